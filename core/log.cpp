@@ -1,0 +1,25 @@
+#include "core/log.hpp"
+
+#include <cstdio>
+#include <cstdlib>
+
+namespace lf {
+
+static std::string g_name = "lightfarm";
+
+void set_log_name(std::string name) { g_name = std::move(name); }
+
+static void emit(const char* level, const std::string& message) {
+  // One fprintf per line so lines from several processes sharing a terminal do not interleave mid-line.
+  std::fprintf(stderr, "%s%s: %s\n", level, g_name.c_str(), message.c_str());
+}
+
+void log_info(const std::string& m) { emit("", m); }
+void log_warn(const std::string& m) { emit("warning: ", m); }
+void log_error(const std::string& m) { emit("error: ", m); }
+void log_debug(const std::string& m) {
+  static const bool enabled = std::getenv("LIGHTFARM_DEBUG") != nullptr;
+  if (enabled) emit("debug: ", m);
+}
+
+}  // namespace lf

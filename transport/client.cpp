@@ -1,0 +1,61 @@
+#include "transport/client.hpp"
+
+#include "core/log.hpp"
+
+namespace lf::wire {
+
+RequestClient::RequestClient(std::string self_name, std::string peer_name, size_t window)
+    : self_(std::move(self_name)), peer_name_(std::move(peer_name)), window_(window ? window : 1),
+      socket_(Socket::Kind::dealer, self_) {}
+
+Status RequestClient::connect(const std::string& endpoint) { return socket_.connect(endpoint); }
+
+void RequestClient::request(std::string op, Value body, Callback callback) {
+  queue_.push_back(Pending{next_id_++, std::move(op), std::move(body), std::move(callback)});
+  pump();
+}
+
+void RequestClient::pump() {
+  while (!queue_.empty() && outstanding_.size() < window_) {
+    Pending p = std::move(queue_.front());
+    queue_.pop_front();
+    Message m = make(MsgType::request, self_, p.op, std::move(p.body), p.id);
+    if (!socket_.send(m)) {
+      p.callback(make_error("could not send '" + p.op + "' to " + peer_name_));
+      continue;
+    }
+    outstanding_.emplace(p.id, std::move(p.callback));
+  }
+}
+
+void RequestClient::on_readable() {
+  while (auto in = socket_.receive()) {
+    if (!in->message) {
+      log_warn("dropped a bad message from " + peer_name_ + ": " + in->message.error().message);
+      continue;
+    }
+    Message& m = *in->message;
+    if (m.header.type != MsgType::reply && m.header.type != MsgType::error) {
+      log_warn("dropped a " + std::string(type_name(m.header.type)) + " from " + peer_name_ +
+               " where a reply was expected");
+      continue;
+    }
+    auto it = outstanding_.find(m.header.id);
+    if (it == outstanding_.end()) {
+      ++dropped_;
+      continue;
+    }
+    Callback cb = std::move(it->second);
+    outstanding_.erase(it);
+    peer_queue_ = m.header.queue;
+    if (m.header.type == MsgType::error) {
+      const Value* text = m.body.find("message");
+      cb(make_error(peer_name_ + ": " + (text && text->is_string() ? text->as_string() : "error")));
+    } else {
+      cb(std::move(m));
+    }
+  }
+  pump();
+}
+
+}  // namespace lf::wire

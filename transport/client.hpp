@@ -1,0 +1,56 @@
+#pragma once
+// RequestClient: asynchronous request/reply with one peer. Requests carry ids and are answered later; at most
+// `window` are outstanding at once and the rest wait in order. Nothing here blocks on an answer: the owner's
+// poll loop calls on_readable() and the matching callback runs.
+#include <cstdint>
+#include <deque>
+#include <functional>
+#include <map>
+#include <string>
+
+#include "transport/socket.hpp"
+
+namespace lf::wire {
+
+class RequestClient {
+ public:
+  // The reply's body, or an Error (an ERROR reply, or the peer went away).
+  using Callback = std::function<void(Result<Message>)>;
+
+  RequestClient(std::string self_name, std::string peer_name, size_t window);
+
+  Status connect(const std::string& endpoint);
+  void request(std::string op, Value body, Callback callback);
+  // Reads every waiting reply and runs its callback. Replies whose id is not outstanding (late or duplicated)
+  // are dropped and counted.
+  void on_readable();
+
+  size_t outstanding() const { return outstanding_.size(); }
+  size_t queued() const { return queue_.size(); }
+  size_t window() const { return window_; }
+  uint32_t peer_queue() const { return peer_queue_; }  // as last reported in a reply header
+  uint64_t dropped_replies() const { return dropped_; }
+  const std::string& peer() const { return peer_name_; }
+  Socket& socket() { return socket_; }
+
+ private:
+  struct Pending {
+    uint64_t id;
+    std::string op;
+    Value body;
+    Callback callback;
+  };
+  void pump();
+
+  std::string self_;
+  std::string peer_name_;
+  size_t window_;
+  Socket socket_;
+  uint64_t next_id_ = 1;
+  std::deque<Pending> queue_;
+  std::map<uint64_t, Callback> outstanding_;
+  uint32_t peer_queue_ = 0;
+  uint64_t dropped_ = 0;
+};
+
+}  // namespace lf::wire

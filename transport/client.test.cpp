@@ -1,0 +1,120 @@
+#include "transport/client.hpp"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+
+namespace lf::wire {
+
+// Several nodes in one process over inproc:// (CZMQ's habit): a router plays the server.
+class ClientTest : public ::testing::Test {
+ protected:
+  Socket server{Socket::Kind::router};
+  std::string endpoint;
+  void SetUp() override {
+    static int n = 0;
+    auto e = server.bind("inproc://client-test-" + std::to_string(n++));
+    ASSERT_TRUE(e.ok()) << e.error().message;
+    endpoint = *e;
+  }
+  // Drains what the server has received so far.
+  std::vector<Incoming> server_receive() {
+    std::vector<Incoming> got;
+    Poller p;
+    p.add(server);
+    for (int spins = 0; spins < 50; ++spins) {
+      p.wait(5);
+      while (auto in = server.receive()) got.push_back(std::move(*in));
+    }
+    return got;
+  }
+  void wait_client(RequestClient& c) {
+    Poller p;
+    p.add(c.socket());
+    for (int spins = 0; spins < 50; ++spins) {
+      p.wait(5);
+      c.on_readable();
+    }
+  }
+};
+
+TEST_F(ClientTest, WindowBoundsOutstandingAndRepliesMatchById) {
+  RequestClient client("renderer-0", "direct", 3);
+  ASSERT_TRUE(client.connect(endpoint).ok());
+  std::vector<int64_t> answered;
+  for (int i = 0; i < 10; ++i)
+    client.request("shade", Value::Map{{"i", i}}, [&, i](Result<Message> r) {
+      ASSERT_TRUE(r.ok());
+      EXPECT_EQ(r->body.find("echo")->as_int(), i);
+      answered.push_back(i);
+    });
+  EXPECT_EQ(client.outstanding(), 3u);
+  EXPECT_EQ(client.queued(), 7u);
+
+  int served = 0;
+  while (served < 10) {
+    auto got = server_receive();
+    ASSERT_FALSE(got.empty()) << "server starved after " << served;
+    EXPECT_LE(got.size(), 3u);  // never more than the window in flight
+    // Answer in reverse order: callbacks must still find their own requests.
+    std::reverse(got.begin(), got.end());
+    for (auto& in : got) {
+      ASSERT_TRUE(in.message.ok());
+      EXPECT_EQ(in.peer, "renderer-0");
+      Message reply = make(MsgType::reply, "direct", "shade",
+                           Value::Map{{"echo", in.message->body.find("i")->as_int()}}, in.message->header.id);
+      reply.header.queue = 5;
+      ASSERT_TRUE(server.send_to(in.peer, reply));
+      ++served;
+    }
+    wait_client(client);
+  }
+  EXPECT_EQ(answered.size(), 10u);
+  EXPECT_EQ(client.outstanding(), 0u);
+  EXPECT_EQ(client.peer_queue(), 5u);
+}
+
+TEST_F(ClientTest, ErrorRepliesReachTheCallbackAndStrayRepliesAreDropped) {
+  RequestClient client("renderer-0", "direct", 2);
+  ASSERT_TRUE(client.connect(endpoint).ok());
+  std::string error;
+  client.request("shade", Value::Map{}, [&](Result<Message> r) {
+    ASSERT_FALSE(r.ok());
+    error = r.error().message;
+  });
+  auto got = server_receive();
+  ASSERT_EQ(got.size(), 1u);
+  uint64_t id = got[0].message->header.id;
+  ASSERT_TRUE(server.send_to(got[0].peer, make_error_reply("direct", id, "bad_request", "no points")));
+  // A second answer to the same id, and one to an id never sent: both dropped, not delivered twice.
+  ASSERT_TRUE(server.send_to(got[0].peer, make(MsgType::reply, "direct", "shade", Value::Map{}, id)));
+  ASSERT_TRUE(server.send_to(got[0].peer, make(MsgType::reply, "direct", "shade", Value::Map{}, 999)));
+  wait_client(client);
+  EXPECT_EQ(error, "direct: no points");
+  EXPECT_EQ(client.dropped_replies(), 2u);
+}
+
+TEST_F(ClientTest, RouterRejectsMalformedFramesAsErrors) {
+  Socket dealer(Socket::Kind::dealer, "hostile");
+  ASSERT_TRUE(dealer.connect(endpoint).ok());
+  ASSERT_TRUE(dealer.send_raw({"just one frame"}));
+  ASSERT_TRUE(dealer.send_raw({"\x81\xa1v\x01", "\x80", "extra"}));
+  ASSERT_TRUE(dealer.send_raw({"garbage", "\x80"}));
+  auto got = server_receive();
+  ASSERT_EQ(got.size(), 3u);
+  EXPECT_EQ(got[0].message.error().message, "expected 2 frames (header, body), got 1");
+  EXPECT_EQ(got[1].message.error().message, "expected 2 frames (header, body), got 3");
+  EXPECT_FALSE(got[2].message.ok());
+  EXPECT_EQ(got[2].peer, "hostile");
+}
+
+TEST_F(ClientTest, BindingAPortInUseIsAClearError) {
+  Socket a(Socket::Kind::router), b(Socket::Kind::router);
+  auto ea = a.bind("tcp://127.0.0.1:*");
+  ASSERT_TRUE(ea.ok());
+  auto eb = b.bind(*ea);
+  ASSERT_FALSE(eb.ok());
+  EXPECT_NE(eb.error().message.find("Address already in use"), std::string::npos) << eb.error().message;
+}
+
+}  // namespace lf::wire

@@ -1,0 +1,40 @@
+#pragma once
+// Message encoding and validation. Decoding never throws and never trusts its input: every failure is an Error
+// whose message says what was wrong with the bytes.
+#include <string>
+#include <string_view>
+
+#include "core/result.hpp"
+#include "core/value.hpp"
+#include "transport/protocol.hpp"
+
+namespace lf::wire {
+
+struct Header {
+  uint32_t version = kProtocolVersion;
+  MsgType type = MsgType::heartbeat;
+  uint64_t id = 0;        // request id; a REPLY/ERROR echoes the request's
+  std::string sender;     // actor name
+  std::string op;         // operation for REQUEST ("shade", "tile", ...); phase name for PHASE
+  uint32_t queue = 0;     // sender's queue length (requests waiting), piggybacked for load balancing
+};
+
+struct Message {
+  Header header;
+  Value body;  // nil or a map
+};
+
+std::string encode_header(const Header& header);
+std::string encode_body(const Value& body);
+
+// Validates and decodes. A version mismatch is reported as such ("protocol version 7, expected 1") so that the
+// receiver can refuse the peer by name.
+Result<Header> decode_header(std::string_view bytes);
+Result<Value> decode_body(std::string_view bytes);
+Result<Message> decode(std::string_view header, std::string_view body);
+
+// Convenience for the common bodies.
+Message make(MsgType type, std::string sender, std::string op = {}, Value body = {}, uint64_t id = 0);
+Message make_error_reply(std::string sender, uint64_t id, std::string code, std::string message);
+
+}  // namespace lf::wire

@@ -1,0 +1,48 @@
+#pragma once
+// The wire, defined once (STYLE habit 6). docs/PROTOCOL.md describes the same thing for people writing actors
+// in other languages; keep the two in step.
+//
+// A message is two ZeroMQ frames: a header (msgpack map with short keys) and a body (msgpack, usually a map).
+// Message type numbers are fixed forever: a retired number is never reused.
+#include <cstddef>
+#include <cstdint>
+#include <optional>
+#include <string_view>
+
+#ifdef LIGHTFARM_ALGORITHM_LAYER
+#error "render/ and radiosity/ must not include transport headers (algorithm code cannot reach the network)"
+#endif
+
+namespace lf::wire {
+
+// Bumped whenever a change would make an old peer misread a new one. HELLO carries it and the director refuses a
+// mismatch by name.
+inline constexpr uint32_t kProtocolVersion = 1;
+
+enum class MsgType : uint8_t {
+  hello = 1,      // actor -> director: name, kind, pid, data endpoint, build settings
+  config = 2,     // director -> actor: parameters, scene, camera, image, input endpoints
+  phase = 3,      // director -> actor: enter a phase ("setup", "render", "finish")
+  request = 4,    // client -> server: an operation with a batch; answered later by REPLY or ERROR with the same id
+  reply = 5,      // server -> client: the answer to request `id`; header `q` carries the server's queue length
+  error = 6,      // any -> any: something was wrong; `id` names the request it answers, if any
+  stats = 7,      // actor -> director: counters (requests, points, bytes, busy time, peak queue)
+  heartbeat = 8,  // both ways: "still here"
+  bye = 9,        // director -> actor: stop now; actor -> director: stopping
+  ready = 10,     // actor -> director: finished a phase (body names it)
+};
+
+std::string_view type_name(MsgType type);
+std::optional<MsgType> type_from_number(uint64_t number);
+
+// Limits every receiver enforces; anything larger is refused before it is decoded.
+inline constexpr size_t kMaxHeaderBytes = 4096;
+inline constexpr size_t kMaxBodyBytes = 256u << 20;
+inline constexpr size_t kMaxNameBytes = 128;
+inline constexpr size_t kMaxOpBytes = 64;
+inline constexpr size_t kMaxDepth = 32;
+
+// The build setting that changes how bulk arrays read; HELLO carries it so a peer that disagrees is refused.
+inline constexpr std::string_view kFloatFormat = "f32le";
+
+}  // namespace lf::wire

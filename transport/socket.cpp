@@ -1,0 +1,135 @@
+#include "transport/socket.hpp"
+
+#include <zmq.hpp>
+#include <zmq_addon.hpp>
+
+#include <algorithm>
+
+namespace lf::wire {
+
+namespace {
+zmq::context_t& context() {
+  static zmq::context_t ctx(1);
+  return ctx;
+}
+}  // namespace
+
+struct Socket::Impl {
+  zmq::socket_t socket;
+  explicit Impl(zmq::socket_type t) : socket(context(), t) {}
+};
+
+Socket::Socket(Kind kind, const std::string& identity)
+    : impl_(std::make_unique<Impl>(kind == Kind::router ? zmq::socket_type::router : zmq::socket_type::dealer)),
+      kind_(kind) {
+  auto& s = impl_->socket;
+  s.set(zmq::sockopt::linger, 0);
+  // Oversized messages are refused by ZeroMQ itself before we buffer them.
+  s.set(zmq::sockopt::maxmsgsize, static_cast<int64_t>(kMaxBodyBytes + kMaxHeaderBytes + 1024));
+  s.set(zmq::sockopt::sndtimeo, 10000);
+  s.set(zmq::sockopt::sndhwm, 100000);
+  s.set(zmq::sockopt::rcvhwm, 100000);
+  if (!identity.empty()) s.set(zmq::sockopt::routing_id, identity);
+  if (kind == Kind::router) s.set(zmq::sockopt::router_mandatory, 1);
+}
+
+Socket::~Socket() = default;
+
+void* Socket::native() { return impl_->socket.handle(); }
+
+void Socket::set_linger_ms(int ms) { impl_->socket.set(zmq::sockopt::linger, ms); }
+
+Result<std::string> Socket::bind(const std::string& endpoint) {
+  try {
+    impl_->socket.bind(endpoint);
+    return impl_->socket.get(zmq::sockopt::last_endpoint);
+  } catch (const zmq::error_t& e) {
+    return make_error("cannot bind " + endpoint + ": " + e.what());
+  }
+}
+
+Status Socket::connect(const std::string& endpoint) {
+  try {
+    impl_->socket.connect(endpoint);
+    return Ok{};
+  } catch (const zmq::error_t& e) {
+    return make_error("cannot connect to " + endpoint + ": " + e.what());
+  }
+}
+
+bool Socket::send_raw(const std::vector<std::string>& frames) {
+  try {
+    for (size_t i = 0; i < frames.size(); ++i) {
+      auto flags = i + 1 < frames.size() ? zmq::send_flags::sndmore : zmq::send_flags::none;
+      if (!impl_->socket.send(zmq::buffer(frames[i]), flags)) return false;
+      counters_.bytes_out += frames[i].size();
+    }
+    ++counters_.messages_out;
+    return true;
+  } catch (const zmq::error_t&) {
+    return false;  // EHOSTUNREACH: the peer is gone
+  }
+}
+
+bool Socket::send(const Message& m) { return send_raw({encode_header(m.header), encode_body(m.body)}); }
+
+bool Socket::send_to(const std::string& peer, const Message& m) {
+  return send_raw({peer, encode_header(m.header), encode_body(m.body)});
+}
+
+std::optional<Incoming> Socket::receive() {
+  std::vector<zmq::message_t> frames;
+  try {
+    auto n = zmq::recv_multipart(impl_->socket, std::back_inserter(frames), zmq::recv_flags::dontwait);
+    if (!n) return std::nullopt;
+  } catch (const zmq::error_t& e) {
+    if (e.num() == EAGAIN || e.num() == EINTR) return std::nullopt;
+    return Incoming{{}, make_error(std::string("receive failed: ") + e.what()), 0};
+  }
+  size_t bytes = 0;
+  for (const auto& f : frames) bytes += f.size();
+  counters_.bytes_in += bytes;
+  ++counters_.messages_in;
+
+  Incoming in{{}, make_error(""), bytes};
+  size_t first = 0;
+  if (kind_ == Kind::router) {
+    in.peer = frames[0].to_string();
+    first = 1;
+  }
+  const size_t parts = frames.size() - first;
+  if (parts != 2) {
+    in.message = make_error("expected 2 frames (header, body), got " + std::to_string(parts));
+    return in;
+  }
+  in.message = decode(frames[first].to_string_view(), frames[first + 1].to_string_view());
+  return in;
+}
+
+void Poller::add(Socket& s) {
+  sockets_.push_back(&s);
+  ready_.push_back(false);
+}
+
+void Poller::remove(Socket& s) {
+  auto it = std::find(sockets_.begin(), sockets_.end(), &s);
+  if (it == sockets_.end()) return;
+  ready_.erase(ready_.begin() + (it - sockets_.begin()));
+  sockets_.erase(it);
+}
+
+const std::vector<bool>& Poller::wait(long timeout_ms) {
+  std::vector<zmq::pollitem_t> items;
+  items.reserve(sockets_.size());
+  for (auto* s : sockets_) items.push_back({s->native(), 0, ZMQ_POLLIN, 0});
+  std::fill(ready_.begin(), ready_.end(), false);
+  try {
+    zmq::poll(items.data(), items.size(), std::chrono::milliseconds(timeout_ms));
+  } catch (const zmq::error_t&) {
+    return ready_;  // EINTR: a signal arrived; the caller checks its flags
+  }
+  for (size_t i = 0; i < items.size(); ++i) ready_[i] = (items[i].revents & ZMQ_POLLIN) != 0;
+  return ready_;
+}
+
+}  // namespace lf::wire

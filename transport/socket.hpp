@@ -1,0 +1,75 @@
+#pragma once
+// Sockets that speak lightfarm messages. Only transport/ sees ZeroMQ; actors use these.
+//
+// Router: binds, talks to many peers, each message tagged with the peer's routing id.
+// Dealer: connects to one router; its routing id is the actor's name.
+// Every received message is validated (frame count, header, body); a bad one arrives as an Error, never a throw.
+#include <cstdint>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "core/result.hpp"
+#include "transport/message.hpp"
+
+namespace lf::wire {
+
+struct Incoming {
+  std::string peer;          // routing id of the sender (Router only)
+  Result<Message> message;   // or why the bytes were refused
+  size_t bytes = 0;
+};
+
+struct SocketCounters {
+  uint64_t messages_in = 0, messages_out = 0, bytes_in = 0, bytes_out = 0;
+};
+
+class Socket {
+ public:
+  enum class Kind { router, dealer };
+  Socket(Kind kind, const std::string& identity = {});
+  ~Socket();
+  Socket(const Socket&) = delete;
+  Socket& operator=(const Socket&) = delete;
+
+  // Binds and returns the endpoint peers should connect to (a "*"/0 port is resolved to the real one).
+  Result<std::string> bind(const std::string& endpoint);
+  Status connect(const std::string& endpoint);
+
+  // Dealer: send to the connected router. Router: send to `peer`. False if the peer is gone or the send timed out.
+  bool send(const Message& message);
+  bool send_to(const std::string& peer, const Message& message);
+  // Sends pre-encoded frames (used to forward or to test hostile bytes).
+  bool send_raw(const std::vector<std::string>& frames);
+
+  // Non-blocking; nullopt when nothing is waiting.
+  std::optional<Incoming> receive();
+
+  void set_linger_ms(int ms);
+  const SocketCounters& counters() const { return counters_; }
+  void* native();  // for Poller
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+  Kind kind_;
+  SocketCounters counters_;
+};
+
+// Waits until one of the sockets has input or the timeout passes.
+class Poller {
+ public:
+  void add(Socket& socket);
+  void remove(Socket& socket);
+  // Returns, for each added socket in order, whether it is readable. timeout_ms < 0 waits forever.
+  // Interrupted by a signal: returns all false.
+  const std::vector<bool>& wait(long timeout_ms);
+  size_t size() const { return sockets_.size(); }
+
+ private:
+  std::vector<Socket*> sockets_;
+  std::vector<bool> ready_;
+};
+
+}  // namespace lf::wire
