@@ -1,0 +1,66 @@
+#include "render/image.hpp"
+
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <filesystem>
+
+namespace lf {
+
+namespace fs = std::filesystem;
+
+class ImageTest : public ::testing::Test {
+ protected:
+  fs::path dir;
+  void SetUp() override {
+    dir = fs::temp_directory_path() / ("lightfarm-image-test-" + std::to_string(::getpid()));
+    fs::create_directories(dir);
+  }
+  void TearDown() override { fs::remove_all(dir); }
+  size_t files_in_dir() const {
+    return static_cast<size_t>(std::distance(fs::directory_iterator(dir), fs::directory_iterator{}));
+  }
+};
+
+static Image gradient() {
+  Image img(8, 4);
+  for (int y = 0; y < 4; ++y)
+    for (int x = 0; x < 8; ++x) img.at(x, y) = {x / 7.0f, y / 3.0f, 2.0f};
+  return img;
+}
+
+TEST_F(ImageTest, ExrKeepsLinearFloats) {
+  Image img = gradient();
+  auto path = (dir / "a.exr").string();
+  ASSERT_TRUE(write_image(img, path).ok());
+  auto back = read_image(path);
+  ASSERT_TRUE(back.ok()) << back.error().message;
+  EXPECT_EQ(back->pixels, img.pixels);  // values above 1 survive in EXR
+  EXPECT_EQ(files_in_dir(), 1u);        // no temporary left beside it
+}
+
+TEST_F(ImageTest, PngIsSrgbEncodedAndClamped) {
+  Image img = gradient();
+  auto path = (dir / "a.png").string();
+  ASSERT_TRUE(write_image(img, path).ok());
+  auto back = read_image(path);
+  ASSERT_TRUE(back.ok());
+  for (size_t i = 0; i < img.pixels.size(); ++i) {
+    EXPECT_NEAR(back->pixels[i].x, img.pixels[i].x, 0.01f);
+    EXPECT_NEAR(back->pixels[i].z, 1.0f, 1e-6f);  // 2.0 clamps to white
+  }
+}
+
+TEST_F(ImageTest, BadPathsAreRefusedUpFrontAndWriteNothing) {
+  EXPECT_EQ(check_output_path((dir / "a.bmp").string()).error().message,
+            "output '" + (dir / "a.bmp").string() + "': unsupported image format '.bmp' (use .exr, .png or .tif)");
+  auto missing = (dir / "no" / "such" / "a.png").string();
+  EXPECT_NE(write_image(gradient(), missing).error().message.find("does not exist"), std::string::npos);
+  // /proc refuses new files even to root.
+  auto r = write_image(gradient(), "/proc/lightfarm-test.png");
+  ASSERT_FALSE(r.ok());
+  EXPECT_NE(r.error().message.find("is not writable"), std::string::npos) << r.error().message;
+  EXPECT_EQ(files_in_dir(), 0u);
+}
+
+}  // namespace lf

@@ -1,0 +1,78 @@
+#include "render/lightop.hpp"
+
+#include <cmath>
+
+namespace lf {
+
+void ShadingPoints::reserve(size_t n) {
+  position.reserve(n);
+  normal.reserve(n);
+  wo.reserve(n);
+  material.reserve(n);
+  key.reserve(n);
+}
+
+void ShadingPoints::clear() {
+  position.clear();
+  normal.clear();
+  wo.clear();
+  material.clear();
+  key.clear();
+}
+
+void ShadingPoints::push_back(Vec3 p, Vec3 n, Vec3 w, uint32_t m, uint64_t k) {
+  position.push_back(p);
+  normal.push_back(n);
+  wo.push_back(w);
+  material.push_back(m);
+  key.push_back(k);
+}
+
+static bool finite(Vec3 v) { return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z); }
+
+std::string ShadingPoints::check(size_t material_count) const {
+  const size_t n = position.size();
+  if (normal.size() != n || wo.size() != n || material.size() != n || key.size() != n)
+    return "shading point arrays have different lengths";
+  for (size_t i = 0; i < n; ++i) {
+    if (material[i] >= material_count)
+      return "point " + std::to_string(i) + " has material " + std::to_string(material[i]) + " but the scene has " +
+             std::to_string(material_count);
+    if (!finite(position[i]) || !finite(normal[i]) || !finite(wo[i]))
+      return "point " + std::to_string(i) + " has a non-finite coordinate";
+  }
+  return {};
+}
+
+void GatherState::complete_one(std::string failure) {
+  if (!failure.empty() && error.empty()) error = std::move(failure);
+  if (remaining > 0 && --remaining == 0 && waiter) {
+    auto h = std::exchange(waiter, {});
+    h.resume();
+  }
+}
+
+void run_to_completion(Task task) {
+  if (!task.done()) throw LightOpError("an in-process LightOp waited for something that never came");
+  task.rethrow_if_failed();
+}
+
+Gather LocalInputs::gather(std::vector<InputQuery> queries) {
+  auto state = std::make_shared<GatherState>();
+  for (const auto& q : queries) {
+    if (q.input >= ops_.size()) {
+      state->error = "input " + std::to_string(q.input) + " does not exist";
+      continue;
+    }
+    q.radiance->assign(q.points->size(), RGB{});
+    auto [op, inputs] = ops_[q.input];
+    try {
+      run_to_completion(op->shade(*q.points, *q.radiance, *inputs));
+    } catch (const std::exception& e) {
+      if (state->error.empty()) state->error = e.what();
+    }
+  }
+  return Gather(state);
+}
+
+}  // namespace lf

@@ -1,0 +1,157 @@
+#pragma once
+// The LightOp interface (DESIGN §2). A LightOp is a plain class: set up on the scene, then shade batches of
+// shading points into outgoing radiance, asking its inputs (predecessors in the lighting network) where the
+// algorithm needs light from elsewhere. It never sees ZeroMQ or msgpack: the actor runtime wraps it
+// (actors/lightop_actor.cpp), and tests run it in-process (LocalInputs below).
+//
+// shade() and setup() are coroutines. Asking inputs is
+//     std::vector<RGB> light;
+//     co_await inputs.shade(0, points, light);
+// In a farm the runtime turns that into an asynchronous batched request and serves other batches meanwhile;
+// in-process the input is called directly. Asking several inputs in one gather() runs them concurrently.
+#include <coroutine>
+#include <cstdint>
+#include <exception>
+#include <memory>
+#include <span>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "core/params.hpp"
+#include "render/math.hpp"
+#include "render/scene.hpp"
+#include "render/tracer.hpp"
+
+namespace lf {
+
+// A batch of points to shade, as structure of arrays (it travels as one float blob per field).
+struct ShadingPoints {
+  std::vector<Vec3> position;
+  std::vector<Vec3> normal;    // unit, on the side of wo
+  std::vector<Vec3> wo;        // unit, pointing away from the surface (towards the viewer)
+  std::vector<uint32_t> material;
+  std::vector<uint64_t> key;   // sample_key(pixel, sample): seeds every random decision for this point
+  size_t size() const { return position.size(); }
+  void reserve(size_t n);
+  void clear();
+  void push_back(Vec3 p, Vec3 n, Vec3 w, uint32_t m, uint64_t k);
+  // Empty string when consistent; otherwise what is wrong (for validating what arrives from the wire).
+  std::string check(size_t material_count) const;
+};
+
+// The coroutine type of setup() and shade(). Starts eagerly; whoever holds it checks done() and failure.
+class Task {
+ public:
+  struct promise_type {
+    std::exception_ptr error;
+    Task get_return_object() { return Task(std::coroutine_handle<promise_type>::from_promise(*this)); }
+    std::suspend_never initial_suspend() noexcept { return {}; }
+    std::suspend_always final_suspend() noexcept { return {}; }
+    void return_void() {}
+    void unhandled_exception() { error = std::current_exception(); }
+  };
+  Task() = default;
+  explicit Task(std::coroutine_handle<promise_type> h) : handle_(h) {}
+  Task(Task&& o) noexcept : handle_(std::exchange(o.handle_, {})) {}
+  Task& operator=(Task&& o) noexcept {
+    if (this != &o) {
+      reset();
+      handle_ = std::exchange(o.handle_, {});
+    }
+    return *this;
+  }
+  ~Task() { reset(); }
+  bool done() const { return !handle_ || handle_.done(); }
+  // Rethrows what the coroutine threw, if it finished by throwing.
+  void rethrow_if_failed() const {
+    if (handle_ && handle_.done() && handle_.promise().error) std::rethrow_exception(handle_.promise().error);
+  }
+
+ private:
+  void reset() {
+    if (handle_) handle_.destroy();
+    handle_ = {};
+  }
+  std::coroutine_handle<promise_type> handle_;
+};
+
+// Thrown by a LightOp (or by an input it asked) when a batch cannot be shaded; the runtime answers with ERROR.
+class LightOpError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+// What a co_await on inputs waits for: a count of outstanding answers, filled in by whoever serves the inputs.
+struct GatherState {
+  size_t remaining = 0;
+  std::string error;                 // first failure, if any
+  std::coroutine_handle<> waiter;    // resumed when remaining reaches 0
+  void complete_one(std::string failure = {});
+};
+
+class Gather {
+ public:
+  explicit Gather(std::shared_ptr<GatherState> s) : state_(std::move(s)) {}
+  bool await_ready() const noexcept { return state_->remaining == 0; }
+  void await_suspend(std::coroutine_handle<> h) noexcept { state_->waiter = h; }
+  void await_resume() const {
+    if (!state_->error.empty()) throw LightOpError(state_->error);
+  }
+
+ private:
+  std::shared_ptr<GatherState> state_;
+};
+
+struct InputQuery {
+  size_t input;                  // which input, in the order the script wired them
+  const ShadingPoints* points;   // must stay alive until the gather completes
+  std::vector<RGB>* radiance;    // resized and filled by the answer
+};
+
+// A LightOp's view of its predecessors.
+class Inputs {
+ public:
+  virtual ~Inputs() = default;
+  virtual size_t count() const = 0;
+  virtual Gather gather(std::vector<InputQuery> queries) = 0;
+  Gather shade(size_t input, const ShadingPoints& points, std::vector<RGB>& radiance) {
+    return gather({InputQuery{input, &points, &radiance}});
+  }
+};
+
+// What a LightOp gets at setup: the scene, its ray tracer, and where it stands among replicas.
+struct SceneContext {
+  const Scene* scene = nullptr;
+  const RayTracer* tracer = nullptr;
+  int replica_index = 0;
+  int replica_count = 1;
+};
+
+class LightOp {
+ public:
+  virtual ~LightOp() = default;
+  // Runs once before rendering (photon shooting, caches, ...). Keep pointers from ctx: they outlive the op.
+  virtual Task setup(const SceneContext& ctx, Inputs& inputs) = 0;
+  // Writes the radiance leaving each point towards its wo into radiance[i] (radiance.size() == points.size()).
+  // Emission of the point itself is not included: the renderer adds what the camera sees directly.
+  virtual Task shade(const ShadingPoints& points, std::span<RGB> radiance, Inputs& inputs) = 0;
+};
+
+// Inputs served in-process: each input is another LightOp in the same address space, called directly.
+// Used by unit tests and single-process tools.
+class LocalInputs : public Inputs {
+ public:
+  explicit LocalInputs(std::vector<std::pair<LightOp*, Inputs*>> ops) : ops_(std::move(ops)) {}
+  LocalInputs() = default;
+  size_t count() const override { return ops_.size(); }
+  Gather gather(std::vector<InputQuery> queries) override;
+
+ private:
+  std::vector<std::pair<LightOp*, Inputs*>> ops_;
+};
+
+// Runs a task that must complete synchronously (in-process use); throws what it threw.
+void run_to_completion(Task task);
+
+}  // namespace lf

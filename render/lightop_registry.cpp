@@ -1,0 +1,31 @@
+#include "render/lightop_registry.hpp"
+
+namespace lf {
+
+extern const LightOpKind direct_kind;
+
+static const LightOpKind* const kAllKinds[] = {
+    &direct_kind,
+};
+
+std::span<const LightOpKind* const> lightop_kinds() { return kAllKinds; }
+
+const LightOpKind* find_lightop_kind(std::string_view name) {
+  for (const auto* k : kAllKinds)
+    if (k->name == name) return k;
+  return nullptr;
+}
+
+std::string lightop_kind_list() {
+  std::string s;
+  for (const auto* k : kAllKinds) s += (s.empty() ? "" : ", ") + std::string(k->name);
+  return s;
+}
+
+std::unique_ptr<LightOp> create_lightop(const LightOpKind& kind, const ParamTable& params) {
+  auto op = kind.create(params);
+  params.report_unused();
+  return op;
+}
+
+}  // namespace lf

@@ -1,0 +1,30 @@
+#pragma once
+// Every LightOp kind, by name. Each kind's file ends with its LightOpKind; registry.cpp lists them all in one
+// place (an explicit list, because self-registering statics vanish from static libraries).
+#include <memory>
+#include <span>
+#include <string>
+#include <string_view>
+
+#include "core/params.hpp"
+#include "render/lightop.hpp"
+
+namespace lf {
+
+struct LightOpKind {
+  std::string_view name;
+  std::string_view summary;
+  int min_inputs;
+  int max_inputs;  // -1: any number
+  // Reads its parameters from the table; throws ParamError on a bad value. The caller reports unused ones.
+  std::unique_ptr<LightOp> (*create)(const ParamTable& params);
+};
+
+std::span<const LightOpKind* const> lightop_kinds();
+const LightOpKind* find_lightop_kind(std::string_view name);
+// "direct, ..." for error messages.
+std::string lightop_kind_list();
+// Creates the op and reports unknown parameters (ParamError).
+std::unique_ptr<LightOp> create_lightop(const LightOpKind& kind, const ParamTable& params);
+
+}  // namespace lf

@@ -1,0 +1,188 @@
+#include "render/scene.hpp"
+
+#include <tiny_obj_loader.h>
+
+#include <algorithm>
+#include <filesystem>
+
+namespace lf {
+
+uint32_t Scene::add_material(Material m) {
+  materials_.push_back(std::move(m));
+  return static_cast<uint32_t>(materials_.size() - 1);
+}
+
+void Scene::add_triangle(Vec3 a, Vec3 b, Vec3 c, uint32_t material) {
+  Vec3 n = cross(b - a, c - a);
+  float len = length(n);
+  if (!(len > 0)) return;  // degenerate: nothing to hit, nothing to emit
+  auto base = static_cast<uint32_t>(vertices_.size());
+  vertices_.push_back(a);
+  vertices_.push_back(b);
+  vertices_.push_back(c);
+  triangles_.push_back({base, base + 1, base + 2});
+  material_of_.push_back(material);
+  normals_.push_back(n / len);
+  areas_.push_back(0.5f * len);
+}
+
+void Scene::add_quad(Vec3 a, Vec3 b, Vec3 c, Vec3 d, uint32_t material) {
+  add_triangle(a, b, c, material);
+  add_triangle(a, c, d, material);
+}
+
+Status Scene::finalize(const std::string& what) {
+  if (triangles_.empty()) return make_error(what + ": the scene has no triangles");
+  Vec3 lo = vertices_[0], hi = vertices_[0];
+  for (const auto& v : vertices_) {
+    lo = {std::min(lo.x, v.x), std::min(lo.y, v.y), std::min(lo.z, v.z)};
+    hi = {std::max(hi.x, v.x), std::max(hi.y, v.y), std::max(hi.z, v.z)};
+  }
+  epsilon_ = std::max(1e-4f * length(hi - lo), 1e-6f);
+
+  emitters_.clear();
+  emitter_cdf_.clear();
+  double total = 0;
+  std::vector<double> power;
+  for (uint32_t t = 0; t < triangles_.size(); ++t) {
+    const Material& m = materials_[material_of_[t]];
+    if (!m.emissive()) continue;
+    emitters_.push_back(t);
+    power.push_back(static_cast<double>(areas_[t]) * average(m.ke));
+    total += power.back();
+  }
+  if (emitters_.empty() || !(total > 0))
+    return make_error(what + ": the scene has no light (no material with Ke > 0)");
+  double running = 0;
+  for (double p : power) {
+    running += p;
+    emitter_cdf_.push_back(static_cast<float>(running / total));
+    emitter_pdf_.push_back(static_cast<float>(p / total));
+  }
+  emitter_cdf_.back() = 1.0f;
+  return Ok{};
+}
+
+size_t Scene::pick_emitter(float u, float& probability) const {
+  auto it = std::upper_bound(emitter_cdf_.begin(), emitter_cdf_.end(), u);
+  size_t i = std::min(static_cast<size_t>(it - emitter_cdf_.begin()), emitters_.size() - 1);
+  probability = emitter_pdf_[i];
+  return i;
+}
+
+// The Cornell box as published by the Cornell Program of Computer Graphics (measured geometry, millimetres),
+// with the usual RGB approximations of its measured reflectances and light.
+static Scene cornell_box() {
+  Scene s;
+  auto white = s.add_material({"white", {0.725f, 0.71f, 0.68f}, {}});
+  auto red = s.add_material({"red", {0.63f, 0.065f, 0.05f}, {}});
+  auto green = s.add_material({"green", {0.14f, 0.45f, 0.091f}, {}});
+  auto light = s.add_material({"light", {0.78f, 0.78f, 0.78f}, {17.0f, 12.0f, 4.0f}});
+
+  s.add_quad({552.8f, 0, 0}, {0, 0, 0}, {0, 0, 559.2f}, {549.6f, 0, 559.2f}, white);                     // floor
+  s.add_quad({556.0f, 548.8f, 0}, {556.0f, 548.8f, 559.2f}, {0, 548.8f, 559.2f}, {0, 548.8f, 0}, white);  // ceiling
+  s.add_quad({549.6f, 0, 559.2f}, {0, 0, 559.2f}, {0, 548.8f, 559.2f}, {556.0f, 548.8f, 559.2f}, white);  // back
+  s.add_quad({0, 0, 559.2f}, {0, 0, 0}, {0, 548.8f, 0}, {0, 548.8f, 559.2f}, green);                      // right
+  s.add_quad({552.8f, 0, 0}, {549.6f, 0, 559.2f}, {556.0f, 548.8f, 559.2f}, {556.0f, 548.8f, 0}, red);    // left
+  // The light hangs 0.1 mm below the ceiling so the two never share a plane; it faces down.
+  s.add_quad({343.0f, 548.7f, 227.0f}, {343.0f, 548.7f, 332.0f}, {213.0f, 548.7f, 332.0f},
+             {213.0f, 548.7f, 227.0f}, light);
+
+  const float short_block[5][4][3] = {
+      {{130, 165, 65}, {82, 165, 225}, {240, 165, 272}, {290, 165, 114}},
+      {{290, 0, 114}, {290, 165, 114}, {240, 165, 272}, {240, 0, 272}},
+      {{130, 0, 65}, {130, 165, 65}, {290, 165, 114}, {290, 0, 114}},
+      {{82, 0, 225}, {82, 165, 225}, {130, 165, 65}, {130, 0, 65}},
+      {{240, 0, 272}, {240, 165, 272}, {82, 165, 225}, {82, 0, 225}}};
+  const float tall_block[5][4][3] = {
+      {{423, 330, 247}, {265, 330, 296}, {314, 330, 456}, {472, 330, 406}},
+      {{423, 0, 247}, {423, 330, 247}, {472, 330, 406}, {472, 0, 406}},
+      {{472, 0, 406}, {472, 330, 406}, {314, 330, 456}, {314, 0, 456}},
+      {{314, 0, 456}, {314, 330, 456}, {265, 330, 296}, {265, 0, 296}},
+      {{265, 0, 296}, {265, 330, 296}, {423, 330, 247}, {423, 0, 247}}};
+  for (const auto* block : {short_block, tall_block})
+    for (int f = 0; f < 5; ++f) {
+      auto v = [&](int i) { return Vec3{block[f][i][0], block[f][i][1], block[f][i][2]}; };
+      s.add_quad(v(0), v(1), v(2), v(3), white);
+    }
+  return s;
+}
+
+const std::vector<std::string>& Scene::builtin_names() {
+  static const std::vector<std::string> names{"cornell"};
+  return names;
+}
+
+Result<Scene> Scene::builtin(const std::string& name) {
+  Scene s;
+  if (name == "cornell") {
+    s = cornell_box();
+  } else {
+    std::string known;
+    for (const auto& n : builtin_names()) known += (known.empty() ? "" : ", ") + n;
+    return make_error("unknown built-in scene '" + name + "' (built-in scenes: " + known + ")");
+  }
+  if (auto st = s.finalize("built-in scene '" + name + "'"); !st) return st.error();
+  return s;
+}
+
+Result<Scene> Scene::load_obj(const std::string& path) {
+  std::error_code ec;
+  if (!std::filesystem::is_regular_file(path, ec)) return make_error("scene file '" + path + "' not found");
+  tinyobj::ObjReaderConfig config;
+  config.triangulate = true;
+  config.vertex_color = false;
+  config.mtl_search_path = std::filesystem::path(path).parent_path().string();
+  tinyobj::ObjReader reader;
+  if (!reader.ParseFromFile(path, config)) {
+    std::string why = reader.Error();
+    while (!why.empty() && (why.back() == '\n' || why.back() == '\r')) why.pop_back();
+    return make_error("cannot read scene file '" + path + "': " + (why.empty() ? "parse error" : why));
+  }
+  const auto& attrib = reader.GetAttrib();
+  const auto& materials = reader.GetMaterials();
+  Scene s;
+  for (const auto& m : materials) {
+    s.add_material({m.name, {m.diffuse[0], m.diffuse[1], m.diffuse[2]},
+                    {m.emission[0], m.emission[1], m.emission[2]}});
+  }
+  // Faces without a material get a neutral grey, as most renderers do.
+  const auto fallback = s.add_material({"(default)", {0.5f, 0.5f, 0.5f}, {}});
+  const size_t vertex_count = attrib.vertices.size() / 3;
+  for (const auto& shape : reader.GetShapes()) {
+    const auto& mesh = shape.mesh;
+    size_t index = 0;
+    for (size_t f = 0; f < mesh.num_face_vertices.size(); ++f) {
+      const size_t corners = mesh.num_face_vertices[f];
+      if (corners != 3) {
+        index += corners;
+        continue;
+      }
+      Vec3 p[3];
+      bool valid = true;
+      for (size_t c = 0; c < 3; ++c) {
+        int vi = mesh.indices[index + c].vertex_index;
+        if (vi < 0 || static_cast<size_t>(vi) >= vertex_count) {
+          valid = false;
+          break;
+        }
+        p[c] = {attrib.vertices[3 * vi], attrib.vertices[3 * vi + 1], attrib.vertices[3 * vi + 2]};
+      }
+      index += 3;
+      if (!valid) return make_error("scene file '" + path + "': a face refers to a vertex that does not exist");
+      int mid = f < mesh.material_ids.size() ? mesh.material_ids[f] : -1;
+      uint32_t material = (mid >= 0 && static_cast<size_t>(mid) < materials.size()) ? static_cast<uint32_t>(mid)
+                                                                                      : fallback;
+      s.add_triangle(p[0], p[1], p[2], material);
+    }
+  }
+  if (auto st = s.finalize("scene file '" + path + "'"); !st) return st.error();
+  return s;
+}
+
+Result<Scene> Scene::load(const SceneSpec& spec) {
+  if (!spec.file.empty()) return load_obj(spec.file);
+  return builtin(spec.builtin.empty() ? "cornell" : spec.builtin);
+}
+
+}  // namespace lf

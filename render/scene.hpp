@@ -1,0 +1,67 @@
+#pragma once
+// Scene: triangles with materials, and the emitters among them. Built-in scenes or OBJ+MTL via tinyobjloader.
+#include <array>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "core/farm_spec.hpp"
+#include "core/result.hpp"
+#include "render/math.hpp"
+
+namespace lf {
+
+struct Material {
+  std::string name;
+  RGB kd;  // diffuse reflectance
+  RGB ke;  // emitted radiance; non-zero makes every triangle of this material an area light
+  bool emissive() const { return !is_black(ke); }
+};
+
+class Scene {
+ public:
+  uint32_t add_material(Material m);
+  // Adds a planar quad a-b-c-d as two triangles; its front (emitting) side is the one (b-a)x(c-a) points to.
+  void add_quad(Vec3 a, Vec3 b, Vec3 c, Vec3 d, uint32_t material);
+  void add_triangle(Vec3 a, Vec3 b, Vec3 c, uint32_t material);
+  // Builds the emitter distribution. An error if the scene has no triangles or no emitters.
+  Status finalize(const std::string& what);
+
+  size_t triangle_count() const { return material_of_.size(); }
+  const std::vector<Vec3>& vertices() const { return vertices_; }
+  const std::vector<std::array<uint32_t, 3>>& triangles() const { return triangles_; }
+  const Material& material(uint32_t id) const { return materials_[id]; }
+  const std::vector<Material>& materials() const { return materials_; }
+  uint32_t material_of(uint32_t triangle) const { return material_of_[triangle]; }
+  Vec3 vertex(uint32_t triangle, int corner) const { return vertices_[triangles_[triangle][corner]]; }
+  Vec3 normal(uint32_t triangle) const { return normals_[triangle]; }  // unit, from the winding
+  float area(uint32_t triangle) const { return areas_[triangle]; }
+
+  // Emitters, chosen with probability proportional to emitted power.
+  const std::vector<uint32_t>& emitters() const { return emitters_; }
+  // Picks an emitter for u in [0,1); returns its index in emitters() and its probability.
+  size_t pick_emitter(float u, float& probability) const;
+  float emitter_probability(size_t index) const { return emitter_pdf_[index]; }
+
+  // A distance small against the scene's size, for offsetting ray origins.
+  float epsilon() const { return epsilon_; }
+
+  static Result<Scene> builtin(const std::string& name);
+  static Result<Scene> load_obj(const std::string& path);
+  static Result<Scene> load(const SceneSpec& spec);
+  static const std::vector<std::string>& builtin_names();
+
+ private:
+  std::vector<Vec3> vertices_;
+  std::vector<std::array<uint32_t, 3>> triangles_;
+  std::vector<uint32_t> material_of_;
+  std::vector<Vec3> normals_;
+  std::vector<float> areas_;
+  std::vector<Material> materials_;
+  std::vector<uint32_t> emitters_;
+  std::vector<float> emitter_cdf_;
+  std::vector<float> emitter_pdf_;
+  float epsilon_ = 1e-4f;
+};
+
+}  // namespace lf

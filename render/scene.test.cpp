@@ -1,0 +1,76 @@
+#include "render/scene.hpp"
+
+#include <gtest/gtest.h>
+
+#include <filesystem>
+
+namespace lf {
+
+static const std::string kShared = std::string(LIGHTFARM_SOURCE_DIR) + "/../shared/scenes/cornell_box_mcguire/";
+
+#define REQUIRE_SHARED_SCENES()                                                          \
+  if (!std::filesystem::is_directory(kShared)) GTEST_SKIP() << "no " << kShared << " here"
+
+TEST(Scene, BuiltinCornellBoxHasItsGeometryAndOneDownwardLight) {
+  auto s = Scene::builtin("cornell");
+  ASSERT_TRUE(s.ok()) << s.error().message;
+  EXPECT_EQ(s->triangle_count(), 32u);  // 6 room quads + 10 block faces, two triangles each
+  ASSERT_EQ(s->emitters().size(), 2u);
+  for (uint32_t t : s->emitters()) {
+    EXPECT_FLOAT_EQ(s->normal(t).y, -1.0f);
+    EXPECT_EQ(s->material(s->material_of(t)).name, "light");
+  }
+  float area = s->area(s->emitters()[0]) + s->area(s->emitters()[1]);
+  EXPECT_NEAR(area, 130.0f * 105.0f, 1e-2f);
+}
+
+TEST(Scene, UnknownBuiltinNamesTheKnownOnes) {
+  auto s = Scene::builtin("kitchen");
+  ASSERT_FALSE(s.ok());
+  EXPECT_EQ(s.error().message, "unknown built-in scene 'kitchen' (built-in scenes: cornell)");
+}
+
+TEST(Scene, MissingFileIsAClearError) {
+  auto s = Scene::load_obj("/nonexistent/room.obj");
+  ASSERT_FALSE(s.ok());
+  EXPECT_EQ(s.error().message, "scene file '/nonexistent/room.obj' not found");
+}
+
+TEST(Scene, McGuireOriginalLoadsDespiteTabsAndDuplicateFaces) {
+  REQUIRE_SHARED_SCENES();
+  auto s = Scene::load_obj(kShared + "CornellBox-Original.obj");
+  ASSERT_TRUE(s.ok()) << s.error().message;
+  EXPECT_GE(s->triangle_count(), 30u);
+  ASSERT_FALSE(s->emitters().empty());
+  for (uint32_t t : s->emitters()) {
+    EXPECT_LT(s->normal(t).y, -0.99f);  // the light faces down into the box
+    EXPECT_EQ(s->material(s->material_of(t)).ke, (RGB{17, 12, 4}));
+  }
+}
+
+TEST(Scene, McGuireEmptyCOReadsTheIndentedMaterial) {
+  REQUIRE_SHARED_SCENES();
+  auto s = Scene::load_obj(kShared + "CornellBox-Empty-CO.obj");
+  ASSERT_TRUE(s.ok()) << s.error().message;
+  EXPECT_FALSE(s->emitters().empty());
+}
+
+TEST(Scene, SceneWithoutEmittersIsAnErrorThatSaysSo) {
+  REQUIRE_SHARED_SCENES();
+  auto s = Scene::load_obj(kShared + "CornellBox-Glossy.obj");
+  ASSERT_FALSE(s.ok());
+  EXPECT_NE(s.error().message.find("has no light (no material with Ke > 0)"), std::string::npos)
+      << s.error().message;
+}
+
+TEST(Scene, EveryMcGuireSceneWithALightLoads) {
+  REQUIRE_SHARED_SCENES();
+  for (const char* name : {"CornellBox-Mirror", "CornellBox-Sphere", "CornellBox-Water", "CornellBox-Empty-RG",
+                           "CornellBox-Empty-Squashed", "CornellBox-Empty-White"}) {
+    auto s = Scene::load_obj(kShared + name + ".obj");
+    ASSERT_TRUE(s.ok()) << name << ": " << s.error().message;
+    EXPECT_FALSE(s->emitters().empty()) << name;
+  }
+}
+
+}  // namespace lf

@@ -1,0 +1,72 @@
+#include "render/tile_kernel.hpp"
+
+#include <algorithm>
+
+#include "render/sampler.hpp"
+
+namespace lf {
+
+std::vector<TileRect> make_tiles(int width, int height, int tile_size) {
+  std::vector<TileRect> tiles;
+  for (int y = 0; y < height; y += tile_size)
+    for (int x = 0; x < width; x += tile_size)
+      tiles.push_back({x, y, std::min(x + tile_size, width), std::min(y + tile_size, height)});
+  return tiles;
+}
+
+void trace_tile(const Scene& scene, const RayTracer& tracer, const Camera& camera, const ImageSpec& image,
+                const TileRect& rect, TileWork& work) {
+  work.rect = rect;
+  work.spp = image.spp;
+  const size_t samples = static_cast<size_t>(rect.pixel_count()) * image.spp;
+  thread_local std::vector<Ray> rays;
+  thread_local std::vector<Hit> hits;
+  rays.resize(samples);
+  hits.resize(samples);
+  std::vector<uint64_t> keys(samples);
+  size_t s = 0;
+  for (int y = rect.y0; y < rect.y1; ++y)
+    for (int x = rect.x0; x < rect.x1; ++x) {
+      const uint64_t pixel = static_cast<uint64_t>(y) * image.width + x;
+      for (int k = 0; k < image.spp; ++k, ++s) {
+        keys[s] = sample_key(pixel, static_cast<uint64_t>(k));
+        Rng rng(keys[s], streams::camera);
+        const float jx = rng.uniform(), jy = rng.uniform();
+        rays[s] = camera.ray(static_cast<float>(x) + jx, static_cast<float>(y) + jy);
+      }
+    }
+  tracer.intersect(rays, hits);
+
+  work.points.clear();
+  work.points.reserve(samples);
+  work.sample_of_point.clear();
+  work.emitted.assign(samples, RGB{});
+  for (size_t i = 0; i < samples; ++i) {
+    if (!hits[i].valid()) continue;
+    const uint32_t tri = hits[i].triangle;
+    const Vec3 wo = -rays[i].direction;
+    const Vec3 ng = scene.normal(tri);
+    const bool front = dot(ng, wo) > 0;
+    const Material& m = scene.material(scene.material_of(tri));
+    if (front && m.emissive()) work.emitted[i] = m.ke;
+    const Vec3 p = rays[i].origin + rays[i].direction * hits[i].t;
+    work.points.push_back(p, front ? ng : -ng, wo, scene.material_of(tri), keys[i]);
+    work.sample_of_point.push_back(static_cast<uint32_t>(i));
+  }
+}
+
+void resolve_tile(const TileWork& work, std::span<const RGB> radiance, std::vector<RGB>& pixels) {
+  const size_t samples = work.emitted.size();
+  std::vector<RGB> per_sample(work.emitted);
+  for (size_t j = 0; j < work.sample_of_point.size(); ++j) per_sample[work.sample_of_point[j]] += radiance[j];
+  const size_t spp = static_cast<size_t>(work.spp);
+  pixels.assign(samples / spp, RGB{});
+  const float inv = 1.0f / static_cast<float>(spp);
+  for (size_t p = 0; p < pixels.size(); ++p) {
+    RGB sum{};
+    for (size_t k = 0; k < spp; ++k) sum += per_sample[p * spp + k];
+    pixels[p] = sum * inv;
+  }
+}
+
+}  // namespace lf

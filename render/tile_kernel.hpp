@@ -1,0 +1,38 @@
+#pragma once
+// The renderer's per-tile kernel, apart from the host program that moves tiles around (Embree tutorials' split):
+// trace the camera rays of a tile into shading points, then fold the radiance the lighting network returns into
+// pixels. The renderer actor and the bare single-process benchmark both call exactly this.
+#include <span>
+#include <vector>
+
+#include "core/farm_spec.hpp"
+#include "render/camera.hpp"
+#include "render/lightop.hpp"
+
+namespace lf {
+
+struct TileRect {
+  int x0 = 0, y0 = 0, x1 = 0, y1 = 0;  // half-open
+  int width() const { return x1 - x0; }
+  int height() const { return y1 - y0; }
+  int pixel_count() const { return width() * height(); }
+};
+
+// Tiles covering the image, row by row.
+std::vector<TileRect> make_tiles(int width, int height, int tile_size);
+
+struct TileWork {
+  TileRect rect;
+  int spp = 1;
+  ShadingPoints points;                 // one per camera sample that hit a surface
+  std::vector<uint32_t> sample_of_point;  // which sample (pixel-major, then sample index) each point is
+  std::vector<RGB> emitted;             // per sample: emission the camera sees directly
+};
+
+void trace_tile(const Scene& scene, const RayTracer& tracer, const Camera& camera, const ImageSpec& image,
+                const TileRect& rect, TileWork& work);
+
+// pixels[p] = mean over samples of (emitted + radiance of its point); sums run in sample order.
+void resolve_tile(const TileWork& work, std::span<const RGB> radiance, std::vector<RGB>& pixels);
+
+}  // namespace lf

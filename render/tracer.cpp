@@ -1,0 +1,94 @@
+#include "render/tracer.hpp"
+
+#include <embree3/rtcore.h>
+
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+namespace lf {
+
+struct RayTracer::Impl {
+  RTCDevice device = nullptr;
+  RTCScene scene = nullptr;
+  ~Impl() {
+    if (scene) rtcReleaseScene(scene);
+    if (device) rtcReleaseDevice(device);
+  }
+};
+
+RayTracer::RayTracer(const Scene& scene) : impl_(std::make_unique<Impl>()), scene_(scene) {
+  // One thread per actor: parallelism comes from processes (and Embree's own pool would fight them for cores).
+  impl_->device = rtcNewDevice("threads=1");
+  if (!impl_->device) throw std::runtime_error("Embree: cannot create a device");
+  impl_->scene = rtcNewScene(impl_->device);
+  RTCGeometry geom = rtcNewGeometry(impl_->device, RTC_GEOMETRY_TYPE_TRIANGLE);
+  auto* vb = static_cast<float*>(rtcSetNewGeometryBuffer(geom, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3,
+                                                         3 * sizeof(float), scene.vertices().size()));
+  for (size_t i = 0; i < scene.vertices().size(); ++i) {
+    vb[3 * i] = scene.vertices()[i].x;
+    vb[3 * i + 1] = scene.vertices()[i].y;
+    vb[3 * i + 2] = scene.vertices()[i].z;
+  }
+  auto* ib = static_cast<unsigned*>(rtcSetNewGeometryBuffer(geom, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3,
+                                                            3 * sizeof(unsigned), scene.triangles().size()));
+  for (size_t i = 0; i < scene.triangles().size(); ++i)
+    for (int c = 0; c < 3; ++c) ib[3 * i + c] = scene.triangles()[i][c];
+  rtcCommitGeometry(geom);
+  rtcAttachGeometry(impl_->scene, geom);
+  rtcReleaseGeometry(geom);
+  rtcCommitScene(impl_->scene);
+  if (rtcGetDeviceError(impl_->device) != RTC_ERROR_NONE) throw std::runtime_error("Embree: cannot build the scene");
+}
+
+RayTracer::~RayTracer() = default;
+
+static void fill(RTCRay& r, const Ray& ray) {
+  r.org_x = ray.origin.x;
+  r.org_y = ray.origin.y;
+  r.org_z = ray.origin.z;
+  r.dir_x = ray.direction.x;
+  r.dir_y = ray.direction.y;
+  r.dir_z = ray.direction.z;
+  r.tnear = ray.tnear;
+  r.tfar = ray.tfar;
+  r.time = 0;
+  r.mask = 0xffffffffu;
+  r.id = 0;
+  r.flags = 0;
+}
+
+void RayTracer::intersect(std::span<const Ray> rays, std::span<Hit> hits) const {
+  thread_local std::vector<RTCRayHit> buffer;
+  buffer.resize(rays.size());
+  for (size_t i = 0; i < rays.size(); ++i) {
+    fill(buffer[i].ray, rays[i]);
+    buffer[i].hit.geomID = RTC_INVALID_GEOMETRY_ID;
+    buffer[i].hit.primID = RTC_INVALID_GEOMETRY_ID;
+    buffer[i].hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
+  }
+  RTCIntersectContext context;
+  rtcInitIntersectContext(&context);
+  context.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
+  rtcIntersect1M(impl_->scene, &context, buffer.data(), static_cast<unsigned>(rays.size()), sizeof(RTCRayHit));
+  for (size_t i = 0; i < rays.size(); ++i) {
+    if (buffer[i].hit.geomID == RTC_INVALID_GEOMETRY_ID) {
+      hits[i] = Hit{};
+    } else {
+      hits[i] = Hit{buffer[i].hit.primID, buffer[i].ray.tfar};
+    }
+  }
+}
+
+void RayTracer::occluded(std::span<const Ray> rays, std::span<uint8_t> occluded) const {
+  thread_local std::vector<RTCRay> buffer;
+  buffer.resize(rays.size());
+  for (size_t i = 0; i < rays.size(); ++i) fill(buffer[i], rays[i]);
+  RTCIntersectContext context;
+  rtcInitIntersectContext(&context);
+  rtcOccluded1M(impl_->scene, &context, buffer.data(), static_cast<unsigned>(rays.size()), sizeof(RTCRay));
+  // Embree marks an occluded ray by setting tfar to -inf.
+  for (size_t i = 0; i < rays.size(); ++i) occluded[i] = buffer[i].tfar < 0 ? 1 : 0;
+}
+
+}  // namespace lf

@@ -1,0 +1,46 @@
+#pragma once
+// RayTracer: the scene in an Embree BVH. Rays are traced in streams (rtcIntersect1M / rtcOccluded1M), which is
+// how Embree is fastest for the coherent batches renderers and LightOps produce.
+#include <cstdint>
+#include <limits>
+#include <memory>
+#include <span>
+
+#include "render/math.hpp"
+#include "render/scene.hpp"
+
+namespace lf {
+
+struct Ray {
+  Vec3 origin;
+  Vec3 direction;
+  float tnear = 0;
+  float tfar = std::numeric_limits<float>::infinity();
+};
+
+struct Hit {
+  static constexpr uint32_t kNone = 0xffffffffu;
+  uint32_t triangle = kNone;
+  float t = 0;
+  bool valid() const { return triangle != kNone; }
+};
+
+class RayTracer {
+ public:
+  explicit RayTracer(const Scene& scene);
+  ~RayTracer();
+  RayTracer(const RayTracer&) = delete;
+  RayTracer& operator=(const RayTracer&) = delete;
+
+  void intersect(std::span<const Ray> rays, std::span<Hit> hits) const;
+  // occluded[i] = 1 when something lies on ray i between tnear and tfar.
+  void occluded(std::span<const Ray> rays, std::span<uint8_t> occluded) const;
+  const Scene& scene() const { return scene_; }
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+  const Scene& scene_;
+};
+
+}  // namespace lf
