@@ -1,0 +1,504 @@
+// The farm-script library. Like Lua's own libraries: one registration table, every argument checked with
+// luaL_check*, so a mistake comes back as "farm.lua:12: what is wrong".
+//
+// Globals a script sees: scene, camera, image, lightop, renderers, host, param (and Lua's base, string, table,
+// math and utf8 libraries; no io or os, so a script describes a farm and does nothing else).
+#include "lua/script.hpp"
+
+#include <lua.hpp>
+
+#include <cmath>
+#include <filesystem>
+#include <set>
+
+#include "core/params.hpp"
+#include "render/lightop_registry.hpp"
+#include "render/scene.hpp"
+
+namespace lf {
+namespace {
+
+namespace fs = std::filesystem;
+
+constexpr const char* kActorMeta = "lightfarm.actor";
+constexpr const char* kHostMeta = "lightfarm.host";
+
+struct Builder {
+  FarmSpec spec;
+  ScriptOptions options;
+  fs::path script_dir;
+  std::set<std::string> consumed_params;
+  bool have_scene = false, have_camera = false, have_image = false, have_renderers = false;
+};
+
+Builder& builder(lua_State* L) { return *static_cast<Builder*>(lua_touserdata(L, lua_upvalueindex(1))); }
+
+SourceLoc caller_loc(lua_State* L) {
+  lua_Debug ar;
+  for (int level = 1; lua_getstack(L, level, &ar); ++level) {
+    lua_getinfo(L, "Sl", &ar);
+    if (ar.currentline > 0) return SourceLoc{ar.short_src, ar.currentline};
+  }
+  return SourceLoc{};
+}
+
+// Lua value at idx -> Value. Actor and host handles are refused: only wiring keys may hold them.
+Value to_value(lua_State* L, int idx, const std::string& what, int depth = 0) {
+  idx = lua_absindex(L, idx);
+  if (depth > 16) luaL_error(L, "%s nests too deeply", what.c_str());
+  switch (lua_type(L, idx)) {
+    case LUA_TNIL: return Value();
+    case LUA_TBOOLEAN: return Value(static_cast<bool>(lua_toboolean(L, idx)));
+    case LUA_TNUMBER:
+      if (lua_isinteger(L, idx)) return Value(static_cast<int64_t>(lua_tointeger(L, idx)));
+      return Value(static_cast<double>(lua_tonumber(L, idx)));
+    case LUA_TSTRING: return Value(std::string(lua_tostring(L, idx)));
+    case LUA_TTABLE: {
+      lua_Integer n = luaL_len(L, idx);
+      size_t count = 0;
+      lua_pushnil(L);
+      while (lua_next(L, idx)) {
+        ++count;
+        lua_pop(L, 1);
+      }
+      if (n > 0 && static_cast<size_t>(n) == count) {
+        Value::Array a;
+        for (lua_Integer i = 1; i <= n; ++i) {
+          lua_geti(L, idx, i);
+          a.push_back(to_value(L, -1, what, depth + 1));
+          lua_pop(L, 1);
+        }
+        return Value(std::move(a));
+      }
+      Value::Map m;
+      lua_pushnil(L);
+      while (lua_next(L, idx)) {
+        if (lua_type(L, -2) != LUA_TSTRING) luaL_error(L, "%s: table keys must be names", what.c_str());
+        std::string key = lua_tostring(L, -2);
+        m.emplace(key, to_value(L, -1, what + "." + key, depth + 1));
+        lua_pop(L, 1);
+      }
+      return Value(std::move(m));
+    }
+    case LUA_TUSERDATA:
+      if (luaL_testudata(L, idx, kActorMeta) || luaL_testudata(L, idx, kHostMeta))
+        luaL_error(L, "%s cannot hold an actor or host here", what.c_str());
+      [[fallthrough]];
+    default: luaL_error(L, "%s: a %s is not a valid value", what.c_str(), luaL_typename(L, idx));
+  }
+  return Value();
+}
+
+// Runs fn, turning ParamError into a Lua error at the caller's line.
+template <class Fn>
+void with_params(lua_State* L, Fn&& fn) {
+  std::string failure;
+  try {
+    fn();
+    return;
+  } catch (const ParamError& e) {
+    failure = e.what();
+  }
+  luaL_error(L, "%s", failure.c_str());
+}
+
+// Reads a table argument into a ParamTable named `owner`.
+ParamTable table_params(lua_State* L, int idx, const std::string& owner) {
+  luaL_checktype(L, idx, LUA_TTABLE);
+  Value v = to_value(L, idx, owner);
+  return ParamTable(v.is_map() ? v.as_map() : Value::Map{}, owner);
+}
+
+int actor_index(lua_State* L, int idx, const char* what) {
+  auto* handle = static_cast<int*>(luaL_testudata(L, idx, kActorMeta));
+  if (!handle) {
+    luaL_error(L, "%s must be a LightOp (made with lightop \"kind\" { ... }), got a %s", what, luaL_typename(L, idx));
+  }
+  return *handle;
+}
+
+void push_actor(lua_State* L, int index) {
+  auto* handle = static_cast<int*>(lua_newuserdatauv(L, sizeof(int), 0));
+  *handle = index;
+  luaL_setmetatable(L, kActorMeta);
+}
+
+// Takes `host = h` out of a table (if present) and returns the host's name.
+std::string take_host(lua_State* L, int table, Builder& b) {
+  lua_getfield(L, table, "host");
+  std::string host = "local";
+  if (!lua_isnil(L, -1)) {
+    auto* name = static_cast<std::string*>(luaL_testudata(L, -1, kHostMeta));
+    if (name) {
+      host = *name;
+    } else if (lua_type(L, -1) == LUA_TSTRING) {
+      host = lua_tostring(L, -1);
+      bool known = host == "local";
+      for (const auto& h : b.spec.hosts) known = known || h.name == host;
+      if (!known) luaL_error(L, "host '%s' is not declared (declare it with host \"%s\" { ... })", host.c_str(), host.c_str());
+    } else {
+      luaL_error(L, "host must be a host (made with host \"name\" { ... }) or its name");
+    }
+  }
+  lua_pop(L, 1);
+  lua_pushnil(L);
+  lua_setfield(L, table, "host");
+  return host;
+}
+
+// scene { builtin = "cornell" } | scene { file = "room.obj" }
+int l_scene(lua_State* L) {
+  Builder& b = builder(L);
+  if (b.have_scene) luaL_error(L, "scene is declared twice");
+  ParamTable p = table_params(L, 1, "scene");
+  with_params(L, [&] {
+    b.spec.scene.builtin = p.get_string("builtin", "", Scene::builtin_names());
+    b.spec.scene.file = p.get_string("file", "");
+    p.report_unused();
+  });
+  if (b.spec.scene.builtin.empty() == b.spec.scene.file.empty())
+    luaL_error(L, "scene needs exactly one of builtin = \"cornell\" or file = \"path.obj\"");
+  if (!b.spec.scene.file.empty()) {
+    fs::path f(b.spec.scene.file);
+    if (f.is_relative()) f = b.script_dir / f;  // relative to the script, so a farm travels with its scene
+    std::error_code ec;
+    if (!fs::is_regular_file(f, ec)) luaL_error(L, "scene file '%s' not found", f.string().c_str());
+    b.spec.scene.file = fs::absolute(f).lexically_normal().string();
+  }
+  b.spec.scene.loc = caller_loc(L);
+  b.have_scene = true;
+  return 0;
+}
+
+// camera { eye = {x,y,z}, at = {x,y,z}, up = {0,1,0}, fov = 39.3 }
+int l_camera(lua_State* L) {
+  Builder& b = builder(L);
+  if (b.have_camera) luaL_error(L, "camera is declared twice");
+  ParamTable p = table_params(L, 1, "camera");
+  CameraSpec& c = b.spec.camera;
+  with_params(L, [&] {
+    c.eye = p.get_vec3("eye", c.eye);
+    c.at = p.get_vec3("at", c.at);
+    c.up = p.get_vec3("up", c.up);
+    c.fov = p.get_float("fov", c.fov, 0.1, 179.0);
+    p.report_unused();
+  });
+  double dx = c.at[0] - c.eye[0], dy = c.at[1] - c.eye[1], dz = c.at[2] - c.eye[2];
+  if (dx * dx + dy * dy + dz * dz == 0) luaL_error(L, "camera: eye and at are the same point");
+  double cx = dy * c.up[2] - dz * c.up[1], cy = dz * c.up[0] - dx * c.up[2], cz = dx * c.up[1] - dy * c.up[0];
+  if (cx * cx + cy * cy + cz * cz == 0) luaL_error(L, "camera: up is parallel to the viewing direction");
+  b.have_camera = true;
+  return 0;
+}
+
+// image { width = 512, height = 512, spp = 16, tile = 16, output = "cornell.png" }
+int l_image(lua_State* L) {
+  Builder& b = builder(L);
+  if (b.have_image) luaL_error(L, "image is declared twice");
+  ParamTable p = table_params(L, 1, "image");
+  ImageSpec& i = b.spec.image;
+  with_params(L, [&] {
+    i.width = static_cast<int>(p.get_int("width", i.width, 1, 16384));
+    i.height = static_cast<int>(p.get_int("height", i.height, 1, 16384));
+    i.spp = static_cast<int>(p.get_int("spp", i.spp, 1, 65536));
+    i.tile = static_cast<int>(p.get_int("tile", i.tile, 1, 1024));
+    i.output = p.get_string("output", i.output);
+    p.report_unused();
+  });
+  b.have_image = true;
+  return 0;
+}
+
+// host "name" { launcher = "local", address = "127.0.0.1" } -> host handle
+int l_host_table(lua_State* L) {
+  Builder& b = builder(L);
+  const char* name = luaL_checkstring(L, lua_upvalueindex(2));
+  ParamTable p = table_params(L, 1, std::string("host '") + name + "'");
+  HostSpec h;
+  h.name = name;
+  with_params(L, [&] {
+    h.launcher = p.get_string("launcher", "local", {"local", "ssh", "slurm"});
+    h.address = p.get_string("address", "127.0.0.1");
+    p.report_unused();
+  });
+  if (h.launcher != "local")
+    luaL_error(L, "host '%s': launcher '%s' is not available yet (only \"local\")", name, h.launcher.c_str());
+  for (const auto& other : b.spec.hosts)
+    if (other.name == h.name) luaL_error(L, "host '%s' is declared twice", name);
+  h.loc = caller_loc(L);
+  b.spec.hosts.push_back(h);
+  auto* ud = static_cast<std::string*>(lua_newuserdatauv(L, sizeof(std::string), 0));
+  new (ud) std::string(h.name);
+  luaL_setmetatable(L, kHostMeta);
+  return 1;
+}
+
+int l_host(lua_State* L) {
+  luaL_checkstring(L, 1);
+  lua_pushvalue(L, lua_upvalueindex(1));
+  lua_pushvalue(L, 1);
+  lua_pushcclosure(L, l_host_table, 2);
+  return 1;
+}
+
+std::string unique_name(const Builder& b, const std::string& wanted) {
+  auto taken = [&](const std::string& n) {
+    for (const auto& a : b.spec.actors)
+      if (a.name == n) return true;
+    return false;
+  };
+  if (!taken(wanted)) return wanted;
+  for (int i = 2;; ++i)
+    if (!taken(wanted + "-" + std::to_string(i))) return wanted + "-" + std::to_string(i);
+}
+
+// lightop "kind" { params..., input = op | inputs = {op, ...}, name = "...", host = h } -> LightOp handle
+int l_lightop_table(lua_State* L) {
+  Builder& b = builder(L);
+  const std::string kind_name = luaL_checkstring(L, lua_upvalueindex(2));
+  luaL_checktype(L, 1, LUA_TTABLE);
+  const LightOpKind* kind = find_lightop_kind(kind_name);  // checked in l_lightop already
+
+  ActorSpec a;
+  a.kind = kind_name;
+  a.loc = caller_loc(L);
+  // Wiring keys come out of the table before the rest becomes the op's parameters.
+  lua_getfield(L, 1, "input");
+  if (!lua_isnil(L, -1)) a.inputs.push_back(actor_index(L, -1, "input"));
+  lua_pop(L, 1);
+  lua_getfield(L, 1, "inputs");
+  if (!lua_isnil(L, -1)) {
+    if (!a.inputs.empty()) luaL_error(L, "lightop '%s': give either input or inputs, not both", kind_name.c_str());
+    luaL_checktype(L, -1, LUA_TTABLE);
+    lua_Integer n = luaL_len(L, -1);
+    for (lua_Integer i = 1; i <= n; ++i) {
+      lua_geti(L, -1, i);
+      a.inputs.push_back(actor_index(L, -1, "each of inputs"));
+      lua_pop(L, 1);
+    }
+  }
+  lua_pop(L, 1);
+  lua_getfield(L, 1, "name");
+  std::string wanted = lua_isnil(L, -1) ? kind_name : luaL_checkstring(L, -1);
+  lua_pop(L, 1);
+  a.host = take_host(L, 1, b);
+  for (const char* key : {"input", "inputs", "name"}) {
+    lua_pushnil(L);
+    lua_setfield(L, 1, key);
+  }
+
+  const int n_inputs = static_cast<int>(a.inputs.size());
+  if (n_inputs < kind->min_inputs || (kind->max_inputs >= 0 && n_inputs > kind->max_inputs)) {
+    std::string want = kind->max_inputs == kind->min_inputs ? std::to_string(kind->min_inputs)
+                       : kind->max_inputs < 0 ? "at least " + std::to_string(kind->min_inputs)
+                                              : std::to_string(kind->min_inputs) + " to " + std::to_string(kind->max_inputs);
+    luaL_error(L, "lightop '%s' takes %s input%s, got %d", kind_name.c_str(), want.c_str(),
+               want == "1" ? "" : "s", n_inputs);
+  }
+  ParamTable params = table_params(L, 1, "lightop '" + kind_name + "'");
+  with_params(L, [&] { create_lightop(*kind, params); });  // the op validates its own parameters
+  a.params = params.values();
+  if (wanted.empty() || wanted.size() > 64) luaL_error(L, "lightop name must be 1 to 64 characters");
+  a.name = unique_name(b, wanted);
+  b.spec.actors.push_back(std::move(a));
+  push_actor(L, static_cast<int>(b.spec.actors.size() - 1));
+  return 1;
+}
+
+int l_lightop(lua_State* L) {
+  const char* kind = luaL_checkstring(L, 1);
+  if (!find_lightop_kind(kind))
+    luaL_error(L, "unknown LightOp kind '%s' (known kinds: %s)", kind, lightop_kind_list().c_str());
+  lua_pushvalue(L, lua_upvalueindex(1));
+  lua_pushvalue(L, 1);
+  lua_pushcclosure(L, l_lightop_table, 2);
+  return 1;
+}
+
+// renderers { count = 2, lighting = op, batch = 4096, window = 4, host = h }
+int l_renderers(lua_State* L) {
+  Builder& b = builder(L);
+  if (b.have_renderers) luaL_error(L, "renderers is declared twice");
+  luaL_checktype(L, 1, LUA_TTABLE);
+  lua_getfield(L, 1, "lighting");
+  if (lua_isnil(L, -1)) luaL_error(L, "renderers needs lighting = <a LightOp>");
+  int lighting = actor_index(L, -1, "lighting");
+  lua_pop(L, 1);
+  lua_pushnil(L);
+  lua_setfield(L, 1, "lighting");
+  std::string host = take_host(L, 1, b);
+  ParamTable p = table_params(L, 1, "renderers");
+  int count = 1;
+  Value::Map params;
+  with_params(L, [&] {
+    count = static_cast<int>(p.get_int("count", 1, 1, 256));
+    params["batch"] = p.get_int("batch", 4096, 1, 1 << 20);
+    params["window"] = p.get_int("window", 4, 1, 64);
+    p.report_unused();
+  });
+  SourceLoc loc = caller_loc(L);
+  b.spec.lighting = lighting;
+  for (int i = 0; i < count; ++i) {
+    ActorSpec a;
+    a.name = "renderer-" + std::to_string(i);
+    a.kind = "renderer";
+    a.params = params;
+    a.inputs = {lighting};
+    a.host = host;
+    a.loc = loc;
+    b.spec.actors.push_back(std::move(a));
+  }
+  b.have_renderers = true;
+  return 0;
+}
+
+// param(name, default): the value of --set name=..., converted to default's type, or default.
+int l_param(lua_State* L) {
+  Builder& b = builder(L);
+  const char* name = luaL_checkstring(L, 1);
+  luaL_checkany(L, 2);
+  auto it = b.options.set.find(name);
+  if (it == b.options.set.end()) {
+    lua_pushvalue(L, 2);
+    return 1;
+  }
+  b.consumed_params.insert(name);
+  const std::string& text = it->second;
+  switch (lua_type(L, 2)) {
+    case LUA_TNUMBER:
+      if (!lua_stringtonumber(L, text.c_str()))
+        luaL_error(L, "--set %s=%s: param '%s' is a number", name, text.c_str(), name);
+      return 1;
+    case LUA_TBOOLEAN:
+      if (text != "true" && text != "false")
+        luaL_error(L, "--set %s=%s: param '%s' is true or false", name, text.c_str(), name);
+      lua_pushboolean(L, text == "true");
+      return 1;
+    case LUA_TSTRING: lua_pushstring(L, text.c_str()); return 1;
+    default: return luaL_error(L, "param '%s': the default must be a number, boolean or string", name);
+  }
+}
+
+int actor_tostring(lua_State* L) {
+  lua_pushfstring(L, "lightop #%d", *static_cast<int*>(luaL_checkudata(L, 1, kActorMeta)));
+  return 1;
+}
+
+int host_gc(lua_State* L) {
+  static_cast<std::string*>(luaL_checkudata(L, 1, kHostMeta))->~basic_string();
+  return 0;
+}
+
+const luaL_Reg kFarmLib[] = {{"scene", l_scene},   {"camera", l_camera},       {"image", l_image},
+                             {"lightop", l_lightop}, {"renderers", l_renderers}, {"host", l_host},
+                             {"param", l_param},   {nullptr, nullptr}};
+
+void open_libs(lua_State* L) {
+  // A farm script describes; it does not read files or run programs.
+  const luaL_Reg libs[] = {{LUA_GNAME, luaopen_base},
+                           {LUA_TABLIBNAME, luaopen_table},
+                           {LUA_STRLIBNAME, luaopen_string},
+                           {LUA_MATHLIBNAME, luaopen_math},
+                           {LUA_UTF8LIBNAME, luaopen_utf8}};
+  for (const auto& lib : libs) {
+    luaL_requiref(L, lib.name, lib.func, 1);
+    lua_pop(L, 1);
+  }
+  for (const char* unsafe : {"dofile", "loadfile", "load", "require", "collectgarbage"}) {
+    lua_pushnil(L);
+    lua_setglobal(L, unsafe);
+  }
+}
+
+std::string finish(Builder& b) {
+  const FarmSpec& s = b.spec;
+  if (!b.have_scene) return "the script declares no scene (add scene { builtin = \"cornell\" })";
+  if (!b.have_renderers) return "the script declares no renderers (add renderers { lighting = ... })";
+  for (const auto& [name, value] : b.options.set)
+    if (!b.consumed_params.count(name)) return "--set " + name + "=" + value + ": the script has no param '" + name + "'";
+  // Every LightOp must be reachable from the renderers' lighting: a dangling one would run for nothing.
+  std::vector<bool> used(s.actors.size(), false);
+  std::vector<int> stack{s.lighting};
+  while (!stack.empty()) {
+    int i = stack.back();
+    stack.pop_back();
+    if (used[static_cast<size_t>(i)]) continue;
+    used[static_cast<size_t>(i)] = true;
+    for (int in : s.actors[static_cast<size_t>(i)].inputs) stack.push_back(in);
+  }
+  for (size_t i = 0; i < s.actors.size(); ++i)
+    if (!s.actors[i].is_renderer() && !used[i])
+      return s.actors[i].loc.str() + ": lightop '" + s.actors[i].name +
+             "' is not connected to the renderers' lighting (nothing would ask it for light)";
+  return {};
+}
+
+}  // namespace
+
+Result<FarmSpec> evaluate_script(const std::string& path, const ScriptOptions& options) {
+  std::error_code ec;
+  if (!fs::is_regular_file(path, ec)) return make_error("script '" + path + "' not found");
+  Builder b;
+  b.options = options;
+  b.spec.script = path;
+  b.script_dir = fs::absolute(fs::path(path)).parent_path();
+
+  lua_State* L = luaL_newstate();
+  if (!L) return make_error("cannot create a Lua state");
+  open_libs(L);
+  luaL_newmetatable(L, kActorMeta);
+  lua_pushcfunction(L, actor_tostring);
+  lua_setfield(L, -2, "__tostring");
+  lua_pop(L, 1);
+  luaL_newmetatable(L, kHostMeta);
+  lua_pushcfunction(L, host_gc);
+  lua_setfield(L, -2, "__gc");
+  lua_pop(L, 1);
+  for (const luaL_Reg* f = kFarmLib; f->name; ++f) {
+    lua_pushlightuserdata(L, &b);
+    lua_pushcclosure(L, f->func, 1);
+    lua_setglobal(L, f->name);
+  }
+
+  std::string failure;
+  if (luaL_loadfile(L, path.c_str()) != LUA_OK || lua_pcall(L, 0, 0, 0) != LUA_OK) {
+    failure = lua_isstring(L, -1) ? lua_tostring(L, -1) : "script failed with a non-string error";
+  }
+  lua_close(L);
+  if (!failure.empty()) return make_error(failure);
+  if (std::string e = finish(b); !e.empty()) return make_error(e.find(path) == 0 ? e : path + ": " + e);
+  if (!options.output.empty()) b.spec.image.output = options.output;
+  return std::move(b.spec);
+}
+
+std::string to_dot(const FarmSpec& spec) {
+  std::string out = "digraph farm {\n  rankdir=LR;\n  node [shape=box, style=rounded];\n";
+  auto id = [](const std::string& name) { return "\"" + name + "\""; };
+  std::map<std::string, std::vector<std::string>> by_host;
+  const int renderers = spec.renderer_count();
+  for (const auto& a : spec.actors) {
+    if (a.is_renderer()) {
+      if (a.name != "renderer-0") continue;
+      by_host[a.host].push_back("    " + id("renderers") + " [label=\"renderer × " + std::to_string(renderers) +
+                                "\", shape=box3d];");
+    } else {
+      by_host[a.host].push_back("    " + id(a.name) + " [label=\"" + a.name + "\\n(" + a.kind + ")\"];");
+    }
+  }
+  for (const auto& [host, lines] : by_host) {
+    out += "  subgraph \"cluster_" + host + "\" {\n    label=\"host " + host + "\";\n";
+    for (const auto& l : lines) out += l + "\n";
+    out += "  }\n";
+  }
+  out += "  film [shape=note, label=\"film\\n" + spec.image.output + "\"];\n";
+  for (const auto& a : spec.actors) {
+    if (a.is_renderer()) continue;
+    for (int in : a.inputs) out += "  " + id(spec.actors[static_cast<size_t>(in)].name) + " -> " + id(a.name) + ";\n";
+  }
+  if (spec.lighting >= 0)
+    out += "  " + id(spec.actors[static_cast<size_t>(spec.lighting)].name) + " -> " + id("renderers") + ";\n";
+  out += "  \"renderers\" -> film;\n}\n";
+  return out;
+}
+
+}  // namespace lf

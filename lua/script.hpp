@@ -1,0 +1,23 @@
+#pragma once
+// Farm scripts: Lua 5.4, declarative. Evaluating a script yields a FarmSpec or an error that names the script's
+// file and line. The functions a script may call are documented in docs/lua-api.md.
+#include <map>
+#include <string>
+
+#include "core/farm_spec.hpp"
+#include "core/result.hpp"
+
+namespace lf {
+
+struct ScriptOptions {
+  std::map<std::string, std::string> set;  // --set name=value, read by param(name, default)
+  std::string output;                      // --output FILE, overrides image { output = ... }
+};
+
+Result<FarmSpec> evaluate_script(const std::string& path, const ScriptOptions& options = {});
+
+// The actor graph as Graphviz DOT: one node per actor (renderers folded into one node), edges in the direction
+// light flows, one cluster per host.
+std::string to_dot(const FarmSpec& spec);
+
+}  // namespace lf

@@ -1,0 +1,137 @@
+#include "lua/script.hpp"
+
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <filesystem>
+#include <fstream>
+
+namespace lf {
+
+namespace fs = std::filesystem;
+
+class ScriptTest : public ::testing::Test {
+ protected:
+  fs::path dir;
+  void SetUp() override {
+    dir = fs::temp_directory_path() / ("lightfarm-script-test-" + std::to_string(::getpid()));
+    fs::create_directories(dir);
+  }
+  void TearDown() override { fs::remove_all(dir); }
+  std::string write(const std::string& name, const std::string& text) {
+    auto p = dir / name;
+    std::ofstream(p) << text;
+    return p.string();
+  }
+  std::string error_of(const std::string& text, ScriptOptions o = {}) {
+    auto path = write("farm.lua", text);
+    auto r = evaluate_script(path, o);
+    EXPECT_FALSE(r.ok());
+    if (r.ok()) return {};
+    // Make messages independent of the temporary directory.
+    std::string m = r.error().message;
+    auto pos = m.find(path);
+    if (pos != std::string::npos) m.replace(pos, path.size(), "farm.lua");
+    return m;
+  }
+};
+
+static const char* kCornell = R"(scene { builtin = "cornell" }
+camera { eye = {278, 273, -800}, at = {278, 273, 0}, fov = 39.3 }
+image { width = 64, height = 48, spp = 2, output = "x.png" }
+local direct = lightop "direct" { light_samples = param("light_samples", 2) }
+renderers { count = param("renderers", 2), lighting = direct }
+)";
+
+TEST_F(ScriptTest, CornellScriptBuildsTheGraph) {
+  auto r = evaluate_script(write("farm.lua", kCornell));
+  ASSERT_TRUE(r.ok()) << r.error().message;
+  const FarmSpec& s = *r;
+  EXPECT_EQ(s.scene.builtin, "cornell");
+  EXPECT_EQ(s.image.width, 64);
+  EXPECT_EQ(s.image.spp, 2);
+  ASSERT_EQ(s.actors.size(), 3u);
+  EXPECT_EQ(s.actors[0].name, "direct");
+  EXPECT_EQ(s.actors[0].params.at("light_samples").as_int(), 2);
+  EXPECT_EQ(s.actors[0].loc.line, 4);
+  EXPECT_EQ(s.renderer_count(), 2);
+  EXPECT_EQ(s.actors[2].name, "renderer-1");
+  EXPECT_EQ(s.actors[2].inputs, std::vector<int>{0});
+  EXPECT_EQ(s.lighting, 0);
+}
+
+TEST_F(ScriptTest, SetOverridesParamsWithTheDefaultsType) {
+  ScriptOptions o;
+  o.set = {{"renderers", "3"}, {"light_samples", "8"}};
+  o.output = "other.exr";
+  auto r = evaluate_script(write("farm.lua", kCornell), o);
+  ASSERT_TRUE(r.ok()) << r.error().message;
+  EXPECT_EQ(r->renderer_count(), 3);
+  EXPECT_EQ(r->actors[0].params.at("light_samples").as_int(), 8);
+  EXPECT_EQ(r->image.output, "other.exr");
+}
+
+TEST_F(ScriptTest, SetErrorsNameTheParam) {
+  ScriptOptions o;
+  o.set = {{"renderers", "many"}};
+  EXPECT_EQ(error_of(kCornell, o), "farm.lua:5: --set renderers=many: param 'renderers' is a number");
+  o.set = {{"renderer", "2"}};
+  EXPECT_EQ(error_of(kCornell, o), "farm.lua: --set renderer=2: the script has no param 'renderer'");
+}
+
+TEST_F(ScriptTest, SyntaxErrorNamesFileAndLine) {
+  EXPECT_EQ(error_of("scene { builtin = \"cornell\" }\nlocal x = = 3\n"), "farm.lua:2: unexpected symbol near '='");
+}
+
+TEST_F(ScriptTest, UnknownKindNamesLineAndKnownKinds) {
+  EXPECT_EQ(error_of("scene { builtin = \"cornell\" }\n\nlocal p = lightop \"photon\" { }\n"),
+            "farm.lua:3: unknown LightOp kind 'photon' (known kinds: direct)");
+}
+
+TEST_F(ScriptTest, BadParametersNameLineAndParameter) {
+  EXPECT_EQ(error_of("local d = lightop \"direct\" { light_sample = 4 }\n"),
+            "farm.lua:1: lightop 'direct': unknown parameter 'light_sample' (known: light_samples, seed)");
+  EXPECT_EQ(error_of("local d = lightop \"direct\" { light_samples = -1 }\n"),
+            "farm.lua:1: lightop 'direct': parameter 'light_samples' must be in [1, 1048576], got -1");
+  EXPECT_EQ(error_of("image { width = 0 }\n"), "farm.lua:1: image: parameter 'width' must be in [1, 16384], got 0");
+  EXPECT_EQ(error_of("camera { eye = {0, 0, 0}, at = {0, 0, 0} }\n"), "farm.lua:1: camera: eye and at are the same point");
+}
+
+TEST_F(ScriptTest, WiringErrors) {
+  EXPECT_EQ(error_of("scene { builtin = \"cornell\" }\nrenderers { lighting = 3 }\n"),
+            "farm.lua:2: lighting must be a LightOp (made with lightop \"kind\" { ... }), got a number");
+  EXPECT_EQ(error_of("local d = lightop \"direct\" {}\nlocal e = lightop \"direct\" { input = d }\n"),
+            "farm.lua:2: lightop 'direct' takes 0 inputs, got 1");
+  EXPECT_EQ(error_of("scene { builtin = \"cornell\" }\n"),
+            "farm.lua: the script declares no renderers (add renderers { lighting = ... })");
+  EXPECT_EQ(error_of("scene { builtin = \"cornell\" }\nlocal a = lightop \"direct\" {}\nlocal b = lightop \"direct\" {}\n"
+                     "renderers { lighting = b }\n"),
+            "farm.lua:2: lightop 'direct' is not connected to the renderers' lighting (nothing would ask it for light)");
+}
+
+TEST_F(ScriptTest, MissingSceneFileIsNamedRelativeToTheScript) {
+  auto m = error_of("scene { file = \"room.obj\" }\n");
+  EXPECT_EQ(m, "farm.lua:1: scene file '" + (dir / "room.obj").string() + "' not found");
+}
+
+TEST_F(ScriptTest, ScriptsCannotReachFilesOrPrograms) {
+  EXPECT_EQ(error_of("io.open('/etc/passwd')\n"), "farm.lua:1: attempt to index a nil value (global 'io')");
+  EXPECT_EQ(error_of("os.execute('true')\n"), "farm.lua:1: attempt to index a nil value (global 'os')");
+}
+
+TEST_F(ScriptTest, MissingScriptIsAnError) {
+  auto r = evaluate_script((dir / "nope.lua").string());
+  ASSERT_FALSE(r.ok());
+  EXPECT_EQ(r.error().message, "script '" + (dir / "nope.lua").string() + "' not found");
+}
+
+TEST_F(ScriptTest, DotShowsTheNetwork) {
+  auto r = evaluate_script(write("farm.lua", kCornell));
+  ASSERT_TRUE(r.ok());
+  std::string dot = to_dot(*r);
+  EXPECT_NE(dot.find("digraph farm"), std::string::npos);
+  EXPECT_NE(dot.find("\"direct\" -> \"renderers\""), std::string::npos);
+  EXPECT_NE(dot.find("renderer × 2"), std::string::npos);
+}
+
+}  // namespace lf
