@@ -80,7 +80,15 @@ static Scene cornell_box() {
   auto light = s.add_material({"light", {0.78f, 0.78f, 0.78f}, {17.0f, 12.0f, 4.0f}});
 
   s.add_quad({552.8f, 0, 0}, {0, 0, 0}, {0, 0, 559.2f}, {549.6f, 0, 559.2f}, white);                     // floor
-  s.add_quad({556.0f, 548.8f, 0}, {556.0f, 548.8f, 559.2f}, {0, 548.8f, 559.2f}, {0, 548.8f, 0}, white);  // ceiling
+  // The ceiling has a hole where the light sits (as the real box does): a light just below an unbroken ceiling
+  // z-fights with it at camera distance in float precision.
+  auto ceiling = [&](float x0, float x1, float z0, float z1) {
+    s.add_quad({x1, 548.8f, z0}, {x1, 548.8f, z1}, {x0, 548.8f, z1}, {x0, 548.8f, z0}, white);
+  };
+  ceiling(0, 556.0f, 0, 227.0f);
+  ceiling(0, 556.0f, 332.0f, 559.2f);
+  ceiling(0, 213.0f, 227.0f, 332.0f);
+  ceiling(343.0f, 556.0f, 227.0f, 332.0f);
   s.add_quad({549.6f, 0, 559.2f}, {0, 0, 559.2f}, {0, 548.8f, 559.2f}, {556.0f, 548.8f, 559.2f}, white);  // back
   s.add_quad({0, 0, 559.2f}, {0, 0, 0}, {0, 548.8f, 0}, {0, 548.8f, 559.2f}, green);                      // right
   s.add_quad({552.8f, 0, 0}, {549.6f, 0, 559.2f}, {556.0f, 548.8f, 559.2f}, {556.0f, 548.8f, 0}, red);    // left

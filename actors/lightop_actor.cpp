@@ -1,0 +1,181 @@
+// The LightOp wrapper (the wrapper pattern of Kipfer & Slusallek): turns a plain LightOp class into an actor.
+//
+// Accepts on the data socket:
+//   REQUEST op="shade" { n, p, nrm, wo, m, k }  ->  REPLY { n, L }   (header q = requests waiting here)
+//   anything else / malformed                  ->  ERROR { code, message }; the actor carries on
+// Control: CONFIG builds the op from its parameters and loads the scene; PHASE setup runs op.setup() and answers
+// READY setup when it finishes; PHASE finish / BYE stop it.
+// Requests queue in arrival order and start one per loop turn, so heartbeats and replies keep flowing. A request
+// whose op asks its inputs suspends (a coroutine) while the runtime sends those batches asynchronously; other
+// requests run meanwhile. The LightOp class sees none of this.
+#include "actors/lightop_actor.hpp"
+
+#include <deque>
+
+#include "actors/shade_codec.hpp"
+#include "core/farm_spec.hpp"
+#include "core/log.hpp"
+#include "render/lightop_registry.hpp"
+
+namespace lf {
+namespace {
+
+// Predecessors reached over the wire: each query becomes one or more batched, asynchronous requests.
+class RemoteInputs final : public Inputs {
+ public:
+  RemoteInputs(Runtime& rt, size_t batch) : rt_(rt), batch_(batch) {}
+  size_t count() const override { return rt_.input_count(); }
+
+  Gather gather(std::vector<InputQuery> queries) override {
+    auto state = std::make_shared<GatherState>();
+    for (const auto& q : queries) {
+      if (q.input >= rt_.input_count()) {
+        state->error = "input " + std::to_string(q.input) + " does not exist";
+        continue;
+      }
+      q.radiance->assign(q.points->size(), RGB{});
+      for (size_t begin = 0; begin < q.points->size(); begin += batch_) {
+        const size_t end = std::min(begin + batch_, q.points->size());
+        ++state->remaining;
+        auto* out = q.radiance;
+        const std::string input_name = rt_.input_name(q.input);
+        rt_.input(q.input).request(
+            "shade", encode_shade_request(*q.points, begin, end),
+            [state, out, begin, end, input_name](Result<wire::Message> r) {
+              if (!r) return state->complete_one(r.error().message);
+              auto radiance = decode_radiance(r->body, end - begin);
+              if (!radiance) return state->complete_one(input_name + ": " + radiance.error().message);
+              std::copy(radiance->begin(), radiance->end(), out->begin() + static_cast<ptrdiff_t>(begin));
+              state->complete_one();
+            });
+      }
+    }
+    return Gather(state);
+  }
+
+ private:
+  Runtime& rt_;
+  size_t batch_;
+};
+
+class LightOpActor final : public Actor {
+ public:
+  explicit LightOpActor(const LightOpKind& kind) : kind_(kind) {}
+
+  Status configure(const Value& config, Runtime& rt) override {
+    const Value* params = config.find("params");
+    try {
+      op_ = create_lightop(kind_, ParamTable(params && params->is_map() ? params->as_map() : Value::Map{},
+                                             "lightop '" + rt.name() + "'"));
+    } catch (const ParamError& e) {
+      return make_error(e.what());
+    }
+    const Value* scene = config.find("scene");
+    auto loaded = Scene::load(SceneSpec::from_value(scene ? *scene : Value()));
+    if (!loaded) return loaded.error();
+    scene_ = std::make_unique<Scene>(std::move(*loaded));
+    tracer_ = std::make_unique<RayTracer>(*scene_);
+    inputs_ = std::make_unique<RemoteInputs>(rt, 4096);
+    return Ok{};
+  }
+
+  void on_phase(const std::string& phase, Runtime& rt) override {
+    if (phase == "setup") {
+      setup_ = op_->setup(SceneContext{scene_.get(), tracer_.get()}, *inputs_);
+      setup_running_ = true;
+      on_progress(rt);
+    } else if (phase == "render") {
+      rt.phase_done("render");  // a LightOp renders by answering requests
+    }
+  }
+
+  void on_request(const std::string& peer, wire::Message& m, Runtime& rt) override {
+    if (m.header.op != "shade") {
+      rt.reply_error(peer, m.header.id, "unknown_op", "unknown operation '" + m.header.op + "' (this actor serves 'shade')");
+      return;
+    }
+    if (!op_ || setup_running_) {
+      rt.reply_error(peer, m.header.id, "not_ready", "'" + rt.name() + "' is not set up yet");
+      return;
+    }
+    auto points = decode_shade_request(m.body, scene_->materials().size());
+    if (!points) {
+      rt.reply_error(peer, m.header.id, "bad_request", points.error().message);
+      return;
+    }
+    auto job = std::make_unique<Job>();
+    job->peer = peer;
+    job->id = m.header.id;
+    job->points = std::move(*points);
+    waiting_.push_back(std::move(job));
+  }
+
+  void on_progress(Runtime& rt) override {
+    if (setup_running_ && setup_.done()) {
+      setup_running_ = false;
+      try {
+        setup_.rethrow_if_failed();
+      } catch (const std::exception& e) {
+        rt.fail("setup failed: " + std::string(e.what()));
+        return;
+      }
+      rt.phase_done("setup");
+    }
+    // Start one waiting request per turn; the loop polls sockets between requests.
+    if (!waiting_.empty() && running_.size() < kMaxRunning) {
+      auto job = std::move(waiting_.front());
+      waiting_.pop_front();
+      job->radiance.assign(job->points.size(), RGB{});
+      job->task = op_->shade(job->points, job->radiance, *inputs_);
+      running_.push_back(std::move(job));
+    }
+    for (size_t i = 0; i < running_.size();) {
+      Job& job = *running_[i];
+      if (!job.task.done()) {
+        ++i;
+        continue;
+      }
+      try {
+        job.task.rethrow_if_failed();
+        rt.stats().requests += 1;
+        rt.stats().points += job.points.size();
+        rt.reply(job.peer, job.id, encode_radiance(job.radiance));
+      } catch (const std::exception& e) {
+        rt.reply_error(job.peer, job.id, "shade_failed", e.what());
+      }
+      running_.erase(running_.begin() + static_cast<ptrdiff_t>(i));
+    }
+  }
+
+  size_t queue_length() const override { return waiting_.size(); }
+
+ private:
+  struct Job {
+    std::string peer;
+    uint64_t id = 0;
+    ShadingPoints points;
+    std::vector<RGB> radiance;
+    Task task;
+  };
+  static constexpr size_t kMaxRunning = 16;
+
+  const LightOpKind& kind_;
+  std::unique_ptr<LightOp> op_;
+  std::unique_ptr<Scene> scene_;
+  std::unique_ptr<RayTracer> tracer_;
+  std::unique_ptr<RemoteInputs> inputs_;
+  Task setup_;
+  bool setup_running_ = false;
+  std::deque<std::unique_ptr<Job>> waiting_;
+  std::vector<std::unique_ptr<Job>> running_;
+};
+
+}  // namespace
+
+std::unique_ptr<Actor> make_lightop_actor(const std::string& kind) {
+  const LightOpKind* k = find_lightop_kind(kind);
+  if (!k) return nullptr;
+  return std::make_unique<LightOpActor>(*k);
+}
+
+}  // namespace lf

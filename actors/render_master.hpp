@@ -1,0 +1,48 @@
+#pragma once
+// RenderMaster: hands out tiles on demand and takes results back. It remembers who holds each tile and accepts
+// a result only from that holder and only once (DESIGN §8), so a late or repeated answer cannot overwrite or
+// double-count. Pure logic: the director feeds it requests; tests feed it without processes.
+#include <cstdint>
+#include <map>
+#include <optional>
+#include <span>
+#include <string>
+#include <vector>
+
+#include "render/image.hpp"
+#include "render/tile_kernel.hpp"
+
+namespace lf {
+
+class RenderMaster {
+ public:
+  RenderMaster(int width, int height, int tile_size);
+
+  struct Assignment {
+    uint64_t id;
+    TileRect rect;
+  };
+  // The next unassigned tile for `worker`, or nullopt when every tile is assigned or done.
+  std::optional<Assignment> next(const std::string& worker);
+
+  enum class Outcome { accepted, not_holder, already_done, unknown_tile, wrong_size };
+  Outcome complete(const std::string& worker, uint64_t id, std::span<const float> rgb);
+  // Puts every tile `worker` holds back in line (its process is gone). Returns how many.
+  size_t release(const std::string& worker);
+
+  size_t total() const { return tiles_.size(); }
+  size_t done() const { return done_count_; }
+  bool finished() const { return done_count_ == tiles_.size(); }
+  const Image& film() const { return film_; }
+  static const char* describe(Outcome o);
+
+ private:
+  std::vector<TileRect> tiles_;
+  std::vector<bool> done_;
+  std::map<uint64_t, std::string> holder_;
+  std::vector<uint64_t> unassigned_;  // a stack, popped from the back; filled so tile 0 goes first
+  size_t done_count_ = 0;
+  Image film_;
+};
+
+}  // namespace lf

@@ -1,0 +1,267 @@
+#include "actors/runtime.hpp"
+
+#include <unistd.h>
+
+#include <csignal>
+
+#include "core/log.hpp"
+
+namespace lf {
+
+using wire::MsgType;
+using Clock = std::chrono::steady_clock;
+
+namespace {
+volatile std::sig_atomic_t g_stop_signal = 0;
+void on_signal(int sig) { g_stop_signal = sig; }
+}  // namespace
+
+void install_stop_signals() {
+  struct sigaction sa {};
+  sa.sa_handler = on_signal;
+  sigemptyset(&sa.sa_mask);
+  sa.sa_flags = 0;  // no SA_RESTART: a blocking poll returns EINTR and the loop sees the flag
+  sigaction(SIGINT, &sa, nullptr);
+  sigaction(SIGTERM, &sa, nullptr);
+  sigaction(SIGHUP, &sa, nullptr);
+  std::signal(SIGPIPE, SIG_IGN);
+}
+
+bool stop_requested() { return g_stop_signal != 0; }
+int stop_signal() { return g_stop_signal; }
+
+Value ActorStats::to_value(uint64_t bytes_in, uint64_t bytes_out) const {
+  return Value::Map{{"requests", requests},         {"points", points},
+                    {"tiles", tiles},               {"busy_seconds", busy_seconds},
+                    {"peak_queue", uint64_t{peak_queue}}, {"bytes_in", bytes_in},
+                    {"bytes_out", bytes_out}};
+}
+
+Runtime::Runtime(ActorArgs args)
+    : args_(std::move(args)), control_(wire::Socket::Kind::dealer, args_.name), data_(wire::Socket::Kind::router) {
+  // Let BYE and the last STATS leave before the socket closes.
+  control_.set_linger_ms(2000);
+}
+
+Runtime::~Runtime() = default;
+
+void Runtime::add_busy(Clock::time_point since) {
+  stats_.busy_seconds += std::chrono::duration<double>(Clock::now() - since).count();
+}
+
+void Runtime::send_control(wire::Message m) {
+  m.header.sender = args_.name;
+  control_.send(m);
+}
+
+void Runtime::reply(const std::string& peer, uint64_t id, Value body) {
+  wire::Message m = wire::make(MsgType::reply, args_.name, {}, std::move(body), id);
+  m.header.queue = actor_ ? static_cast<uint32_t>(actor_->queue_length()) : 0;
+  data_.send_to(peer, m);
+}
+
+void Runtime::reply_error(const std::string& peer, uint64_t id, const std::string& code, const std::string& message) {
+  data_.send_to(peer, wire::make_error_reply(args_.name, id, code, message));
+}
+
+void Runtime::ask_director(const std::string& op, Value body, DirectorCallback callback) {
+  uint64_t id = next_director_id_++;
+  director_pending_.emplace(id, std::move(callback));
+  send_control(wire::make(MsgType::request, args_.name, op, std::move(body), id));
+}
+
+void Runtime::phase_done(const std::string& phase) {
+  send_control(wire::make(MsgType::ready, args_.name, phase, Value::Map{{"phase", phase}}));
+}
+
+void Runtime::fail(const std::string& message) {
+  log_error(message);
+  send_control(wire::make_error_reply(args_.name, 0, "actor_failed", message));
+  stopping_ = true;
+  exit_status_ = 1;
+}
+
+void Runtime::send_stats_and_bye() {
+  uint64_t in = control_.counters().bytes_in + data_.counters().bytes_in;
+  uint64_t out = control_.counters().bytes_out + data_.counters().bytes_out;
+  for (auto& c : inputs_) {
+    in += c->socket().counters().bytes_in;
+    out += c->socket().counters().bytes_out;
+  }
+  send_control(wire::make(MsgType::stats, args_.name, {}, stats_.to_value(in, out)));
+  send_control(wire::make(MsgType::bye, args_.name));
+}
+
+void Runtime::handle_control(wire::Message& m, Actor& actor) {
+  switch (m.header.type) {
+    case MsgType::config: {
+      if (configured_) return;
+      configured_ = true;
+      if (const Value* t = m.body.find("heartbeat_timeout"); t && t->is_number()) heartbeat_timeout_ = t->as_double();
+      // Connect to every input before the actor configures, so that it may ask them during setup.
+      if (const Value* ins = m.body.find("inputs"); ins && ins->is_array()) {
+        for (const auto& in : ins->as_array()) {
+          const Value* name = in.find("name");
+          const Value* endpoint = in.find("endpoint");
+          const Value* window = in.find("window");
+          if (!name || !name->is_string() || !endpoint || !endpoint->is_string()) {
+            fail("CONFIG names an input without name or endpoint");
+            return;
+          }
+          auto client = std::make_unique<wire::RequestClient>(
+              args_.name, name->as_string(), window && window->is_number() ? window->as_int() : 4);
+          if (auto st = client->connect(endpoint->as_string()); !st) {
+            fail(st.error().message);
+            return;
+          }
+          inputs_.push_back(std::move(client));
+          input_names_.push_back(name->as_string());
+        }
+        inputs_changed_ = true;
+      }
+      auto started = Clock::now();
+      Status st = actor.configure(m.body, *this);
+      add_busy(started);
+      if (!st) {
+        fail(st.error().message);
+        return;
+      }
+      phase_done("configure");
+      return;
+    }
+    case MsgType::phase: {
+      const std::string phase = m.header.op;
+      if (phase == "finish") {
+        send_stats_and_bye();
+        stopping_ = true;
+        return;
+      }
+      auto started = Clock::now();
+      actor.on_phase(phase, *this);
+      add_busy(started);
+      return;
+    }
+    case MsgType::reply:
+    case MsgType::error: {
+      auto it = director_pending_.find(m.header.id);
+      if (it == director_pending_.end()) return;
+      auto cb = std::move(it->second);
+      director_pending_.erase(it);
+      if (m.header.type == MsgType::error) {
+        const Value* text = m.body.find("message");
+        cb(make_error(text && text->is_string() ? text->as_string() : "director refused the request"));
+      } else {
+        cb(std::move(m));
+      }
+      return;
+    }
+    case MsgType::bye:
+      send_stats_and_bye();
+      stopping_ = true;
+      return;
+    case MsgType::heartbeat: return;
+    default: log_warn("ignored a " + std::string(wire::type_name(m.header.type)) + " from the director");
+  }
+}
+
+void Runtime::handle_data(Actor& actor) {
+  while (auto in = data_.receive()) {
+    if (!in->message) {
+      // Refuse, tell the sender if we can, and carry on: a bad packet must never take the actor down.
+      log_warn("dropped a bad message from '" + in->peer + "': " + in->message.error().message);
+      if (!in->peer.empty()) reply_error(in->peer, 0, "bad_message", in->message.error().message);
+      continue;
+    }
+    wire::Message& m = *in->message;
+    if (m.header.type != MsgType::request) {
+      reply_error(in->peer, m.header.id, "bad_message",
+                  "expected a REQUEST on the data socket, got " + std::string(wire::type_name(m.header.type)));
+      continue;
+    }
+    auto started = Clock::now();
+    actor.on_request(in->peer, m, *this);
+    add_busy(started);
+    if (stopping_) return;
+  }
+}
+
+int Runtime::run(Actor& actor) {
+  actor_ = &actor;
+  set_log_name(args_.name);
+  auto endpoint = data_.bind(args_.bind);
+  if (!endpoint) {
+    log_error(endpoint.error().message);
+    return 2;
+  }
+  data_endpoint_ = *endpoint;
+  if (auto st = control_.connect(args_.director); !st) {
+    log_error(st.error().message);
+    return 2;
+  }
+  send_control(wire::make(MsgType::hello, args_.name, {},
+                          Value::Map{{"kind", args_.kind},
+                                     {"pid", static_cast<int64_t>(::getpid())},
+                                     {"endpoint", data_endpoint_},
+                                     {"float_format", std::string(wire::kFloatFormat)}}));
+
+  auto last_from_director = Clock::now();
+  auto next_heartbeat = Clock::now() + std::chrono::seconds(1);
+  wire::Poller poller;
+  poller.add(control_);
+  poller.add(data_);
+  size_t polled_inputs = 0;
+
+  while (!stopping_) {
+    if (stop_requested()) {
+      log_debug("stopping on signal " + std::to_string(stop_signal()));
+      return 128 + stop_signal();
+    }
+    if (inputs_changed_) {
+      for (; polled_inputs < inputs_.size(); ++polled_inputs) poller.add(inputs_[polled_inputs]->socket());
+      inputs_changed_ = false;
+    }
+    // While requests wait in the actor's own queue, do not sleep in poll.
+    const long timeout = actor.queue_length() > 0 ? 0 : 100;
+    const auto& ready = poller.wait(timeout);
+
+    if (ready[0]) {
+      while (auto in = control_.receive()) {
+        if (!in->message) {
+          log_warn("bad message from the director: " + in->message.error().message);
+          continue;
+        }
+        last_from_director = Clock::now();
+        handle_control(*in->message, actor);
+        if (stopping_) break;
+      }
+    }
+    if (stopping_) break;
+    if (ready[1] || actor.queue_length() > 0) handle_data(actor);
+    for (size_t i = 0; i < polled_inputs && !stopping_; ++i) {
+      if (!ready[2 + i]) continue;
+      auto started = Clock::now();
+      inputs_[i]->on_readable();
+      add_busy(started);
+    }
+    if (!stopping_) {
+      auto started = Clock::now();
+      actor.on_progress(*this);
+      add_busy(started);
+    }
+    stats_.peak_queue = std::max<uint32_t>(stats_.peak_queue, static_cast<uint32_t>(actor.queue_length()));
+
+    const auto now = Clock::now();
+    if (now >= next_heartbeat) {
+      send_control(wire::make(MsgType::heartbeat, args_.name));
+      next_heartbeat = now + std::chrono::seconds(1);
+    }
+    if (std::chrono::duration<double>(now - last_from_director).count() > heartbeat_timeout_) {
+      log_error("the director has been silent for " + std::to_string(static_cast<int>(heartbeat_timeout_)) +
+                " s; stopping");
+      return 3;
+    }
+  }
+  return exit_status_;
+}
+
+}  // namespace lf

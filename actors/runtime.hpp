@@ -1,0 +1,114 @@
+#pragma once
+// The actor runtime: one process, one poll loop. It owns the control channel to the director (HELLO, CONFIG,
+// PHASE, HEARTBEAT, STATS, BYE), the data socket where peers send requests, and one RequestClient per input.
+// Actor logic (renderer, LightOp wrapper) is an Actor: handlers the runtime calls; it never touches sockets.
+//
+// Life of an actor process:
+//   start -> bind data socket -> HELLO -> CONFIG -> configure() -> READY configure
+//         -> PHASE setup -> on_phase("setup") ... phase_done("setup") -> READY setup
+//         -> PHASE render -> on_phase("render") ...
+//         -> PHASE finish (or BYE) -> STATS -> BYE -> exit 0
+// It exits non-zero after fail(), and on its own when the director is silent for longer than the heartbeat
+// timeout or SIGINT/SIGTERM arrives: an actor never outlives its farm.
+#include <chrono>
+#include <functional>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "core/value.hpp"
+#include "transport/client.hpp"
+#include "transport/socket.hpp"
+
+namespace lf {
+
+struct ActorArgs {
+  std::string kind;
+  std::string name;
+  std::string director;               // control endpoint, e.g. tcp://127.0.0.1:5555
+  std::string bind = "tcp://127.0.0.1:*";  // where the data socket listens
+};
+
+struct ActorStats {
+  uint64_t requests = 0;      // requests served (LightOps) or sent (renderers)
+  uint64_t points = 0;        // shading points shaded (LightOps) or traced (renderers)
+  uint64_t tiles = 0;         // renderers only
+  double busy_seconds = 0;    // time inside handlers
+  uint32_t peak_queue = 0;    // longest request queue seen
+  Value to_value(uint64_t bytes_in, uint64_t bytes_out) const;
+};
+
+class Runtime;
+
+class Actor {
+ public:
+  virtual ~Actor() = default;
+  // CONFIG arrived. Load what is needed; an error stops the actor and is reported to the director.
+  virtual Status configure(const Value& config, Runtime& rt) = 0;
+  // PHASE arrived ("setup", "render"). Call rt.phase_done(phase) when the phase's work is finished.
+  virtual void on_phase(const std::string& phase, Runtime& rt) = 0;
+  // A REQUEST on the data socket. Answer now or later with rt.reply / rt.reply_error.
+  virtual void on_request(const std::string& peer, wire::Message& request, Runtime& rt) = 0;
+  // After any input's replies were dispatched, and after each request: a chance to make progress.
+  virtual void on_progress(Runtime&) {}
+  // Requests waiting to be served (piggybacked on replies for load balancing).
+  virtual size_t queue_length() const { return 0; }
+};
+
+class Runtime {
+ public:
+  explicit Runtime(ActorArgs args);
+  ~Runtime();
+  // Runs until the farm ends; returns the process exit status.
+  int run(Actor& actor);
+
+  const std::string& name() const { return args_.name; }
+  const std::string& kind() const { return args_.kind; }
+
+  void reply(const std::string& peer, uint64_t id, Value body);
+  void reply_error(const std::string& peer, uint64_t id, const std::string& code, const std::string& message);
+
+  size_t input_count() const { return inputs_.size(); }
+  wire::RequestClient& input(size_t i) { return *inputs_[i]; }
+  const std::string& input_name(size_t i) const { return input_names_[i]; }
+
+  using DirectorCallback = std::function<void(Result<wire::Message>)>;
+  // A request to the director (tiles, results), answered by a REPLY on the control channel.
+  void ask_director(const std::string& op, Value body, DirectorCallback callback);
+  void phase_done(const std::string& phase);
+  // Reports the failure to the director and stops the actor with a non-zero status.
+  void fail(const std::string& message);
+
+  ActorStats& stats() { return stats_; }
+  // Adds the time since `since` to busy time.
+  void add_busy(std::chrono::steady_clock::time_point since);
+
+ private:
+  void handle_control(wire::Message& m, Actor& actor);
+  void handle_data(Actor& actor);
+  void send_control(wire::Message m);
+  void send_stats_and_bye();
+
+  ActorArgs args_;
+  Actor* actor_ = nullptr;
+  wire::Socket control_;
+  wire::Socket data_;
+  std::string data_endpoint_;
+  std::vector<std::unique_ptr<wire::RequestClient>> inputs_;
+  std::vector<std::string> input_names_;
+  std::map<uint64_t, DirectorCallback> director_pending_;
+  uint64_t next_director_id_ = 1;
+  ActorStats stats_;
+  double heartbeat_timeout_ = 30.0;
+  bool configured_ = false;
+  bool stopping_ = false;
+  int exit_status_ = 0;
+  bool inputs_changed_ = false;
+};
+
+// Installs SIGINT/SIGTERM handlers that make poll loops stop; returns true once a signal has arrived.
+void install_stop_signals();
+bool stop_requested();
+int stop_signal();
+
+}  // namespace lf

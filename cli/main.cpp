@@ -1,0 +1,166 @@
+// lightfarm: one executable for the user's commands (run, graph) and for the actor processes a farm launches.
+#include <unistd.h>
+
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <string>
+#include <algorithm>
+#include <map>
+#include <vector>
+
+#include "actors/actor_kinds.hpp"
+#include "actors/director.hpp"
+#include "actors/runtime.hpp"
+#include "core/log.hpp"
+#include "lua/script.hpp"
+#include "transport/protocol.hpp"
+
+namespace {
+
+constexpr const char* kUsage = R"(lightfarm — a distributed lighting-simulation farm
+
+usage:
+  lightfarm run SCRIPT [--output FILE] [--set NAME=VALUE]... [--stats-json FILE] [--quiet]
+      Turn a farm script into processes and an image.
+  lightfarm graph SCRIPT [--set NAME=VALUE]...
+      Print the script's actor graph as Graphviz DOT; launches nothing.
+  lightfarm actor --kind KIND --name NAME --director ENDPOINT [--bind ENDPOINT]
+      Host one actor (the director runs this; see docs/PROTOCOL.md).
+  lightfarm --help | --version
+
+options:
+  --output FILE       write the image here instead of image { output = ... } (.exr, .png, .tif)
+  --set NAME=VALUE    override param("NAME", default) in the script
+  --stats-json FILE   also write phase timings and per-actor statistics as JSON
+  --quiet             print no tables, only errors
+
+exit status: 0 done; 1 the farm failed; 2 bad command line or script; 128+N stopped by signal N.
+docs: docs/lua-api.md (scripts), docs/PROTOCOL.md (the wire), docs/writing-an-actor.md
+)";
+
+int usage_error(const std::string& message) {
+  std::fprintf(stderr, "lightfarm: %s\n(see lightfarm --help)\n", message.c_str());
+  return 2;
+}
+
+struct Args {
+  std::vector<std::string> positional;
+  std::map<std::string, std::string> options;
+  std::map<std::string, std::string> set;
+};
+
+// Parses "--key value" pairs and repeated --set; `flags` are options without a value.
+bool parse(int argc, char** argv, int first, const std::vector<std::string>& known, const std::vector<std::string>& flags,
+           Args& out, std::string& error) {
+  for (int i = first; i < argc; ++i) {
+    std::string a = argv[i];
+    if (a.rfind("--", 0) != 0) {
+      out.positional.push_back(a);
+      continue;
+    }
+    std::string key = a.substr(2), value;
+    bool inline_value = false;
+    if (auto eq = key.find('='); eq != std::string::npos && key.rfind("set", 0) != 0) {
+      value = key.substr(eq + 1);
+      key = key.substr(0, eq);
+      inline_value = true;
+    }
+    if (std::find(flags.begin(), flags.end(), key) != flags.end()) {
+      out.options[key] = "1";
+      continue;
+    }
+    if (key != "set" && std::find(known.begin(), known.end(), key) == known.end()) {
+      error = "unknown option '" + a + "'";
+      return false;
+    }
+    if (!inline_value) {
+      if (i + 1 >= argc) {
+        error = "option '" + a + "' needs a value";
+        return false;
+      }
+      value = argv[++i];
+    }
+    if (key == "set") {
+      auto eq = value.find('=');
+      if (eq == std::string::npos || eq == 0) {
+        error = "--set needs NAME=VALUE, got '" + value + "'";
+        return false;
+      }
+      out.set[value.substr(0, eq)] = value.substr(eq + 1);
+    } else {
+      out.options[key] = value;
+    }
+  }
+  return true;
+}
+
+int cmd_run(int argc, char** argv, bool graph_only) {
+  Args args;
+  std::string error;
+  std::vector<std::string> known = graph_only ? std::vector<std::string>{} : std::vector<std::string>{"output", "stats-json"};
+  std::vector<std::string> flags = graph_only ? std::vector<std::string>{} : std::vector<std::string>{"quiet"};
+  if (!parse(argc, argv, 2, known, flags, args, error)) return usage_error(error);
+  if (args.positional.size() != 1) return usage_error(std::string(graph_only ? "graph" : "run") + " needs one SCRIPT");
+  lf::ScriptOptions so;
+  so.set = args.set;
+  if (args.options.count("output")) so.output = args.options["output"];
+  auto spec = lf::evaluate_script(args.positional[0], so);
+  if (!spec) {
+    std::fprintf(stderr, "lightfarm: %s\n", spec.error().message.c_str());
+    return 2;
+  }
+  if (graph_only) {
+    std::fputs(lf::to_dot(*spec).c_str(), stdout);
+    return 0;
+  }
+  lf::RunOptions ro;
+  ro.progress_on_terminal = ::isatty(STDERR_FILENO);
+  ro.quiet = args.options.count("quiet") > 0;
+  if (args.options.count("stats-json")) ro.stats_json = args.options["stats-json"];
+  return lf::run_farm(*spec, ro);
+}
+
+int cmd_actor(int argc, char** argv) {
+  Args args;
+  std::string error;
+  if (!parse(argc, argv, 2, {"kind", "name", "director", "bind"}, {}, args, error)) return usage_error(error);
+  for (const char* required : {"kind", "name", "director"})
+    if (!args.options.count(required)) return usage_error(std::string("actor needs --") + required);
+  lf::ActorArgs a;
+  a.kind = args.options["kind"];
+  a.name = args.options["name"];
+  a.director = args.options["director"];
+  if (args.options.count("bind")) a.bind = args.options["bind"];
+  lf::set_log_name(a.name);
+  auto actor = lf::make_actor(a.kind);
+  if (!actor) {
+    lf::log_error("unknown actor kind '" + a.kind + "' (known kinds: " + lf::actor_kind_list() + ")");
+    return 2;
+  }
+  // Fault injection for the failure tests (CONTRIBUTING.md): this actor dies before it says hello.
+  if (const char* fault = std::getenv("LIGHTFARM_FAULT"); fault && std::string(fault) == "crash-at-start:" + a.name)
+    std::abort();
+  lf::install_stop_signals();
+  lf::Runtime runtime(a);
+  return runtime.run(*actor);
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  if (argc < 2) return usage_error("no command given");
+  std::string cmd = argv[1];
+  if (cmd == "--help" || cmd == "-h" || cmd == "help") {
+    std::fputs(kUsage, stdout);
+    return 0;
+  }
+  if (cmd == "--version") {
+    std::printf("lightfarm %s (protocol %u)\n", LIGHTFARM_VERSION, lf::wire::kProtocolVersion);
+    return 0;
+  }
+  if (cmd == "run") return cmd_run(argc, argv, false);
+  if (cmd == "graph") return cmd_run(argc, argv, true);
+  if (cmd == "actor") return cmd_actor(argc, argv);
+  return usage_error("unknown command '" + cmd + "'");
+}
