@@ -1,0 +1,257 @@
+// The farm as users run it: the real binary, real processes, real images. Every test also checks that no process
+// of its farm is left running.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <map>
+
+#include "render/camera.hpp"
+#include "render/image.hpp"
+#include "render/scene.hpp"
+#include "render/tracer.hpp"
+#include "tests/farm_harness.hpp"
+
+namespace lf::test {
+namespace {
+
+const std::string kCornellScript = std::string(LIGHTFARM_SOURCE_DIR) + "/examples/cornell.lua";
+
+class FarmTest : public ::testing::Test {
+ protected:
+  fs::path dir;
+  void SetUp() override {
+    dir = fs::temp_directory_path() / ("lightfarm-farm-test-" + unique_tag());
+    fs::create_directories(dir);
+  }
+  void TearDown() override { fs::remove_all(dir); }
+  std::string path(const std::string& name) const { return (dir / name).string(); }
+  std::string write(const std::string& name, const std::string& text) {
+    std::ofstream(dir / name) << text;
+    return path(name);
+  }
+  static void expect_no_leftovers(const RunResult& r) {
+    auto left = wait_no_leftovers(r.tag);
+    EXPECT_TRUE(left.empty()) << left.size() << " lightfarm processes left behind, e.g. pid " << left[0];
+  }
+  size_t files_in_dir() const {
+    return static_cast<size_t>(std::distance(fs::directory_iterator(dir), fs::directory_iterator{}));
+  }
+};
+
+// Renders the Cornell script small and fast; returns the result and the EXR image.
+RunResult render_cornell(const std::string& output, std::vector<std::string> extra = {}) {
+  std::vector<std::string> args{"run", kCornellScript, "--output", output, "--set", "width=64", "--set", "height=64",
+                                "--set", "spp=4"};
+  args.insert(args.end(), extra.begin(), extra.end());
+  return run_lightfarm(args);
+}
+
+// Classifies each pixel by the material its centre ray hits, using the same scene and camera as the script.
+std::vector<std::string> pixel_materials(int w, int h) {
+  auto scene = Scene::builtin("cornell");
+  RayTracer tracer(*scene);
+  CameraSpec cam;  // the script uses the classic camera, which is the default
+  Camera camera(cam, w, h);
+  std::vector<std::string> names(static_cast<size_t>(w * h));
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) {
+      Ray ray = camera.ray(x + 0.5f, y + 0.5f);
+      Hit hit;
+      tracer.intersect(std::span<const Ray>(&ray, 1), std::span<Hit>(&hit, 1));
+      std::string name = "none";
+      if (hit.valid()) {
+        name = scene->material(scene->material_of(hit.triangle)).name;
+        Vec3 p = ray.origin + ray.direction * hit.t;
+        if (name == "white" && p.y < 1.0f) {
+          const bool under_light = p.x > 213 && p.x < 343 && p.z > 227 && p.z < 332;
+          const bool corner = (p.x < 80 || p.x > 470) && p.z > 480;
+          name = under_light ? "floor-under-light" : corner ? "floor-corner" : "floor";
+        }
+      }
+      names[static_cast<size_t>(y * w + x)] = name;
+    }
+  return names;
+}
+
+TEST_F(FarmTest, CornellBoxImageLooksLikeTheCornellBox) {
+  auto r = render_cornell(path("cornell.exr"));
+  ASSERT_EQ(r.status, 0) << r.err;
+  EXPECT_NE(r.out.find("wrote " + path("cornell.exr")), std::string::npos) << r.out;
+  EXPECT_NE(r.err.find("phase"), std::string::npos);  // the phase table
+  EXPECT_NE(r.err.find("renderer-1"), std::string::npos);  // the stats table lists every actor
+  expect_no_leftovers(r);
+
+  auto img = read_image(path("cornell.exr"));
+  ASSERT_TRUE(img.ok()) << img.error().message;
+  ASSERT_EQ(img->width, 64);
+  auto classes = pixel_materials(64, 64);
+  std::map<std::string, RGB> sum;
+  std::map<std::string, int> count;
+  float brightest = 0;
+  std::string brightest_class;
+  for (size_t i = 0; i < classes.size(); ++i) {
+    sum[classes[i]] += img->pixels[i];
+    ++count[classes[i]];
+    if (average(img->pixels[i]) > brightest) {
+      brightest = average(img->pixels[i]);
+      brightest_class = classes[i];
+    }
+  }
+  auto mean = [&](const std::string& c) { return sum[c] / static_cast<float>(count[c]); };
+  for (const char* c : {"red", "green", "light", "floor-under-light", "floor-corner"})
+    ASSERT_GT(count[c], 0) << "no pixel shows " << c;
+  RGB red = mean("red"), green = mean("green");
+  EXPECT_GT(red.x, 2 * red.y) << "left wall is not red-dominant";
+  EXPECT_GT(red.x, 2 * red.z);
+  EXPECT_GT(green.y, 1.5f * green.x) << "right wall is not green-dominant";
+  EXPECT_GT(green.y, 1.5f * green.z);
+  EXPECT_EQ(brightest_class, "light");
+  for (const auto& [c, s] : sum)
+    if (c != "light") EXPECT_GT(average(mean("light")), 5 * average(mean(c))) << c;
+  EXPECT_GT(average(mean("floor-under-light")), 1.5f * average(mean("floor-corner")));
+  // Pixels whose centre ray leaves the box are black but for jittered samples that graze a wall edge.
+  EXPECT_LT(average(mean("none")), 0.05f * average(mean("red")));
+}
+
+TEST_F(FarmTest, RendererCountDoesNotChangeAPixel) {
+  auto one = render_cornell(path("one.exr"), {"--set", "renderers=1"});
+  auto three = render_cornell(path("three.exr"), {"--set", "renderers=3"});
+  ASSERT_EQ(one.status, 0) << one.err;
+  ASSERT_EQ(three.status, 0) << three.err;
+  expect_no_leftovers(one);
+  expect_no_leftovers(three);
+  auto a = read_image(path("one.exr")), b = read_image(path("three.exr"));
+  ASSERT_TRUE(a.ok() && b.ok());
+  EXPECT_TRUE(a->pixels == b->pixels) << "images differ between 1 and 3 renderers";
+}
+
+TEST_F(FarmTest, StatsJsonCarriesPhasesAndActors) {
+  auto r = render_cornell(path("c.png"), {"--stats-json", path("stats.json")});
+  ASSERT_EQ(r.status, 0) << r.err;
+  std::string json = read_file(path("stats.json"));
+  for (const char* key : {"\"phases_seconds\"", "\"render\"", "\"setup\"", "\"actors\"", "\"renderer-0\"",
+                          "\"direct\"", "\"busy_seconds\"", "\"peak_queue\"", "\"bytes_in\""})
+    EXPECT_NE(json.find(key), std::string::npos) << key << " missing from " << json;
+  expect_no_leftovers(r);
+}
+
+TEST_F(FarmTest, LuaSyntaxErrorNamesFileAndLine) {
+  auto script = write("bad.lua", "scene { builtin = \"cornell\" }\nimage { width = }\n");
+  auto r = run_lightfarm({"run", script, "--output", path("x.png")});
+  EXPECT_EQ(r.status, 2);
+  EXPECT_NE(r.err.find(script + ":2:"), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(path("x.png")));
+  expect_no_leftovers(r);
+}
+
+TEST_F(FarmTest, UnknownLightOpKindIsOneClearMessage) {
+  auto script = write("bad.lua", "scene { builtin = \"cornell\" }\nlocal p = lightop \"photonz\" {}\n");
+  auto r = run_lightfarm({"run", script, "--output", path("x.png")});
+  EXPECT_EQ(r.status, 2);
+  EXPECT_EQ(r.err, "lightfarm: " + script + ":2: unknown LightOp kind 'photonz' (known kinds: direct)\n");
+  EXPECT_EQ(files_in_dir(), 1u);
+  expect_no_leftovers(r);
+}
+
+TEST_F(FarmTest, MissingSceneFileIsOneClearMessage) {
+  auto script = write("bad.lua", "\nscene { file = \"nowhere/room.obj\" }\n");
+  auto r = run_lightfarm({"run", script, "--output", path("x.png")});
+  EXPECT_EQ(r.status, 2);
+  EXPECT_EQ(r.err, "lightfarm: " + script + ":2: scene file '" + path("nowhere/room.obj") + "' not found\n");
+  expect_no_leftovers(r);
+}
+
+TEST_F(FarmTest, UnwritableOutputStopsBeforeLaunching) {
+  auto r = render_cornell("/proc/lightfarm-cannot-write-here.png");
+  EXPECT_EQ(r.status, 1);
+  EXPECT_NE(r.err.find("error: lightfarm: output '/proc/lightfarm-cannot-write-here.png': directory '/proc' is not writable"),
+            std::string::npos)
+      << r.err;
+  EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << "expected one message, got:\n" << r.err;
+  auto missing_dir = render_cornell(path("no/such/dir/x.png"));
+  EXPECT_EQ(missing_dir.status, 1);
+  EXPECT_NE(missing_dir.err.find("does not exist"), std::string::npos) << missing_dir.err;
+  expect_no_leftovers(r);
+  expect_no_leftovers(missing_dir);
+}
+
+TEST_F(FarmTest, ActorDyingDuringStartUpStopsTheFarmCleanly) {
+  auto r = run_lightfarm({"run", kCornellScript, "--output", path("x.png"), "--set", "width=32", "--set", "height=32"},
+                         {"LIGHTFARM_FAULT=crash-at-start:renderer-1"});
+  EXPECT_EQ(r.status, 1);
+  EXPECT_NE(r.err.find("error: lightfarm: actor 'renderer-1' (pid "), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("was killed by signal 6 (Aborted) during start-up"), std::string::npos) << r.err;
+  EXPECT_EQ(files_in_dir(), 0u) << "no image, not even a partial one";
+  expect_no_leftovers(r);
+}
+
+// A render big enough to interrupt: 512x512 at 64 spp takes seconds.
+std::vector<std::string> long_render(const std::string& output) {
+  return {"run", kCornellScript, "--output", output, "--set", "spp=64", "--set", "light_samples=4"};
+}
+
+TEST_F(FarmTest, SigintStopsEverythingAndWritesNothing) {
+  Farm farm(long_render(path("x.png")));
+  ASSERT_TRUE(Farm::eventually([&] { return farm.err_so_far().find("render 10%") != std::string::npos; }, 60))
+      << farm.err_so_far();
+  ::kill(farm.pid(), SIGINT);
+  auto r = farm.wait(30);
+  EXPECT_EQ(r.status, 128 + SIGINT) << r.err;
+  EXPECT_NE(r.err.find("interrupted by signal 2"), std::string::npos) << r.err;
+  EXPECT_EQ(files_in_dir(), 0u);
+  expect_no_leftovers(r);
+}
+
+TEST_F(FarmTest, KilledDirectorTakesItsActorsWithIt) {
+  Farm farm(long_render(path("x.png")));
+  ASSERT_TRUE(Farm::eventually([&] { return !actor_pids(farm.tag(), "direct").empty(); }, 30));
+  ASSERT_TRUE(Farm::eventually([&] { return farm.err_so_far().find("render 10%") != std::string::npos; }, 60));
+  ::kill(farm.pid(), SIGKILL);
+  auto r = farm.wait(10);
+  EXPECT_EQ(r.status, 128 + SIGKILL);
+  expect_no_leftovers(r);
+}
+
+TEST_F(FarmTest, LightOpKilledMidFrameStopsTheFarmNamingIt) {
+  Farm farm(long_render(path("x.png")));
+  ASSERT_TRUE(Farm::eventually([&] { return farm.err_so_far().find("render 10%") != std::string::npos; }, 60));
+  auto pids = actor_pids(farm.tag(), "direct");
+  ASSERT_EQ(pids.size(), 1u);
+  ::kill(pids[0], SIGKILL);
+  auto r = farm.wait(30);
+  EXPECT_EQ(r.status, 1);
+  EXPECT_NE(r.err.find("actor 'direct' (pid " + std::to_string(pids[0]) + ") was killed by signal 9 (Killed) during render"),
+            std::string::npos)
+      << r.err;
+  EXPECT_EQ(files_in_dir(), 0u);
+  expect_no_leftovers(r);
+}
+
+TEST_F(FarmTest, GraphPrintsDotAndLaunchesNothing) {
+  auto r = run_lightfarm({"graph", kCornellScript});
+  EXPECT_EQ(r.status, 0) << r.err;
+  EXPECT_EQ(r.out.rfind("digraph farm {", 0), 0u);
+  EXPECT_NE(r.out.find("\"direct\" -> \"renderers\""), std::string::npos);
+  expect_no_leftovers(r);
+}
+
+TEST_F(FarmTest, CommandLineBasics) {
+  auto help = run_lightfarm({"--help"});
+  EXPECT_EQ(help.status, 0);
+  EXPECT_NE(help.out.find("lightfarm run SCRIPT"), std::string::npos);
+  auto version = run_lightfarm({"--version"});
+  EXPECT_EQ(version.status, 0);
+  EXPECT_NE(version.out.find("protocol 1"), std::string::npos);
+  auto bad = run_lightfarm({"frobnicate"});
+  EXPECT_EQ(bad.status, 2);
+  EXPECT_NE(bad.err.find("unknown command 'frobnicate'"), std::string::npos);
+  auto bad_set = run_lightfarm({"run", kCornellScript, "--set", "spp"});
+  EXPECT_EQ(bad_set.status, 2);
+  EXPECT_NE(bad_set.err.find("--set needs NAME=VALUE, got 'spp'"), std::string::npos) << bad_set.err;
+  auto unknown_actor = run_lightfarm({"actor", "--kind", "teapot", "--name", "t", "--director", "tcp://127.0.0.1:9"});
+  EXPECT_EQ(unknown_actor.status, 2);
+  EXPECT_NE(unknown_actor.err.find("unknown actor kind 'teapot' (known kinds: renderer, direct)"), std::string::npos);
+}
+
+}  // namespace
+}  // namespace lf::test
