@@ -43,7 +43,8 @@ struct FarmFailure {
 
 class Progress {
  public:
-  Progress(bool tty, size_t total, uint64_t samples_per_tile) : tty_(tty), total_(total), per_tile_(samples_per_tile) {}
+  Progress(bool tty, bool quiet, size_t total, uint64_t samples_per_tile)
+      : tty_(tty && !quiet), quiet_(quiet), total_(total), per_tile_(samples_per_tile) {}
   void update(size_t done, double elapsed, bool force = false) {
     if (tty_) {
       if (!force && seconds_since(last_) < 0.1) return;
@@ -56,7 +57,7 @@ class Progress {
                    std::string(static_cast<size_t>(filled), '#').c_str(),
                    std::string(static_cast<size_t>(width - filled), '.').c_str(), done, total_, rate / 1e6, eta);
       if (done == total_) std::fprintf(stderr, "\n");
-    } else {
+    } else if (!quiet_) {
       // Plain lines at every tenth, for logs and CI.
       size_t tenth = total_ ? 10 * done / total_ : 10;
       if (tenth > last_tenth_ || (force && done == total_ && last_tenth_ < 10)) {
@@ -69,6 +70,7 @@ class Progress {
 
  private:
   bool tty_;
+  bool quiet_;
   size_t total_;
   uint64_t per_tile_;
   Clock::time_point last_ = Clock::now() - std::chrono::seconds(1);
@@ -83,6 +85,7 @@ class Director {
     install_stop_signals();
     const auto start = Clock::now();
     int status = 0;
+    start_ = start;
     try {
       prepare();
       phase("launch", [&] { launch(); });
@@ -170,8 +173,8 @@ class Director {
 
   void render() {
     const uint64_t per_tile = static_cast<uint64_t>(spec_.image.tile) * spec_.image.tile * spec_.image.spp;
-    progress_ = std::make_unique<Progress>(options_.progress_on_terminal, master_->total(), per_tile);
-    progress_active_ = options_.progress_on_terminal;
+    progress_ = std::make_unique<Progress>(options_.progress_on_terminal, options_.quiet, master_->total(), per_tile);
+    progress_active_ = options_.progress_on_terminal && !options_.quiet;
     render_start_ = Clock::now();
     broadcast_phase("render");
     wait_all("render", 0, [](const ActorState& a) { return a.phase_done == "render"; });
@@ -339,6 +342,7 @@ class Director {
         return;
       }
       send(name, wire::make(MsgType::reply, "director", "tile_done", Value::Map{}, m.header.id));
+      if (master_->done() == 1) first_tile_seconds_ = seconds_since(start_);
       progress_->update(master_->done(), seconds_since(render_start_));
     } else {
       send(name, wire::make_error_reply("director", m.header.id, "unknown_op", "the director serves 'tile' and 'tile_done'"));
@@ -388,6 +392,7 @@ class Director {
                              {"image", spec_.image.to_value()},
                              {"phases_seconds", std::move(phases)},
                              {"render_samples_per_second", samples / render_seconds_},
+                             {"first_tile_seconds", first_tile_seconds_},
                              {"actors", std::move(actors)}};
       std::ofstream out(options_.stats_json);
       out << to_json(doc, 2) << "\n";
@@ -408,7 +413,9 @@ class Director {
   std::vector<std::pair<std::string, double>> phases_;
   Clock::time_point render_start_;
   Clock::time_point last_heartbeat_ = Clock::now();
+  Clock::time_point start_;
   double render_seconds_ = 0;
+  double first_tile_seconds_ = 0;  // from the director's start to the first finished tile
   double total_seconds_ = 0;
 };
 

@@ -1,8 +1,6 @@
 #include "render/image.hpp"
 
-#include <OpenImageIO/imagebuf.h>
-#include <OpenImageIO/imagebufalgo.h>
-#include <OpenImageIO/imageio.h>
+#include <dlfcn.h>
 #include <fcntl.h>
 #include <unistd.h>
 
@@ -11,7 +9,9 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdlib>
 #include <filesystem>
+#include <vector>
 
 namespace lf {
 
@@ -50,40 +50,76 @@ static float to_srgb(float linear) {
   return linear <= 0.0031308f ? 12.92f * linear : 1.055f * std::pow(linear, 1.0f / 2.4f) - 0.055f;
 }
 
+namespace {
+
+// The image module (image_oiio.cpp), loaded on first use.
+struct ImageModule {
+  using WriteFn = int (*)(const char*, int, int, int, const float*, const unsigned char*, const char*, char*, size_t);
+  using ReadFn = int (*)(const char*, float**, int*, int*, char*, size_t);
+  WriteFn write = nullptr;
+  ReadFn read = nullptr;
+  std::string error;
+};
+
+const ImageModule& image_module() {
+  static const ImageModule module = [] {
+    ImageModule m;
+    // Beside the executable (an install, or build/ for the lightfarm binary), else where this build put it.
+    std::vector<std::string> candidates;
+    if (const char* env = std::getenv("LIGHTFARM_IMAGEIO_MODULE")) candidates.push_back(env);
+    std::error_code ec;
+    auto exe = fs::read_symlink("/proc/self/exe", ec);
+    if (!ec) {
+      candidates.push_back((exe.parent_path() / LIGHTFARM_IMAGEIO_NAME).string());
+      candidates.push_back((exe.parent_path() / ".." / "lib" / LIGHTFARM_IMAGEIO_NAME).string());
+    }
+    candidates.push_back(LIGHTFARM_IMAGEIO_BUILD_PATH);
+    std::string tried;
+    for (const auto& path : candidates) {
+      void* handle = ::dlopen(path.c_str(), RTLD_NOW | RTLD_LOCAL);
+      if (!handle) {
+        tried += std::string("\n  ") + ::dlerror();
+        continue;
+      }
+      m.write = reinterpret_cast<ImageModule::WriteFn>(::dlsym(handle, "lightfarm_imageio_write"));
+      m.read = reinterpret_cast<ImageModule::ReadFn>(::dlsym(handle, "lightfarm_imageio_read"));
+      if (m.write && m.read) return m;
+      tried += "\n  " + path + ": missing entry points";
+    }
+    m.error = std::string("cannot load the image module ") + LIGHTFARM_IMAGEIO_NAME + ":" + tried;
+    return m;
+  }();
+  return module;
+}
+
+}  // namespace
+
 Status write_image(const Image& image, const std::string& path) {
   if (auto st = check_output_path(path); !st) return st;
+  const auto& module = image_module();
+  if (!module.write) return make_error(module.error);
   const std::string ext = extension_of(path);
   fs::path target(path);
   fs::path temp = target.parent_path() /
                   ("." + target.stem().string() + ".partial-" + std::to_string(::getpid()) + target.extension().string());
-
-  auto out = OIIO::ImageOutput::create(temp.string());
-  if (!out) return make_error("output '" + path + "': no writer for '" + ext + "'");
   const bool linear = is_float_format(ext);
-  OIIO::ImageSpec spec(image.width, image.height, 3, linear ? OIIO::TypeDesc::FLOAT : OIIO::TypeDesc::UINT8);
-  spec.attribute("oiio:ColorSpace", linear ? "Linear" : "sRGB");
-  if (!out->open(temp.string(), spec)) {
-    std::string why = out->geterror();
-    return make_error("cannot write '" + path + "': " + why);
-  }
-  bool ok;
-  if (linear) {
-    ok = out->write_image(OIIO::TypeDesc::FLOAT, image.pixels.data());
-  } else {
-    std::vector<unsigned char> bytes(image.pixels.size() * 3);
+  std::vector<unsigned char> bytes;
+  if (!linear) {
+    bytes.resize(image.pixels.size() * 3);
     for (size_t i = 0; i < image.pixels.size(); ++i) {
       bytes[3 * i] = static_cast<unsigned char>(std::lround(255.0f * to_srgb(image.pixels[i].x)));
       bytes[3 * i + 1] = static_cast<unsigned char>(std::lround(255.0f * to_srgb(image.pixels[i].y)));
       bytes[3 * i + 2] = static_cast<unsigned char>(std::lround(255.0f * to_srgb(image.pixels[i].z)));
     }
-    ok = out->write_image(OIIO::TypeDesc::UINT8, bytes.data());
   }
-  ok = out->close() && ok;
+  char err[512] = {0};
+  int rc = module.write(temp.c_str(), image.width, image.height, linear ? 1 : 0,
+                        reinterpret_cast<const float*>(image.pixels.data()), bytes.data(), linear ? "Linear" : "sRGB",
+                        err, sizeof err);
   std::error_code ec;
-  if (!ok) {
-    std::string why = out->geterror();
+  if (rc != 0) {
     fs::remove(temp, ec);
-    return make_error("cannot write '" + path + "': " + why);
+    return make_error("cannot write '" + path + "': " + err);
   }
   fs::rename(temp, target, ec);
   if (ec) {
@@ -94,22 +130,22 @@ Status write_image(const Image& image, const std::string& path) {
 }
 
 Result<Image> read_image(const std::string& path) {
-  OIIO::ImageBuf buf(path);
-  if (!buf.read(0, 0, true, OIIO::TypeDesc::FLOAT)) return make_error("cannot read '" + path + "': " + buf.geterror());
-  const auto& spec = buf.spec();
-  if (spec.nchannels < 3) return make_error("'" + path + "' has fewer than 3 channels");
-  Image img(spec.width, spec.height);
-  std::vector<float> data(static_cast<size_t>(spec.width) * spec.height * spec.nchannels);
-  buf.get_pixels(OIIO::ROI::All(), OIIO::TypeDesc::FLOAT, data.data());
+  const auto& module = image_module();
+  if (!module.read) return make_error(module.error);
+  float* data = nullptr;
+  int w = 0, h = 0;
+  char err[512] = {0};
+  if (module.read(path.c_str(), &data, &w, &h, err, sizeof err) != 0)
+    return make_error("cannot read '" + path + "': " + err);
+  Image img(w, h);
   const bool srgb = extension_of(path) != ".exr";
   auto decode = [&](float v) {
     if (!srgb) return v;
     return v <= 0.04045f ? v / 12.92f : std::pow((v + 0.055f) / 1.055f, 2.4f);
   };
-  for (size_t i = 0; i < img.pixels.size(); ++i) {
-    const float* p = &data[i * spec.nchannels];
-    img.pixels[i] = {decode(p[0]), decode(p[1]), decode(p[2])};
-  }
+  for (size_t i = 0; i < img.pixels.size(); ++i)
+    img.pixels[i] = {decode(data[3 * i]), decode(data[3 * i + 1]), decode(data[3 * i + 2])};
+  std::free(data);
   return img;
 }
 
