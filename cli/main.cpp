@@ -1,4 +1,5 @@
 // lightfarm: one executable for the user's commands (run, graph) and for the actor processes a farm launches.
+#include <malloc.h>
 #include <unistd.h>
 
 #include <cstdio>
@@ -149,6 +150,10 @@ int cmd_actor(int argc, char** argv) {
 }  // namespace
 
 int main(int argc, char** argv) {
+  // Shading batches are a few hundred KB each. Keep such buffers in the heap rather than mmap/munmap-ing them per
+  // message: that churn (page faults, zeroing) cost more than the copies themselves.
+  mallopt(M_MMAP_THRESHOLD, 256 << 20);
+  mallopt(M_TRIM_THRESHOLD, 512 << 20);
   if (argc < 2) return usage_error("no command given");
   std::string cmd = argv[1];
   if (cmd == "--help" || cmd == "-h" || cmd == "help") {

@@ -37,7 +37,7 @@ struct ImageSpec {
   int width = 256;
   int height = 256;
   int spp = 4;
-  int tile = 16;
+  int tile = 32;
   std::string output = "out.png";
   Value to_value() const;
   static ImageSpec from_value(const Value& v);

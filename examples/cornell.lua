@@ -8,7 +8,7 @@
 scene  { builtin = "cornell" }
 camera { eye = {278, 273, -800}, at = {278, 273, 0}, fov = 39.3 }
 image  { width = param("width", 512), height = param("height", 512), spp = param("spp", 16),
-         output = "cornell.png" }
+         tile = param("tile", 32), output = "cornell.png" }
 
 local direct = lightop "direct" { light_samples = param("light_samples", 2) }
 

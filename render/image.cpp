@@ -94,6 +94,8 @@ const ImageModule& image_module() {
 
 }  // namespace
 
+void preload_image_io() { (void)image_module(); }
+
 Status write_image(const Image& image, const std::string& path) {
   if (auto st = check_output_path(path); !st) return st;
   const auto& module = image_module();

@@ -23,5 +23,8 @@ struct Image {
 Status check_output_path(const std::string& path);
 Status write_image(const Image& image, const std::string& path);
 Result<Image> read_image(const std::string& path);  // linear RGB (sRGB files are decoded)
+// Loads the image module (OpenImageIO and its ~250 libraries) now, on this thread. The director calls it on a
+// background thread while its actors start, so writing the image later costs only the write.
+void preload_image_io();
 
 }  // namespace lf

@@ -41,7 +41,7 @@ class FarmTest : public ::testing::Test {
 // Renders the Cornell script small and fast; returns the result and the EXR image.
 RunResult render_cornell(const std::string& output, std::vector<std::string> extra = {}) {
   std::vector<std::string> args{"run", kCornellScript, "--output", output, "--set", "width=64", "--set", "height=64",
-                                "--set", "spp=4"};
+                                "--set", "spp=4", "--set", "tile=16"};
   args.insert(args.end(), extra.begin(), extra.end());
   return run_lightfarm(args);
 }

@@ -151,8 +151,28 @@ std::string encode_header(const Header& h) {
   return std::string(buf.data(), buf.size());
 }
 
+// An upper bound of the encoded size, so the buffer is allocated once instead of doubling (and copying) its way up
+// to a 200 KB shading batch.
+static size_t encoded_size_bound(const Value& v) {
+  switch (v.storage().index()) {
+    case 4: return v.as_string().size() + 5;
+    case 5: return v.as_bytes().data.size() + 5;
+    case 6: {
+      size_t n = 5;
+      for (const auto& e : v.as_array()) n += encoded_size_bound(e);
+      return n;
+    }
+    case 7: {
+      size_t n = 5;
+      for (const auto& [k, e] : v.as_map()) n += k.size() + 5 + encoded_size_bound(e);
+      return n;
+    }
+    default: return 9;
+  }
+}
+
 std::string encode_body(const Value& body) {
-  msgpack::sbuffer buf(256);
+  msgpack::sbuffer buf(encoded_size_bound(body));
   Packer pk(&buf);
   pack_value(pk, body);
   return std::string(buf.data(), buf.size());

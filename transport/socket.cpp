@@ -57,12 +57,23 @@ Status Socket::connect(const std::string& endpoint) {
   }
 }
 
-bool Socket::send_raw(const std::vector<std::string>& frames) {
+namespace {
+// Large frames are handed to ZeroMQ without a copy: the string moves to the heap and ZeroMQ frees it once sent.
+zmq::message_t to_frame(std::string&& s) {
+  if (s.size() < 4096) return zmq::message_t(s.data(), s.size());
+  auto* owned = new std::string(std::move(s));
+  return zmq::message_t(owned->data(), owned->size(),
+                        [](void*, void* hint) { delete static_cast<std::string*>(hint); }, owned);
+}
+}  // namespace
+
+bool Socket::send_raw(std::vector<std::string> frames) {
   try {
     for (size_t i = 0; i < frames.size(); ++i) {
       auto flags = i + 1 < frames.size() ? zmq::send_flags::sndmore : zmq::send_flags::none;
-      if (!impl_->socket.send(zmq::buffer(frames[i]), flags)) return false;
-      counters_.bytes_out += frames[i].size();
+      const size_t size = frames[i].size();
+      if (!impl_->socket.send(to_frame(std::move(frames[i])), flags)) return false;
+      counters_.bytes_out += size;
     }
     ++counters_.messages_out;
     return true;

@@ -41,7 +41,7 @@ class Socket {
   bool send(const Message& message);
   bool send_to(const std::string& peer, const Message& message);
   // Sends pre-encoded frames (used to forward or to test hostile bytes).
-  bool send_raw(const std::vector<std::string>& frames);
+  bool send_raw(std::vector<std::string> frames);
 
   // Non-blocking; nullopt when nothing is waiting.
   std::optional<Incoming> receive();
