@@ -1,7 +1,7 @@
 // The farm-script library. Like Lua's own libraries: one registration table, every argument checked with
 // luaL_check*, so a mistake comes back as "farm.lua:12: what is wrong".
 //
-// Globals a script sees: scene, camera, image, lightop, renderers, host, param (and Lua's base, string, table,
+// Globals a script sees: scene, camera, image, lightop, renderers, host, farm, param (and Lua's base, string, table,
 // math and utf8 libraries; no io or os, so a script describes a farm and does nothing else).
 #include "lua/script.hpp"
 
@@ -352,6 +352,17 @@ int l_renderers(lua_State* L) {
   return 0;
 }
 
+// farm { heartbeat_timeout = 10 }: settings of the farm as a whole.
+int l_farm(lua_State* L) {
+  Builder& b = builder(L);
+  ParamTable p = table_params(L, 1, "farm");
+  with_params(L, [&] {
+    b.spec.heartbeat_timeout = p.get_float("heartbeat_timeout", b.spec.heartbeat_timeout, 0.5, 3600);
+    p.report_unused();
+  });
+  return 0;
+}
+
 // param(name, default): the value of --set name=..., converted to default's type, or default.
 int l_param(lua_State* L) {
   Builder& b = builder(L);
@@ -391,7 +402,8 @@ int host_gc(lua_State* L) {
 
 const luaL_Reg kFarmLib[] = {{"scene", l_scene},   {"camera", l_camera},       {"image", l_image},
                              {"lightop", l_lightop}, {"renderers", l_renderers}, {"host", l_host},
-                             {"param", l_param},   {nullptr, nullptr}};
+                             {"param", l_param},   {"farm", l_farm},
+                             {nullptr, nullptr}};
 
 void open_libs(lua_State* L) {
   // A farm script describes; it does not read files or run programs.

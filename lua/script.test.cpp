@@ -119,6 +119,22 @@ TEST_F(ScriptTest, ScriptsCannotReachFilesOrPrograms) {
   EXPECT_EQ(error_of("os.execute('true')\n"), "farm.lua:1: attempt to index a nil value (global 'os')");
 }
 
+TEST_F(ScriptTest, FarmSettingsAndHosts) {
+  auto r = evaluate_script(write("farm.lua", std::string(kCornell) + "farm { heartbeat_timeout = 2.5 }\n"));
+  ASSERT_TRUE(r.ok()) << r.error().message;
+  EXPECT_DOUBLE_EQ(r->heartbeat_timeout, 2.5);
+  EXPECT_EQ(error_of("farm { heartbeat = 3 }\n"), "farm.lua:1: farm: unknown parameter 'heartbeat' (known: heartbeat_timeout)");
+  EXPECT_EQ(error_of("local h = host \"gpu1\" { launcher = \"ssh\" }\n"),
+            "farm.lua:1: host 'gpu1': launcher 'ssh' is not available yet (only \"local\")");
+  EXPECT_EQ(error_of("local d = lightop \"direct\" { host = \"gpu1\" }\n"),
+            "farm.lua:1: host 'gpu1' is not declared (declare it with host \"gpu1\" { ... })");
+  auto ok = evaluate_script(write("farm.lua", std::string("local h = host \"here\" { launcher = \"local\" }\n") +
+                                                  "scene { builtin = \"cornell\" }\n"
+                                                  "renderers { lighting = lightop \"direct\" { host = h } }\n"));
+  ASSERT_TRUE(ok.ok()) << ok.error().message;
+  EXPECT_EQ(ok->actors[0].host, "here");
+}
+
 TEST_F(ScriptTest, MissingScriptIsAnError) {
   auto r = evaluate_script((dir / "nope.lua").string());
   ASSERT_FALSE(r.ok());
