@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <chrono>
 
 namespace lf::wire {
 
@@ -17,21 +18,31 @@ class ClientTest : public ::testing::Test {
     ASSERT_TRUE(e.ok()) << e.error().message;
     endpoint = *e;
   }
-  // Drains what the server has received so far.
-  std::vector<Incoming> server_receive() {
+  // Collects what the server receives until `want` messages arrived (then a short grace for extras) or 5 s passed.
+  std::vector<Incoming> server_receive(size_t want = 1) {
     std::vector<Incoming> got;
     Poller p;
     p.add(server);
-    for (int spins = 0; spins < 50; ++spins) {
+    auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(5);
+    while (std::chrono::steady_clock::now() < deadline) {
       p.wait(5);
       while (auto in = server.receive()) got.push_back(std::move(*in));
+      if (got.size() >= want) {
+        // Anything sent beyond `want` would already be queued: drain it too, so window checks see it.
+        p.wait(20);
+        while (auto in = server.receive()) got.push_back(std::move(*in));
+        break;
+      }
     }
     return got;
   }
-  void wait_client(RequestClient& c) {
+  // Runs the client's reply handling until `done()` or 5 s passed.
+  template <class Done>
+  void wait_client(RequestClient& c, Done done) {
     Poller p;
     p.add(c.socket());
-    for (int spins = 0; spins < 50; ++spins) {
+    auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(5);
+    while (!done() && std::chrono::steady_clock::now() < deadline) {
       p.wait(5);
       c.on_readable();
     }
@@ -67,7 +78,8 @@ TEST_F(ClientTest, WindowBoundsOutstandingAndRepliesMatchById) {
       ASSERT_TRUE(server.send_to(in.peer, reply));
       ++served;
     }
-    wait_client(client);
+    const size_t expected = static_cast<size_t>(served);
+    wait_client(client, [&] { return answered.size() == expected; });
   }
   EXPECT_EQ(answered.size(), 10u);
   EXPECT_EQ(client.outstanding(), 0u);
@@ -89,7 +101,7 @@ TEST_F(ClientTest, ErrorRepliesReachTheCallbackAndStrayRepliesAreDropped) {
   // A second answer to the same id, and one to an id never sent: both dropped, not delivered twice.
   ASSERT_TRUE(server.send_to(got[0].peer, make(MsgType::reply, "direct", "shade", Value::Map{}, id)));
   ASSERT_TRUE(server.send_to(got[0].peer, make(MsgType::reply, "direct", "shade", Value::Map{}, 999)));
-  wait_client(client);
+  wait_client(client, [&] { return client.dropped_replies() == 2; });
   EXPECT_EQ(error, "direct: no points");
   EXPECT_EQ(client.dropped_replies(), 2u);
 }
@@ -100,7 +112,7 @@ TEST_F(ClientTest, RouterRejectsMalformedFramesAsErrors) {
   ASSERT_TRUE(dealer.send_raw({"just one frame"}));
   ASSERT_TRUE(dealer.send_raw({"\x81\xa1v\x01", "\x80", "extra"}));
   ASSERT_TRUE(dealer.send_raw({"garbage", "\x80"}));
-  auto got = server_receive();
+  auto got = server_receive(3);
   ASSERT_EQ(got.size(), 3u);
   EXPECT_EQ(got[0].message.error().message, "expected 2 frames (header, body), got 1");
   EXPECT_EQ(got[1].message.error().message, "expected 2 frames (header, body), got 3");

@@ -1,0 +1,18 @@
+# ctest "layering": algorithm code (render/, radiosity/) must not include ZeroMQ, msgpack or transport headers.
+# Run as: cmake -DSOURCE_DIR=... -P check_layering.cmake
+set(violations "")
+foreach(dir render radiosity)
+  file(GLOB_RECURSE files "${SOURCE_DIR}/${dir}/*.cpp" "${SOURCE_DIR}/${dir}/*.hpp")
+  foreach(f IN LISTS files)
+    file(STRINGS "${f}" lines REGEX "^[ \t]*#[ \t]*include[ \t]*[<\"](zmq|msgpack|transport/|actors/)")
+    foreach(line IN LISTS lines)
+      file(RELATIVE_PATH rel "${SOURCE_DIR}" "${f}")
+      list(APPEND violations "${rel}: ${line}")
+    endforeach()
+  endforeach()
+endforeach()
+if(violations)
+  list(JOIN violations "\n  " text)
+  message(FATAL_ERROR "algorithm code reaches the network:\n  ${text}")
+endif()
+message(STATUS "layering ok: render/ and radiosity/ include no network code")
