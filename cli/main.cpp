@@ -41,7 +41,7 @@ docs: docs/lua-api.md (scripts), docs/PROTOCOL.md (the wire), docs/writing-an-ac
 )";
 
 int usage_error(const std::string& message) {
-  std::fprintf(stderr, "lightfarm: %s\n(see lightfarm --help)\n", message.c_str());
+  std::fprintf(stderr, "lightfarm: error: %s\n(see lightfarm --help)\n", message.c_str());
   return 2;
 }
 
@@ -108,7 +108,7 @@ int cmd_run(int argc, char** argv, bool graph_only) {
   if (args.options.count("output")) so.output = args.options["output"];
   auto spec = lf::evaluate_script(args.positional[0], so);
   if (!spec) {
-    std::fprintf(stderr, "lightfarm: %s\n", spec.error().message.c_str());
+    std::fprintf(stderr, "lightfarm: error: %s\n", spec.error().message.c_str());
     return 2;
   }
   if (graph_only) {

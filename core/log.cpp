@@ -11,7 +11,7 @@ void set_log_name(std::string name) { g_name = std::move(name); }
 
 static void emit(const char* level, const std::string& message) {
   // One fprintf per line so lines from several processes sharing a terminal do not interleave mid-line.
-  std::fprintf(stderr, "%s%s: %s\n", level, g_name.c_str(), message.c_str());
+  std::fprintf(stderr, "%s: %s%s\n", g_name.c_str(), level, message.c_str());
 }
 
 void log_info(const std::string& m) { emit("", m); }

@@ -148,7 +148,7 @@ TEST_F(FarmTest, UnknownLightOpKindIsOneClearMessage) {
   auto script = write("bad.lua", "scene { builtin = \"cornell\" }\nlocal p = lightop \"photonz\" {}\n");
   auto r = run_lightfarm({"run", script, "--output", path("x.png")});
   EXPECT_EQ(r.status, 2);
-  EXPECT_EQ(r.err, "lightfarm: " + script + ":2: unknown LightOp kind 'photonz' (known kinds: direct)\n");
+  EXPECT_EQ(r.err, "lightfarm: error: " + script + ":2: unknown LightOp kind 'photonz' (known kinds: direct)\n");
   EXPECT_EQ(files_in_dir(), 1u);
   expect_no_leftovers(r);
 }
@@ -157,14 +157,14 @@ TEST_F(FarmTest, MissingSceneFileIsOneClearMessage) {
   auto script = write("bad.lua", "\nscene { file = \"nowhere/room.obj\" }\n");
   auto r = run_lightfarm({"run", script, "--output", path("x.png")});
   EXPECT_EQ(r.status, 2);
-  EXPECT_EQ(r.err, "lightfarm: " + script + ":2: scene file '" + path("nowhere/room.obj") + "' not found\n");
+  EXPECT_EQ(r.err, "lightfarm: error: " + script + ":2: scene file '" + path("nowhere/room.obj") + "' not found\n");
   expect_no_leftovers(r);
 }
 
 TEST_F(FarmTest, UnwritableOutputStopsBeforeLaunching) {
   auto r = render_cornell("/proc/lightfarm-cannot-write-here.png");
   EXPECT_EQ(r.status, 1);
-  EXPECT_NE(r.err.find("error: lightfarm: output '/proc/lightfarm-cannot-write-here.png': directory '/proc' is not writable"),
+  EXPECT_NE(r.err.find("lightfarm: error: output '/proc/lightfarm-cannot-write-here.png': directory '/proc' is not writable"),
             std::string::npos)
       << r.err;
   EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << "expected one message, got:\n" << r.err;
@@ -179,7 +179,7 @@ TEST_F(FarmTest, ActorDyingDuringStartUpStopsTheFarmCleanly) {
   auto r = run_lightfarm({"run", kCornellScript, "--output", path("x.png"), "--set", "width=32", "--set", "height=32"},
                          {"LIGHTFARM_FAULT=crash-at-start:renderer-1"});
   EXPECT_EQ(r.status, 1);
-  EXPECT_NE(r.err.find("error: lightfarm: actor 'renderer-1' (pid "), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("lightfarm: error: actor 'renderer-1' (pid "), std::string::npos) << r.err;
   EXPECT_NE(r.err.find("was killed by signal 6 (Aborted) during start-up"), std::string::npos) << r.err;
   EXPECT_EQ(files_in_dir(), 0u) << "no image, not even a partial one";
   expect_no_leftovers(r);
@@ -190,16 +190,18 @@ std::vector<std::string> long_render(const std::string& output) {
   return {"run", kCornellScript, "--output", output, "--set", "spp=64", "--set", "light_samples=4"};
 }
 
-TEST_F(FarmTest, SigintStopsEverythingAndWritesNothing) {
-  Farm farm(long_render(path("x.png")));
-  ASSERT_TRUE(Farm::eventually([&] { return farm.err_so_far().find("render 10%") != std::string::npos; }, 60))
-      << farm.err_so_far();
-  ::kill(farm.pid(), SIGINT);
-  auto r = farm.wait(30);
-  EXPECT_EQ(r.status, 128 + SIGINT) << r.err;
-  EXPECT_NE(r.err.find("interrupted by signal 2"), std::string::npos) << r.err;
-  EXPECT_EQ(files_in_dir(), 0u);
-  expect_no_leftovers(r);
+TEST_F(FarmTest, SigintAndSigtermStopEverythingAndWriteNothing) {
+  for (int sig : {SIGINT, SIGTERM}) {
+    Farm farm(long_render(path("x.png")));
+    ASSERT_TRUE(Farm::eventually([&] { return farm.err_so_far().find("render 10%") != std::string::npos; }, 60))
+        << farm.err_so_far();
+    ::kill(farm.pid(), sig);
+    auto r = farm.wait(30);
+    EXPECT_EQ(r.status, 128 + sig) << r.err;
+    EXPECT_NE(r.err.find("interrupted by signal " + std::to_string(sig)), std::string::npos) << r.err;
+    EXPECT_EQ(files_in_dir(), 0u);
+    expect_no_leftovers(r);
+  }
 }
 
 TEST_F(FarmTest, KilledDirectorTakesItsActorsWithIt) {
