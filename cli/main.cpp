@@ -60,9 +60,10 @@ bool parse(int argc, char** argv, int first, const std::vector<std::string>& kno
       out.positional.push_back(a);
       continue;
     }
+    // --key value, or --key=value (for --set=name=value the first '=' ends the key).
     std::string key = a.substr(2), value;
     bool inline_value = false;
-    if (auto eq = key.find('='); eq != std::string::npos && key.rfind("set", 0) != 0) {
+    if (auto eq = key.find('='); eq != std::string::npos) {
       value = key.substr(eq + 1);
       key = key.substr(0, eq);
       inline_value = true;

@@ -250,6 +250,9 @@ TEST_F(FarmTest, CommandLineBasics) {
   auto bad_set = run_lightfarm({"run", kCornellScript, "--set", "spp"});
   EXPECT_EQ(bad_set.status, 2);
   EXPECT_NE(bad_set.err.find("--set needs NAME=VALUE, got 'spp'"), std::string::npos) << bad_set.err;
+  auto inline_set = run_lightfarm({"graph", kCornellScript, "--set=renderers=3"});
+  EXPECT_EQ(inline_set.status, 0) << inline_set.err;
+  EXPECT_NE(inline_set.out.find("renderer × 3"), std::string::npos);
   auto unknown_actor = run_lightfarm({"actor", "--kind", "teapot", "--name", "t", "--director", "tcp://127.0.0.1:9"});
   EXPECT_EQ(unknown_actor.status, 2);
   EXPECT_NE(unknown_actor.err.find("unknown actor kind 'teapot' (known kinds: renderer, direct)"), std::string::npos);
