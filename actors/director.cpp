@@ -1,5 +1,6 @@
 #include "actors/director.hpp"
 
+#include <signal.h>
 #include <unistd.h>
 
 #include <chrono>
@@ -33,6 +34,9 @@ struct ActorState {
   bool said_hello = false;
   bool said_bye = false;
   bool exited = false;
+  bool lost = false;         // died or hung during setup/render, and the farm went on without it
+  bool killed_hung = false;  // we SIGKILLed it for missing heartbeats
+  std::string loss;          // why it was lost
   Clock::time_point last_seen;
   Value stats;
 };
@@ -169,6 +173,7 @@ class Director {
                         {"camera", spec_.camera.to_value()},
                         {"image", spec_.image.to_value()},
                         {"inputs", std::move(inputs)},
+                        {"runtime", a.spec->runtime},
                         {"heartbeat_timeout", spec_.heartbeat_timeout}};
       send(name, wire::make(MsgType::config, "director", {}, std::move(config)));
     }
@@ -198,7 +203,7 @@ class Director {
     const auto deadline = Clock::now() + std::chrono::seconds(10);
     while (Clock::now() < deadline) {
       bool all = true;
-      for (auto& [n, a] : actors_) all = all && a.said_bye && a.exited;
+      for (auto& [n, a] : actors_) all = all && (a.lost || (a.said_bye && a.exited));
       if (all) return;
       pump(50);
     }
@@ -212,7 +217,7 @@ class Director {
 
   void send_bye_to_all() {
     for (auto& [name, a] : actors_)
-      if (a.said_hello && !a.said_bye && !a.exited) send(name, wire::make(MsgType::bye, "director"));
+      if (a.said_hello && !a.said_bye && !a.exited && !a.lost) send(name, wire::make(MsgType::bye, "director"));
   }
 
   // Processes control messages and child exits until every actor satisfies `done`.
@@ -221,12 +226,12 @@ class Director {
     const auto start = Clock::now();
     while (true) {
       bool all = true;
-      for (auto& [n, a] : actors_) all = all && done(a);
+      for (auto& [n, a] : actors_) all = all && (a.lost || done(a));
       if (all) return;
       if (timeout_seconds > 0 && seconds_since(start) > timeout_seconds) {
         std::string late;
         for (auto& [n, a] : actors_)
-          if (!done(a)) late += (late.empty() ? "'" : ", '") + n + "'";
+          if (!a.lost && !done(a)) late += (late.empty() ? "'" : ", '") + n + "'";
         throw FarmFailure{std::string("timed out after ") + std::to_string(static_cast<int>(timeout_seconds)) +
                           " s waiting for " + late + " in phase " + what};
       }
@@ -238,7 +243,7 @@ class Director {
     if (stop_requested()) throw FarmFailure{"interrupted by signal " + std::to_string(stop_signal()) + "; stopping the farm", 128 + stop_signal()};
     wire::Poller poller;
     poller.add(control_);
-    poller.wait(timeout_ms);
+    poller.wait(std::min<long>(timeout_ms, static_cast<long>(spec_.heartbeat_timeout * 250)));
     while (auto in = control_.receive()) handle(*in);
     while (auto exit = launcher_.reap_one()) on_exit(*exit);
     check_heartbeats();
@@ -249,29 +254,92 @@ class Director {
     for (auto& [name, a] : actors_) {
       if (a.pid != r.pid) continue;
       a.exited = true;
+      if (a.lost) return;  // already accounted for (we killed it)
       if (current_phase_ == "finish" && a.said_bye) return;
+      const std::string why = a.killed_hung ? "stopped answering (no heartbeat for " + seconds_text(spec_.heartbeat_timeout) +
+                                                  "); it was killed"
+                                            : r.describe();
+      if (recoverable(a)) return on_lost(a, why);
       std::string when = current_phase_ == "launch" || current_phase_ == "hello" || current_phase_ == "configure"
                              ? "during start-up"
                              : "during " + current_phase_;
-      throw FarmFailure{"actor '" + name + "' (pid " + std::to_string(r.pid) + ") " + r.describe() + " " + when};
+      throw FarmFailure{"actor '" + name + "' (pid " + std::to_string(r.pid) + ") " + why + " " + when};
     }
+  }
+
+  static std::string seconds_text(double s) {
+    char buf[32];
+    std::snprintf(buf, sizeof buf, "%g s", s);
+    return buf;
+  }
+
+  int index_of(const ActorState& a) const { return static_cast<int>(a.spec - spec_.actors.data()); }
+
+  // Renderers and pool replicas may be lost during setup and render: their work goes to the others.
+  bool recoverable(const ActorState& a) const {
+    if (current_phase_ != "setup" && current_phase_ != "render") return false;
+    return a.spec->is_renderer() || spec_.pool_of(index_of(a)) >= 0;
+  }
+
+  void on_lost(ActorState& a, const std::string& why) {
+    a.lost = true;
+    a.loss = why;
+    const std::string& name = a.spec->name;
+    if (a.spec->is_renderer()) {
+      std::string all;
+      bool any_left = false;
+      for (auto& [n, other] : actors_) {
+        if (!other.spec->is_renderer()) continue;
+        any_left = any_left || !other.lost;
+        all += (all.empty() ? "" : ", ") + n + " " + other.loss;
+      }
+      if (!any_left) throw FarmFailure{"every renderer was lost: " + all};
+      const size_t tiles = master_ ? master_->release(name) : 0;
+      log_warn("renderer '" + name + "' " + why + "; its " + std::to_string(tiles) + " tiles go to the others");
+      serve_waiting_tile_requests();
+      return;
+    }
+    ActorState& pool = actors_.at(spec_.actors[static_cast<size_t>(spec_.pool_of(index_of(a)))].name);
+    std::string replicas;
+    bool any_left = false;
+    for (int r : pool.spec->inputs) {
+      const ActorState& rep = actors_.at(spec_.actors[static_cast<size_t>(r)].name);
+      any_left = any_left || !rep.lost;
+      replicas += (replicas.empty() ? "" : "; ") + rep.spec->name + " " + (rep.lost ? rep.loss : "alive");
+    }
+    if (!any_left) {
+      if (recoverable(pool) && !pool.exited) {
+        // A nested pool with no replica left is itself a lost replica of the pool above.
+        ::kill(pool.pid, SIGKILL);
+        return on_lost(pool, "lost every replica (" + replicas + ")");
+      }
+      throw FarmFailure{"lost the last replica of '" + pool.spec->name + "': " + replicas};
+    }
+    log_warn("replica '" + name + "' " + why + "; '" + pool.spec->name + "' sends its work to the others");
+    send(pool.spec->name, wire::make(MsgType::peer_down, "director", {}, Value::Map{{"name", name}}));
   }
 
   void check_heartbeats() {
     if (current_phase_ == "launch" || current_phase_ == "hello") return;  // the hello timeout covers start-up
     for (auto& [name, a] : actors_) {
-      if (a.exited || a.said_bye) continue;
-      if (seconds_since(a.last_seen) > spec_.heartbeat_timeout)
-        throw FarmFailure{"actor '" + name + "' has been silent for " +
-                          std::to_string(static_cast<int>(spec_.heartbeat_timeout)) + " s (missed heartbeats)"};
+      if (a.exited || a.said_bye || a.lost || a.killed_hung) continue;
+      if (seconds_since(a.last_seen) <= spec_.heartbeat_timeout) continue;
+      if (recoverable(a)) {
+        // A hung process (e.g. SIGSTOPped) counts as dead; SIGKILL makes sure it can never answer late.
+        a.killed_hung = true;
+        ::kill(a.pid, SIGKILL);
+        continue;
+      }
+      throw FarmFailure{"actor '" + name + "' has been silent for " + seconds_text(spec_.heartbeat_timeout) +
+                        " (missed heartbeats)"};
     }
   }
 
   void send_heartbeats() {
-    if (seconds_since(last_heartbeat_) < 1.0) return;
+    if (seconds_since(last_heartbeat_) < std::min(1.0, spec_.heartbeat_timeout / 4)) return;
     last_heartbeat_ = Clock::now();
     for (auto& [name, a] : actors_)
-      if (a.said_hello && !a.exited) send(name, wire::make(MsgType::heartbeat, "director"));
+      if (a.said_hello && !a.exited && !a.lost) send(name, wire::make(MsgType::heartbeat, "director"));
   }
 
   void handle(wire::Incoming& in) {
@@ -288,6 +356,7 @@ class Director {
       return;
     }
     ActorState& a = it->second;
+    if (a.lost) return;  // whatever a lost actor still says is not counted
     a.last_seen = Clock::now();
     wire::Message& m = *in.message;
     switch (m.header.type) {
@@ -328,12 +397,9 @@ class Director {
   void on_request(ActorState& a, const wire::Message& m) {
     const std::string& name = a.spec->name;
     if (m.header.op == "tile") {
-      Value::Map body;
-      if (current_phase_ == "render") {
-        if (auto t = master_->next(name))
-          body["tile"] = Value::Map{{"id", t->id}, {"x0", t->rect.x0}, {"y0", t->rect.y0}, {"x1", t->rect.x1}, {"y1", t->rect.y1}};
-      }
-      send(name, wire::make(MsgType::reply, "director", "tile", std::move(body), m.header.id));
+      // With no tile free but some still out with others, the answer waits: a lost renderer's tiles may come back.
+      waiting_tile_requests_.emplace_back(name, m.header.id);
+      serve_waiting_tile_requests();
     } else if (m.header.op == "tile_done") {
       const Value* id = m.body.find("id");
       const Value* pixels = m.body.find("pixels");
@@ -351,8 +417,29 @@ class Director {
       send(name, wire::make(MsgType::reply, "director", "tile_done", Value::Map{}, m.header.id));
       if (master_->done() == 1) first_tile_seconds_ = seconds_since(start_);
       progress_->update(master_->done(), seconds_since(render_start_));
+      if (master_->finished()) serve_waiting_tile_requests();
     } else {
       send(name, wire::make_error_reply("director", m.header.id, "unknown_op", "the director serves 'tile' and 'tile_done'"));
+    }
+  }
+
+  // Answers waiting tile requests: a tile each while tiles are free; "none left" once every tile is done.
+  void serve_waiting_tile_requests() {
+    if (current_phase_ != "render") return;
+    while (!waiting_tile_requests_.empty()) {
+      auto [name, id] = waiting_tile_requests_.front();
+      if (actors_.at(name).lost) {
+        waiting_tile_requests_.erase(waiting_tile_requests_.begin());
+        continue;
+      }
+      Value::Map body;
+      if (auto t = master_->next(name)) {
+        body["tile"] = Value::Map{{"id", t->id}, {"x0", t->rect.x0}, {"y0", t->rect.y0}, {"x1", t->rect.x1}, {"y1", t->rect.y1}};
+      } else if (!master_->finished()) {
+        return;  // keep waiting
+      }
+      waiting_tile_requests_.erase(waiting_tile_requests_.begin());
+      send(name, wire::make(MsgType::reply, "director", "tile", std::move(body), id));
     }
   }
 
@@ -372,6 +459,11 @@ class Director {
                    "MiB in", "MiB out", "busy s", "peakq");
       for (const auto& a : spec_.actors) {
         const ActorState& s = actors_.at(a.name);
+        if (s.lost) {
+          std::fprintf(stderr, "%-14s %-10s %8d  lost: %s\n", a.name.c_str(), a.kind.c_str(), static_cast<int>(s.pid),
+                       s.loss.c_str());
+          continue;
+        }
         std::fprintf(stderr, "%-14s %-10s %8d %9.0f %11.0f %9.2f %9.2f %8.3f %6.0f\n", a.name.c_str(), a.kind.c_str(),
                      static_cast<int>(s.pid), num(s.stats, "requests"), num(s.stats, "points"),
                      num(s.stats, "bytes_in") / 1048576.0, num(s.stats, "bytes_out") / 1048576.0,
@@ -392,6 +484,7 @@ class Director {
         entry.as_map()["name"] = a.name;
         entry.as_map()["kind"] = a.kind;
         entry.as_map()["pid"] = static_cast<int64_t>(s.pid);
+        if (s.lost) entry.as_map()["lost"] = s.loss;
         actors.push_back(std::move(entry));
       }
       Value doc = Value::Map{{"script", spec_.script},
@@ -414,6 +507,7 @@ class Director {
   std::string control_endpoint_;
   std::map<std::string, ActorState> actors_;
   std::unique_ptr<RenderMaster> master_;
+  std::vector<std::pair<std::string, uint64_t>> waiting_tile_requests_;
   std::unique_ptr<Progress> progress_;
   bool progress_active_ = false;
   std::string current_phase_ = "prepare";

@@ -5,11 +5,14 @@
 //   anything else / malformed                  ->  ERROR { code, message }; the actor carries on
 // Control: CONFIG builds the op from its parameters and loads the scene; PHASE setup runs op.setup() and answers
 // READY setup when it finishes; PHASE finish / BYE stop it.
+// Runtime setting `slowdown` (from a multiplexer's slowdown list) emulates a slower host: after a request computed
+// for t seconds, the reply and the next request wait (slowdown - 1) * t, without using the CPU.
 // Requests queue in arrival order and start one per loop turn, so heartbeats and replies keep flowing. A request
 // whose op asks its inputs suspends (a coroutine) while the runtime sends those batches asynchronously; other
 // requests run meanwhile. The LightOp class sees none of this.
 #include "actors/lightop_actor.hpp"
 
+#include <chrono>
 #include <deque>
 
 #include "actors/shade_codec.hpp"
@@ -76,6 +79,8 @@ class LightOpActor final : public Actor {
     scene_ = std::make_unique<Scene>(std::move(*loaded));
     tracer_ = std::make_unique<RayTracer>(*scene_);
     inputs_ = std::make_unique<RemoteInputs>(rt, 4096);
+    if (const Value* slow = rt.runtime_settings().find("slowdown"); slow && slow->is_number())
+      slowdown_ = std::max(1.0, slow->as_double());
     return Ok{};
   }
 
@@ -121,12 +126,20 @@ class LightOpActor final : public Actor {
       }
       rt.phase_done("setup");
     }
+    const auto now = Clock::now();
+    if (now < resting_until_) return;
     // Start one waiting request per turn; the loop polls sockets between requests.
     if (!waiting_.empty() && running_.size() < kMaxRunning) {
       auto job = std::move(waiting_.front());
       waiting_.pop_front();
       job->radiance.assign(job->points.size(), RGB{});
+      const auto started = Clock::now();
       job->task = op_->shade(job->points, job->radiance, *inputs_);
+      if (slowdown_ > 1.0) {
+        resting_until_ = Clock::now() + std::chrono::duration_cast<Clock::duration>((Clock::now() - started) * (slowdown_ - 1.0));
+        running_.push_back(std::move(job));
+        return;  // its reply leaves when the rest is over
+      }
       running_.push_back(std::move(job));
     }
     for (size_t i = 0; i < running_.size();) {
@@ -148,6 +161,11 @@ class LightOpActor final : public Actor {
   }
 
   size_t queue_length() const override { return waiting_.size(); }
+  bool has_local_work() const override { return !waiting_.empty() && Clock::now() >= resting_until_; }
+  long next_due_ms() const override {
+    if (Clock::now() >= resting_until_) return -1;
+    return std::chrono::duration_cast<std::chrono::milliseconds>(resting_until_ - Clock::now()).count() + 1;
+  }
 
  private:
   struct Job {
@@ -158,6 +176,9 @@ class LightOpActor final : public Actor {
     Task task;
   };
   static constexpr size_t kMaxRunning = 16;
+  using Clock = std::chrono::steady_clock;
+  double slowdown_ = 1.0;
+  Clock::time_point resting_until_{};
 
   const LightOpKind& kind_;
   std::unique_ptr<LightOp> op_;

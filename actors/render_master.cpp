@@ -1,10 +1,27 @@
 #include "actors/render_master.hpp"
 
+#include <algorithm>
+
 namespace lf {
+
+// Interleaves the bits of x and y: tiles close in Morton order are close on screen, so consecutive tiles share
+// geometry and lighting data (Jansen & Reinhard's access coherence).
+static uint64_t morton(uint32_t x, uint32_t y) {
+  uint64_t code = 0;
+  for (int b = 0; b < 16; ++b) code |= (uint64_t{(x >> b) & 1u} << (2 * b)) | (uint64_t{(y >> b) & 1u} << (2 * b + 1));
+  return code;
+}
 
 RenderMaster::RenderMaster(int width, int height, int tile_size)
     : tiles_(make_tiles(width, height, tile_size)), done_(tiles_.size(), false), film_(width, height) {
-  for (size_t i = tiles_.size(); i-- > 0;) unassigned_.push_back(i);
+  std::vector<uint64_t> order(tiles_.size());
+  for (size_t i = 0; i < order.size(); ++i) order[i] = i;
+  auto key = [&](uint64_t i) {
+    return morton(static_cast<uint32_t>(tiles_[i].x0 / tile_size), static_cast<uint32_t>(tiles_[i].y0 / tile_size));
+  };
+  std::sort(order.begin(), order.end(), [&](uint64_t a, uint64_t b) { return key(a) < key(b); });
+  // unassigned_ is a stack: push in reverse so the first in Morton order is handed out first.
+  unassigned_.assign(order.rbegin(), order.rend());
 }
 
 std::optional<RenderMaster::Assignment> RenderMaster::next(const std::string& worker) {

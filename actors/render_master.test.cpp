@@ -19,6 +19,15 @@ TEST(RenderMaster, HandsOutEveryTileOnceAndCoversTheImage) {
   EXPECT_EQ(pixels, 50 * 30);
 }
 
+TEST(RenderMaster, HandsTilesOutInMortonOrder) {
+  RenderMaster m(64, 64, 16);  // 4 x 4 tiles
+  std::vector<std::pair<int, int>> got;
+  while (auto t = m.next("r0")) got.emplace_back(t->rect.x0 / 16, t->rect.y0 / 16);
+  std::vector<std::pair<int, int>> z{{0, 0}, {1, 0}, {0, 1}, {1, 1}, {2, 0}, {3, 0}, {2, 1}, {3, 1},
+                                     {0, 2}, {1, 2}, {0, 3}, {1, 3}, {2, 2}, {3, 2}, {2, 3}, {3, 3}};
+  EXPECT_EQ(got, z);
+}
+
 TEST(RenderMaster, AcceptsOnlyFromTheHolderAndOnlyOnce) {
   RenderMaster m(16, 16, 16);
   auto t = m.next("r0");

@@ -38,7 +38,7 @@ class RendererActor final : public Actor {
     try {
       batch_ = static_cast<size_t>(p.get_int("batch", 4096, 1, 1 << 20));
       p.get_int("window", 4, 1, 64);  // applied by the runtime to the input connection
-      tiles_in_flight_ = static_cast<size_t>(p.get_int("tiles_in_flight", 2, 1, 64));
+      tiles_in_flight_ = static_cast<size_t>(p.get_int("tiles_in_flight", 3, 1, 64));
       p.report_unused();
     } catch (const ParamError& e) {
       return make_error(e.what());
@@ -150,7 +150,7 @@ class RendererActor final : public Actor {
   std::unique_ptr<Camera> camera_;
   ImageSpec image_;
   size_t batch_ = 4096;
-  size_t tiles_in_flight_ = 2;
+  size_t tiles_in_flight_ = 3;
   bool rendering_ = false;
   bool no_more_tiles_ = false;
   size_t tile_requests_out_ = 0;

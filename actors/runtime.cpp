@@ -37,6 +37,10 @@ Value ActorStats::to_value(uint64_t bytes_in, uint64_t bytes_out) const {
                     {"bytes_out", bytes_out}};
 }
 
+void Actor::on_peer_down(const std::string& name, Runtime& rt) {
+  rt.fail("input '" + name + "' was lost and this actor has no other");
+}
+
 Runtime::Runtime(ActorArgs args)
     : args_(std::move(args)), control_(wire::Socket::Kind::dealer, args_.name), data_(wire::Socket::Kind::router) {
   // Let BYE and the last STATS leave before the socket closes.
@@ -88,7 +92,12 @@ void Runtime::send_stats_and_bye() {
     in += c->socket().counters().bytes_in;
     out += c->socket().counters().bytes_out;
   }
-  send_control(wire::make(MsgType::stats, args_.name, {}, stats_.to_value(in, out)));
+  Value stats = stats_.to_value(in, out);
+  if (actor_) {
+    Value detail = actor_->extra_stats();
+    if (!detail.is_nil()) stats.as_map()["detail"] = std::move(detail);
+  }
+  send_control(wire::make(MsgType::stats, args_.name, {}, std::move(stats)));
   send_control(wire::make(MsgType::bye, args_.name));
 }
 
@@ -98,6 +107,7 @@ void Runtime::handle_control(wire::Message& m, Actor& actor) {
       if (configured_) return;
       configured_ = true;
       if (const Value* t = m.body.find("heartbeat_timeout"); t && t->is_number()) heartbeat_timeout_ = t->as_double();
+      if (const Value* r = m.body.find("runtime"); r && r->is_map()) runtime_settings_ = *r;
       // Connect to every input before the actor configures, so that it may ask them during setup.
       if (const Value* ins = m.body.find("inputs"); ins && ins->is_array()) {
         for (const auto& in : ins->as_array()) {
@@ -160,6 +170,11 @@ void Runtime::handle_control(wire::Message& m, Actor& actor) {
       stopping_ = true;
       return;
     case MsgType::heartbeat: return;
+    case MsgType::peer_down: {
+      const Value* name = m.body.find("name");
+      if (name && name->is_string()) actor.on_peer_down(name->as_string(), *this);
+      return;
+    }
     default: log_warn("ignored a " + std::string(wire::type_name(m.header.type)) + " from the director");
   }
 }
@@ -220,8 +235,9 @@ int Runtime::run(Actor& actor) {
       for (; polled_inputs < inputs_.size(); ++polled_inputs) poller.add(inputs_[polled_inputs]->socket());
       inputs_changed_ = false;
     }
-    // While requests wait in the actor's own queue, do not sleep in poll.
-    const long timeout = actor.queue_length() > 0 ? 0 : 100;
+    // While the actor has work of its own, do not sleep in poll.
+    long timeout = actor.has_local_work() ? 0 : 100;
+    if (long due = actor.next_due_ms(); due >= 0) timeout = std::min(timeout, due);
     const auto& ready = poller.wait(timeout);
 
     if (ready[0]) {
@@ -236,7 +252,7 @@ int Runtime::run(Actor& actor) {
       }
     }
     if (stopping_) break;
-    if (ready[1] || actor.queue_length() > 0) handle_data(actor);
+    if (ready[1]) handle_data(actor);
     for (size_t i = 0; i < polled_inputs && !stopping_; ++i) {
       if (!ready[2 + i]) continue;
       auto started = Clock::now();
@@ -253,7 +269,9 @@ int Runtime::run(Actor& actor) {
     const auto now = Clock::now();
     if (now >= next_heartbeat) {
       send_control(wire::make(MsgType::heartbeat, args_.name));
-      next_heartbeat = now + std::chrono::seconds(1);
+      // Four beats per timeout (at most one a second), so one late beat is never taken for a death.
+      next_heartbeat = now + std::chrono::duration_cast<Clock::duration>(
+                                 std::chrono::duration<double>(std::min(1.0, heartbeat_timeout_ / 4)));
     }
     if (std::chrono::duration<double>(now - last_from_director).count() > heartbeat_timeout_) {
       log_error("the director has been silent for " + std::to_string(static_cast<int>(heartbeat_timeout_)) +

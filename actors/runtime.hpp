@@ -53,6 +53,14 @@ class Actor {
   virtual void on_progress(Runtime&) {}
   // Requests waiting to be served (piggybacked on replies for load balancing).
   virtual size_t queue_length() const { return 0; }
+  // True while the actor has work it can do right now (the loop then polls without sleeping).
+  virtual bool has_local_work() const { return queue_length() > 0; }
+  // PEER_DOWN: input `name` is gone. By default that ends this actor; a multiplexer re-routes instead.
+  virtual void on_peer_down(const std::string& name, Runtime& rt);
+  // How long the loop may sleep before this actor has something due (ms); -1: nothing due.
+  virtual long next_due_ms() const { return -1; }
+  // Added to STATS under "detail" (e.g. a multiplexer's per-replica counts).
+  virtual Value extra_stats() const { return Value(); }
 };
 
 class Runtime {
@@ -70,6 +78,8 @@ class Runtime {
 
   size_t input_count() const { return inputs_.size(); }
   wire::RequestClient& input(size_t i) { return *inputs_[i]; }
+  // Runtime settings the director sent in CONFIG (e.g. slowdown), apart from the algorithm's parameters.
+  const Value& runtime_settings() const { return runtime_settings_; }
   const std::string& input_name(size_t i) const { return input_names_[i]; }
 
   using DirectorCallback = std::function<void(Result<wire::Message>)>;
@@ -96,6 +106,7 @@ class Runtime {
   std::string data_endpoint_;
   std::vector<std::unique_ptr<wire::RequestClient>> inputs_;
   std::vector<std::string> input_names_;
+  Value runtime_settings_;
   std::map<uint64_t, DirectorCallback> director_pending_;
   uint64_t next_director_id_ = 1;
   ActorStats stats_;

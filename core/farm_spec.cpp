@@ -58,6 +58,14 @@ ImageSpec ImageSpec::from_value(const Value& v) {
   return i;
 }
 
+int FarmSpec::pool_of(int i) const {
+  for (size_t m = 0; m < actors.size(); ++m)
+    if (actors[m].is_multiplexer())
+      for (int in : actors[m].inputs)
+        if (in == i) return static_cast<int>(m);
+  return -1;
+}
+
 int FarmSpec::renderer_count() const {
   int n = 0;
   for (const auto& a : actors) n += a.is_renderer();

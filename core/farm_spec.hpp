@@ -55,10 +55,12 @@ struct ActorSpec {
   std::string name;       // unique in the farm, e.g. "direct" or "renderer-1"
   std::string kind;       // "renderer" or a LightOp kind such as "direct"
   Value::Map params;      // the script's parameters, minus wiring keys
-  std::vector<int> inputs;  // indices into FarmSpec::actors
+  Value::Map runtime;     // settings for the runtime that wraps the actor, not the algorithm (e.g. slowdown)
+  std::vector<int> inputs;  // indices into FarmSpec::actors; a multiplexer's inputs are its replicas
   std::string host = "local";
   SourceLoc loc;
   bool is_renderer() const { return kind == "renderer"; }
+  bool is_multiplexer() const { return kind == "multiplexer"; }
 };
 
 struct FarmSpec {
@@ -71,6 +73,8 @@ struct FarmSpec {
   int lighting = -1;  // index of the MasterLightOp the renderers ask
   double heartbeat_timeout = 10.0;  // seconds of silence before an actor counts as dead
   int renderer_count() const;
+  // Index of the multiplexer whose replica actor `i` is, or -1.
+  int pool_of(int i) const;
 };
 
 }  // namespace lf

@@ -12,4 +12,4 @@ image  { width = param("width", 512), height = param("height", 512), spp = param
 
 local direct = lightop "direct" { light_samples = param("light_samples", 2) }
 
-renderers { count = param("renderers", 2), lighting = direct }
+renderers { count = param("renderers", 2), lighting = direct, mode = param("mode", "async") }

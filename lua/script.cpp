@@ -1,7 +1,7 @@
 // The farm-script library. Like Lua's own libraries: one registration table, every argument checked with
 // luaL_check*, so a mistake comes back as "farm.lua:12: what is wrong".
 //
-// Globals a script sees: scene, camera, image, lightop, renderers, host, farm, param (and Lua's base, string, table,
+// Globals a script sees: scene, camera, image, lightop, multiplexer, renderers, host, farm, param (and Lua's base, string, table,
 // math and utf8 libraries; no io or os, so a script describes a farm and does nothing else).
 #include "lua/script.hpp"
 
@@ -9,6 +9,7 @@
 
 #include <cmath>
 #include <filesystem>
+#include <map>
 #include <set>
 
 #include "core/params.hpp"
@@ -315,7 +316,141 @@ int l_lightop(lua_State* L) {
   return 1;
 }
 
-// renderers { count = 2, lighting = op, batch = 4096, window = 4, host = h }
+// The template's subtree: the actor itself and, for a multiplexer, its replicas' subtrees (not their inputs, which
+// replicas share).
+void subtree(const FarmSpec& spec, int i, std::vector<int>& out) {
+  out.push_back(i);
+  if (spec.actors[static_cast<size_t>(i)].is_multiplexer())
+    for (int r : spec.actors[static_cast<size_t>(i)].inputs) subtree(spec, r, out);
+}
+
+bool is_wired(const FarmSpec& spec, int i) {
+  if (spec.lighting == i) return true;
+  for (const auto& a : spec.actors)
+    for (int in : a.inputs)
+      if (in == i) return true;
+  return false;
+}
+
+// multiplexer { op, replicas = 2, strategy = "least_loaded", split = 0, window = 4, slowdown = {...}, name, host }
+// The op (a lightop or another multiplexer, freshly declared) becomes replica 0; replicas 1.. are copies. The
+// multiplexer takes the op's name: to the network it is that LightOp. Replicas are NAME.0, NAME.1, ...
+int l_multiplexer(lua_State* L) {
+  Builder& b = builder(L);
+  luaL_checktype(L, 1, LUA_TTABLE);
+  lua_geti(L, 1, 1);
+  if (lua_isnil(L, -1)) luaL_error(L, "multiplexer needs a LightOp to replicate as its first entry");
+  const int tmpl = actor_index(L, -1, "a multiplexer's first entry");
+  lua_pop(L, 1);
+  lua_pushnil(L);
+  lua_seti(L, 1, 1);
+  if (is_wired(b.spec, tmpl))
+    luaL_error(L, "lightop '%s' is already wired elsewhere; give the multiplexer a LightOp of its own",
+               b.spec.actors[static_cast<size_t>(tmpl)].name.c_str());
+  lua_getfield(L, 1, "name");
+  const std::string base = b.spec.actors[static_cast<size_t>(tmpl)].name;
+  std::string wanted = lua_isnil(L, -1) ? base : luaL_checkstring(L, -1);
+  lua_pop(L, 1);
+  lua_pushnil(L);
+  lua_setfield(L, 1, "name");
+  std::string host = take_host(L, 1, b);
+  lua_getfield(L, 1, "slowdown");
+  Value slowdown = to_value(L, -1, "multiplexer.slowdown");
+  lua_pop(L, 1);
+  lua_pushnil(L);
+  lua_setfield(L, 1, "slowdown");
+
+  ParamTable p = table_params(L, 1, "multiplexer");
+  int replicas = 2;
+  Value::Map params;
+  with_params(L, [&] {
+    replicas = static_cast<int>(p.get_int("replicas", 2, 1, 64));
+    params["strategy"] = p.get_string("strategy", "least_loaded", {"round_robin", "least_loaded", "random"});
+    params["split"] = p.get_int("split", 0, 0, 1 << 20);
+    params["window"] = p.get_int("window", 4, 1, 64);
+    params["seed"] = p.get_int("seed", 0, 0, INT32_MAX);
+    p.report_unused();
+  });
+  std::vector<double> slow(static_cast<size_t>(replicas), 1.0);
+  if (!slowdown.is_nil()) {
+    if (!slowdown.is_array() || slowdown.as_array().size() != static_cast<size_t>(replicas))
+      luaL_error(L, "multiplexer: slowdown must list one factor per replica (%d)", replicas);
+    for (size_t i = 0; i < slow.size(); ++i) {
+      const Value& f = slowdown.as_array()[i];
+      if (!f.is_number() || f.as_double() < 1 || f.as_double() > 1000)
+        luaL_error(L, "multiplexer: slowdown factors must be numbers in [1, 1000]");
+      slow[i] = f.as_double();
+    }
+  }
+
+  std::vector<int> nodes;
+  subtree(b.spec, tmpl, nodes);
+  // "direct" -> "direct.1"; an inner replica "direct.0" -> "direct.1.0"; a node named otherwise keeps its name
+  // under the replica's prefix.
+  auto renamed = [&](const std::string& name, int replica) {
+    const std::string suffix = name.rfind(base, 0) == 0 ? name.substr(base.size()) : "." + name;
+    return base + "." + std::to_string(replica) + suffix;
+  };
+  auto taken = [&](const std::string& n) {
+    for (const auto& a : b.spec.actors)
+      if (a.name == n) return true;
+    return false;
+  };
+  std::vector<int> roots;
+  for (int r = 0; r < replicas; ++r) {
+    std::map<int, int> index_of;  // template node -> this replica's node
+    for (int n : nodes) {
+      if (r == 0) {
+        index_of[n] = n;
+      } else {
+        b.spec.actors.push_back(b.spec.actors[static_cast<size_t>(n)]);
+        index_of[n] = static_cast<int>(b.spec.actors.size() - 1);
+      }
+    }
+    for (int n : nodes) {
+      ActorSpec& a = b.spec.actors[static_cast<size_t>(index_of[n])];
+      for (int& in : a.inputs)
+        if (index_of.count(in)) in = index_of[in];
+    }
+    roots.push_back(index_of[tmpl]);
+  }
+  // Rename after copying, all at once: inner names may be what outer renaming frees (direct.0 -> direct.0.0).
+  std::vector<std::pair<int, std::string>> new_names;
+  std::set<int> moving;
+  for (int r = 0; r < replicas; ++r) {
+    std::vector<int> mine;
+    subtree(b.spec, roots[static_cast<size_t>(r)], mine);
+    for (int n : mine) {
+      new_names.emplace_back(n, renamed(b.spec.actors[static_cast<size_t>(n)].name, r));
+      moving.insert(n);
+    }
+  }
+  for (const auto& [n, name] : new_names)
+    for (size_t i = 0; i < b.spec.actors.size(); ++i)
+      if (!moving.count(static_cast<int>(i)) && b.spec.actors[i].name == name)
+        luaL_error(L, "multiplexer: replica name '%s' is already taken", name.c_str());
+  for (const auto& [n, name] : new_names) b.spec.actors[static_cast<size_t>(n)].name = name;
+  for (int r = 0; r < replicas; ++r) {
+    ActorSpec& root = b.spec.actors[static_cast<size_t>(roots[static_cast<size_t>(r)])];
+    if (slow[static_cast<size_t>(r)] != 1.0) {
+      if (root.is_multiplexer()) luaL_error(L, "multiplexer: slowdown applies to LightOp replicas, not multiplexers");
+      root.runtime["slowdown"] = slow[static_cast<size_t>(r)];
+    }
+  }
+  if (taken(wanted)) luaL_error(L, "multiplexer: name '%s' is already taken", wanted.c_str());
+  ActorSpec m;
+  m.name = wanted;
+  m.kind = "multiplexer";
+  m.params = std::move(params);
+  m.inputs = roots;
+  m.host = host;
+  m.loc = caller_loc(L);
+  b.spec.actors.push_back(std::move(m));
+  push_actor(L, static_cast<int>(b.spec.actors.size() - 1));
+  return 1;
+}
+
+// renderers { count = 2, lighting = op, batch = 4096, window = 4, tiles_in_flight = 3, mode = "async", host = h }
 int l_renderers(lua_State* L) {
   Builder& b = builder(L);
   if (b.have_renderers) luaL_error(L, "renderers is declared twice");
@@ -334,6 +469,13 @@ int l_renderers(lua_State* L) {
     count = static_cast<int>(p.get_int("count", 1, 1, 256));
     params["batch"] = p.get_int("batch", 4096, 1, 1 << 20);
     params["window"] = p.get_int("window", 4, 1, 64);
+    params["tiles_in_flight"] = p.get_int("tiles_in_flight", 3, 1, 64);
+    // sync: one point per request, one request at a time, one tile at a time — to measure what packets buy.
+    if (p.get_string("mode", "async", {"async", "sync"}) == "sync") {
+      params["batch"] = 1;
+      params["window"] = 1;
+      params["tiles_in_flight"] = 1;
+    }
     p.report_unused();
   });
   SourceLoc loc = caller_loc(L);
@@ -402,7 +544,7 @@ int host_gc(lua_State* L) {
 
 const luaL_Reg kFarmLib[] = {{"scene", l_scene},   {"camera", l_camera},       {"image", l_image},
                              {"lightop", l_lightop}, {"renderers", l_renderers}, {"host", l_host},
-                             {"param", l_param},   {"farm", l_farm},
+                             {"param", l_param},   {"farm", l_farm},       {"multiplexer", l_multiplexer},
                              {nullptr, nullptr}};
 
 void open_libs(lua_State* L) {
@@ -494,7 +636,8 @@ std::string to_dot(const FarmSpec& spec) {
       by_host[a.host].push_back("    " + id("renderers") + " [label=\"renderer × " + std::to_string(renderers) +
                                 "\", shape=box3d];");
     } else {
-      by_host[a.host].push_back("    " + id(a.name) + " [label=\"" + a.name + "\\n(" + a.kind + ")\"];");
+      const char* shape = a.is_multiplexer() ? ", shape=trapezium" : "";
+      by_host[a.host].push_back("    " + id(a.name) + " [label=\"" + a.name + "\\n(" + a.kind + ")\"" + shape + "];");
     }
   }
   for (const auto& [host, lines] : by_host) {

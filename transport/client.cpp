@@ -28,6 +28,11 @@ void RequestClient::pump() {
   }
 }
 
+void RequestClient::abandon_all() {
+  outstanding_.clear();
+  queue_.clear();
+}
+
 void RequestClient::on_readable() {
   while (auto in = socket_.receive()) {
     if (!in->message) {

@@ -24,6 +24,9 @@ class RequestClient {
   // Reads every waiting reply and runs its callback. Replies whose id is not outstanding (late or duplicated)
   // are dropped and counted.
   void on_readable();
+  // Forgets every outstanding and queued request without running callbacks (the peer is gone; whoever owns the
+  // work re-sends it elsewhere). Late replies to them are then dropped as strays.
+  void abandon_all();
 
   size_t outstanding() const { return outstanding_.size(); }
   size_t queued() const { return queue_.size(); }

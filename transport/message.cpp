@@ -18,12 +18,13 @@ std::string_view type_name(MsgType type) {
     case MsgType::heartbeat: return "HEARTBEAT";
     case MsgType::bye: return "BYE";
     case MsgType::ready: return "READY";
+    case MsgType::peer_down: return "PEER_DOWN";
   }
   return "?";
 }
 
 std::optional<MsgType> type_from_number(uint64_t n) {
-  if (n >= 1 && n <= 10) return static_cast<MsgType>(n);
+  if (n >= 1 && n <= 11) return static_cast<MsgType>(n);
   return std::nullopt;
 }
 

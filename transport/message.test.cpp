@@ -7,7 +7,7 @@
 namespace lf::wire {
 
 TEST(Message, EveryTypeRoundTrips) {
-  for (uint64_t n = 1; n <= 10; ++n) {
+  for (uint64_t n = 1; n <= 11; ++n) {
     Message m = make(*type_from_number(n), "renderer-0", "shade",
                      Value::Map{{"count", 3}, {"p", floats_to_bytes(std::vector<float>{1, 2, 3})},
                                 {"nested", Value::Array{1.5, "x", true, nullptr}}},

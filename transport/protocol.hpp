@@ -30,6 +30,7 @@ enum class MsgType : uint8_t {
   heartbeat = 8,  // both ways: "still here"
   bye = 9,        // director -> actor: stop now; actor -> director: stopping
   ready = 10,     // actor -> director: finished a phase (body names it)
+  peer_down = 11, // director -> actor: one of your inputs is gone (body: {name}); re-route its work
 };
 
 std::string_view type_name(MsgType type);

@@ -1,0 +1,51 @@
+#pragma once
+// Scheduler: which replica of a pool gets the next packet (the multiplexer's strategy). Pure logic, fed with what
+// the multiplexer observes; tests drive it with scripted fake replicas.
+//
+//   round_robin   cycles through live replicas, skipping one that already holds `cap` packets
+//   least_loaded  the live replica with the smallest (packets out + queue length it last reported), as Kipfer &
+//                 Slusallek's wrappers do with the FIFO fill level piggybacked on replies
+//   random        uniform over live replicas below the cap, from a seeded generator
+// A replica that stops answering accumulates packets out, so it stops getting work before it is declared dead.
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace lf {
+
+class Scheduler {
+ public:
+  enum class Strategy { round_robin, least_loaded, random };
+  static std::optional<Strategy> parse(const std::string& name);
+
+  Scheduler(Strategy strategy, size_t replicas, size_t cap, uint64_t seed = 0);
+
+  // The replica for the next packet, or nullopt when every replica is lost.
+  std::optional<size_t> pick();
+  void sent(size_t replica, size_t points);
+  void answered(size_t replica, uint32_t reported_queue);
+  void lost(size_t replica);  // never picked again
+
+  size_t live() const;
+  bool is_live(size_t r) const { return replicas_[r].live; }
+  size_t out(size_t r) const { return replicas_[r].out; }
+  uint64_t packets_sent(size_t r) const { return replicas_[r].packets; }
+  uint64_t points_sent(size_t r) const { return replicas_[r].points; }
+  size_t size() const { return replicas_.size(); }
+
+ private:
+  struct Replica {
+    bool live = true;
+    size_t out = 0;           // packets sent and not answered
+    uint32_t queue = 0;       // last reported queue length
+    uint64_t packets = 0, points = 0;
+  };
+  Strategy strategy_;
+  size_t cap_;
+  size_t next_ = 0;   // round-robin position; also breaks least_loaded ties in rotation
+  uint64_t rng_;
+  std::vector<Replica> replicas_;
+};
+
+}  // namespace lf

@@ -1,0 +1,121 @@
+// Pools, packets and failures (issue 4): multiplexed networks render the same pixels as plain ones, and a frame
+// survives a renderer or replica killed or stopped in the middle of it — with the fault-free image, bit for bit.
+#include <gtest/gtest.h>
+
+#include "render/image.hpp"
+#include "tests/farm_harness.hpp"
+
+namespace lf::test {
+namespace {
+
+const std::string kSource = LIGHTFARM_SOURCE_DIR;
+const std::string kCornell = kSource + "/examples/cornell.lua";
+const std::string kPool = kSource + "/examples/cornell_pool.lua";
+const std::string kSlowPool = kSource + "/tests/scripts/slow_pool.lua";
+const std::string kNested = kSource + "/tests/scripts/nested_pool.lua";
+
+class FailureTest : public ::testing::Test {
+ protected:
+  fs::path dir;
+  void SetUp() override {
+    dir = fs::temp_directory_path() / ("lightfarm-failure-test-" + unique_tag());
+    fs::create_directories(dir);
+  }
+  void TearDown() override { fs::remove_all(dir); }
+  std::string path(const std::string& name) const { return (dir / name).string(); }
+
+  // Runs to completion and returns the image (fails the test if the run failed or left processes).
+  Image render(const std::vector<std::string>& args, const std::string& out) {
+    std::vector<std::string> all = args;
+    all.insert(all.end(), {"--output", path(out)});
+    auto r = run_lightfarm(all);
+    EXPECT_EQ(r.status, 0) << r.err;
+    EXPECT_TRUE(wait_no_leftovers(r.tag).empty());
+    auto img = read_image(path(out));
+    EXPECT_TRUE(img.ok()) << (img.ok() ? "" : img.error().message);
+    return img.ok() ? *img : Image();
+  }
+
+  // Starts `args`, waits until a quarter of the frame is done, applies `fault` to the actor named `victim`, and
+  // returns the finished run.
+  RunResult render_with_fault(std::vector<std::string> args, const std::string& out, const std::string& victim,
+                              int signal) {
+    args.insert(args.end(), {"--output", path(out)});
+    Farm farm(args);
+    EXPECT_TRUE(Farm::eventually([&] { return farm.err_so_far().find("render 20%") != std::string::npos; }, 60))
+        << farm.err_so_far();
+    auto pids = actor_pids(farm.tag(), victim);
+    EXPECT_EQ(pids.size(), 1u) << "no actor named " << victim;
+    if (!pids.empty()) ::kill(pids[0], signal);
+    auto r = farm.wait(120);
+    EXPECT_TRUE(wait_no_leftovers(r.tag).empty()) << "processes left behind";
+    return r;
+  }
+};
+
+std::vector<std::string> small(const std::string& script, std::vector<std::string> sets) {
+  std::vector<std::string> args{"run", script};
+  for (auto& s : sets) args.insert(args.end(), {"--set", s});
+  return args;
+}
+
+TEST_F(FailureTest, MultiplexedNetworksRenderThePlainNetworksPixels) {
+  const std::vector<std::string> common{"width=64", "height=64", "spp=4", "tile=16"};
+  auto sets = [&](std::vector<std::string> extra) {
+    extra.insert(extra.end(), common.begin(), common.end());
+    return extra;
+  };
+  Image plain = render(small(kCornell, sets({})), "plain.exr");
+  for (const char* strategy : {"least_loaded", "round_robin", "random"}) {
+    Image pooled = render(small(kPool, sets({std::string("strategy=") + strategy, "replicas=3", "split=300"})),
+                          std::string("pool-") + strategy + ".exr");
+    EXPECT_TRUE(pooled.pixels == plain.pixels) << strategy;
+  }
+  Image nested = render({"run", kNested}, "nested.exr");
+  EXPECT_TRUE(nested.pixels == plain.pixels) << "pool of pools";
+  Image sync = render(small(kCornell, {"width=16", "height=16", "spp=2", "tile=16", "mode=sync"}), "sync.exr");
+  Image async = render(small(kCornell, {"width=16", "height=16", "spp=2", "tile=16"}), "async.exr");
+  EXPECT_TRUE(sync.pixels == async.pixels) << "sync mode";
+}
+
+TEST_F(FailureTest, KilledRendererReplicaOrStoppedReplicaLeaveTheImageUnchanged) {
+  // spp=64 and slowed replicas: the frame lasts about a second, so faults land well inside it.
+  const auto args = small(kSlowPool, {"spp=64", "slowdown=3", "renderers=2", "heartbeat_timeout=1.5"});
+  Image reference = render(small(kSlowPool, {"spp=64", "renderers=1"}), "reference.exr");
+
+  struct Case {
+    const char* victim;
+    int signal;
+    const char* says;
+  };
+  for (const Case& c : {Case{"renderer-1", SIGKILL, "renderer 'renderer-1' was killed by signal 9 (Killed); its "},
+                        Case{"direct.1", SIGKILL, "replica 'direct.1' was killed by signal 9 (Killed); 'direct' sends its work"},
+                        Case{"direct.0", SIGSTOP, "replica 'direct.0' stopped answering (no heartbeat for 1.5 s); it was killed"}}) {
+    SCOPED_TRACE(c.victim);
+    auto r = render_with_fault(args, std::string(c.victim) + ".exr", c.victim, c.signal);
+    ASSERT_EQ(r.status, 0) << r.err;
+    EXPECT_NE(r.err.find(c.says), std::string::npos) << r.err;
+    auto img = read_image(path(std::string(c.victim) + ".exr"));
+    ASSERT_TRUE(img.ok());
+    EXPECT_TRUE(img->pixels == reference.pixels) << "the image changed after losing " << c.victim;
+  }
+}
+
+TEST_F(FailureTest, LosingTheLastReplicaOrEveryRendererStopsTheFarmNamingIt) {
+  auto one_replica = render_with_fault(
+      {"run", kPool, "--set", "replicas=1", "--set", "spp=64", "--set", "light_samples=4"}, "x.png", "direct.0", SIGKILL);
+  EXPECT_EQ(one_replica.status, 1);
+  EXPECT_NE(one_replica.err.find("lightfarm: error: lost the last replica of 'direct': direct.0 was killed by signal 9"),
+            std::string::npos)
+      << one_replica.err;
+  auto one_renderer = render_with_fault(small(kSlowPool, {"spp=64", "slowdown=3", "renderers=1"}), "y.exr", "renderer-0", SIGKILL);
+  EXPECT_EQ(one_renderer.status, 1);
+  EXPECT_NE(one_renderer.err.find("lightfarm: error: every renderer was lost: renderer-0 was killed by signal 9"),
+            std::string::npos)
+      << one_renderer.err;
+  EXPECT_FALSE(fs::exists(path("x.png")));
+  EXPECT_FALSE(fs::exists(path("y.exr")));
+}
+
+}  // namespace
+}  // namespace lf::test
