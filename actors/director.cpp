@@ -478,6 +478,12 @@ class Director {
       for (const auto& [name, secs] : phases_) phases[name] = secs;
       phases["total"] = total_seconds_;
       Value::Array actors;
+      double shading_requests = 0, messages = 0;
+      for (const auto& a : spec_.actors) {
+        const ActorState& st = actors_.at(a.name);
+        if (a.is_renderer()) shading_requests += num(st.stats, "requests");
+        messages += num(st.stats, "messages_out");
+      }
       for (const auto& a : spec_.actors) {
         const ActorState& s = actors_.at(a.name);
         Value entry = s.stats.is_map() ? s.stats : Value(Value::Map{});
@@ -493,6 +499,9 @@ class Director {
                              {"phases_seconds", std::move(phases)},
                              {"render_samples_per_second", samples / render_seconds_},
                              {"first_tile_seconds", first_tile_seconds_},
+                             {"render_seconds", render_seconds_},
+                             {"totals", Value::Map{{"renderer_shading_requests", shading_requests},
+                                                   {"messages_sent", messages}}},
                              {"actors", std::move(actors)}};
       std::ofstream out(options_.stats_json);
       out << to_json(doc, 2) << "\n";

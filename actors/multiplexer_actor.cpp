@@ -38,7 +38,9 @@ class MultiplexerActor final : public Actor {
       return make_error(e.what());
     }
     if (rt.input_count() == 0) return make_error("a multiplexer needs at least one replica");
-    scheduler_ = std::make_unique<Scheduler>(*Scheduler::parse(strategy), rt.input_count(), window_, seed_);
+    // The cap is a stall limit (a replica holding that many unanswered packets gets no more), not a balancing
+    // rule: at one window it would make round robin as load-aware as least_loaded.
+    scheduler_ = std::make_unique<Scheduler>(*Scheduler::parse(strategy), rt.input_count(), 4 * window_, seed_);
     return Ok{};
   }
 

@@ -30,11 +30,16 @@ void install_stop_signals() {
 bool stop_requested() { return g_stop_signal != 0; }
 int stop_signal() { return g_stop_signal; }
 
-Value ActorStats::to_value(uint64_t bytes_in, uint64_t bytes_out) const {
-  return Value::Map{{"requests", requests},         {"points", points},
-                    {"tiles", tiles},               {"busy_seconds", busy_seconds},
-                    {"peak_queue", uint64_t{peak_queue}}, {"bytes_in", bytes_in},
-                    {"bytes_out", bytes_out}};
+Value ActorStats::to_value(const wire::SocketCounters& t) const {
+  return Value::Map{{"requests", requests},
+                    {"points", points},
+                    {"tiles", tiles},
+                    {"busy_seconds", busy_seconds},
+                    {"peak_queue", uint64_t{peak_queue}},
+                    {"bytes_in", t.bytes_in},
+                    {"bytes_out", t.bytes_out},
+                    {"messages_in", t.messages_in},
+                    {"messages_out", t.messages_out}};
 }
 
 void Actor::on_peer_down(const std::string& name, Runtime& rt) {
@@ -86,13 +91,17 @@ void Runtime::fail(const std::string& message) {
 }
 
 void Runtime::send_stats_and_bye() {
-  uint64_t in = control_.counters().bytes_in + data_.counters().bytes_in;
-  uint64_t out = control_.counters().bytes_out + data_.counters().bytes_out;
-  for (auto& c : inputs_) {
-    in += c->socket().counters().bytes_in;
-    out += c->socket().counters().bytes_out;
-  }
-  Value stats = stats_.to_value(in, out);
+  wire::SocketCounters total;
+  auto add = [&](const wire::SocketCounters& c) {
+    total.bytes_in += c.bytes_in;
+    total.bytes_out += c.bytes_out;
+    total.messages_in += c.messages_in;
+    total.messages_out += c.messages_out;
+  };
+  add(control_.counters());
+  add(data_.counters());
+  for (auto& c : inputs_) add(c->socket().counters());
+  Value stats = stats_.to_value(total);
   if (actor_) {
     Value detail = actor_->extra_stats();
     if (!detail.is_nil()) stats.as_map()["detail"] = std::move(detail);

@@ -35,7 +35,7 @@ struct ActorStats {
   uint64_t tiles = 0;         // renderers only
   double busy_seconds = 0;    // time inside handlers
   uint32_t peak_queue = 0;    // longest request queue seen
-  Value to_value(uint64_t bytes_in, uint64_t bytes_out) const;
+  Value to_value(const wire::SocketCounters& totals) const;
 };
 
 class Runtime;

@@ -17,6 +17,7 @@
 #include <string>
 #include <vector>
 
+#include "bench/bench_util.hpp"
 #include "core/value.hpp"
 #include "render/camera.hpp"
 #include "render/lightop_registry.hpp"
@@ -27,65 +28,17 @@ using Clock = std::chrono::steady_clock;
 
 namespace {
 
-double median(std::vector<double> v) {
-  std::sort(v.begin(), v.end());
-  return v.empty() ? 0 : v[v.size() / 2];
-}
-
-// The number after "key": in a JSON text (the director's --stats-json; flat enough for this).
-double json_number(const std::string& text, const std::string& key) {
-  auto pos = text.find("\"" + key + "\"");
-  if (pos == std::string::npos) return -1;
-  pos = text.find(':', pos);
-  return std::strtod(text.c_str() + pos + 1, nullptr);
-}
+using bench::median;
 
 struct FarmRun {
   double samples_per_second = 0;  // render phase
   double first_tile_seconds = 0;
-  double wall_seconds = 0;
-  double cpu_seconds = 0;         // all processes of the farm (children's rusage)
+  double cpu_seconds = 0;
 };
 
 FarmRun run_farm(const std::vector<std::string>& sets) {
-  const fs::path tmp = fs::temp_directory_path() / ("lightfarm-bench-" + std::to_string(::getpid()));
-  fs::create_directories(tmp);
-  std::vector<std::string> args{LIGHTFARM_BINARY, "run", std::string(LIGHTFARM_SOURCE_DIR) + "/examples/cornell.lua",
-                                "--quiet", "--output", (tmp / "bench.exr").string(), "--stats-json",
-                                (tmp / "stats.json").string()};
-  for (const auto& s : sets) {
-    args.push_back("--set");
-    args.push_back(s);
-  }
-  std::vector<char*> argv;
-  for (auto& a : args) argv.push_back(a.data());
-  argv.push_back(nullptr);
-  struct rusage before {};
-  getrusage(RUSAGE_CHILDREN, &before);
-  auto t0 = Clock::now();
-  pid_t pid = fork();
-  if (pid == 0) {
-    execv(argv[0], argv.data());
-    _exit(127);
-  }
-  int status = 0;
-  waitpid(pid, &status, 0);
-  FarmRun r;
-  r.wall_seconds = std::chrono::duration<double>(Clock::now() - t0).count();
-  struct rusage after {};
-  getrusage(RUSAGE_CHILDREN, &after);
-  auto secs = [](const timeval& t) { return t.tv_sec + t.tv_usec / 1e6; };
-  r.cpu_seconds = secs(after.ru_utime) + secs(after.ru_stime) - secs(before.ru_utime) - secs(before.ru_stime);
-  if (!WIFEXITED(status) || WEXITSTATUS(status) != 0) {
-    std::fprintf(stderr, "farm run failed\n");
-    std::exit(1);
-  }
-  std::stringstream ss;
-  ss << std::ifstream(tmp / "stats.json").rdbuf();
-  r.samples_per_second = json_number(ss.str(), "render_samples_per_second");
-  r.first_tile_seconds = json_number(ss.str(), "first_tile_seconds");
-  fs::remove_all(tmp);
-  return r;
+  auto r = bench::run_farm(std::string(LIGHTFARM_SOURCE_DIR) + "/examples/cornell.lua", sets);
+  return FarmRun{r.number("render_samples_per_second"), r.number("first_tile_seconds"), r.cpu_seconds};
 }
 
 // The same work as a farm of one renderer and one direct LightOp, in one process, no messages: trace a tile, shade

@@ -1,0 +1,89 @@
+#pragma once
+// Shared by the benchmarks: run the real lightfarm binary on a script and read back its --stats-json figures.
+#include <sys/resource.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <string>
+#include <vector>
+
+namespace bench {
+
+namespace fs = std::filesystem;
+using Clock = std::chrono::steady_clock;
+
+inline double median(std::vector<double> v) {
+  std::sort(v.begin(), v.end());
+  return v.empty() ? 0 : v[v.size() / 2];
+}
+
+// The number after "key": in a JSON text (the director's stats are flat enough for this).
+inline double json_number(const std::string& text, const std::string& key) {
+  auto pos = text.find("\"" + key + "\"");
+  if (pos == std::string::npos) return -1;
+  pos = text.find(':', pos);
+  return std::strtod(text.c_str() + pos + 1, nullptr);
+}
+
+struct FarmRun {
+  std::string stats;              // the --stats-json text
+  double wall_seconds = 0;
+  double cpu_seconds = 0;         // every process of the farm
+  double number(const std::string& key) const { return json_number(stats, key); }
+};
+
+// Runs `lightfarm run script --set ...`; exits the benchmark if the farm fails.
+inline FarmRun run_farm(const std::string& script, const std::vector<std::string>& sets) {
+  const fs::path tmp = fs::temp_directory_path() / ("lightfarm-bench-" + std::to_string(::getpid()));
+  fs::create_directories(tmp);
+  std::vector<std::string> args{LIGHTFARM_BINARY, "run", script, "--quiet", "--output", (tmp / "bench.exr").string(),
+                                "--stats-json", (tmp / "stats.json").string()};
+  for (const auto& s : sets) {
+    args.push_back("--set");
+    args.push_back(s);
+  }
+  std::vector<char*> argv;
+  for (auto& a : args) argv.push_back(a.data());
+  argv.push_back(nullptr);
+  struct rusage before {};
+  getrusage(RUSAGE_CHILDREN, &before);
+  auto t0 = Clock::now();
+  pid_t pid = fork();
+  if (pid == 0) {
+    execv(argv[0], argv.data());
+    _exit(127);
+  }
+  int status = 0;
+  waitpid(pid, &status, 0);
+  FarmRun r;
+  r.wall_seconds = std::chrono::duration<double>(Clock::now() - t0).count();
+  struct rusage after {};
+  getrusage(RUSAGE_CHILDREN, &after);
+  auto secs = [](const timeval& t) { return t.tv_sec + t.tv_usec / 1e6; };
+  r.cpu_seconds = secs(after.ru_utime) + secs(after.ru_stime) - secs(before.ru_utime) - secs(before.ru_stime);
+  if (!WIFEXITED(status) || WEXITSTATUS(status) != 0) {
+    std::fprintf(stderr, "farm run failed: %s\n", script.c_str());
+    std::exit(1);
+  }
+  std::stringstream ss;
+  ss << std::ifstream(tmp / "stats.json").rdbuf();
+  r.stats = ss.str();
+  fs::remove_all(tmp);
+  return r;
+}
+
+// Writes a script to a temporary file and returns its path.
+inline std::string temp_script(const std::string& name, const std::string& text) {
+  fs::path p = fs::temp_directory_path() / ("lightfarm-bench-" + std::to_string(::getpid()) + "-" + name);
+  std::ofstream(p) << text;
+  return p.string();
+}
+
+}  // namespace bench
