@@ -152,8 +152,17 @@ class Director {
 
   void launch() {
     for (const auto& a : spec_.actors) {
-      auto pid = launcher_.launch({"lightfarm", "actor", "--kind", a.kind, "--name", a.name, "--director",
-                                   control_endpoint_});
+      std::vector<std::string> argv{"lightfarm", "actor"};
+      LocalLauncher::Options how;
+      if (const Value* cmd = a.runtime.count("cmd") ? &a.runtime.at("cmd") : nullptr) {
+        // An external actor: its own command, then the arguments every actor gets.
+        argv.clear();
+        for (const auto& part : cmd->as_array()) argv.push_back(part.as_string());
+        how.self = false;
+        how.cwd = a.runtime.count("cwd") ? a.runtime.at("cwd").as_string() : std::string();
+      }
+      argv.insert(argv.end(), {"--kind", a.kind, "--name", a.name, "--director", control_endpoint_});
+      auto pid = launcher_.launch(argv, how);
       if (!pid) throw FarmFailure{a.loc.str() + ": cannot start actor '" + a.name + "': " + pid.error().message};
       actors_[a.name].pid = *pid;
       actors_[a.name].last_seen = Clock::now();
@@ -174,7 +183,8 @@ class Director {
                         {"image", spec_.image.to_value()},
                         {"inputs", std::move(inputs)},
                         {"runtime", a.spec->runtime},
-                        {"heartbeat_timeout", spec_.heartbeat_timeout}};
+                        {"heartbeat_timeout", spec_.heartbeat_timeout},
+                        {"request_timeout", spec_.request_timeout}};
       send(name, wire::make(MsgType::config, "director", {}, std::move(config)));
     }
   }

@@ -30,9 +30,9 @@ LocalLauncher::LocalLauncher() : exe_(self_executable()) {}
 
 LocalLauncher::~LocalLauncher() { stop_all(std::chrono::milliseconds(0)); }
 
-Result<pid_t> LocalLauncher::launch(const std::vector<std::string>& argv) {
+Result<pid_t> LocalLauncher::launch(const std::vector<std::string>& argv, const Options& options) {
   std::vector<std::string> args = argv;
-  args[0] = exe_;
+  if (options.self) args[0] = exe_;
   std::vector<char*> cargv;
   for (auto& a : args) cargv.push_back(a.data());
   cargv.push_back(nullptr);
@@ -54,7 +54,17 @@ Result<pid_t> LocalLauncher::launch(const std::vector<std::string>& argv) {
     sigset_t none;
     sigemptyset(&none);
     ::sigprocmask(SIG_SETMASK, &none, nullptr);
-    ::execv(cargv[0], cargv.data());
+    if (!options.cwd.empty() && ::chdir(options.cwd.c_str()) != 0) {
+      int err = errno;
+      ssize_t ignored = ::write(fds[1], &err, sizeof err);
+      (void)ignored;
+      ::_exit(127);
+    }
+    if (options.self) {
+      ::execv(cargv[0], cargv.data());
+    } else {
+      ::execvp(cargv[0], cargv.data());
+    }
     int err = errno;
     ssize_t ignored = ::write(fds[1], &err, sizeof err);
     (void)ignored;
@@ -70,7 +80,7 @@ Result<pid_t> LocalLauncher::launch(const std::vector<std::string>& argv) {
   if (n == static_cast<ssize_t>(sizeof err)) {
     int status;
     ::waitpid(pid, &status, 0);
-    return make_error("cannot run " + exe_ + ": " + std::strerror(err));
+    return make_error("cannot run " + args[0] + ": " + std::strerror(err));
   }
   children_.insert(pid);
   return pid;

@@ -28,8 +28,12 @@ class LocalLauncher {
   LocalLauncher(const LocalLauncher&) = delete;
   LocalLauncher& operator=(const LocalLauncher&) = delete;
 
-  // argv[0] is ignored: the child runs this same lightfarm binary.
-  Result<pid_t> launch(const std::vector<std::string>& argv);
+  struct Options {
+    bool self = true;   // run this lightfarm binary (argv[0] ignored); false: run argv[0], looked up on PATH
+    std::string cwd;    // working directory of the child, if set
+  };
+  Result<pid_t> launch(const std::vector<std::string>& argv, const Options& options);
+  Result<pid_t> launch(const std::vector<std::string>& argv) { return launch(argv, Options{}); }
   // A child that has exited, if any (never blocks).
   std::optional<ExitReport> reap_one();
   // Waits up to `grace` for children to exit, then SIGTERM, then SIGKILL; reaps them all.

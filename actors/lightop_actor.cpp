@@ -199,4 +199,6 @@ std::unique_ptr<Actor> make_lightop_actor(const std::string& kind) {
   return std::make_unique<LightOpActor>(*k);
 }
 
+std::unique_ptr<Actor> make_lightop_actor(const LightOpKind& kind) { return std::make_unique<LightOpActor>(kind); }
+
 }  // namespace lf

@@ -133,6 +133,7 @@ void Runtime::handle_control(wire::Message& m, Actor& actor) {
             fail(st.error().message);
             return;
           }
+          if (const Value* t = m.body.find("request_timeout"); t && t->is_number()) client->set_timeout(t->as_double());
           inputs_.push_back(std::move(client));
           input_names_.push_back(name->as_string());
         }
@@ -263,9 +264,9 @@ int Runtime::run(Actor& actor) {
     if (stopping_) break;
     if (ready[1]) handle_data(actor);
     for (size_t i = 0; i < polled_inputs && !stopping_; ++i) {
-      if (!ready[2 + i]) continue;
       auto started = Clock::now();
-      inputs_[i]->on_readable();
+      if (ready[2 + i]) inputs_[i]->on_readable();
+      inputs_[i]->expire_overdue();
       add_busy(started);
     }
     if (!stopping_) {

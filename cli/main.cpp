@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "actors/actor_kinds.hpp"
+#include "actors/check_actor.hpp"
 #include "actors/director.hpp"
 #include "actors/runtime.hpp"
 #include "core/log.hpp"
@@ -28,6 +29,8 @@ usage:
       Print the script's actor graph as Graphviz DOT; launches nothing.
   lightfarm actor --kind KIND --name NAME --director ENDPOINT [--bind ENDPOINT]
       Host one actor (the director runs this; see docs/PROTOCOL.md).
+  lightfarm check-actor [--kind KIND] [--timeout SECONDS] [--inputs N] -- COMMAND [ARG]...
+      Launch COMMAND as an actor and check it against the protocol; PASS/FAIL per check.
   lightfarm --help | --version
 
 options:
@@ -150,6 +153,27 @@ int cmd_actor(int argc, char** argv) {
 
 }  // namespace
 
+int cmd_check_actor(int argc, char** argv) {
+  lf::CheckOptions o;
+  int i = 2;
+  for (; i < argc; ++i) {
+    std::string a = argv[i];
+    if (a == "--") {
+      ++i;
+      break;
+    }
+    if (i + 1 >= argc) return usage_error("option '" + a + "' needs a value");
+    if (a == "--kind") o.kind = argv[++i];
+    else if (a == "--timeout") o.timeout = std::atof(argv[++i]);
+    else if (a == "--inputs") o.inputs = std::atoi(argv[++i]);
+    else return usage_error("unknown option '" + a + "' (the actor's command goes after --)");
+  }
+  for (; i < argc; ++i) o.command.push_back(argv[i]);
+  if (o.command.empty()) return usage_error("check-actor needs a command after --");
+  if (!(o.timeout > 0)) return usage_error("--timeout must be positive");
+  return lf::check_actor(o);
+}
+
 int main(int argc, char** argv) {
   // Shading batches are a few hundred KB each. Keep such buffers in the heap rather than mmap/munmap-ing them per
   // message: that churn (page faults, zeroing) cost more than the copies themselves.
@@ -168,5 +192,6 @@ int main(int argc, char** argv) {
   if (cmd == "run") return cmd_run(argc, argv, false);
   if (cmd == "graph") return cmd_run(argc, argv, true);
   if (cmd == "actor") return cmd_actor(argc, argv);
+  if (cmd == "check-actor") return cmd_check_actor(argc, argv);
   return usage_error("unknown command '" + cmd + "'");
 }

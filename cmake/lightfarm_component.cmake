@@ -4,15 +4,19 @@ function(lightfarm_component name)
   cmake_parse_arguments(ARG "" "" "SOURCES;DEPENDS;TESTS;TEST_DEPENDS" ${ARGN})
   add_library(lightfarm_${name} STATIC ${ARG_SOURCES})
   add_library(lightfarm::${name} ALIAS lightfarm_${name})
-  target_include_directories(lightfarm_${name} PUBLIC ${PROJECT_SOURCE_DIR})
-  target_link_libraries(lightfarm_${name} PUBLIC ${ARG_DEPENDS} lightfarm_flags PRIVATE lightfarm_warnings)
+  target_include_directories(lightfarm_${name} PUBLIC $<BUILD_INTERFACE:${PROJECT_SOURCE_DIR}>
+                                                     $<INSTALL_INTERFACE:include/lightfarm>)
+  target_link_libraries(lightfarm_${name} PUBLIC ${ARG_DEPENDS} $<BUILD_INTERFACE:lightfarm_flags>
+                        PRIVATE $<BUILD_INTERFACE:lightfarm_warnings>)
+  set_target_properties(lightfarm_${name} PROPERTIES EXPORT_NAME ${name})
   if(LIGHTFARM_TESTS)
     foreach(test_src IN LISTS ARG_TESTS)
       get_filename_component(test_name ${test_src} NAME_WE)
       set(target test_${name}_${test_name})
       add_executable(${target} ${test_src})
       set_target_properties(${target} PROPERTIES RUNTIME_OUTPUT_DIRECTORY ${CMAKE_BINARY_DIR}/tests)
-      target_link_libraries(${target} PRIVATE lightfarm_${name} ${ARG_TEST_DEPENDS} GTest::gtest_main lightfarm_warnings)
+      target_link_libraries(${target} PRIVATE lightfarm_${name} ${ARG_TEST_DEPENDS} GTest::gtest_main lightfarm_warnings
+                            lightfarm_flags)
       target_compile_definitions(${target} PRIVATE
         LIGHTFARM_SOURCE_DIR="${PROJECT_SOURCE_DIR}" LIGHTFARM_BINARY="${CMAKE_BINARY_DIR}/lightfarm")
       add_test(NAME ${name}.${test_name} COMMAND ${target})

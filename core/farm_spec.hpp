@@ -72,6 +72,7 @@ struct FarmSpec {
   std::vector<ActorSpec> actors;
   int lighting = -1;  // index of the MasterLightOp the renderers ask
   double heartbeat_timeout = 10.0;  // seconds of silence before an actor counts as dead
+  double request_timeout = 120.0;   // seconds a shading request may wait for its answer
   int renderer_count() const;
   // Index of the multiplexer whose replica actor `i` is, or -1.
   int pool_of(int i) const;

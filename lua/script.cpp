@@ -6,6 +6,7 @@
 #include "lua/script.hpp"
 
 #include <lua.hpp>
+#include <unistd.h>
 
 #include <cmath>
 #include <filesystem>
@@ -253,6 +254,35 @@ std::string unique_name(const Builder& b, const std::string& wanted) {
     if (!taken(wanted + "-" + std::to_string(i))) return wanted + "-" + std::to_string(i);
 }
 
+// Takes the wiring keys (input, inputs, name, host) out of the table at index 1 into `a`; returns the wanted name.
+std::string take_wiring(lua_State* L, Builder& b, ActorSpec& a, const std::string& what, const std::string& default_name) {
+  lua_getfield(L, 1, "input");
+  if (!lua_isnil(L, -1)) a.inputs.push_back(actor_index(L, -1, "input"));
+  lua_pop(L, 1);
+  lua_getfield(L, 1, "inputs");
+  if (!lua_isnil(L, -1)) {
+    if (!a.inputs.empty()) luaL_error(L, "%s: give either input or inputs, not both", what.c_str());
+    luaL_checktype(L, -1, LUA_TTABLE);
+    lua_Integer n = luaL_len(L, -1);
+    for (lua_Integer i = 1; i <= n; ++i) {
+      lua_geti(L, -1, i);
+      a.inputs.push_back(actor_index(L, -1, "each of inputs"));
+      lua_pop(L, 1);
+    }
+  }
+  lua_pop(L, 1);
+  lua_getfield(L, 1, "name");
+  std::string wanted = lua_isnil(L, -1) ? default_name : luaL_checkstring(L, -1);
+  lua_pop(L, 1);
+  a.host = take_host(L, 1, b);
+  for (const char* key : {"input", "inputs", "name"}) {
+    lua_pushnil(L);
+    lua_setfield(L, 1, key);
+  }
+  if (wanted.empty() || wanted.size() > 64) luaL_error(L, "%s: name must be 1 to 64 characters", what.c_str());
+  return wanted;
+}
+
 // lightop "kind" { params..., input = op | inputs = {op, ...}, name = "...", host = h } -> LightOp handle
 int l_lightop_table(lua_State* L) {
   Builder& b = builder(L);
@@ -264,30 +294,7 @@ int l_lightop_table(lua_State* L) {
   a.kind = kind_name;
   a.loc = caller_loc(L);
   // Wiring keys come out of the table before the rest becomes the op's parameters.
-  lua_getfield(L, 1, "input");
-  if (!lua_isnil(L, -1)) a.inputs.push_back(actor_index(L, -1, "input"));
-  lua_pop(L, 1);
-  lua_getfield(L, 1, "inputs");
-  if (!lua_isnil(L, -1)) {
-    if (!a.inputs.empty()) luaL_error(L, "lightop '%s': give either input or inputs, not both", kind_name.c_str());
-    luaL_checktype(L, -1, LUA_TTABLE);
-    lua_Integer n = luaL_len(L, -1);
-    for (lua_Integer i = 1; i <= n; ++i) {
-      lua_geti(L, -1, i);
-      a.inputs.push_back(actor_index(L, -1, "each of inputs"));
-      lua_pop(L, 1);
-    }
-  }
-  lua_pop(L, 1);
-  lua_getfield(L, 1, "name");
-  std::string wanted = lua_isnil(L, -1) ? kind_name : luaL_checkstring(L, -1);
-  lua_pop(L, 1);
-  a.host = take_host(L, 1, b);
-  for (const char* key : {"input", "inputs", "name"}) {
-    lua_pushnil(L);
-    lua_setfield(L, 1, key);
-  }
-
+  std::string wanted = take_wiring(L, b, a, "lightop '" + kind_name + "'", kind_name);
   const int n_inputs = static_cast<int>(a.inputs.size());
   if (n_inputs < kind->min_inputs || (kind->max_inputs >= 0 && n_inputs > kind->max_inputs)) {
     std::string want = kind->max_inputs == kind->min_inputs ? std::to_string(kind->min_inputs)
@@ -299,7 +306,64 @@ int l_lightop_table(lua_State* L) {
   ParamTable params = table_params(L, 1, "lightop '" + kind_name + "'");
   with_params(L, [&] { create_lightop(*kind, params); });  // the op validates its own parameters
   a.params = params.values();
-  if (wanted.empty() || wanted.size() > 64) luaL_error(L, "lightop name must be 1 to 64 characters");
+  a.name = unique_name(b, wanted);
+  b.spec.actors.push_back(std::move(a));
+  push_actor(L, static_cast<int>(b.spec.actors.size() - 1));
+  return 1;
+}
+
+// Where `program` runs from: a path with a slash is relative to the script; a bare name is looked up on PATH.
+std::string resolve_program(const std::string& program, const fs::path& script_dir) {
+  auto executable = [](const fs::path& p) {
+    std::error_code ec;
+    return fs::is_regular_file(p, ec) && ::access(p.c_str(), X_OK) == 0;
+  };
+  if (program.find('/') != std::string::npos) {
+    fs::path p = fs::path(program).is_absolute() ? fs::path(program) : script_dir / program;
+    return executable(p) ? fs::absolute(p).lexically_normal().string() : std::string();
+  }
+  const char* path = std::getenv("PATH");
+  std::string dirs = path ? path : "/usr/bin:/bin";
+  for (size_t start = 0; start <= dirs.size();) {
+    size_t end = dirs.find(':', start);
+    if (end == std::string::npos) end = dirs.size();
+    fs::path candidate = fs::path(dirs.substr(start, end - start)) / program;
+    if (executable(candidate)) return candidate.string();
+    start = end + 1;
+  }
+  return {};
+}
+
+// lightop.exec { cmd = {"python3", "my_op.py"}, params..., input(s), name, host } -> LightOp handle
+// Any executable that speaks docs/PROTOCOL.md. It runs in the script's folder with the arguments every actor gets
+// appended (--kind exec --name NAME --director ENDPOINT); its parameters reach it in CONFIG, unchecked here.
+int l_lightop_exec(lua_State* L) {
+  Builder& b = builder(L);
+  luaL_checktype(L, 1, LUA_TTABLE);
+  ActorSpec a;
+  a.kind = "exec";
+  a.loc = caller_loc(L);
+  lua_getfield(L, 1, "cmd");
+  if (!lua_istable(L, -1) || luaL_len(L, -1) < 1)
+    luaL_error(L, "lightop.exec needs cmd = {\"program\", \"arg\", ...}");
+  Value::Array cmd;
+  for (lua_Integer i = 1; i <= luaL_len(L, -1); ++i) {
+    lua_geti(L, -1, i);
+    if (lua_type(L, -1) != LUA_TSTRING) luaL_error(L, "lightop.exec: every entry of cmd must be a string");
+    cmd.push_back(std::string(lua_tostring(L, -1)));
+    lua_pop(L, 1);
+  }
+  lua_pop(L, 1);
+  lua_pushnil(L);
+  lua_setfield(L, 1, "cmd");
+  const std::string program = cmd[0].as_string();
+  std::string resolved = resolve_program(program, b.script_dir);
+  if (resolved.empty()) luaL_error(L, "lightop.exec: program '%s' not found or not executable", program.c_str());
+  cmd[0] = resolved;
+  std::string wanted = take_wiring(L, b, a, "lightop.exec", fs::path(program).stem().string());
+  a.params = to_value(L, 1, "lightop.exec").as_map();
+  a.runtime["cmd"] = std::move(cmd);
+  a.runtime["cwd"] = b.script_dir.string();
   a.name = unique_name(b, wanted);
   b.spec.actors.push_back(std::move(a));
   push_actor(L, static_cast<int>(b.spec.actors.size() - 1));
@@ -307,6 +371,7 @@ int l_lightop_table(lua_State* L) {
 }
 
 int l_lightop(lua_State* L) {
+  if (lua_istable(L, 1)) lua_remove(L, 1);  // called through the lightop table's __call
   const char* kind = luaL_checkstring(L, 1);
   if (!find_lightop_kind(kind))
     luaL_error(L, "unknown LightOp kind '%s' (known kinds: %s)", kind, lightop_kind_list().c_str());
@@ -494,12 +559,13 @@ int l_renderers(lua_State* L) {
   return 0;
 }
 
-// farm { heartbeat_timeout = 10 }: settings of the farm as a whole.
+// farm { heartbeat_timeout = 10, request_timeout = 120 }: settings of the farm as a whole.
 int l_farm(lua_State* L) {
   Builder& b = builder(L);
   ParamTable p = table_params(L, 1, "farm");
   with_params(L, [&] {
     b.spec.heartbeat_timeout = p.get_float("heartbeat_timeout", b.spec.heartbeat_timeout, 0.5, 3600);
+    b.spec.request_timeout = p.get_float("request_timeout", b.spec.request_timeout, 0.1, 86400);
     p.report_unused();
   });
   return 0;
@@ -543,7 +609,7 @@ int host_gc(lua_State* L) {
 }
 
 const luaL_Reg kFarmLib[] = {{"scene", l_scene},   {"camera", l_camera},       {"image", l_image},
-                             {"lightop", l_lightop}, {"renderers", l_renderers}, {"host", l_host},
+                             {"renderers", l_renderers}, {"host", l_host},
                              {"param", l_param},   {"farm", l_farm},       {"multiplexer", l_multiplexer},
                              {nullptr, nullptr}};
 
@@ -613,6 +679,17 @@ Result<FarmSpec> evaluate_script(const std::string& path, const ScriptOptions& o
     lua_pushcclosure(L, f->func, 1);
     lua_setglobal(L, f->name);
   }
+  // lightop is a table: called, it declares a built-in kind; lightop.exec declares an external program.
+  lua_newtable(L);
+  lua_pushlightuserdata(L, &b);
+  lua_pushcclosure(L, l_lightop_exec, 1);
+  lua_setfield(L, -2, "exec");
+  lua_newtable(L);
+  lua_pushlightuserdata(L, &b);
+  lua_pushcclosure(L, l_lightop, 1);
+  lua_setfield(L, -2, "__call");
+  lua_setmetatable(L, -2);
+  lua_setglobal(L, "lightop");
 
   std::string failure;
   if (luaL_loadfile(L, path.c_str()) != LUA_OK || lua_pcall(L, 0, 0, 0) != LUA_OK) {

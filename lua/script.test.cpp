@@ -123,7 +123,7 @@ TEST_F(ScriptTest, FarmSettingsAndHosts) {
   auto r = evaluate_script(write("farm.lua", std::string(kCornell) + "farm { heartbeat_timeout = 2.5 }\n"));
   ASSERT_TRUE(r.ok()) << r.error().message;
   EXPECT_DOUBLE_EQ(r->heartbeat_timeout, 2.5);
-  EXPECT_EQ(error_of("farm { heartbeat = 3 }\n"), "farm.lua:1: farm: unknown parameter 'heartbeat' (known: heartbeat_timeout)");
+  EXPECT_EQ(error_of("farm { heartbeat = 3 }\n"), "farm.lua:1: farm: unknown parameter 'heartbeat' (known: heartbeat_timeout, request_timeout)");
   EXPECT_EQ(error_of("local h = host \"gpu1\" { launcher = \"ssh\" }\n"),
             "farm.lua:1: host 'gpu1': launcher 'ssh' is not available yet (only \"local\")");
   EXPECT_EQ(error_of("local d = lightop \"direct\" { host = \"gpu1\" }\n"),

@@ -2,6 +2,8 @@
 
 #include "core/log.hpp"
 
+#include <cstdio>
+
 namespace lf::wire {
 
 RequestClient::RequestClient(std::string self_name, std::string peer_name, size_t window)
@@ -24,13 +26,31 @@ void RequestClient::pump() {
       p.callback(make_error("could not send '" + p.op + "' to " + peer_name_));
       continue;
     }
-    outstanding_.emplace(p.id, std::move(p.callback));
+    outstanding_.emplace(p.id, Outstanding{std::move(p.callback), std::chrono::steady_clock::now()});
   }
 }
 
 void RequestClient::abandon_all() {
   outstanding_.clear();
   queue_.clear();
+}
+
+void RequestClient::expire_overdue() {
+  if (timeout_ <= 0 || outstanding_.empty()) return;
+  const auto now = std::chrono::steady_clock::now();
+  std::vector<Callback> expired;
+  for (auto it = outstanding_.begin(); it != outstanding_.end();) {
+    if (std::chrono::duration<double>(now - it->second.sent).count() > timeout_) {
+      expired.push_back(std::move(it->second.callback));
+      it = outstanding_.erase(it);
+    } else {
+      ++it;
+    }
+  }
+  char text[32];
+  std::snprintf(text, sizeof text, "%g", timeout_);
+  for (auto& cb : expired) cb(make_error("no answer from '" + peer_name_ + "' within " + text + " s"));
+  pump();
 }
 
 void RequestClient::on_readable() {
@@ -50,7 +70,7 @@ void RequestClient::on_readable() {
       ++dropped_;
       continue;
     }
-    Callback cb = std::move(it->second);
+    Callback cb = std::move(it->second.callback);
     outstanding_.erase(it);
     peer_queue_ = m.header.queue;
     if (m.header.type == MsgType::error) {

@@ -2,6 +2,7 @@
 // RequestClient: asynchronous request/reply with one peer. Requests carry ids and are answered later; at most
 // `window` are outstanding at once and the rest wait in order. Nothing here blocks on an answer: the owner's
 // poll loop calls on_readable() and the matching callback runs.
+#include <chrono>
 #include <cstdint>
 #include <deque>
 #include <functional>
@@ -27,6 +28,10 @@ class RequestClient {
   // Forgets every outstanding and queued request without running callbacks (the peer is gone; whoever owns the
   // work re-sends it elsewhere). Late replies to them are then dropped as strays.
   void abandon_all();
+  // Requests unanswered for longer than `seconds` fail with "no answer from PEER within N s" (0: never).
+  void set_timeout(double seconds) { timeout_ = seconds; }
+  // Fails every request older than the timeout; call it from the poll loop.
+  void expire_overdue();
 
   size_t outstanding() const { return outstanding_.size(); }
   size_t queued() const { return queue_.size(); }
@@ -51,7 +56,12 @@ class RequestClient {
   Socket socket_;
   uint64_t next_id_ = 1;
   std::deque<Pending> queue_;
-  std::map<uint64_t, Callback> outstanding_;
+  struct Outstanding {
+    Callback callback;
+    std::chrono::steady_clock::time_point sent;
+  };
+  std::map<uint64_t, Outstanding> outstanding_;
+  double timeout_ = 0;
   uint32_t peer_queue_ = 0;
   uint64_t dropped_ = 0;
 };

@@ -1,0 +1,18 @@
+#pragma once
+// check-actor: launches an actor program and checks it against docs/PROTOCOL.md, playing the director (and, if
+// asked, a constant-light input). Prints PASS or FAIL per check; returns 0 only if every check passed.
+#include <string>
+#include <vector>
+
+namespace lf {
+
+struct CheckOptions {
+  std::vector<std::string> command;  // the actor program and its own arguments
+  std::string kind = "exec";         // passed as --kind
+  double timeout = 5.0;              // seconds allowed for each answer
+  int inputs = 0;                    // constant-light inputs to offer the actor
+};
+
+int check_actor(const CheckOptions& options);
+
+}  // namespace lf

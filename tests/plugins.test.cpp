@@ -1,0 +1,164 @@
+// Plugging actors in as processes (issue 6): a Python LightOp and an out-of-tree C++ LightOp built against the
+// installed SDK pass check-actor and render in farms; broken actors fail check-actor saying why, and farms that
+// contain them stop cleanly with that message.
+#include <gtest/gtest.h>
+
+#include <cstdlib>
+
+#include "render/image.hpp"
+#include "tests/farm_harness.hpp"
+
+namespace lf::test {
+namespace {
+
+const std::string kSource = LIGHTFARM_SOURCE_DIR;
+const std::string kTint = kSource + "/examples/plugin-python/tint.py";
+const std::string kBroken = kSource + "/tests/actors/broken_actor.py";
+
+class PluginTest : public ::testing::Test {
+ protected:
+  fs::path dir;
+  void SetUp() override {
+    dir = fs::temp_directory_path() / ("lightfarm-plugin-test-" + unique_tag());
+    fs::create_directories(dir);
+  }
+  void TearDown() override { fs::remove_all(dir); }
+  std::string path(const std::string& name) const { return (dir / name).string(); }
+  std::string write(const std::string& name, const std::string& text) {
+    std::ofstream(dir / name) << text;
+    return path(name);
+  }
+  static void expect_no_leftovers(const RunResult& r) {
+    auto left = wait_no_leftovers(r.tag);
+    EXPECT_TRUE(left.empty()) << "processes left behind";
+  }
+};
+
+int count(const std::string& text, const std::string& what) {
+  int n = 0;
+  for (size_t pos = text.find(what); pos != std::string::npos; pos = text.find(what, pos + 1)) ++n;
+  return n;
+}
+
+TEST_F(PluginTest, ExamplesAndBuiltinsPassCheckActor) {
+  for (const auto& args : std::vector<std::vector<std::string>>{
+           {"check-actor", "--", kTint},
+           {"check-actor", "--inputs", "1", "--", kTint},
+           {"check-actor", "--kind", "direct", "--", LIGHTFARM_BINARY, "actor"}}) {
+    auto r = run_lightfarm(args);
+    EXPECT_EQ(r.status, 0) << r.out << r.err;
+    EXPECT_EQ(count(r.out, "PASS "), 8) << r.out;
+    expect_no_leftovers(r);
+  }
+}
+
+TEST_F(PluginTest, BrokenActorsFailCheckActorSayingWhy) {
+  struct Case {
+    const char* mode;
+    const char* says;
+  };
+  for (const Case& c : {Case{"wrong_version", "FAIL hello      no HELLO: incompatible peer: protocol version 2, expected 1"},
+                        Case{"silent", "FAIL requests   no REPLY to 1 points within 2 s"},
+                        Case{"crash", "FAIL requests   the actor exited with status 3 while shading 1 points"}}) {
+    auto r = run_lightfarm({"check-actor", "--timeout", "2", "--", kBroken, "--mode", c.mode});
+    EXPECT_EQ(r.status, 1) << c.mode;
+    EXPECT_NE(r.out.find(c.says), std::string::npos) << c.mode << ":\n" << r.out;
+    expect_no_leftovers(r);
+  }
+}
+
+TEST_F(PluginTest, FarmsWithBrokenActorsStopCleanlyNamingTheProblem) {
+  struct Case {
+    const char* mode;
+    const char* says;
+  };
+  for (const Case& c : {Case{"wrong_version", "lightfarm: error: actor 'broken' is an incompatible peer: protocol version 2, expected 1"},
+                        Case{"silent", "lightfarm: error: actor 'renderer-0' failed: lighting failed: no answer from 'broken' within 2 s"},
+                        Case{"crash", "lightfarm: error: actor 'broken' (pid "}}) {
+    auto script = write(std::string(c.mode) + ".lua", "scene { builtin = \"cornell\" }\n"
+                                                      "image { width = 32, height = 32, spp = 1 }\n"
+                                                      "farm { request_timeout = 2 }\n"
+                                                      "local b = lightop.exec { cmd = {\"" + kBroken + "\", \"--mode\", \"" +
+                                                      c.mode + "\"}, name = \"broken\" }\n"
+                                                      "renderers { count = 1, lighting = b }\n");
+    auto r = run_lightfarm({"run", script, "--output", path(std::string(c.mode) + ".png")});
+    EXPECT_EQ(r.status, 1) << c.mode << ": " << r.err;
+    EXPECT_NE(r.err.find(c.says), std::string::npos) << c.mode << ":\n" << r.err;
+    if (std::string(c.mode) == "crash") EXPECT_NE(r.err.find("exited with status 3 during render"), std::string::npos) << r.err;
+    EXPECT_FALSE(fs::exists(path(std::string(c.mode) + ".png")));
+    expect_no_leftovers(r);
+  }
+}
+
+TEST_F(PluginTest, PythonTintMultipliesItsInputsLight) {
+  auto plain_script = write("plain.lua", "scene { builtin = \"cornell\" }\n"
+                                         "image { width = 48, height = 48, spp = 2, tile = 16 }\n"
+                                         "renderers { count = 2, lighting = lightop \"direct\" { light_samples = 2 } }\n");
+  auto tint_script = write("tint.lua", "scene { builtin = \"cornell\" }\n"
+                                       "image { width = 48, height = 48, spp = 2, tile = 16 }\n"
+                                       "local d = lightop \"direct\" { light_samples = 2 }\n"
+                                       "local t = multiplexer { lightop.exec { cmd = {\"" + kTint +
+                                       "\"}, input = d, color = {1, 0, 0} }, replicas = 2 }\n"
+                                       "renderers { count = 2, lighting = t }\n");
+  auto plain = run_lightfarm({"run", plain_script, "--output", path("plain.exr")});
+  auto tinted = run_lightfarm({"run", tint_script, "--output", path("tint.exr")});
+  ASSERT_EQ(plain.status, 0) << plain.err;
+  ASSERT_EQ(tinted.status, 0) << tinted.err;
+  expect_no_leftovers(plain);
+  expect_no_leftovers(tinted);
+  auto a = read_image(path("plain.exr")), b = read_image(path("tint.exr"));
+  ASSERT_TRUE(a.ok() && b.ok());
+  // Emission the camera sees is added by the renderer, so compare only pixels with no light source in view.
+  int compared = 0;
+  for (size_t i = 0; i < a->pixels.size(); ++i) {
+    if (a->pixels[i].x > 1.0f) continue;  // the light itself
+    EXPECT_EQ(b->pixels[i].x, a->pixels[i].x) << i;  // red passes unchanged, bit for bit
+    EXPECT_EQ(b->pixels[i].y, 0.0f) << i;
+    EXPECT_EQ(b->pixels[i].z, 0.0f) << i;
+    ++compared;
+  }
+  EXPECT_GT(compared, 2000);
+}
+
+TEST_F(PluginTest, SdkBuildsAnOutOfTreeLightOpThatRendersInAFarm) {
+  const std::string prefix = path("prefix"), build = path("build");
+  auto sh = [&](const std::string& cmd) {
+    int rc = std::system((cmd + " > " + path("sdk.log") + " 2>&1").c_str());
+    EXPECT_EQ(rc, 0) << cmd << "\n" << read_file(path("sdk.log"));
+    return rc == 0;
+  };
+  ASSERT_TRUE(sh("cmake --install " + std::string(LIGHTFARM_BUILD_DIR) + " --prefix " + prefix));
+  ASSERT_TRUE(sh("cmake -S " + kSource + "/examples/plugin-cpp -B " + build + " -DCMAKE_PREFIX_PATH=" + prefix));
+  ASSERT_TRUE(sh("cmake --build " + build + " -j2"));
+  const std::string program = build + "/ambient_occlusion";
+
+  auto check = run_lightfarm({"check-actor", "--", program});
+  EXPECT_EQ(check.status, 0) << check.out << check.err;
+  EXPECT_EQ(count(check.out, "PASS "), 8) << check.out;
+
+  const std::string script = kSource + "/examples/plugin-cpp/ao_cornell.lua";
+  auto one = run_lightfarm({"run", script, "--set", "program=" + program, "--set", "replicas=1", "--set", "width=48",
+                            "--set", "height=48", "--output", path("ao1.exr")});
+  auto two = run_lightfarm({"run", script, "--set", "program=" + program, "--set", "replicas=2", "--set", "width=48",
+                            "--set", "height=48", "--output", path("ao2.exr")});
+  ASSERT_EQ(one.status, 0) << one.err;
+  ASSERT_EQ(two.status, 0) << two.err;
+  expect_no_leftovers(one);
+  expect_no_leftovers(two);
+  auto a = read_image(path("ao1.exr")), b = read_image(path("ao2.exr"));
+  ASSERT_TRUE(a.ok() && b.ok());
+  EXPECT_TRUE(a->pixels == b->pixels) << "the out-of-tree op gives the same image on one or two replicas";
+  // Ambient occlusion of albedo <= 1 under ambient 1: every non-emitting pixel in [0, 1], and open surfaces bright.
+  double sum = 0;
+  int n = 0;
+  for (const RGB& p : a->pixels) {
+    if (p.x > 1.0f) continue;  // the light, seen directly
+    EXPECT_GE(p.y, 0.0f);
+    sum += p.y;
+    ++n;
+  }
+  EXPECT_GT(sum / n, 0.3);
+}
+
+}  // namespace
+}  // namespace lf::test
