@@ -103,7 +103,7 @@ class LightOpActor final : public Actor {
       rt.reply_error(peer, m.header.id, "not_ready", "'" + rt.name() + "' is not set up yet");
       return;
     }
-    auto points = decode_shade_request(m.body, scene_->materials().size());
+    auto points = decode_shade_request(m.body, scene_->materials().size(), scene_->triangle_count());
     if (!points) {
       rt.reply_error(peer, m.header.id, "bad_request", points.error().message);
       return;

@@ -11,7 +11,7 @@ static Bytes vec3_bytes(const std::vector<Vec3>& v, size_t begin, size_t end) {
 }
 
 Value encode_shade_request(const ShadingPoints& pts, size_t begin, size_t end) {
-  return Value::Map{
+  Value body = Value::Map{
       {"n", static_cast<int64_t>(end - begin)},
       {"p", vec3_bytes(pts.position, begin, end)},
       {"nrm", vec3_bytes(pts.normal, begin, end)},
@@ -19,6 +19,9 @@ Value encode_shade_request(const ShadingPoints& pts, size_t begin, size_t end) {
       {"m", u32_to_bytes(std::span<const uint32_t>(pts.material.data() + begin, end - begin))},
       {"k", u64_to_bytes(std::span<const uint64_t>(pts.key.data() + begin, end - begin))},
   };
+  if (!pts.triangle.empty())
+    body.as_map()["tri"] = u32_to_bytes(std::span<const uint32_t>(pts.triangle.data() + begin, end - begin));
+  return body;
 }
 
 static Status read_vec3(const Value& body, const char* key, size_t n, std::vector<Vec3>& out) {
@@ -38,7 +41,7 @@ static Result<size_t> read_count(const Value& body) {
   return static_cast<size_t>(n->as_int());
 }
 
-Result<ShadingPoints> decode_shade_request(const Value& body, size_t material_count) {
+Result<ShadingPoints> decode_shade_request(const Value& body, size_t material_count, size_t triangle_count) {
   auto n = read_count(body);
   if (!n) return make_error("shade request: " + n.error().message);
   ShadingPoints pts;
@@ -50,7 +53,11 @@ Result<ShadingPoints> decode_shade_request(const Value& body, size_t material_co
   const Value* k = body.find("k");
   if (!k || !k->is_bytes() || !bytes_to_u64(k->as_bytes(), pts.key) || pts.key.size() != *n)
     return make_error("shade request 'k' must hold " + std::to_string(*n) + " u64 sample keys");
-  if (std::string why = pts.check(material_count); !why.empty()) return make_error("shade request: " + why);
+  if (const Value* t = body.find("tri")) {
+    if (!t->is_bytes() || !bytes_to_u32(t->as_bytes(), pts.triangle) || pts.triangle.size() != *n)
+      return make_error("shade request 'tri' must hold " + std::to_string(*n) + " u32 triangle ids");
+  }
+  if (std::string why = pts.check(material_count, triangle_count); !why.empty()) return make_error("shade request: " + why);
   return pts;
 }
 

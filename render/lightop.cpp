@@ -1,6 +1,7 @@
 #include "render/lightop.hpp"
 
 #include <cmath>
+#include <cstdint>
 
 namespace lf {
 
@@ -10,6 +11,7 @@ void ShadingPoints::reserve(size_t n) {
   wo.reserve(n);
   material.reserve(n);
   key.reserve(n);
+  triangle.reserve(n);
 }
 
 void ShadingPoints::clear() {
@@ -18,6 +20,7 @@ void ShadingPoints::clear() {
   wo.clear();
   material.clear();
   key.clear();
+  triangle.clear();
 }
 
 void ShadingPoints::push_back(Vec3 p, Vec3 n, Vec3 w, uint32_t m, uint64_t k) {
@@ -30,10 +33,20 @@ void ShadingPoints::push_back(Vec3 p, Vec3 n, Vec3 w, uint32_t m, uint64_t k) {
 
 static bool finite(Vec3 v) { return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z); }
 
-std::string ShadingPoints::check(size_t material_count) const {
+void ShadingPoints::push_back(Vec3 p, Vec3 n, Vec3 w, uint32_t m, uint64_t k, uint32_t tri) {
+  push_back(p, n, w, m, k);
+  triangle.push_back(tri);
+}
+
+std::string ShadingPoints::check(size_t material_count, size_t triangle_count) const {
   const size_t n = position.size();
   if (normal.size() != n || wo.size() != n || material.size() != n || key.size() != n)
     return "shading point arrays have different lengths";
+  if (!triangle.empty() && triangle.size() != n) return "shading point arrays have different lengths";
+  for (size_t i = 0; i < triangle.size(); ++i)
+    if (triangle[i] >= triangle_count)
+      return "point " + std::to_string(i) + " lies on triangle " + std::to_string(triangle[i]) + " but the scene has " +
+             std::to_string(triangle_count);
   for (size_t i = 0; i < n; ++i) {
     if (material[i] >= material_count)
       return "point " + std::to_string(i) + " has material " + std::to_string(material[i]) + " but the scene has " +

@@ -32,12 +32,20 @@ struct ShadingPoints {
   std::vector<Vec3> wo;        // unit, pointing away from the surface (towards the viewer)
   std::vector<uint32_t> material;
   std::vector<uint64_t> key;   // sample_key(pixel, sample): seeds every random decision for this point
+  // Optional: the scene triangle each point lies on (its winding tells outside from inside). Empty when the
+  // sender did not say; then every point counts as on the outside.
+  std::vector<uint32_t> triangle;
   size_t size() const { return position.size(); }
   void reserve(size_t n);
   void clear();
   void push_back(Vec3 p, Vec3 n, Vec3 w, uint32_t m, uint64_t k);
+  void push_back(Vec3 p, Vec3 n, Vec3 w, uint32_t m, uint64_t k, uint32_t tri);
+  // True when point i is on the side its triangle's winding faces (or nothing says otherwise).
+  bool outside(size_t i, const Scene& scene) const {
+    return triangle.empty() || dot(scene.normal(triangle[i]), wo[i]) >= 0;
+  }
   // Empty string when consistent; otherwise what is wrong (for validating what arrives from the wire).
-  std::string check(size_t material_count) const;
+  std::string check(size_t material_count, size_t triangle_count = SIZE_MAX) const;
 };
 
 // The coroutine type of setup() and shade(). Starts eagerly; whoever holds it checks done() and failure.

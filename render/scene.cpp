@@ -7,6 +7,33 @@
 
 namespace lf {
 
+Material material_from_mtl(std::string name, RGB kd, RGB ks, RGB ke, float ns, float ni, int illum) {
+  Material m{std::move(name), kd, ke};
+  m.ks = ks;
+  m.ns = ns;
+  m.ior = ni > 1.0f ? ni : 1.5f;
+  if (illum == 3 || illum == 5) {
+    m.type = Material::Type::mirror;
+    if (is_black(m.ks)) m.ks = {1, 1, 1};
+    m.kd = {};
+  } else if (illum == 4 || illum == 6 || illum == 7 || illum == 9) {
+    m.type = Material::Type::glass;
+    m.kd = {};
+  } else if (illum == 2 && !is_black(ks) && ns > 0) {
+    m.type = Material::Type::glossy;
+    // Per channel kd + ks <= 1.
+    const RGB sum = m.kd + m.ks;
+    const float peak = std::max({sum.x, sum.y, sum.z});
+    if (peak > 1.0f) {
+      m.kd *= 1.0f / peak;
+      m.ks *= 1.0f / peak;
+    }
+  } else {
+    m.ks = {};
+  }
+  return m;
+}
+
 uint32_t Scene::add_material(Material m) {
   materials_.push_back(std::move(m));
   return static_cast<uint32_t>(materials_.size() - 1);
@@ -151,8 +178,9 @@ Result<Scene> Scene::load_obj(const std::string& path) {
   const auto& materials = reader.GetMaterials();
   Scene s;
   for (const auto& m : materials) {
-    s.add_material({m.name, {m.diffuse[0], m.diffuse[1], m.diffuse[2]},
-                    {m.emission[0], m.emission[1], m.emission[2]}});
+    s.add_material(material_from_mtl(m.name, {m.diffuse[0], m.diffuse[1], m.diffuse[2]},
+                                     {m.specular[0], m.specular[1], m.specular[2]},
+                                     {m.emission[0], m.emission[1], m.emission[2]}, m.shininess, m.ior, m.illum));
   }
   // Faces without a material get a neutral grey, as most renderers do.
   const auto fallback = s.add_material({"(default)", {0.5f, 0.5f, 0.5f}, {}});

@@ -12,11 +12,22 @@
 namespace lf {
 
 struct Material {
+  enum class Type { diffuse, glossy, mirror, glass };
   std::string name;
   RGB kd;  // diffuse reflectance
   RGB ke;  // emitted radiance; non-zero makes every triangle of this material an area light
+  Type type = Type::diffuse;
+  RGB ks;         // glossy: Phong lobe reflectance; mirror: reflectance
+  float ns = 0;   // glossy: Phong exponent
+  float ior = 1.5f;  // glass: index of refraction
   bool emissive() const { return !is_black(ke); }
+  bool specular() const { return type == Type::mirror || type == Type::glass; }
 };
+
+// The MTL illum model and coefficients as a Material type (docs/decisions.md): illum 3 and 5 are mirrors (Ks),
+// 4, 6, 7 and 9 glass (Ni), 2 with Ks > 0 and Ns > 0 glossy, anything else diffuse. Kd + Ks is scaled to at most 1
+// so that no surface creates energy.
+Material material_from_mtl(std::string name, RGB kd, RGB ks, RGB ke, float ns, float ni, int illum);
 
 class Scene {
  public:

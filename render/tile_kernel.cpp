@@ -50,7 +50,7 @@ void trace_tile(const Scene& scene, const RayTracer& tracer, const Camera& camer
     const Material& m = scene.material(scene.material_of(tri));
     if (front && m.emissive()) work.emitted[i] = m.ke;
     const Vec3 p = rays[i].origin + rays[i].direction * hits[i].t;
-    work.points.push_back(p, front ? ng : -ng, wo, scene.material_of(tri), keys[i]);
+    work.points.push_back(p, front ? ng : -ng, wo, scene.material_of(tri), keys[i], tri);
     work.sample_of_point.push_back(static_cast<uint32_t>(i));
   }
 }

@@ -1,0 +1,44 @@
+#pragma once
+// Scattering at a surface point: diffuse (Lambert), glossy (Lambert + a normalized Phong lobe), perfect mirror,
+// and dielectric glass with Fresnel. Directions point away from the surface; `n` is the unit normal on the side
+// of wo. eval() returns f(wo, wi) without the cosine; sample() returns wi with weight f * |cos| / pdf.
+#include <optional>
+
+#include "render/math.hpp"
+#include "render/scene.hpp"
+
+namespace lf {
+
+class Bsdf {
+ public:
+  explicit Bsdf(const Material& m) : m_(m) {}
+
+  // Mirror and glass scatter into single directions: light sampling cannot reach them, only sample() can.
+  bool is_delta() const { return m_.type == Material::Type::mirror || m_.type == Material::Type::glass; }
+  RGB eval(Vec3 n, Vec3 wo, Vec3 wi) const;
+  float pdf(Vec3 n, Vec3 wo, Vec3 wi) const;
+
+  struct Sample {
+    Vec3 wi;
+    RGB weight;      // f * |cos(wi)| / pdf
+    float pdf;       // of wi (meaningless for delta lobes)
+    bool delta;
+  };
+  // `entering`: wo is on the outside of the surface (for glass: which way refraction bends).
+  std::optional<Sample> sample(Vec3 n, Vec3 wo, bool entering, float u0, float u1, float u2) const;
+
+ private:
+  float diffuse_probability() const;
+  const Material& m_;
+};
+
+// Fresnel reflectance of a dielectric interface for unpolarized light; cos_i > 0, eta = n_transmitted / n_incident.
+float fresnel_dielectric(float cos_i, float eta);
+Vec3 reflect(Vec3 wo, Vec3 n);
+// Refracted direction, or nullopt on total internal reflection.
+std::optional<Vec3> refract(Vec3 wo, Vec3 n, float eta);
+// Orthonormal basis around n (Duff et al.).
+void basis(Vec3 n, Vec3& t, Vec3& s);
+Vec3 cosine_hemisphere(Vec3 n, float u, float v);
+
+}  // namespace lf

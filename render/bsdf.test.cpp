@@ -1,0 +1,112 @@
+// BSDFs against closed forms and against each other: sample() weights must agree with eval()/pdf(), densities
+// must integrate to what sample() produces, Fresnel and Snell must hold.
+#include "render/bsdf.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "render/sampler.hpp"
+
+namespace lf {
+
+static Vec3 uniform_hemisphere(Vec3 n, float u, float v) {
+  Vec3 t, s;
+  basis(n, t, s);
+  const float z = u, r = std::sqrt(std::max(0.0f, 1 - z * z)), phi = 2 * kPi * v;
+  return t * (r * std::cos(phi)) + s * (r * std::sin(phi)) + n * z;
+}
+
+static const Vec3 kN{0, 0, 1};
+
+static Vec3 direction(float theta_deg) {
+  const float t = theta_deg * kPi / 180;
+  return {std::sin(t), 0, std::cos(t)};
+}
+
+TEST(Bsdf, DiffuseReflectsItsAlbedo) {
+  Material m{"d", {0.6f, 0.3f, 0.1f}, {}};
+  Bsdf b(m);
+  Rng rng(1, 1);
+  double integrated_x = 0, integrated_z = 0;
+  const int n = 200000;
+  for (int i = 0; i < n; ++i) {
+    auto s = b.sample(kN, direction(30), true, rng.uniform(), rng.uniform(), rng.uniform());
+    ASSERT_TRUE(s);
+    EXPECT_NEAR(s->weight.x, 0.6f, 1e-5f);  // cosine sampling: every weight is kd
+    Vec3 wi = uniform_hemisphere(kN, rng.uniform(), rng.uniform());
+    RGB f = b.eval(kN, direction(30), wi) * (dot(kN, wi) * 2 * kPi);
+    integrated_x += f.x;
+    integrated_z += f.z;
+  }
+  EXPECT_NEAR(integrated_x / n, 0.6, 0.01);
+  EXPECT_NEAR(integrated_z / n, 0.1, 0.002);
+}
+
+TEST(Bsdf, GlossyEvalPdfAndSampleAgree) {
+  Material m = material_from_mtl("g", {0.3f, 0.3f, 0.3f}, {0.6f, 0.6f, 0.6f}, {}, 40, 1, 2);
+  ASSERT_EQ(m.type, Material::Type::glossy);
+  Bsdf b(m);
+  for (float theta : {0.0f, 45.0f, 75.0f}) {
+    const Vec3 wo = direction(theta);
+    Rng rng(2, static_cast<uint64_t>(theta));
+    const int n = 400000;
+    double pdf_integral = 0, valid = 0, albedo_sampled = 0, albedo_integrated = 0;
+    for (int i = 0; i < n; ++i) {
+      Vec3 wi = uniform_hemisphere(kN, rng.uniform(), rng.uniform());
+      pdf_integral += b.pdf(kN, wo, wi) * 2 * kPi;
+      albedo_integrated += b.eval(kN, wo, wi).x * (dot(kN, wi) * 2 * kPi);
+      if (auto s = b.sample(kN, wo, true, rng.uniform(), rng.uniform(), rng.uniform())) {
+        valid += 1;
+        albedo_sampled += s->weight.x;
+        EXPECT_NEAR(s->pdf, b.pdf(kN, wo, s->wi), 1e-3f * s->pdf);
+      }
+    }
+    // The density over the hemisphere is the share of samples that land in it (the lobe may dip below).
+    EXPECT_NEAR(pdf_integral / n, valid / n, 0.02) << theta;
+    // Two estimates of the directional albedo agree, and no energy is created.
+    EXPECT_NEAR(albedo_sampled / n, albedo_integrated / n, 0.03) << theta;
+    EXPECT_LE(albedo_sampled / n, 1.0) << theta;
+  }
+}
+
+TEST(Bsdf, MirrorReflectsAboutTheNormal) {
+  Material m = material_from_mtl("m", {}, {0.9f, 0.9f, 0.9f}, {}, 1000, 1, 5);
+  ASSERT_EQ(m.type, Material::Type::mirror);
+  auto s = Bsdf(m).sample(kN, direction(30), true, 0.5f, 0.5f, 0.5f);
+  ASSERT_TRUE(s && s->delta);
+  EXPECT_NEAR(s->wi.x, -direction(30).x, 1e-6f);
+  EXPECT_NEAR(s->wi.z, direction(30).z, 1e-6f);
+  EXPECT_EQ(s->weight, (RGB{0.9f, 0.9f, 0.9f}));
+  EXPECT_EQ(Bsdf(m).eval(kN, direction(30), s->wi), RGB{});  // a delta lobe has no density to evaluate
+}
+
+TEST(Bsdf, GlassFollowsFresnelAndSnell) {
+  EXPECT_NEAR(fresnel_dielectric(1.0f, 1.5f), 0.04f, 1e-6f);           // ((1.5 - 1) / (1.5 + 1))^2
+  EXPECT_EQ(fresnel_dielectric(std::cos(0.8f), 1 / 1.5f), 1.0f);  // 45.8 deg, beyond the critical angle of 41.8
+  Material m = material_from_mtl("glass", {}, {}, {}, 0, 1.5f, 7);
+  ASSERT_EQ(m.type, Material::Type::glass);
+  Bsdf b(m);
+  const Vec3 wo = direction(40);
+  // Entering: refract (u0 above F) obeys sin(t) = sin(i) / 1.5, on the far side.
+  auto t = b.sample(kN, wo, true, 0.99f, 0, 0);
+  ASSERT_TRUE(t);
+  EXPECT_LT(t->wi.z, 0.0f);
+  EXPECT_NEAR(std::sqrt(1 - t->wi.z * t->wi.z), std::sin(40 * kPi / 180) / 1.5f, 1e-5f);
+  // The share of reflections is the Fresnel reflectance.
+  Rng rng(3, 3);
+  int reflected = 0;
+  for (int i = 0; i < 100000; ++i) reflected += b.sample(kN, wo, true, rng.uniform(), 0, 0)->wi.z > 0;
+  EXPECT_NEAR(reflected / 100000.0, fresnel_dielectric(wo.z, 1.5f), 0.005);
+  // Leaving at 60 degrees from inside: total internal reflection, always.
+  for (float u : {0.0f, 0.5f, 0.99f}) EXPECT_GT(b.sample(kN, direction(60), false, u, 0, 0)->wi.z, 0.0f);
+}
+
+TEST(Bsdf, MtlMappingKeepsEnergyBounded) {
+  Material m = material_from_mtl("g", {0.8f, 0.8f, 0.8f}, {0.5f, 0.5f, 0.5f}, {}, 10, 1, 2);
+  EXPECT_NEAR(m.kd.x + m.ks.x, 1.0f, 1e-6f);  // scaled from 1.3 down to 1
+  EXPECT_EQ(material_from_mtl("d", {0.5f, 0.5f, 0.5f}, {}, {}, 10, 1.5f, 2).type, Material::Type::diffuse);
+  EXPECT_FLOAT_EQ(material_from_mtl("s", {}, {0.3f, 0.3f, 0.3f}, {}, 200, 2.5f, 7).ior, 2.5f);
+}
+
+}  // namespace lf
