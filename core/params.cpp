@@ -77,6 +77,20 @@ std::array<double, 3> ParamTable::get_vec3(const std::string& name, std::array<d
   return out;
 }
 
+std::vector<double> ParamTable::get_numbers(const std::string& name, std::vector<double> fallback, double min,
+                                            double max) const {
+  const Value* v = lookup(name);
+  if (!v) return fallback;
+  if (!v->is_array()) fail(name, "must be a list of numbers");
+  std::vector<double> out;
+  for (const auto& e : v->as_array()) {
+    if (!e.is_number() || !std::isfinite(e.as_double()) || e.as_double() < min || e.as_double() > max)
+      fail(name, "must be a list of numbers in [" + number_text(min) + ", " + number_text(max) + "]");
+    out.push_back(e.as_double());
+  }
+  return out;
+}
+
 std::vector<std::string> ParamTable::unused() const {
   std::vector<std::string> out;
   for (const auto& [k, v] : values_)

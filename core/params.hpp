@@ -28,6 +28,8 @@ class ParamTable {
   std::string get_string(const std::string& name, const std::string& fallback,
                          const std::vector<std::string>& allowed = {}) const;
   std::array<double, 3> get_vec3(const std::string& name, std::array<double, 3> fallback) const;
+  // A list of finite numbers, each in [min, max].
+  std::vector<double> get_numbers(const std::string& name, std::vector<double> fallback, double min, double max) const;
   bool has(const std::string& name) const { return values_.count(name) != 0; }
 
   // Names present in the table that nobody asked for.

@@ -3,9 +3,15 @@
 namespace lf {
 
 extern const LightOpKind direct_kind;
+extern const LightOpKind pathtrace_kind;
+extern const LightOpKind combine_kind;
+extern const LightOpKind emission_kind;
 
 static const LightOpKind* const kAllKinds[] = {
     &direct_kind,
+    &pathtrace_kind,
+    &combine_kind,
+    &emission_kind,
 };
 
 std::span<const LightOpKind* const> lightop_kinds() { return kAllKinds; }

@@ -44,6 +44,7 @@ class Rng {
 namespace streams {
 inline constexpr uint64_t camera = 1;
 inline constexpr uint64_t direct = 2;
+inline constexpr uint64_t pathtrace = 3;
 }  // namespace streams
 
 }  // namespace lf

@@ -69,6 +69,7 @@ Status Scene::finalize(const std::string& what) {
 
   emitters_.clear();
   emitter_cdf_.clear();
+  emitter_pdf_.clear();
   double total = 0;
   std::vector<double> power;
   for (uint32_t t = 0; t < triangles_.size(); ++t) {
@@ -87,6 +88,8 @@ Status Scene::finalize(const std::string& what) {
     emitter_pdf_.push_back(static_cast<float>(p / total));
   }
   emitter_cdf_.back() = 1.0f;
+  triangle_light_pdf_.assign(triangles_.size(), 0.0f);
+  for (size_t i = 0; i < emitters_.size(); ++i) triangle_light_pdf_[emitters_[i]] = emitter_pdf_[i];
   return Ok{};
 }
 

@@ -53,6 +53,8 @@ class Scene {
   // Picks an emitter for u in [0,1); returns its index in emitters() and its probability.
   size_t pick_emitter(float u, float& probability) const;
   float emitter_probability(size_t index) const { return emitter_pdf_[index]; }
+  // Probability that pick_emitter chooses triangle t (0 for non-emitters).
+  float emitter_probability_of_triangle(uint32_t t) const { return triangle_light_pdf_[t]; }
 
   // A distance small against the scene's size, for offsetting ray origins.
   float epsilon() const { return epsilon_; }
@@ -72,6 +74,7 @@ class Scene {
   std::vector<uint32_t> emitters_;
   std::vector<float> emitter_cdf_;
   std::vector<float> emitter_pdf_;
+  std::vector<float> triangle_light_pdf_;
   float epsilon_ = 1e-4f;
 };
 

@@ -1,0 +1,40 @@
+#pragma once
+// Sampling a point on the scene's area lights, shared by every LightOp that does next-event estimation.
+#include "render/math.hpp"
+#include "render/sampler.hpp"
+#include "render/scene.hpp"
+
+namespace lf {
+
+struct LightSample {
+  Vec3 point;
+  Vec3 normal;      // the emitter's front side
+  uint32_t triangle;
+  RGB radiance;     // Le
+  float pdf_area;   // P(triangle) / area
+};
+
+// Picks an emitter triangle by power and a uniform point on it.
+inline LightSample sample_light(const Scene& scene, Rng& rng) {
+  float p_tri = 0;
+  const size_t e = scene.pick_emitter(rng.uniform(), p_tri);
+  const uint32_t tri = scene.emitters()[e];
+  const float su = std::sqrt(rng.uniform());
+  const float v = rng.uniform();
+  const Vec3 y = scene.vertex(tri, 0) * (1 - su) + scene.vertex(tri, 1) * (su * (1 - v)) + scene.vertex(tri, 2) * (su * v);
+  return LightSample{y, scene.normal(tri), tri, scene.material(scene.material_of(tri)).ke, p_tri / scene.area(tri)};
+}
+
+// The area density with which sample_light draws a point on triangle `tri` (for MIS when a BSDF-sampled ray hits
+// a light).
+inline float light_pdf_area(const Scene& scene, uint32_t tri) {
+  return scene.emitter_probability_of_triangle(tri) / scene.area(tri);
+}
+
+// Power heuristic (beta = 2) weight of a sample drawn with density `a` when `b` could also have drawn it.
+inline float power_heuristic(float a, float b) {
+  const float a2 = a * a, b2 = b * b;
+  return a2 + b2 > 0 ? a2 / (a2 + b2) : 0.0f;
+}
+
+}  // namespace lf

@@ -1,0 +1,33 @@
+// emission: the light a point itself emits towards wo (Ke on an emitter's front side, else nothing). The renderer
+// adds emission the camera sees; inside a network, e.g. at the end of a mirror chain, this is how a LightOp asks
+// "is this a light?". No inputs, no parameters.
+#include "render/lightop_registry.hpp"
+
+namespace lf {
+namespace {
+
+class Emission final : public LightOp {
+ public:
+  explicit Emission(const ParamTable&) {}
+  Task setup(const SceneContext& ctx, Inputs&) override {
+    ctx_ = ctx;
+    co_return;
+  }
+  Task shade(const ShadingPoints& points, std::span<RGB> radiance, Inputs&) override {
+    const Scene& scene = *ctx_.scene;
+    for (size_t i = 0; i < points.size(); ++i)
+      radiance[i] = points.outside(i, scene) ? scene.material(points.material[i]).ke : RGB{};
+    co_return;
+  }
+
+ private:
+  SceneContext ctx_;
+};
+
+}  // namespace
+
+extern const LightOpKind emission_kind{
+    "emission", "the light the point itself emits", 0, 0,
+    [](const ParamTable& p) -> std::unique_ptr<LightOp> { return std::make_unique<Emission>(p); }};
+
+}  // namespace lf

@@ -1,0 +1,208 @@
+// pathtrace against closed forms, and direct against pathtrace.
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "render/bsdf.hpp"
+#include "render/camera.hpp"
+#include "render/lightop_registry.hpp"
+#include "render/sampler.hpp"
+#include "render/tile_kernel.hpp"
+
+namespace lf {
+namespace {
+
+std::vector<RGB> shade(const char* kind, Value::Map params, const Scene& scene, const RayTracer& tracer,
+                       const ShadingPoints& pts) {
+  auto op = create_lightop(*find_lightop_kind(kind), ParamTable(std::move(params), kind));
+  LocalInputs none;
+  run_to_completion(op->setup(SceneContext{&scene, &tracer}, none));
+  std::vector<RGB> out(pts.size());
+  run_to_completion(op->shade(pts, out, none));
+  return out;
+}
+
+// A closed cube seen from inside: every face emits E and reflects rho (diffuse). Radiance everywhere is
+// E / (1 - rho); the renderer adds the E it sees, so the reflected part a LightOp returns is rho E / (1 - rho).
+TEST(PathTrace, FurnaceConvergesToEOverOneMinusRho) {
+  for (float rho : {0.5f, 0.8f}) {
+    Scene s;
+    const float e = 1.0f;
+    auto m = s.add_material({"furnace", {rho, rho, rho}, {e, e, e}});
+    const Vec3 c[8] = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}, {0, 0, 1}, {1, 0, 1}, {1, 1, 1}, {0, 1, 1}};
+    // Windings face inwards.
+    s.add_quad(c[0], c[1], c[2], c[3], m);
+    s.add_quad(c[4], c[7], c[6], c[5], m);
+    s.add_quad(c[0], c[4], c[5], c[1], m);
+    s.add_quad(c[3], c[2], c[6], c[7], m);
+    s.add_quad(c[0], c[3], c[7], c[4], m);
+    s.add_quad(c[1], c[5], c[6], c[2], m);
+    ASSERT_TRUE(s.finalize("furnace").ok());
+    RayTracer tracer(s);
+    ShadingPoints pts;
+    for (int i = 0; i < 8; ++i) {
+      const float u = 0.1f + 0.1f * i;
+      pts.push_back({u, 0.0f, 1 - u}, {0, 1, 0}, normalize(Vec3{0.3f, 1, 0.2f}), m, sample_key(i, 0));
+      pts.push_back({0.0f, u, 0.5f}, {1, 0, 0}, {1, 0, 0}, m, sample_key(i, 1));
+    }
+    auto out = shade("pathtrace", Value::Map{{"samples", 4096}, {"max_depth", 1000}}, s, tracer, pts);
+    double mean = 0;
+    for (const RGB& l : out) mean += l.y;
+    mean /= static_cast<double>(out.size());
+    const double expected = rho * e / (1 - rho);
+    EXPECT_NEAR(mean / expected, 1.0, 0.02) << "rho " << rho;
+    EXPECT_NEAR((e + mean) / (e / (1 - rho)), 1.0, 0.02) << "total radiance vs E / (1 - rho)";
+  }
+}
+
+struct Estimate {
+  std::vector<double> mean, se2;  // per point, green channel: mean and squared standard error over seeds
+};
+
+Estimate estimate(const char* kind, const char* samples_key, int samples, const Scene& scene, const RayTracer& tracer,
+                  const ShadingPoints& pts, Value::Map extra = {}) {
+  const int seeds = 8;
+  std::vector<std::vector<double>> runs;
+  for (int seed = 0; seed < seeds; ++seed) {
+    Value::Map params = extra;
+    params[samples_key] = samples;
+    params["seed"] = seed;
+    auto out = shade(kind, params, scene, tracer, pts);
+    std::vector<double> g;
+    for (const RGB& l : out) g.push_back(l.y);
+    runs.push_back(std::move(g));
+  }
+  Estimate e;
+  for (size_t i = 0; i < pts.size(); ++i) {
+    double m = 0, v = 0;
+    for (const auto& r : runs) m += r[i];
+    m /= seeds;
+    for (const auto& r : runs) v += (r[i] - m) * (r[i] - m);
+    e.mean.push_back(m);
+    e.se2.push_back(v / (seeds - 1) / seeds);
+  }
+  return e;
+}
+
+// Two unbiased estimators of the same direct light: their squared differences average to the sum of their
+// squared standard errors. The bound, 1.3 times that sum, leaves room for the error in estimating the errors
+// (8 seeds) and fails a bias of a few percent of the signal.
+void expect_same_direct_light(const Scene& scene, const ShadingPoints& pts, const char* what) {
+  RayTracer tracer(scene);
+  auto direct = estimate("direct", "light_samples", 16, scene, tracer, pts);
+  auto path = estimate("pathtrace", "samples", 16, scene, tracer, pts, Value::Map{{"max_depth", 1}});
+  double diff2 = 0, se2 = 0, signal = 0;
+  for (size_t i = 0; i < pts.size(); ++i) {
+    diff2 += (direct.mean[i] - path.mean[i]) * (direct.mean[i] - path.mean[i]);
+    se2 += direct.se2[i] + path.se2[i];
+    signal += direct.mean[i];
+  }
+  ASSERT_GT(signal, 0) << what;
+  EXPECT_LT(diff2, 1.3 * se2) << what << ": RMSE " << std::sqrt(diff2 / pts.size()) << " vs expected "
+                              << std::sqrt(se2 / pts.size());
+}
+
+ShadingPoints camera_points(const Scene& scene, const CameraSpec& cam, int size) {
+  RayTracer tracer(scene);
+  ImageSpec image;
+  image.width = image.height = size;
+  image.spp = 1;
+  Camera camera(cam, size, size);
+  TileWork work;
+  trace_tile(scene, tracer, camera, image, TileRect{0, 0, size, size}, work);
+  return work.points;
+}
+
+TEST(PathTrace, DirectMatchesPathTraceLimitedToDirectLightOnTheCornellBox) {
+  auto scene = Scene::builtin("cornell");
+  expect_same_direct_light(*scene, camera_points(*scene, CameraSpec{}, 24), "cornell");
+}
+
+// The direct light a glossy point reflects from a quad light, by midpoint quadrature over the light's area (no
+// occluders in the scene): an independent reference for what MIS estimates.
+double quadrature(const Scene& s, const Bsdf& bsdf, Vec3 x, Vec3 n, Vec3 wo, const Vec3 q[4], RGB le) {
+  const int grid = 400;
+  const Vec3 e1 = q[1] - q[0], e2 = q[3] - q[0];
+  const Vec3 ln = normalize(cross(e1, e2));
+  const float da = length(cross(e1, e2)) / (grid * grid);
+  double sum = 0;
+  for (int a = 0; a < grid; ++a)
+    for (int b = 0; b < grid; ++b) {
+      const Vec3 y = q[0] + e1 * ((a + 0.5f) / grid) + e2 * ((b + 0.5f) / grid);
+      const Vec3 d = y - x;
+      const float d2 = dot(d, d);
+      const Vec3 wi = d / std::sqrt(d2);
+      const float cx = dot(n, wi), cy = -dot(ln, wi);
+      if (cx <= 0 || cy <= 0) continue;
+      sum += bsdf.eval(n, wo, wi).y * le.y * cx * cy / d2 * da;
+    }
+  (void)s;
+  return sum;
+}
+
+TEST(PathTrace, DirectAndPathTraceMatchQuadratureOnGlossySurfaces) {
+  // A glossy floor under a tilted rectangular light: light sampling alone would be noisy here, so direct uses MIS.
+  Scene s;
+  const Material glossy = material_from_mtl("glossy", {0.2f, 0.2f, 0.2f}, {0.7f, 0.7f, 0.7f}, {}, 60, 1, 2);
+  auto floor = s.add_material(glossy);
+  auto light = s.add_material({"light", {}, {5, 5, 5}});
+  const Vec3 q[4] = {{-0.5f, 1.2f, -0.3f}, {0.5f, 1.2f, -0.3f}, {0.5f, 1.0f, 0.3f}, {-0.5f, 1.0f, 0.3f}};
+  s.add_quad({-2, 0, -2}, {-2, 0, 2}, {2, 0, 2}, {2, 0, -2}, floor);
+  s.add_quad(q[0], q[1], q[2], q[3], light);
+  ASSERT_TRUE(s.finalize("glossy").ok());
+  RayTracer tracer(s);
+  ShadingPoints pts;
+  std::vector<double> reference;
+  for (int i = 0; i < 40; ++i) {
+    const float x = -1.2f + 2.4f * (i % 8) / 7.0f, z = -1.0f + 2.0f * (i / 8) / 4.0f;
+    const Vec3 wo = normalize(Vec3{-x * 0.3f, 1.0f, 1.5f - z});
+    pts.push_back({x, 0, z}, {0, 1, 0}, wo, floor, sample_key(i, 0), 0);
+    reference.push_back(quadrature(s, Bsdf(s.material(floor)), {x, 0, z}, {0, 1, 0}, wo, q, {5, 5, 5}));
+  }
+  for (const char* kind : {"direct", "pathtrace"}) {
+    auto e = estimate(kind, kind == std::string("direct") ? "light_samples" : "samples", 256, s, tracer, pts,
+                      kind == std::string("direct") ? Value::Map{} : Value::Map{{"max_depth", 1}});
+    double sum = 0, ref = 0, worst = 0;
+    for (size_t i = 0; i < pts.size(); ++i) {
+      sum += e.mean[i];
+      ref += reference[i];
+      worst = std::max(worst, std::abs(e.mean[i] - reference[i]) / std::sqrt(e.se2[i] + 1e-12));
+    }
+    // The total over the points within 2 %, and no point further than 6 of its standard errors from quadrature.
+    EXPECT_NEAR(sum / ref, 1.0, 0.02) << kind;
+    EXPECT_LT(worst, 6.0) << kind;
+  }
+}
+
+TEST(Combine, SumsItsInputsWithWeights) {
+  auto scene = Scene::builtin("cornell");
+  RayTracer tracer(*scene);
+  auto pts = camera_points(*scene, CameraSpec{}, 16);
+  auto direct = shade("direct", Value::Map{{"light_samples", 2}}, *scene, tracer, pts);
+  auto emitted = shade("emission", Value::Map{}, *scene, tracer, pts);
+
+  auto d = create_lightop(*find_lightop_kind("direct"), ParamTable(Value::Map{{"light_samples", 2}}, "d"));
+  auto e = create_lightop(*find_lightop_kind("emission"), ParamTable(Value::Map{}, "e"));
+  auto c = create_lightop(*find_lightop_kind("combine"),
+                          ParamTable(Value::Map{{"weights", Value::Array{2.0, 0.5}}}, "c"));
+  LocalInputs none;
+  SceneContext ctx{&*scene, &tracer};
+  run_to_completion(d->setup(ctx, none));
+  run_to_completion(e->setup(ctx, none));
+  LocalInputs inputs({{d.get(), &none}, {e.get(), &none}});
+  run_to_completion(c->setup(ctx, inputs));
+  std::vector<RGB> out(pts.size());
+  run_to_completion(c->shade(pts, out, inputs));
+  int lit = 0;
+  for (size_t i = 0; i < pts.size(); ++i) {
+    EXPECT_EQ(out[i], direct[i] * 2.0f + emitted[i] * 0.5f) << i;
+    lit += !is_black(emitted[i]);
+  }
+  EXPECT_GT(lit, 0) << "some points lie on the light";
+
+  LocalInputs one({{d.get(), &none}});
+  EXPECT_THROW(run_to_completion(c->setup(ctx, one)), LightOpError);  // two weights, one input
+}
+
+}  // namespace
+}  // namespace lf

@@ -1,0 +1,161 @@
+#include "render/path_kernel.hpp"
+
+#include <algorithm>
+
+#include "render/bsdf.hpp"
+#include "render/light_sampling.hpp"
+#include "render/sampler.hpp"
+
+namespace lf {
+
+namespace {
+
+struct Path {
+  Vec3 x, n, wo;
+  uint32_t material;
+  bool outside;
+  RGB beta{1, 1, 1};  // throughput
+  RGB L{};            // gathered radiance
+  Rng rng;
+  bool alive = true;
+  // The BSDF sample that led here, for MIS at an emitter hit.
+  float bsdf_pdf = 0;
+  bool delta = false;
+};
+
+struct Pending {
+  size_t path;
+  RGB contribution;
+};
+
+}  // namespace
+
+void trace_paths(const SceneContext& ctx, const ShadingPoints& points, std::span<RGB> radiance, const PathOptions& o) {
+  const Scene& scene = *ctx.scene;
+  const float eps = scene.epsilon();
+  const size_t n = points.size();
+  const size_t per = static_cast<size_t>(o.samples);
+  std::vector<Path> paths;
+  paths.reserve(n * per);
+  for (size_t i = 0; i < n; ++i)
+    for (size_t s = 0; s < per; ++s)
+      paths.push_back(Path{points.position[i], points.normal[i], points.wo[i], points.material[i],
+                           points.outside(i, scene), {1, 1, 1}, {}, Rng(points.key[i], o.stream + (s << 32))});
+
+  std::vector<Ray> rays;
+  std::vector<uint8_t> blocked;
+  std::vector<Hit> hits;
+  std::vector<Pending> pending;
+  std::vector<size_t> continuing;
+  std::vector<Bsdf::Sample> samples;
+
+  for (int depth = 1; depth <= o.max_depth; ++depth) {
+    // Next-event estimation.
+    rays.clear();
+    pending.clear();
+    for (size_t p = 0; p < paths.size(); ++p) {
+      Path& path = paths[p];
+      if (!path.alive) continue;
+      const Material& m = scene.material(path.material);
+      const Bsdf bsdf(m);
+      if (bsdf.is_delta()) continue;
+      const LightSample ls = sample_light(scene, path.rng);
+      const Vec3 d = ls.point - path.x;
+      const float dist2 = dot(d, d);
+      if (!(dist2 > 0)) continue;
+      const Vec3 wi = d / std::sqrt(dist2);
+      const float cos_x = dot(path.n, wi), cos_y = -dot(ls.normal, wi);
+      if (cos_x <= 0 || cos_y <= 0) continue;
+      const RGB f = bsdf.eval(path.n, path.wo, wi);
+      if (is_black(f)) continue;
+      const float light_pdf = ls.pdf_area * dist2 / cos_y;  // per solid angle
+      const bool light_only = o.light_only_on_diffuse && m.type == Material::Type::diffuse;
+      const float w = light_only ? 1.0f : power_heuristic(light_pdf, bsdf.pdf(path.n, path.wo, wi));
+      pending.push_back({p, path.beta * f * ls.radiance * (cos_x * w / light_pdf)});
+      const Vec3 origin = path.x + path.n * eps;
+      const Vec3 to_light = ls.point - origin;
+      const float span = length(to_light);
+      rays.push_back(Ray{origin, to_light / span, 0.0f, span - eps});
+    }
+    blocked.resize(rays.size());
+    if (!rays.empty()) ctx.tracer->occluded(rays, blocked);
+    for (size_t r = 0; r < pending.size(); ++r)
+      if (!blocked[r]) paths[pending[r].path].L += pending[r].contribution;
+
+    // BSDF sampling: continue each path (and count lights it hits).
+    rays.clear();
+    continuing.clear();
+    samples.clear();
+    for (size_t p = 0; p < paths.size(); ++p) {
+      Path& path = paths[p];
+      if (!path.alive) continue;
+      const Material& m = scene.material(path.material);
+      if (o.light_only_on_diffuse && o.max_depth == 1 && m.type == Material::Type::diffuse) {
+        path.alive = false;
+        continue;
+      }
+      const float u0 = path.rng.uniform(), u1 = path.rng.uniform(), u2 = path.rng.uniform();
+      auto s = Bsdf(m).sample(path.n, path.wo, path.outside, u0, u1, u2);
+      if (!s || is_black(s->weight)) {
+        path.alive = false;
+        continue;
+      }
+      path.beta = path.beta * s->weight;
+      path.bsdf_pdf = s->pdf;
+      path.delta = s->delta;
+      const Vec3 side = dot(s->wi, path.n) > 0 ? path.n : -path.n;  // refraction leaves through the back
+      rays.push_back(Ray{path.x + side * eps, s->wi});
+      continuing.push_back(p);
+      samples.push_back(*s);
+    }
+    hits.resize(rays.size());
+    if (!rays.empty()) ctx.tracer->intersect(rays, hits);
+    for (size_t r = 0; r < continuing.size(); ++r) {
+      Path& path = paths[continuing[r]];
+      if (!hits[r].valid()) {
+        path.alive = false;
+        continue;
+      }
+      const uint32_t tri = hits[r].triangle;
+      const Vec3 wo = -rays[r].direction;
+      const Vec3 ng = scene.normal(tri);
+      const bool front = dot(ng, wo) > 0;
+      const Material& hit_material = scene.material(scene.material_of(tri));
+      if (hit_material.emissive() && front) {
+        float w = 1.0f;
+        if (!path.delta) {
+          const float cos_y = dot(ng, wo);
+          const float light_pdf = light_pdf_area(scene, tri) * hits[r].t * hits[r].t / cos_y;
+          w = power_heuristic(path.bsdf_pdf, light_pdf);
+        }
+        path.L += path.beta * hit_material.ke * w;
+      }
+      if (depth == o.max_depth) {
+        path.alive = false;
+        continue;
+      }
+      if (depth >= o.rr_depth) {
+        const float q = std::min(0.95f, std::max({path.beta.x, path.beta.y, path.beta.z}));
+        if (path.rng.uniform() >= q) {
+          path.alive = false;
+          continue;
+        }
+        path.beta *= 1.0f / q;
+      }
+      path.x = rays[r].origin + rays[r].direction * hits[r].t;
+      path.n = front ? ng : -ng;
+      path.wo = wo;
+      path.material = scene.material_of(tri);
+      path.outside = front;
+    }
+  }
+
+  // Average each point's paths in sample order: the result does not depend on the batch.
+  for (size_t i = 0; i < n; ++i) {
+    RGB sum{};
+    for (size_t s = 0; s < per; ++s) sum += paths[i * per + s].L;
+    radiance[i] = sum * (1.0f / static_cast<float>(per));
+  }
+}
+
+}  // namespace lf

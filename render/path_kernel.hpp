@@ -1,0 +1,26 @@
+#pragma once
+// The path-tracing kernel shared by `pathtrace` and `direct`. Paths for a whole batch advance together, one bounce
+// at a time, so each bounce's shadow rays and continuation rays go to Embree as one stream.
+//
+// At every vertex: next-event estimation (a point on a light, a shadow ray) and a BSDF sample that continues the
+// path; a BSDF-sampled ray that hits a light counts too. The two are combined by multiple importance sampling
+// (power heuristic), so glossy surfaces get both estimators' strengths. Russian roulette ends long paths without
+// bias. Emission at the first vertex is not counted: the renderer adds what the camera sees.
+#include <span>
+
+#include "render/lightop.hpp"
+
+namespace lf {
+
+struct PathOptions {
+  int max_depth = 8;          // vertices that gather light; 1 is direct light only
+  int rr_depth = 3;           // Russian roulette from this vertex on
+  int samples = 1;            // paths per point, averaged
+  uint64_t stream = 0;        // random stream of the calling op (sampler.hpp)
+  // With max_depth 1: on diffuse surfaces use light sampling alone (a BSDF ray adds cost, not quality there).
+  bool light_only_on_diffuse = false;
+};
+
+void trace_paths(const SceneContext& ctx, const ShadingPoints& points, std::span<RGB> radiance, const PathOptions& o);
+
+}  // namespace lf
