@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <filesystem>
+#include <map>
 
 namespace lf {
 
@@ -51,6 +52,38 @@ void Scene::add_triangle(Vec3 a, Vec3 b, Vec3 c, uint32_t material) {
   material_of_.push_back(material);
   normals_.push_back(n / len);
   areas_.push_back(0.5f * len);
+}
+
+void Scene::add_sphere(Vec3 center, float radius, int subdivisions, uint32_t material) {
+  const float t = (1.0f + std::sqrt(5.0f)) / 2.0f;
+  std::vector<Vec3> v{{-1, t, 0}, {1, t, 0},  {-1, -t, 0}, {1, -t, 0}, {0, -1, t}, {0, 1, t},
+                      {0, -1, -t}, {0, 1, -t}, {t, 0, -1},  {t, 0, 1},  {-t, 0, -1}, {-t, 0, 1}};
+  std::vector<std::array<int, 3>> f{{0, 11, 5}, {0, 5, 1},  {0, 1, 7},   {0, 7, 10}, {0, 10, 11}, {1, 5, 9}, {5, 11, 4},
+                                    {11, 10, 2}, {10, 7, 6}, {7, 1, 8},   {3, 9, 4},  {3, 4, 2},   {3, 2, 6}, {3, 6, 8},
+                                    {3, 8, 9},   {4, 9, 5},  {2, 4, 11},  {6, 2, 10}, {8, 6, 7},   {9, 8, 1}};
+  for (auto& p : v) p = normalize(p);
+  for (int level = 0; level < subdivisions; ++level) {
+    std::vector<std::array<int, 3>> next;
+    std::map<std::pair<int, int>, int> midpoint;
+    auto mid = [&](int a, int b) {
+      auto key = std::minmax(a, b);
+      auto it = midpoint.find(key);
+      if (it != midpoint.end()) return it->second;
+      v.push_back(normalize((v[static_cast<size_t>(a)] + v[static_cast<size_t>(b)]) * 0.5f));
+      return midpoint[key] = static_cast<int>(v.size() - 1);
+    };
+    for (const auto& tri : f) {
+      int a = mid(tri[0], tri[1]), b = mid(tri[1], tri[2]), c = mid(tri[2], tri[0]);
+      next.push_back({tri[0], a, c});
+      next.push_back({tri[1], b, a});
+      next.push_back({tri[2], c, b});
+      next.push_back({a, b, c});
+    }
+    f = std::move(next);
+  }
+  for (const auto& tri : f)
+    add_triangle(center + v[static_cast<size_t>(tri[0])] * radius, center + v[static_cast<size_t>(tri[1])] * radius,
+                 center + v[static_cast<size_t>(tri[2])] * radius, material);
 }
 
 void Scene::add_quad(Vec3 a, Vec3 b, Vec3 c, Vec3 d, uint32_t material) {
@@ -102,7 +135,9 @@ size_t Scene::pick_emitter(float u, float& probability) const {
 
 // The Cornell box as published by the Cornell Program of Computer Graphics (measured geometry, millimetres),
 // with the usual RGB approximations of its measured reflectances and light.
-static Scene cornell_box() {
+// `glass`: the Cornell box with a glass sphere where the short block stood and a mirror for the tall block, for
+// caustics on the floor.
+static Scene cornell_box(bool glass) {
   Scene s;
   auto white = s.add_material({"white", {0.725f, 0.71f, 0.68f}, {}});
   auto red = s.add_material({"red", {0.63f, 0.065f, 0.05f}, {}});
@@ -138,23 +173,31 @@ static Scene cornell_box() {
       {{472, 0, 406}, {472, 330, 406}, {314, 330, 456}, {314, 0, 456}},
       {{314, 0, 456}, {314, 330, 456}, {265, 330, 296}, {265, 0, 296}},
       {{265, 0, 296}, {265, 330, 296}, {423, 330, 247}, {423, 0, 247}}};
-  for (const auto* block : {short_block, tall_block})
+  const uint32_t tall_material =
+      glass ? s.add_material(material_from_mtl("mirror", {}, {0.95f, 0.95f, 0.95f}, {}, 0, 1, 3)) : white;
+  for (const auto* block : {short_block, tall_block}) {
+    if (glass && block == short_block) continue;
     for (int f = 0; f < 5; ++f) {
       auto v = [&](int i) { return Vec3{block[f][i][0], block[f][i][1], block[f][i][2]}; };
-      s.add_quad(v(0), v(1), v(2), v(3), white);
+      s.add_quad(v(0), v(1), v(2), v(3), block == tall_block ? tall_material : white);
     }
+  }
+  if (glass) {
+    const uint32_t sphere = s.add_material(material_from_mtl("glass", {}, {}, {}, 0, 1.5f, 7));
+    s.add_sphere({185.0f, 90.0f, 169.0f}, 90.0f, 4, sphere);
+  }
   return s;
 }
 
 const std::vector<std::string>& Scene::builtin_names() {
-  static const std::vector<std::string> names{"cornell"};
+  static const std::vector<std::string> names{"cornell", "cornell_glass"};
   return names;
 }
 
 Result<Scene> Scene::builtin(const std::string& name) {
   Scene s;
-  if (name == "cornell") {
-    s = cornell_box();
+  if (name == "cornell" || name == "cornell_glass") {
+    s = cornell_box(name == "cornell_glass");
   } else {
     std::string known;
     for (const auto& n : builtin_names()) known += (known.empty() ? "" : ", ") + n;

@@ -35,6 +35,8 @@ class Scene {
   // Adds a planar quad a-b-c-d as two triangles; its front (emitting) side is the one (b-a)x(c-a) points to.
   void add_quad(Vec3 a, Vec3 b, Vec3 c, Vec3 d, uint32_t material);
   void add_triangle(Vec3 a, Vec3 b, Vec3 c, uint32_t material);
+  // A sphere as a subdivided icosahedron (20 * 4^subdivisions triangles), wound outwards.
+  void add_sphere(Vec3 center, float radius, int subdivisions, uint32_t material);
   // Builds the emitter distribution. An error if the scene has no triangles or no emitters.
   Status finalize(const std::string& what);
 

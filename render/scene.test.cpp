@@ -24,10 +24,31 @@ TEST(Scene, BuiltinCornellBoxHasItsGeometryAndOneDownwardLight) {
   EXPECT_NEAR(area, 130.0f * 105.0f, 1e-2f);
 }
 
+TEST(Scene, CornellGlassHasAClosedGlassSphereAndAMirrorBlock) {
+  auto s = Scene::builtin("cornell_glass");
+  ASSERT_TRUE(s.ok()) << s.error().message;
+  size_t glass = 0, mirror = 0;
+  double glass_area = 0;
+  for (uint32_t t = 0; t < s->triangle_count(); ++t) {
+    const Material& m = s->material(s->material_of(t));
+    if (m.type == Material::Type::glass) {
+      ++glass;
+      glass_area += s->area(t);
+      // Outward winding: the normal points away from the centre.
+      Vec3 c = (s->vertex(t, 0) + s->vertex(t, 1) + s->vertex(t, 2)) / 3.0f;
+      EXPECT_GT(dot(s->normal(t), c - Vec3{185, 90, 169}), 0.0f);
+    }
+    mirror += m.type == Material::Type::mirror;
+  }
+  EXPECT_EQ(glass, 20u * 256u);
+  EXPECT_NEAR(glass_area / (4 * M_PI * 90 * 90), 1.0, 0.01);  // a level-4 icosphere is within 1 % of the sphere
+  EXPECT_EQ(mirror, 10u);
+}
+
 TEST(Scene, UnknownBuiltinNamesTheKnownOnes) {
   auto s = Scene::builtin("kitchen");
   ASSERT_FALSE(s.ok());
-  EXPECT_EQ(s.error().message, "unknown built-in scene 'kitchen' (built-in scenes: cornell)");
+  EXPECT_EQ(s.error().message, "unknown built-in scene 'kitchen' (built-in scenes: cornell, cornell_glass)");
 }
 
 TEST(Scene, MissingFileIsAClearError) {
