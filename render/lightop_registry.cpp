@@ -6,12 +6,14 @@ extern const LightOpKind direct_kind;
 extern const LightOpKind pathtrace_kind;
 extern const LightOpKind combine_kind;
 extern const LightOpKind emission_kind;
+extern const LightOpKind specular_kind;
 
 static const LightOpKind* const kAllKinds[] = {
     &direct_kind,
     &pathtrace_kind,
     &combine_kind,
     &emission_kind,
+    &specular_kind,
 };
 
 std::span<const LightOpKind* const> lightop_kinds() { return kAllKinds; }

@@ -45,6 +45,7 @@ namespace streams {
 inline constexpr uint64_t camera = 1;
 inline constexpr uint64_t direct = 2;
 inline constexpr uint64_t pathtrace = 3;
+inline constexpr uint64_t specular = 4;
 }  // namespace streams
 
 }  // namespace lf

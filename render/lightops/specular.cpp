@@ -1,0 +1,112 @@
+// specular: light that reaches a point on a mirror or glass surface along a chain of perfect reflections and
+// refractions. From such a point it follows the chain (choosing reflection or refraction at glass by Fresnel,
+// `samples` chains per point) until it lands on a non-specular surface, then asks its input, in one batch, for the
+// light leaving that surface back along the chain. An emitter the chain lands on adds its own emission (the
+// input returns reflected light only). Points on non-specular surfaces get nothing: that is the other ops' job.
+// One input.
+#include "render/bsdf.hpp"
+#include "render/lightop_registry.hpp"
+#include "render/sampler.hpp"
+
+namespace lf {
+namespace {
+
+class Specular final : public LightOp {
+ public:
+  explicit Specular(const ParamTable& p)
+      : samples_(static_cast<int>(p.get_int("samples", 1, 1, 1 << 16))),
+        max_depth_(static_cast<int>(p.get_int("max_depth", 8, 1, 256))),
+        seed_(static_cast<uint64_t>(p.get_int("seed", 0, 0, INT32_MAX))) {}
+
+  Task setup(const SceneContext& ctx, Inputs&) override {
+    ctx_ = ctx;
+    co_return;
+  }
+
+  Task shade(const ShadingPoints& points, std::span<RGB> radiance, Inputs& inputs) override {
+    const Scene& scene = *ctx_.scene;
+    const float eps = scene.epsilon();
+    struct Chain {
+      size_t owner;
+      Vec3 x, n, wo;
+      uint32_t material;
+      bool outside;
+      RGB weight{1, 1, 1};
+      RGB emitted{};
+      int landed = -1;  // index into `ends` once it reaches a non-specular surface
+      Rng rng;
+    };
+    std::vector<Chain> chains;
+    for (size_t i = 0; i < points.size(); ++i) {
+      radiance[i] = RGB{};
+      if (!scene.material(points.material[i]).specular()) continue;
+      for (int s = 0; s < samples_; ++s)
+        chains.push_back(Chain{i, points.position[i], points.normal[i], points.wo[i], points.material[i],
+                               points.outside(i, scene), {1, 1, 1}, {}, -1,
+                               Rng(points.key[i], streams::specular ^ (seed_ << 8) ^ (uint64_t(s) << 32))});
+    }
+    ShadingPoints ends;
+    std::vector<size_t> active(chains.size());
+    for (size_t c = 0; c < chains.size(); ++c) active[c] = c;
+    std::vector<Ray> rays;
+    std::vector<Hit> hits;
+    for (int depth = 0; depth < max_depth_ && !active.empty(); ++depth) {
+      rays.clear();
+      std::vector<size_t> moving;
+      for (size_t c : active) {
+        Chain& ch = chains[c];
+        const float u0 = ch.rng.uniform();
+        auto s = Bsdf(scene.material(ch.material)).sample(ch.n, ch.wo, ch.outside, u0, 0.5f, 0.5f);
+        if (!s) continue;
+        ch.weight = ch.weight * s->weight;
+        const Vec3 side = dot(s->wi, ch.n) > 0 ? ch.n : -ch.n;
+        rays.push_back(Ray{ch.x + side * eps, s->wi});
+        moving.push_back(c);
+      }
+      hits.resize(rays.size());
+      if (!rays.empty()) ctx_.tracer->intersect(rays, hits);
+      active.clear();
+      for (size_t r = 0; r < moving.size(); ++r) {
+        if (!hits[r].valid()) continue;
+        Chain& ch = chains[moving[r]];
+        const uint32_t tri = hits[r].triangle;
+        const Vec3 wo = -rays[r].direction;
+        const Vec3 ng = scene.normal(tri);
+        const bool front = dot(ng, wo) > 0;
+        const uint32_t m = scene.material_of(tri);
+        const Material& hit = scene.material(m);
+        const Vec3 x = rays[r].origin + rays[r].direction * hits[r].t;
+        if (hit.emissive() && front) ch.emitted += ch.weight * hit.ke;
+        if (hit.specular()) {
+          ch = Chain{ch.owner, x, front ? ng : -ng, wo, m, front, ch.weight, ch.emitted, -1, ch.rng};
+          active.push_back(moving[r]);
+          continue;
+        }
+        ch.landed = static_cast<int>(ends.size());
+        const uint64_t key = splitmix64(points.key[ch.owner] ^ (0x5bec0000ull + static_cast<uint64_t>(moving[r])));
+        ends.push_back(x, front ? ng : -ng, wo, m, key, tri);
+      }
+    }
+    std::vector<RGB> arriving;
+    if (ends.size() > 0 && inputs.count() > 0) co_await inputs.shade(0, ends, arriving);
+    const float inv = 1.0f / static_cast<float>(samples_);
+    for (const Chain& ch : chains) {
+      RGB l = ch.emitted;
+      if (ch.landed >= 0 && !arriving.empty()) l += ch.weight * arriving[static_cast<size_t>(ch.landed)];
+      radiance[ch.owner] += l * inv;
+    }
+  }
+
+ private:
+  int samples_, max_depth_;
+  uint64_t seed_;
+  SceneContext ctx_;
+};
+
+}  // namespace
+
+extern const LightOpKind specular_kind{
+    "specular", "light along mirror and glass chains, asking its input where a chain lands", 1, 1,
+    [](const ParamTable& p) -> std::unique_ptr<LightOp> { return std::make_unique<Specular>(p); }};
+
+}  // namespace lf
