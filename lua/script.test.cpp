@@ -85,7 +85,7 @@ TEST_F(ScriptTest, SyntaxErrorNamesFileAndLine) {
 
 TEST_F(ScriptTest, UnknownKindNamesLineAndKnownKinds) {
   EXPECT_EQ(error_of("scene { builtin = \"cornell\" }\n\nlocal p = lightop \"photon\" { }\n"),
-            "farm.lua:3: unknown LightOp kind 'photon' (known kinds: direct, pathtrace, combine, emission)");
+            "farm.lua:3: unknown LightOp kind 'photon' (known kinds: direct, pathtrace, combine, emission, specular)");
 }
 
 TEST_F(ScriptTest, BadParametersNameLineAndParameter) {
