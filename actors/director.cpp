@@ -7,6 +7,7 @@
 #include <cmath>
 #include <cstdio>
 #include <fstream>
+#include <algorithm>
 #include <map>
 #include <thread>
 
@@ -185,6 +186,13 @@ class Director {
                         {"runtime", a.spec->runtime},
                         {"heartbeat_timeout", spec_.heartbeat_timeout},
                         {"request_timeout", spec_.request_timeout}};
+      if (const int pool = spec_.pool_of(index_of(a)); pool >= 0) {
+        const auto& replicas = spec_.actors[static_cast<size_t>(pool)].inputs;
+        const auto at = std::find(replicas.begin(), replicas.end(), index_of(a)) - replicas.begin();
+        config["pool"] = Value::Map{{"name", spec_.actors[static_cast<size_t>(pool)].name},
+                                    {"index", static_cast<int64_t>(at)},
+                                    {"count", static_cast<int64_t>(replicas.size())}};
+      }
       send(name, wire::make(MsgType::config, "director", {}, std::move(config)));
     }
   }
@@ -325,6 +333,9 @@ class Director {
       }
       throw FarmFailure{"lost the last replica of '" + pool.spec->name + "': " + replicas};
     }
+    if (gathers_.count(spec_.pool_of(index_of(a))))
+      throw FarmFailure{"replica '" + name + "' " + why + " while '" + pool.spec->name +
+                        "' was sharing its setup; its share cannot be redone"};
     log_warn("replica '" + name + "' " + why + "; '" + pool.spec->name + "' sends its work to the others");
     send(pool.spec->name, wire::make(MsgType::peer_down, "director", {}, Value::Map{{"name", name}}));
   }
@@ -428,9 +439,46 @@ class Director {
       if (master_->done() == 1) first_tile_seconds_ = seconds_since(start_);
       progress_->update(master_->done(), seconds_since(render_start_));
       if (master_->finished()) serve_waiting_tile_requests();
+    } else if (m.header.op == "all_gather") {
+      on_all_gather(a, m);
     } else {
-      send(name, wire::make_error_reply("director", m.header.id, "unknown_op", "the director serves 'tile' and 'tile_done'"));
+      send(name, wire::make_error_reply("director", m.header.id, "unknown_op",
+                                        "the director serves 'tile', 'tile_done' and 'all_gather'"));
     }
+  }
+
+  // A pool's replicas each send their part; once all have, each gets every part in replica order.
+  void on_all_gather(ActorState& a, const wire::Message& m) {
+    const Value* part = m.body.find("part");
+    const int pool = spec_.pool_of(index_of(a));
+    if (!part || !part->is_bytes()) {
+      send(a.spec->name, wire::make_error_reply("director", m.header.id, "bad_request", "all_gather needs a part"));
+      return;
+    }
+    if (pool < 0) {  // not in a pool: its own part is everything
+      send(a.spec->name, wire::make(MsgType::reply, "director", "all_gather", Value::Map{{"parts", Value::Array{*part}}},
+                                    m.header.id));
+      return;
+    }
+    const auto& replicas = spec_.actors[static_cast<size_t>(pool)].inputs;
+    for (int r : replicas)
+      if (actors_.at(spec_.actors[static_cast<size_t>(r)].name).lost)
+        throw FarmFailure{"replica '" + spec_.actors[static_cast<size_t>(r)].name + "' of '" +
+                          spec_.actors[static_cast<size_t>(pool)].name +
+                          "' was lost before the pool shared its setup; its share cannot be redone"};
+    auto& g = gathers_[pool];
+    g.parts.resize(replicas.size());
+    g.askers.resize(replicas.size());
+    const size_t at = static_cast<size_t>(std::find(replicas.begin(), replicas.end(), index_of(a)) - replicas.begin());
+    g.parts[at] = *part;
+    g.askers[at] = m.header.id;
+    for (const auto& p : g.parts)
+      if (p.is_nil()) return;
+    Value::Array all(g.parts.begin(), g.parts.end());
+    for (size_t r = 0; r < replicas.size(); ++r)
+      send(spec_.actors[static_cast<size_t>(replicas[r])].name,
+           wire::make(MsgType::reply, "director", "all_gather", Value::Map{{"parts", all}}, g.askers[r]));
+    gathers_.erase(pool);
   }
 
   // Answers waiting tile requests: a tile each while tiles are free; "none left" once every tile is done.
@@ -527,6 +575,11 @@ class Director {
   std::map<std::string, ActorState> actors_;
   std::unique_ptr<RenderMaster> master_;
   std::vector<std::pair<std::string, uint64_t>> waiting_tile_requests_;
+  struct PendingGather {
+    std::vector<Value> parts;     // nil until that replica sent its part
+    std::vector<uint64_t> askers;  // request ids to answer
+  };
+  std::map<int, PendingGather> gathers_;
   std::unique_ptr<Progress> progress_;
   bool progress_active_ = false;
   std::string current_phase_ = "prepare";

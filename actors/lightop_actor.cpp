@@ -61,6 +61,31 @@ class RemoteInputs final : public Inputs {
   size_t batch_;
 };
 
+// All-gather among the replicas of a pool, through the director (which knows the pool).
+class DirectorExchange final : public Exchange {
+ public:
+  explicit DirectorExchange(Runtime& rt) : rt_(rt) {}
+  Gather all_gather(std::string part, std::vector<std::string>* parts) override {
+    auto state = std::make_shared<GatherState>();
+    state->remaining = 1;
+    rt_.ask_director("all_gather", Value::Map{{"part", Bytes{std::move(part)}}}, [state, parts](Result<wire::Message> r) {
+      if (!r) return state->complete_one("all_gather: " + r.error().message);
+      const Value* all = r->body.find("parts");
+      if (!all || !all->is_array()) return state->complete_one("all_gather: the director sent no parts");
+      parts->clear();
+      for (const auto& p : all->as_array()) {
+        if (!p.is_bytes()) return state->complete_one("all_gather: a part is not bytes");
+        parts->push_back(p.as_bytes().data);
+      }
+      state->complete_one();
+    });
+    return Gather(state);
+  }
+
+ private:
+  Runtime& rt_;
+};
+
 class LightOpActor final : public Actor {
  public:
   explicit LightOpActor(const LightOpKind& kind) : kind_(kind) {}
@@ -79,6 +104,13 @@ class LightOpActor final : public Actor {
     scene_ = std::make_unique<Scene>(std::move(*loaded));
     tracer_ = std::make_unique<RayTracer>(*scene_);
     inputs_ = std::make_unique<RemoteInputs>(rt, 4096);
+    if (const Value* pool = config.find("pool"); pool && pool->is_map()) {
+      replica_index_ = static_cast<int>(pool->find("index")->as_int());
+      replica_count_ = static_cast<int>(pool->find("count")->as_int());
+      exchange_ = std::make_unique<DirectorExchange>(rt);
+    } else {
+      exchange_ = std::make_unique<SoloExchange>();
+    }
     if (const Value* slow = rt.runtime_settings().find("slowdown"); slow && slow->is_number())
       slowdown_ = std::max(1.0, slow->as_double());
     return Ok{};
@@ -86,7 +118,8 @@ class LightOpActor final : public Actor {
 
   void on_phase(const std::string& phase, Runtime& rt) override {
     if (phase == "setup") {
-      setup_ = op_->setup(SceneContext{scene_.get(), tracer_.get()}, *inputs_);
+      setup_ = op_->setup(SceneContext{scene_.get(), tracer_.get(), replica_index_, replica_count_, exchange_.get()},
+                          *inputs_);
       setup_running_ = true;
       on_progress(rt);
     } else if (phase == "render") {
@@ -185,6 +218,8 @@ class LightOpActor final : public Actor {
   std::unique_ptr<Scene> scene_;
   std::unique_ptr<RayTracer> tracer_;
   std::unique_ptr<RemoteInputs> inputs_;
+  std::unique_ptr<Exchange> exchange_;
+  int replica_index_ = 0, replica_count_ = 1;
   Task setup_;
   bool setup_running_ = false;
   std::deque<std::unique_ptr<Job>> waiting_;

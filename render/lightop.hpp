@@ -128,12 +128,31 @@ class Inputs {
   }
 };
 
+// Replicas of one pool share work done in setup: each contributes its part and receives every replica's part, in
+// replica order, so that all of them build the same state (e.g. a photon map from disjoint shares). An op that is
+// not in a pool gets its own part back at once.
+class Exchange {
+ public:
+  virtual ~Exchange() = default;
+  virtual Gather all_gather(std::string part, std::vector<std::string>* parts) = 0;
+};
+
+// The exchange of an op with no peers: its part comes straight back.
+class SoloExchange final : public Exchange {
+ public:
+  Gather all_gather(std::string part, std::vector<std::string>* parts) override {
+    parts->assign(1, std::move(part));
+    return Gather(std::make_shared<GatherState>());
+  }
+};
+
 // What a LightOp gets at setup: the scene, its ray tracer, and where it stands among replicas.
 struct SceneContext {
   const Scene* scene = nullptr;
   const RayTracer* tracer = nullptr;
   int replica_index = 0;
   int replica_count = 1;
+  Exchange* exchange = nullptr;  // never null in setup(): SoloExchange when not in a pool
 };
 
 class LightOp {

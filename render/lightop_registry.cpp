@@ -7,6 +7,7 @@ extern const LightOpKind pathtrace_kind;
 extern const LightOpKind combine_kind;
 extern const LightOpKind emission_kind;
 extern const LightOpKind specular_kind;
+extern const LightOpKind photonmap_kind;
 
 static const LightOpKind* const kAllKinds[] = {
     &direct_kind,
@@ -14,6 +15,7 @@ static const LightOpKind* const kAllKinds[] = {
     &combine_kind,
     &emission_kind,
     &specular_kind,
+    &photonmap_kind,
 };
 
 std::span<const LightOpKind* const> lightop_kinds() { return kAllKinds; }

@@ -46,6 +46,7 @@ inline constexpr uint64_t camera = 1;
 inline constexpr uint64_t direct = 2;
 inline constexpr uint64_t pathtrace = 3;
 inline constexpr uint64_t specular = 4;
+inline constexpr uint64_t photons = 5;
 }  // namespace streams
 
 }  // namespace lf

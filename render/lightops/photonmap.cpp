@@ -1,0 +1,193 @@
+// photonmap: caustics by a caustic photon map (Jensen). No inputs.
+//
+// Setup: photons leave the lights (emitter chosen by power, uniform point, cosine direction), each carrying an
+// equal share of the total emitted flux. They follow mirrors and glass (Fresnel picks reflection or refraction)
+// and are stored where they first land on a non-specular surface after at least one specular bounce — the
+// light paths L S+ D that make caustics. Photon j draws its random numbers from its own index, so replicas of a
+// pool shoot disjoint, contiguous shares (replica r of n shoots [N r / n, N (r + 1) / n)) and merge them in
+// replica order: every replica then holds the same map, photon for photon, as a single op would.
+// Shade: at a non-specular point, the k nearest photons within max_radius (a kd-tree, nanoflann) estimate the
+// reflected radiance, sum f(wo, wi) * flux * w / (pi r^2), with a cone filter w = 1 - d / (k_cone r) normalised
+// by 1 - 2 / (3 k_cone) (or an Epanechnikov filter, or none). Points on mirrors and glass get nothing.
+#include <nanoflann.hpp>
+
+#include <cstring>
+
+#include "render/bsdf.hpp"
+#include "render/light_sampling.hpp"
+#include "render/lightop_registry.hpp"
+#include "render/sampler.hpp"
+
+namespace lf {
+namespace {
+
+struct Photon {
+  Vec3 position;
+  Vec3 incoming;  // unit direction back towards where the photon came from
+  RGB flux;
+};
+static_assert(sizeof(Photon) == 9 * sizeof(float), "photons travel between replicas as packed floats");
+
+struct PhotonCloud {
+  std::vector<Photon> photons;
+  size_t kdtree_get_point_count() const { return photons.size(); }
+  float kdtree_get_pt(size_t i, size_t dim) const { return photons[i].position[static_cast<int>(dim)]; }
+  template <class Box>
+  bool kdtree_get_bbox(Box&) const {
+    return false;
+  }
+};
+using KdTree = nanoflann::KDTreeSingleIndexAdaptor<nanoflann::L2_Simple_Adaptor<float, PhotonCloud>, PhotonCloud, 3,
+                                                   uint32_t>;
+
+class PhotonMap final : public LightOp {
+ public:
+  explicit PhotonMap(const ParamTable& p)
+      : photons_(static_cast<uint64_t>(p.get_int("photons", 500000, 1, int64_t{1} << 32))),
+        k_(static_cast<size_t>(p.get_int("k", 64, 1, 10000))),
+        max_radius_(static_cast<float>(p.get_float("max_radius", 0, 0, 1e30))),
+        filter_(p.get_string("filter", "cone", {"cone", "epanechnikov", "none"})),
+        cone_k_(static_cast<float>(p.get_float("cone_k", 1.1, 1.0, 100))),
+        max_depth_(static_cast<int>(p.get_int("max_depth", 16, 1, 256))),
+        seed_(static_cast<uint64_t>(p.get_int("seed", 0, 0, INT32_MAX))) {}
+
+  Task setup(const SceneContext& ctx, Inputs&) override {
+    ctx_ = ctx;
+    const Scene& scene = *ctx.scene;
+    if (max_radius_ <= 0) max_radius_ = 1000 * scene.epsilon();  // 10 % of the scene's diagonal
+    const uint64_t begin = photons_ * static_cast<uint64_t>(ctx.replica_index) / static_cast<uint64_t>(ctx.replica_count);
+    const uint64_t end = photons_ * static_cast<uint64_t>(ctx.replica_index + 1) / static_cast<uint64_t>(ctx.replica_count);
+    std::vector<Photon> mine = shoot(scene, *ctx.tracer, begin, end);
+
+    std::string part(mine.size() * sizeof(Photon), '\0');
+    if (!mine.empty()) std::memcpy(part.data(), mine.data(), part.size());
+    SoloExchange solo;
+    Exchange& exchange = ctx.exchange ? *ctx.exchange : solo;
+    std::vector<std::string> parts;
+    co_await exchange.all_gather(std::move(part), &parts);
+    cloud_.photons.clear();
+    for (const auto& p : parts) {
+      if (p.size() % sizeof(Photon) != 0) throw LightOpError("photonmap: a replica's share is malformed");
+      const size_t n = p.size() / sizeof(Photon);
+      const size_t at = cloud_.photons.size();
+      cloud_.photons.resize(at + n);
+      if (n) std::memcpy(cloud_.photons.data() + at, p.data(), p.size());
+    }
+    tree_ = std::make_unique<KdTree>(3, cloud_, nanoflann::KDTreeSingleIndexAdaptorParams(16));
+    tree_->buildIndex();
+  }
+
+  Task shade(const ShadingPoints& points, std::span<RGB> radiance, Inputs&) override {
+    const Scene& scene = *ctx_.scene;
+    std::vector<uint32_t> index(k_);
+    std::vector<float> dist2(k_);
+    const float max_r2 = max_radius_ * max_radius_;
+    for (size_t i = 0; i < points.size(); ++i) {
+      radiance[i] = RGB{};
+      const Material& m = scene.material(points.material[i]);
+      if (m.specular() || cloud_.photons.empty()) continue;
+      const float q[3] = {points.position[i].x, points.position[i].y, points.position[i].z};
+      size_t found = tree_->knnSearch(q, k_, index.data(), dist2.data());
+      while (found > 0 && dist2[found - 1] > max_r2) --found;  // results come sorted by distance
+      if (found == 0) continue;
+      const float r2 = dist2[found - 1] > 0 ? dist2[found - 1] : max_r2;
+      const float r = std::sqrt(r2);
+      const Bsdf bsdf(m);
+      RGB sum{};
+      for (size_t j = 0; j < found; ++j) {
+        const Photon& ph = cloud_.photons[index[j]];
+        if (dot(ph.incoming, points.normal[i]) <= 0) continue;  // arrived on the other side
+        float w = 1.0f;
+        const float d = std::sqrt(dist2[j]);
+        if (filter_ == "cone") w = 1.0f - d / (cone_k_ * r);
+        else if (filter_ == "epanechnikov") w = 2.0f * (1.0f - dist2[j] / r2);  // normalised over the disc
+        sum += bsdf.eval(points.normal[i], points.wo[i], ph.incoming) * ph.flux * w;
+      }
+      const float norm = filter_ == "cone" ? 1.0f - 2.0f / (3.0f * cone_k_) : 1.0f;
+      radiance[i] = sum * (1.0f / (kPi * r2 * norm));
+    }
+    co_return;
+  }
+
+ private:
+  std::vector<Photon> shoot(const Scene& scene, const RayTracer& tracer, uint64_t begin, uint64_t end) const {
+    // Total emitted flux: pi * area * Le summed over emitters; every photon carries 1 / photons of it.
+    RGB total{};
+    for (uint32_t t : scene.emitters()) total += scene.material(scene.material_of(t)).ke * (kPi * scene.area(t));
+    const float share = average(total) / static_cast<float>(photons_);
+    const float eps = scene.epsilon();
+    std::vector<Photon> stored;
+    struct Flight {
+      Ray ray;
+      RGB flux;
+      Rng rng;
+      int specular_bounces = 0;
+    };
+    const uint64_t batch = 4096;
+    for (uint64_t first = begin; first < end; first += batch) {
+      std::vector<Flight> flights;
+      for (uint64_t j = first; j < std::min(end, first + batch); ++j) {
+        Rng rng(splitmix64(j), streams::photons ^ (seed_ << 8));
+        const LightSample ls = sample_light(scene, rng);
+        const float u = rng.uniform(), v = rng.uniform();
+        const Vec3 dir = cosine_hemisphere(ls.normal, u, v);
+        // Emitters picked by power and cosine directions give every photon the same share of the total flux,
+        // coloured like its emitter.
+        const RGB flux = ls.radiance * (share / average(ls.radiance));
+        flights.push_back(Flight{Ray{ls.point + ls.normal * eps, dir}, flux, rng});
+      }
+      std::vector<Ray> rays;
+      std::vector<Hit> hits;
+      for (int depth = 0; depth < max_depth_ && !flights.empty(); ++depth) {
+        rays.clear();
+        for (const auto& f : flights) rays.push_back(f.ray);
+        hits.resize(rays.size());
+        tracer.intersect(rays, hits);
+        std::vector<Flight> next;
+        for (size_t i = 0; i < flights.size(); ++i) {
+          if (!hits[i].valid()) continue;
+          Flight f = flights[i];
+          const uint32_t tri = hits[i].triangle;
+          const Material& m = scene.material(scene.material_of(tri));
+          const Vec3 wo = -f.ray.direction;
+          const Vec3 ng = scene.normal(tri);
+          const bool front = dot(ng, wo) > 0;
+          const Vec3 x = f.ray.origin + f.ray.direction * hits[i].t;
+          if (!m.specular()) {
+            if (f.specular_bounces > 0) stored.push_back(Photon{x, wo, f.flux});
+            continue;  // a caustic map keeps only L S+ D paths and stops at the first diffuse surface
+          }
+          const Vec3 n = front ? ng : -ng;
+          auto s = Bsdf(m).sample(n, wo, front, f.rng.uniform(), 0.5f, 0.5f);
+          if (!s) continue;
+          f.flux = f.flux * s->weight;
+          const Vec3 side = dot(s->wi, n) > 0 ? n : -n;
+          f.ray = Ray{x + side * eps, s->wi};
+          ++f.specular_bounces;
+          next.push_back(f);
+        }
+        flights = std::move(next);
+      }
+    }
+    return stored;
+  }
+
+  uint64_t photons_;
+  size_t k_;
+  float max_radius_;
+  std::string filter_;
+  float cone_k_;
+  int max_depth_;
+  uint64_t seed_;
+  SceneContext ctx_;
+  PhotonCloud cloud_;
+  std::unique_ptr<KdTree> tree_;
+};
+
+}  // namespace
+
+extern const LightOpKind photonmap_kind{
+    "photonmap", "caustics from a caustic photon map (k nearest photons, cone filter)", 0, 0,
+    [](const ParamTable& p) -> std::unique_ptr<LightOp> { return std::make_unique<PhotonMap>(p); }};
+
+}  // namespace lf
