@@ -45,6 +45,7 @@ class FailureTest : public ::testing::Test {
     EXPECT_TRUE(Farm::eventually([&] { return farm.err_so_far().find("render 20%") != std::string::npos; }, 60))
         << farm.err_so_far();
     auto pids = actor_pids(farm.tag(), victim);
+    EXPECT_EQ(farm.err_so_far().find("render 100%"), std::string::npos) << "the frame ended before the fault";
     EXPECT_EQ(pids.size(), 1u) << "no actor named " << victim;
     if (!pids.empty()) ::kill(pids[0], signal);
     auto r = farm.wait(120);
@@ -79,8 +80,8 @@ TEST_F(FailureTest, MultiplexedNetworksRenderThePlainNetworksPixels) {
 }
 
 TEST_F(FailureTest, KilledRendererReplicaOrStoppedReplicaLeaveTheImageUnchanged) {
-  // spp=64 and slowed replicas: the frame lasts about a second, so faults land well inside it.
-  const auto args = small(kSlowPool, {"spp=64", "slowdown=3", "renderers=2", "heartbeat_timeout=1.5"});
+  // spp=64 and slowed replicas: the frame lasts a couple of seconds, so faults land well inside it.
+  const auto args = small(kSlowPool, {"spp=64", "slowdown=6", "renderers=2", "heartbeat_timeout=1.5"});
   Image reference = render(small(kSlowPool, {"spp=64", "renderers=1"}), "reference.exr");
 
   struct Case {
@@ -108,7 +109,7 @@ TEST_F(FailureTest, LosingTheLastReplicaOrEveryRendererStopsTheFarmNamingIt) {
   EXPECT_NE(one_replica.err.find("lightfarm: error: lost the last replica of 'direct': direct.0 was killed by signal 9"),
             std::string::npos)
       << one_replica.err;
-  auto one_renderer = render_with_fault(small(kSlowPool, {"spp=64", "slowdown=3", "renderers=1"}), "y.exr", "renderer-0", SIGKILL);
+  auto one_renderer = render_with_fault(small(kSlowPool, {"spp=64", "slowdown=6", "renderers=1"}), "y.exr", "renderer-0", SIGKILL);
   EXPECT_EQ(one_renderer.status, 1);
   EXPECT_NE(one_renderer.err.find("lightfarm: error: every renderer was lost: renderer-0 was killed by signal 9"),
             std::string::npos)

@@ -87,8 +87,13 @@ class PhotonMap final : public LightOp {
       const Material& m = scene.material(points.material[i]);
       if (m.specular() || cloud_.photons.empty()) continue;
       const float q[3] = {points.position[i].x, points.position[i].y, points.position[i].z};
-      size_t found = tree_->knnSearch(q, k_, index.data(), dist2.data());
-      while (found > 0 && dist2[found - 1] > max_r2) --found;  // results come sorted by distance
+      // k nearest, but none beyond max_radius: seeding the result set's worst distance with the radius prunes the
+      // search, so points far from any caustic cost almost nothing.
+      nanoflann::KNNResultSet<float, uint32_t> result(k_);
+      result.init(index.data(), dist2.data());
+      dist2[k_ - 1] = max_r2;
+      tree_->findNeighbors(result, q, nanoflann::SearchParams());
+      const size_t found = result.size();
       if (found == 0) continue;
       const float r2 = dist2[found - 1] > 0 ? dist2[found - 1] : max_r2;
       const float r = std::sqrt(r2);
