@@ -33,7 +33,8 @@ renderers { count = 2, lighting = direct, window = 8 }
 
   std::vector<double> async_t, sync_t, async_msgs, sync_msgs, async_req, sync_req;
   std::vector<double> ll_t, rr_t;
-  std::vector<double> r1, r2, p1, p2;
+  std::vector<double> r1, r2, p1, p2, shoot1, shoot2;
+  const std::string glass = source + "/examples/cornell_glass.lua";
   const std::vector<std::string> tiny{"width=48", "height=48", "spp=4", "renderers=1"};
   auto with = [](std::vector<std::string> v, const std::string& extra) {
     v.push_back(extra);
@@ -51,6 +52,11 @@ renderers { count = 2, lighting = direct, window = 8 }
 
     ll_t.push_back(bench::run_farm(slowed, {"strategy=least_loaded"}).number("render_seconds"));
     rr_t.push_back(bench::run_farm(slowed, {"strategy=round_robin"}).number("render_seconds"));
+
+    // Photon shooting happens in the setup phase; a tiny image keeps the rest out of the way.
+    const std::vector<std::string> shots{"width=16", "height=16", "spp=1", "photons=4000000"};
+    shoot1.push_back(bench::run_farm(glass, with(shots, "photon_replicas=1")).number("setup"));
+    shoot2.push_back(bench::run_farm(glass, with(shots, "photon_replicas=2")).number("setup"));
 
     const std::vector<std::string> scale{"width=384", "height=384", "spp=16"};
     r1.push_back(bench::run_farm(pool, with(with(scale, "renderers=1"), "replicas=2")).number("render_samples_per_second"));
@@ -77,6 +83,9 @@ renderers { count = 2, lighting = direct, window = 8 }
               median(r2) / median(r1));
   std::printf("  replicas  1 -> 2 (2 renderers): %.3f -> %.3f = %.2fx\n", median(p1) / 1e6, median(p2) / 1e6,
               median(p2) / median(p1));
+  std::printf("\nphoton shooting (cornell_glass, 4 M photons, setup phase):\n");
+  std::printf("  1 replica %.3f s, 2 replicas %.3f s: %.2fx faster\n", median(shoot1), median(shoot2),
+              median(shoot1) / median(shoot2));
 
   lf::Value doc = lf::Value::Map{
       {"benchmark", "pool"},
@@ -88,7 +97,8 @@ renderers { count = 2, lighting = direct, window = 8 }
       {"slowed_replica", lf::Value::Map{{"least_loaded_seconds", ll}, {"round_robin_seconds", rr},
                                         {"speedup", rr / ll}}},
       {"scaling", lf::Value::Map{{"renderers_1", median(r1)}, {"renderers_2", median(r2)},
-                                 {"replicas_1", median(p1)}, {"replicas_2", median(p2)}}}};
+                                 {"replicas_1", median(p1)}, {"replicas_2", median(p2)}}},
+      {"photon_setup_seconds", lf::Value::Map{{"replicas_1", median(shoot1)}, {"replicas_2", median(shoot2)}}}};
   std::ofstream(json_path) << lf::to_json(doc, 2) << "\n";
   std::printf("\nwrote %s\n", json_path.c_str());
   return 0;

@@ -79,6 +79,18 @@ TEST_F(FailureTest, MultiplexedNetworksRenderThePlainNetworksPixels) {
   EXPECT_TRUE(sync.pixels == async.pixels) << "sync mode";
 }
 
+TEST_F(FailureTest, PooledPhotonMapsShareTheirSharesThroughTheDirector) {
+  // Each replica shoots a third of the photons; the director's all-gather hands every replica all three shares.
+  const std::string glass = kSource + "/examples/cornell_glass.lua";
+  auto sets = [](const char* replicas) {
+    return small(kSource + "/examples/cornell_glass.lua",
+                 {"width=48", "height=48", "spp=2", "photons=60000", std::string("photon_replicas=") + replicas});
+  };
+  Image one = render(sets("1"), "one.exr");
+  Image three = render(sets("3"), "three.exr");
+  EXPECT_TRUE(one.pixels == three.pixels) << "a pool of photon maps answers like one map";
+}
+
 TEST_F(FailureTest, KilledRendererReplicaOrStoppedReplicaLeaveTheImageUnchanged) {
   // spp=64 and slowed replicas: the frame lasts a couple of seconds, so faults land well inside it.
   const auto args = small(kSlowPool, {"spp=64", "slowdown=6", "renderers=2", "heartbeat_timeout=1.5"});
