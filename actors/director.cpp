@@ -1,6 +1,7 @@
 #include "actors/director.hpp"
 
 #include <signal.h>
+#include <sys/wait.h>
 #include <unistd.h>
 
 #include <chrono>
@@ -273,7 +274,11 @@ class Director {
       if (a.pid != r.pid) continue;
       a.exited = true;
       if (a.lost) return;  // already accounted for (we killed it)
-      if (current_phase_ == "finish" && a.said_bye) return;
+      // In the finish phase a clean exit is an actor finishing, even if its BYE is still on the way.
+      if (current_phase_ == "finish" && (a.said_bye || (WIFEXITED(r.status) && WEXITSTATUS(r.status) == 0))) {
+        a.said_bye = true;
+        return;
+      }
       const std::string why = a.killed_hung ? "stopped answering (no heartbeat for " + seconds_text(spec_.heartbeat_timeout) +
                                                   "); it was killed"
                                             : r.describe();
