@@ -264,7 +264,15 @@ class Director {
     poller.add(control_);
     poller.wait(std::min<long>(timeout_ms, static_cast<long>(spec_.heartbeat_timeout * 250)));
     while (auto in = control_.receive()) handle(*in);
-    while (auto exit = launcher_.reap_one()) on_exit(*exit);
+    while (auto exit = launcher_.reap_one()) {
+      // Its last words (an ERROR with the reason, or BYE) may still be in flight: read them before judging.
+      wire::Poller last;
+      last.add(control_);
+      for (int i = 0; i < 5 && !last.wait(10)[0]; ++i) {
+      }
+      while (auto in = control_.receive()) handle(*in);
+      on_exit(*exit);
+    }
     check_heartbeats();
     send_heartbeats();
   }
