@@ -4,7 +4,7 @@
 //   REQUEST op="shade" { n, p, nrm, wo, m, k }  ->  REPLY { n, L }   (header q = requests waiting here)
 //   anything else / malformed                  ->  ERROR { code, message }; the actor carries on
 // Control: CONFIG builds the op from its parameters and loads the scene; PHASE setup runs op.setup() and answers
-// READY setup when it finishes; PHASE finish / BYE stop it.
+// READY setup when it finishes; PHASE finish / BYE stop it. Requests that arrive before setup finished wait.
 // Runtime setting `slowdown` (from a multiplexer's slowdown list) emulates a slower host: after a request computed
 // for t seconds, the reply and the next request wait (slowdown - 1) * t, without using the CPU.
 // Requests queue in arrival order and start one per loop turn, so heartbeats and replies keep flowing. A request
@@ -132,10 +132,12 @@ class LightOpActor final : public Actor {
       rt.reply_error(peer, m.header.id, "unknown_op", "unknown operation '" + m.header.op + "' (this actor serves 'shade')");
       return;
     }
-    if (!op_ || setup_running_) {
-      rt.reply_error(peer, m.header.id, "not_ready", "'" + rt.name() + "' is not set up yet");
+    if (!op_) {
+      rt.reply_error(peer, m.header.id, "not_ready", "'" + rt.name() + "' is not configured yet");
       return;
     }
+    // Requests that arrive before this op's setup finished (another op's setup may ask it, e.g. an irradiance
+    // pre-pass) wait in the queue until it has.
     auto points = decode_shade_request(m.body, scene_->materials().size(), scene_->triangle_count());
     if (!points) {
       rt.reply_error(peer, m.header.id, "bad_request", points.error().message);
@@ -157,8 +159,10 @@ class LightOpActor final : public Actor {
         rt.fail("setup failed: " + std::string(e.what()));
         return;
       }
+      set_up_ = true;
       rt.phase_done("setup");
     }
+    if (!set_up_) return;
     const auto now = Clock::now();
     if (now < resting_until_) return;
     // Start one waiting request per turn; the loop polls sockets between requests.
@@ -194,7 +198,7 @@ class LightOpActor final : public Actor {
   }
 
   size_t queue_length() const override { return waiting_.size(); }
-  bool has_local_work() const override { return !waiting_.empty() && Clock::now() >= resting_until_; }
+  bool has_local_work() const override { return set_up_ && !waiting_.empty() && Clock::now() >= resting_until_; }
   long next_due_ms() const override {
     if (Clock::now() >= resting_until_) return -1;
     return std::chrono::duration_cast<std::chrono::milliseconds>(resting_until_ - Clock::now()).count() + 1;
@@ -222,6 +226,7 @@ class LightOpActor final : public Actor {
   int replica_index_ = 0, replica_count_ = 1;
   Task setup_;
   bool setup_running_ = false;
+  bool set_up_ = false;  // setup finished: requests may start
   std::deque<std::unique_ptr<Job>> waiting_;
   std::vector<std::unique_ptr<Job>> running_;
 };

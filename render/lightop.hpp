@@ -53,9 +53,20 @@ class Task {
  public:
   struct promise_type {
     std::exception_ptr error;
+    std::coroutine_handle<> continuation;  // a coroutine awaiting this one, resumed when it finishes
     Task get_return_object() { return Task(std::coroutine_handle<promise_type>::from_promise(*this)); }
     std::suspend_never initial_suspend() noexcept { return {}; }
-    std::suspend_always final_suspend() noexcept { return {}; }
+    auto final_suspend() noexcept {
+      struct Resume {
+        bool await_ready() noexcept { return false; }
+        std::coroutine_handle<> await_suspend(std::coroutine_handle<promise_type> h) noexcept {
+          auto c = h.promise().continuation;
+          return c ? c : std::noop_coroutine();
+        }
+        void await_resume() noexcept {}
+      };
+      return Resume{};
+    }
     void return_void() {}
     void unhandled_exception() { error = std::current_exception(); }
   };
@@ -71,6 +82,10 @@ class Task {
   }
   ~Task() { reset(); }
   bool done() const { return !handle_ || handle_.done(); }
+  // A LightOp may `co_await` a helper coroutine of its own: the caller resumes when the helper finishes.
+  bool await_ready() const noexcept { return done(); }
+  void await_suspend(std::coroutine_handle<> h) noexcept { handle_.promise().continuation = h; }
+  void await_resume() const { rethrow_if_failed(); }
   // Rethrows what the coroutine threw, if it finished by throwing.
   void rethrow_if_failed() const {
     if (handle_ && handle_.done() && handle_.promise().error) std::rethrow_exception(handle_.promise().error);
@@ -158,8 +173,9 @@ struct SceneContext {
 class LightOp {
  public:
   virtual ~LightOp() = default;
-  // Runs once before rendering (photon shooting, caches, ...). Keep pointers from ctx: they outlive the op.
-  virtual Task setup(const SceneContext& ctx, Inputs& inputs) = 0;
+  // Runs once before rendering (photon shooting, caches, ...). The pointers in ctx outlive the op. ctx comes by
+  // value because setup is a coroutine: a reference parameter would dangle after its first co_await.
+  virtual Task setup(SceneContext ctx, Inputs& inputs) = 0;
   // Writes the radiance leaving each point towards its wo into radiance[i] (radiance.size() == points.size()).
   // Emission of the point itself is not included: the renderer adds what the camera sees directly.
   virtual Task shade(const ShadingPoints& points, std::span<RGB> radiance, Inputs& inputs) = 0;

@@ -8,6 +8,7 @@ extern const LightOpKind combine_kind;
 extern const LightOpKind emission_kind;
 extern const LightOpKind specular_kind;
 extern const LightOpKind photonmap_kind;
+extern const LightOpKind irradiance_kind;
 
 static const LightOpKind* const kAllKinds[] = {
     &direct_kind,
@@ -16,6 +17,7 @@ static const LightOpKind* const kAllKinds[] = {
     &emission_kind,
     &specular_kind,
     &photonmap_kind,
+    &irradiance_kind,
 };
 
 std::span<const LightOpKind* const> lightop_kinds() { return kAllKinds; }

@@ -47,6 +47,7 @@ inline constexpr uint64_t direct = 2;
 inline constexpr uint64_t pathtrace = 3;
 inline constexpr uint64_t specular = 4;
 inline constexpr uint64_t photons = 5;
+inline constexpr uint64_t irradiance = 6;
 }  // namespace streams
 
 }  // namespace lf

@@ -35,7 +35,7 @@ void trace_tile(const Scene& scene, const RayTracer& tracer, const Camera& camer
         rays[s] = camera.ray(static_cast<float>(x) + jx, static_cast<float>(y) + jy);
       }
     }
-  tracer.intersect(rays, hits);
+  tracer.intersect(rays, hits, /*coherent=*/true);  // a tile's camera rays are the same batch on any layout
 
   work.points.clear();
   work.points.reserve(samples);

@@ -58,7 +58,7 @@ static void fill(RTCRay& r, const Ray& ray) {
   r.flags = 0;
 }
 
-void RayTracer::intersect(std::span<const Ray> rays, std::span<Hit> hits) const {
+void RayTracer::intersect(std::span<const Ray> rays, std::span<Hit> hits, bool coherent) const {
   thread_local std::vector<RTCRayHit> buffer;
   buffer.resize(rays.size());
   for (size_t i = 0; i < rays.size(); ++i) {
@@ -69,7 +69,7 @@ void RayTracer::intersect(std::span<const Ray> rays, std::span<Hit> hits) const 
   }
   RTCIntersectContext context;
   rtcInitIntersectContext(&context);
-  context.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
+  context.flags = coherent ? RTC_INTERSECT_CONTEXT_FLAG_COHERENT : RTC_INTERSECT_CONTEXT_FLAG_INCOHERENT;
   rtcIntersect1M(impl_->scene, &context, buffer.data(), static_cast<unsigned>(rays.size()), sizeof(RTCRayHit));
   for (size_t i = 0; i < rays.size(); ++i) {
     if (buffer[i].hit.geomID == RTC_INVALID_GEOMETRY_ID) {

@@ -32,7 +32,10 @@ class RayTracer {
   RayTracer(const RayTracer&) = delete;
   RayTracer& operator=(const RayTracer&) = delete;
 
-  void intersect(std::span<const Ray> rays, std::span<Hit> hits) const;
+  // `coherent` lets Embree trace the stream in SIMD packets, whose arithmetic depends on which rays share a
+  // packet: use it only for batches that are the same on every farm layout (a tile's camera rays). Everything
+  // else is traced ray by ray, so a ray's hit never depends on the batch it came in (DESIGN §4).
+  void intersect(std::span<const Ray> rays, std::span<Hit> hits, bool coherent = false) const;
   // occluded[i] = 1 when something lies on ray i between tnear and tfar.
   void occluded(std::span<const Ray> rays, std::span<uint8_t> occluded) const;
   const Scene& scene() const { return scene_; }

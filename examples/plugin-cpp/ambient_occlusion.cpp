@@ -18,7 +18,7 @@ class AmbientOcclusion final : public lf::LightOp {
         radius_(static_cast<float>(p.get_float("radius", 1e30, 0, 1e30))),
         ambient_(static_cast<float>(p.get_float("ambient", 1.0, 0, 1e6))) {}
 
-  lf::Task setup(const lf::SceneContext& ctx, lf::Inputs&) override {
+  lf::Task setup(lf::SceneContext ctx, lf::Inputs&) override {
     ctx_ = ctx;
     co_return;
   }

@@ -11,7 +11,7 @@ class Combine final : public LightOp {
     for (double w : p.get_numbers("weights", {}, -1e6, 1e6)) weights_.push_back(static_cast<float>(w));
   }
 
-  Task setup(const SceneContext&, Inputs& inputs) override {
+  Task setup(SceneContext, Inputs& inputs) override {
     if (!weights_.empty() && weights_.size() != inputs.count())
       throw LightOpError("combine has " + std::to_string(weights_.size()) + " weights for " +
                          std::to_string(inputs.count()) + " inputs");

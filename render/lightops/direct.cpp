@@ -18,7 +18,7 @@ class DirectLight final : public LightOp {
       : light_samples_(static_cast<int>(p.get_int("light_samples", 1, 1, 1 << 20))),
         seed_(static_cast<uint64_t>(p.get_int("seed", 0, 0, INT32_MAX))) {}
 
-  Task setup(const SceneContext& ctx, Inputs&) override {
+  Task setup(SceneContext ctx, Inputs&) override {
     ctx_ = ctx;
     co_return;
   }

@@ -6,20 +6,11 @@
 
 #include "render/lightop_registry.hpp"
 #include "render/sampler.hpp"
+#include "render/test_support.hpp"
 
 namespace lf {
 
-// Lambert: F = 1/(2 pi) * sum_i angle(r_i, r_i+1) * n . unit(r_i x r_i+1), r_i unit vectors to the corners.
-static double form_factor(Vec3 p, Vec3 n, const std::vector<Vec3>& polygon) {
-  double sum = 0;
-  for (size_t i = 0; i < polygon.size(); ++i) {
-    Vec3 a = normalize(polygon[i] - p), b = normalize(polygon[(i + 1) % polygon.size()] - p);
-    Vec3 c = cross(a, b);
-    double angle = std::acos(std::clamp(static_cast<double>(dot(a, b)), -1.0, 1.0));
-    sum += angle * dot(n, normalize(c));
-  }
-  return std::abs(sum) / (2 * M_PI);
-}
+using test::form_factor;
 
 struct Rig {
   Scene scene;

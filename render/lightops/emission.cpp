@@ -9,7 +9,7 @@ namespace {
 class Emission final : public LightOp {
  public:
   explicit Emission(const ParamTable&) {}
-  Task setup(const SceneContext& ctx, Inputs&) override {
+  Task setup(SceneContext ctx, Inputs&) override {
     ctx_ = ctx;
     co_return;
   }

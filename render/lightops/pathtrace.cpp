@@ -17,7 +17,7 @@ class PathTrace final : public LightOp {
     options_.stream = streams::pathtrace ^ (static_cast<uint64_t>(p.get_int("seed", 0, 0, INT32_MAX)) << 8);
   }
 
-  Task setup(const SceneContext& ctx, Inputs&) override {
+  Task setup(SceneContext ctx, Inputs&) override {
     ctx_ = ctx;
     co_return;
   }

@@ -51,7 +51,7 @@ class PhotonMap final : public LightOp {
         max_depth_(static_cast<int>(p.get_int("max_depth", 16, 1, 256))),
         seed_(static_cast<uint64_t>(p.get_int("seed", 0, 0, INT32_MAX))) {}
 
-  Task setup(const SceneContext& ctx, Inputs&) override {
+  Task setup(SceneContext ctx, Inputs&) override {
     ctx_ = ctx;
     const Scene& scene = *ctx.scene;
     if (max_radius_ <= 0) max_radius_ = 1000 * scene.epsilon();  // 10 % of the scene's diagonal

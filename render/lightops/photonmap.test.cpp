@@ -3,6 +3,7 @@
 
 #include "render/lightop_registry.hpp"
 #include "render/sampler.hpp"
+#include "render/test_support.hpp"
 
 namespace lf {
 namespace {
@@ -55,38 +56,8 @@ TEST(PhotonMap, FloorMirrorCausticMatchesTheMirroredLight) {
   EXPECT_NEAR(sum / ref, 1.0, 0.05);  // averaged over the points
 }
 
-// An in-process all-gather among `n` replicas: completes every waiting replica once all parts are in.
-struct Board {
-  explicit Board(size_t n) : parts(n) {}
-  std::vector<std::string> parts;
-  std::vector<bool> in = std::vector<bool>(parts.size(), false);
-  std::vector<std::pair<std::shared_ptr<GatherState>, std::vector<std::string>*>> waiting;
-};
-
-class BoardExchange final : public Exchange {
- public:
-  BoardExchange(Board& b, size_t index) : board_(b), index_(index) {}
-  Gather all_gather(std::string part, std::vector<std::string>* out) override {
-    auto state = std::make_shared<GatherState>();
-    state->remaining = 1;
-    board_.parts[index_] = std::move(part);
-    board_.in[index_] = true;
-    board_.waiting.emplace_back(state, out);
-    if (std::find(board_.in.begin(), board_.in.end(), false) == board_.in.end()) {
-      auto waiting = std::move(board_.waiting);
-      for (auto& [s, o] : waiting) *o = board_.parts;
-      // Completing resumes the waiting coroutines; the last one resumes after we return, through await_ready.
-      for (auto& [s, o] : waiting)
-        if (s != state) s->complete_one();
-      state->remaining = 0;
-    }
-    return Gather(state);
-  }
-
- private:
-  Board& board_;
-  size_t index_;
-};
+using test::Board;
+using test::BoardExchange;
 
 TEST(PhotonMap, ReplicasSharingTheirSharesAnswerLikeOneMap) {
   auto scene = Scene::builtin("cornell_glass");

@@ -18,7 +18,7 @@ class Specular final : public LightOp {
         max_depth_(static_cast<int>(p.get_int("max_depth", 8, 1, 256))),
         seed_(static_cast<uint64_t>(p.get_int("seed", 0, 0, INT32_MAX))) {}
 
-  Task setup(const SceneContext& ctx, Inputs&) override {
+  Task setup(SceneContext ctx, Inputs&) override {
     ctx_ = ctx;
     co_return;
   }

@@ -1,0 +1,74 @@
+#pragma once
+// Ward's irradiance cache with Ward & Heckbert's irradiance gradients: the data structure and its arithmetic, apart
+// from the LightOp that fills it (lightops/irradiance.cpp).
+#include <cstdint>
+#include <span>
+#include <string>
+#include <unordered_map>
+#include <vector>
+
+#include "render/math.hpp"
+
+namespace lf {
+
+struct IrradianceRecord {
+  Vec3 position;
+  Vec3 normal;
+  RGB irradiance;
+  float harmonic_distance;     // R_i: harmonic mean distance to what the hemisphere sees
+  Vec3 rotational[3];          // d E / d(normal rotation), per channel
+  Vec3 translational[3];       // d E / d position, per channel
+};
+
+// Hemisphere samples of one record, stratified for cosine weighting: cell (j, k) has sin^2(theta) in
+// [j/M, (j+1)/M) and phi in [2 pi k / N, 2 pi (k+1) / N).
+struct HemisphereSamples {
+  int m = 0, n = 0;            // theta and phi strata
+  std::vector<RGB> radiance;   // index j * n + k
+  std::vector<float> distance; // to the hit (a large number for none)
+};
+
+// E, R and both gradients from a stratified hemisphere (Ward & Heckbert 1992). `u`, `v`, `w` are the local frame
+// (w = the normal); the strata's directions were built from the same frame.
+IrradianceRecord make_record(Vec3 position, Vec3 u, Vec3 v, Vec3 w, const HemisphereSamples& s);
+
+// Direction of sample (j, k) with jitter (a, b) in [0,1)^2, in the frame (u, v, w).
+Vec3 stratum_direction(int j, int k, int m, int n, float a, float b, Vec3 u, Vec3 v, Vec3 w);
+
+class IrradianceCache {
+ public:
+  // `a`: Ward's error bound; `extent`: the scene's size (sets the octree's root cell).
+  IrradianceCache(float a, float extent) : a_(a), root_(extent) {}
+
+  void insert(const IrradianceRecord& r);
+  // Weighted, gradient-extrapolated irradiance at (x, n) from the records whose error there is below relax * a;
+  // false when there is none. relax may be at most kMaxRelax.
+  bool lookup(Vec3 x, Vec3 n, RGB& irradiance, float relax = 1.0f) const;
+  static constexpr float kMaxRelax = 4.0f;
+  size_t size() const { return records_.size(); }
+  const std::vector<IrradianceRecord>& records() const { return records_; }
+
+  static std::string serialize(std::span<const IrradianceRecord> records);
+  static bool deserialize(const std::string& bytes, std::vector<IrradianceRecord>& out);
+
+ private:
+  // A hashed octree: level L has cells of size root / 2^L; a record lives in the deepest level whose cells are at
+  // least its valid diameter, so a lookup checks the 27 cells around x on each level.
+  struct Key {
+    int level, x, y, z;
+    bool operator==(const Key&) const = default;
+  };
+  struct KeyHash {
+    size_t operator()(const Key& k) const;
+  };
+  float cell_size(int level) const;
+  Key key_of(int level, Vec3 p) const;
+
+  float a_;
+  float root_;
+  std::vector<IrradianceRecord> records_;
+  std::unordered_map<Key, std::vector<uint32_t>, KeyHash> cells_;
+  int deepest_ = 0;
+};
+
+}  // namespace lf

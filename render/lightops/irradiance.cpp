@@ -1,0 +1,188 @@
+// irradiance: Ward's irradiance caching with Ward & Heckbert's rotational and translational gradients. One input:
+// the light leaving the surfaces a hemisphere sees (e.g. `direct`: then this op is one diffuse bounce of direct
+// light; a radiosity solution: a final gather).
+//
+// Records: M x N stratified cosine-weighted hemisphere samples ask the input for radiance at the secondary hits;
+// the record keeps E, the harmonic mean distance R and both gradients, and serves points where
+// |x - x_i| / R_i + sqrt(1 - n.n_i) < a, extrapolated with the gradients and weighted by 1 / that error.
+// Determinism (DESIGN §4): records are made only in setup, by a pre-pass over `prepass` points spread over the
+// scene's non-specular surfaces by area in a fixed order, in rounds: each round keeps the points the cache cannot
+// yet serve, replicas of a pool each compute a contiguous share of them, and the shares are merged in order
+// (all-gather), so every replica inserts the same records in the same order as a single op would. While
+// rendering, a point the cache cannot serve (even with the bound relaxed to 2a, then 4a) computes its own value
+// from its own hemisphere samples and adds no record, so no point's value depends on which points came first.
+// Output: Kd / pi * E (the diffuse part); nothing on mirrors and glass.
+#include <algorithm>
+
+#include "render/bsdf.hpp"
+#include "render/irradiance_cache.hpp"
+#include "render/lightop_registry.hpp"
+#include "render/sampler.hpp"
+
+namespace lf {
+namespace {
+
+class Irradiance final : public LightOp {
+ public:
+  explicit Irradiance(const ParamTable& p)
+      : a_(static_cast<float>(p.get_float("a", 0.2, 0.01, 2.0))),
+        m_(static_cast<int>(p.get_int("theta", 8, 2, 256))),
+        n_(static_cast<int>(p.get_int("phi", 24, 3, 1024))),
+        prepass_(static_cast<uint32_t>(p.get_int("prepass", 20000, 0, 10000000))),
+        min_spacing_(static_cast<float>(p.get_float("min_spacing", 0.002, 0, 1))),
+        max_spacing_(static_cast<float>(p.get_float("max_spacing", 0.2, 0, 10))),
+        seed_(static_cast<uint64_t>(p.get_int("seed", 0, 0, INT32_MAX))) {}
+
+  Task setup(SceneContext ctx, Inputs& inputs) override {
+    ctx_ = ctx;
+    const Scene& scene = *ctx.scene;
+    extent_ = 1e4f * scene.epsilon();  // the scene's diagonal
+    cache_ = std::make_unique<IrradianceCache>(a_, extent_);
+    if (inputs.count() != 1) throw LightOpError("irradiance needs one input");
+    SoloExchange solo;
+    Exchange& exchange = ctx.exchange ? *ctx.exchange : solo;
+
+    // Pre-pass points: stratified over the area of non-emitting, non-specular triangles, in a fixed order.
+    std::vector<uint32_t> tris;
+    std::vector<double> cdf;
+    double total = 0;
+    for (uint32_t t = 0; t < scene.triangle_count(); ++t) {
+      const Material& m = scene.material(scene.material_of(t));
+      if (m.specular() || is_black(m.kd)) continue;
+      total += scene.area(t);
+      tris.push_back(t);
+      cdf.push_back(total);
+    }
+    const uint32_t round_size = 512;
+    for (uint32_t first = 0; first < prepass_ && !tris.empty(); first += round_size) {
+      std::vector<Candidate> open;
+      for (uint32_t c = first; c < std::min(prepass_, first + round_size); ++c) {
+        Rng rng(splitmix64(c), streams::irradiance ^ (seed_ << 8) ^ 0x9e37);
+        const double target = (static_cast<double>(c) + rng.uniform()) / prepass_ * total;
+        const size_t i = std::min(tris.size() - 1, static_cast<size_t>(std::lower_bound(cdf.begin(), cdf.end(), target) -
+                                                                       cdf.begin()));
+        const uint32_t t = tris[i];
+        const float su = std::sqrt(rng.uniform()), v = rng.uniform();
+        const Vec3 x = scene.vertex(t, 0) * (1 - su) + scene.vertex(t, 1) * (su * (1 - v)) + scene.vertex(t, 2) * (su * v);
+        RGB unused;
+        if (!cache_->lookup(x, scene.normal(t), unused)) open.push_back(Candidate{x, scene.normal(t), splitmix64(c ^ 0x1c)});
+      }
+      // This replica's contiguous share of the open points; shares concatenate back into candidate order.
+      const size_t r = static_cast<size_t>(ctx.replica_index), count = static_cast<size_t>(ctx.replica_count);
+      const size_t begin = open.size() * r / count, end = open.size() * (r + 1) / count;
+      std::vector<IrradianceRecord> mine;
+      co_await compute(std::span<const Candidate>(open.data() + begin, end - begin), inputs, mine);
+      std::vector<std::string> parts;
+      co_await exchange.all_gather(IrradianceCache::serialize(mine), &parts);
+      for (const auto& part : parts) {
+        std::vector<IrradianceRecord> records;
+        if (!IrradianceCache::deserialize(part, records)) throw LightOpError("irradiance: a replica's records are malformed");
+        for (const auto& rec : records) cache_->insert(rec);
+      }
+    }
+  }
+
+  Task shade(const ShadingPoints& points, std::span<RGB> radiance, Inputs& inputs) override {
+    const Scene& scene = *ctx_.scene;
+    std::vector<Candidate> misses;
+    std::vector<size_t> miss_owner;
+    for (size_t i = 0; i < points.size(); ++i) {
+      radiance[i] = RGB{};
+      const Material& m = scene.material(points.material[i]);
+      if (m.specular() || is_black(m.kd)) continue;
+      // The records valid under a, else under 2a and 4a: a point the cache barely misses still uses its nearest
+      // records (deterministically: the cache does not change while rendering) instead of paying for a hemisphere,
+      // whose own samples would miss the next cache down a network in turn.
+      RGB e;
+      if (cache_->lookup(points.position[i], points.normal[i], e) ||
+          cache_->lookup(points.position[i], points.normal[i], e, 2.0f) ||
+          cache_->lookup(points.position[i], points.normal[i], e, 4.0f)) {
+        radiance[i] = m.kd * e * (1.0f / kPi);
+      } else {
+        misses.push_back(Candidate{points.position[i], points.normal[i], splitmix64(points.key[i] ^ 0x1e7)});
+        miss_owner.push_back(i);
+      }
+    }
+    if (misses.empty()) co_return;
+    std::vector<IrradianceRecord> own;
+    co_await compute(misses, inputs, own);  // used once, never inserted
+    for (size_t j = 0; j < misses.size(); ++j) {
+      const size_t i = miss_owner[j];
+      radiance[i] = scene.material(points.material[i]).kd * own[j].irradiance * (1.0f / kPi);
+    }
+  }
+
+ private:
+  struct Candidate {
+    Vec3 x, n;
+    uint64_t key;
+  };
+
+  // One record per candidate, from M x N hemisphere samples whose radiance comes from the input in one batch.
+  Task compute(std::span<const Candidate> candidates, Inputs& inputs, std::vector<IrradianceRecord>& out) {
+    const Scene& scene = *ctx_.scene;
+    const size_t per = static_cast<size_t>(m_ * n_);
+    std::vector<Ray> rays;
+    rays.reserve(candidates.size() * per);
+    std::vector<std::array<Vec3, 3>> frames;
+    for (const Candidate& c : candidates) {
+      Vec3 u, v;
+      basis(c.n, u, v);
+      frames.push_back({u, v, c.n});
+      for (int j = 0; j < m_; ++j)
+        for (int k = 0; k < n_; ++k) {
+          Rng rng(c.key, streams::irradiance ^ (seed_ << 8) ^ (static_cast<uint64_t>(j * n_ + k) << 20));
+          const float a = rng.uniform(), b = rng.uniform();
+          rays.push_back(Ray{c.x + c.n * scene.epsilon(), stratum_direction(j, k, m_, n_, a, b, u, v, c.n)});
+        }
+    }
+    std::vector<Hit> hits(rays.size());
+    if (!rays.empty()) ctx_.tracer->intersect(rays, hits);
+    ShadingPoints secondary;
+    std::vector<int> slot(rays.size(), -1);
+    for (size_t r = 0; r < rays.size(); ++r) {
+      if (!hits[r].valid()) continue;
+      const uint32_t tri = hits[r].triangle;
+      const Vec3 wo = -rays[r].direction;
+      const Vec3 ng = scene.normal(tri);
+      slot[r] = static_cast<int>(secondary.size());
+      secondary.push_back(rays[r].origin + rays[r].direction * hits[r].t, dot(ng, wo) > 0 ? ng : -ng, wo,
+                          scene.material_of(tri), splitmix64(candidates[r / per].key ^ (r % per + 1)), tri);
+    }
+    std::vector<RGB> arriving;
+    if (secondary.size() > 0) co_await inputs.shade(0, secondary, arriving);
+    const float min_r = min_spacing_ * extent_, max_r = max_spacing_ * extent_;
+    for (size_t c = 0; c < candidates.size(); ++c) {
+      HemisphereSamples s;
+      s.m = m_;
+      s.n = n_;
+      s.radiance.resize(per);
+      s.distance.resize(per);
+      for (size_t q = 0; q < per; ++q) {
+        const size_t r = c * per + q;
+        s.radiance[q] = slot[r] >= 0 ? arriving[static_cast<size_t>(slot[r])] : RGB{};
+        s.distance[q] = hits[r].valid() ? hits[r].t : max_r;
+      }
+      IrradianceRecord rec = make_record(candidates[c].x, frames[c][0], frames[c][1], frames[c][2], s);
+      rec.harmonic_distance = std::clamp(rec.harmonic_distance, min_r, max_r);
+      out.push_back(rec);
+    }
+  }
+
+  float a_;
+  int m_, n_;
+  uint32_t prepass_;
+  float min_spacing_, max_spacing_;
+  uint64_t seed_;
+  float extent_ = 1;
+  SceneContext ctx_;
+  std::unique_ptr<IrradianceCache> cache_;
+};
+
+}  // namespace
+
+extern const LightOpKind irradiance_kind{
+    "irradiance", "Ward irradiance caching with irradiance gradients over its input's light", 1, 1,
+    [](const ParamTable& p) -> std::unique_ptr<LightOp> { return std::make_unique<Irradiance>(p); }};
+
+}  // namespace lf

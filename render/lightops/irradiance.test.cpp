@@ -1,0 +1,193 @@
+// irradiance caching against closed forms and against the path tracer.
+#include <gtest/gtest.h>
+
+#include "render/bsdf.hpp"
+#include "render/camera.hpp"
+#include "render/irradiance_cache.hpp"
+#include "render/lightop_registry.hpp"
+#include "render/sampler.hpp"
+#include "render/test_support.hpp"
+#include "render/tile_kernel.hpp"
+
+namespace lf {
+namespace {
+
+using test::form_factor;
+
+// Irradiance from a uniformly emitting rectangle is Le * pi * F; Ward & Heckbert's gradients, computed from
+// stratified samples of that rectangle, must follow finite differences of the closed form.
+TEST(IrradianceGradients, FollowFiniteDifferencesOfTheClosedForm) {
+  const std::vector<Vec3> light{{0.2f, 1, -0.5f}, {1.2f, 1, -0.5f}, {1.2f, 1, 0.5f}, {0.2f, 1, 0.5f}};
+  Scene s;
+  auto m = s.add_material({"light", {}, {1, 1, 1}});
+  s.add_quad(light[0], light[1], light[2], light[3], m);
+  ASSERT_TRUE(s.finalize("light").ok());
+  RayTracer tracer(s);
+  const Vec3 x{0, 0, 0}, n{0, 1, 0};
+  Vec3 u, v;
+  basis(n, u, v);
+  HemisphereSamples hs;
+  hs.m = 64;
+  hs.n = 192;
+  Rng rng(1, 1);
+  for (int j = 0; j < hs.m; ++j)
+    for (int k = 0; k < hs.n; ++k) {
+      Ray ray{x, stratum_direction(j, k, hs.m, hs.n, rng.uniform(), rng.uniform(), u, v, n)};
+      Hit hit;
+      tracer.intersect(std::span<const Ray>(&ray, 1), std::span<Hit>(&hit, 1));
+      hs.radiance.push_back(hit.valid() ? RGB{1, 1, 1} : RGB{});
+      hs.distance.push_back(hit.valid() ? hit.t : 1000.0f);
+    }
+  IrradianceRecord r = make_record(x, u, v, n, hs);
+  auto exact = [&](Vec3 p, Vec3 normal) { return M_PI * form_factor(p, normal, light); };
+  EXPECT_NEAR(r.irradiance.y / exact(x, n), 1.0, 0.01);
+
+  const float d = 0.01f;
+  const double dx = (exact({d, 0, 0}, n) - exact({-d, 0, 0}, n)) / (2 * d);
+  const double dz = (exact({0, 0, d}, n) - exact({0, 0, -d}, n)) / (2 * d);
+  EXPECT_NEAR(r.translational[1].x / dx, 1.0, 0.1) << "d E / dx";
+  EXPECT_NEAR(r.translational[1].z, dz, 0.05 * std::abs(dx)) << "d E / dz (zero by symmetry)";
+  // Tilting the normal by alpha about z moves it to (-sin a, cos a, 0); n_i x n = (0, 0, sin a).
+  const double alpha = 0.01;
+  const double da = (exact(x, {float(-std::sin(alpha)), float(std::cos(alpha)), 0}) -
+                     exact(x, {float(std::sin(alpha)), float(std::cos(alpha)), 0})) / (2 * alpha);
+  EXPECT_NEAR(r.rotational[1].z / da, 1.0, 0.1) << "d E / d alpha";
+}
+
+std::unique_ptr<LightOp> make(const char* kind, Value::Map params = {}) {
+  return create_lightop(*find_lightop_kind(kind), ParamTable(std::move(params), kind));
+}
+
+// A closed box emitting E with reflectance rho everywhere: an irradiance network composed to depth D,
+// R_d = irradiance(input = combine { emission, R_d-1 }), reflects rho E (1 - rho^D) / (1 - rho).
+TEST(Irradiance, FurnaceNetworkComposedToFullDepthGivesEOverOneMinusRho) {
+  const float rho = 0.5f, e = 1.0f;
+  Scene s;
+  auto m = s.add_material({"furnace", {rho, rho, rho}, {e, e, e}});
+  const Vec3 c[8] = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}, {0, 0, 1}, {1, 0, 1}, {1, 1, 1}, {0, 1, 1}};
+  s.add_quad(c[0], c[1], c[2], c[3], m);
+  s.add_quad(c[4], c[7], c[6], c[5], m);
+  s.add_quad(c[0], c[4], c[5], c[1], m);
+  s.add_quad(c[3], c[2], c[6], c[7], m);
+  s.add_quad(c[0], c[3], c[7], c[4], m);
+  s.add_quad(c[1], c[5], c[6], c[2], m);
+  ASSERT_TRUE(s.finalize("furnace").ok());
+  RayTracer tracer(s);
+  SceneContext ctx{&s, &tracer};
+  const int depth = 8;  // rho^8 = 0.4 %: the truncation is well inside the 2 % bound
+  std::vector<std::unique_ptr<LightOp>> ops;
+  std::vector<std::unique_ptr<LocalInputs>> wiring;
+  LocalInputs none;
+  auto emission = make("emission");
+  run_to_completion(emission->setup(ctx, none));
+  LightOp* below = nullptr;
+  LocalInputs* below_inputs = &none;
+  for (int d = 1; d <= depth; ++d) {
+    // combine { emission, R_d-1 } (just emission at the bottom), then R_d = irradiance over it.
+    std::vector<std::pair<LightOp*, Inputs*>> parts{{emission.get(), &none}};
+    if (below) parts.emplace_back(below, below_inputs);
+    ops.push_back(make("combine"));
+    wiring.push_back(std::make_unique<LocalInputs>(parts));
+    LightOp* combine = ops.back().get();
+    LocalInputs* combine_inputs = wiring.back().get();
+    run_to_completion(combine->setup(ctx, *combine_inputs));
+    ops.push_back(make("irradiance", Value::Map{{"prepass", 1500}, {"theta", 4}, {"phi", 12}}));
+    wiring.push_back(std::make_unique<LocalInputs>(std::vector<std::pair<LightOp*, Inputs*>>{{combine, combine_inputs}}));
+    run_to_completion(ops.back()->setup(ctx, *wiring.back()));
+    below = ops.back().get();
+    below_inputs = wiring.back().get();
+  }
+  ShadingPoints pts;
+  for (int i = 0; i < 16; ++i)
+    pts.push_back({0.1f + 0.05f * i, 0, 0.3f + 0.02f * i}, {0, 1, 0}, {0, 1, 0}, m, sample_key(i, 0), 0);
+  std::vector<RGB> out(pts.size());
+  run_to_completion(below->shade(pts, out, *below_inputs));
+  const double expected = rho * e * (1 - std::pow(rho, depth)) / (1 - rho);
+  for (const RGB& l : out) EXPECT_NEAR(l.y / expected, 1.0, 0.02);
+  double total = e + out[0].y;
+  EXPECT_NEAR(total / (e / (1 - rho)), 1.0, 0.02) << "E + reflected = E / (1 - rho)";
+}
+
+ShadingPoints camera_points(const Scene& scene, int size) {
+  RayTracer tracer(scene);
+  ImageSpec image;
+  image.width = image.height = size;
+  image.spp = 1;
+  Camera camera(CameraSpec{}, size, size);
+  TileWork work;
+  trace_tile(scene, tracer, camera, image, TileRect{0, 0, size, size}, work);
+  return work.points;
+}
+
+// irradiance(input = direct) is one diffuse bounce of direct light: pathtrace at depth 2 minus depth 1.
+TEST(Irradiance, OneBounceOfDirectMatchesThePathTracer) {
+  auto scene = Scene::builtin("cornell");
+  RayTracer tracer(*scene);
+  SceneContext ctx{&*scene, &tracer};
+  auto pts = camera_points(*scene, 16);
+  LocalInputs none;
+  auto direct = make("direct", Value::Map{{"light_samples", 4}});
+  run_to_completion(direct->setup(ctx, none));
+  LocalInputs to_direct({{direct.get(), &none}});
+  auto irr = make("irradiance", Value::Map{{"prepass", 3000}});
+  run_to_completion(irr->setup(ctx, to_direct));
+  std::vector<RGB> bounce(pts.size());
+  run_to_completion(irr->shade(pts, bounce, to_direct));
+
+  auto path = [&](int depth) {
+    auto pt = make("pathtrace", Value::Map{{"max_depth", depth}, {"samples", 2048}, {"rr_depth", 100}});
+    run_to_completion(pt->setup(ctx, none));
+    std::vector<RGB> out(pts.size());
+    run_to_completion(pt->shade(pts, out, none));
+    return out;
+  };
+  auto two = path(2), one = path(1);
+  double cached = 0, reference = 0;
+  for (size_t i = 0; i < pts.size(); ++i) {
+    cached += average(bounce[i]);
+    reference += average(two[i]) - average(one[i]);
+  }
+  ASSERT_GT(reference, 0);
+  EXPECT_NEAR(cached / reference, 1.0, 0.05) << "one bounce over the image";
+}
+
+TEST(Irradiance, ReplicasBuildTheSingleCacheAndAnswerLikeIt) {
+  auto scene = Scene::builtin("cornell");
+  RayTracer tracer(*scene);
+  auto pts = camera_points(*scene, 12);
+  LocalInputs none;
+  auto direct = make("direct");
+  run_to_completion(direct->setup(SceneContext{&*scene, &tracer}, none));
+  LocalInputs to_direct({{direct.get(), &none}});
+  const Value::Map params{{"prepass", 2000}};
+
+  auto single = make("irradiance", params);
+  run_to_completion(single->setup(SceneContext{&*scene, &tracer}, to_direct));
+  std::vector<RGB> one(pts.size());
+  run_to_completion(single->shade(pts, one, to_direct));
+
+  test::Board board(2);
+  std::vector<std::unique_ptr<LightOp>> replicas;
+  std::vector<std::unique_ptr<test::BoardExchange>> exchanges;
+  std::vector<Task> setups;
+  for (int r = 0; r < 2; ++r) {
+    replicas.push_back(make("irradiance", params));
+    exchanges.push_back(std::make_unique<test::BoardExchange>(board, static_cast<size_t>(r)));
+  }
+  // Both replicas run their rounds in step: each waits in the all-gather for the other.
+  for (int r = 0; r < 2; ++r)
+    setups.push_back(replicas[static_cast<size_t>(r)]->setup(
+        SceneContext{&*scene, &tracer, r, 2, exchanges[static_cast<size_t>(r)].get()}, to_direct));
+  for (auto& t : setups) {
+    ASSERT_TRUE(t.done());
+    t.rethrow_if_failed();
+  }
+  for (auto& rep : replicas) {
+    std::vector<RGB> out(pts.size());
+    run_to_completion(rep->shade(pts, out, to_direct));
+    EXPECT_TRUE(out == one) << "a replica's cache answers differently from the single cache";
+  }
+}
+
+}  // namespace
+}  // namespace lf

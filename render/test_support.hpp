@@ -1,0 +1,60 @@
+#pragma once
+// Helpers for render/ tests: closed forms and an in-process stand-in for a pool's all-gather.
+#include <algorithm>
+#include <cmath>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "render/lightop.hpp"
+
+namespace lf::test {
+
+// Lambert's contour formula: the form factor from a differential area at p with normal n to a polygon,
+// F = 1/(2 pi) sum_i angle(r_i, r_i+1) n . unit(r_i x r_i+1), r_i unit vectors to the corners.
+inline double form_factor(Vec3 p, Vec3 n, const std::vector<Vec3>& polygon) {
+  double sum = 0;
+  for (size_t i = 0; i < polygon.size(); ++i) {
+    Vec3 a = normalize(polygon[i] - p), b = normalize(polygon[(i + 1) % polygon.size()] - p);
+    double angle = std::acos(std::clamp(static_cast<double>(dot(a, b)), -1.0, 1.0));
+    sum += angle * dot(n, normalize(cross(a, b)));
+  }
+  return std::abs(sum) / (2 * M_PI);
+}
+
+// An all-gather among n in-process replicas: once every part is in, each waiting replica gets all of them.
+struct Board {
+  explicit Board(size_t n) : parts(n), in(n, false) {}
+  std::vector<std::string> parts;
+  std::vector<bool> in;
+  std::vector<std::pair<std::shared_ptr<GatherState>, std::vector<std::string>*>> waiting;
+};
+
+class BoardExchange final : public Exchange {
+ public:
+  BoardExchange(Board& b, size_t index) : board_(b), index_(index) {}
+  Gather all_gather(std::string part, std::vector<std::string>* out) override {
+    auto state = std::make_shared<GatherState>();
+    state->remaining = 1;
+    board_.parts[index_] = std::move(part);
+    board_.in[index_] = true;
+    board_.waiting.emplace_back(state, out);
+    if (std::find(board_.in.begin(), board_.in.end(), false) == board_.in.end()) {
+      auto waiting = std::move(board_.waiting);
+      board_.waiting.clear();
+      std::fill(board_.in.begin(), board_.in.end(), false);  // ready for the next round
+      for (auto& [s, o] : waiting) *o = board_.parts;
+      // The others resume now; the caller finds its gather complete through await_ready.
+      for (auto& [s, o] : waiting)
+        if (s != state) s->complete_one();
+      state->remaining = 0;
+    }
+    return Gather(state);
+  }
+
+ private:
+  Board& board_;
+  size_t index_;
+};
+
+}  // namespace lf::test
