@@ -1,6 +1,6 @@
--- The Cornell box with a glass sphere and a mirror block, lit by a lighting network:
---   direct light + light along mirror/glass chains + caustics from a photon map shot by two replicas in parallel.
--- (Indirect diffuse light — irradiance caching — is not in the network yet.)
+-- The Cornell box with a glass sphere and a mirror block, lit by a lighting network (DESIGN §2):
+--   direct light, light along mirror/glass chains, caustics from a photon map shot by two replicas in parallel,
+--   and two bounces of indirect light from irradiance caches.
 --   lightfarm run examples/cornell_glass.lua
 --   lightfarm graph examples/cornell_glass.lua | dot -Tsvg > network.svg
 scene  { builtin = "cornell_glass" }
@@ -11,9 +11,13 @@ image  { width = param("width", 512), height = param("height", 512), spp = param
 local direct   = lightop "direct" { light_samples = param("light_samples", 2) }
 local caustics = multiplexer { lightop "photonmap" { photons = param("photons", 1000000), k = 100 },
                                replicas = param("photon_replicas", 2) }
--- What leaves a surface a mirror/glass chain lands on: its direct light and its caustics.
-local landing  = lightop "combine" { inputs = { direct, caustics }, name = "landing" }
+-- Indirect light: a cache over direct light (one bounce), and a cache over that plus direct (two bounces).
+local bounce1  = lightop "irradiance" { input = direct, name = "bounce1", prepass = param("prepass", 20000) }
+local lit1     = lightop "combine" { inputs = { direct, caustics, bounce1 }, name = "lit1" }
+local indirect = lightop "irradiance" { input = lit1, name = "indirect", prepass = param("prepass", 20000) }
+-- What leaves a surface a mirror/glass chain lands on.
+local landing  = lightop "combine" { inputs = { direct, caustics, indirect }, name = "landing" }
 local specular = lightop "specular" { input = landing }
 
 renderers { count = param("renderers", 2),
-            lighting = lightop "combine" { inputs = { direct, specular, caustics } } }
+            lighting = lightop "combine" { inputs = { direct, specular, caustics, indirect } } }
