@@ -300,8 +300,8 @@ int l_lightop_table(lua_State* L) {
     std::string want = kind->max_inputs == kind->min_inputs ? std::to_string(kind->min_inputs)
                        : kind->max_inputs < 0 ? "at least " + std::to_string(kind->min_inputs)
                                               : std::to_string(kind->min_inputs) + " to " + std::to_string(kind->max_inputs);
-    luaL_error(L, "lightop '%s' takes %s input%s, got %d", kind_name.c_str(), want.c_str(),
-               want == "1" ? "" : "s", n_inputs);
+    const bool one = want.size() >= 1 && want.back() == '1' && (want.size() == 1 || want[want.size() - 2] == ' ');
+    luaL_error(L, "lightop '%s' takes %s input%s, got %d", kind_name.c_str(), want.c_str(), one ? "" : "s", n_inputs);
   }
   ParamTable params = table_params(L, 1, "lightop '" + kind_name + "'");
   with_params(L, [&] { create_lightop(*kind, params); });  // the op validates its own parameters

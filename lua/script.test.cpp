@@ -110,6 +110,22 @@ TEST_F(ScriptTest, WiringErrors) {
             "farm.lua:2: lightop 'direct' is not connected to the renderers' lighting (nothing would ask it for light)");
 }
 
+TEST_F(ScriptTest, NetworkWiringErrorsNameTheLine) {
+  // A missing input, too many inputs, and an input that is not a LightOp.
+  EXPECT_EQ(error_of("scene { builtin = \"cornell\" }\nlocal s = lightop \"specular\" {}\n"),
+            "farm.lua:2: lightop 'specular' takes 1 input, got 0");
+  EXPECT_EQ(error_of("local d = lightop \"direct\" {}\nlocal i = lightop \"irradiance\" { inputs = { d, d } }\n"),
+            "farm.lua:2: lightop 'irradiance' takes 1 input, got 2");
+  EXPECT_EQ(error_of("local c = lightop \"combine\" { inputs = { 1 } }\n"),
+            "farm.lua:1: each of inputs must be a LightOp (made with lightop \"kind\" { ... }), got a number");
+  EXPECT_EQ(error_of("local h = host \"x\" {}\nlocal c = lightop \"combine\" { input = h }\n"),
+            "farm.lua:2: input must be a LightOp (made with lightop \"kind\" { ... }), got a userdata");
+  // Handles exist only once declared, so a network cannot loop back on itself: naming an op before it exists
+  // is naming nil, which Lua cannot tell from leaving the input out.
+  EXPECT_EQ(error_of("local a = lightop \"combine\" { input = b }\nlocal b = lightop \"direct\" {}\n"),
+            "farm.lua:1: lightop 'combine' takes at least 1 input, got 0");
+}
+
 TEST_F(ScriptTest, MissingSceneFileIsNamedRelativeToTheScript) {
   auto m = error_of("scene { file = \"room.obj\" }\n");
   EXPECT_EQ(m, "farm.lua:1: scene file '" + (dir / "room.obj").string() + "' not found");
