@@ -22,12 +22,13 @@ static std::string str(const Value& v, const char* key) {
   return e && e->is_string() ? e->as_string() : std::string();
 }
 
-Value SceneSpec::to_value() const { return Value::Map{{"builtin", builtin}, {"file", file}}; }
+Value SceneSpec::to_value() const { return Value::Map{{"builtin", builtin}, {"file", file}, {"lights", lights}}; }
 
 SceneSpec SceneSpec::from_value(const Value& v) {
   SceneSpec s;
   s.builtin = str(v, "builtin");
   s.file = str(v, "file");
+  if (const Value* l = v.find("lights"); l && l->is_array()) s.lights = l->as_array();
   return s;
 }
 

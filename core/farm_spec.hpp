@@ -19,6 +19,8 @@ struct SourceLoc {
 struct SceneSpec {
   std::string builtin;  // e.g. "cornell"; empty when file is set
   std::string file;     // absolute path of an OBJ file
+  Value::Array lights;  // lights the script adds: {quad = {4 corners}, radiance} | {sphere, radius, radiance} |
+                        // {point, intensity}
   SourceLoc loc;
   Value to_value() const;
   static SceneSpec from_value(const Value& v);

@@ -1,7 +1,7 @@
 // The farm-script library. Like Lua's own libraries: one registration table, every argument checked with
 // luaL_check*, so a mistake comes back as "farm.lua:12: what is wrong".
 //
-// Globals a script sees: scene, camera, image, lightop, multiplexer, renderers, host, farm, param (and Lua's base, string, table,
+// Globals a script sees: scene, camera, image, light, lightop, multiplexer, renderers, host, farm, param (and Lua's base, string, table,
 // math and utf8 libraries; no io or os, so a script describes a farm and does nothing else).
 #include "lua/script.hpp"
 
@@ -559,6 +559,33 @@ int l_renderers(lua_State* L) {
   return 0;
 }
 
+// light { quad = {c1, c2, c3, c4}, radiance = {r,g,b} } | light { sphere = {x,y,z}, radius = r, radiance = ... }
+// | light { point = {x,y,z}, intensity = {r,g,b} }: a light added to the scene (any number of them). A quad emits
+// on the side its corners wind counter-clockwise around.
+int l_light(lua_State* L) {
+  Builder& b = builder(L);
+  luaL_checktype(L, 1, LUA_TTABLE);
+  Value light = to_value(L, 1, "light");
+  if (!light.is_map()) luaL_error(L, "light needs quad, sphere or point");
+  for (const auto& [key, v] : light.as_map())
+    if (key != "quad" && key != "sphere" && key != "radius" && key != "point" && key != "radiance" && key != "intensity")
+      luaL_error(L, "light: unknown parameter '%s' (known: quad, sphere, radius, radiance, point, intensity)", key.c_str());
+  const int shapes = (light.find("quad") != nullptr) + (light.find("sphere") != nullptr) + (light.find("point") != nullptr);
+  if (shapes != 1) luaL_error(L, "light needs exactly one of quad, sphere or point");
+  for (const char* colour : {"radiance", "intensity"})
+    if (const Value* c = light.find(colour); c && c->is_array())
+      for (const auto& e : c->as_array())
+        if (e.is_number() && e.as_double() < 0) luaL_error(L, "light: %s must not be negative", colour);
+  Scene check;  // the scene's own reader says what is wrong, with the same words it would use later
+  if (auto st = check.add_script_lights(Value::Array{light}); !st) {
+    std::string why = st.error().message;
+    why = why.substr(why.find(':') + 2);
+    luaL_error(L, "light: %s", why.c_str());
+  }
+  b.spec.scene.lights.push_back(std::move(light));
+  return 0;
+}
+
 // farm { heartbeat_timeout = 10, request_timeout = 120 }: settings of the farm as a whole.
 int l_farm(lua_State* L) {
   Builder& b = builder(L);
@@ -611,6 +638,7 @@ int host_gc(lua_State* L) {
 const luaL_Reg kFarmLib[] = {{"scene", l_scene},   {"camera", l_camera},       {"image", l_image},
                              {"renderers", l_renderers}, {"host", l_host},
                              {"param", l_param},   {"farm", l_farm},       {"multiplexer", l_multiplexer},
+                             {"light", l_light},
                              {nullptr, nullptr}};
 
 void open_libs(lua_State* L) {

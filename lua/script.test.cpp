@@ -126,6 +126,22 @@ TEST_F(ScriptTest, NetworkWiringErrorsNameTheLine) {
             "farm.lua:1: lightop 'combine' takes at least 1 input, got 0");
 }
 
+TEST_F(ScriptTest, LightsAreCheckedAtTheirLine) {
+  auto r = evaluate_script(write("farm.lua", std::string(kCornell) +
+                                                 "light { point = {278, 400, 280}, intensity = {1000, 1000, 1000} }\n"
+                                                 "light { sphere = {100, 100, 100}, radius = 20, radiance = {5, 5, 5} }\n"));
+  ASSERT_TRUE(r.ok()) << r.error().message;
+  EXPECT_EQ(r->scene.lights.size(), 2u);
+  EXPECT_EQ(error_of("light { point = {0, 0} , intensity = {1, 1, 1} }\n"), "farm.lua:1: light: point must be {x, y, z}");
+  EXPECT_EQ(error_of("light { quad = {{0,0,0}, {1,0,0}, {1,1,0}}, radiance = {1, 1, 1} }\n"),
+            "farm.lua:1: light: quad needs 4 corners");
+  EXPECT_EQ(error_of("light { point = {0, 0, 0}, sphere = {0, 0, 0}, intensity = {1, 1, 1} }\n"),
+            "farm.lua:1: light needs exactly one of quad, sphere or point");
+  EXPECT_EQ(error_of("light { point = {0, 0, 0}, intensty = {1, 1, 1} }\n"),
+            "farm.lua:1: light: unknown parameter 'intensty' (known: quad, sphere, radius, radiance, point, intensity)");
+  EXPECT_EQ(error_of("light { point = {0, 0, 0}, intensity = {1, -1, 1} }\n"), "farm.lua:1: light: intensity must not be negative");
+}
+
 TEST_F(ScriptTest, MissingSceneFileIsNamedRelativeToTheScript) {
   auto m = error_of("scene { file = \"room.obj\" }\n");
   EXPECT_EQ(m, "farm.lua:1: scene file '" + (dir / "room.obj").string() + "' not found");

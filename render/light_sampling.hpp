@@ -8,16 +8,21 @@ namespace lf {
 
 struct LightSample {
   Vec3 point;
-  Vec3 normal;      // the emitter's front side
+  Vec3 normal;      // the emitter's front side (area lights)
   uint32_t triangle;
-  RGB radiance;     // Le
-  float pdf_area;   // P(triangle) / area
+  RGB radiance;     // Le for an area light; intensity I for a point light
+  float pdf_area;   // P(triangle) / area for an area light; P(light) for a point light
+  bool is_point = false;
 };
 
 // Picks an emitter triangle by power and a uniform point on it.
 inline LightSample sample_light(const Scene& scene, Rng& rng) {
   float p_tri = 0;
   const size_t e = scene.pick_emitter(rng.uniform(), p_tri);
+  if (e >= scene.emitters().size()) {
+    const PointLight& p = scene.point_lights()[e - scene.emitters().size()];
+    return LightSample{p.position, {}, UINT32_MAX, p.intensity, p_tri, true};
+  }
   const uint32_t tri = scene.emitters()[e];
   const float su = std::sqrt(rng.uniform());
   const float v = rng.uniform();

@@ -64,18 +64,24 @@ void trace_paths(const SceneContext& ctx, const ShadingPoints& points, std::span
       const float dist2 = dot(d, d);
       if (!(dist2 > 0)) continue;
       const Vec3 wi = d / std::sqrt(dist2);
-      const float cos_x = dot(path.n, wi), cos_y = -dot(ls.normal, wi);
+      const float cos_x = dot(path.n, wi);
+      const float cos_y = ls.is_point ? 1.0f : -dot(ls.normal, wi);
       if (cos_x <= 0 || cos_y <= 0) continue;
       const RGB f = bsdf.eval(path.n, path.wo, wi);
       if (is_black(f)) continue;
-      const float light_pdf = ls.pdf_area * dist2 / cos_y;  // per solid angle
-      const bool light_only = o.light_only_on_diffuse && m.type == Material::Type::diffuse;
-      const float w = light_only ? 1.0f : power_heuristic(light_pdf, bsdf.pdf(path.n, path.wo, wi));
-      pending.push_back({p, path.beta * f * ls.radiance * (cos_x * w / light_pdf)});
+      if (ls.is_point) {
+        // A point light: I cos / d^2, and no BSDF sample can ever hit it, so no MIS.
+        pending.push_back({p, path.beta * f * ls.radiance * (cos_x / (dist2 * ls.pdf_area))});
+      } else {
+        const float light_pdf = ls.pdf_area * dist2 / cos_y;  // per solid angle
+        const bool light_only = o.light_only_on_diffuse && m.type == Material::Type::diffuse;
+        const float w = light_only ? 1.0f : power_heuristic(light_pdf, bsdf.pdf(path.n, path.wo, wi));
+        pending.push_back({p, path.beta * f * ls.radiance * (cos_x * w / light_pdf)});
+      }
       const Vec3 origin = path.x + path.n * eps;
       const Vec3 to_light = ls.point - origin;
       const float span = length(to_light);
-      rays.push_back(Ray{origin, to_light / span, 0.0f, span - eps});
+      rays.push_back(Ray{origin, to_light / span, 0.0f, ls.is_point ? span : span - eps});
     }
     blocked.resize(rays.size());
     if (!rays.empty()) ctx.tracer->occluded(rays, blocked);

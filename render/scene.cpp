@@ -104,16 +104,20 @@ Status Scene::finalize(const std::string& what) {
   emitter_cdf_.clear();
   emitter_pdf_.clear();
   double total = 0;
-  std::vector<double> power;
+  std::vector<double> power;  // emitted flux: pi * area * Le for triangles, 4 pi I for points
   for (uint32_t t = 0; t < triangles_.size(); ++t) {
     const Material& m = materials_[material_of_[t]];
     if (!m.emissive()) continue;
     emitters_.push_back(t);
-    power.push_back(static_cast<double>(areas_[t]) * average(m.ke));
+    power.push_back(static_cast<double>(areas_[t]) * average(m.ke) * kPi);
     total += power.back();
   }
-  if (emitters_.empty() || !(total > 0))
-    return make_error(what + ": the scene has no light (no material with Ke > 0)");
+  for (const auto& p : point_lights_) {
+    power.push_back(4.0 * kPi * average(p.intensity));
+    total += power.back();
+  }
+  if (power.empty() || !(total > 0))
+    return make_error(what + ": the scene has no light (no material with Ke > 0, and the script adds none)");
   double running = 0;
   for (double p : power) {
     running += p;
@@ -128,7 +132,7 @@ Status Scene::finalize(const std::string& what) {
 
 size_t Scene::pick_emitter(float u, float& probability) const {
   auto it = std::upper_bound(emitter_cdf_.begin(), emitter_cdf_.end(), u);
-  size_t i = std::min(static_cast<size_t>(it - emitter_cdf_.begin()), emitters_.size() - 1);
+  size_t i = std::min(static_cast<size_t>(it - emitter_cdf_.begin()), emitter_cdf_.size() - 1);
   probability = emitter_pdf_[i];
   return i;
 }
@@ -195,6 +199,13 @@ const std::vector<std::string>& Scene::builtin_names() {
 }
 
 Result<Scene> Scene::builtin(const std::string& name) {
+  auto s = builtin_unlit(name);
+  if (!s) return s;
+  if (auto st = s->finalize("built-in scene '" + name + "'"); !st) return st.error();
+  return s;
+}
+
+Result<Scene> Scene::builtin_unlit(const std::string& name) {
   Scene s;
   if (name == "cornell" || name == "cornell_glass") {
     s = cornell_box(name == "cornell_glass");
@@ -203,11 +214,17 @@ Result<Scene> Scene::builtin(const std::string& name) {
     for (const auto& n : builtin_names()) known += (known.empty() ? "" : ", ") + n;
     return make_error("unknown built-in scene '" + name + "' (built-in scenes: " + known + ")");
   }
-  if (auto st = s.finalize("built-in scene '" + name + "'"); !st) return st.error();
   return s;
 }
 
 Result<Scene> Scene::load_obj(const std::string& path) {
+  auto s = load_obj_unlit(path);
+  if (!s) return s;
+  if (auto st = s->finalize("scene file '" + path + "'"); !st) return st.error();
+  return s;
+}
+
+Result<Scene> Scene::load_obj_unlit(const std::string& path) {
   std::error_code ec;
   if (!std::filesystem::is_regular_file(path, ec)) return make_error("scene file '" + path + "' not found");
   tinyobj::ObjReaderConfig config;
@@ -258,13 +275,57 @@ Result<Scene> Scene::load_obj(const std::string& path) {
       s.add_triangle(p[0], p[1], p[2], material);
     }
   }
-  if (auto st = s.finalize("scene file '" + path + "'"); !st) return st.error();
   return s;
 }
 
 Result<Scene> Scene::load(const SceneSpec& spec) {
-  if (!spec.file.empty()) return load_obj(spec.file);
-  return builtin(spec.builtin.empty() ? "cornell" : spec.builtin);
+  const bool file = !spec.file.empty();
+  auto s = file ? load_obj_unlit(spec.file) : builtin_unlit(spec.builtin.empty() ? "cornell" : spec.builtin);
+  if (!s) return s;
+  if (auto st = s->add_script_lights(spec.lights); !st) return st.error();
+  const std::string what = file ? "scene file '" + spec.file + "'" : "built-in scene '" + spec.builtin + "'";
+  if (auto st = s->finalize(what); !st) return st.error();
+  return s;
+}
+
+static bool vec3_of(const Value* v, Vec3& out) {
+  if (!v || !v->is_array() || v->as_array().size() != 3) return false;
+  for (const auto& e : v->as_array())
+    if (!e.is_number()) return false;
+  const auto& a = v->as_array();
+  out = {static_cast<float>(a[0].as_double()), static_cast<float>(a[1].as_double()), static_cast<float>(a[2].as_double())};
+  return true;
+}
+
+Status Scene::add_script_lights(const Value::Array& lights) {
+  for (size_t i = 0; i < lights.size(); ++i) {
+    const Value& l = lights[i];
+    const std::string which = "light " + std::to_string(i + 1);
+    Vec3 colour;
+    if (const Value* q = l.find("quad")) {
+      if (!vec3_of(l.find("radiance"), colour)) return make_error(which + ": radiance must be {r, g, b}");
+      Vec3 c[4];
+      if (!q->is_array() || q->as_array().size() != 4) return make_error(which + ": quad needs 4 corners");
+      for (int k = 0; k < 4; ++k)
+        if (!vec3_of(&q->as_array()[static_cast<size_t>(k)], c[k])) return make_error(which + ": a corner is not {x, y, z}");
+      add_quad(c[0], c[1], c[2], c[3], add_material({"light (script)", {}, colour}));
+    } else if (const Value* sph = l.find("sphere")) {
+      Vec3 centre;
+      const Value* r = l.find("radius");
+      if (!vec3_of(sph, centre) || !r || !r->is_number() || !(r->as_double() > 0))
+        return make_error(which + ": sphere needs a centre {x, y, z} and a radius > 0");
+      if (!vec3_of(l.find("radiance"), colour)) return make_error(which + ": radiance must be {r, g, b}");
+      add_sphere(centre, static_cast<float>(r->as_double()), 3, add_material({"light (script)", {}, colour}));
+    } else if (const Value* p = l.find("point")) {
+      Vec3 at;
+      if (!vec3_of(p, at)) return make_error(which + ": point must be {x, y, z}");
+      if (!vec3_of(l.find("intensity"), colour)) return make_error(which + ": intensity must be {r, g, b}");
+      add_point_light(at, colour);
+    } else {
+      return make_error(which + ": give quad, sphere or point");
+    }
+  }
+  return Ok{};
 }
 
 }  // namespace lf

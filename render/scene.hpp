@@ -29,6 +29,11 @@ struct Material {
 // so that no surface creates energy.
 Material material_from_mtl(std::string name, RGB kd, RGB ks, RGB ke, float ns, float ni, int illum);
 
+struct PointLight {
+  Vec3 position;
+  RGB intensity;  // W/sr per channel
+};
+
 class Scene {
  public:
   uint32_t add_material(Material m);
@@ -37,7 +42,10 @@ class Scene {
   void add_triangle(Vec3 a, Vec3 b, Vec3 c, uint32_t material);
   // A sphere as a subdivided icosahedron (20 * 4^subdivisions triangles), wound outwards.
   void add_sphere(Vec3 center, float radius, int subdivisions, uint32_t material);
-  // Builds the emitter distribution. An error if the scene has no triangles or no emitters.
+  void add_point_light(Vec3 position, RGB intensity) { point_lights_.push_back({position, intensity}); }
+  // Adds the lights a script declares (SceneSpec::lights); an error names what is wrong with one.
+  Status add_script_lights(const Value::Array& lights);
+  // Builds the light distribution. An error if the scene has no triangles or no light.
   Status finalize(const std::string& what);
 
   size_t triangle_count() const { return material_of_.size(); }
@@ -50,9 +58,10 @@ class Scene {
   Vec3 normal(uint32_t triangle) const { return normals_[triangle]; }  // unit, from the winding
   float area(uint32_t triangle) const { return areas_[triangle]; }
 
-  // Emitters, chosen with probability proportional to emitted power.
+  // Lights: emitter triangles, then point lights, chosen with probability proportional to emitted flux.
   const std::vector<uint32_t>& emitters() const { return emitters_; }
-  // Picks an emitter for u in [0,1); returns its index in emitters() and its probability.
+  const std::vector<PointLight>& point_lights() const { return point_lights_; }
+  // Picks a light for u in [0,1); an index below emitters().size() is a triangle, above it a point light.
   size_t pick_emitter(float u, float& probability) const;
   float emitter_probability(size_t index) const { return emitter_pdf_[index]; }
   // Probability that pick_emitter chooses triangle t (0 for non-emitters).
@@ -63,6 +72,9 @@ class Scene {
 
   static Result<Scene> builtin(const std::string& name);
   static Result<Scene> load_obj(const std::string& path);
+  // Without finalize(), so that script lights can still be added.
+  static Result<Scene> builtin_unlit(const std::string& name);
+  static Result<Scene> load_obj_unlit(const std::string& path);
   static Result<Scene> load(const SceneSpec& spec);
   static const std::vector<std::string>& builtin_names();
 
@@ -74,6 +86,7 @@ class Scene {
   std::vector<float> areas_;
   std::vector<Material> materials_;
   std::vector<uint32_t> emitters_;
+  std::vector<PointLight> point_lights_;
   std::vector<float> emitter_cdf_;
   std::vector<float> emitter_pdf_;
   std::vector<float> triangle_light_pdf_;

@@ -80,8 +80,26 @@ TEST(Scene, SceneWithoutEmittersIsAnErrorThatSaysSo) {
   REQUIRE_SHARED_SCENES();
   auto s = Scene::load_obj(kShared + "CornellBox-Glossy.obj");
   ASSERT_FALSE(s.ok());
-  EXPECT_NE(s.error().message.find("has no light (no material with Ke > 0)"), std::string::npos)
+  EXPECT_NE(s.error().message.find("has no light (no material with Ke > 0, and the script adds none)"),
+            std::string::npos)
       << s.error().message;
+}
+
+TEST(Scene, ScriptLightsLightASceneWithoutEmitters) {
+  REQUIRE_SHARED_SCENES();
+  SceneSpec spec;
+  spec.file = kShared + "CornellBox-Glossy.obj";
+  spec.lights = Value::Array{Value::Map{
+      {"quad", Value::Array{Value::Array{-0.2, 1.58, 0.2}, Value::Array{-0.2, 1.58, -0.2}, Value::Array{0.2, 1.58, -0.2},
+                            Value::Array{0.2, 1.58, 0.2}}},
+      {"radiance", Value::Array{17, 12, 4}}}};
+  auto s = Scene::load(spec);
+  ASSERT_TRUE(s.ok()) << s.error().message;
+  ASSERT_EQ(s->emitters().size(), 2u);
+  EXPECT_LT(s->normal(s->emitters()[0]).y, -0.99f);  // faces down into the box
+  size_t glossy = 0;
+  for (const auto& m : s->materials()) glossy += m.type == Material::Type::glossy;
+  EXPECT_GT(glossy, 0u) << "the Glossy box's MTL has glossy materials";
 }
 
 TEST(Scene, EveryMcGuireSceneWithALightLoads) {

@@ -99,6 +99,30 @@ TEST(Direct, ResultOfAPointDoesNotDependOnItsBatch) {
   EXPECT_EQ(rig.shade(last)[0], all[2]);  // bit for bit
 }
 
+TEST(Direct, PointLightGivesICosOverPiDSquared) {
+  // A white diffuse floor under a point light: reflected radiance is I cos(theta) / (pi d^2), exactly.
+  Scene s;
+  auto white = s.add_material({"white", {1, 1, 1}, {}});
+  s.add_quad({-10, 0, -10}, {-10, 0, 10}, {10, 0, 10}, {10, 0, -10}, white);
+  s.add_point_light({1, 2, 0}, {8, 4, 2});
+  ASSERT_TRUE(s.finalize("point").ok());
+  RayTracer tracer(s);
+  auto op = create_lightop(*find_lightop_kind("direct"), ParamTable(Value::Map{}, "d"));
+  LocalInputs none;
+  run_to_completion(op->setup(SceneContext{&s, &tracer}, none));
+  ShadingPoints pts;
+  pts.push_back({0, 0, 0}, {0, 1, 0}, {0, 1, 0}, white, 1, 0);
+  pts.push_back({3, 0, 1}, {0, 1, 0}, {0, 1, 0}, white, 2, 0);
+  std::vector<RGB> out(2);
+  run_to_completion(op->shade(pts, out, none));
+  for (size_t i = 0; i < 2; ++i) {
+    const Vec3 d = Vec3{1, 2, 0} - pts.position[i];
+    const float d2 = dot(d, d), cos = d.y / std::sqrt(d2);
+    EXPECT_NEAR(out[i].x, 8 * cos / (kPi * d2), 1e-5f) << i;
+    EXPECT_NEAR(out[i].z, 2 * cos / (kPi * d2), 1e-5f) << i;
+  }
+}
+
 TEST(Direct, BadParametersAreReported) {
   const auto& kind = *find_lightop_kind("direct");
   EXPECT_THROW(create_lightop(kind, ParamTable(Value::Map{{"light_samples", 0}}, "d")), ParamError);

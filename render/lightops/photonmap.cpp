@@ -119,6 +119,7 @@ class PhotonMap final : public LightOp {
     // Total emitted flux: pi * area * Le summed over emitters; every photon carries 1 / photons of it.
     RGB total{};
     for (uint32_t t : scene.emitters()) total += scene.material(scene.material_of(t)).ke * (kPi * scene.area(t));
+    for (const auto& p : scene.point_lights()) total += p.intensity * (4.0f * kPi);
     const float share = average(total) / static_cast<float>(photons_);
     const float eps = scene.epsilon();
     std::vector<Photon> stored;
@@ -135,11 +136,17 @@ class PhotonMap final : public LightOp {
         Rng rng(splitmix64(j), streams::photons ^ (seed_ << 8));
         const LightSample ls = sample_light(scene, rng);
         const float u = rng.uniform(), v = rng.uniform();
-        const Vec3 dir = cosine_hemisphere(ls.normal, u, v);
+        Vec3 dir;
+        if (ls.is_point) {  // uniform over the sphere
+          const float z = 1.0f - 2.0f * u, r = std::sqrt(std::max(0.0f, 1.0f - z * z)), phi = 2.0f * kPi * v;
+          dir = {r * std::cos(phi), r * std::sin(phi), z};
+        } else {
+          dir = cosine_hemisphere(ls.normal, u, v);
+        }
         // Emitters picked by power and cosine directions give every photon the same share of the total flux,
         // coloured like its emitter.
         const RGB flux = ls.radiance * (share / average(ls.radiance));
-        flights.push_back(Flight{Ray{ls.point + ls.normal * eps, dir}, flux, rng});
+        flights.push_back(Flight{Ray{ls.point + ls.normal * eps, dir}, flux, rng});  // normal is 0 for points
       }
       std::vector<Ray> rays;
       std::vector<Hit> hits;
