@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "render/lightop.hpp"
+#include "render/scene.hpp"
 
 namespace lf::test {
 
@@ -20,6 +21,17 @@ inline double form_factor(Vec3 p, Vec3 n, const std::vector<Vec3>& polygon) {
     sum += angle * dot(n, normalize(cross(a, b)));
   }
   return std::abs(sum) / (2 * M_PI);
+}
+
+// A closed unit cube whose six faces, wound inwards, all have material m (the furnace).
+inline void add_closed_box(Scene& s, uint32_t m) {
+  const Vec3 c[8] = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}, {0, 0, 1}, {1, 0, 1}, {1, 1, 1}, {0, 1, 1}};
+  s.add_quad(c[0], c[1], c[2], c[3], m);
+  s.add_quad(c[4], c[7], c[6], c[5], m);
+  s.add_quad(c[0], c[4], c[5], c[1], m);
+  s.add_quad(c[3], c[2], c[6], c[7], m);
+  s.add_quad(c[0], c[3], c[7], c[4], m);
+  s.add_quad(c[1], c[5], c[6], c[2], m);
 }
 
 // An all-gather among n in-process replicas: once every part is in, each waiting replica gets all of them.

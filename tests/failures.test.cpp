@@ -14,15 +14,8 @@ const std::string kPool = kSource + "/examples/cornell_pool.lua";
 const std::string kSlowPool = kSource + "/tests/scripts/slow_pool.lua";
 const std::string kNested = kSource + "/tests/scripts/nested_pool.lua";
 
-class FailureTest : public ::testing::Test {
+class FailureTest : public FarmFixture {
  protected:
-  fs::path dir;
-  void SetUp() override {
-    dir = fs::temp_directory_path() / ("lightfarm-failure-test-" + unique_tag());
-    fs::create_directories(dir);
-  }
-  void TearDown() override { fs::remove_all(dir); }
-  std::string path(const std::string& name) const { return (dir / name).string(); }
 
   // Runs to completion and returns the image (fails the test if the run failed or left processes).
   Image render(const std::vector<std::string>& args, const std::string& out) {

@@ -17,27 +17,7 @@ namespace {
 
 const std::string kCornellScript = std::string(LIGHTFARM_SOURCE_DIR) + "/examples/cornell.lua";
 
-class FarmTest : public ::testing::Test {
- protected:
-  fs::path dir;
-  void SetUp() override {
-    dir = fs::temp_directory_path() / ("lightfarm-farm-test-" + unique_tag());
-    fs::create_directories(dir);
-  }
-  void TearDown() override { fs::remove_all(dir); }
-  std::string path(const std::string& name) const { return (dir / name).string(); }
-  std::string write(const std::string& name, const std::string& text) {
-    std::ofstream(dir / name) << text;
-    return path(name);
-  }
-  static void expect_no_leftovers(const RunResult& r) {
-    auto left = wait_no_leftovers(r.tag);
-    EXPECT_TRUE(left.empty()) << left.size() << " lightfarm processes left behind, e.g. pid " << left[0];
-  }
-  size_t files_in_dir() const {
-    return static_cast<size_t>(std::distance(fs::directory_iterator(dir), fs::directory_iterator{}));
-  }
-};
+using FarmTest = FarmFixture;
 
 // Renders the Cornell script small and fast; returns the result and the EXR image.
 RunResult render_cornell(const std::string& output, std::vector<std::string> extra = {}) {

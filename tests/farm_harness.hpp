@@ -2,6 +2,7 @@
 // Runs the real lightfarm binary as a child process and inspects what it leaves behind. Every run gets a unique
 // tag in its environment; actors inherit it, so leftover_processes() finds any process of that farm still alive.
 #include <fcntl.h>
+#include <gtest/gtest.h>
 #include <signal.h>
 #include <spawn.h>
 #include <sys/wait.h>
@@ -156,6 +157,26 @@ class Farm {
   bool reaped_ = false;
   std::string tag_;
   fs::path dir_;
+};
+
+// A test's own temporary folder, removed afterwards.
+class FarmFixture : public ::testing::Test {
+ protected:
+  fs::path dir = fs::temp_directory_path() / ("lightfarm-test-" + unique_tag());
+  void SetUp() override { fs::create_directories(dir); }
+  void TearDown() override { fs::remove_all(dir); }
+  std::string path(const std::string& name) const { return (dir / name).string(); }
+  std::string write(const std::string& name, const std::string& text) {
+    std::ofstream(dir / name) << text;
+    return path(name);
+  }
+  size_t files_in_dir() const {
+    return static_cast<size_t>(std::distance(fs::directory_iterator(dir), fs::directory_iterator{}));
+  }
+  static void expect_no_leftovers(const RunResult& r) {
+    auto left = wait_no_leftovers(r.tag);
+    EXPECT_TRUE(left.empty()) << left.size() << " lightfarm processes left behind, e.g. pid " << left[0];
+  }
 };
 
 inline RunResult run_lightfarm(const std::vector<std::string>& args, const std::vector<std::string>& env = {}) {

@@ -14,11 +14,8 @@ namespace {
 const std::string kSource = LIGHTFARM_SOURCE_DIR;
 constexpr int kSize = 48;
 
-class NetworkTest : public ::testing::Test {
+class NetworkTest : public FarmFixture {
  protected:
-  fs::path dir = fs::temp_directory_path() / ("lightfarm-network-test-" + unique_tag());
-  void SetUp() override { fs::create_directories(dir); }
-  void TearDown() override { fs::remove_all(dir); }
   Image render(std::vector<std::string> args, const std::string& out) {
     args.insert(args.end(), {"--output", (dir / out).string()});
     auto r = run_lightfarm(args);

@@ -15,24 +15,7 @@ const std::string kSource = LIGHTFARM_SOURCE_DIR;
 const std::string kTint = kSource + "/examples/plugin-python/tint.py";
 const std::string kBroken = kSource + "/tests/actors/broken_actor.py";
 
-class PluginTest : public ::testing::Test {
- protected:
-  fs::path dir;
-  void SetUp() override {
-    dir = fs::temp_directory_path() / ("lightfarm-plugin-test-" + unique_tag());
-    fs::create_directories(dir);
-  }
-  void TearDown() override { fs::remove_all(dir); }
-  std::string path(const std::string& name) const { return (dir / name).string(); }
-  std::string write(const std::string& name, const std::string& text) {
-    std::ofstream(dir / name) << text;
-    return path(name);
-  }
-  static void expect_no_leftovers(const RunResult& r) {
-    auto left = wait_no_leftovers(r.tag);
-    EXPECT_TRUE(left.empty()) << "processes left behind";
-  }
-};
+using PluginTest = FarmFixture;
 
 int count(const std::string& text, const std::string& what) {
   int n = 0;

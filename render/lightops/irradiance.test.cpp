@@ -64,13 +64,7 @@ TEST(Irradiance, FurnaceNetworkComposedToFullDepthGivesEOverOneMinusRho) {
   const float rho = 0.5f, e = 1.0f;
   Scene s;
   auto m = s.add_material({"furnace", {rho, rho, rho}, {e, e, e}});
-  const Vec3 c[8] = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}, {0, 0, 1}, {1, 0, 1}, {1, 1, 1}, {0, 1, 1}};
-  s.add_quad(c[0], c[1], c[2], c[3], m);
-  s.add_quad(c[4], c[7], c[6], c[5], m);
-  s.add_quad(c[0], c[4], c[5], c[1], m);
-  s.add_quad(c[3], c[2], c[6], c[7], m);
-  s.add_quad(c[0], c[3], c[7], c[4], m);
-  s.add_quad(c[1], c[5], c[6], c[2], m);
+  test::add_closed_box(s, m);
   ASSERT_TRUE(s.finalize("furnace").ok());
   RayTracer tracer(s);
   SceneContext ctx{&s, &tracer};
