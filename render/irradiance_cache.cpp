@@ -91,7 +91,10 @@ void IrradianceCache::insert(const IrradianceRecord& r) {
   const float valid = kMaxRelax * a_ * r.harmonic_distance;
   int level = 0;
   while (level < 20 && cell_size(level + 1) >= valid) ++level;
-  deepest_ = std::max(deepest_, level);
+  if (std::find(levels_.begin(), levels_.end(), level) == levels_.end()) {
+    levels_.push_back(level);
+    std::sort(levels_.begin(), levels_.end());
+  }
   cells_[key_of(level, r.position)].push_back(static_cast<uint32_t>(records_.size()));
   records_.push_back(r);
 }
@@ -100,7 +103,7 @@ bool IrradianceCache::lookup(Vec3 x, Vec3 n, RGB& irradiance, float relax) const
   const float bound = a_ * relax;
   double weight_sum = 0;
   RGB sum{};
-  for (int level = 0; level <= deepest_; ++level) {
+  for (int level : levels_) {
     const Key c = key_of(level, x);
     for (int dx = -1; dx <= 1; ++dx)
       for (int dy = -1; dy <= 1; ++dy)

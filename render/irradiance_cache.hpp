@@ -68,7 +68,7 @@ class IrradianceCache {
   float root_;
   std::vector<IrradianceRecord> records_;
   std::unordered_map<Key, std::vector<uint32_t>, KeyHash> cells_;
-  int deepest_ = 0;
+  std::vector<int> levels_;  // levels that hold records, ascending: lookups visit only these
 };
 
 }  // namespace lf
