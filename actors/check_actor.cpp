@@ -21,6 +21,7 @@
 #include <thread>
 
 #include "actors/launcher.hpp"
+#include "core/log.hpp"
 #include "actors/shade_codec.hpp"
 #include "render/camera.hpp"
 #include "render/tile_kernel.hpp"
@@ -144,12 +145,6 @@ class Checker {
       }
     }
     return make_error("nothing within " + seconds_text(seconds));
-  }
-
-  static std::string seconds_text(double s) {
-    char buf[32];
-    std::snprintf(buf, sizeof buf, "%g s", s);
-    return buf;
   }
 
   std::string expect_hello() {

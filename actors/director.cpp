@@ -251,8 +251,7 @@ class Director {
         std::string late;
         for (auto& [n, a] : actors_)
           if (!a.lost && !done(a)) late += (late.empty() ? "'" : ", '") + n + "'";
-        throw FarmFailure{std::string("timed out after ") + std::to_string(static_cast<int>(timeout_seconds)) +
-                          " s waiting for " + late + " in phase " + what};
+        throw FarmFailure{"timed out after " + seconds_text(timeout_seconds) + " waiting for " + late + " in phase " + what};
       }
       pump(100);
     }
@@ -296,12 +295,6 @@ class Director {
                              : "during " + current_phase_;
       throw FarmFailure{"actor '" + name + "' (pid " + std::to_string(r.pid) + ") " + why + " " + when};
     }
-  }
-
-  static std::string seconds_text(double s) {
-    char buf[32];
-    std::snprintf(buf, sizeof buf, "%g s", s);
-    return buf;
   }
 
   int index_of(const ActorState& a) const { return static_cast<int>(a.spec - spec_.actors.data()); }

@@ -38,7 +38,6 @@ class LocalLauncher {
   std::optional<ExitReport> reap_one();
   // Waits up to `grace` for children to exit, then SIGTERM, then SIGKILL; reaps them all.
   void stop_all(std::chrono::milliseconds grace);
-  size_t running() const { return children_.size(); }
 
  private:
   std::string exe_;

@@ -39,11 +39,13 @@ struct FarmRun {
   double number(const std::string& key) const { return json_number(stats, key); }
 };
 
-// Runs `lightfarm run script --set ...`; exits the benchmark if the farm fails.
-inline FarmRun run_farm(const std::string& script, const std::vector<std::string>& sets) {
+// Runs `lightfarm run script --set ...`; exits the benchmark if the farm fails. The image goes to `output` if
+// given (the caller keeps it), else to a temporary file.
+inline FarmRun run_farm(const std::string& script, const std::vector<std::string>& sets, const std::string& output = {}) {
   const fs::path tmp = fs::temp_directory_path() / ("lightfarm-bench-" + std::to_string(::getpid()));
   fs::create_directories(tmp);
-  std::vector<std::string> args{LIGHTFARM_BINARY, "run", script, "--quiet", "--output", (tmp / "bench.exr").string(),
+  const std::string image = output.empty() ? (tmp / "bench.exr").string() : output;
+  std::vector<std::string> args{LIGHTFARM_BINARY, "run", script, "--quiet", "--output", image,
                                 "--stats-json", (tmp / "stats.json").string()};
   for (const auto& s : sets) {
     args.push_back("--set");

@@ -32,20 +32,16 @@ double relative_rmse(const lf::Image& a, const lf::Image& ref) {
   return std::sqrt(se / n) / (mean / n);
 }
 
-lf::Image run(const std::string& script, std::vector<std::string> sets, double& seconds) {
-  const std::string out = (bench::fs::temp_directory_path() / ("lightfarm-quality-" + std::to_string(::getpid()) + ".exr")).string();
-  // bench::run_farm writes to its own temporary output; render again here to keep the image.
-  std::vector<std::string> args = sets;
-  auto t0 = bench::Clock::now();
-  std::string cmd = std::string(LIGHTFARM_BINARY) + " run " + script + " --quiet --output " + out;
-  for (const auto& s : args) cmd += " --set " + s;
-  if (std::system(cmd.c_str()) != 0) {
-    std::fprintf(stderr, "failed: %s\n", cmd.c_str());
-    std::exit(1);
-  }
-  seconds = std::chrono::duration<double>(bench::Clock::now() - t0).count();
+lf::Image run(const std::string& script, const std::vector<std::string>& sets, double& seconds) {
+  const std::string out =
+      (bench::fs::temp_directory_path() / ("lightfarm-quality-" + std::to_string(::getpid()) + ".exr")).string();
+  seconds = bench::run_farm(script, sets, out).wall_seconds;
   auto img = lf::read_image(out);
   bench::fs::remove(out);
+  if (!img) {
+    std::fprintf(stderr, "%s\n", img.error().message.c_str());
+    std::exit(1);
+  }
   return *img;
 }
 

@@ -14,6 +14,12 @@ static void emit(const char* level, const std::string& message) {
   std::fprintf(stderr, "%s: %s%s\n", g_name.c_str(), level, message.c_str());
 }
 
+std::string seconds_text(double seconds) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%g s", seconds);
+  return buf;
+}
+
 void log_info(const std::string& m) { emit("", m); }
 void log_warn(const std::string& m) { emit("warning: ", m); }
 void log_error(const std::string& m) { emit("error: ", m); }

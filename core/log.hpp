@@ -11,4 +11,7 @@ void log_error(const std::string& message);
 // Debug lines appear only when LIGHTFARM_DEBUG is set in the environment.
 void log_debug(const std::string& message);
 
+// "1.5 s", "10 s": a duration as messages show it.
+std::string seconds_text(double seconds);
+
 }  // namespace lf

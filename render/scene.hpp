@@ -63,7 +63,6 @@ class Scene {
   const std::vector<PointLight>& point_lights() const { return point_lights_; }
   // Picks a light for u in [0,1); an index below emitters().size() is a triangle, above it a point light.
   size_t pick_emitter(float u, float& probability) const;
-  float emitter_probability(size_t index) const { return emitter_pdf_[index]; }
   // Probability that pick_emitter chooses triangle t (0 for non-emitters).
   float emitter_probability_of_triangle(uint32_t t) const { return triangle_light_pdf_[t]; }
 

@@ -2,8 +2,6 @@
 
 #include "core/log.hpp"
 
-#include <cstdio>
-
 namespace lf::wire {
 
 RequestClient::RequestClient(std::string self_name, std::string peer_name, size_t window)
@@ -47,9 +45,7 @@ void RequestClient::expire_overdue() {
       ++it;
     }
   }
-  char text[32];
-  std::snprintf(text, sizeof text, "%g", timeout_);
-  for (auto& cb : expired) cb(make_error("no answer from '" + peer_name_ + "' within " + text + " s"));
+  for (auto& cb : expired) cb(make_error("no answer from '" + peer_name_ + "' within " + seconds_text(timeout_)));
   pump();
 }
 

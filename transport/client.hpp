@@ -35,7 +35,6 @@ class RequestClient {
 
   size_t outstanding() const { return outstanding_.size(); }
   size_t queued() const { return queue_.size(); }
-  size_t window() const { return window_; }
   uint32_t peer_queue() const { return peer_queue_; }  // as last reported in a reply header
   uint64_t dropped_replies() const { return dropped_; }
   const std::string& peer() const { return peer_name_; }

@@ -122,13 +122,6 @@ void Poller::add(Socket& s) {
   ready_.push_back(false);
 }
 
-void Poller::remove(Socket& s) {
-  auto it = std::find(sockets_.begin(), sockets_.end(), &s);
-  if (it == sockets_.end()) return;
-  ready_.erase(ready_.begin() + (it - sockets_.begin()));
-  sockets_.erase(it);
-}
-
 const std::vector<bool>& Poller::wait(long timeout_ms) {
   std::vector<zmq::pollitem_t> items;
   items.reserve(sockets_.size());

@@ -61,11 +61,9 @@ class Socket {
 class Poller {
  public:
   void add(Socket& socket);
-  void remove(Socket& socket);
   // Returns, for each added socket in order, whether it is readable. timeout_ms < 0 waits forever.
   // Interrupted by a signal: returns all false.
   const std::vector<bool>& wait(long timeout_ms);
-  size_t size() const { return sockets_.size(); }
 
  private:
   std::vector<Socket*> sockets_;

@@ -40,13 +40,19 @@ struct PhotonCloud {
 using KdTree = nanoflann::KDTreeSingleIndexAdaptor<nanoflann::L2_Simple_Adaptor<float, PhotonCloud>, PhotonCloud, 3,
                                                    uint32_t>;
 
+enum class Filter { cone, epanechnikov, none };
+
+Filter filter_of(const std::string& name) {
+  return name == "cone" ? Filter::cone : name == "epanechnikov" ? Filter::epanechnikov : Filter::none;
+}
+
 class PhotonMap final : public LightOp {
  public:
   explicit PhotonMap(const ParamTable& p)
       : photons_(static_cast<uint64_t>(p.get_int("photons", 500000, 1, int64_t{1} << 32))),
         k_(static_cast<size_t>(p.get_int("k", 64, 1, 10000))),
         max_radius_(static_cast<float>(p.get_float("max_radius", 0, 0, 1e30))),
-        filter_(p.get_string("filter", "cone", {"cone", "epanechnikov", "none"})),
+        filter_(filter_of(p.get_string("filter", "cone", {"cone", "epanechnikov", "none"}))),
         cone_k_(static_cast<float>(p.get_float("cone_k", 1.1, 1.0, 100))),
         max_depth_(static_cast<int>(p.get_int("max_depth", 16, 1, 256))),
         seed_(static_cast<uint64_t>(p.get_int("seed", 0, 0, INT32_MAX))) {}
@@ -104,11 +110,11 @@ class PhotonMap final : public LightOp {
         if (dot(ph.incoming, points.normal[i]) <= 0) continue;  // arrived on the other side
         float w = 1.0f;
         const float d = std::sqrt(dist2[j]);
-        if (filter_ == "cone") w = 1.0f - d / (cone_k_ * r);
-        else if (filter_ == "epanechnikov") w = 2.0f * (1.0f - dist2[j] / r2);  // normalised over the disc
+        if (filter_ == Filter::cone) w = 1.0f - d / (cone_k_ * r);
+        else if (filter_ == Filter::epanechnikov) w = 2.0f * (1.0f - dist2[j] / r2);  // normalised over the disc
         sum += bsdf.eval(points.normal[i], points.wo[i], ph.incoming) * ph.flux * w;
       }
-      const float norm = filter_ == "cone" ? 1.0f - 2.0f / (3.0f * cone_k_) : 1.0f;
+      const float norm = filter_ == Filter::cone ? 1.0f - 2.0f / (3.0f * cone_k_) : 1.0f;
       radiance[i] = sum * (1.0f / (kPi * r2 * norm));
     }
     co_return;
@@ -187,7 +193,7 @@ class PhotonMap final : public LightOp {
   uint64_t photons_;
   size_t k_;
   float max_radius_;
-  std::string filter_;
+  Filter filter_;
   float cone_k_;
   int max_depth_;
   uint64_t seed_;
