@@ -193,8 +193,55 @@ static Scene cornell_box(bool glass) {
   return s;
 }
 
+// A furnished room (metres, 6 x 3 x 5) for radiosity: walls, floor and ceiling facing in, a ceiling panel light,
+// a table and two chairs, a sofa and a cabinet as boxes. Only quads, so that radiosity meshes it as authored.
+static Scene furnished_room() {
+  Scene s;
+  const auto wall = s.add_material({"wall", {0.75f, 0.73f, 0.70f}, {}});
+  const auto blue_wall = s.add_material({"blue wall", {0.30f, 0.42f, 0.65f}, {}});
+  const auto floor = s.add_material({"floor", {0.55f, 0.42f, 0.30f}, {}});
+  const auto wood = s.add_material({"wood", {0.45f, 0.30f, 0.18f}, {}});
+  const auto fabric = s.add_material({"fabric", {0.65f, 0.12f, 0.10f}, {}});
+  const auto light = s.add_material({"panel", {0.8f, 0.8f, 0.8f}, {12.0f, 11.0f, 9.0f}});
+  auto face = [&](Vec3 o, Vec3 u, Vec3 v, uint32_t m) { s.add_quad(o, o + u, o + u + v, o + v, m); };
+  // Outward faces of an axis-aligned box; boxes standing on the floor leave out their bottom.
+  auto box = [&](Vec3 lo, Vec3 hi, uint32_t m) {
+    const Vec3 d = hi - lo;
+    face({hi.x, lo.y, lo.z}, {0, d.y, 0}, {0, 0, d.z}, m);
+    face(lo, {0, 0, d.z}, {0, d.y, 0}, m);
+    face({lo.x, hi.y, lo.z}, {0, 0, d.z}, {d.x, 0, 0}, m);
+    if (lo.y > 0) face(lo, {d.x, 0, 0}, {0, 0, d.z}, m);
+    face({lo.x, lo.y, hi.z}, {d.x, 0, 0}, {0, d.y, 0}, m);
+    face(lo, {0, d.y, 0}, {d.x, 0, 0}, m);
+  };
+  face({0, 0, 0}, {0, 0, 5}, {6, 0, 0}, floor);
+  face({0, 3, 0}, {6, 0, 0}, {0, 0, 5}, wall);
+  face({0, 0, 0}, {0, 3, 0}, {0, 0, 5}, wall);
+  face({6, 0, 0}, {0, 0, 5}, {0, 3, 0}, blue_wall);
+  face({0, 0, 0}, {6, 0, 0}, {0, 3, 0}, wall);
+  face({0, 0, 5}, {0, 3, 0}, {6, 0, 0}, wall);
+  face({2.4f, 2.99f, 2.0f}, {1.2f, 0, 0}, {0, 0, 1.0f}, light);
+  auto table = [&](float x, float z, float w, float d, float h) {
+    box({x, h - 0.05f, z}, {x + w, h, z + d}, wood);
+    for (float lx : {x + 0.03f, x + w - 0.09f})
+      for (float lz : {z + 0.03f, z + d - 0.09f}) box({lx, 0, lz}, {lx + 0.06f, h - 0.05f, lz + 0.06f}, wood);
+  };
+  table(1.8f, 1.6f, 1.8f, 1.0f, 0.75f);
+  for (float x : {2.0f, 3.0f}) {
+    table(x, 2.9f, 0.45f, 0.45f, 0.47f);                         // seat on legs
+    box({x, 0.47f, 3.3f}, {x + 0.45f, 1.0f, 3.35f}, wood);       // backrest
+  }
+  box({0.05f, 0, 1.2f}, {0.95f, 0.45f, 3.6f}, fabric);           // sofa
+  box({0.05f, 0.45f, 1.2f}, {0.30f, 0.90f, 3.6f}, fabric);
+  box({0.30f, 0.45f, 1.2f}, {0.95f, 0.65f, 1.4f}, fabric);
+  box({0.30f, 0.45f, 3.4f}, {0.95f, 0.65f, 3.6f}, fabric);
+  box({5.45f, 0, 0.8f}, {5.95f, 1.9f, 2.4f}, wood);              // cabinet
+  box({4.2f, 0, 4.3f}, {5.6f, 0.5f, 4.9f}, wood);                // chest
+  return s;
+}
+
 const std::vector<std::string>& Scene::builtin_names() {
-  static const std::vector<std::string> names{"cornell", "cornell_glass"};
+  static const std::vector<std::string> names{"cornell", "cornell_glass", "room"};
   return names;
 }
 
@@ -209,6 +256,8 @@ Result<Scene> Scene::builtin_unlit(const std::string& name) {
   Scene s;
   if (name == "cornell" || name == "cornell_glass") {
     s = cornell_box(name == "cornell_glass");
+  } else if (name == "room") {
+    s = furnished_room();
   } else {
     std::string known;
     for (const auto& n : builtin_names()) known += (known.empty() ? "" : ", ") + n;

@@ -1,0 +1,177 @@
+#include "radiosity/bsp.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <numeric>
+#include <queue>
+
+namespace lf::radiosity {
+
+bool Box::overlaps(const Box& b, float slack) const {
+  for (int a = 0; a < 3; ++a)
+    if (lo[a] > b.hi[a] + slack || b.lo[a] > hi[a] + slack) return false;
+  return true;
+}
+
+Box bounds(const Polygon& p) {
+  Box b{p.v[0], p.v[0]};
+  for (int i = 1; i < p.count; ++i) {
+    const Vec3 v = p.v[static_cast<size_t>(i)];
+    b.lo = {std::min(b.lo.x, v.x), std::min(b.lo.y, v.y), std::min(b.lo.z, v.z)};
+    b.hi = {std::max(b.hi.x, v.x), std::max(b.hi.y, v.y), std::max(b.hi.z, v.z)};
+  }
+  return b;
+}
+
+static Vec3 with(Vec3 v, int axis, float value) {
+  if (axis == 0) v.x = value;
+  if (axis == 1) v.y = value;
+  if (axis == 2) v.z = value;
+  return v;
+}
+
+int GlobalBsp::build_node(const Mesh& mesh, const std::vector<uint32_t>& surfaces, Box box, int depth, int max_depth,
+                          bool median) {
+  const int index = static_cast<int>(nodes_.size());
+  nodes_.emplace_back();
+  if (depth == max_depth) {
+    nodes_[static_cast<size_t>(index)].leaf = static_cast<int>(leaves_.size());
+    leaves_.push_back(surfaces);
+    leaf_box_.push_back(box);
+    return index;
+  }
+  const Vec3 extent = box.hi - box.lo;
+  const int axis = extent.x >= extent.y && extent.x >= extent.z ? 0 : (extent.y >= extent.z ? 1 : 2);
+  float split = 0.5f * (box.lo[axis] + box.hi[axis]);
+  if (median && !surfaces.empty()) {
+    std::vector<float> c;
+    for (uint32_t s : surfaces) c.push_back(mesh.surfaces[s].polygon.centroid()[axis]);
+    std::nth_element(c.begin(), c.begin() + static_cast<long>(c.size() / 2), c.end());
+    const float m = c[c.size() / 2];
+    // A median on the box's face would leave one side empty: keep the middle then.
+    if (m > box.lo[axis] + slack_ && m < box.hi[axis] - slack_) split = m;
+  }
+  Box left = box, right = box;
+  left.hi = with(left.hi, axis, split);
+  right.lo = with(right.lo, axis, split);
+  std::vector<uint32_t> in_left, in_right;
+  for (uint32_t s : surfaces) {
+    const Box b = bounds(mesh.surfaces[s].polygon);
+    if (b.overlaps(left, slack_)) in_left.push_back(s);
+    if (b.overlaps(right, slack_)) in_right.push_back(s);
+  }
+  const int l = build_node(mesh, in_left, left, depth + 1, max_depth, median);
+  const int r = build_node(mesh, in_right, right, depth + 1, max_depth, median);
+  Node& n = nodes_[static_cast<size_t>(index)];
+  n.axis = axis;
+  n.split = split;
+  n.left = l;
+  n.right = r;
+  return index;
+}
+
+static double imbalance(const std::vector<size_t>& counts) {
+  const double total = std::accumulate(counts.begin(), counts.end(), 0.0);
+  if (total <= 0) return 1.0;
+  return static_cast<double>(*std::max_element(counts.begin(), counts.end())) / (total / static_cast<double>(counts.size()));
+}
+
+GlobalBsp GlobalBsp::build(const Mesh& mesh, int positions, bool balanced) {
+  const int base = positions <= 1 ? 0 : static_cast<int>(std::ceil(std::log2(static_cast<double>(positions))));
+  std::vector<uint32_t> all(mesh.surfaces.size());
+  std::iota(all.begin(), all.end(), 0u);
+  const float slack = 4 * mesh.epsilon;
+  const Box root{mesh.lo - Vec3{slack, slack, slack}, mesh.hi + Vec3{slack, slack, slack}};
+  GlobalBsp best;
+  double best_imbalance = INFINITY;
+  // Deeper trees spread surfaces more evenly but cost every node memory (seed 003 §5.2): take the shallowest
+  // that is within 5 % of even.
+  const int deepest = balanced ? base + 6 : base;
+  for (int depth = base; depth <= deepest; ++depth) {
+    GlobalBsp t;
+    t.positions_ = positions;
+    t.depth_ = depth;
+    t.slack_ = slack;
+    t.build_node(mesh, all, root, 0, depth, balanced);
+    t.owner_.assign(t.leaves_.size(), 0);
+    if (balanced) {
+      std::vector<size_t> order(t.leaves_.size());
+      std::iota(order.begin(), order.end(), 0);
+      std::stable_sort(order.begin(), order.end(),
+                       [&](size_t a, size_t b) { return t.leaves_[a].size() > t.leaves_[b].size(); });
+      using Load = std::pair<size_t, int>;
+      std::priority_queue<Load, std::vector<Load>, std::greater<>> loads;
+      for (int p = 0; p < positions; ++p) loads.push({0, p});
+      for (size_t leaf : order) {
+        auto [load, p] = loads.top();
+        loads.pop();
+        t.owner_[leaf] = p;
+        loads.push({load + t.leaves_[leaf].size(), p});
+      }
+    } else {
+      for (size_t leaf = 0; leaf < t.leaves_.size(); ++leaf) t.owner_[leaf] = static_cast<int>(leaf % static_cast<size_t>(positions));
+    }
+    t.held_.assign(static_cast<size_t>(positions), {});
+    for (size_t leaf = 0; leaf < t.leaves_.size(); ++leaf)
+      for (uint32_t s : t.leaves_[leaf]) t.held_[static_cast<size_t>(t.owner_[leaf])].push_back(s);
+    for (auto& h : t.held_) {
+      std::sort(h.begin(), h.end());
+      h.erase(std::unique(h.begin(), h.end()), h.end());
+    }
+    const double im = imbalance(t.surface_counts());
+    if (im < best_imbalance - 1e-9) {
+      best_imbalance = im;
+      best = std::move(t);
+    }
+    if (best_imbalance <= 1.05) break;
+  }
+  return best;
+}
+
+std::vector<size_t> GlobalBsp::surface_counts() const {
+  std::vector<size_t> c;
+  for (const auto& h : held_) c.push_back(h.size());
+  return c;
+}
+
+int GlobalBsp::position_of_point(Vec3 p) const {
+  int n = 0;
+  while (nodes_[static_cast<size_t>(n)].axis >= 0) {
+    const Node& node = nodes_[static_cast<size_t>(n)];
+    n = p[node.axis] <= node.split ? node.left : node.right;
+  }
+  return owner_[static_cast<size_t>(nodes_[static_cast<size_t>(n)].leaf)];
+}
+
+void GlobalBsp::route_node(int index, Vec3 a, Vec3 d, float t0, float t1, uint64_t& bits) const {
+  const Node& n = nodes_[static_cast<size_t>(index)];
+  if (n.axis < 0) {
+    bits |= uint64_t{1} << owner_[static_cast<size_t>(n.leaf)];
+    return;
+  }
+  const float o = a[n.axis], dir = d[n.axis];
+  // Left holds coordinates <= split + slack, right >= split - slack; visit each side the segment reaches.
+  auto visit = [&](int child, bool below, float plane) {
+    float lo = t0, hi = t1;
+    if (dir == 0) {
+      if (below ? o > plane : o < plane) return;
+    } else {
+      const float t = (plane - o) / dir;
+      if ((dir > 0) == below)
+        hi = std::min(hi, t);
+      else
+        lo = std::max(lo, t);
+    }
+    if (lo <= hi) route_node(child, a, d, lo, hi, bits);
+  };
+  visit(n.left, true, n.split + slack_);
+  visit(n.right, false, n.split - slack_);
+}
+
+uint64_t GlobalBsp::route(Vec3 a, Vec3 b) const {
+  uint64_t bits = 0;
+  route_node(0, a, b - a, 0.0f, 1.0f, bits);
+  return bits;
+}
+
+}  // namespace lf::radiosity

@@ -1,0 +1,93 @@
+#include "radiosity/ply.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <tuple>
+
+namespace lf::radiosity {
+
+RadiosityField vertex_field(const Mesh& mesh, const std::vector<Element>& elements) {
+  RadiosityField f;
+  // Corners meet exactly where elements share them (they come from the same midpoint arithmetic), so exact keys
+  // per surface find the neighbours.
+  std::map<std::tuple<uint32_t, float, float, float>, uint32_t> index;
+  std::vector<double> weight;
+  std::vector<std::array<double, 3>> sum;
+  for (const auto& e : elements) {
+    if (!e.leaf) continue;
+    const Patch& patch = mesh.patches[e.patch];
+    const double area = e.polygon.area();
+    uint32_t corner[4];
+    for (int i = 0; i < e.polygon.count; ++i) {
+      const Vec3 v = e.polygon.v[static_cast<size_t>(i)];
+      auto [it, fresh] = index.try_emplace({patch.surface, v.x, v.y, v.z}, static_cast<uint32_t>(f.position.size()));
+      if (fresh) {
+        f.position.push_back(v);
+        f.emission.push_back(patch.emission);
+        weight.push_back(0);
+        sum.push_back({0, 0, 0});
+      }
+      corner[i] = it->second;
+      weight[it->second] += area;
+      sum[it->second][0] += area * e.radiosity.x;
+      sum[it->second][1] += area * e.radiosity.y;
+      sum[it->second][2] += area * e.radiosity.z;
+    }
+    f.triangles.push_back({corner[0], corner[1], corner[2]});
+    if (e.polygon.count == 4) f.triangles.push_back({corner[0], corner[2], corner[3]});
+  }
+  f.radiosity.resize(f.position.size());
+  for (size_t i = 0; i < f.position.size(); ++i)
+    f.radiosity[i] = {static_cast<float>(sum[i][0] / weight[i]), static_cast<float>(sum[i][1] / weight[i]),
+                      static_cast<float>(sum[i][2] / weight[i])};
+  return f;
+}
+
+static unsigned char srgb8(float linear) {
+  const float c = std::clamp(linear, 0.0f, 1.0f);
+  const float s = c <= 0.0031308f ? 12.92f * c : 1.055f * std::pow(c, 1 / 2.4f) - 0.055f;
+  return static_cast<unsigned char>(std::lround(s * 255));
+}
+
+Status write_ply(const RadiosityField& field, const std::string& path) {
+  const std::string temp = path + ".partial";
+  {
+    std::ofstream out(temp, std::ios::binary);
+    if (!out) return make_error("cannot write '" + path + "'");
+    out << "ply\nformat binary_little_endian 1.0\ncomment lightfarm radiosity solution\n"
+        << "element vertex " << field.position.size() << "\n"
+        << "property float x\nproperty float y\nproperty float z\n"
+        << "property float radiosity_r\nproperty float radiosity_g\nproperty float radiosity_b\n"
+        << "property uchar red\nproperty uchar green\nproperty uchar blue\n"
+        << "element face " << field.triangles.size() << "\nproperty list uchar uint vertex_indices\nend_header\n";
+    for (size_t i = 0; i < field.position.size(); ++i) {
+      const Vec3 p = field.position[i], b = field.radiosity[i];
+      const float values[6] = {p.x, p.y, p.z, b.x, b.y, b.z};
+      out.write(reinterpret_cast<const char*>(values), sizeof values);
+      const unsigned char rgb[3] = {srgb8(b.x / kPi), srgb8(b.y / kPi), srgb8(b.z / kPi)};
+      out.write(reinterpret_cast<const char*>(rgb), 3);
+    }
+    for (const auto& t : field.triangles) {
+      const unsigned char three = 3;
+      out.write(reinterpret_cast<const char*>(&three), 1);
+      out.write(reinterpret_cast<const char*>(t.data()), 3 * sizeof(uint32_t));
+    }
+    if (!out.flush()) {
+      std::remove(temp.c_str());
+      return make_error("cannot write '" + path + "' (disk full?)");
+    }
+  }
+  std::error_code ec;
+  std::filesystem::rename(temp, path, ec);
+  if (ec) {
+    std::remove(temp.c_str());
+    return make_error("cannot write '" + path + "': " + ec.message());
+  }
+  return Ok{};
+}
+
+}  // namespace lf::radiosity

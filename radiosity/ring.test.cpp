@@ -1,0 +1,206 @@
+#include "radiosity/ring.hpp"
+
+#include <gtest/gtest.h>
+
+#include <deque>
+#include <random>
+
+namespace lf::radiosity {
+namespace {
+
+Mesh cornell_mesh() {
+  auto scene = Scene::builtin("cornell");
+  EXPECT_TRUE(scene);
+  auto mesh = build_mesh(*scene, {110.0f, 55.0f});
+  EXPECT_TRUE(mesh);
+  return *mesh;
+}
+
+// Exact segment-polygon intersection points, by brute force over every surface (double precision).
+std::vector<std::pair<uint32_t, Vec3>> crossings(const Mesh& mesh, Vec3 a, Vec3 b) {
+  std::vector<std::pair<uint32_t, Vec3>> hits;
+  for (uint32_t s = 0; s < mesh.surfaces.size(); ++s) {
+    const Polygon& p = mesh.surfaces[s].polygon;
+    const Vec3 n = p.normal();
+    const double da = dot(n, a - p.v[0]), db = dot(n, b - p.v[0]);
+    if ((da > 0) == (db > 0) || da == db) continue;
+    const Vec3 x = a + (b - a) * static_cast<float>(da / (da - db));
+    bool inside = true;
+    for (int i = 0; i < p.count; ++i) {
+      const Vec3 e = p.v[static_cast<size_t>((i + 1) % p.count)] - p.v[static_cast<size_t>(i)];
+      if (dot(cross(e, x - p.v[static_cast<size_t>(i)]), n) < 0) inside = false;
+    }
+    if (inside) hits.emplace_back(s, x);
+  }
+  return hits;
+}
+
+// A processor vector may include extra positions, but never leaves out the one whose space holds a blocker, and
+// that position holds the blocking surface.
+TEST(GlobalBsp, ProcessorVectorsNeverSkipABlocker) {
+  const Mesh mesh = cornell_mesh();
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<float> u(0, 1);
+  auto random_point = [&] {
+    return Vec3{mesh.lo.x + u(rng) * (mesh.hi.x - mesh.lo.x), mesh.lo.y + u(rng) * (mesh.hi.y - mesh.lo.y),
+                mesh.lo.z + u(rng) * (mesh.hi.z - mesh.lo.z)};
+  };
+  for (bool balanced : {false, true}) {
+    for (int positions : {2, 3, 4, 7}) {
+      const GlobalBsp bsp = GlobalBsp::build(mesh, positions, balanced);
+      size_t checked = 0, skipped = 0;
+      for (int i = 0; i < 3000; ++i) {
+        const Vec3 a = random_point(), b = random_point();
+        const uint64_t route = bsp.route(a, b);
+        skipped += static_cast<size_t>(positions - std::popcount(route));
+        for (const auto& [surface, x] : crossings(mesh, a, b)) {
+          const int p = bsp.position_of_point(x);
+          ASSERT_TRUE(route >> p & 1) << "segment skips position " << p << " where it crosses surface " << surface;
+          const auto& held = bsp.surfaces_of(p);
+          ASSERT_TRUE(std::binary_search(held.begin(), held.end(), surface));
+          ++checked;
+        }
+      }
+      EXPECT_GT(checked, 1000u);
+      if (positions > 2) {
+        EXPECT_GT(skipped, 0u) << "processor vectors should let some packets skip nodes";
+      }
+    }
+  }
+}
+
+TEST(GlobalBsp, StaticBalancingEvensSurfaceCounts) {
+  auto scene = Scene::builtin("room");
+  ASSERT_TRUE(scene) << scene.error().message;
+  auto mesh = build_mesh(*scene, {});
+  ASSERT_TRUE(mesh);
+  auto imbalance = [](const std::vector<size_t>& c) {
+    double sum = 0, most = 0;
+    for (size_t x : c) {
+      sum += static_cast<double>(x);
+      most = std::max(most, static_cast<double>(x));
+    }
+    return most / (sum / static_cast<double>(c.size()));
+  };
+  for (int positions : {2, 4, 8}) {
+    const double plain = imbalance(GlobalBsp::build(*mesh, positions, false).surface_counts());
+    const double even = imbalance(GlobalBsp::build(*mesh, positions, true).surface_counts());
+    EXPECT_LE(even, plain) << positions;
+    EXPECT_LT(even, 1.15) << positions;
+  }
+}
+
+// Runs a ring in one process: packets go round in FIFO order; with `borrow`, an idle node takes a pending packet
+// of the node at its position in another ring and runs it round its own ring.
+struct RingRun {
+  std::map<uint32_t, std::vector<RGB>> radiosity;  // per patch, its elements in creation order
+  std::vector<uint32_t> shooters;
+  std::vector<NodeWork> work;
+};
+
+RingRun run_ring(const Mesh& mesh, RingLayout layout, bool balance, bool borrow, const SolverSettings& settings) {
+  const int n = layout.nodes();
+  const auto owner = assign_patches(mesh, n, balance);
+  const GlobalBsp bsp = GlobalBsp::build(mesh, layout.length, balance);
+  std::vector<std::unique_ptr<RingNode>> nodes;
+  for (int i = 0; i < n; ++i) {
+    std::vector<uint32_t> mine;
+    for (uint32_t p = 0; p < owner.size(); ++p)
+      if (owner[p] == i) mine.push_back(p);
+    nodes.push_back(std::make_unique<RingNode>(mesh, bsp, layout, i, mine, settings, RingSettings{8, 0}));
+  }
+  RingRun run;
+  const double emitted = mesh.emitted_power();
+  struct Hop {
+    int node;
+    bool home;      // arriving home after the round
+    int home_node;  // the node it circulates for in this ring
+    SamplePacket packet;
+  };
+  for (int it = 0; it < settings.max_iterations; ++it) {
+    Candidate best;
+    double unshot = 0;
+    for (auto& node : nodes) {
+      unshot += node->unshot_power();
+      if (node->candidate().beats(best)) best = node->candidate();
+    }
+    if (unshot / emitted < settings.converge || best.patch == UINT32_MAX) break;
+    run.shooters.push_back(best.patch);
+    const Shooter shooter = make_shooter(mesh, best.patch, best.unshot, settings.shooter_samples);
+    for (auto& node : nodes) node->begin_iteration(static_cast<uint32_t>(it), shooter);
+    std::deque<Hop> queue;
+    auto start = [&](int at, SamplePacket p) { queue.push_back({at, false, at, std::move(p)}); };
+    for (bool busy = true; busy;) {
+      busy = false;
+      for (int i = 0; i < n; ++i) {
+        if (auto p = nodes[static_cast<size_t>(i)]->take_pending()) {
+          start(i, std::move(*p));
+          busy = true;
+        } else if (borrow && nodes[static_cast<size_t>(i)]->finished()) {
+          for (int r = 0; r < layout.rings; ++r) {
+            auto& other = *nodes[static_cast<size_t>(layout.node(r, layout.position_of(i)))];
+            if (auto q = other.take_pending()) {
+              start(i, std::move(*q));
+              busy = true;
+              break;
+            }
+          }
+        }
+      }
+      while (!queue.empty()) {
+        busy = true;
+        Hop h = std::move(queue.front());
+        queue.pop_front();
+        RingNode& node = *nodes[static_cast<size_t>(h.node)];
+        if (h.home) {
+          EXPECT_TRUE(nodes[h.packet.origin]->complete(h.packet)) << "packet came home twice";
+          continue;
+        }
+        node.process(h.packet);
+        const int next = node.next_position(h.packet, node.position());
+        if (next >= 0)
+          queue.push_back({layout.node(node.ring(), next), false, h.home_node, std::move(h.packet)});
+        else
+          queue.push_back({h.home_node, true, h.home_node, std::move(h.packet)});
+      }
+    }
+    for (auto& node : nodes) EXPECT_TRUE(node->finished());
+  }
+  for (auto& node : nodes) {
+    for (const auto& e : node->part().elements()) run.radiosity[e.patch].push_back(e.radiosity);
+    run.work.push_back(node->work());
+  }
+  return run;
+}
+
+// The ring computes what the serial solver computes: the same shooters, the same element radiosities.
+TEST(Ring, GivesTheSerialSolversAnswerInEveryLayout) {
+  SolverSettings settings;
+  settings.subdivide = 0.15f;
+  settings.max_iterations = 25;
+  for (bool balance : {false, true}) {
+    for (RingLayout layout : {RingLayout{1, 1}, RingLayout{1, 3}, RingLayout{2, 2}}) {
+      Mesh mesh = cornell_mesh();
+      if (balance) split_for_balance(mesh, layout.nodes());
+      const SceneVisibility vis(mesh);
+      const auto serial = solve_serial(mesh, settings, std::cref(vis));
+      std::map<uint32_t, std::vector<RGB>> expected;
+      for (const auto& e : serial.elements) expected[e.patch].push_back(e.radiosity);
+      const auto ring = run_ring(mesh, layout, balance, balance, settings);
+      std::vector<uint32_t> shooters;
+      for (const auto& it : serial.iterations) shooters.push_back(it.shooter);
+      EXPECT_EQ(ring.shooters, shooters) << layout.rings << "x" << layout.length;
+      ASSERT_EQ(ring.radiosity.size(), expected.size());
+      for (const auto& [patch, values] : expected) {
+        ASSERT_EQ(ring.radiosity.at(patch).size(), values.size()) << "patch " << patch;
+        for (size_t i = 0; i < values.size(); ++i)
+          for (int c = 0; c < 3; ++c)
+            ASSERT_NEAR(ring.radiosity.at(patch)[i][c], values[i][c], 1e-4 * std::max(1.0f, values[i][c]))
+                << "patch " << patch << " element " << i;
+      }
+    }
+  }
+}
+
+}  // namespace
+}  // namespace lf::radiosity
