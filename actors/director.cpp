@@ -5,6 +5,7 @@
 #include <unistd.h>
 
 #include <chrono>
+#include <filesystem>
 #include <cmath>
 #include <cstdio>
 #include <fstream>
@@ -14,6 +15,7 @@
 
 #include "actors/launcher.hpp"
 #include "actors/render_master.hpp"
+#include "actors/ring_coordinator.hpp"
 #include "actors/runtime.hpp"
 #include "core/log.hpp"
 #include "render/image.hpp"
@@ -86,7 +88,8 @@ class Progress {
 
 class Director {
  public:
-  Director(const FarmSpec& spec, const RunOptions& options) : spec_(spec), options_(options) {}
+  Director(const FarmSpec& spec, const RunOptions& options)
+      : spec_(spec), options_(options), ring_(spec, options.quiet) {}
 
   int run() {
     install_stop_signals();
@@ -140,6 +143,15 @@ class Director {
     // The director reads the scene once itself, so a broken scene stops the farm before anything launches.
     auto scene = Scene::load(spec_.scene);
     if (!scene) throw FarmFailure{spec_.scene.loc.str() + ": " + scene.error().message};
+    if (ring_.active()) {
+      if (auto st = ring_.prepare(*scene); !st) throw FarmFailure{st.error().message};
+      if (!ring_.ply_path().empty()) {
+        const auto dir = std::filesystem::path(ring_.ply_path()).parent_path();
+        if (::access(dir.c_str(), W_OK) != 0)
+          throw FarmFailure{"radiosity: cannot write '" + ring_.ply_path() + "': folder '" + dir.string() +
+                            "' does not exist or is not writable"};
+      }
+    }
     auto endpoint = control_.bind("tcp://127.0.0.1:*");
     if (!endpoint) throw FarmFailure{endpoint.error().message};
     control_endpoint_ = *endpoint;
@@ -447,9 +459,26 @@ class Director {
       if (master_->finished()) serve_waiting_tile_requests();
     } else if (m.header.op == "all_gather") {
       on_all_gather(a, m);
+    } else if (m.header.op == "ring.shooter" || m.header.op == "ring.result") {
+      auto replies = m.header.op == "ring.shooter" ? ring_.on_shooter(name, m.header.id, m.body)
+                                                   : ring_.on_result(name, m.header.id, m.body);
+      if (!replies) throw FarmFailure{replies.error().message};
+      for (auto& r : *replies) send(r.node, wire::make(MsgType::reply, "director", m.header.op, std::move(r.body), r.id));
+      if (ring_.solved()) serve_waiting_fetches();
+    } else if (m.header.op == "fetch") {
+      const Value* key = m.body.find("key");
+      if (!key || !key->is_string() || key->as_string() != "radiosity" || !ring_.active()) {
+        send(name, wire::make_error_reply("director", m.header.id, "not_found",
+                                          "this farm publishes no '" + (key && key->is_string() ? key->as_string() : std::string("?")) +
+                                              "' (a radiosity LightOp needs radiosity { ... } in the script)"));
+        return;
+      }
+      waiting_fetches_.emplace_back(name, m.header.id);
+      if (ring_.solved()) serve_waiting_fetches();
     } else {
       send(name, wire::make_error_reply("director", m.header.id, "unknown_op",
-                                        "the director serves 'tile', 'tile_done' and 'all_gather'"));
+                                        "the director serves 'tile', 'tile_done', 'all_gather', 'fetch' and the ring's "
+                                        "'ring.shooter' and 'ring.result'"));
     }
   }
 
@@ -485,6 +514,12 @@ class Director {
       send(spec_.actors[static_cast<size_t>(replicas[r])].name,
            wire::make(MsgType::reply, "director", "all_gather", Value::Map{{"parts", all}}, g.askers[r]));
     gathers_.erase(pool);
+  }
+
+  void serve_waiting_fetches() {
+    for (auto& [name, id] : waiting_fetches_)
+      send(name, wire::make(MsgType::reply, "director", "fetch", Value::Map{{"blob", Bytes{ring_.solution()}}}, id));
+    waiting_fetches_.clear();
   }
 
   // Answers waiting tile requests: a tile each while tiles are free; "none left" once every tile is done.
@@ -567,6 +602,7 @@ class Director {
                              {"totals", Value::Map{{"renderer_shading_requests", shading_requests},
                                                    {"messages_sent", messages}}},
                              {"actors", std::move(actors)}};
+      if (ring_.active()) doc.as_map()["radiosity"] = ring_.report();
       std::ofstream out(options_.stats_json);
       out << to_json(doc, 2) << "\n";
       if (!out) log_warn("could not write stats to '" + options_.stats_json + "'");
@@ -580,6 +616,8 @@ class Director {
   std::string control_endpoint_;
   std::map<std::string, ActorState> actors_;
   std::unique_ptr<RenderMaster> master_;
+  RingCoordinator ring_;
+  std::vector<std::pair<std::string, uint64_t>> waiting_fetches_;
   std::vector<std::pair<std::string, uint64_t>> waiting_tile_requests_;
   struct PendingGather {
     std::vector<Value> parts;     // nil until that replica sent its part

@@ -82,6 +82,19 @@ class DirectorExchange final : public Exchange {
     return Gather(state);
   }
 
+  Gather fetch(const std::string& key, std::string* blob) override {
+    auto state = std::make_shared<GatherState>();
+    state->remaining = 1;
+    rt_.ask_director("fetch", Value::Map{{"key", key}}, [state, blob, key](Result<wire::Message> r) {
+      if (!r) return state->complete_one("fetch '" + key + "': " + r.error().message);
+      const Value* b = r->body.find("blob");
+      if (!b || !b->is_bytes()) return state->complete_one("fetch '" + key + "': the director sent no blob");
+      *blob = b->as_bytes().data;
+      state->complete_one();
+    });
+    return Gather(state);
+  }
+
  private:
   Runtime& rt_;
 };
@@ -107,10 +120,8 @@ class LightOpActor final : public Actor {
     if (const Value* pool = config.find("pool"); pool && pool->is_map()) {
       replica_index_ = static_cast<int>(pool->find("index")->as_int());
       replica_count_ = static_cast<int>(pool->find("count")->as_int());
-      exchange_ = std::make_unique<DirectorExchange>(rt);
-    } else {
-      exchange_ = std::make_unique<SoloExchange>();
     }
+    exchange_ = std::make_unique<DirectorExchange>(rt);  // a lone op's all_gather comes straight back from it
     if (const Value* slow = rt.runtime_settings().find("slowdown"); slow && slow->is_number())
       slowdown_ = std::max(1.0, slow->as_double());
     return Ok{};

@@ -1,7 +1,7 @@
 // The farm-script library. Like Lua's own libraries: one registration table, every argument checked with
 // luaL_check*, so a mistake comes back as "farm.lua:12: what is wrong".
 //
-// Globals a script sees: scene, camera, image, light, lightop, multiplexer, renderers, host, farm, param (and Lua's base, string, table,
+// Globals a script sees: scene, camera, image, light, lightop, multiplexer, radiosity, renderers, host, farm, param (and Lua's base, string, table,
 // math and utf8 libraries; no io or os, so a script describes a farm and does nothing else).
 #include "lua/script.hpp"
 
@@ -13,6 +13,7 @@
 #include <map>
 #include <set>
 
+#include "radiosity/config.hpp"
 #include "core/params.hpp"
 #include "render/lightop_registry.hpp"
 #include "render/scene.hpp"
@@ -31,6 +32,7 @@ struct Builder {
   fs::path script_dir;
   std::set<std::string> consumed_params;
   bool have_scene = false, have_camera = false, have_image = false, have_renderers = false;
+  bool have_radiosity = false;
 };
 
 Builder& builder(lua_State* L) { return *static_cast<Builder*>(lua_touserdata(L, lua_upvalueindex(1))); }
@@ -559,6 +561,49 @@ int l_renderers(lua_State* L) {
   return 0;
 }
 
+// radiosity { rings = 2, ring_length = 4, samples_per_packet = 50, shooter_samples = 16, balance = "static+dynamic",
+//             patch_size, element_size, subdivide, max_depth, converge, max_iterations, max_visits, ply, name, host }
+// -> the `radiosity` LightOp. Declares the ring nodes (NAME.RING.POSITION, one process each) that solve the scene
+// in the setup phase, and the LightOp that shades with their solution.
+int l_radiosity(lua_State* L) {
+  Builder& b = builder(L);
+  if (b.have_radiosity) luaL_error(L, "radiosity is declared twice (a farm has one radiosity ring)");
+  luaL_checktype(L, 1, LUA_TTABLE);
+  ActorSpec op;
+  op.kind = "radiosity";
+  op.loc = caller_loc(L);
+  const std::string wanted = take_wiring(L, b, op, "radiosity", "radiosity");
+  if (!op.inputs.empty()) luaL_error(L, "radiosity takes no inputs (it solves the scene itself)");
+  ParamTable p = table_params(L, 1, "radiosity");
+  radiosity::RingConfig config;
+  with_params(L, [&] {
+    config = radiosity::read_ring_config(p);
+    p.report_unused();
+  });
+  Value::Map params = p.values();
+  if (!config.ply.empty()) params["ply"] = fs::absolute(config.ply).lexically_normal().string();
+  op.name = unique_name(b, wanted);
+  const int first = static_cast<int>(b.spec.actors.size());
+  const int nodes = config.layout.nodes();
+  for (int i = 0; i < nodes; ++i) {
+    ActorSpec n;
+    n.kind = "radiosity_node";
+    n.name = op.name + "." + std::to_string(config.layout.ring_of(i)) + "." + std::to_string(config.layout.position_of(i));
+    if (unique_name(b, n.name) != n.name) luaL_error(L, "radiosity: name '%s' is already taken", n.name.c_str());
+    n.params = params;
+    n.params["node"] = static_cast<int64_t>(i);
+    for (int j = 0; j < nodes; ++j)
+      if (j != i) n.inputs.push_back(first + j);
+    n.host = op.host;
+    n.loc = op.loc;
+    b.spec.actors.push_back(std::move(n));
+  }
+  b.spec.actors.push_back(std::move(op));
+  b.have_radiosity = true;
+  push_actor(L, static_cast<int>(b.spec.actors.size() - 1));
+  return 1;
+}
+
 // light { quad = {c1, c2, c3, c4}, radiance = {r,g,b} } | light { sphere = {x,y,z}, radius = r, radiance = ... }
 // | light { point = {x,y,z}, intensity = {r,g,b} }: a light added to the scene (any number of them). A quad emits
 // on the side its corners wind counter-clockwise around.
@@ -638,7 +683,7 @@ int host_gc(lua_State* L) {
 const luaL_Reg kFarmLib[] = {{"scene", l_scene},   {"camera", l_camera},       {"image", l_image},
                              {"renderers", l_renderers}, {"host", l_host},
                              {"param", l_param},   {"farm", l_farm},       {"multiplexer", l_multiplexer},
-                             {"light", l_light},
+                             {"light", l_light},   {"radiosity", l_radiosity},
                              {nullptr, nullptr}};
 
 void open_libs(lua_State* L) {
@@ -675,7 +720,7 @@ std::string finish(Builder& b) {
     for (int in : s.actors[static_cast<size_t>(i)].inputs) stack.push_back(in);
   }
   for (size_t i = 0; i < s.actors.size(); ++i)
-    if (!s.actors[i].is_renderer() && !used[i])
+    if (!s.actors[i].is_renderer() && s.actors[i].kind != "radiosity_node" && !used[i])
       return s.actors[i].loc.str() + ": lightop '" + s.actors[i].name +
              "' is not connected to the renderers' lighting (nothing would ask it for light)";
   return {};

@@ -88,4 +88,11 @@ Gather LocalInputs::gather(std::vector<InputQuery> queries) {
   return Gather(state);
 }
 
+Gather Exchange::fetch(const std::string& key, std::string*) {
+  auto state = std::make_shared<GatherState>();
+  state->remaining = 1;
+  state->complete_one("nothing named '" + key + "' is published here");
+  return Gather(state);
+}
+
 }  // namespace lf

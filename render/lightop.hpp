@@ -150,6 +150,9 @@ class Exchange {
  public:
   virtual ~Exchange() = default;
   virtual Gather all_gather(std::string part, std::vector<std::string>* parts) = 0;
+  // Something the farm publishes by name, e.g. "radiosity" (a RadiosityField's bytes, once the ring converged).
+  // Waits until it is ready; fails when nothing by that name exists.
+  virtual Gather fetch(const std::string& key, std::string* blob);
 };
 
 // The exchange of an op with no peers: its part comes straight back.

@@ -9,6 +9,7 @@ extern const LightOpKind emission_kind;
 extern const LightOpKind specular_kind;
 extern const LightOpKind photonmap_kind;
 extern const LightOpKind irradiance_kind;
+extern const LightOpKind radiosity_kind;
 
 static const LightOpKind* const kAllKinds[] = {
     &direct_kind,
@@ -18,6 +19,7 @@ static const LightOpKind* const kAllKinds[] = {
     &specular_kind,
     &photonmap_kind,
     &irradiance_kind,
+    &radiosity_kind,
 };
 
 std::span<const LightOpKind* const> lightop_kinds() { return kAllKinds; }

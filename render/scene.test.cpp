@@ -48,7 +48,7 @@ TEST(Scene, CornellGlassHasAClosedGlassSphereAndAMirrorBlock) {
 TEST(Scene, UnknownBuiltinNamesTheKnownOnes) {
   auto s = Scene::builtin("kitchen");
   ASSERT_FALSE(s.ok());
-  EXPECT_EQ(s.error().message, "unknown built-in scene 'kitchen' (built-in scenes: cornell, cornell_glass)");
+  EXPECT_EQ(s.error().message, "unknown built-in scene 'kitchen' (built-in scenes: cornell, cornell_glass, room)");
 }
 
 TEST(Scene, MissingFileIsAClearError) {

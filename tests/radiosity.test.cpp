@@ -1,0 +1,195 @@
+// Radiosity rings as real processes: every layout gives the serial solver's answer, the `radiosity` LightOp shows
+// the analytic furnace, and failures end the farm cleanly.
+#include <gtest/gtest.h>
+
+#include <signal.h>
+
+#include <cstring>
+#include <map>
+#include <tuple>
+
+#include "radiosity/config.hpp"
+#include "radiosity/ply.hpp"
+#include "render/image.hpp"
+#include "tests/farm_harness.hpp"
+
+namespace lf::test {
+namespace {
+
+struct Ply {
+  std::vector<Vec3> position;
+  std::vector<RGB> radiosity;
+  size_t faces = 0;
+};
+
+// Reads what radiosity::write_ply writes.
+Ply read_ply(const std::string& path) {
+  Ply ply;
+  const std::string bytes = read_file(path);
+  const size_t end = bytes.find("end_header\n");
+  if (end == std::string::npos) return ply;
+  size_t vertices = 0;
+  std::sscanf(bytes.c_str() + bytes.find("element vertex"), "element vertex %zu", &vertices);
+  std::sscanf(bytes.c_str() + bytes.find("element face"), "element face %zu", &ply.faces);
+  const char* at = bytes.data() + end + std::strlen("end_header\n");
+  for (size_t i = 0; i < vertices; ++i, at += 27) {
+    float f[6];
+    std::memcpy(f, at, sizeof f);
+    ply.position.push_back({f[0], f[1], f[2]});
+    ply.radiosity.push_back({f[3], f[4], f[5]});
+  }
+  return ply;
+}
+
+// The numbers of the "shooters" array in the stats JSON.
+std::vector<uint32_t> shooters_in(const std::string& json) {
+  std::vector<uint32_t> out;
+  size_t at = json.find("\"shooters\"");
+  if (at == std::string::npos) return out;
+  at = json.find('[', at);
+  const size_t end = json.find(']', at);
+  for (size_t i = at + 1; i < end;) {
+    while (i < end && !std::isdigit(static_cast<unsigned char>(json[i]))) ++i;
+    if (i >= end) break;
+    out.push_back(static_cast<uint32_t>(std::strtoul(json.c_str() + i, nullptr, 10)));
+    while (i < end && std::isdigit(static_cast<unsigned char>(json[i]))) ++i;
+  }
+  return out;
+}
+
+class RadiosityFarm : public FarmFixture {};
+
+constexpr const char* kRingScript = R"(
+scene { builtin = "cornell" }
+image { width = 16, height = 16, spp = 1 }
+local ring = radiosity { rings = param("rings", 1), ring_length = param("length", 1), balance = param("balance", "none"),
+                         patch_size = 110, element_size = 55, subdivide = 0.15, max_iterations = 20,
+                         samples_per_packet = 8, ply = param("ply", "out.ply") }
+renderers { lighting = ring }
+)";
+
+// The ring in each layout, with and without load balancing, against the serial solver on the same mesh: the same
+// shooters one after another and the same radiosity at every vertex (1e-4 relative).
+TEST_F(RadiosityFarm, EveryLayoutGivesTheSerialSolversAnswer) {
+  const std::string script = write("ring.lua", kRingScript);
+  struct Case {
+    int rings, length;
+    const char* balance;
+  };
+  for (const Case c : {Case{1, 1, "none"}, Case{1, 3, "none"}, Case{1, 3, "static"}, Case{2, 2, "none"},
+                       Case{2, 2, "static+dynamic"}}) {
+    const std::string name = std::to_string(c.rings) + "x" + std::to_string(c.length) + "-" + c.balance;
+    const std::string ply = path(name + ".ply"), stats = path(name + ".json");
+    auto r = run_lightfarm({"run", script, "--output", path(name + ".png"), "--stats-json", stats, "--set",
+                            "rings=" + std::to_string(c.rings), "--set", "length=" + std::to_string(c.length), "--set",
+                            std::string("balance=") + c.balance, "--set", "ply=" + ply});
+    ASSERT_EQ(r.status, 0) << name << "\n" << r.err;
+    expect_no_leftovers(r);
+
+    Value::Map params{{"rings", c.rings}, {"ring_length", c.length}, {"balance", c.balance}, {"patch_size", 110.0},
+                      {"element_size", 55.0}, {"subdivide", 0.15}, {"max_iterations", 20}, {"samples_per_packet", 8}};
+    const auto config = radiosity::read_ring_config(ParamTable(params, "test"));
+    auto scene = Scene::builtin("cornell");
+    ASSERT_TRUE(scene);
+    auto plan = radiosity::plan_ring(*scene, config);
+    ASSERT_TRUE(plan);
+    const radiosity::SceneVisibility vis(plan->mesh);
+    const auto serial = radiosity::solve_serial(plan->mesh, config.solver, std::cref(vis));
+    std::vector<uint32_t> expected_shooters;
+    for (const auto& it : serial.iterations) expected_shooters.push_back(it.shooter);
+    EXPECT_EQ(shooters_in(read_file(stats)), expected_shooters) << name;
+
+    std::vector<radiosity::Element> leaves;
+    for (const auto& e : serial.elements)
+      if (e.leaf) leaves.push_back(e);
+    const RadiosityField expected = radiosity::vertex_field(plan->mesh, leaves);
+    const Ply got = read_ply(ply);
+    ASSERT_EQ(got.position.size(), expected.position.size()) << name;
+    EXPECT_EQ(got.faces, expected.triangles.size()) << name;
+    // Vertices come out in element order, which differs between layouts: match them by surface position.
+    std::map<std::tuple<float, float, float, float, float, float>, RGB> want;
+    for (size_t i = 0; i < expected.position.size(); ++i) {
+      const Vec3 p = expected.position[i];
+      want[{p.x, p.y, p.z, expected.radiosity[i].x, expected.radiosity[i].y, expected.radiosity[i].z}] = expected.radiosity[i];
+    }
+    size_t matched = 0;
+    double worst = 0;
+    for (size_t i = 0; i < got.position.size(); ++i) {
+      const Vec3 p = got.position[i];
+      // Nearest expected vertex at this position (positions repeat across surfaces that meet at an edge).
+      double best = INFINITY;
+      for (auto it = want.lower_bound({p.x, p.y, p.z, -INFINITY, -INFINITY, -INFINITY});
+           it != want.end() && std::get<0>(it->first) == p.x && std::get<1>(it->first) == p.y && std::get<2>(it->first) == p.z; ++it) {
+        double d = 0;
+        for (int k = 0; k < 3; ++k)
+          d = std::max(d, std::abs(static_cast<double>(got.radiosity[i][k] - it->second[k])) / std::max(1.0, static_cast<double>(it->second[k])));
+        best = std::min(best, d);
+      }
+      if (best <= 1e-4) ++matched;
+      worst = std::max(worst, best);
+    }
+    EXPECT_EQ(matched, got.position.size()) << name << ": worst relative difference " << worst;
+  }
+}
+
+// A closed box that emits E = pi Ke and reflects rho, as an OBJ: through the `radiosity` LightOp every pixel
+// shows Ke (seen directly) + Ke rho / (1 - rho) (its reflected radiosity / pi) = Ke / (1 - rho).
+TEST_F(RadiosityFarm, RadiosityLightOpShowsTheFurnace) {
+  write("box.mtl", "newmtl furnace\nKd 0.5 0.5 0.5\nKe 1 1 1\n");
+  write("box.obj",
+        "mtllib box.mtl\nusemtl furnace\n"
+        "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nv 0 0 1\nv 1 0 1\nv 1 1 1\nv 0 1 1\n"
+        "f 1 2 3 4\nf 5 8 7 6\nf 1 5 6 2\nf 4 3 7 8\nf 1 4 8 5\nf 2 6 7 3\n");
+  const std::string script = write("furnace.lua", R"(
+scene { file = "box.obj" }
+camera { eye = {0.5, 0.5, 0.1}, at = {0.5, 0.5, 1}, fov = 60 }
+image { width = 24, height = 24, spp = 1 }
+renderers { lighting = radiosity { rings = 1, ring_length = 2, patch_size = 0.5, element_size = 0.25, converge = 0.0005 } }
+)");
+  auto r = run_lightfarm({"run", script, "--output", path("furnace.exr")});
+  ASSERT_EQ(r.status, 0) << r.err;
+  expect_no_leftovers(r);
+  auto img = read_image(path("furnace.exr"));
+  ASSERT_TRUE(img.ok());
+  for (const RGB& p : img->pixels) ASSERT_NEAR(average(p), 2.0, 0.02);
+}
+
+TEST_F(RadiosityFarm, BadSettingsAndUnwritablePlyAreClearErrors) {
+  const std::string script = write("ring.lua", kRingScript);
+  auto r = run_lightfarm({"run", script, "--output", path("x.png"), "--set", "ply=/nonexistent/dir/out.ply"});
+  EXPECT_EQ(r.status, 1);
+  EXPECT_NE(r.err.find("radiosity: cannot write '/nonexistent/dir/out.ply'"), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(path("x.png")));
+  expect_no_leftovers(r);
+
+  const std::string bad = write("bad.lua", "scene { builtin = \"cornell\" }\n"
+                                           "renderers { lighting = radiosity { rings = 2, shooter_samples = 10 } }\n");
+  r = run_lightfarm({"run", bad, "--output", path("y.png")});
+  EXPECT_EQ(r.status, 2);  // a script error, as for every other bad script
+  EXPECT_NE(r.err.find("bad.lua:2: radiosity: shooter_samples must be a square number"), std::string::npos) << r.err;
+  expect_no_leftovers(r);
+}
+
+// A ring node that dies takes the solve with it: one message naming it, no image, nothing left running.
+TEST_F(RadiosityFarm, ALostRingNodeEndsTheFarmCleanly) {
+  const std::string script = write("ring.lua", R"(
+scene { builtin = "cornell" }
+image { width = 16, height = 16, spp = 1 }
+renderers { lighting = radiosity { rings = 2, ring_length = 2, patch_size = 60, converge = 0, max_iterations = 100000 } }
+)");
+  Farm farm({"run", script, "--output", path("z.png")});
+  ASSERT_TRUE(Farm::eventually([&] { return farm.err_so_far().find("iteration 3,") != std::string::npos; }, 60))
+      << farm.err_so_far();
+  auto pids = actor_pids(farm.tag(), "radiosity.1.0");
+  ASSERT_EQ(pids.size(), 1u);
+  ::kill(pids[0], SIGKILL);
+  auto r = farm.wait(60);
+  EXPECT_EQ(r.status, 1);
+  EXPECT_NE(r.err.find("actor 'radiosity.1.0'"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("killed by signal 9"), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(path("z.png")));
+  expect_no_leftovers(r);
+}
+
+}  // namespace
+}  // namespace lf::test
