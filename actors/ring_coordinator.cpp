@@ -118,12 +118,14 @@ Result<std::vector<RingCoordinator::Reply>> RingCoordinator::on_result(const std
   const int at = index_of(node);
   if (at < 0) return make_error("'" + node + "' is not a ring node");
   std::vector<uint32_t> patch, corners;
-  std::vector<float> points, radiosity;
-  const Value *p = body.find("patch"), *c = body.find("corners"), *x = body.find("points"), *b = body.find("radiosity");
-  if (!p || !c || !x || !b || !p->is_bytes() || !c->is_bytes() || !x->is_bytes() || !b->is_bytes() ||
-      !bytes_to_u32(p->as_bytes(), patch) || !bytes_to_u32(c->as_bytes(), corners) ||
+  std::vector<float> points, radiosity, unshot;
+  const Value *p = body.find("patch"), *c = body.find("corners"), *x = body.find("points"), *b = body.find("radiosity"),
+              *u = body.find("unshot");
+  if (!p || !c || !x || !b || !u || !p->is_bytes() || !c->is_bytes() || !x->is_bytes() || !b->is_bytes() ||
+      !u->is_bytes() || !bytes_to_u32(p->as_bytes(), patch) || !bytes_to_u32(c->as_bytes(), corners) ||
       !bytes_to_floats(x->as_bytes(), points) || !bytes_to_floats(b->as_bytes(), radiosity) ||
-      corners.size() != patch.size() || points.size() != 12 * patch.size() || radiosity.size() != 3 * patch.size())
+      !bytes_to_floats(u->as_bytes(), unshot) || corners.size() != patch.size() ||
+      points.size() != 12 * patch.size() || radiosity.size() != 3 * patch.size() || unshot.size() != radiosity.size())
     return make_error("ring node '" + node + "' sent a malformed result");
   auto& elements = results_[at];
   for (size_t i = 0; i < patch.size(); ++i) {
@@ -134,12 +136,15 @@ Result<std::vector<RingCoordinator::Reply>> RingCoordinator::on_result(const std
     e.polygon.count = static_cast<int>(corners[i]);
     for (size_t k = 0; k < 4; ++k) e.polygon.v[k] = {points[12 * i + 3 * k], points[12 * i + 3 * k + 1], points[12 * i + 3 * k + 2]};
     e.radiosity = {radiosity[3 * i], radiosity[3 * i + 1], radiosity[3 * i + 2]};
+    e.unshot = {unshot[3 * i], unshot[3 * i + 1], unshot[3 * i + 2]};
     elements.push_back(e);
   }
   std::vector<Reply> replies{{node, id, Value::Map{}}};
   if (results_.size() < nodes_.size()) return replies;
   std::vector<Element> all;
   for (auto& [i, list] : results_) all.insert(all.end(), list.begin(), list.end());
+  // Shown with the ambient term (what is still unshot, spread evenly), like any progressive radiosity display.
+  ambient_ = add_ambient(plan_->mesh, all);
   const RadiosityField field = vertex_field(plan_->mesh, all);
   if (!config_.ply.empty()) {
     if (auto st = write_ply(field, config_.ply); !st) return make_error("radiosity: " + st.error().message);
@@ -163,7 +168,8 @@ Value RingCoordinator::report() const {
                     {"iteration_seconds", std::move(seconds)},
                     {"unshot_fraction", std::move(fractions)},
                     {"shooters", std::move(shooters)},
-                    {"patches", static_cast<int64_t>(plan_ ? plan_->mesh.patches.size() : 0)}};
+                    {"patches", static_cast<int64_t>(plan_ ? plan_->mesh.patches.size() : 0)},
+                    {"ambient", Value::Array{double(ambient_.x), double(ambient_.y), double(ambient_.z)}}};
 }
 
 }  // namespace lf

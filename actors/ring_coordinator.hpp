@@ -56,6 +56,7 @@ class RingCoordinator {
   double started_ = 0, last_ = 0;
   std::map<int, std::vector<radiosity::Element>> results_;
   std::string solution_;
+  RGB ambient_;
 };
 
 }  // namespace lf

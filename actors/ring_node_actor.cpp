@@ -252,20 +252,24 @@ class RingNodeActor final : public Actor {
 
   void send_result(Runtime& rt) {
     running_ = false;
-    // Leaf elements: patch, corner count, 4 corners, radiosity.
+    // Leaf elements: patch, corner count, 4 corners, radiosity, unshot radiosity.
     std::vector<uint32_t> patch, corners;
-    std::vector<float> points, radiosity;
+    std::vector<float> points, radiosity, unshot;
     for (const auto& e : node_->part().elements()) {
       if (!e.leaf) continue;
       patch.push_back(e.patch);
       corners.push_back(static_cast<uint32_t>(e.polygon.count));
       for (const Vec3& v : e.polygon.v)
         for (int c = 0; c < 3; ++c) points.push_back(v[c]);
-      for (int c = 0; c < 3; ++c) radiosity.push_back(e.radiosity[c]);
+      for (int c = 0; c < 3; ++c) {
+        radiosity.push_back(e.radiosity[c]);
+        unshot.push_back(e.unshot[c]);
+      }
     }
     rt.ask_director("ring.result",
                     Value::Map{{"patch", u32_to_bytes(patch)}, {"corners", u32_to_bytes(corners)},
-                               {"points", floats_to_bytes(points)}, {"radiosity", floats_to_bytes(radiosity)}},
+                               {"points", floats_to_bytes(points)}, {"radiosity", floats_to_bytes(radiosity)},
+                               {"unshot", floats_to_bytes(unshot)}},
                     [&rt](Result<wire::Message> r) {
                       if (!r) return rt.fail("ring: " + r.error().message);
                       rt.phase_done("setup");

@@ -4,8 +4,11 @@
 #include <cmath>
 #include <numeric>
 #include <queue>
+#include <random>
 
 namespace lf::radiosity {
+
+static constexpr size_t kProbeSegments = 4000;
 
 bool Box::overlaps(const Box& b, float slack) const {
   for (int a = 0; a < 3; ++a)
@@ -84,6 +87,7 @@ GlobalBsp GlobalBsp::build(const Mesh& mesh, int positions, bool balanced) {
   const Box root{mesh.lo - Vec3{slack, slack, slack}, mesh.hi + Vec3{slack, slack, slack}};
   GlobalBsp best;
   double best_imbalance = INFINITY;
+  const auto probe = balanced ? probe_segments(mesh, kProbeSegments) : std::vector<std::pair<Vec3, Vec3>>{};
   // Deeper trees spread surfaces more evenly but cost every node memory (seed 003 §5.2): take the shallowest
   // that is within 5 % of even.
   const int deepest = balanced ? base + 6 : base;
@@ -92,13 +96,15 @@ GlobalBsp GlobalBsp::build(const Mesh& mesh, int positions, bool balanced) {
     t.positions_ = positions;
     t.depth_ = depth;
     t.slack_ = slack;
-    t.build_node(mesh, all, root, 0, depth, balanced);
+    t.build_node(mesh, all, root, 0, depth, false);
     t.owner_.assign(t.leaves_.size(), 0);
     if (balanced) {
+      std::vector<size_t> weight(t.leaves_.size(), 0);
+      for (const auto& [a, b] : probe)
+        t.walk(0, a, b - a, 0.0f, 1.0f, [&](int leaf) { ++weight[static_cast<size_t>(leaf)]; });
       std::vector<size_t> order(t.leaves_.size());
       std::iota(order.begin(), order.end(), 0);
-      std::stable_sort(order.begin(), order.end(),
-                       [&](size_t a, size_t b) { return t.leaves_[a].size() > t.leaves_[b].size(); });
+      std::stable_sort(order.begin(), order.end(), [&](size_t a, size_t b) { return weight[a] > weight[b]; });
       using Load = std::pair<size_t, int>;
       std::priority_queue<Load, std::vector<Load>, std::greater<>> loads;
       for (int p = 0; p < positions; ++p) loads.push({0, p});
@@ -106,7 +112,7 @@ GlobalBsp GlobalBsp::build(const Mesh& mesh, int positions, bool balanced) {
         auto [load, p] = loads.top();
         loads.pop();
         t.owner_[leaf] = p;
-        loads.push({load + t.leaves_[leaf].size(), p});
+        loads.push({load + weight[leaf], p});
       }
     } else {
       for (size_t leaf = 0; leaf < t.leaves_.size(); ++leaf) t.owner_[leaf] = static_cast<int>(leaf % static_cast<size_t>(positions));
@@ -118,7 +124,7 @@ GlobalBsp GlobalBsp::build(const Mesh& mesh, int positions, bool balanced) {
       std::sort(h.begin(), h.end());
       h.erase(std::unique(h.begin(), h.end()), h.end());
     }
-    const double im = imbalance(t.surface_counts());
+    const double im = balanced ? imbalance(t.probe_load(mesh)) : 1.0;
     if (im < best_imbalance - 1e-9) {
       best_imbalance = im;
       best = std::move(t);
@@ -143,15 +149,16 @@ int GlobalBsp::position_of_point(Vec3 p) const {
   return owner_[static_cast<size_t>(nodes_[static_cast<size_t>(n)].leaf)];
 }
 
-void GlobalBsp::route_node(int index, Vec3 a, Vec3 d, float t0, float t1, uint64_t& bits) const {
+template <class Visit>
+void GlobalBsp::walk(int index, Vec3 a, Vec3 d, float t0, float t1, Visit&& visit) const {
   const Node& n = nodes_[static_cast<size_t>(index)];
   if (n.axis < 0) {
-    bits |= uint64_t{1} << owner_[static_cast<size_t>(n.leaf)];
+    visit(n.leaf);
     return;
   }
   const float o = a[n.axis], dir = d[n.axis];
   // Left holds coordinates <= split + slack, right >= split - slack; visit each side the segment reaches.
-  auto visit = [&](int child, bool below, float plane) {
+  auto side = [&](int child, bool below, float plane) {
     float lo = t0, hi = t1;
     if (dir == 0) {
       if (below ? o > plane : o < plane) return;
@@ -162,16 +169,55 @@ void GlobalBsp::route_node(int index, Vec3 a, Vec3 d, float t0, float t1, uint64
       else
         lo = std::max(lo, t);
     }
-    if (lo <= hi) route_node(child, a, d, lo, hi, bits);
+    if (lo <= hi) walk(child, a, d, lo, hi, visit);
   };
-  visit(n.left, true, n.split + slack_);
-  visit(n.right, false, n.split - slack_);
+  side(n.left, true, n.split + slack_);
+  side(n.right, false, n.split - slack_);
 }
 
 uint64_t GlobalBsp::route(Vec3 a, Vec3 b) const {
   uint64_t bits = 0;
-  route_node(0, a, b - a, 0.0f, 1.0f, bits);
+  walk(0, a, b - a, 0.0f, 1.0f, [&](int leaf) { bits |= uint64_t{1} << owner_[static_cast<size_t>(leaf)]; });
   return bits;
+}
+
+std::vector<size_t> GlobalBsp::probe_load(const Mesh& mesh) const {
+  std::vector<size_t> load(static_cast<size_t>(positions_), 0);
+  for (const auto& [a, b] : probe_segments(mesh, kProbeSegments)) {
+    const uint64_t bits = route(a, b);
+    for (int p = 0; p < positions_; ++p) load[static_cast<size_t>(p)] += bits >> p & 1;
+  }
+  return load;
+}
+
+std::vector<std::pair<Vec3, Vec3>> probe_segments(const Mesh& mesh, size_t count) {
+  std::vector<double> cdf;
+  double total = 0;
+  for (const auto& s : mesh.surfaces) cdf.push_back(total += s.polygon.area());
+  std::mt19937 rng(20261122);
+  std::uniform_real_distribution<double> u(0, 1);
+  auto point_on = [&](size_t& surface) {
+    surface = static_cast<size_t>(std::lower_bound(cdf.begin(), cdf.end(), u(rng) * total) - cdf.begin());
+    surface = std::min(surface, cdf.size() - 1);
+    const Polygon& p = mesh.surfaces[surface].polygon;
+    const auto pieces = p.count == 4 ? std::vector<Polygon>{Polygon{{p.v[0], p.v[1], p.v[2], Vec3{}}, 3},
+                                                            Polygon{{p.v[0], p.v[2], p.v[3], Vec3{}}, 3}}
+                                     : std::vector<Polygon>{p};
+    const Polygon& t = pieces[pieces.size() == 2 && u(rng) * p.area() > pieces[0].area() ? 1 : 0];
+    double r1 = u(rng), r2 = u(rng);
+    if (r1 + r2 > 1) r1 = 1 - r1, r2 = 1 - r2;
+    return t.v[0] + (t.v[1] - t.v[0]) * static_cast<float>(r1) + (t.v[2] - t.v[0]) * static_cast<float>(r2);
+  };
+  std::vector<std::pair<Vec3, Vec3>> out;
+  for (size_t tries = 0; out.size() < count && tries < 50 * count; ++tries) {
+    size_t sa = 0, sb = 0;
+    const Vec3 a = point_on(sa), b = point_on(sb);
+    if (sa == sb) continue;
+    if (dot(mesh.surfaces[sa].polygon.normal(), b - a) <= 0 || dot(mesh.surfaces[sb].polygon.normal(), a - b) <= 0)
+      continue;
+    out.emplace_back(a, b);
+  }
+  return out;
 }
 
 }  // namespace lf::radiosity

@@ -16,10 +16,12 @@ struct Box {
 
 class GlobalBsp {
  public:
-  // `balanced` (static load balancing of visibility complexity, seed 003 §5.2): planes at the median of the
-  // surfaces' centroids, the tree deepened until positions can be given even surface counts, leaves dealt
-  // largest-first. Otherwise: one level per doubling of positions, planes through the middle of the box, leaves
-  // dealt round-robin.
+  // `balanced` (static load balancing of visibility complexity, seed 003 §5.2): the tree deepened and its leaves
+  // dealt largest-first so that positions get even visibility work. The paper weighs a leaf by its polygons; with
+  // Embree a ray's cost hardly depends on how many polygons a node holds, but on whether it has to be cast at
+  // all, so a leaf weighs the rays that cross it: a fixed probe of segments between random points of surfaces
+  // that face each other. Otherwise: one level per doubling of positions, planes through the middle of the box,
+  // leaves dealt round-robin.
   static GlobalBsp build(const Mesh& mesh, int positions, bool balanced);
 
   int positions() const { return positions_; }
@@ -31,6 +33,8 @@ class GlobalBsp {
   const std::vector<uint32_t>& surfaces_of(int position) const { return held_[static_cast<size_t>(position)]; }
   // Surfaces held per position, counting a surface once per position.
   std::vector<size_t> surface_counts() const;
+  // Per position, how many of the mesh's probe segments cross its space (the balanced tree's cost model).
+  std::vector<size_t> probe_load(const Mesh& mesh) const;
   // The leaf that contains point p, and its position (for tests).
   int position_of_point(Vec3 p) const;
 
@@ -43,7 +47,8 @@ class GlobalBsp {
   };
   int build_node(const Mesh& mesh, const std::vector<uint32_t>& surfaces, Box box, int depth, int max_depth,
                  bool median);
-  void route_node(int node, Vec3 a, Vec3 d, float t0, float t1, uint64_t& bits) const;
+  template <class Visit>
+  void walk(int node, Vec3 a, Vec3 d, float t0, float t1, Visit&& visit) const;
 
   std::vector<Node> nodes_;
   std::vector<Box> leaf_box_;
@@ -56,5 +61,8 @@ class GlobalBsp {
 };
 
 Box bounds(const Polygon& p);
+// Segments between random points (area-weighted, fixed seed) of surfaces that face each other: a stand-in for the
+// visibility rays a solve will cast, the same in every process.
+std::vector<std::pair<Vec3, Vec3>> probe_segments(const Mesh& mesh, size_t count);
 
 }  // namespace lf::radiosity

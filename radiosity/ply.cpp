@@ -10,6 +10,28 @@
 
 namespace lf::radiosity {
 
+RGB add_ambient(const Mesh& mesh, std::vector<Element>& elements) {
+  double area = 0;
+  std::array<double, 3> unshot{0, 0, 0}, rho{0, 0, 0};
+  for (const auto& e : elements) {
+    if (!e.leaf) continue;
+    const double a = e.polygon.area();
+    const RGB r = mesh.patches[e.patch].reflectance;
+    area += a;
+    for (int c = 0; c < 3; ++c) {
+      unshot[static_cast<size_t>(c)] += a * e.unshot[c];
+      rho[static_cast<size_t>(c)] += a * r[c];
+    }
+  }
+  if (area <= 0) return {};
+  RGB ambient;
+  float* out[3] = {&ambient.x, &ambient.y, &ambient.z};
+  for (size_t c = 0; c < 3; ++c) *out[c] = static_cast<float>(unshot[c] / area / std::max(1e-3, 1.0 - rho[c] / area));
+  for (auto& e : elements)
+    if (e.leaf) e.radiosity += mesh.patches[e.patch].reflectance * ambient;
+  return ambient;
+}
+
 RadiosityField vertex_field(const Mesh& mesh, const std::vector<Element>& elements) {
   RadiosityField f;
   // Corners meet exactly where elements share them (they come from the same midpoint arithmetic), so exact keys

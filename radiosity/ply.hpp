@@ -11,6 +11,10 @@
 
 namespace lf::radiosity {
 
+// Cohen et al.'s ambient term for showing a solution that has not converged: the unshot power spread evenly and
+// reflected as often as the average reflectance says, B + rho * ambient, ambient = mean unshot / (1 - mean rho).
+// It only changes what is shown; none of it is shot. Returns the ambient radiosity added.
+RGB add_ambient(const Mesh& mesh, std::vector<Element>& elements);
 // `elements`: every leaf element of the solution (any order).
 RadiosityField vertex_field(const Mesh& mesh, const std::vector<Element>& elements);
 // Binary little-endian PLY: float x y z, float radiosity_r/g/b (B, emission included), and uchar red/green/blue

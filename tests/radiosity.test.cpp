@@ -102,6 +102,7 @@ TEST_F(RadiosityFarm, EveryLayoutGivesTheSerialSolversAnswer) {
     std::vector<radiosity::Element> leaves;
     for (const auto& e : serial.elements)
       if (e.leaf) leaves.push_back(e);
+    radiosity::add_ambient(plan->mesh, leaves);
     const RadiosityField expected = radiosity::vertex_field(plan->mesh, leaves);
     const Ply got = read_ply(ply);
     ASSERT_EQ(got.position.size(), expected.position.size()) << name;

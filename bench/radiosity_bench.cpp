@@ -1,0 +1,174 @@
+// Load balancing of the radiosity ring (seed 003, Tables 1-4), on the built-in furnished room: for each layout
+// (N nodes as rings x ring length) and each balancing scheme, the per-node work — visibility rays cast, packets
+// processed — as max/mean imbalance, and the mean iteration wall time. Work counts stay meaningful when 8
+// processes share 2 cores; times do not (they are printed for the record).
+//
+//   build/bench/radiosity_bench [--iterations 6] [--json radiosity_bench.json]
+#include <cmath>
+#include <cstring>
+#include <map>
+
+#include "bench_util.hpp"
+
+namespace {
+
+struct NodeFigures {
+  double rays = 0, visits = 0, samples = 0, lent = 0, borrowed = 0, elements = 0, surfaces = 0;
+};
+
+// Every radiosity node's "detail" block in the stats JSON.
+std::vector<NodeFigures> node_figures(const std::string& stats) {
+  std::vector<NodeFigures> out;
+  for (size_t at = stats.find("\"detail\""); at != std::string::npos; at = stats.find("\"detail\"", at + 1)) {
+    const size_t open = stats.find('{', at), close = stats.find('}', open);
+    const std::string block = stats.substr(open, close - open + 1);
+    if (block.find("\"rays\"") == std::string::npos) continue;
+    NodeFigures f;
+    f.rays = bench::json_number(block, "rays");
+    f.visits = bench::json_number(block, "visits");
+    f.samples = bench::json_number(block, "samples");
+    f.lent = bench::json_number(block, "packets_lent");
+    f.borrowed = bench::json_number(block, "packets_borrowed");
+    f.elements = bench::json_number(block, "elements");
+    f.surfaces = bench::json_number(block, "surfaces_held");
+    out.push_back(f);
+  }
+  return out;
+}
+
+double imbalance(const std::vector<NodeFigures>& nodes, double NodeFigures::*field) {
+  double sum = 0, most = 0;
+  for (const auto& n : nodes) {
+    sum += n.*field;
+    most = std::max(most, n.*field);
+  }
+  return sum > 0 ? most / (sum / static_cast<double>(nodes.size())) : 1.0;
+}
+
+// Mean of the "iteration_seconds" array.
+double mean_iteration_seconds(const std::string& stats) {
+  size_t at = stats.find("\"iteration_seconds\"");
+  if (at == std::string::npos) return 0;
+  at = stats.find('[', at);
+  const size_t end = stats.find(']', at);
+  double sum = 0;
+  int n = 0;
+  const char* p = stats.c_str() + at + 1;
+  while (p < stats.c_str() + end) {
+    char* next = nullptr;
+    const double v = std::strtod(p, &next);
+    if (next == p) {
+      ++p;
+      continue;
+    }
+    sum += v;
+    ++n;
+    p = next;
+  }
+  return n ? sum / n : 0;
+}
+
+struct Layout {
+  int rings, length;
+};
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  int iterations = 6;
+  std::string json_path = "radiosity_bench.json";
+  for (int i = 1; i < argc; ++i) {
+    if (!std::strcmp(argv[i], "--iterations") && i + 1 < argc) iterations = std::atoi(argv[++i]);
+    else if (!std::strcmp(argv[i], "--json") && i + 1 < argc) json_path = argv[++i];
+    else {
+      std::fprintf(stderr, "usage: radiosity_bench [--iterations N] [--json FILE]\n");
+      return 2;
+    }
+  }
+  const std::string script = std::string(LIGHTFARM_SOURCE_DIR) + "/examples/radiosity_room.lua";
+  const std::vector<Layout> layouts{{1, 1}, {1, 2}, {2, 1}, {1, 4}, {2, 2}, {4, 1}, {1, 8}, {2, 4}, {4, 2}, {8, 1}};
+  const std::vector<std::string> schemes{"none", "static", "dynamic", "static+dynamic"};
+  std::printf("lightfarm radiosity ring benchmark: built-in room, first %d iterations, subdivide 0.5, S = 50, M = 16\n",
+              iterations);
+  std::printf("imbalance = max/mean over nodes of visibility rays cast (packets processed in brackets)\n\n");
+  struct Row {
+    Layout layout;
+    std::string scheme;
+    double ray_imbalance, visit_imbalance, element_imbalance, surface_imbalance, seconds, lent;
+  };
+  std::vector<Row> rows;
+  for (const auto& scheme : schemes) {
+    for (const auto& l : layouts) {
+      auto run = bench::run_farm(script, {"rings=" + std::to_string(l.rings), "ring_length=" + std::to_string(l.length),
+                                          "balance=" + scheme, "iterations=" + std::to_string(iterations), "width=32",
+                                          "height=24", "spp=1"});
+      const auto nodes = node_figures(run.stats);
+      if (static_cast<int>(nodes.size()) != l.rings * l.length) {
+        std::fprintf(stderr, "expected %d nodes in the stats, found %zu\n", l.rings * l.length, nodes.size());
+        return 1;
+      }
+      double lent = 0;
+      for (const auto& n : nodes) lent += n.lent;
+      rows.push_back({l, scheme, imbalance(nodes, &NodeFigures::rays), imbalance(nodes, &NodeFigures::visits),
+                      imbalance(nodes, &NodeFigures::elements), imbalance(nodes, &NodeFigures::surfaces),
+                      mean_iteration_seconds(run.stats), lent});
+      std::fprintf(stderr, "  %-15s %dx%d: rays %.3f\n", scheme.c_str(), l.rings, l.length, rows.back().ray_imbalance);
+    }
+  }
+  // One table per scheme, rows N, columns ring length, like the paper's.
+  const int lengths[] = {1, 2, 4, 8};
+  int table = 1;
+  for (const auto& scheme : schemes) {
+    std::printf("Table %d: balance = %s\n%-4s", table++, scheme.c_str(), "N\\L");
+    for (int len : lengths) std::printf(" %18d", len);
+    std::printf("\n");
+    for (int n : {1, 2, 4, 8}) {
+      std::printf("%-4d", n);
+      for (int len : lengths) {
+        const Row* found = nullptr;
+        for (const auto& r : rows)
+          if (r.scheme == scheme && r.layout.length == len && r.layout.rings * r.layout.length == n) found = &r;
+        if (found)
+          std::printf("   %5.3f (%5.3f) %4.2fs", found->ray_imbalance, found->visit_imbalance, found->seconds);
+        else
+          std::printf(" %18s", "");
+      }
+      std::printf("\n");
+    }
+    std::printf("\n");
+  }
+  // Which scheme is most even in each layout.
+  std::printf("%-8s %-16s %10s %10s %10s %10s\n", "layout", "lowest imbalance", "none", "static", "dynamic", "st+dyn");
+  bool goal = true;
+  double worst_n8 = 0;
+  for (const auto& l : layouts) {
+    std::map<std::string, double> by;
+    for (const auto& r : rows)
+      if (r.layout.rings == l.rings && r.layout.length == l.length) by[r.scheme] = r.ray_imbalance;
+    std::string best = "none";
+    for (const auto& s : schemes)
+      if (by[s] < by[best] - 1e-9) best = s;
+    const bool combined_best = by["static+dynamic"] <= by[best] + 0.02;  // ties within noise count
+    goal = goal && combined_best;
+    if (l.rings * l.length == 8) worst_n8 = std::max(worst_n8, by["static+dynamic"]);
+    std::printf("%dx%-6d %-16s %10.3f %10.3f %10.3f %10.3f\n", l.rings, l.length, best.c_str(), by["none"],
+                by["static"], by["dynamic"], by["static+dynamic"]);
+  }
+  std::printf("\nstatic+dynamic lowest (within 0.02) in every layout: %s; worst at N = 8: %.3f (goal <= 1.15)\n",
+              goal ? "yes" : "no", worst_n8);
+
+  std::ofstream out(json_path);
+  out << "{\n  \"benchmark\": \"radiosity_ring\",\n  \"iterations\": " << iterations << ",\n  \"runs\": [\n";
+  for (size_t i = 0; i < rows.size(); ++i) {
+    const auto& r = rows[i];
+    out << "    {\"rings\": " << r.layout.rings << ", \"ring_length\": " << r.layout.length << ", \"balance\": \""
+        << r.scheme << "\", \"ray_imbalance\": " << r.ray_imbalance << ", \"packet_imbalance\": " << r.visit_imbalance
+        << ", \"element_imbalance\": " << r.element_imbalance << ", \"surface_imbalance\": " << r.surface_imbalance
+        << ", \"packets_lent\": " << r.lent << ", \"mean_iteration_seconds\": " << r.seconds << "}"
+        << (i + 1 < rows.size() ? ",\n" : "\n");
+  }
+  out << "  ],\n  \"static_dynamic_lowest_everywhere\": " << (goal ? "true" : "false")
+      << ",\n  \"static_dynamic_worst_n8\": " << worst_n8 << "\n}\n";
+  std::printf("wrote %s\n", json_path.c_str());
+  return 0;
+}
