@@ -94,7 +94,7 @@ int main(int argc, char** argv) {
   struct Row {
     Layout layout;
     std::string scheme;
-    double ray_imbalance, visit_imbalance, element_imbalance, surface_imbalance, seconds, lent;
+    double ray_imbalance, visit_imbalance, element_imbalance, surface_imbalance, seconds, lent, total_rays, max_rays;
   };
   std::vector<Row> rows;
   for (const auto& scheme : schemes) {
@@ -107,11 +107,15 @@ int main(int argc, char** argv) {
         std::fprintf(stderr, "expected %d nodes in the stats, found %zu\n", l.rings * l.length, nodes.size());
         return 1;
       }
-      double lent = 0;
-      for (const auto& n : nodes) lent += n.lent;
+      double lent = 0, total_rays = 0, max_rays = 0;
+      for (const auto& n : nodes) {
+        lent += n.lent;
+        total_rays += n.rays;
+        max_rays = std::max(max_rays, n.rays);
+      }
       rows.push_back({l, scheme, imbalance(nodes, &NodeFigures::rays), imbalance(nodes, &NodeFigures::visits),
                       imbalance(nodes, &NodeFigures::elements), imbalance(nodes, &NodeFigures::surfaces),
-                      mean_iteration_seconds(run.stats), lent});
+                      mean_iteration_seconds(run.stats), lent, total_rays, max_rays});
       std::fprintf(stderr, "  %-15s %dx%d: rays %.3f\n", scheme.c_str(), l.rings, l.length, rows.back().ray_imbalance);
     }
   }
@@ -138,21 +142,28 @@ int main(int argc, char** argv) {
     std::printf("\n");
   }
   // Which scheme is most even in each layout.
-  std::printf("%-8s %-16s %10s %10s %10s %10s\n", "layout", "lowest imbalance", "none", "static", "dynamic", "st+dyn");
+  std::printf("busiest node's rays (the iteration's critical path) and all rays, static+dynamic over none:\n");
+  std::printf("%-8s %-16s %10s %10s %10s %10s %12s %10s\n", "layout", "lowest imbalance", "none", "static", "dynamic",
+              "st+dyn", "busiest", "all rays");
   bool goal = true;
   double worst_n8 = 0;
   for (const auto& l : layouts) {
-    std::map<std::string, double> by;
+    std::map<std::string, double> by, rays, busiest;
     for (const auto& r : rows)
-      if (r.layout.rings == l.rings && r.layout.length == l.length) by[r.scheme] = r.ray_imbalance;
+      if (r.layout.rings == l.rings && r.layout.length == l.length) {
+        by[r.scheme] = r.ray_imbalance;
+        rays[r.scheme] = r.total_rays;
+        busiest[r.scheme] = r.max_rays;
+      }
     std::string best = "none";
     for (const auto& s : schemes)
       if (by[s] < by[best] - 1e-9) best = s;
     const bool combined_best = by["static+dynamic"] <= by[best] + 0.02;  // ties within noise count
     goal = goal && combined_best;
     if (l.rings * l.length == 8) worst_n8 = std::max(worst_n8, by["static+dynamic"]);
-    std::printf("%dx%-6d %-16s %10.3f %10.3f %10.3f %10.3f\n", l.rings, l.length, best.c_str(), by["none"],
-                by["static"], by["dynamic"], by["static+dynamic"]);
+    std::printf("%dx%-6d %-16s %10.3f %10.3f %10.3f %10.3f %12.3f %10.3f\n", l.rings, l.length, best.c_str(), by["none"],
+                by["static"], by["dynamic"], by["static+dynamic"], busiest["static+dynamic"] / busiest["none"],
+                rays["static+dynamic"] / rays["none"]);
   }
   std::printf("\nstatic+dynamic lowest (within 0.02) in every layout: %s; worst at N = 8: %.3f (goal <= 1.15)\n",
               goal ? "yes" : "no", worst_n8);
@@ -164,7 +175,7 @@ int main(int argc, char** argv) {
     out << "    {\"rings\": " << r.layout.rings << ", \"ring_length\": " << r.layout.length << ", \"balance\": \""
         << r.scheme << "\", \"ray_imbalance\": " << r.ray_imbalance << ", \"packet_imbalance\": " << r.visit_imbalance
         << ", \"element_imbalance\": " << r.element_imbalance << ", \"surface_imbalance\": " << r.surface_imbalance
-        << ", \"packets_lent\": " << r.lent << ", \"mean_iteration_seconds\": " << r.seconds << "}"
+        << ", \"packets_lent\": " << r.lent << ", \"total_rays\": " << r.total_rays << ", \"busiest_node_rays\": " << r.max_rays << ", \"mean_iteration_seconds\": " << r.seconds << "}"
         << (i + 1 < rows.size() ? ",\n" : "\n");
   }
   out << "  ],\n  \"static_dynamic_lowest_everywhere\": " << (goal ? "true" : "false")

@@ -73,12 +73,6 @@ int GlobalBsp::build_node(const Mesh& mesh, const std::vector<uint32_t>& surface
   return index;
 }
 
-static double imbalance(const std::vector<size_t>& counts) {
-  const double total = std::accumulate(counts.begin(), counts.end(), 0.0);
-  if (total <= 0) return 1.0;
-  return static_cast<double>(*std::max_element(counts.begin(), counts.end())) / (total / static_cast<double>(counts.size()));
-}
-
 GlobalBsp GlobalBsp::build(const Mesh& mesh, int positions, bool balanced) {
   const int base = positions <= 1 ? 0 : static_cast<int>(std::ceil(std::log2(static_cast<double>(positions))));
   std::vector<uint32_t> all(mesh.surfaces.size());
@@ -86,10 +80,11 @@ GlobalBsp GlobalBsp::build(const Mesh& mesh, int positions, bool balanced) {
   const float slack = 4 * mesh.epsilon;
   const Box root{mesh.lo - Vec3{slack, slack, slack}, mesh.hi + Vec3{slack, slack, slack}};
   GlobalBsp best;
-  double best_imbalance = INFINITY;
+  size_t best_load = SIZE_MAX;
   const auto probe = balanced ? probe_segments(mesh, kProbeSegments) : std::vector<std::pair<Vec3, Vec3>>{};
-  // Deeper trees spread surfaces more evenly but cost every node memory (seed 003 §5.2): take the shallowest
-  // that is within 5 % of even.
+  // A deeper tree lets leaves be dealt more evenly, but a ray then crosses more positions and is cast more often
+  // (and every node stores the tree, seed 003 §5.2): try each depth and keep the one whose busiest position has
+  // the least probe work.
   const int deepest = balanced ? base + 6 : base;
   for (int depth = base; depth <= deepest; ++depth) {
     GlobalBsp t;
@@ -99,20 +94,36 @@ GlobalBsp GlobalBsp::build(const Mesh& mesh, int positions, bool balanced) {
     t.build_node(mesh, all, root, 0, depth, false);
     t.owner_.assign(t.leaves_.size(), 0);
     if (balanced) {
-      std::vector<size_t> weight(t.leaves_.size(), 0);
-      for (const auto& [a, b] : probe)
-        t.walk(0, a, b - a, 0.0f, 1.0f, [&](int leaf) { ++weight[static_cast<size_t>(leaf)]; });
+      // Which probe segments cross each leaf.
+      std::vector<std::vector<uint32_t>> crossing(t.leaves_.size());
+      for (uint32_t k = 0; k < probe.size(); ++k) {
+        const auto& [a, b] = probe[k];
+        t.walk(0, a, b - a, 0.0f, 1.0f, [&](int leaf) { crossing[static_cast<size_t>(leaf)].push_back(k); });
+      }
       std::vector<size_t> order(t.leaves_.size());
       std::iota(order.begin(), order.end(), 0);
-      std::stable_sort(order.begin(), order.end(), [&](size_t a, size_t b) { return weight[a] > weight[b]; });
-      using Load = std::pair<size_t, int>;
-      std::priority_queue<Load, std::vector<Load>, std::greater<>> loads;
-      for (int p = 0; p < positions; ++p) loads.push({0, p});
+      std::stable_sort(order.begin(), order.end(),
+                       [&](size_t a, size_t b) { return crossing[a].size() > crossing[b].size(); });
+      // Largest leaf first, to the position that ends up least loaded; a segment costs a position once however
+      // many of its leaves it crosses, so neighbouring leaves tend to join the same position.
+      std::vector<uint64_t> seen(probe.size(), 0);
+      std::vector<size_t> load(static_cast<size_t>(positions), 0);
       for (size_t leaf : order) {
-        auto [load, p] = loads.top();
-        loads.pop();
-        t.owner_[leaf] = p;
-        loads.push({load + weight[leaf], p});
+        int pick = 0;
+        size_t pick_after = SIZE_MAX, pick_added = SIZE_MAX;
+        for (int p = 0; p < positions; ++p) {
+          size_t added = 0;
+          for (uint32_t k : crossing[leaf]) added += (seen[k] >> p & 1) ? 0 : 1;
+          const size_t after = load[static_cast<size_t>(p)] + added;
+          if (after < pick_after || (after == pick_after && added < pick_added)) {
+            pick = p;
+            pick_after = after;
+            pick_added = added;
+          }
+        }
+        t.owner_[leaf] = pick;
+        load[static_cast<size_t>(pick)] = pick_after;
+        for (uint32_t k : crossing[leaf]) seen[k] |= uint64_t{1} << pick;
       }
     } else {
       for (size_t leaf = 0; leaf < t.leaves_.size(); ++leaf) t.owner_[leaf] = static_cast<int>(leaf % static_cast<size_t>(positions));
@@ -124,12 +135,13 @@ GlobalBsp GlobalBsp::build(const Mesh& mesh, int positions, bool balanced) {
       std::sort(h.begin(), h.end());
       h.erase(std::unique(h.begin(), h.end()), h.end());
     }
-    const double im = balanced ? imbalance(t.probe_load(mesh)) : 1.0;
-    if (im < best_imbalance - 1e-9) {
-      best_imbalance = im;
+    size_t busiest = 0;
+    if (balanced)
+      for (size_t l : t.probe_load(mesh)) busiest = std::max(busiest, l);
+    if (busiest < best_load) {
+      best_load = busiest;
       best = std::move(t);
     }
-    if (best_imbalance <= 1.05) break;
   }
   return best;
 }
@@ -208,10 +220,25 @@ std::vector<std::pair<Vec3, Vec3>> probe_segments(const Mesh& mesh, size_t count
     if (r1 + r2 > 1) r1 = 1 - r1, r2 = 1 - r2;
     return t.v[0] + (t.v[1] - t.v[0]) * static_cast<float>(r1) + (t.v[2] - t.v[0]) * static_cast<float>(r2);
   };
+  // The lights shoot first and longest, so half the probe ends on an emitter (chosen by power).
+  std::vector<double> light_cdf;
+  double light_total = 0;
+  for (const auto& p : mesh.patches) light_cdf.push_back(light_total += p.polygon.area() * average(p.emission));
   std::vector<std::pair<Vec3, Vec3>> out;
   for (size_t tries = 0; out.size() < count && tries < 50 * count; ++tries) {
     size_t sa = 0, sb = 0;
-    const Vec3 a = point_on(sa), b = point_on(sb);
+    const Vec3 a = point_on(sa);
+    Vec3 b;
+    if (light_total > 0 && tries % 2 == 0) {
+      const size_t lp = std::min(static_cast<size_t>(std::lower_bound(light_cdf.begin(), light_cdf.end(), u(rng) * light_total) -
+                                                     light_cdf.begin()),
+                                 light_cdf.size() - 1);
+      sb = mesh.patches[lp].surface;
+      const Polygon& q = mesh.patches[lp].polygon;
+      b = q.v[0] + (q.v[1] - q.v[0]) * static_cast<float>(u(rng) * 0.999) + (q.v[q.count - 1] - q.v[0]) * static_cast<float>(u(rng) * 0.999) * (q.count == 4 ? 1.0f : 0.0f);
+    } else {
+      b = point_on(sb);
+    }
     if (sa == sb) continue;
     if (dot(mesh.surfaces[sa].polygon.normal(), b - a) <= 0 || dot(mesh.surfaces[sb].polygon.normal(), a - b) <= 0)
       continue;

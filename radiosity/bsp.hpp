@@ -16,12 +16,12 @@ struct Box {
 
 class GlobalBsp {
  public:
-  // `balanced` (static load balancing of visibility complexity, seed 003 §5.2): the tree deepened and its leaves
-  // dealt largest-first so that positions get even visibility work. The paper weighs a leaf by its polygons; with
-  // Embree a ray's cost hardly depends on how many polygons a node holds, but on whether it has to be cast at
-  // all, so a leaf weighs the rays that cross it: a fixed probe of segments between random points of surfaces
-  // that face each other. Otherwise: one level per doubling of positions, planes through the middle of the box,
-  // leaves dealt round-robin.
+  // `balanced` (static load balancing of visibility complexity, seed 003 §5.2): the depth and the dealing of
+  // leaves chosen so that the busiest position has the least visibility work. The paper weighs a leaf by its
+  // polygons; with Embree a ray's cost hardly depends on how many polygons a node holds, but on whether the node
+  // has to cast it at all, so work is measured with a fixed probe of segments (between facing surfaces, half of
+  // them ending on an emitter) counted once per position they cross. Otherwise: one level per doubling of
+  // positions, planes through the middle of the box, leaves dealt round-robin.
   static GlobalBsp build(const Mesh& mesh, int positions, bool balanced);
 
   int positions() const { return positions_; }
