@@ -89,7 +89,7 @@ class Progress {
 class Director {
  public:
   Director(const FarmSpec& spec, const RunOptions& options)
-      : spec_(spec), options_(options), ring_(spec, options.quiet) {}
+      : spec_(spec), options_(options), ring_(spec, options.quiet, options.progress_on_terminal) {}
 
   int run() {
     install_stop_signals();

@@ -14,7 +14,7 @@ static double now_seconds() {
   return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
 }
 
-RingCoordinator::RingCoordinator(const FarmSpec& spec, bool quiet) : quiet_(quiet) {
+RingCoordinator::RingCoordinator(const FarmSpec& spec, bool quiet, bool live) : quiet_(quiet), live_(live && !quiet) {
   std::map<int64_t, std::string> by_index;
   for (const auto& a : spec.actors) {
     if (a.kind != "radiosity_node") continue;
@@ -89,7 +89,10 @@ Result<std::vector<RingCoordinator::Reply>> RingCoordinator::on_shooter(const st
   const bool done = fraction < config_.solver.converge || best.patch == UINT32_MAX || !(best.power > 0) ||
                     iteration_ + 1 >= config_.solver.max_iterations;
   const int64_t next = iteration_ + 1;
-  if (!quiet_ && (done || next < 4 || next % 50 == 0)) {
+  if (live_) {
+    std::fprintf(stderr, "\rradiosity: iteration %lld, unshot energy %.3f %% of emitted   %s", static_cast<long long>(next),
+                 100 * fraction, done ? "\n" : "");
+  } else if (!quiet_ && (done || next < 4 || next % 50 == 0)) {
     char line[160];
     std::snprintf(line, sizeof line, "radiosity: iteration %lld, unshot energy %.3f %% of emitted%s",
                   static_cast<long long>(next), 100 * fraction, done ? (fraction < config_.solver.converge ? " (converged)" : " (stopped: max_iterations)") : "");

@@ -24,7 +24,8 @@ class RingCoordinator {
   };
 
   // Finds the farm's ring nodes; inactive when there are none.
-  RingCoordinator(const FarmSpec& spec, bool quiet);
+  // `live`: a progress line rewritten in place on the terminal; otherwise log lines now and then.
+  RingCoordinator(const FarmSpec& spec, bool quiet, bool live);
   bool active() const { return !nodes_.empty(); }
   // Plans the ring as the nodes do, to turn their elements back into one mesh. An error names the script line.
   Status prepare(const Scene& scene);
@@ -40,6 +41,7 @@ class RingCoordinator {
   int index_of(const std::string& node) const;
 
   bool quiet_;
+  bool live_;
   SourceLoc loc_;
   radiosity::RingConfig config_;
   std::unique_ptr<radiosity::RingPlan> plan_;

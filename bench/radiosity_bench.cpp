@@ -3,7 +3,7 @@
 // processed — as max/mean imbalance, and the mean iteration wall time. Work counts stay meaningful when 8
 // processes share 2 cores; times do not (they are printed for the record).
 //
-//   build/bench/radiosity_bench [--iterations 6] [--json radiosity_bench.json]
+//   build/bench/radiosity_bench [--iterations 6] [--json bench-radiosity.json]
 #include <cmath>
 #include <cstring>
 #include <map>
@@ -76,7 +76,7 @@ struct Layout {
 
 int main(int argc, char** argv) {
   int iterations = 6;
-  std::string json_path = "radiosity_bench.json";
+  std::string json_path = "bench-radiosity.json";
   for (int i = 1; i < argc; ++i) {
     if (!std::strcmp(argv[i], "--iterations") && i + 1 < argc) iterations = std::atoi(argv[++i]);
     else if (!std::strcmp(argv[i], "--json") && i + 1 < argc) json_path = argv[++i];
