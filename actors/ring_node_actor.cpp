@@ -202,8 +202,7 @@ class RingNodeActor final : public Actor {
 
   void came_home(Runtime& rt, SamplePacket p) {
     if (static_cast<int>(p.origin) == node_->node()) {
-      node_->complete(p);
-      --own_out_;
+      if (node_->complete(p)) --own_out_;  // a duplicate or forged packet changes nothing
       return;
     }
     // Borrowed: back to the node whose samples these are.
