@@ -1,5 +1,7 @@
 #include "actors/ring_node_actor.hpp"
 
+#include <time.h>
+
 #include <chrono>
 #include <deque>
 #include <random>
@@ -85,7 +87,10 @@ class RingNodeActor final : public Actor {
   }
 
   void on_phase(const std::string& phase, Runtime& rt) override {
-    if (phase == "setup") ask_for_shooter(rt, -1);
+    if (phase == "setup") {
+      solve_cpu_start_ = cpu_seconds();
+      ask_for_shooter(rt, -1);
+    }
     if (phase == "render") rt.phase_done("render");  // the solution was handed over in setup
   }
 
@@ -162,6 +167,7 @@ class RingNodeActor final : public Actor {
                       {"packets_borrowed", static_cast<int64_t>(w.packets_borrowed)},
                       {"samples", static_cast<int64_t>(w.samples)},
                       {"polls", static_cast<int64_t>(polls_)},
+                      {"solve_cpu_seconds", solve_cpu_},
                       {"surfaces_held", static_cast<int64_t>(node_->surfaces_held())},
                       {"patches", static_cast<int64_t>(node_->part().patches().size())},
                       {"elements", static_cast<int64_t>(node_->part().leaf_count())},
@@ -251,6 +257,7 @@ class RingNodeActor final : public Actor {
 
   void send_result(Runtime& rt) {
     running_ = false;
+    solve_cpu_ = cpu_seconds() - solve_cpu_start_;
     // Leaf elements: patch, corner count, 4 corners, radiosity, unshot radiosity.
     std::vector<uint32_t> patch, corners;
     std::vector<float> points, radiosity, unshot;
@@ -343,6 +350,14 @@ class RingNodeActor final : public Actor {
     rt.reply(peer, m.header.id, Value::Map{{"finished", finished}, {"idle", std::move(idle)}});
   }
 
+  // CPU time of this process: the work it did, whatever share of a core the OS gave it.
+  static double cpu_seconds() {
+    timespec t{};
+    clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &t);
+    return static_cast<double>(t.tv_sec) + static_cast<double>(t.tv_nsec) * 1e-9;
+  }
+
+  double solve_cpu_start_ = 0, solve_cpu_ = 0;
   RingConfig config_;
   std::unique_ptr<RingPlan> plan_;
   std::unique_ptr<RingNode> node_;

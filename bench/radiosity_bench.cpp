@@ -13,7 +13,7 @@
 namespace {
 
 struct NodeFigures {
-  double rays = 0, visits = 0, samples = 0, lent = 0, borrowed = 0, elements = 0, surfaces = 0;
+  double rays = 0, visits = 0, samples = 0, lent = 0, borrowed = 0, elements = 0, surfaces = 0, cpu = 0;
 };
 
 // Every radiosity node's "detail" block in the stats JSON.
@@ -31,6 +31,7 @@ std::vector<NodeFigures> node_figures(const std::string& stats) {
     f.borrowed = bench::json_number(block, "packets_borrowed");
     f.elements = bench::json_number(block, "elements");
     f.surfaces = bench::json_number(block, "surfaces_held");
+    f.cpu = bench::json_number(block, "solve_cpu_seconds");
     out.push_back(f);
   }
   return out;
@@ -94,7 +95,8 @@ int main(int argc, char** argv) {
   struct Row {
     Layout layout;
     std::string scheme;
-    double ray_imbalance, visit_imbalance, element_imbalance, surface_imbalance, seconds, lent, total_rays, max_rays;
+    double ray_imbalance, visit_imbalance, element_imbalance, surface_imbalance, seconds, lent, total_rays, max_rays,
+        cpu_imbalance;
   };
   std::vector<Row> rows;
   for (const auto& scheme : schemes) {
@@ -115,7 +117,8 @@ int main(int argc, char** argv) {
       }
       rows.push_back({l, scheme, imbalance(nodes, &NodeFigures::rays), imbalance(nodes, &NodeFigures::visits),
                       imbalance(nodes, &NodeFigures::elements), imbalance(nodes, &NodeFigures::surfaces),
-                      mean_iteration_seconds(run.stats), lent, total_rays, max_rays});
+                      mean_iteration_seconds(run.stats), lent, total_rays, max_rays,
+                      imbalance(nodes, &NodeFigures::cpu)});
       std::fprintf(stderr, "  %-15s %dx%d: rays %.3f\n", scheme.c_str(), l.rings, l.length, rows.back().ray_imbalance);
     }
   }
@@ -167,6 +170,17 @@ int main(int argc, char** argv) {
   }
   std::printf("\nstatic+dynamic lowest (within 0.02) in every layout: %s; worst at N = 8: %.3f (goal <= 1.15)\n",
               goal ? "yes" : "no", worst_n8);
+  // The same question asked of each node's CPU time during the solve: the work it did, including what rays do
+  // not count (form factors and routing at a packet's origin), whatever share of a core it got.
+  std::printf("\nCPU-time imbalance (max/mean of each node's CPU seconds in the solve):\n%-8s %10s %10s %10s %10s\n",
+              "layout", "none", "static", "dynamic", "st+dyn");
+  for (const auto& l : layouts) {
+    std::map<std::string, double> cpu;
+    for (const auto& r : rows)
+      if (r.layout.rings == l.rings && r.layout.length == l.length) cpu[r.scheme] = r.cpu_imbalance;
+    std::printf("%dx%-6d %10.3f %10.3f %10.3f %10.3f\n", l.rings, l.length, cpu["none"], cpu["static"], cpu["dynamic"],
+                cpu["static+dynamic"]);
+  }
 
   std::ofstream out(json_path);
   out << "{\n  \"benchmark\": \"radiosity_ring\",\n  \"iterations\": " << iterations << ",\n  \"runs\": [\n";
@@ -175,7 +189,7 @@ int main(int argc, char** argv) {
     out << "    {\"rings\": " << r.layout.rings << ", \"ring_length\": " << r.layout.length << ", \"balance\": \""
         << r.scheme << "\", \"ray_imbalance\": " << r.ray_imbalance << ", \"packet_imbalance\": " << r.visit_imbalance
         << ", \"element_imbalance\": " << r.element_imbalance << ", \"surface_imbalance\": " << r.surface_imbalance
-        << ", \"packets_lent\": " << r.lent << ", \"total_rays\": " << r.total_rays << ", \"busiest_node_rays\": " << r.max_rays << ", \"mean_iteration_seconds\": " << r.seconds << "}"
+        << ", \"packets_lent\": " << r.lent << ", \"total_rays\": " << r.total_rays << ", \"busiest_node_rays\": " << r.max_rays << ", \"cpu_imbalance\": " << r.cpu_imbalance << ", \"mean_iteration_seconds\": " << r.seconds << "}"
         << (i + 1 < rows.size() ? ",\n" : "\n");
   }
   out << "  ],\n  \"static_dynamic_lowest_everywhere\": " << (goal ? "true" : "false")
