@@ -796,9 +796,25 @@ std::string to_dot(const FarmSpec& spec) {
     out += "  }\n";
   }
   out += "  film [shape=note, label=\"film\\n" + spec.image.output + "\"];\n";
+  std::string ring_op;
   for (const auto& a : spec.actors) {
     if (a.is_renderer()) continue;
+    if (a.kind == "radiosity") ring_op = a.name;
+    if (a.kind == "radiosity_node") continue;  // drawn as rings below, not as their all-to-all connections
     for (int in : a.inputs) out += "  " + id(spec.actors[static_cast<size_t>(in)].name) + " -> " + id(a.name) + ";\n";
+  }
+  // A radiosity ring: packets go round each ring (solid), idle nodes borrow from the same position of another
+  // ring (dashed), and the solution goes to the radiosity op (dotted).
+  for (const auto& a : spec.actors) {
+    if (a.kind != "radiosity_node") continue;
+    auto param = [&](const char* key) { return static_cast<int>(a.params.count(key) ? a.params.at(key).as_int() : 1); };
+    const int rings = param("rings"), length = param("ring_length"), node = param("node");
+    const std::string prefix = a.name.substr(0, a.name.rfind('.', a.name.rfind('.') - 1));
+    auto name = [&](int r, int p) { return id(prefix + "." + std::to_string(r) + "." + std::to_string(p)); };
+    const int r = node / length, p = node % length;
+    if (length > 1) out += "  " + name(r, p) + " -> " + name(r, (p + 1) % length) + ";\n";
+    if (rings > 1) out += "  " + name(r, p) + " -> " + name((r + 1) % rings, p) + " [style=dashed, dir=none];\n";
+    if (!ring_op.empty()) out += "  " + id(a.name) + " -> " + id(ring_op) + " [style=dotted];\n";
   }
   if (spec.lighting >= 0)
     out += "  " + id(spec.actors[static_cast<size_t>(spec.lighting)].name) + " -> " + id("renderers") + ";\n";

@@ -184,3 +184,34 @@ TEST_F(ScriptTest, DotShowsTheNetwork) {
 }
 
 }  // namespace lf
+
+namespace lf {
+
+TEST_F(ScriptTest, RadiosityDeclaresItsRingNodesAndReturnsTheLightOp) {
+  auto path = write("farm.lua", "scene { builtin = \"cornell\" }\n"
+                                "local r = radiosity { rings = 2, ring_length = 3, balance = \"static\" }\n"
+                                "renderers { lighting = lightop \"combine\" { inputs = { r, lightop \"direct\" {} } } }\n");
+  auto spec = evaluate_script(path, {});
+  ASSERT_TRUE(spec.ok()) << spec.error().message;
+  std::vector<std::string> nodes;
+  for (const auto& a : spec->actors)
+    if (a.kind == "radiosity_node") {
+      nodes.push_back(a.name);
+      EXPECT_EQ(a.inputs.size(), 5u) << a.name;  // every other node
+      EXPECT_EQ(a.params.at("balance").as_string(), "static");
+    }
+  EXPECT_EQ(nodes, (std::vector<std::string>{"radiosity.0.0", "radiosity.0.1", "radiosity.0.2", "radiosity.1.0",
+                                             "radiosity.1.1", "radiosity.1.2"}));
+  const std::string dot = to_dot(*spec);
+  EXPECT_NE(dot.find("\"radiosity.1.2\" -> \"radiosity.1.0\";"), std::string::npos) << dot;  // round the ring
+  EXPECT_NE(dot.find("\"radiosity.0.1\" -> \"radiosity.1.1\" [style=dashed"), std::string::npos) << dot;
+
+  EXPECT_EQ(error_of("scene { builtin = \"cornell\" }\nlocal a = radiosity {}\nlocal b = radiosity {}\n"),
+            "farm.lua:3: radiosity is declared twice (a farm has one radiosity ring)");
+  EXPECT_EQ(error_of("scene { builtin = \"cornell\" }\nlocal d = lightop \"direct\" {}\nlocal a = radiosity { input = d }\n"),
+            "farm.lua:3: radiosity takes no inputs (it solves the scene itself)");
+  EXPECT_EQ(error_of("scene { builtin = \"cornell\" }\nlocal a = radiosity { balance = \"perfect\" }\n").substr(0, 49),
+            "farm.lua:2: radiosity: parameter 'balance' must be");
+}
+
+}  // namespace lf
