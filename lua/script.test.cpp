@@ -210,7 +210,7 @@ TEST_F(ScriptTest, RadiosityDeclaresItsRingNodesAndReturnsTheLightOp) {
             "farm.lua:3: radiosity is declared twice (a farm has one radiosity ring)");
   EXPECT_EQ(error_of("scene { builtin = \"cornell\" }\nlocal d = lightop \"direct\" {}\nlocal a = radiosity { input = d }\n"),
             "farm.lua:3: radiosity takes no inputs (it solves the scene itself)");
-  EXPECT_EQ(error_of("scene { builtin = \"cornell\" }\nlocal a = radiosity { balance = \"perfect\" }\n").substr(0, 49),
+  EXPECT_EQ(error_of("scene { builtin = \"cornell\" }\nlocal a = radiosity { balance = \"perfect\" }\n").substr(0, 50),
             "farm.lua:2: radiosity: parameter 'balance' must be");
 }
 
