@@ -74,7 +74,10 @@ void Part::begin_shot(const Shooter& shooter) {
   std::vector<uint32_t> all;
   for (const auto& list : patch_elements_)
     for (uint32_t e : list)
-      if (elements_[e].leaf && mesh_.patches[elements_[e].patch].surface != shooter.surface) all.push_back(e);
+      // A black receiver (mirrors, glass) reflects nothing: what it receives changes no radiosity.
+      if (elements_[e].leaf && mesh_.patches[elements_[e].patch].surface != shooter.surface &&
+          !is_black(mesh_.patches[elements_[e].patch].reflectance))
+        all.push_back(e);
   prepare_round(std::move(all));
 }
 

@@ -1,0 +1,24 @@
+-- cornell_glass with a radiosity final gather (DESIGN §2 and §7): the network of cornell_glass.lua, but its
+-- indirect light comes from one irradiance cache over a coarse radiosity solution (all diffuse bounces, shown with
+-- the ambient term) plus the caustic photon map, instead of two caches stacked over direct light (two bounces).
+-- Fewer processes' worth of setup and no missing higher bounces: bench/quality_bench compares the two.
+--   lightfarm run examples/cornell_glass_radiosity.lua
+scene  { builtin = "cornell_glass" }
+camera { eye = {278, 273, -800}, at = {278, 273, 0}, fov = 39.3 }
+image  { width = param("width", 512), height = param("height", 512), spp = param("spp", 4),
+         output = "cornell_glass_radiosity.png" }
+
+local direct   = lightop "direct" { light_samples = param("light_samples", 2) }
+local caustics = multiplexer { lightop "photonmap" { photons = param("photons", 300000), k = 100 },
+                               replicas = param("photon_replicas", 2) }
+-- Radiosity treats the mirror and the glass as black (it is diffuse only); light through them reaches the
+-- cache as caustic photons instead.
+local solution = radiosity { rings = 1, ring_length = 2, patch_size = 140, element_size = 70,
+                             converge = param("converge", 0.2), max_iterations = 2000 }
+local indirect = lightop "irradiance" { input = lightop "combine" { inputs = { solution, caustics }, name = "bounced" },
+                                        name = "indirect", prepass = param("prepass", 4000) }
+local landing  = lightop "combine" { inputs = { direct, caustics, indirect }, name = "landing" }
+local specular = lightop "specular" { input = landing }
+
+renderers { count = param("renderers", 2),
+            lighting = lightop "combine" { inputs = { direct, specular, caustics, indirect } } }
