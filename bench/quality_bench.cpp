@@ -7,7 +7,7 @@
 // emission). A second figure also leaves out the pixels next to the light: their error is how much of the light
 // a pixel's camera samples happened to cover, which depends on the sample count alone, not on the lighting.
 //
-//   build/bench/quality_bench [--json FILE] [--size PIXELS] [--reference-spp N]
+//   build/bench/quality_bench [--json FILE] [--size PIXELS] [--reference-spp N] [--reference FILE.exr]
 #include <cmath>
 #include <cstdio>
 #include <fstream>
@@ -67,18 +67,28 @@ lf::Image run(const std::string& script, const std::vector<std::string>& sets, d
 int main(int argc, char** argv) {
   std::string json_path = "bench-quality.json";
   int size = 512, reference_spp = 2048;
+  std::string reference_file;  // --reference: reuse this image if it exists, else render and keep it there
   for (int i = 1; i + 1 < argc; i += 2) {
     std::string a = argv[i];
     if (a == "--json") json_path = argv[i + 1];
     else if (a == "--size") size = std::atoi(argv[i + 1]);
     else if (a == "--reference-spp") reference_spp = std::atoi(argv[i + 1]);
+    else if (a == "--reference") reference_file = argv[i + 1];
   }
   const std::string src = LIGHTFARM_SOURCE_DIR;
   const std::string pt = src + "/tests/scripts/glass_pathtrace.lua";
   const std::string s = std::to_string(size);
   double t = 0;
-  lf::Image reference = run(pt, {"size=" + s, "spp=" + std::to_string(reference_spp)}, t);
-  std::printf("reference: pathtrace, %dx%d, %d spp, %.1f s\n\n", size, size, reference_spp, t);
+  lf::Image reference;
+  if (auto kept = reference_file.empty() ? lf::Result<lf::Image>(lf::make_error("none")) : lf::read_image(reference_file);
+      kept && kept->width == size && kept->height == size) {
+    reference = *kept;
+    std::printf("reference: %s (%dx%d, kept from an earlier run)\n\n", reference_file.c_str(), size, size);
+  } else {
+    reference = run(pt, {"size=" + s, "spp=" + std::to_string(reference_spp)}, t);
+    if (!reference_file.empty()) (void)lf::write_image(reference, reference_file);
+    std::printf("reference: pathtrace, %dx%d, %d spp, %.1f s\n\n", size, size, reference_spp, t);
+  }
 
   std::vector<Point> path, networks;
   for (int spp : {16, 64, 256}) {

@@ -100,9 +100,16 @@ void IrradianceCache::insert(const IrradianceRecord& r) {
 }
 
 bool IrradianceCache::lookup(Vec3 x, Vec3 n, RGB& irradiance, float relax) const {
-  const float bound = a_ * relax;
-  double weight_sum = 0;
-  RGB sum{};
+  const float one[1] = {relax};
+  return lookup_first(x, n, one, irradiance) == 0;
+}
+
+int IrradianceCache::lookup_first(Vec3 x, Vec3 n, std::span<const float> relax, RGB& irradiance) const {
+  constexpr size_t kMaxBounds = 4;
+  const size_t bounds = std::min(relax.size(), kMaxBounds);
+  double weight_sum[kMaxBounds] = {};
+  RGB sum[kMaxBounds] = {};
+  const float widest = a_ * relax[bounds - 1];
   for (int level : levels_) {
     const Key c = key_of(level, x);
     for (int dx = -1; dx <= 1; ++dx)
@@ -117,7 +124,7 @@ bool IrradianceCache::lookup(Vec3 x, Vec3 n, RGB& irradiance, float relax) const
             if (dot(d, (n + r.normal) * 0.5f) < -0.05f * r.harmonic_distance) continue;
             const float cos_n = std::min(1.0f, dot(n, r.normal));
             const float error = length(d) / r.harmonic_distance + std::sqrt(std::max(0.0f, 1.0f - cos_n));
-            if (error >= bound) continue;  // weight 1/error at most 1/a: not valid here
+            if (error >= widest) continue;  // weight 1/error at most 1/a: not valid here
             const float w = 1.0f / std::max(error, 1e-4f);
             const Vec3 nxn = cross(r.normal, n);
             RGB e;
@@ -126,14 +133,20 @@ bool IrradianceCache::lookup(Vec3 x, Vec3 n, RGB& irradiance, float relax) const
               const float value = base + dot(nxn, r.rotational[ch]) + dot(d, r.translational[ch]);
               (ch == 0 ? e.x : ch == 1 ? e.y : e.z) = std::max(0.0f, value);
             }
-            sum += e * w;
-            weight_sum += w;
+            for (size_t b = 0; b < bounds; ++b) {
+              if (error >= a_ * relax[b]) continue;
+              sum[b] += e * w;
+              weight_sum[b] += w;
+            }
           }
         }
   }
-  if (weight_sum <= 0) return false;
-  irradiance = sum * static_cast<float>(1.0 / weight_sum);
-  return true;
+  for (size_t b = 0; b < bounds; ++b)
+    if (weight_sum[b] > 0) {
+      irradiance = sum[b] * static_cast<float>(1.0 / weight_sum[b]);
+      return static_cast<int>(b);
+    }
+  return -1;
 }
 
 std::string IrradianceCache::serialize(std::span<const IrradianceRecord> records) {

@@ -44,6 +44,10 @@ class IrradianceCache {
   // Weighted, gradient-extrapolated irradiance at (x, n) from the records whose error there is below relax * a;
   // false when there is none. relax may be at most kMaxRelax.
   bool lookup(Vec3 x, Vec3 n, RGB& irradiance, float relax = 1.0f) const;
+  // The lookups under bounds relax[0] * a, relax[1] * a, ... (ascending, at most 4 of them, each at most
+  // kMaxRelax) in one pass over the records: the index of the first that found records, its irradiance in
+  // `irradiance`, or -1. Gives exactly what the separate lookups would.
+  int lookup_first(Vec3 x, Vec3 n, std::span<const float> relax, RGB& irradiance) const;
   static constexpr float kMaxRelax = 4.0f;
   size_t size() const { return records_.size(); }
   const std::vector<IrradianceRecord>& records() const { return records_; }

@@ -94,9 +94,8 @@ class Irradiance final : public LightOp {
       // records (deterministically: the cache does not change while rendering) instead of paying for a hemisphere,
       // whose own samples would miss the next cache down a network in turn.
       RGB e;
-      if (cache_->lookup(points.position[i], points.normal[i], e) ||
-          cache_->lookup(points.position[i], points.normal[i], e, 2.0f) ||
-          cache_->lookup(points.position[i], points.normal[i], e, 4.0f)) {
+      static constexpr float kBounds[] = {1.0f, 2.0f, 4.0f};
+      if (cache_->lookup_first(points.position[i], points.normal[i], kBounds, e) >= 0) {
         radiance[i] = m.kd * e * (1.0f / kPi);
       } else {
         misses.push_back(Candidate{points.position[i], points.normal[i], splitmix64(points.key[i] ^ 0x1e7)});
