@@ -96,6 +96,7 @@ class RingNodeActor final : public Actor {
 
   void on_request(const std::string& peer, wire::Message& m, Runtime& rt) override {
     const std::string& op = m.header.op;
+    if (!node_) return rt.reply_error(peer, m.header.id, "not_ready", "'" + rt.name() + "' is not configured yet");
     if (op == "ring.poll") return on_poll(peer, m, rt);
     if (op != "ring.visit" && op != "ring.back" && op != "ring.return") {
       rt.reply_error(peer, m.header.id, "unknown_op", "unknown operation '" + op + "' (a ring node serves ring.visit, "
@@ -105,6 +106,14 @@ class RingNodeActor final : public Actor {
     auto decoded = decode_packet(m.body, config_.layout.nodes());
     if (!decoded) {
       rt.reply_error(peer, m.header.id, "bad_request", decoded.error().message);
+      return;
+    }
+    // Past the director's barrier a peer is at most one shooter ahead of this node; anything further would only
+    // pile up here.
+    if (decoded->first.iteration > node_->iteration() + 1) {
+      rt.reply_error(peer, m.header.id, "bad_request",
+                     "a packet of iteration " + std::to_string(decoded->first.iteration) + " while this node is on " +
+                         std::to_string(node_->iteration()));
       return;
     }
     rt.reply(peer, m.header.id, Value::Map{});

@@ -106,6 +106,10 @@ TEST_F(RingNodeActorTest, SolvesThroughTheDirectorAndRefusesHostilePackets) {
   stranger.as_map()["o"] = 7;  // there is one node
   EXPECT_EQ(refused("ring.back", stranger, 4), "a sample packet needs o, s, it, r and home in range");
   EXPECT_EQ(refused("ring.poll", Value::Map{}, 5), "ring.poll needs an iteration");
+  Value early = packet;
+  early.as_map()["n"] = floats_to_bytes(std::vector<float>(6, 0.0f));
+  early.as_map()["it"] = 40;
+  EXPECT_EQ(refused("ring.visit", early, 7), "a packet of iteration 40 while this node is on 0");
   // A well-formed packet the node never sent: acknowledged, then ignored.
   Value forged = packet;
   forged.as_map()["n"] = floats_to_bytes(std::vector<float>(6, 0.0f));
