@@ -86,6 +86,9 @@ IrradianceCache::Key IrradianceCache::key_of(int level, Vec3 p) const {
 }
 
 void IrradianceCache::insert(const IrradianceRecord& r) {
+  grid_cell_ = 0;  // a frozen grid no longer lists everything
+  grid_.clear();
+  wide_.clear();
   // Valid where |x - x_i| / R_i < a (up to kMaxRelax * a for relaxed lookups): the deepest level whose cells are
   // at least that wide.
   const float valid = kMaxRelax * a_ * r.harmonic_distance;
@@ -104,12 +107,55 @@ bool IrradianceCache::lookup(Vec3 x, Vec3 n, RGB& irradiance, float relax) const
   return lookup_first(x, n, one, irradiance) == 0;
 }
 
-int IrradianceCache::lookup_first(Vec3 x, Vec3 n, std::span<const float> relax, RGB& irradiance) const {
-  constexpr size_t kMaxBounds = 4;
-  const size_t bounds = std::min(relax.size(), kMaxBounds);
-  double weight_sum[kMaxBounds] = {};
-  RGB sum[kMaxBounds] = {};
-  const float widest = a_ * relax[bounds - 1];
+void IrradianceCache::freeze() {
+  grid_.clear();
+  wide_.clear();
+  if (records_.empty()) return;
+  // Cells as wide as the median record's valid sphere; a record touching more than kMaxCells cells is checked by
+  // every lookup instead.
+  constexpr double kMaxCells = 512;
+  std::vector<float> radius;
+  for (const auto& r : records_) radius.push_back(kMaxRelax * a_ * r.harmonic_distance);
+  std::vector<float> sorted = radius;
+  std::nth_element(sorted.begin(), sorted.begin() + static_cast<long>(sorted.size() / 2), sorted.end());
+  grid_cell_ = std::max(sorted[sorted.size() / 2], 1e-6f * root_);
+  for (uint32_t id = 0; id < records_.size(); ++id) {
+    const Vec3 p = records_[id].position;
+    const float r = radius[id];
+    const int lo[3] = {static_cast<int>(std::floor((p.x - r) / grid_cell_)), static_cast<int>(std::floor((p.y - r) / grid_cell_)),
+                       static_cast<int>(std::floor((p.z - r) / grid_cell_))};
+    const int hi[3] = {static_cast<int>(std::floor((p.x + r) / grid_cell_)), static_cast<int>(std::floor((p.y + r) / grid_cell_)),
+                       static_cast<int>(std::floor((p.z + r) / grid_cell_))};
+    const double cells = static_cast<double>(hi[0] - lo[0] + 1) * (hi[1] - lo[1] + 1) * (hi[2] - lo[2] + 1);
+    if (cells > kMaxCells) {
+      wide_.push_back(id);
+      continue;
+    }
+    for (int x = lo[0]; x <= hi[0]; ++x)
+      for (int y = lo[1]; y <= hi[1]; ++y)
+        for (int z = lo[2]; z <= hi[2]; ++z) grid_[Key{0, x, y, z}].push_back(id);
+  }
+}
+
+template <class Visit>
+void IrradianceCache::for_candidates(Vec3 x, Visit&& visit) const {
+  if (grid_cell_ > 0) {
+    // Frozen: the one cell holding x lists every record whose sphere might reach it, in record order; the wide
+    // ones are merged in by index so that the order stays the record order.
+    const Key k{0, static_cast<int>(std::floor(x.x / grid_cell_)), static_cast<int>(std::floor(x.y / grid_cell_)),
+                static_cast<int>(std::floor(x.z / grid_cell_))};
+    auto it = grid_.find(k);
+    static const std::vector<uint32_t> none;
+    const std::vector<uint32_t>& cell = it == grid_.end() ? none : it->second;
+    size_t i = 0, j = 0;
+    while (i < cell.size() || j < wide_.size()) {
+      if (j >= wide_.size() || (i < cell.size() && cell[i] < wide_[j]))
+        visit(records_[cell[i++]]);
+      else
+        visit(records_[wide_[j++]]);
+    }
+    return;
+  }
   for (int level : levels_) {
     const Key c = key_of(level, x);
     for (int dx = -1; dx <= 1; ++dx)
@@ -117,30 +163,38 @@ int IrradianceCache::lookup_first(Vec3 x, Vec3 n, std::span<const float> relax, 
         for (int dz = -1; dz <= 1; ++dz) {
           auto it = cells_.find(Key{level, c.x + dx, c.y + dy, c.z + dz});
           if (it == cells_.end()) continue;
-          for (uint32_t id : it->second) {
-            const IrradianceRecord& r = records_[id];
-            const Vec3 d = x - r.position;
-            // Not from behind: a record does not serve points in front of its surface's other side.
-            if (dot(d, (n + r.normal) * 0.5f) < -0.05f * r.harmonic_distance) continue;
-            const float cos_n = std::min(1.0f, dot(n, r.normal));
-            const float error = length(d) / r.harmonic_distance + std::sqrt(std::max(0.0f, 1.0f - cos_n));
-            if (error >= widest) continue;  // weight 1/error at most 1/a: not valid here
-            const float w = 1.0f / std::max(error, 1e-4f);
-            const Vec3 nxn = cross(r.normal, n);
-            RGB e;
-            for (int ch = 0; ch < 3; ++ch) {
-              const float base = ch == 0 ? r.irradiance.x : ch == 1 ? r.irradiance.y : r.irradiance.z;
-              const float value = base + dot(nxn, r.rotational[ch]) + dot(d, r.translational[ch]);
-              (ch == 0 ? e.x : ch == 1 ? e.y : e.z) = std::max(0.0f, value);
-            }
-            for (size_t b = 0; b < bounds; ++b) {
-              if (error >= a_ * relax[b]) continue;
-              sum[b] += e * w;
-              weight_sum[b] += w;
-            }
-          }
+          for (uint32_t id : it->second) visit(records_[id]);
         }
   }
+}
+
+int IrradianceCache::lookup_first(Vec3 x, Vec3 n, std::span<const float> relax, RGB& irradiance) const {
+  constexpr size_t kMaxBounds = 4;
+  const size_t bounds = std::min(relax.size(), kMaxBounds);
+  double weight_sum[kMaxBounds] = {};
+  RGB sum[kMaxBounds] = {};
+  const float widest = a_ * relax[bounds - 1];
+  for_candidates(x, [&](const IrradianceRecord& r) {
+    const Vec3 d = x - r.position;
+    // Not from behind: a record does not serve points in front of its surface's other side.
+    if (dot(d, (n + r.normal) * 0.5f) < -0.05f * r.harmonic_distance) return;
+    const float cos_n = std::min(1.0f, dot(n, r.normal));
+    const float error = length(d) / r.harmonic_distance + std::sqrt(std::max(0.0f, 1.0f - cos_n));
+    if (error >= widest) return;  // weight 1/error at most 1/a: not valid here
+    const float w = 1.0f / std::max(error, 1e-4f);
+    const Vec3 nxn = cross(r.normal, n);
+    RGB e;
+    for (int ch = 0; ch < 3; ++ch) {
+      const float base = ch == 0 ? r.irradiance.x : ch == 1 ? r.irradiance.y : r.irradiance.z;
+      const float value = base + dot(nxn, r.rotational[ch]) + dot(d, r.translational[ch]);
+      (ch == 0 ? e.x : ch == 1 ? e.y : e.z) = std::max(0.0f, value);
+    }
+    for (size_t b = 0; b < bounds; ++b) {
+      if (error >= a_ * relax[b]) continue;
+      sum[b] += e * w;
+      weight_sum[b] += w;
+    }
+  });
   for (size_t b = 0; b < bounds; ++b)
     if (weight_sum[b] > 0) {
       irradiance = sum[b] * static_cast<float>(1.0 / weight_sum[b]);

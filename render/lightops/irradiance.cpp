@@ -80,6 +80,7 @@ class Irradiance final : public LightOp {
         for (const auto& rec : records) cache_->insert(rec);
       }
     }
+    cache_->freeze();  // rendering only reads it
   }
 
   Task shade(const ShadingPoints& points, std::span<RGB> radiance, Inputs& inputs) override {
