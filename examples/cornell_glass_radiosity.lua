@@ -9,12 +9,12 @@ image  { width = param("width", 512), height = param("height", 512), spp = param
          output = "cornell_glass_radiosity.png" }
 
 local direct   = lightop "direct" { light_samples = param("light_samples", 2) }
--- k = 50: at 512x512, 8 spp the same RMSE as k = 100 (0.306 vs 0.304) at half the photon map's time.
-local caustics = multiplexer { lightop "photonmap" { photons = param("photons", 300000), k = 50 },
+-- Caustics the camera sees: k = 50, with Christensen's irradiance precomputed at every photon, so that a point
+-- asks for one neighbour instead of 50. Measured at 512x512, 8 spp against the full estimate at k = 100: RMSE
+-- 0.308 vs 0.304, and a sixth of the photon map's time. (At every 4th photon its Voronoi cells show: 0.367.)
+local caustics = multiplexer { lightop "photonmap" { photons = param("photons", 300000), k = 50, precompute = 1 },
                                replicas = param("photon_replicas", 2) }
--- What the cache gathers needs no sharp caustics: a second map with Christensen's precomputed irradiance answers
--- with one neighbour instead of k (seen directly, its Voronoi cells would show; measured 512x512, 8 spp: the
--- same RMSE as the full estimate, 18 % less time in all).
+-- What the cache gathers needs no sharp caustics: a sparser precomputed map is enough there.
 local gathered = multiplexer { lightop "photonmap" { photons = param("photons", 300000), k = 100, precompute = 4,
                                                     name = "gathered_caustics" },
                                replicas = param("photon_replicas", 2) }
