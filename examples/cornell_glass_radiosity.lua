@@ -22,8 +22,11 @@ local gathered = multiplexer { lightop "photonmap" { photons = param("photons", 
 -- cache as caustic photons instead.
 local solution = radiosity { rings = 1, ring_length = 2, patch_size = 140, element_size = 70,
                              converge = param("converge", 0.2), max_iterations = 2000 }
-local indirect = lightop "irradiance" { input = lightop "combine" { inputs = { solution, gathered }, name = "bounced" },
-                                        name = "indirect", prepass = param("prepass", 4000) }
+-- Two replicas of the cache (each builds the same records, sharing the pre-pass; measured 512x512, 16 spp: the
+-- single cache process was busy the whole render, 12.3 s, the pool renders in 9.3-10.0 s, pixels unchanged).
+local bounced  = lightop "combine" { inputs = { solution, gathered }, name = "bounced" }
+local indirect = multiplexer { lightop "irradiance" { input = bounced, name = "indirect", prepass = param("prepass", 4000) },
+                               replicas = param("cache_replicas", 2) }
 local landing  = lightop "combine" { inputs = { direct, caustics, indirect }, name = "landing" }
 local specular = lightop "specular" { input = landing }
 
