@@ -9,6 +9,7 @@
 #include <map>
 
 #include "bench_util.hpp"
+#include "core/value.hpp"
 
 namespace {
 
@@ -190,19 +191,28 @@ int main(int argc, char** argv) {
   std::printf("\nstatic+dynamic lowest (within 0.02) in every layout by CPU time: %s; worst at N = 8: %.3f\n",
               cpu_goal ? "yes" : "no", cpu_worst_n8);
 
-  std::ofstream out(json_path);
-  out << "{\n  \"benchmark\": \"radiosity_ring\",\n  \"iterations\": " << iterations << ",\n  \"runs\": [\n";
-  for (size_t i = 0; i < rows.size(); ++i) {
-    const auto& r = rows[i];
-    out << "    {\"rings\": " << r.layout.rings << ", \"ring_length\": " << r.layout.length << ", \"balance\": \""
-        << r.scheme << "\", \"ray_imbalance\": " << r.ray_imbalance << ", \"packet_imbalance\": " << r.visit_imbalance
-        << ", \"element_imbalance\": " << r.element_imbalance << ", \"surface_imbalance\": " << r.surface_imbalance
-        << ", \"packets_lent\": " << r.lent << ", \"total_rays\": " << r.total_rays << ", \"busiest_node_rays\": " << r.max_rays << ", \"cpu_imbalance\": " << r.cpu_imbalance << ", \"mean_iteration_seconds\": " << r.seconds << "}"
-        << (i + 1 < rows.size() ? ",\n" : "\n");
-  }
-  out << "  ],\n  \"static_dynamic_lowest_everywhere\": " << (goal ? "true" : "false")
-      << ",\n  \"static_dynamic_worst_n8\": " << worst_n8 << ",\n  \"cpu_static_dynamic_lowest_everywhere\": "
-      << (cpu_goal ? "true" : "false") << ",\n  \"cpu_static_dynamic_worst_n8\": " << cpu_worst_n8 << "\n}\n";
+  lf::Value::Array runs;
+  for (const auto& r : rows)
+    runs.push_back(lf::Value::Map{{"rings", r.layout.rings},
+                                  {"ring_length", r.layout.length},
+                                  {"balance", r.scheme},
+                                  {"ray_imbalance", r.ray_imbalance},
+                                  {"packet_imbalance", r.visit_imbalance},
+                                  {"element_imbalance", r.element_imbalance},
+                                  {"surface_imbalance", r.surface_imbalance},
+                                  {"packets_lent", r.lent},
+                                  {"total_rays", r.total_rays},
+                                  {"busiest_node_rays", r.max_rays},
+                                  {"cpu_imbalance", r.cpu_imbalance},
+                                  {"mean_iteration_seconds", r.seconds}});
+  const lf::Value doc = lf::Value::Map{{"benchmark", "radiosity_ring"},
+                                       {"iterations", iterations},
+                                       {"runs", std::move(runs)},
+                                       {"static_dynamic_lowest_everywhere", goal},
+                                       {"static_dynamic_worst_n8", worst_n8},
+                                       {"cpu_static_dynamic_lowest_everywhere", cpu_goal},
+                                       {"cpu_static_dynamic_worst_n8", cpu_worst_n8}};
+  std::ofstream(json_path) << lf::to_json(doc, 2) << "\n";
   std::printf("wrote %s\n", json_path.c_str());
   return 0;
 }

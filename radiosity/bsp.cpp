@@ -3,7 +3,6 @@
 #include <algorithm>
 #include <cmath>
 #include <numeric>
-#include <queue>
 #include <random>
 
 namespace lf::radiosity {
@@ -33,8 +32,7 @@ static Vec3 with(Vec3 v, int axis, float value) {
   return v;
 }
 
-int GlobalBsp::build_node(const Mesh& mesh, const std::vector<uint32_t>& surfaces, Box box, int depth, int max_depth,
-                          bool median) {
+int GlobalBsp::build_node(const Mesh& mesh, const std::vector<uint32_t>& surfaces, Box box, int depth, int max_depth) {
   const int index = static_cast<int>(nodes_.size());
   nodes_.emplace_back();
   if (depth == max_depth) {
@@ -45,15 +43,8 @@ int GlobalBsp::build_node(const Mesh& mesh, const std::vector<uint32_t>& surface
   }
   const Vec3 extent = box.hi - box.lo;
   const int axis = extent.x >= extent.y && extent.x >= extent.z ? 0 : (extent.y >= extent.z ? 1 : 2);
-  float split = 0.5f * (box.lo[axis] + box.hi[axis]);
-  if (median && !surfaces.empty()) {
-    std::vector<float> c;
-    for (uint32_t s : surfaces) c.push_back(mesh.surfaces[s].polygon.centroid()[axis]);
-    std::nth_element(c.begin(), c.begin() + static_cast<long>(c.size() / 2), c.end());
-    const float m = c[c.size() / 2];
-    // A median on the box's face would leave one side empty: keep the middle then.
-    if (m > box.lo[axis] + slack_ && m < box.hi[axis] - slack_) split = m;
-  }
+  // Planes through the middle: the dealing of leaves, not their shape, balances the positions.
+  const float split = 0.5f * (box.lo[axis] + box.hi[axis]);
   Box left = box, right = box;
   left.hi = with(left.hi, axis, split);
   right.lo = with(right.lo, axis, split);
@@ -63,8 +54,8 @@ int GlobalBsp::build_node(const Mesh& mesh, const std::vector<uint32_t>& surface
     if (b.overlaps(left, slack_)) in_left.push_back(s);
     if (b.overlaps(right, slack_)) in_right.push_back(s);
   }
-  const int l = build_node(mesh, in_left, left, depth + 1, max_depth, median);
-  const int r = build_node(mesh, in_right, right, depth + 1, max_depth, median);
+  const int l = build_node(mesh, in_left, left, depth + 1, max_depth);
+  const int r = build_node(mesh, in_right, right, depth + 1, max_depth);
   Node& n = nodes_[static_cast<size_t>(index)];
   n.axis = axis;
   n.split = split;
@@ -91,7 +82,7 @@ GlobalBsp GlobalBsp::build(const Mesh& mesh, int positions, bool balanced) {
     t.positions_ = positions;
     t.depth_ = depth;
     t.slack_ = slack;
-    t.build_node(mesh, all, root, 0, depth, false);
+    t.build_node(mesh, all, root, 0, depth);
     t.owner_.assign(t.leaves_.size(), 0);
     if (balanced) {
       // Which probe segments cross each leaf.
@@ -144,12 +135,6 @@ GlobalBsp GlobalBsp::build(const Mesh& mesh, int positions, bool balanced) {
     }
   }
   return best;
-}
-
-std::vector<size_t> GlobalBsp::surface_counts() const {
-  std::vector<size_t> c;
-  for (const auto& h : held_) c.push_back(h.size());
-  return c;
 }
 
 int GlobalBsp::position_of_point(Vec3 p) const {
@@ -235,7 +220,10 @@ std::vector<std::pair<Vec3, Vec3>> probe_segments(const Mesh& mesh, size_t count
                                  light_cdf.size() - 1);
       sb = mesh.patches[lp].surface;
       const Polygon& q = mesh.patches[lp].polygon;
-      b = q.v[0] + (q.v[1] - q.v[0]) * static_cast<float>(u(rng) * 0.999) + (q.v[q.count - 1] - q.v[0]) * static_cast<float>(u(rng) * 0.999) * (q.count == 4 ? 1.0f : 0.0f);
+      double t = u(rng) * 0.999;  // (drawn before s, as the probe has always drawn them)
+      double s = u(rng) * 0.999;
+      if (q.count == 3 && s + t > 1) s = 1 - s, t = 1 - t;  // a triangle: fold the square onto it
+      b = q.v[0] + (q.v[1] - q.v[0]) * static_cast<float>(s) + (q.v[q.count - 1] - q.v[0]) * static_cast<float>(t);
     } else {
       b = point_on(sb);
     }

@@ -31,8 +31,6 @@ class GlobalBsp {
   uint64_t route(Vec3 a, Vec3 b) const;
   // The surfaces position p holds: those overlapping any of its leaves (a surface can be in several).
   const std::vector<uint32_t>& surfaces_of(int position) const { return held_[static_cast<size_t>(position)]; }
-  // Surfaces held per position, counting a surface once per position.
-  std::vector<size_t> surface_counts() const;
   // Per position, how many of the mesh's probe segments cross its space (the balanced tree's cost model).
   std::vector<size_t> probe_load(const Mesh& mesh) const;
   // The leaf that contains point p, and its position (for tests).
@@ -45,8 +43,7 @@ class GlobalBsp {
     int left = -1, right = -1;
     int leaf = -1;
   };
-  int build_node(const Mesh& mesh, const std::vector<uint32_t>& surfaces, Box box, int depth, int max_depth,
-                 bool median);
+  int build_node(const Mesh& mesh, const std::vector<uint32_t>& surfaces, Box box, int depth, int max_depth);
   template <class Visit>
   void walk(int node, Vec3 a, Vec3 d, float t0, float t1, Visit&& visit) const;
 

@@ -107,7 +107,6 @@ TEST(GlobalBsp, StaticBalancingEvensVisibilityWork) {
 struct RingRun {
   std::map<uint32_t, std::vector<RGB>> radiosity;  // per patch, its elements in creation order
   std::vector<uint32_t> shooters;
-  std::vector<NodeWork> work;
 };
 
 RingRun run_ring(const Mesh& mesh, RingLayout layout, bool balance, bool borrow, const SolverSettings& settings) {
@@ -180,7 +179,6 @@ RingRun run_ring(const Mesh& mesh, RingLayout layout, bool balance, bool borrow,
   }
   for (auto& node : nodes) {
     for (const auto& e : node->part().elements()) run.radiosity[e.patch].push_back(e.radiosity);
-    run.work.push_back(node->work());
   }
   return run;
 }
