@@ -10,11 +10,12 @@
 #include <map>
 #include <vector>
 
-#include "actors/actor_kinds.hpp"
-#include "actors/check_actor.hpp"
-#include "actors/director.hpp"
-#include "actors/runtime.hpp"
+#include "actors/kinds/actor_kinds.hpp"
+#include "actors/check/check_actor.hpp"
+#include "actors/director/director.hpp"
+#include "actors/runtime/runtime.hpp"
 #include "core/log.hpp"
+#include "farm/builders.hpp"
 #include "lua/script.hpp"
 #include "transport/protocol.hpp"
 

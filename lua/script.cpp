@@ -13,8 +13,9 @@
 #include <map>
 #include <set>
 
-#include "radiosity/config.hpp"
 #include "core/params.hpp"
+#include "farm/builders.hpp"
+#include "radiosity/config.hpp"
 #include "render/lightop_registry.hpp"
 #include "render/scene.hpp"
 
@@ -245,17 +246,6 @@ int l_host(lua_State* L) {
   return 1;
 }
 
-std::string unique_name(const Builder& b, const std::string& wanted) {
-  auto taken = [&](const std::string& n) {
-    for (const auto& a : b.spec.actors)
-      if (a.name == n) return true;
-    return false;
-  };
-  if (!taken(wanted)) return wanted;
-  for (int i = 2;; ++i)
-    if (!taken(wanted + "-" + std::to_string(i))) return wanted + "-" + std::to_string(i);
-}
-
 // Takes the wiring keys (input, inputs, name, host) out of the table at index 1 into `a`; returns the wanted name.
 std::string take_wiring(lua_State* L, Builder& b, ActorSpec& a, const std::string& what, const std::string& default_name) {
   lua_getfield(L, 1, "input");
@@ -308,7 +298,7 @@ int l_lightop_table(lua_State* L) {
   ParamTable params = table_params(L, 1, "lightop '" + kind_name + "'");
   with_params(L, [&] { create_lightop(*kind, params); });  // the op validates its own parameters
   a.params = params.values();
-  a.name = unique_name(b, wanted);
+  a.name = unique_name(b.spec, wanted);
   b.spec.actors.push_back(std::move(a));
   push_actor(L, static_cast<int>(b.spec.actors.size() - 1));
   return 1;
@@ -366,7 +356,7 @@ int l_lightop_exec(lua_State* L) {
   a.params = to_value(L, 1, "lightop.exec").as_map();
   a.runtime["cmd"] = std::move(cmd);
   a.runtime["cwd"] = b.script_dir.string();
-  a.name = unique_name(b, wanted);
+  a.name = unique_name(b.spec, wanted);
   b.spec.actors.push_back(std::move(a));
   push_actor(L, static_cast<int>(b.spec.actors.size() - 1));
   return 1;
@@ -383,137 +373,37 @@ int l_lightop(lua_State* L) {
   return 1;
 }
 
-// The template's subtree: the actor itself and, for a multiplexer, its replicas' subtrees (not their inputs, which
-// replicas share).
-void subtree(const FarmSpec& spec, int i, std::vector<int>& out) {
-  out.push_back(i);
-  if (spec.actors[static_cast<size_t>(i)].is_multiplexer())
-    for (int r : spec.actors[static_cast<size_t>(i)].inputs) subtree(spec, r, out);
-}
-
-bool is_wired(const FarmSpec& spec, int i) {
-  if (spec.lighting == i) return true;
-  for (const auto& a : spec.actors)
-    for (int in : a.inputs)
-      if (in == i) return true;
-  return false;
-}
-
 // multiplexer { op, replicas = 2, strategy = "least_loaded", split = 0, window = 4, slowdown = {...}, name, host }
-// The op (a lightop or another multiplexer, freshly declared) becomes replica 0; replicas 1.. are copies. The
-// multiplexer takes the op's name: to the network it is that LightOp. Replicas are NAME.0, NAME.1, ...
+// The op (a lightop or another multiplexer, freshly declared) becomes replica 0; replicas 1.. are copies
+// (farm/builders.hpp: replicate).
 int l_multiplexer(lua_State* L) {
   Builder& b = builder(L);
   luaL_checktype(L, 1, LUA_TTABLE);
+  PoolSpec pool;
   lua_geti(L, 1, 1);
   if (lua_isnil(L, -1)) luaL_error(L, "multiplexer needs a LightOp to replicate as its first entry");
-  const int tmpl = actor_index(L, -1, "a multiplexer's first entry");
+  pool.op = actor_index(L, -1, "a multiplexer's first entry");
   lua_pop(L, 1);
   lua_pushnil(L);
   lua_seti(L, 1, 1);
-  if (is_wired(b.spec, tmpl))
-    luaL_error(L, "lightop '%s' is already wired elsewhere; give the multiplexer a LightOp of its own",
-               b.spec.actors[static_cast<size_t>(tmpl)].name.c_str());
   lua_getfield(L, 1, "name");
-  const std::string base = b.spec.actors[static_cast<size_t>(tmpl)].name;
-  std::string wanted = lua_isnil(L, -1) ? base : luaL_checkstring(L, -1);
+  if (!lua_isnil(L, -1)) pool.name = luaL_checkstring(L, -1);
   lua_pop(L, 1);
   lua_pushnil(L);
   lua_setfield(L, 1, "name");
-  std::string host = take_host(L, 1, b);
-  lua_getfield(L, 1, "slowdown");
-  Value slowdown = to_value(L, -1, "multiplexer.slowdown");
-  lua_pop(L, 1);
-  lua_pushnil(L);
-  lua_setfield(L, 1, "slowdown");
-
+  pool.host = take_host(L, 1, b);
   ParamTable p = table_params(L, 1, "multiplexer");
-  int replicas = 2;
-  Value::Map params;
   with_params(L, [&] {
-    replicas = static_cast<int>(p.get_int("replicas", 2, 1, 64));
-    params["strategy"] = p.get_string("strategy", "least_loaded", {"round_robin", "least_loaded", "random"});
-    params["split"] = p.get_int("split", 0, 0, 1 << 20);
-    params["window"] = p.get_int("window", 4, 1, 64);
-    params["seed"] = p.get_int("seed", 0, 0, INT32_MAX);
+    pool.replicas = static_cast<int>(p.get_int("replicas", 2, 1, 64));
+    pool.params = MultiplexerParams::read(p);
+    // A test knob (docs/lua-api.md): replica i rests (factor - 1) x its compute time after each request.
+    if (p.has("slowdown")) pool.slowdown = p.get_numbers("slowdown", {}, 1, 1000);
     p.report_unused();
   });
-  std::vector<double> slow(static_cast<size_t>(replicas), 1.0);
-  if (!slowdown.is_nil()) {
-    if (!slowdown.is_array() || slowdown.as_array().size() != static_cast<size_t>(replicas))
-      luaL_error(L, "multiplexer: slowdown must list one factor per replica (%d)", replicas);
-    for (size_t i = 0; i < slow.size(); ++i) {
-      const Value& f = slowdown.as_array()[i];
-      if (!f.is_number() || f.as_double() < 1 || f.as_double() > 1000)
-        luaL_error(L, "multiplexer: slowdown factors must be numbers in [1, 1000]");
-      slow[i] = f.as_double();
-    }
-  }
-
-  std::vector<int> nodes;
-  subtree(b.spec, tmpl, nodes);
-  // "direct" -> "direct.1"; an inner replica "direct.0" -> "direct.1.0"; a node named otherwise keeps its name
-  // under the replica's prefix.
-  auto renamed = [&](const std::string& name, int replica) {
-    const std::string suffix = name.rfind(base, 0) == 0 ? name.substr(base.size()) : "." + name;
-    return base + "." + std::to_string(replica) + suffix;
-  };
-  auto taken = [&](const std::string& n) {
-    for (const auto& a : b.spec.actors)
-      if (a.name == n) return true;
-    return false;
-  };
-  std::vector<int> roots;
-  for (int r = 0; r < replicas; ++r) {
-    std::map<int, int> index_of;  // template node -> this replica's node
-    for (int n : nodes) {
-      if (r == 0) {
-        index_of[n] = n;
-      } else {
-        b.spec.actors.push_back(b.spec.actors[static_cast<size_t>(n)]);
-        index_of[n] = static_cast<int>(b.spec.actors.size() - 1);
-      }
-    }
-    for (int n : nodes) {
-      ActorSpec& a = b.spec.actors[static_cast<size_t>(index_of[n])];
-      for (int& in : a.inputs)
-        if (index_of.count(in)) in = index_of[in];
-    }
-    roots.push_back(index_of[tmpl]);
-  }
-  // Rename after copying, all at once: inner names may be what outer renaming frees (direct.0 -> direct.0.0).
-  std::vector<std::pair<int, std::string>> new_names;
-  std::set<int> moving;
-  for (int r = 0; r < replicas; ++r) {
-    std::vector<int> mine;
-    subtree(b.spec, roots[static_cast<size_t>(r)], mine);
-    for (int n : mine) {
-      new_names.emplace_back(n, renamed(b.spec.actors[static_cast<size_t>(n)].name, r));
-      moving.insert(n);
-    }
-  }
-  for (const auto& [n, name] : new_names)
-    for (size_t i = 0; i < b.spec.actors.size(); ++i)
-      if (!moving.count(static_cast<int>(i)) && b.spec.actors[i].name == name)
-        luaL_error(L, "multiplexer: replica name '%s' is already taken", name.c_str());
-  for (const auto& [n, name] : new_names) b.spec.actors[static_cast<size_t>(n)].name = name;
-  for (int r = 0; r < replicas; ++r) {
-    ActorSpec& root = b.spec.actors[static_cast<size_t>(roots[static_cast<size_t>(r)])];
-    if (slow[static_cast<size_t>(r)] != 1.0) {
-      if (root.is_multiplexer()) luaL_error(L, "multiplexer: slowdown applies to LightOp replicas, not multiplexers");
-      root.runtime["slowdown"] = slow[static_cast<size_t>(r)];
-    }
-  }
-  if (taken(wanted)) luaL_error(L, "multiplexer: name '%s' is already taken", wanted.c_str());
-  ActorSpec m;
-  m.name = wanted;
-  m.kind = "multiplexer";
-  m.params = std::move(params);
-  m.inputs = roots;
-  m.host = host;
-  m.loc = caller_loc(L);
-  b.spec.actors.push_back(std::move(m));
-  push_actor(L, static_cast<int>(b.spec.actors.size() - 1));
+  pool.loc = caller_loc(L);
+  auto index = replicate(b.spec, pool);
+  if (!index) luaL_error(L, "%s", index.error().message.c_str());
+  push_actor(L, *index);
   return 1;
 }
 
@@ -531,32 +421,13 @@ int l_renderers(lua_State* L) {
   std::string host = take_host(L, 1, b);
   ParamTable p = table_params(L, 1, "renderers");
   int count = 1;
-  Value::Map params;
+  RendererParams params;
   with_params(L, [&] {
     count = static_cast<int>(p.get_int("count", 1, 1, 256));
-    params["batch"] = p.get_int("batch", 4096, 1, 1 << 20);
-    params["window"] = p.get_int("window", 4, 1, 64);
-    params["tiles_in_flight"] = p.get_int("tiles_in_flight", 3, 1, 64);
-    // sync: one point per request, one request at a time, one tile at a time — to measure what packets buy.
-    if (p.get_string("mode", "async", {"async", "sync"}) == "sync") {
-      params["batch"] = 1;
-      params["window"] = 1;
-      params["tiles_in_flight"] = 1;
-    }
+    params = RendererParams::read(p);
     p.report_unused();
   });
-  SourceLoc loc = caller_loc(L);
-  b.spec.lighting = lighting;
-  for (int i = 0; i < count; ++i) {
-    ActorSpec a;
-    a.name = "renderer-" + std::to_string(i);
-    a.kind = "renderer";
-    a.params = params;
-    a.inputs = {lighting};
-    a.host = host;
-    a.loc = loc;
-    b.spec.actors.push_back(std::move(a));
-  }
+  add_renderers(b.spec, count, lighting, params, host, caller_loc(L));
   b.have_renderers = true;
   return 0;
 }
@@ -582,25 +453,10 @@ int l_radiosity(lua_State* L) {
   });
   Value::Map params = p.values();
   if (!config.ply.empty()) params["ply"] = fs::absolute(config.ply).lexically_normal().string();
-  op.name = unique_name(b, wanted);
-  const int first = static_cast<int>(b.spec.actors.size());
-  const int nodes = config.layout.nodes();
-  for (int i = 0; i < nodes; ++i) {
-    ActorSpec n;
-    n.kind = "radiosity_node";
-    n.name = op.name + "." + std::to_string(config.layout.ring_of(i)) + "." + std::to_string(config.layout.position_of(i));
-    if (unique_name(b, n.name) != n.name) luaL_error(L, "radiosity: name '%s' is already taken", n.name.c_str());
-    n.params = params;
-    n.params["node"] = static_cast<int64_t>(i);
-    for (int j = 0; j < nodes; ++j)
-      if (j != i) n.inputs.push_back(first + j);
-    n.host = op.host;
-    n.loc = op.loc;
-    b.spec.actors.push_back(std::move(n));
-  }
-  b.spec.actors.push_back(std::move(op));
+  auto index = expand_ring(b.spec, config, params, unique_name(b.spec, wanted), op.host, op.loc);
+  if (!index) luaL_error(L, "%s", index.error().message.c_str());
   b.have_radiosity = true;
-  push_actor(L, static_cast<int>(b.spec.actors.size() - 1));
+  push_actor(L, *index);
   return 1;
 }
 
@@ -704,25 +560,11 @@ void open_libs(lua_State* L) {
 }
 
 std::string finish(Builder& b) {
-  const FarmSpec& s = b.spec;
   if (!b.have_scene) return "the script declares no scene (add scene { builtin = \"cornell\" })";
   if (!b.have_renderers) return "the script declares no renderers (add renderers { lighting = ... })";
   for (const auto& [name, value] : b.options.set)
     if (!b.consumed_params.count(name)) return "--set " + name + "=" + value + ": the script has no param '" + name + "'";
-  // Every LightOp must be reachable from the renderers' lighting: a dangling one would run for nothing.
-  std::vector<bool> used(s.actors.size(), false);
-  std::vector<int> stack{s.lighting};
-  while (!stack.empty()) {
-    int i = stack.back();
-    stack.pop_back();
-    if (used[static_cast<size_t>(i)]) continue;
-    used[static_cast<size_t>(i)] = true;
-    for (int in : s.actors[static_cast<size_t>(i)].inputs) stack.push_back(in);
-  }
-  for (size_t i = 0; i < s.actors.size(); ++i)
-    if (!s.actors[i].is_renderer() && s.actors[i].kind != "radiosity_node" && !used[i])
-      return s.actors[i].loc.str() + ": lightop '" + s.actors[i].name +
-             "' is not connected to the renderers' lighting (nothing would ask it for light)";
+  if (auto st = validate(b.spec); !st) return st.error().message;
   return {};
 }
 
@@ -773,53 +615,6 @@ Result<FarmSpec> evaluate_script(const std::string& path, const ScriptOptions& o
   if (std::string e = finish(b); !e.empty()) return make_error(e.find(path) == 0 ? e : path + ": " + e);
   if (!options.output.empty()) b.spec.image.output = options.output;
   return std::move(b.spec);
-}
-
-std::string to_dot(const FarmSpec& spec) {
-  std::string out = "digraph farm {\n  rankdir=LR;\n  node [shape=box, style=rounded];\n";
-  auto id = [](const std::string& name) { return "\"" + name + "\""; };
-  std::map<std::string, std::vector<std::string>> by_host;
-  const int renderers = spec.renderer_count();
-  for (const auto& a : spec.actors) {
-    if (a.is_renderer()) {
-      if (a.name != "renderer-0") continue;
-      by_host[a.host].push_back("    " + id("renderers") + " [label=\"renderer × " + std::to_string(renderers) +
-                                "\", shape=box3d];");
-    } else {
-      const char* shape = a.is_multiplexer() ? ", shape=trapezium" : "";
-      by_host[a.host].push_back("    " + id(a.name) + " [label=\"" + a.name + "\\n(" + a.kind + ")\"" + shape + "];");
-    }
-  }
-  for (const auto& [host, lines] : by_host) {
-    out += "  subgraph \"cluster_" + host + "\" {\n    label=\"host " + host + "\";\n";
-    for (const auto& l : lines) out += l + "\n";
-    out += "  }\n";
-  }
-  out += "  film [shape=note, label=\"film\\n" + spec.image.output + "\"];\n";
-  std::string ring_op;
-  for (const auto& a : spec.actors) {
-    if (a.is_renderer()) continue;
-    if (a.kind == "radiosity") ring_op = a.name;
-    if (a.kind == "radiosity_node") continue;  // drawn as rings below, not as their all-to-all connections
-    for (int in : a.inputs) out += "  " + id(spec.actors[static_cast<size_t>(in)].name) + " -> " + id(a.name) + ";\n";
-  }
-  // A radiosity ring: packets go round each ring (solid), idle nodes borrow from the same position of another
-  // ring (dashed), and the solution goes to the radiosity op (dotted).
-  for (const auto& a : spec.actors) {
-    if (a.kind != "radiosity_node") continue;
-    auto param = [&](const char* key) { return static_cast<int>(a.params.count(key) ? a.params.at(key).as_int() : 1); };
-    const int rings = param("rings"), length = param("ring_length"), node = param("node");
-    const std::string prefix = a.name.substr(0, a.name.rfind('.', a.name.rfind('.') - 1));
-    auto name = [&](int r, int p) { return id(prefix + "." + std::to_string(r) + "." + std::to_string(p)); };
-    const int r = node / length, p = node % length;
-    if (length > 1) out += "  " + name(r, p) + " -> " + name(r, (p + 1) % length) + ";\n";
-    if (rings > 1) out += "  " + name(r, p) + " -> " + name((r + 1) % rings, p) + " [style=dashed, dir=none];\n";
-    if (!ring_op.empty()) out += "  " + id(a.name) + " -> " + id(ring_op) + " [style=dotted];\n";
-  }
-  if (spec.lighting >= 0)
-    out += "  " + id(spec.actors[static_cast<size_t>(spec.lighting)].name) + " -> " + id("renderers") + ";\n";
-  out += "  \"renderers\" -> film;\n}\n";
-  return out;
 }
 
 }  // namespace lf

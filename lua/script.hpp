@@ -1,10 +1,11 @@
 #pragma once
 // Farm scripts: Lua 5.4, declarative. Evaluating a script yields a FarmSpec or an error that names the script's
-// file and line. The functions a script may call are documented in docs/lua-api.md.
+// file and line. The functions a script may call are documented in docs/lua-api.md. This is only a binding:
+// what the graph means lives in farm/builders.hpp.
 #include <map>
 #include <string>
 
-#include "core/farm_spec.hpp"
+#include "farm/farm_spec.hpp"
 #include "core/result.hpp"
 
 namespace lf {
@@ -15,9 +16,5 @@ struct ScriptOptions {
 };
 
 Result<FarmSpec> evaluate_script(const std::string& path, const ScriptOptions& options = {});
-
-// The actor graph as Graphviz DOT: one node per actor (renderers folded into one node), edges in the direction
-// light flows, one cluster per host.
-std::string to_dot(const FarmSpec& spec);
 
 }  // namespace lf

@@ -1,4 +1,5 @@
 #include "lua/script.hpp"
+#include "farm/builders.hpp"
 #include "render/lightop_registry.hpp"
 
 #include <gtest/gtest.h>

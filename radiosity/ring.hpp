@@ -1,5 +1,5 @@
 #pragma once
-// A ring node's algorithm (seed 003 §3-§6), with no transport: the actor (actors/ring_node_actor.cpp) moves its
+// A ring node's algorithm (seed 003 §3-§6), with no transport: the actor (actors/kinds/ring_node_actor.cpp) moves its
 // packets between processes, and tests move them in-process.
 //
 // N = rings x length nodes. Node (r, p) computes radiosity for its share of the patches (a Part) and holds, for

@@ -1,5 +1,5 @@
 #pragma once
-#include "core/farm_spec.hpp"
+#include "core/specs.hpp"
 #include "render/tracer.hpp"
 
 namespace lf {

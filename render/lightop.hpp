@@ -2,7 +2,7 @@
 // The LightOp interface (DESIGN §2). A LightOp is a plain class: set up on the scene, then shade batches of
 // shading points into outgoing radiance, asking its inputs (predecessors in the lighting network) where the
 // algorithm needs light from elsewhere. It never sees ZeroMQ or msgpack: the actor runtime wraps it
-// (actors/lightop_actor.cpp), and tests run it in-process (LocalInputs below).
+// (actors/runtime/lightop_actor.cpp), and tests run it in-process (LocalInputs below).
 //
 // shade() and setup() are coroutines. Asking inputs is
 //     std::vector<RGB> light;

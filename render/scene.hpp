@@ -5,7 +5,7 @@
 #include <string>
 #include <vector>
 
-#include "core/farm_spec.hpp"
+#include "core/specs.hpp"
 #include "core/result.hpp"
 #include "render/math.hpp"
 

@@ -5,7 +5,7 @@
 #include <span>
 #include <vector>
 
-#include "core/farm_spec.hpp"
+#include "core/specs.hpp"
 #include "render/camera.hpp"
 #include "render/lightop.hpp"
 

@@ -10,8 +10,8 @@ RequestClient::RequestClient(std::string self_name, std::string peer_name, size_
 
 Status RequestClient::connect(const std::string& endpoint) { return socket_.connect(endpoint); }
 
-void RequestClient::request(std::string op, Value body, Callback callback) {
-  queue_.push_back(Pending{next_id_++, std::move(op), std::move(body), std::move(callback)});
+void RequestClient::request(Op op, Value body, Callback callback) {
+  queue_.push_back(Pending{next_id_++, op, std::move(body), std::move(callback)});
   pump();
 }
 
@@ -19,12 +19,12 @@ void RequestClient::pump() {
   while (!queue_.empty() && outstanding_.size() < window_) {
     Pending p = std::move(queue_.front());
     queue_.pop_front();
-    Message m = make(MsgType::request, self_, p.op, std::move(p.body), p.id);
+    Message m = make_request(self_, p.op, std::move(p.body), p.id);
     if (!socket_.send(m)) {
-      p.callback(make_error("could not send '" + p.op + "' to " + peer_name_));
+      p.callback(make_error("could not send '" + std::string(op_name(p.op)) + "' to " + peer_name_, ErrorCode::unreachable));
       continue;
     }
-    outstanding_.emplace(p.id, Outstanding{std::move(p.callback), std::chrono::steady_clock::now()});
+    outstanding_.emplace(p.id, Outstanding{std::move(p.callback), p.op, std::chrono::steady_clock::now()});
   }
 }
 
@@ -36,16 +36,17 @@ void RequestClient::abandon_all() {
 void RequestClient::expire_overdue() {
   if (timeout_ <= 0 || outstanding_.empty()) return;
   const auto now = std::chrono::steady_clock::now();
-  std::vector<Callback> expired;
+  std::vector<std::pair<Callback, Op>> expired;  // the op: kept for a message that names it (issue 12)
   for (auto it = outstanding_.begin(); it != outstanding_.end();) {
     if (std::chrono::duration<double>(now - it->second.sent).count() > timeout_) {
-      expired.push_back(std::move(it->second.callback));
+      expired.emplace_back(std::move(it->second.callback), it->second.op);
       it = outstanding_.erase(it);
     } else {
       ++it;
     }
   }
-  for (auto& cb : expired) cb(make_error("no answer from '" + peer_name_ + "' within " + seconds_text(timeout_)));
+  for (auto& [cb, op] : expired)
+    cb(make_error("no answer from '" + peer_name_ + "' within " + seconds_text(timeout_), ErrorCode::timeout));
   pump();
 }
 
@@ -70,8 +71,9 @@ void RequestClient::on_readable() {
     outstanding_.erase(it);
     peer_queue_ = m.header.queue;
     if (m.header.type == MsgType::error) {
-      const Value* text = m.body.find("message");
-      cb(make_error(peer_name_ + ": " + (text && text->is_string() ? text->as_string() : "error")));
+      Error e = error_of(m);
+      e.message = peer_name_ + ": " + e.message;
+      cb(std::move(e));
     } else {
       cb(std::move(m));
     }

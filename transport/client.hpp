@@ -15,20 +15,21 @@ namespace lf::wire {
 
 class RequestClient {
  public:
-  // The reply's body, or an Error (an ERROR reply, or the peer went away).
+  // The reply, or an Error: an ERROR reply (its code, and its message prefixed with the peer's name), a timeout,
+  // or a send that failed.
   using Callback = std::function<void(Result<Message>)>;
 
   RequestClient(std::string self_name, std::string peer_name, size_t window);
 
   Status connect(const std::string& endpoint);
-  void request(std::string op, Value body, Callback callback);
+  void request(Op op, Value body, Callback callback);
   // Reads every waiting reply and runs its callback. Replies whose id is not outstanding (late or duplicated)
   // are dropped and counted.
   void on_readable();
   // Forgets every outstanding and queued request without running callbacks (the peer is gone; whoever owns the
   // work re-sends it elsewhere). Late replies to them are then dropped as strays.
   void abandon_all();
-  // Requests unanswered for longer than `seconds` fail with "no answer from PEER within N s" (0: never).
+  // Requests unanswered for longer than `seconds` fail with "no answer from PEER within N s" (code timeout; 0: never).
   void set_timeout(double seconds) { timeout_ = seconds; }
   // Fails every request older than the timeout; call it from the poll loop.
   void expire_overdue();
@@ -43,7 +44,7 @@ class RequestClient {
  private:
   struct Pending {
     uint64_t id;
-    std::string op;
+    Op op;
     Value body;
     Callback callback;
   };
@@ -57,6 +58,7 @@ class RequestClient {
   std::deque<Pending> queue_;
   struct Outstanding {
     Callback callback;
+    Op op;
     std::chrono::steady_clock::time_point sent;
   };
   std::map<uint64_t, Outstanding> outstanding_;

@@ -54,7 +54,7 @@ TEST_F(ClientTest, WindowBoundsOutstandingAndRepliesMatchById) {
   ASSERT_TRUE(client.connect(endpoint).ok());
   std::vector<int64_t> answered;
   for (int i = 0; i < 10; ++i)
-    client.request("shade", Value::Map{{"i", i}}, [&, i](Result<Message> r) {
+    client.request(Op::shade, Value::Map{{"i", i}}, [&, i](Result<Message> r) {
       ASSERT_TRUE(r.ok());
       EXPECT_EQ(r->body.find("echo")->as_int(), i);
       answered.push_back(i);
@@ -72,9 +72,8 @@ TEST_F(ClientTest, WindowBoundsOutstandingAndRepliesMatchById) {
     for (auto& in : got) {
       ASSERT_TRUE(in.message.ok());
       EXPECT_EQ(in.peer, "renderer-0");
-      Message reply = make(MsgType::reply, "direct", "shade",
-                           Value::Map{{"echo", in.message->body.find("i")->as_int()}}, in.message->header.id);
-      reply.header.queue = 5;
+      Message reply = make_reply("direct", in.message->header.id,
+                                 Value::Map{{"echo", in.message->body.find("i")->as_int()}}, 5);
       ASSERT_TRUE(server.send_to(in.peer, reply));
       ++served;
     }
@@ -90,19 +89,22 @@ TEST_F(ClientTest, ErrorRepliesReachTheCallbackAndStrayRepliesAreDropped) {
   RequestClient client("renderer-0", "direct", 2);
   ASSERT_TRUE(client.connect(endpoint).ok());
   std::string error;
-  client.request("shade", Value::Map{}, [&](Result<Message> r) {
+  ErrorCode code = ErrorCode::failed;
+  client.request(Op::shade, Value::Map{}, [&](Result<Message> r) {
     ASSERT_FALSE(r.ok());
     error = r.error().message;
+    code = r.error().code;
   });
   auto got = server_receive();
   ASSERT_EQ(got.size(), 1u);
   uint64_t id = got[0].message->header.id;
-  ASSERT_TRUE(server.send_to(got[0].peer, make_error_reply("direct", id, "bad_request", "no points")));
+  ASSERT_TRUE(server.send_to(got[0].peer, make_error_reply("direct", id, ErrorCode::bad_request, "no points")));
   // A second answer to the same id, and one to an id never sent: both dropped, not delivered twice.
-  ASSERT_TRUE(server.send_to(got[0].peer, make(MsgType::reply, "direct", "shade", Value::Map{}, id)));
-  ASSERT_TRUE(server.send_to(got[0].peer, make(MsgType::reply, "direct", "shade", Value::Map{}, 999)));
+  ASSERT_TRUE(server.send_to(got[0].peer, make_reply("direct", id, Value::Map{})));
+  ASSERT_TRUE(server.send_to(got[0].peer, make_reply("direct", 999, Value::Map{})));
   wait_client(client, [&] { return client.dropped_replies() == 2; });
   EXPECT_EQ(error, "direct: no points");
+  EXPECT_EQ(code, ErrorCode::bad_request);
   EXPECT_EQ(client.dropped_replies(), 2u);
 }
 

@@ -29,6 +29,60 @@ std::optional<MsgType> type_from_number(uint64_t n) {
 }
 
 namespace {
+// The one table of operation and phase names on the wire.
+constexpr std::pair<Op, std::string_view> kOps[] = {
+    {Op::shade, "shade"},
+    {Op::tile, "tile"},
+    {Op::tile_done, "tile_done"},
+    {Op::all_gather, "all_gather"},
+    {Op::fetch, "fetch"},
+    {Op::ring_shooter, "ring.shooter"},
+    {Op::ring_result, "ring.result"},
+    {Op::ring_visit, "ring.visit"},
+    {Op::ring_back, "ring.back"},
+    {Op::ring_return, "ring.return"},
+    {Op::ring_poll, "ring.poll"},
+};
+constexpr std::pair<Phase, std::string_view> kPhases[] = {
+    {Phase::configure, "configure"},
+    {Phase::setup, "setup"},
+    {Phase::render, "render"},
+    {Phase::finish, "finish"},
+};
+}  // namespace
+
+std::string_view op_name(Op op) {
+  for (const auto& [o, name] : kOps)
+    if (o == op) return name;
+  return "?";
+}
+
+Op op_from_name(std::string_view name) {
+  for (const auto& [o, n] : kOps)
+    if (n == name) return o;
+  return Op::unknown;
+}
+
+std::string_view phase_name(Phase phase) {
+  for (const auto& [p, name] : kPhases)
+    if (p == phase) return name;
+  return "?";
+}
+
+std::optional<Phase> phase_from_name(std::string_view name) {
+  for (const auto& [p, n] : kPhases)
+    if (n == name) return p;
+  return std::nullopt;
+}
+
+Op op_of(const Header& header) { return header.type == MsgType::request ? op_from_name(header.op) : Op::unknown; }
+
+std::optional<Phase> phase_of(const Header& header) {
+  if (header.type != MsgType::phase && header.type != MsgType::ready) return std::nullopt;
+  return phase_from_name(header.op);
+}
+
+namespace {
 
 using Packer = msgpack::packer<msgpack::sbuffer>;
 
@@ -232,7 +286,8 @@ Result<Header> decode_header(std::string_view bytes) {
   // The version is checked before the type so that a newer peer with new types is refused as "incompatible".
   if (h.version != kProtocolVersion)
     return make_error("incompatible peer: protocol version " + std::to_string(h.version) + ", expected " +
-                      std::to_string(kProtocolVersion));
+                          std::to_string(kProtocolVersion),
+                      ErrorCode::incompatible);
   if (!have_type) return make_error("header has no message type 't'");
   return h;
 }
@@ -258,19 +313,49 @@ Result<Message> decode(std::string_view header, std::string_view body) {
   return Message{std::move(*h), std::move(*b)};
 }
 
-Message make(MsgType type, std::string sender, std::string op, Value body, uint64_t id) {
+Message make(MsgType type, std::string sender, Value body, uint64_t id) {
   Message m;
   m.header.type = type;
   m.header.sender = std::move(sender);
-  m.header.op = std::move(op);
   m.header.id = id;
   m.body = std::move(body);
   return m;
 }
 
-Message make_error_reply(std::string sender, uint64_t id, std::string code, std::string message) {
-  return make(MsgType::error, std::move(sender), {},
-              Value::Map{{"code", std::move(code)}, {"message", std::move(message)}}, id);
+Message make_request(std::string sender, Op op, Value body, uint64_t id) {
+  Message m = make(MsgType::request, std::move(sender), std::move(body), id);
+  m.header.op = op_name(op);
+  return m;
+}
+
+Message make_reply(std::string sender, uint64_t id, Value body, uint32_t queue) {
+  Message m = make(MsgType::reply, std::move(sender), std::move(body), id);
+  m.header.queue = queue;
+  return m;
+}
+
+Message make_phase(std::string sender, Phase phase) {
+  Message m = make(MsgType::phase, std::move(sender), Value::Map{{"phase", std::string(phase_name(phase))}});
+  m.header.op = phase_name(phase);
+  return m;
+}
+
+Message make_ready(std::string sender, Phase phase) {
+  Message m = make(MsgType::ready, std::move(sender), Value::Map{{"phase", std::string(phase_name(phase))}});
+  m.header.op = phase_name(phase);
+  return m;
+}
+
+Message make_error_reply(std::string sender, uint64_t id, ErrorCode code, std::string message) {
+  return make(MsgType::error, std::move(sender),
+              Value::Map{{"code", std::string(error_code_name(code))}, {"message", std::move(message)}}, id);
+}
+
+Error error_of(const Message& error) {
+  const Value* text = error.body.find("message");
+  const Value* code = error.body.find("code");
+  return make_error(text && text->is_string() ? text->as_string() : "?",
+                    code && code->is_string() ? error_code_from_name(code->as_string()) : ErrorCode::failed);
 }
 
 }  // namespace lf::wire

@@ -15,7 +15,7 @@ struct Header {
   MsgType type = MsgType::heartbeat;
   uint64_t id = 0;        // request id; a REPLY/ERROR echoes the request's
   std::string sender;     // actor name
-  std::string op;         // operation for REQUEST ("shade", "tile", ...); phase name for PHASE
+  std::string op;         // operation for REQUEST (see Op); phase name for PHASE and READY (see Phase)
   uint32_t queue = 0;     // sender's queue length (requests waiting), piggybacked for load balancing
 };
 
@@ -33,8 +33,18 @@ Result<Header> decode_header(std::string_view bytes);
 Result<Value> decode_body(std::string_view bytes);
 Result<Message> decode(std::string_view header, std::string_view body);
 
-// Convenience for the common bodies.
-Message make(MsgType type, std::string sender, std::string op = {}, Value body = {}, uint64_t id = 0);
-Message make_error_reply(std::string sender, uint64_t id, std::string code, std::string message);
+// The operation a REQUEST names (Op::unknown for a name not in the table), and the phase of a PHASE or READY.
+Op op_of(const Header& header);
+std::optional<Phase> phase_of(const Header& header);
+
+// Makers for every message kind; the only places a header's `op` is written.
+Message make(MsgType type, std::string sender, Value body = {}, uint64_t id = 0);
+Message make_request(std::string sender, Op op, Value body, uint64_t id);
+Message make_reply(std::string sender, uint64_t id, Value body, uint32_t queue = 0);
+Message make_phase(std::string sender, Phase phase);
+Message make_ready(std::string sender, Phase phase);
+Message make_error_reply(std::string sender, uint64_t id, ErrorCode code, std::string message);
+// An ERROR's body as an Error: its code and message ("?" when the body says nothing).
+Error error_of(const Message& error);
 
 }  // namespace lf::wire

@@ -8,17 +8,18 @@ namespace lf::wire {
 
 TEST(Message, EveryTypeRoundTrips) {
   for (uint64_t n = 1; n <= 11; ++n) {
-    Message m = make(*type_from_number(n), "renderer-0", "shade",
+    Message m = make(*type_from_number(n), "renderer-0",
                      Value::Map{{"count", 3}, {"p", floats_to_bytes(std::vector<float>{1, 2, 3})},
                                 {"nested", Value::Array{1.5, "x", true, nullptr}}},
                      1000 + n);
+    m.header.op = op_name(Op::shade);
     m.header.queue = 7;
     auto back = decode(encode_header(m.header), encode_body(m.body));
     ASSERT_TRUE(back.ok()) << back.error().message;
     EXPECT_EQ(back->header.type, m.header.type);
     EXPECT_EQ(back->header.id, 1000 + n);
     EXPECT_EQ(back->header.sender, "renderer-0");
-    EXPECT_EQ(back->header.op, "shade");
+    EXPECT_EQ(op_from_name(back->header.op), Op::shade);
     EXPECT_EQ(back->header.queue, 7u);
     EXPECT_EQ(back->body, m.body);
   }
@@ -46,7 +47,7 @@ TEST(Message, UnknownTypeIsRefused) {
 }
 
 TEST(Message, TruncatedHeaderAndBodyAreErrors) {
-  Message m = make(MsgType::request, "a", "shade", Value::Map{{"k", Value::Array{1, 2, 3, 4}}});
+  Message m = make_request("a", Op::shade, Value::Map{{"k", Value::Array{1, 2, 3, 4}}}, 0);
   std::string h = encode_header(m.header), b = encode_body(m.body);
   for (size_t cut = 0; cut < h.size(); ++cut) EXPECT_FALSE(decode_header(h.substr(0, cut)).ok()) << cut;
   for (size_t cut = 0; cut < b.size(); ++cut) EXPECT_FALSE(decode_body(b.substr(0, cut)).ok()) << cut;
@@ -116,8 +117,8 @@ TEST(Message, RandomBytesNeverCrash) {
 }
 
 TEST(Message, MutatedValidMessagesNeverCrash) {
-  Message m = make(MsgType::request, "renderer-0", "shade",
-                   Value::Map{{"n", 2}, {"p", floats_to_bytes(std::vector<float>{1, 2, 3, 4, 5, 6})}}, 42);
+  Message m = make_request("renderer-0", Op::shade,
+                           Value::Map{{"n", 2}, {"p", floats_to_bytes(std::vector<float>{1, 2, 3, 4, 5, 6})}}, 42);
   const std::string h = encode_header(m.header), b = encode_body(m.body);
   std::mt19937 rng(7);
   for (int i = 0; i < 20000; ++i) {
@@ -128,6 +129,42 @@ TEST(Message, MutatedValidMessagesNeverCrash) {
     (void)decode(hh, bb);
   }
   SUCCEED();
+}
+
+TEST(Message, OperationsAndPhasesRoundTripThroughTheirOneTable) {
+  for (Op op : {Op::shade, Op::tile, Op::tile_done, Op::all_gather, Op::fetch, Op::ring_shooter, Op::ring_result,
+                Op::ring_visit, Op::ring_back, Op::ring_return, Op::ring_poll}) {
+    auto m = make_request("a", op, Value::Map{}, 1);
+    auto back = decode(encode_header(m.header), encode_body(m.body));
+    ASSERT_TRUE(back.ok());
+    EXPECT_EQ(op_of(back->header), op) << op_name(op);
+  }
+  for (Phase p : {Phase::configure, Phase::setup, Phase::render, Phase::finish}) {
+    EXPECT_EQ(phase_of(make_phase("director", p).header), p);
+    EXPECT_EQ(phase_of(make_ready("a", p).header), p);
+  }
+  EXPECT_EQ(op_from_name("ring.spin"), Op::unknown);
+  EXPECT_FALSE(phase_from_name("lunch"));
+  // A PHASE header's op is a phase, never an operation; a REQUEST's is never a phase.
+  EXPECT_EQ(op_of(make_phase("director", Phase::render).header), Op::unknown);
+  EXPECT_FALSE(phase_of(make_request("a", Op::shade, Value::Map{}, 1).header));
+}
+
+TEST(Message, ErrorRepliesCarryTheirCode) {
+  auto m = make_error_reply("direct", 7, ErrorCode::bad_request, "no points");
+  auto back = decode(encode_header(m.header), encode_body(m.body));
+  ASSERT_TRUE(back.ok());
+  EXPECT_EQ(back->body.find("code")->as_string(), "bad_request");
+  Error e = error_of(*back);
+  EXPECT_EQ(e.code, ErrorCode::bad_request);
+  EXPECT_EQ(e.message, "no points");
+  // A code this build does not know reads as `failed`, never as something it is not.
+  auto foreign = make(MsgType::error, "x", Value::Map{{"code", "on_fire"}, {"message", "m"}}, 1);
+  EXPECT_EQ(error_of(foreign).code, ErrorCode::failed);
+  // A version mismatch is recognisable by code, not by its text.
+  Header h;
+  h.version = 9;
+  EXPECT_EQ(decode_header(encode_header(h)).error().code, ErrorCode::incompatible);
 }
 
 }  // namespace lf::wire

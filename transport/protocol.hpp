@@ -36,6 +36,31 @@ enum class MsgType : uint8_t {
 std::string_view type_name(MsgType type);
 std::optional<MsgType> type_from_number(uint64_t number);
 
+// Operations a REQUEST names in its header `op`. On the wire they are strings; in code they are these values, and
+// their wire names live in one table (transport/message.cpp). docs/PROTOCOL.md describes each body.
+enum class Op : uint8_t {
+  unknown,       // a name this build does not serve (the raw name stays in Header::op for the error message)
+  shade,         // renderer/LightOp -> LightOp: shade a batch of points
+  tile,          // renderer -> director: the next tile
+  tile_done,     // renderer -> director: a finished tile's pixels
+  all_gather,    // pool replica -> director: share a part, receive every replica's
+  fetch,         // actor -> director: a blob the farm publishes (the radiosity solution)
+  ring_shooter,  // ring node -> director: this iteration is done here; the next shooter?
+  ring_result,   // ring node -> director: the node's elements, after the last iteration
+  ring_visit,    // ring node -> ring node: process this sample packet and pass it on
+  ring_back,     // ring node -> home node: the packet is round its ring
+  ring_return,   // borrower -> origin node: a lent packet comes back
+  ring_poll,     // idle ring node -> node at its position in another ring: lend me work
+};
+std::string_view op_name(Op op);
+Op op_from_name(std::string_view name);
+
+// Phases the director drives (PHASE and READY carry the name in header `op`). configure is answered by READY
+// without a PHASE: CONFIG starts it.
+enum class Phase : uint8_t { configure, setup, render, finish };
+std::string_view phase_name(Phase phase);
+std::optional<Phase> phase_from_name(std::string_view name);
+
 // Limits every receiver enforces; anything larger is refused before it is decoded.
 inline constexpr size_t kMaxHeaderBytes = 4096;
 inline constexpr size_t kMaxBodyBytes = 256u << 20;

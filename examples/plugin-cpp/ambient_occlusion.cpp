@@ -4,7 +4,7 @@
 // hitting anything count as open sky. The point reflects Kd * ambient * (open fraction). It uses the scene and
 // the Embree tracer the SDK hands to every LightOp, and draws its random numbers from the point's sample key, so
 // its image is the same on any farm layout.
-#include <actors/sdk.hpp>
+#include <actors/runtime/sdk.hpp>
 #include <render/sampler.hpp>
 
 #include <cmath>

@@ -1,0 +1,324 @@
+// check-actor plays the director for one actor process and checks, each within the timeout:
+//   hello      HELLO arrives, with protocol version 1, float format f32le, the kind it was given, an endpoint
+//   configure  CONFIG (the built-in Cornell box, the actor's inputs) is answered with READY configure
+//   setup      PHASE setup is answered with READY setup
+//   requests   shade requests of 1, 100 and 4096 real Cornell box points: a REPLY each, with the request's id,
+//              n radiance triples, all finite and non-negative
+//   malformed  garbage frames on the data socket: the actor answers ERROR or ignores them, and still answers a
+//              good request afterwards
+//   heartbeat  a HEARTBEAT arrives within the heartbeat timeout it was configured with
+//   bye        PHASE finish: STATS and BYE come back and the process exits with status 0
+//   orphaned   a second instance, configured, whose director then falls silent, exits within its heartbeat
+//              timeout plus the check timeout
+#include "actors/check/check_actor.hpp"
+
+#include <signal.h>
+#include <sys/wait.h>
+
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <thread>
+
+#include "actors/director/local_launcher.hpp"
+#include "actors/runtime/actor_config.hpp"
+#include "actors/runtime/hello.hpp"
+#include "core/log.hpp"
+#include "actors/codecs/shade_codec.hpp"
+#include "render/camera.hpp"
+#include "render/tile_kernel.hpp"
+#include "transport/socket.hpp"
+
+namespace lf {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+using wire::MsgType;
+
+class Checker {
+ public:
+  explicit Checker(const CheckOptions& o) : options_(o) {}
+
+  int run() {
+    prepare_points();
+    if (!start("check")) return finish();
+    const bool hello = check("hello", [&] { return expect_hello(); });
+    const bool configured = hello && check("configure", [&] { return configure(10.0); });
+    const bool set_up = configured && check("setup", [&] { return phase(wire::Phase::setup); });
+    if (set_up) {
+      send_control(wire::make_phase("director", wire::Phase::render));
+      check("requests", [&] { return requests(); });
+      check("malformed", [&] { return malformed(); });
+      check("heartbeat", [&] { return heartbeat(); });
+      check("bye", [&] { return bye(); });
+    }
+    stop_actor();
+    if (hello) {
+      // A second instance: configured, then abandoned by its director.
+      if (start("check-orphan") && expect_hello().empty() && configure(1.0).empty()) {
+        check("orphaned", [&] { return orphaned(1.0); });
+      } else {
+        report("orphaned", "could not bring a second instance up to CONFIG");
+      }
+      stop_actor();
+    }
+    return finish();
+  }
+
+ private:
+  // Each check returns an empty string on success, else what is wrong.
+  template <class Fn>
+  bool check(const char* name, Fn&& fn) {
+    std::string why = fn();
+    report(name, why);
+    return why.empty();
+  }
+
+  void report(const char* name, const std::string& why) {
+    if (why.empty()) {
+      std::printf("PASS %-10s\n", name);
+    } else {
+      std::printf("FAIL %-10s %s\n", name, why.c_str());
+      ++failures_;
+    }
+    std::fflush(stdout);
+  }
+
+  int finish() { return failures_ == 0 ? 0 : 1; }
+
+  void prepare_points() {
+    auto scene = Scene::builtin("cornell");
+    RayTracer tracer(*scene);
+    ImageSpec image;
+    image.width = image.height = 64;
+    image.spp = 4;
+    Camera camera(CameraSpec{}, 64, 64);
+    TileWork work;
+    trace_tile(*scene, tracer, camera, image, TileRect{0, 0, 64, 64}, work);
+    points_ = std::move(work.points);
+  }
+
+  bool start(const std::string& name) {
+    name_ = name;
+    control_ = std::make_unique<wire::Socket>(wire::Socket::Kind::router);
+    auto endpoint = control_->bind("tcp://127.0.0.1:*");
+    if (!endpoint) {
+      report("launch", endpoint.error().message);
+      return false;
+    }
+    std::vector<std::string> argv = options_.command;
+    argv.insert(argv.end(), {"--kind", options_.kind, "--name", name, "--director", *endpoint});
+    auto pid = launcher_.start(LaunchRequest{argv, false, {}});
+    if (!pid) {
+      report("launch", pid.error().message);
+      return false;
+    }
+    pid_ = *pid;
+    exit_ = std::nullopt;
+    return true;
+  }
+
+  void stop_actor() {
+    launcher_.stop_all(std::chrono::milliseconds(200));
+    data_.reset();
+    control_.reset();
+  }
+
+  void send_control(wire::Message m) { control_->send_to(name_, m); }
+
+  // Next control message from the actor, skipping heartbeats unless wanted; or why none came.
+  Result<wire::Message> next_control(double seconds, bool want_heartbeat = false) {
+    const auto deadline = Clock::now() + std::chrono::duration<double>(seconds);
+    wire::Poller poller;
+    poller.add(*control_);
+    while (Clock::now() < deadline) {
+      poller.wait(20);
+      while (auto in = control_->receive()) {
+        if (!in->message) return make_error(in->message.error().message);
+        if (in->message->header.type == MsgType::heartbeat && !want_heartbeat) {
+          saw_heartbeat_ = true;
+          continue;
+        }
+        return std::move(*in->message);
+      }
+      if (auto e = launcher_.reap_one()) {
+        exit_ = *e;
+        return make_error("the actor " + e->describe());
+      }
+    }
+    return make_error("nothing within " + seconds_text(seconds));
+  }
+
+  std::string expect_hello() {
+    auto m = next_control(options_.timeout);
+    if (!m) return "no HELLO: " + m.error().message;
+    if (m->header.type != MsgType::hello) return "expected HELLO, got " + std::string(wire::type_name(m->header.type));
+    auto hello = Hello::check(m->body, name_, options_.kind);
+    if (!hello) return hello.error().message;
+    data_ = std::make_unique<wire::Socket>(wire::Socket::Kind::dealer, "check-renderer");
+    if (auto st = data_->connect(hello->endpoint); !st) return st.error().message;
+    return {};
+  }
+
+  std::string configure(double heartbeat_timeout) {
+    ActorConfig config;
+    for (int i = 0; i < options_.inputs; ++i) {
+      if (!fake_input_) start_fake_input();
+      config.inputs.push_back({"check-input", fake_endpoint_, 4});
+    }
+    heartbeat_timeout_ = heartbeat_timeout;
+    config.scene = SceneSpec{"cornell", "", {}};
+    config.heartbeat_timeout = heartbeat_timeout;
+    config.request_timeout = options_.timeout;
+    send_control(wire::make(MsgType::config, "director", config.to_value()));
+    return expect_ready(wire::Phase::configure);
+  }
+
+  std::string expect_ready(wire::Phase phase) {
+    const auto deadline = Clock::now() + std::chrono::duration<double>(options_.timeout);
+    while (Clock::now() < deadline) {
+      pump_fake_input();
+      auto m = next_control(0.05);
+      if (!m) {
+        if (m.error().message.rfind("nothing within", 0) == 0) continue;
+        return m.error().message;
+      }
+      if (m->header.type == MsgType::error) {
+        const Value* text = m->body.find("message");
+        return "the actor failed: " + (text && text->is_string() ? text->as_string() : std::string("?"));
+      }
+      if (m->header.type == MsgType::ready && wire::phase_of(m->header) == phase) return {};
+    }
+    return "no READY " + std::string(wire::phase_name(phase)) + " within " + seconds_text(options_.timeout);
+  }
+
+  std::string phase(wire::Phase phase) {
+    send_control(wire::make_phase("director", phase));
+    return expect_ready(phase);
+  }
+
+  // One shade request of `n` points; empty string if answered well.
+  std::string shade(size_t n, uint64_t id) {
+    n = std::min(n, points_.size());
+    data_->send(wire::make_request("check-renderer", wire::Op::shade, encode_shade_request(points_, 0, n), id));
+    const auto deadline = Clock::now() + std::chrono::duration<double>(options_.timeout);
+    wire::Poller poller;
+    poller.add(*data_);
+    while (Clock::now() < deadline) {
+      pump_fake_input();
+      poller.wait(10);
+      while (auto in = data_->receive()) {
+        if (!in->message) return "undecodable reply: " + in->message.error().message;
+        const auto& m = *in->message;
+        if (m.header.id != id) continue;  // e.g. an ERROR for an earlier malformed packet
+        if (m.header.type == MsgType::error) {
+          const Value* text = m.body.find("message");
+          return "ERROR for " + std::to_string(n) + " points: " + (text && text->is_string() ? text->as_string() : "?");
+        }
+        if (m.header.type != MsgType::reply) return "expected REPLY, got " + std::string(wire::type_name(m.header.type));
+        auto radiance = decode_radiance(m.body, n);
+        if (!radiance) return radiance.error().message;
+        for (const RGB& c : *radiance)
+          if (!std::isfinite(c.x) || !std::isfinite(c.y) || !std::isfinite(c.z) || c.x < 0 || c.y < 0 || c.z < 0)
+            return "radiance must be finite and non-negative";
+        return {};
+      }
+      if (auto e = launcher_.reap_one()) return "the actor " + e->describe() + " while shading " + std::to_string(n) + " points";
+    }
+    return "no REPLY to " + std::to_string(n) + " points within " + seconds_text(options_.timeout);
+  }
+
+  std::string requests() {
+    uint64_t id = 100;
+    for (size_t n : {size_t{1}, size_t{100}, size_t{4096}})
+      if (std::string why = shade(n, id++); !why.empty()) return why;
+    return {};
+  }
+
+  std::string malformed() {
+    data_->send_raw({"\xc1 not msgpack", "\x80"});
+    data_->send_raw({"only one frame"});
+    Header bad;
+    bad.version = 99;
+    data_->send_raw({encode_header(bad), encode_body(Value::Map{})});
+    if (std::string why = shade(10, 200); !why.empty()) return "after malformed packets: " + why;
+    return {};
+  }
+
+  using Header = wire::Header;
+  static std::string encode_header(const Header& h) { return wire::encode_header(h); }
+  static std::string encode_body(const Value& v) { return wire::encode_body(v); }
+
+  std::string heartbeat() {
+    const double wait = heartbeat_timeout_ + options_.timeout;
+    const auto deadline = Clock::now() + std::chrono::duration<double>(wait);
+    while (!saw_heartbeat_ && Clock::now() < deadline) {
+      auto m = next_control(0.05, true);
+      if (m && m->header.type == MsgType::heartbeat) saw_heartbeat_ = true;
+      if (!m && exit_) return m.error().message;
+    }
+    return saw_heartbeat_ ? std::string() : "no HEARTBEAT within " + seconds_text(wait);
+  }
+
+  std::string bye() {
+    send_control(wire::make_phase("director", wire::Phase::finish));
+    bool stats = false, said_bye = false;
+    const auto deadline = Clock::now() + std::chrono::duration<double>(options_.timeout);
+    while (Clock::now() < deadline && !exit_) {
+      auto m = next_control(0.05);
+      if (m) {
+        stats = stats || m->header.type == MsgType::stats;
+        said_bye = said_bye || m->header.type == MsgType::bye;
+      }
+    }
+    if (!said_bye) return "no BYE after PHASE finish";
+    if (!stats) return "no STATS before BYE";
+    if (!exit_) return "still running " + seconds_text(options_.timeout) + " after BYE";
+    if (!WIFEXITED(exit_->status) || WEXITSTATUS(exit_->status) != 0) return "the actor " + exit_->describe();
+    return {};
+  }
+
+  std::string orphaned(double heartbeat_timeout) {
+    // Say nothing more; the actor must notice and leave.
+    const auto deadline = Clock::now() + std::chrono::duration<double>(heartbeat_timeout + options_.timeout);
+    while (Clock::now() < deadline) {
+      if (auto e = launcher_.reap_one()) return {};
+      std::this_thread::sleep_for(std::chrono::milliseconds(20));
+    }
+    return "still running " + seconds_text(heartbeat_timeout + options_.timeout) + " after its director fell silent";
+  }
+
+  // A constant-light input: answers every shade request with radiance 0.5.
+  void start_fake_input() {
+    fake_input_ = std::make_unique<wire::Socket>(wire::Socket::Kind::router);
+    fake_endpoint_ = *fake_input_->bind("tcp://127.0.0.1:*");
+  }
+  void pump_fake_input() {
+    if (!fake_input_) return;
+    while (auto in = fake_input_->receive()) {
+      if (!in->message) continue;
+      const Value* n = in->message->body.find("n");
+      const size_t count = n && n->is_int() ? static_cast<size_t>(n->as_int()) : 0;
+      std::vector<RGB> half(count, RGB{0.5f, 0.5f, 0.5f});
+      fake_input_->send_to(in->peer, wire::make_reply("check-input", in->message->header.id, encode_radiance(half)));
+    }
+  }
+
+  CheckOptions options_;
+  LocalLauncher launcher_;
+  std::unique_ptr<wire::Socket> control_, data_, fake_input_;
+  std::string fake_endpoint_;
+  std::string name_;
+  pid_t pid_ = 0;
+  std::optional<ExitReport> exit_;
+  ShadingPoints points_;
+  double heartbeat_timeout_ = 10;
+  bool saw_heartbeat_ = false;
+  int failures_ = 0;
+};
+
+}  // namespace
+
+int check_actor(const CheckOptions& options) { return Checker(options).run(); }
+
+}  // namespace lf

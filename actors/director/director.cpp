@@ -1,0 +1,283 @@
+#include "actors/director/director.hpp"
+
+#include <unistd.h>
+
+#include <chrono>
+#include <cstdio>
+#include <filesystem>
+#include <map>
+#include <memory>
+#include <thread>
+
+#include "actors/director/exchange_service.hpp"
+#include "actors/director/launcher.hpp"
+#include "actors/director/report.hpp"
+#include "actors/director/ring_service.hpp"
+#include "actors/director/supervisor.hpp"
+#include "actors/director/tile_service.hpp"
+#include "actors/runtime/actor_config.hpp"
+#include "actors/runtime/runtime.hpp"
+#include "core/log.hpp"
+#include "farm/kind_params.hpp"
+#include "render/image.hpp"
+#include "render/scene.hpp"
+#include "transport/socket.hpp"
+
+namespace lf {
+namespace {
+
+using wire::MsgType;
+using wire::Phase;
+
+double seconds_since(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
+
+// Thrown inside the director to end the farm: a message and the exit status.
+struct FarmFailure {
+  std::string message;
+  int status = 1;
+};
+
+void check(const Status& st) {
+  if (!st) throw FarmFailure{st.error().message};
+}
+
+ExchangeService::Pools pools_of(const FarmSpec& spec) {
+  ExchangeService::Pools pools;
+  for (const auto& a : spec.actors)
+    if (a.is_multiplexer())
+      for (int r : a.inputs) pools[a.name].push_back(spec.actors[static_cast<size_t>(r)].name);
+  return pools;
+}
+
+std::vector<std::string> renderers_of(const FarmSpec& spec) {
+  std::vector<std::string> names;
+  for (const auto& a : spec.actors)
+    if (a.is_renderer()) names.push_back(a.name);
+  return names;
+}
+
+class Director final : public ControlOut, public Outbox {
+ public:
+  Director(const FarmSpec& spec, const RunOptions& options)
+      : spec_(spec),
+        options_(options),
+        supervisor_(spec, launchers_, *this,
+                    Supervisor::Events{[this](ActorRecord& a, wire::Message& m) { return dispatch(a, m); },
+                                       [this](ActorRecord& a, const std::string& why) { return lost(a, why); }}),
+        tiles_(spec.image, renderers_of(spec), options.progress_on_terminal, options.quiet),
+        exchange_(pools_of(spec)),
+        ring_(spec, exchange_, options.quiet, options.progress_on_terminal) {
+    for (Service* s : std::initializer_list<Service*>{&tiles_, &exchange_, &ring_})
+      for (wire::Op op : s->ops()) services_[op] = s;
+  }
+
+  int run() {
+    install_stop_signals();
+    start_ = Clock::now();
+    int status = 0;
+    // Loading OpenImageIO takes ~0.2 s; do it while the actors start instead of after the last tile.
+    std::thread image_io(preload_image_io);
+    struct Join {
+      std::thread& t;
+      ~Join() { t.join(); }
+    } join_image_io{image_io};
+    try {
+      stage(Stage::prepare, [&] { prepare(); }, false);
+      stage(Stage::launch, [&] { check(supervisor_.launch(control_endpoint_)); });
+      stage(Stage::hello, [&] { wait_all(30.0, [](const ActorRecord& a) { return a.said_hello; }); });
+      stage(Stage::configure, [&] {
+        configure();
+        wait_all(60.0, [](const ActorRecord& a) { return a.ready == Phase::configure; });
+      });
+      stage(Stage::setup, [&] { run_phase(Phase::setup); });
+      stage(Stage::render, [&] {
+        render_start_ = Clock::now();
+        run_phase(Phase::render);
+        tiles_.finish_progress();
+        render_seconds_ = tiles_.render_seconds();
+        if (!tiles_.finished()) throw FarmFailure{"the renderers stopped before every tile was done"};
+      });
+      stage(Stage::finish, [&] { finish(); });
+    } catch (const FarmFailure& f) {
+      if (tiles_.drawing_progress()) std::fprintf(stderr, "\n");
+      log_error(f.message);
+      status = f.status;
+    }
+    // No actor outlives the farm, whatever happened above.
+    supervisor_.send_bye_to_all();
+    launchers_.stop_all(std::chrono::milliseconds(status == 0 ? 3000 : 300));
+    if (status == 0) report();
+    return status;
+  }
+
+  // ControlOut and Outbox: everything leaves through the control socket.
+  void send(const std::string& actor, wire::Message m) override {
+    m.header.sender = "director";
+    if (!control_.send_to(actor, m)) log_debug("could not send to '" + actor + "'");
+  }
+  void reply(const std::string& actor, uint64_t id, Value body) override {
+    send(actor, wire::make_reply("director", id, std::move(body)));
+  }
+  void refuse(const std::string& actor, uint64_t id, ErrorCode code, const std::string& message) override {
+    send(actor, wire::make_error_reply("director", id, code, message));
+  }
+
+ private:
+  template <class Fn>
+  void stage(Stage s, Fn&& fn, bool timed = true) {
+    const auto t = Clock::now();
+    supervisor_.set_stage(s);
+    fn();
+    if (timed) stage_seconds_.emplace_back(std::string(stage_name(s)), seconds_since(t));
+  }
+
+  void prepare() {
+    if (auto st = check_output_path(spec_.image.output); !st) throw FarmFailure{st.error().message};
+    // The director reads the scene once itself, so a broken scene stops the farm before anything launches.
+    auto scene = Scene::load(spec_.scene);
+    if (!scene) throw FarmFailure{spec_.scene.loc.str() + ": " + scene.error().message};
+    if (ring_.active()) {
+      check(ring_.prepare(*scene));
+      if (!ring_.ply_path().empty()) {
+        const auto dir = std::filesystem::path(ring_.ply_path()).parent_path();
+        if (::access(dir.c_str(), W_OK) != 0)
+          throw FarmFailure{"radiosity: cannot write '" + ring_.ply_path() + "': folder '" + dir.string() +
+                            "' does not exist or is not writable"};
+      }
+    }
+    auto endpoint = control_.bind("tcp://127.0.0.1:*");
+    if (!endpoint) throw FarmFailure{endpoint.error().message};
+    control_endpoint_ = *endpoint;
+    control_.set_linger_ms(0);
+  }
+
+  void configure() {
+    for (const auto& [name, a] : supervisor_.actors()) {
+      ActorConfig config;
+      config.params = a.spec->params;
+      config.scene = spec_.scene;
+      config.camera = spec_.camera;
+      config.image = spec_.image;
+      const int64_t window = input_window(*a.spec);
+      for (int in : a.spec->inputs) {
+        const ActorRecord& peer = supervisor_.at(spec_.actors[static_cast<size_t>(in)].name);
+        config.inputs.push_back({peer.name(), peer.endpoint, window});
+      }
+      config.runtime = a.spec->runtime;
+      config.debug = a.spec->debug;
+      config.heartbeat_timeout = spec_.heartbeat_timeout;
+      config.request_timeout = spec_.request_timeout;
+      if (const int pool = spec_.pool_of(a.index); pool >= 0) {
+        const auto& replicas = spec_.actors[static_cast<size_t>(pool)].inputs;
+        const auto at = std::find(replicas.begin(), replicas.end(), a.index) - replicas.begin();
+        config.pool = PoolPlace{spec_.actors[static_cast<size_t>(pool)].name, at, static_cast<int64_t>(replicas.size())};
+      }
+      send(name, wire::make(MsgType::config, "director", config.to_value()));
+    }
+  }
+
+  // PHASE to everyone, then wait for every READY of it (no timeout: setup and render take what they take).
+  void run_phase(Phase phase) {
+    supervisor_.broadcast(wire::make_phase("director", phase));
+    for (Service* s : std::initializer_list<Service*>{&tiles_, &exchange_, &ring_}) check(s->on_phase(phase, *this));
+    wait_all(0, [phase](const ActorRecord& a) { return a.ready == phase; });
+  }
+
+  void finish() {
+    if (auto st = write_image(tiles_.film(), spec_.image.output); !st) throw FarmFailure{st.error().message};
+    supervisor_.broadcast(wire::make_phase("director", Phase::finish));
+    // Wait for every actor's STATS and BYE, and for its process to end.
+    const auto deadline = Clock::now() + std::chrono::seconds(10);
+    while (Clock::now() < deadline) {
+      if (supervisor_.all([](const ActorRecord& a) { return a.said_bye && a.exited; })) return;
+      pump(50);
+    }
+    log_warn("some actors did not stop within 10 s; stopping them");
+  }
+
+  // Processes control messages and exits until every actor satisfies `done`.
+  template <class Pred>
+  void wait_all(double timeout_seconds, Pred done) {
+    const auto start = Clock::now();
+    while (true) {
+      std::string late;
+      if (supervisor_.all(done, &late)) return;
+      if (timeout_seconds > 0 && seconds_since(start) > timeout_seconds)
+        throw FarmFailure{"timed out after " + seconds_text(timeout_seconds) + " waiting for " + late + " in phase " +
+                          std::string(stage_name(supervisor_.stage()))};
+      pump(100);
+    }
+  }
+
+  void pump(long timeout_ms) {
+    if (stop_requested())
+      throw FarmFailure{"interrupted by signal " + std::to_string(stop_signal()) + "; stopping the farm",
+                        128 + stop_signal()};
+    wire::Poller poller;
+    poller.add(control_);
+    poller.wait(std::min<long>(timeout_ms, static_cast<long>(spec_.heartbeat_timeout * 250)));
+    while (auto in = control_.receive()) check(supervisor_.on_message(in->peer, in->message));
+    while (auto exit = launchers_.reap_one()) {
+      // Its last words (an ERROR with the reason, or BYE) may still be in flight: read them before judging.
+      wire::Poller last;
+      last.add(control_);
+      for (int i = 0; i < 5 && !last.wait(10)[0]; ++i) {
+      }
+      while (auto in = control_.receive()) check(supervisor_.on_message(in->peer, in->message));
+      check(supervisor_.on_exit(*exit));
+    }
+    check(supervisor_.check_heartbeats(Clock::now()));
+    supervisor_.send_heartbeats(Clock::now());
+  }
+
+  Status dispatch(ActorRecord& a, wire::Message& m) {
+    const wire::Op op = wire::op_of(m.header);
+    auto it = services_.find(op);
+    if (it == services_.end()) {
+      std::string served;
+      for (const auto& [o, s] : services_) served += (served.empty() ? "'" : ", '") + std::string(wire::op_name(o)) + "'";
+      refuse(a.name(), m.header.id, ErrorCode::unknown_op,
+             "unknown operation '" + m.header.op + "' (the director serves " + served + ")");
+      return Ok{};
+    }
+    return it->second->on_request(a.name(), op, m.header.id, m.body, *this);
+  }
+
+  Status lost(ActorRecord& a, const std::string& why) {
+    for (Service* s : std::initializer_list<Service*>{&tiles_, &exchange_, &ring_})
+      if (auto st = s->on_lost(a.name(), why, *this); !st) return st;
+    return Ok{};
+  }
+
+  void report() {
+    RunFigures f;
+    f.stage_seconds = stage_seconds_;
+    f.total_seconds = seconds_since(start_);
+    f.render_seconds = render_seconds_;
+    f.first_tile_seconds = std::chrono::duration<double>(render_start_ - start_).count() + tiles_.first_tile_seconds();
+    if (ring_.active()) f.radiosity = ring_.report();
+    if (!options_.quiet) print_report(spec_, supervisor_, f);
+    if (!options_.stats_json.empty())
+      if (auto st = write_stats_json(spec_, supervisor_, f, options_.stats_json); !st) log_warn(st.error().message);
+  }
+
+  const FarmSpec& spec_;
+  RunOptions options_;
+  Launchers launchers_;
+  wire::Socket control_{wire::Socket::Kind::router};
+  std::string control_endpoint_;
+  Supervisor supervisor_;
+  TileService tiles_;
+  ExchangeService exchange_;
+  RingService ring_;
+  std::map<wire::Op, Service*> services_;
+  std::vector<std::pair<std::string, double>> stage_seconds_;
+  Clock::time_point start_, render_start_;
+  double render_seconds_ = 0;
+};
+
+}  // namespace
+
+int run_farm(const FarmSpec& spec, const RunOptions& options) { return Director(spec, options).run(); }
+
+}  // namespace lf

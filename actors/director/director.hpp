@@ -1,0 +1,24 @@
+#pragma once
+// The director (Session + NetManager, DESIGN §1): a phase sequencer. It runs the stages
+//   prepare -> launch -> hello -> configure -> setup -> render -> finish
+// over the parts around it: the Supervisor (actor table, heartbeats, exits, losses; launchers per host) and the
+// services registered by operation (TileService: render master and film; ExchangeService: all-gather and fetch;
+// RingService: the radiosity ring). It owns the control socket and routes each REQUEST to the service that
+// serves its operation. Whatever happens (an actor crash, a bad HELLO, Ctrl-C), it returns only after every actor
+// process is gone.
+#include <string>
+
+#include "farm/farm_spec.hpp"
+
+namespace lf {
+
+struct RunOptions {
+  bool progress_on_terminal = false;  // a live bar on stderr; otherwise plain lines
+  std::string stats_json;             // write figures here as JSON, if set
+  bool quiet = false;                 // no tables (benchmarks)
+};
+
+// Returns the process exit status: 0 on success, 1 if the farm failed, 128+signal if interrupted.
+int run_farm(const FarmSpec& spec, const RunOptions& options);
+
+}  // namespace lf

@@ -1,0 +1,82 @@
+#include "actors/director/exchange_service.hpp"
+
+namespace lf {
+
+ExchangeService::ExchangeService(Pools pools) : pools_(std::move(pools)) {}
+
+const std::string* ExchangeService::pool_of(const std::string& actor, size_t* index) const {
+  for (const auto& [pool, replicas] : pools_)
+    for (size_t i = 0; i < replicas.size(); ++i)
+      if (replicas[i] == actor) {
+        *index = i;
+        return &pool;
+      }
+  return nullptr;
+}
+
+void ExchangeService::expect(const std::string& key) { expected_.insert(key); }
+
+void ExchangeService::publish(const std::string& key, std::string blob, Outbox& out) {
+  expected_.insert(key);
+  const std::string& stored = published_[key] = std::move(blob);
+  auto [first, last] = waiting_fetches_.equal_range(key);
+  for (auto it = first; it != last; ++it) out.reply(it->second.first, it->second.second, Value::Map{{"blob", Bytes{stored}}});
+  waiting_fetches_.erase(first, last);
+}
+
+Status ExchangeService::on_request(const std::string& actor, wire::Op op, uint64_t id, const Value& body, Outbox& out) {
+  if (op == wire::Op::fetch) {
+    const Value* key = body.find("key");
+    const std::string name = key && key->is_string() ? key->as_string() : std::string("?");
+    if (!expected_.count(name)) {
+      out.refuse(actor, id, ErrorCode::not_found,
+                 "this farm publishes no '" + name + "' (a radiosity LightOp needs radiosity { ... } in the script)");
+      return Ok{};
+    }
+    if (auto it = published_.find(name); it != published_.end()) {
+      out.reply(actor, id, Value::Map{{"blob", Bytes{it->second}}});
+    } else {
+      waiting_fetches_.emplace(name, std::make_pair(actor, id));
+    }
+    return Ok{};
+  }
+  const Value* part = body.find("part");
+  if (!part || !part->is_bytes()) {
+    out.refuse(actor, id, ErrorCode::bad_request, "all_gather needs a part");
+    return Ok{};
+  }
+  size_t at = 0;
+  const std::string* pool = pool_of(actor, &at);
+  if (!pool) {  // not in a pool: its own part is everything
+    out.reply(actor, id, Value::Map{{"parts", Value::Array{*part}}});
+    return Ok{};
+  }
+  const auto& replicas = pools_.at(*pool);
+  for (const auto& r : replicas)
+    if (lost_.count(r))
+      return make_error("replica '" + r + "' of '" + *pool +
+                        "' was lost before the pool shared its setup; its share cannot be redone");
+  Gather& g = gathers_[*pool];
+  g.parts.resize(replicas.size());
+  g.askers.resize(replicas.size());
+  g.parts[at] = *part;
+  g.askers[at] = id;
+  for (const auto& p : g.parts)
+    if (p.is_nil()) return Ok{};
+  Value::Array all(g.parts.begin(), g.parts.end());
+  for (size_t r = 0; r < replicas.size(); ++r) out.reply(replicas[r], g.askers[r], Value::Map{{"parts", all}});
+  gathers_.erase(*pool);
+  return Ok{};
+}
+
+Status ExchangeService::on_lost(const std::string& actor, const std::string& why, Outbox&) {
+  lost_.insert(actor);
+  size_t at = 0;
+  const std::string* pool = pool_of(actor, &at);
+  if (pool && gathers_.count(*pool))
+    return make_error("replica '" + actor + "' " + why + " while '" + *pool +
+                      "' was sharing its setup; its share cannot be redone");
+  return Ok{};
+}
+
+}  // namespace lf

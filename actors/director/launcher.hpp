@@ -1,0 +1,67 @@
+#pragma once
+// Launchers start actor processes on a host, learn when they exit, and kill them. The director holds one per host
+// (Launchers), chosen by the host's `launcher` in the script; `local` (fork/exec here) is the first. A new launcher
+// (ssh, slurm) implements Launcher and is named in make_launcher(); nothing else in the director changes.
+//
+// Every launcher starts a process on this machine for each actor (the actor itself, or the ssh/srun client that
+// carries it), so a local pid identifies a launched actor across all launchers.
+#include <sys/types.h>
+
+#include <chrono>
+#include <map>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "core/result.hpp"
+#include "farm/farm_spec.hpp"
+
+namespace lf {
+
+struct ExitReport {
+  pid_t pid = 0;
+  int status = 0;  // as from waitpid
+  // "exited with status 3" / "was killed by signal 9 (Killed)"
+  std::string describe() const;
+};
+
+struct LaunchRequest {
+  std::vector<std::string> argv;  // argv[0] is replaced by this lightfarm binary when `self`
+  bool self = true;               // run this lightfarm binary; false: run argv[0], looked up on PATH
+  std::string cwd;                // working directory of the actor, if set
+};
+
+class Launcher {
+ public:
+  virtual ~Launcher() = default;
+  virtual std::string name() const = 0;
+  // Starts the actor; an error says why it could not start (missing program, ...).
+  virtual Result<pid_t> start(const LaunchRequest& request) = 0;
+  // An actor that has exited, if any (never blocks).
+  virtual std::optional<ExitReport> reap_one() = 0;
+  virtual void kill(pid_t pid, int signal) = 0;
+  // Waits up to `grace` for actors to exit, then SIGTERM, then SIGKILL; reaps them all.
+  virtual void stop_all(std::chrono::milliseconds grace) = 0;
+};
+
+// The launcher a host's `launcher` names; an error for one this build does not have.
+Result<std::unique_ptr<Launcher>> make_launcher(const HostSpec& host);
+
+// One launcher per host, made on first use.
+class Launchers {
+ public:
+  // Installs `launcher` for `host` (tests give fakes).
+  void set(const std::string& host, std::unique_ptr<Launcher> launcher);
+  Result<Launcher*> for_host(const HostSpec& host);
+  Result<pid_t> start(const HostSpec& host, const LaunchRequest& request);
+  std::optional<ExitReport> reap_one();
+  void kill(pid_t pid, int signal);
+  void stop_all(std::chrono::milliseconds grace);
+
+ private:
+  std::map<std::string, std::unique_ptr<Launcher>> by_host_;
+  std::map<pid_t, Launcher*> owner_;
+};
+
+}  // namespace lf

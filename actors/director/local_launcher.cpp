@@ -1,0 +1,168 @@
+#include "actors/director/local_launcher.hpp"
+
+#include <fcntl.h>
+#include <signal.h>
+#include <sys/prctl.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <cerrno>
+#include <cstring>
+#include <filesystem>
+#include <thread>
+
+namespace lf {
+
+std::string self_executable() {
+  std::error_code ec;
+  auto p = std::filesystem::read_symlink("/proc/self/exe", ec);
+  return ec ? std::string("lightfarm") : p.string();
+}
+
+std::string ExitReport::describe() const {
+  if (WIFEXITED(status)) return "exited with status " + std::to_string(WEXITSTATUS(status));
+  if (WIFSIGNALED(status))
+    return "was killed by signal " + std::to_string(WTERMSIG(status)) + " (" + strsignal(WTERMSIG(status)) + ")";
+  return "stopped (status " + std::to_string(status) + ")";
+}
+
+LocalLauncher::LocalLauncher() : exe_(self_executable()) {}
+
+LocalLauncher::~LocalLauncher() { stop_all(std::chrono::milliseconds(0)); }
+
+Result<pid_t> LocalLauncher::start(const LaunchRequest& options) {
+  std::vector<std::string> args = options.argv;
+  if (options.self) args[0] = exe_;
+  std::vector<char*> cargv;
+  for (auto& a : args) cargv.push_back(a.data());
+  cargv.push_back(nullptr);
+
+  // A pipe with O_CLOEXEC tells the parent whether exec succeeded: it closes on exec, or carries errno.
+  int fds[2];
+  if (::pipe2(fds, O_CLOEXEC) != 0) return make_error(std::string("pipe: ") + std::strerror(errno));
+  const pid_t parent = ::getpid();
+  pid_t pid = ::fork();
+  if (pid < 0) {
+    ::close(fds[0]);
+    ::close(fds[1]);
+    return make_error(std::string("fork: ") + std::strerror(errno));
+  }
+  if (pid == 0) {
+    ::close(fds[0]);
+    ::prctl(PR_SET_PDEATHSIG, SIGKILL);
+    if (::getppid() != parent) ::_exit(126);  // the director died between fork and prctl
+    sigset_t none;
+    sigemptyset(&none);
+    ::sigprocmask(SIG_SETMASK, &none, nullptr);
+    if (!options.cwd.empty() && ::chdir(options.cwd.c_str()) != 0) {
+      int err = errno;
+      ssize_t ignored = ::write(fds[1], &err, sizeof err);
+      (void)ignored;
+      ::_exit(127);
+    }
+    if (options.self) {
+      ::execv(cargv[0], cargv.data());
+    } else {
+      ::execvp(cargv[0], cargv.data());
+    }
+    int err = errno;
+    ssize_t ignored = ::write(fds[1], &err, sizeof err);
+    (void)ignored;
+    ::_exit(127);
+  }
+  ::close(fds[1]);
+  int err = 0;
+  ssize_t n;
+  do {
+    n = ::read(fds[0], &err, sizeof err);
+  } while (n < 0 && errno == EINTR);
+  ::close(fds[0]);
+  if (n == static_cast<ssize_t>(sizeof err)) {
+    int status;
+    ::waitpid(pid, &status, 0);
+    return make_error("cannot run " + args[0] + ": " + std::strerror(err));
+  }
+  children_.insert(pid);
+  return pid;
+}
+
+void LocalLauncher::kill(pid_t pid, int signal) {
+  if (children_.count(pid)) ::kill(pid, signal);
+}
+
+std::optional<ExitReport> LocalLauncher::reap_one() {
+  for (pid_t pid : children_) {
+    int status = 0;
+    pid_t r = ::waitpid(pid, &status, WNOHANG);
+    if (r == pid) {
+      children_.erase(pid);
+      return ExitReport{pid, status};
+    }
+  }
+  return std::nullopt;
+}
+
+void LocalLauncher::stop_all(std::chrono::milliseconds grace) {
+  using Clock = std::chrono::steady_clock;
+  auto wait_until = [&](Clock::time_point deadline) {
+    while (!children_.empty()) {
+      while (reap_one()) {
+      }
+      if (children_.empty() || Clock::now() >= deadline) break;
+      std::this_thread::sleep_for(std::chrono::milliseconds(5));
+    }
+  };
+  wait_until(Clock::now() + grace);
+  for (pid_t pid : children_) ::kill(pid, SIGTERM);
+  wait_until(Clock::now() + std::chrono::milliseconds(1500));
+  for (pid_t pid : children_) ::kill(pid, SIGKILL);
+  for (pid_t pid : children_) {
+    int status;
+    while (::waitpid(pid, &status, 0) < 0 && errno == EINTR) {
+    }
+  }
+  children_.clear();
+}
+
+Result<std::unique_ptr<Launcher>> make_launcher(const HostSpec& host) {
+  if (host.launcher == "local") return std::unique_ptr<Launcher>(std::make_unique<LocalLauncher>());
+  return make_error("host '" + host.name + "': launcher '" + host.launcher + "' is not available in this build");
+}
+
+void Launchers::set(const std::string& host, std::unique_ptr<Launcher> launcher) { by_host_[host] = std::move(launcher); }
+
+Result<Launcher*> Launchers::for_host(const HostSpec& host) {
+  auto it = by_host_.find(host.name);
+  if (it != by_host_.end()) return it->second.get();
+  auto made = make_launcher(host);
+  if (!made) return made.error();
+  return (by_host_[host.name] = std::move(*made)).get();
+}
+
+Result<pid_t> Launchers::start(const HostSpec& host, const LaunchRequest& request) {
+  auto launcher = for_host(host);
+  if (!launcher) return launcher.error();
+  auto pid = (*launcher)->start(request);
+  if (pid) owner_[*pid] = *launcher;
+  return pid;
+}
+
+std::optional<ExitReport> Launchers::reap_one() {
+  for (auto& [host, launcher] : by_host_)
+    if (auto r = launcher->reap_one()) {
+      owner_.erase(r->pid);
+      return r;
+    }
+  return std::nullopt;
+}
+
+void Launchers::kill(pid_t pid, int signal) {
+  if (auto it = owner_.find(pid); it != owner_.end()) it->second->kill(pid, signal);
+}
+
+void Launchers::stop_all(std::chrono::milliseconds grace) {
+  for (auto& [host, launcher] : by_host_) launcher->stop_all(grace);
+  owner_.clear();
+}
+
+}  // namespace lf

@@ -1,0 +1,78 @@
+#include "actors/director/report.hpp"
+
+#include <cstdio>
+#include <fstream>
+
+namespace lf {
+
+namespace {
+double num(const Value& stats, const char* key) {
+  const Value* v = stats.find(key);
+  return v && v->is_number() ? v->as_double() : 0.0;
+}
+}  // namespace
+
+void print_report(const FarmSpec& spec, const Supervisor& supervisor, const RunFigures& f) {
+  const double samples = static_cast<double>(spec.image.width) * spec.image.height * spec.image.spp;
+  std::fprintf(stderr, "\n%-12s %9s %7s\n", "phase", "seconds", "share");
+  for (const auto& [name, secs] : f.stage_seconds)
+    std::fprintf(stderr, "%-12s %9.3f %6.1f%%\n", name.c_str(), secs, 100.0 * secs / f.total_seconds);
+  std::fprintf(stderr, "%-12s %9.3f %6.1f%%\n\n", "total", f.total_seconds, 100.0);
+  std::fprintf(stderr, "%-14s %-10s %8s %9s %11s %9s %9s %8s %6s\n", "actor", "kind", "pid", "requests", "points",
+               "MiB in", "MiB out", "busy s", "peakq");
+  for (const auto& a : spec.actors) {
+    const ActorRecord& s = supervisor.at(a.name);
+    if (s.lost) {
+      std::fprintf(stderr, "%-14s %-10s %8d  lost: %s\n", a.name.c_str(), a.kind.c_str(), static_cast<int>(s.pid),
+                   s.loss.c_str());
+      continue;
+    }
+    std::fprintf(stderr, "%-14s %-10s %8d %9.0f %11.0f %9.2f %9.2f %8.3f %6.0f\n", a.name.c_str(), a.kind.c_str(),
+                 static_cast<int>(s.pid), num(s.stats, "requests"), num(s.stats, "points"),
+                 num(s.stats, "bytes_in") / 1048576.0, num(s.stats, "bytes_out") / 1048576.0,
+                 num(s.stats, "busy_seconds"), num(s.stats, "peak_queue"));
+  }
+  std::fprintf(stderr, "\nrender: %.2f M samples/s\n", samples / f.render_seconds / 1e6);
+  std::printf("wrote %s (%dx%d, %d spp)\n", spec.image.output.c_str(), spec.image.width, spec.image.height,
+              spec.image.spp);
+}
+
+Status write_stats_json(const FarmSpec& spec, const Supervisor& supervisor, const RunFigures& f,
+                        const std::string& path) {
+  const double samples = static_cast<double>(spec.image.width) * spec.image.height * spec.image.spp;
+  Value::Map phases;
+  for (const auto& [name, secs] : f.stage_seconds) phases[name] = secs;
+  phases["total"] = f.total_seconds;
+  Value::Array actors;
+  double shading_requests = 0, messages = 0;
+  for (const auto& a : spec.actors) {
+    const ActorRecord& st = supervisor.at(a.name);
+    if (a.is_renderer()) shading_requests += num(st.stats, "requests");
+    messages += num(st.stats, "messages_out");
+  }
+  for (const auto& a : spec.actors) {
+    const ActorRecord& s = supervisor.at(a.name);
+    Value entry = s.stats.is_map() ? s.stats : Value(Value::Map{});
+    entry.as_map()["name"] = a.name;
+    entry.as_map()["kind"] = a.kind;
+    entry.as_map()["pid"] = static_cast<int64_t>(s.pid);
+    if (s.lost) entry.as_map()["lost"] = s.loss;
+    actors.push_back(std::move(entry));
+  }
+  Value doc = Value::Map{{"script", spec.script},
+                         {"output", spec.image.output},
+                         {"image", spec.image.to_value()},
+                         {"phases_seconds", std::move(phases)},
+                         {"render_samples_per_second", samples / f.render_seconds},
+                         {"first_tile_seconds", f.first_tile_seconds},
+                         {"render_seconds", f.render_seconds},
+                         {"totals", Value::Map{{"renderer_shading_requests", shading_requests}, {"messages_sent", messages}}},
+                         {"actors", std::move(actors)}};
+  if (!f.radiosity.is_nil()) doc.as_map()["radiosity"] = f.radiosity;
+  std::ofstream out(path);
+  out << to_json(doc, 2) << "\n";
+  if (!out) return make_error("could not write stats to '" + path + "'");
+  return Ok{};
+}
+
+}  // namespace lf

@@ -1,0 +1,26 @@
+#pragma once
+// The end-of-run report: phase timings and the per-actor table on stderr, the "wrote" line on stdout, and the same
+// figures as JSON for --stats-json.
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "actors/director/supervisor.hpp"
+#include "core/result.hpp"
+#include "farm/farm_spec.hpp"
+
+namespace lf {
+
+struct RunFigures {
+  std::vector<std::pair<std::string, double>> stage_seconds;  // in order
+  double total_seconds = 0;
+  double render_seconds = 0;
+  double first_tile_seconds = 0;  // from the director's start
+  Value radiosity;                // the ring's report, or nil
+};
+
+void print_report(const FarmSpec& spec, const Supervisor& supervisor, const RunFigures& figures);
+Status write_stats_json(const FarmSpec& spec, const Supervisor& supervisor, const RunFigures& figures,
+                        const std::string& path);
+
+}  // namespace lf

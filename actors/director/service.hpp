@@ -1,0 +1,39 @@
+#pragma once
+// Director services: the central capabilities actors ask the director for, each registered by the operations it
+// serves (DESIGN §6). The director owns the control socket and the actor table; a service sees only requests,
+// phases and losses, and answers through an Outbox. So each is tested by feeding it messages and reading the
+// Outbox (see *.test.cpp beside each), and a new central capability is a new Service, never a new branch in the
+// director.
+#include <string>
+#include <vector>
+
+#include "core/result.hpp"
+#include "core/value.hpp"
+#include "transport/protocol.hpp"
+
+namespace lf {
+
+// Where a service's answers go: the director sends them on the control socket.
+class Outbox {
+ public:
+  virtual ~Outbox() = default;
+  virtual void reply(const std::string& actor, uint64_t id, Value body) = 0;
+  virtual void refuse(const std::string& actor, uint64_t id, ErrorCode code, const std::string& message) = 0;
+};
+
+class Service {
+ public:
+  virtual ~Service() = default;
+  // The operations this service serves; each operation has one service.
+  virtual std::vector<wire::Op> ops() const = 0;
+  // A request from `actor`, a live member of this farm. An error stops the farm with its message (a broken
+  // invariant, not a bad request: those are refused through the Outbox and the farm goes on).
+  virtual Status on_request(const std::string& actor, wire::Op op, uint64_t id, const Value& body, Outbox& out) = 0;
+  // The director entered `phase` (its PHASE messages are on their way).
+  virtual Status on_phase(wire::Phase, Outbox&) { return Ok{}; }
+  // `actor` was lost (died or hung) in setup or render, and the farm goes on without it: its work goes elsewhere.
+  // An error stops the farm (the work cannot be redone).
+  virtual Status on_lost(const std::string& /*actor*/, const std::string& /*why*/, Outbox&) { return Ok{}; }
+};
+
+}  // namespace lf

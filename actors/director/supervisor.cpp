@@ -1,0 +1,204 @@
+#include "actors/director/supervisor.hpp"
+
+#include <signal.h>
+#include <sys/wait.h>
+
+#include <algorithm>
+
+#include "actors/runtime/hello.hpp"
+#include "core/log.hpp"
+
+namespace lf {
+
+using wire::MsgType;
+
+namespace {
+double seconds_between(Clock::time_point a, Clock::time_point b) { return std::chrono::duration<double>(b - a).count(); }
+}  // namespace
+
+Supervisor::Supervisor(const FarmSpec& spec, Launchers& launchers, ControlOut& out, Events events)
+    : spec_(spec), launchers_(launchers), out_(out), events_(std::move(events)) {
+  for (size_t i = 0; i < spec.actors.size(); ++i) {
+    ActorRecord r;
+    r.spec = &spec.actors[i];
+    r.index = static_cast<int>(i);
+    r.last_seen = Clock::now();
+    actors_.emplace(spec.actors[i].name, r);
+  }
+}
+
+void Supervisor::send(const std::string& name, wire::Message m) {
+  m.header.sender = "director";
+  out_.send(name, std::move(m));
+}
+
+Status Supervisor::launch(const std::string& director_endpoint) {
+  for (const auto& a : spec_.actors) {
+    LaunchRequest how;
+    how.argv = {"lightfarm", "actor"};
+    if (auto cmd = a.runtime.find("cmd"); cmd != a.runtime.end() && cmd->second.is_array()) {
+      // An external actor: its own command, then the arguments every actor gets.
+      how.argv.clear();
+      for (const auto& part : cmd->second.as_array()) how.argv.push_back(part.as_string());
+      how.self = false;
+      if (auto cwd = a.runtime.find("cwd"); cwd != a.runtime.end() && cwd->second.is_string()) how.cwd = cwd->second.as_string();
+    }
+    how.argv.insert(how.argv.end(), {"--kind", a.kind, "--name", a.name, "--director", director_endpoint});
+    const HostSpec* host = spec_.host_of(a);
+    if (!host) return make_error(a.loc.str() + ": actor '" + a.name + "' is placed on undeclared host '" + a.host + "'");
+    auto pid = launchers_.start(*host, how);
+    if (!pid) return make_error(a.loc.str() + ": cannot start actor '" + a.name + "': " + pid.error().message);
+    ActorRecord& r = actors_.at(a.name);
+    r.pid = *pid;
+    r.last_seen = Clock::now();
+  }
+  return Ok{};
+}
+
+void Supervisor::broadcast(const wire::Message& message) {
+  for (auto& [name, a] : actors_)
+    if (a.said_hello && !a.exited && !a.lost) send(name, message);
+}
+
+void Supervisor::send_bye_to_all() {
+  for (auto& [name, a] : actors_)
+    if (a.said_hello && !a.said_bye && !a.exited && !a.lost) send(name, wire::make(MsgType::bye, "director"));
+}
+
+bool Supervisor::all(const std::function<bool(const ActorRecord&)>& done, std::string* late) const {
+  bool all = true;
+  for (const auto& [name, a] : actors_) {
+    if (a.lost || done(a)) continue;
+    all = false;
+    if (late) *late += (late->empty() ? "'" : ", '") + name + "'";
+  }
+  return all;
+}
+
+Status Supervisor::on_message(const std::string& peer, Result<wire::Message>& message) {
+  auto it = actors_.find(peer);
+  if (!message) {
+    const Error& e = message.error();
+    if (it != actors_.end() && e.code == ErrorCode::incompatible)
+      return make_error("actor '" + peer + "' is an " + e.message + "; refusing it");
+    log_warn("dropped a bad control message from '" + peer + "': " + e.message);
+    return Ok{};
+  }
+  if (it == actors_.end()) {
+    log_warn("ignored a message from '" + peer + "', which is not part of this farm");
+    return Ok{};
+  }
+  ActorRecord& a = it->second;
+  if (a.lost) return Ok{};  // whatever a lost actor still says is not counted
+  a.last_seen = Clock::now();
+  wire::Message& m = *message;
+  switch (m.header.type) {
+    case MsgType::hello: {
+      auto hello = Hello::check(m.body, peer, a.spec->kind);
+      if (!hello) return hello.error();
+      a.endpoint = hello->endpoint;
+      a.said_hello = true;
+      return Ok{};
+    }
+    case MsgType::ready:
+      if (auto phase = wire::phase_of(m.header)) a.ready = *phase;
+      else log_warn("'" + peer + "' said READY for '" + m.header.op + "', which is not a phase");
+      return Ok{};
+    case MsgType::error:
+      return make_error("actor '" + peer + "' failed: " + wire::error_of(m).message);
+    case MsgType::stats: a.stats = m.body; return Ok{};
+    case MsgType::bye: a.said_bye = true; return Ok{};
+    case MsgType::heartbeat: return Ok{};
+    case MsgType::request: return events_.request(a, m);
+    default:
+      log_warn("ignored a " + std::string(wire::type_name(m.header.type)) + " from '" + peer + "'");
+      return Ok{};
+  }
+}
+
+// Renderers and pool replicas may be lost during setup and render: their work goes to the others.
+bool Supervisor::recoverable(const ActorRecord& a) const {
+  if (stage_ != Stage::setup && stage_ != Stage::render) return false;
+  return a.spec->is_renderer() || spec_.pool_of(a.index) >= 0;
+}
+
+Status Supervisor::on_exit(const ExitReport& r) {
+  for (auto& [name, a] : actors_) {
+    if (a.pid != r.pid) continue;
+    a.exited = true;
+    if (a.lost) return Ok{};  // already accounted for (we killed it)
+    // In the finish stage a clean exit is an actor finishing, even if its BYE is still on the way.
+    if (stage_ == Stage::finish && (a.said_bye || (WIFEXITED(r.status) && WEXITSTATUS(r.status) == 0))) {
+      a.said_bye = true;
+      return Ok{};
+    }
+    const std::string why = a.killed_hung ? "stopped answering (no heartbeat for " + seconds_text(spec_.heartbeat_timeout) +
+                                                "); it was killed"
+                                          : r.describe();
+    if (recoverable(a)) return lose(a, why);
+    const std::string when = starting_up(stage_) ? "during start-up" : "during " + std::string(stage_name(stage_));
+    return make_error("actor '" + name + "' (pid " + std::to_string(r.pid) + ") " + why + " " + when);
+  }
+  return Ok{};
+}
+
+Status Supervisor::lose(ActorRecord& a, const std::string& why) {
+  a.lost = true;
+  a.loss = why;
+  if (a.spec->is_renderer()) {
+    std::string all;
+    bool any_left = false;
+    for (auto& [n, other] : actors_) {
+      if (!other.spec->is_renderer()) continue;
+      any_left = any_left || !other.lost;
+      all += (all.empty() ? "" : ", ") + n + " " + other.loss;
+    }
+    if (!any_left) return make_error("every renderer was lost: " + all);
+    return events_.lost(a, why);
+  }
+  ActorRecord& pool = actors_.at(spec_.actors[static_cast<size_t>(spec_.pool_of(a.index))].name);
+  std::string replicas;
+  bool any_left = false;
+  for (int r : pool.spec->inputs) {
+    const ActorRecord& rep = actors_.at(spec_.actors[static_cast<size_t>(r)].name);
+    any_left = any_left || !rep.lost;
+    if (rep.lost) replicas += (replicas.empty() ? "" : ", ") + rep.name() + " " + rep.loss;
+  }
+  if (!any_left) {
+    if (spec_.pool_of(pool.index) >= 0 && !pool.exited) {
+      // A nested pool with no replica left is itself a lost replica of the pool above.
+      launchers_.kill(pool.pid, SIGKILL);
+      return lose(pool, "lost every replica (" + replicas + ")");
+    }
+    return make_error("lost the last replica of '" + pool.name() + "': " + replicas);
+  }
+  if (auto st = events_.lost(a, why); !st) return st;
+  log_warn("replica '" + a.name() + "' " + why + "; '" + pool.name() + "' sends its work to the others");
+  send(pool.name(), wire::make(MsgType::peer_down, "director", Value::Map{{"name", a.name()}}));
+  return Ok{};
+}
+
+Status Supervisor::check_heartbeats(Clock::time_point now) {
+  if (stage_ <= Stage::hello) return Ok{};  // the hello timeout covers start-up
+  for (auto& [name, a] : actors_) {
+    if (a.exited || a.said_bye || a.lost || a.killed_hung) continue;
+    if (seconds_between(a.last_seen, now) <= spec_.heartbeat_timeout) continue;
+    if (recoverable(a)) {
+      // A hung process (e.g. SIGSTOPped) counts as dead; SIGKILL makes sure it can never answer late.
+      a.killed_hung = true;
+      launchers_.kill(a.pid, SIGKILL);
+      continue;
+    }
+    return make_error("actor '" + name + "' has been silent for " + seconds_text(spec_.heartbeat_timeout) +
+                      " (missed heartbeats)");
+  }
+  return Ok{};
+}
+
+void Supervisor::send_heartbeats(Clock::time_point now) {
+  if (seconds_between(last_heartbeat_, now) < std::min(1.0, spec_.heartbeat_timeout / 4)) return;
+  last_heartbeat_ = now;
+  broadcast(wire::make(MsgType::heartbeat, "director"));
+}
+
+}  // namespace lf

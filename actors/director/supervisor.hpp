@@ -1,0 +1,104 @@
+#pragma once
+// The supervisor: the director's actor table. It launches every actor through its host's launcher, reads what
+// actors say on the control channel (HELLO, READY, STATS, BYE, HEARTBEAT, ERROR; REQUESTs go to the services),
+// watches heartbeats and process exits, and decides what a death means:
+//   - during setup and render, a renderer or a pool replica that dies or misses heartbeats (it is then SIGKILLed, so
+//     it can never answer late) is *lost*: the services hear of it (its tiles go back), and a replica's pool gets
+//     PEER_DOWN and re-sends its packets; the last renderer, or a pool's last replica, stops the farm naming each
+//     loss (a nested pool left empty is itself a lost replica of the pool above);
+//   - any other death, an ERROR from an actor, or a bad HELLO stops the farm with a message naming the actor.
+// Socket-free: the director passes messages in and sends what the supervisor says through ControlOut, so the
+// supervisor is tested by feeding it messages and exits (supervisor.test.cpp).
+#include <sys/types.h>
+
+#include <chrono>
+#include <functional>
+#include <map>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "actors/director/launcher.hpp"
+#include "actors/director/stage.hpp"
+#include "core/result.hpp"
+#include "farm/farm_spec.hpp"
+#include "transport/message.hpp"
+
+namespace lf {
+
+using Clock = std::chrono::steady_clock;
+
+struct ActorRecord {
+  const ActorSpec* spec = nullptr;
+  int index = -1;  // in FarmSpec::actors
+  pid_t pid = 0;
+  std::string endpoint;  // its data socket, from HELLO
+  std::optional<wire::Phase> ready;  // the last phase it said READY for
+  bool said_hello = false;
+  bool said_bye = false;
+  bool exited = false;
+  bool lost = false;         // died or hung during setup/render, and the farm went on without it
+  bool killed_hung = false;  // SIGKILLed for missing heartbeats
+  std::string loss;          // why it was lost
+  Clock::time_point last_seen;
+  Value stats;
+  const std::string& name() const { return spec->name; }
+};
+
+// Where the supervisor's messages go (the director's control socket; a recorder in tests).
+class ControlOut {
+ public:
+  virtual ~ControlOut() = default;
+  virtual void send(const std::string& actor, wire::Message message) = 0;
+};
+
+class Supervisor {
+ public:
+  // What the supervisor hands to the director: requests for the services, and losses for them to recover from.
+  struct Events {
+    std::function<Status(ActorRecord&, wire::Message&)> request;
+    std::function<Status(ActorRecord&, const std::string& why)> lost;
+  };
+
+  Supervisor(const FarmSpec& spec, Launchers& launchers, ControlOut& out, Events events);
+
+  // Starts every actor (`lightfarm actor ...`, or an exec actor's own command) pointed at `director_endpoint`.
+  Status launch(const std::string& director_endpoint);
+  void set_stage(Stage stage) { stage_ = stage; }
+  Stage stage() const { return stage_; }
+
+  // One control message from `peer` (or why its bytes were refused).
+  Status on_message(const std::string& peer, Result<wire::Message>& message);
+  // A process ended.
+  Status on_exit(const ExitReport& exit);
+  // Actors silent for longer than the heartbeat timeout: recoverable ones are killed (their exit then counts as a
+  // loss), any other stops the farm.
+  Status check_heartbeats(Clock::time_point now);
+  // HEARTBEAT to every live actor, at most 4 per timeout and 1 a second.
+  void send_heartbeats(Clock::time_point now);
+  // The same message to every live actor that said hello.
+  void broadcast(const wire::Message& message);
+  // BYE to everyone still there (the farm is ending).
+  void send_bye_to_all();
+
+  // True when every actor not lost satisfies `done`; otherwise `late` lists the others ('a', 'b').
+  bool all(const std::function<bool(const ActorRecord&)>& done, std::string* late = nullptr) const;
+  std::map<std::string, ActorRecord>& actors() { return actors_; }
+  const std::map<std::string, ActorRecord>& actors() const { return actors_; }
+  const ActorRecord& at(const std::string& name) const { return actors_.at(name); }
+
+ private:
+  bool recoverable(const ActorRecord& a) const;
+  Status lose(ActorRecord& a, const std::string& why);
+  void send(const std::string& name, wire::Message m);
+
+  const FarmSpec& spec_;
+  Launchers& launchers_;
+  ControlOut& out_;
+  Events events_;
+  std::map<std::string, ActorRecord> actors_;
+  Stage stage_ = Stage::prepare;
+  Clock::time_point last_heartbeat_ = Clock::now();
+};
+
+}  // namespace lf

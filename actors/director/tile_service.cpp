@@ -1,0 +1,82 @@
+#include "actors/director/tile_service.hpp"
+
+#include <algorithm>
+
+#include "core/log.hpp"
+
+namespace lf {
+
+using Clock = std::chrono::steady_clock;
+
+TileService::TileService(const ImageSpec& image, std::vector<std::string> renderers, bool terminal, bool quiet)
+    : image_(image),
+      renderers_(std::move(renderers)),
+      master_(image.width, image.height, image.tile),
+      progress_(terminal, quiet, master_.total(), static_cast<uint64_t>(image.tile) * image.tile * image.spp) {}
+
+double TileService::render_seconds() const {
+  return rendering_ ? std::chrono::duration<double>(Clock::now() - render_start_).count() : 0.0;
+}
+
+Status TileService::on_phase(wire::Phase phase, Outbox& out) {
+  if (phase != wire::Phase::render) return Ok{};
+  rendering_ = true;
+  render_start_ = Clock::now();
+  serve_waiting(out);
+  return Ok{};
+}
+
+void TileService::finish_progress() { progress_.update(master_.done(), render_seconds(), true); }
+
+Status TileService::on_request(const std::string& actor, wire::Op op, uint64_t id, const Value& body, Outbox& out) {
+  if (op == wire::Op::tile) {
+    waiting_.emplace_back(actor, id);
+    serve_waiting(out);
+    return Ok{};
+  }
+  const Value* tile = body.find("id");
+  const Value* pixels = body.find("pixels");
+  std::vector<float> rgb;
+  if (!tile || !tile->is_int() || !pixels || !pixels->is_bytes() || !bytes_to_floats(pixels->as_bytes(), rgb)) {
+    out.refuse(actor, id, ErrorCode::bad_request, "tile_done needs id and pixels");
+    return Ok{};
+  }
+  auto outcome = master_.complete(actor, static_cast<uint64_t>(tile->as_int()), rgb);
+  if (outcome != RenderMaster::Outcome::accepted) {
+    log_warn("refused tile " + std::to_string(tile->as_int()) + " from '" + actor + "': " + RenderMaster::describe(outcome));
+    out.refuse(actor, id, ErrorCode::refused, RenderMaster::describe(outcome));
+    return Ok{};
+  }
+  out.reply(actor, id, Value::Map{});
+  if (master_.done() == 1) first_tile_seconds_ = render_seconds();
+  progress_.update(master_.done(), render_seconds());
+  if (master_.finished()) serve_waiting(out);
+  return Ok{};
+}
+
+Status TileService::on_lost(const std::string& actor, const std::string& why, Outbox& out) {
+  if (std::find(renderers_.begin(), renderers_.end(), actor) == renderers_.end()) return Ok{};
+  std::erase_if(waiting_, [&](const auto& w) { return w.first == actor; });
+  const size_t tiles = master_.release(actor);
+  log_warn("renderer '" + actor + "' " + why + "; its " + std::to_string(tiles) + " tiles go to the others");
+  serve_waiting(out);
+  return Ok{};
+}
+
+// Answers waiting tile requests: a tile each while tiles are free; "none left" once every tile is done.
+void TileService::serve_waiting(Outbox& out) {
+  if (!rendering_) return;
+  while (!waiting_.empty()) {
+    const auto [actor, id] = waiting_.front();
+    Value::Map body;
+    if (auto t = master_.next(actor)) {
+      body["tile"] = Value::Map{{"id", t->id}, {"x0", t->rect.x0}, {"y0", t->rect.y0}, {"x1", t->rect.x1}, {"y1", t->rect.y1}};
+    } else if (!master_.finished()) {
+      return;  // keep waiting
+    }
+    waiting_.erase(waiting_.begin());
+    out.reply(actor, id, std::move(body));
+  }
+}
+
+}  // namespace lf

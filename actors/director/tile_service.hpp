@@ -1,0 +1,52 @@
+#pragma once
+// The tile service: the render master and the film (DESIGN §1). Serves
+//   tile       {}                          -> {tile: {id, x0, y0, x1, y1}}, or {} once every tile is done
+//   tile_done  {id, pixels: f32[3 w h]}    -> {}; ERROR refused unless the sender holds the tile (and only once);
+//                                             ERROR bad_request for a body without id and pixels
+// A tile request waits while no tile is free but some are out with others (a lost renderer's tiles come back),
+// and before the render phase. A lost renderer's tiles go back in line.
+#include <memory>
+#include <utility>
+#include <vector>
+
+#include "actors/director/progress.hpp"
+#include "actors/director/render_master.hpp"
+#include "actors/director/service.hpp"
+#include "core/specs.hpp"
+
+namespace lf {
+
+class TileService final : public Service {
+ public:
+  // `renderers`: the actors that ask for tiles (a loss of any other actor is not this service's concern).
+  TileService(const ImageSpec& image, std::vector<std::string> renderers, bool terminal, bool quiet);
+  std::vector<wire::Op> ops() const override { return {wire::Op::tile, wire::Op::tile_done}; }
+  Status on_request(const std::string& actor, wire::Op op, uint64_t id, const Value& body, Outbox& out) override;
+  Status on_phase(wire::Phase phase, Outbox& out) override;
+  Status on_lost(const std::string& actor, const std::string& why, Outbox& out) override;
+
+  bool finished() const { return master_.finished(); }
+  const Image& film() const { return master_.film(); }
+  size_t tiles_done() const { return master_.done(); }
+  size_t tiles_total() const { return master_.total(); }
+  // Seconds from the render phase's start to the first finished tile, and to now.
+  double first_tile_seconds() const { return first_tile_seconds_; }
+  double render_seconds() const;
+  // Final progress line; the bar's end.
+  void finish_progress();
+  bool drawing_progress() const { return progress_.drawing(); }
+
+ private:
+  void serve_waiting(Outbox& out);
+
+  ImageSpec image_;
+  std::vector<std::string> renderers_;
+  RenderMaster master_;
+  Progress progress_;
+  bool rendering_ = false;
+  std::chrono::steady_clock::time_point render_start_;
+  double first_tile_seconds_ = 0;
+  std::vector<std::pair<std::string, uint64_t>> waiting_;  // tile requests not yet answered, oldest first
+};
+
+}  // namespace lf

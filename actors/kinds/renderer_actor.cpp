@@ -1,0 +1,159 @@
+// renderer: traces camera rays for tiles the render master hands out and asks the lighting network to shade them.
+//
+// Sends to the director (the render master):
+//   REQUEST op="tile"       {}                        -> REPLY { tile: {id, x0, y0, x1, y1} } or {} when none remain
+//   REQUEST op="tile_done"  { id, pixels: f32[3wh] }  -> REPLY {}
+// Sends to its one input (the MasterLightOp): REQUEST op="shade" batches, several in flight (the input's window).
+// Ready for "render" once configured (scene loaded, BVH built); answers READY render when the master has no tiles
+// left and every finished tile was acknowledged. Keeps up to `tiles_in_flight` tiles going, so it traces the next
+// tile while the lighting network shades the last.
+#include "actors/kinds/renderer_actor.hpp"
+
+#include <deque>
+
+#include "actors/codecs/shade_codec.hpp"
+#include "farm/kind_params.hpp"
+#include "core/log.hpp"
+#include "render/camera.hpp"
+#include "render/tile_kernel.hpp"
+
+namespace lf {
+namespace {
+
+class RendererActor final : public Actor {
+ public:
+  Status configure(const ActorConfig& config, Runtime& rt) override {
+    try {
+      ParamTable p(config.params, "renderer '" + rt.name() + "'");
+      params_ = RendererParams::read(p);  // window is applied by the runtime to the input connection
+      p.report_unused();
+    } catch (const ParamError& e) {
+      return make_error(e.what());
+    }
+    if (rt.input_count() != 1) return make_error("a renderer needs exactly one input (its lighting)");
+    auto loaded = Scene::load(config.scene);
+    if (!loaded) return loaded.error();
+    scene_ = std::make_unique<Scene>(std::move(*loaded));
+    tracer_ = std::make_unique<RayTracer>(*scene_);
+    image_ = config.image;
+    camera_ = std::make_unique<Camera>(config.camera, image_.width, image_.height);
+    return Ok{};
+  }
+
+  void on_phase(wire::Phase phase, Runtime& rt) override {
+    if (phase == wire::Phase::setup) {
+      rt.phase_done(wire::Phase::setup);
+    } else if (phase == wire::Phase::render) {
+      rendering_ = true;
+      ask_for_tiles(rt);
+    }
+  }
+
+  void on_request(const std::string& peer, wire::Op, wire::Message& m, Runtime& rt) override {
+    rt.reply_unknown_op(peer, m, "a renderer serves no requests");
+  }
+
+ private:
+  struct TileJob {
+    uint64_t id = 0;
+    TileWork work;
+    std::vector<RGB> radiance;
+    size_t batches_left = 0;
+  };
+
+  void ask_for_tiles(Runtime& rt) {
+    while (rendering_ && !no_more_tiles_ &&
+           jobs_.size() + tile_requests_out_ < static_cast<size_t>(params_.tiles_in_flight)) {
+      ++tile_requests_out_;
+      rt.ask_director(wire::Op::tile, Value::Map{}, [this, &rt](Result<wire::Message> r) {
+        --tile_requests_out_;
+        if (!r) return rt.fail("the render master refused a tile request: " + r.error().message);
+        const Value* tile = r->body.find("tile");
+        if (!tile) {
+          no_more_tiles_ = true;
+          check_finished(rt);
+          return;
+        }
+        start_tile(*tile, rt);
+        ask_for_tiles(rt);
+      });
+    }
+  }
+
+  void start_tile(const Value& tile, Runtime& rt) {
+    auto get = [&](const char* k) {
+      const Value* v = tile.find(k);
+      return v && v->is_int() && v->as_int() >= 0 && v->as_int() <= INT32_MAX ? static_cast<int>(v->as_int()) : -1;
+    };
+    TileRect rect{get("x0"), get("y0"), get("x1"), get("y1")};
+    if (get("id") < 0 || rect.x0 < 0 || rect.y0 < 0 || rect.x1 > image_.width || rect.y1 > image_.height || rect.width() <= 0 ||
+        rect.height() <= 0)
+      return rt.fail("the render master sent a tile outside the image");
+    auto job = std::make_shared<TileJob>();
+    job->id = static_cast<uint64_t>(get("id"));
+    trace_tile(*scene_, *tracer_, *camera_, image_, rect, job->work);
+    rt.stats().points += job->work.points.size();
+    job->radiance.assign(job->work.points.size(), RGB{});
+    jobs_.push_back(job);
+    const size_t n = job->work.points.size();
+    if (n == 0) return finish_tile(job, rt);
+    const size_t batch = static_cast<size_t>(params_.batch);
+    for (size_t begin = 0; begin < n; begin += batch) {
+      const size_t end = std::min(begin + batch, n);
+      ++job->batches_left;
+      ++rt.stats().requests;
+      rt.input(0).request(wire::Op::shade, encode_shade_request(job->work.points, begin, end),
+                          [this, job, begin, end, &rt](Result<wire::Message> r) {
+                            if (!r) return rt.fail("lighting failed: " + r.error().message);
+                            auto radiance = decode_radiance(r->body, end - begin);
+                            if (!radiance)
+                              return rt.fail("lighting '" + rt.input_name(0) + "': " + radiance.error().message);
+                            std::copy(radiance->begin(), radiance->end(),
+                                      job->radiance.begin() + static_cast<ptrdiff_t>(begin));
+                            if (--job->batches_left == 0) finish_tile(job, rt);
+                          });
+    }
+  }
+
+  void finish_tile(const std::shared_ptr<TileJob>& job, Runtime& rt) {
+    std::vector<RGB> pixels;
+    resolve_tile(job->work, job->radiance, pixels);
+    ++rt.stats().tiles;
+    ++done_acks_out_;
+    std::erase(jobs_, job);
+    rt.ask_director(wire::Op::tile_done,
+                    Value::Map{{"id", job->id},
+                               {"pixels", floats_to_bytes(std::span<const float>(
+                                              reinterpret_cast<const float*>(pixels.data()), 3 * pixels.size()))}},
+                    [this, &rt](Result<wire::Message> r) {
+                      --done_acks_out_;
+                      if (!r) log_warn("the render master did not take a tile: " + r.error().message);
+                      check_finished(rt);
+                    });
+    ask_for_tiles(rt);
+  }
+
+  void check_finished(Runtime& rt) {
+    if (rendering_ && no_more_tiles_ && jobs_.empty() && done_acks_out_ == 0 && tile_requests_out_ == 0) {
+      rendering_ = false;
+      rt.phase_done(wire::Phase::render);
+    }
+  }
+
+  std::unique_ptr<Scene> scene_;
+  std::unique_ptr<RayTracer> tracer_;
+  std::unique_ptr<Camera> camera_;
+  ImageSpec image_;
+  RendererParams params_;
+  bool rendering_ = false;
+  bool no_more_tiles_ = false;
+  size_t tile_requests_out_ = 0;
+  size_t done_acks_out_ = 0;
+  std::vector<std::shared_ptr<TileJob>> jobs_;
+};
+
+}  // namespace
+
+std::unique_ptr<Actor> make_renderer_actor() { return std::make_unique<RendererActor>(); }
+
+}  // namespace lf

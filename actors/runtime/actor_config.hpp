@@ -1,0 +1,45 @@
+#pragma once
+// CONFIG's body (docs/PROTOCOL.md), typed: the director builds an ActorConfig and sends to_value(); the runtime
+// decodes it once with from_value(), which checks every field, and hands the actor this struct. Actors read their
+// algorithm parameters from `params` with their own ParamTable definitions.
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "core/result.hpp"
+#include "core/specs.hpp"
+#include "core/value.hpp"
+
+namespace lf {
+
+struct InputSpec {
+  std::string name;      // the input actor's name
+  std::string endpoint;  // its data socket
+  int64_t window = 4;    // requests this actor keeps in flight to it
+};
+
+// A replica's place in its pool: all_gather answers in replica order.
+struct PoolPlace {
+  std::string name;  // the pool (its multiplexer's name)
+  int64_t index = 0;
+  int64_t count = 1;
+};
+
+struct ActorConfig {
+  Value::Map params;  // the actor's parameters from the script
+  SceneSpec scene;
+  CameraSpec camera;
+  ImageSpec image;
+  std::vector<InputSpec> inputs;  // in script order
+  Value::Map runtime;             // how it was started: {cmd, cwd} for lightop.exec actors; informational
+  Value::Map debug;               // test knobs: {slowdown = factor} (actors/kinds/slowdown.hpp)
+  std::optional<PoolPlace> pool;  // set for a pool's replica
+  double heartbeat_timeout = 10.0;
+  double request_timeout = 120.0;
+
+  Value to_value() const;
+  // Every field checked; an error names the field.
+  static Result<ActorConfig> from_value(const Value& body);
+};
+
+}  // namespace lf

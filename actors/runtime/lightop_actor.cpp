@@ -1,0 +1,230 @@
+// The LightOp wrapper (the wrapper pattern of Kipfer & Slusallek): turns a plain LightOp class into an actor.
+//
+// Accepts on the data socket:
+//   REQUEST op="shade" { n, p, nrm, wo, m, k }  ->  REPLY { n, L }   (header q = requests waiting here)
+//   anything else / malformed                  ->  ERROR { code, message }; the actor carries on
+// Control: CONFIG builds the op from its parameters and loads the scene; PHASE setup runs op.setup() and answers
+// READY setup when it finishes; PHASE render is answered READY render at once; PHASE finish / BYE stop it.
+// Requests that arrive before setup finished wait.
+// Requests queue in arrival order and start one per loop turn, so heartbeats and replies keep flowing. A request
+// whose op asks its inputs suspends (a coroutine) while the runtime sends those batches asynchronously; other
+// requests run meanwhile. The LightOp class sees none of this.
+#include "actors/runtime/lightop_actor.hpp"
+
+#include <chrono>
+#include <deque>
+
+#include "actors/codecs/shade_codec.hpp"
+#include "core/log.hpp"
+#include "render/lightop_registry.hpp"
+
+namespace lf {
+namespace {
+
+// Predecessors reached over the wire: each query becomes one or more batched, asynchronous requests.
+class RemoteInputs final : public Inputs {
+ public:
+  RemoteInputs(Runtime& rt, size_t batch) : rt_(rt), batch_(batch) {}
+  size_t count() const override { return rt_.input_count(); }
+
+  Gather gather(std::vector<InputQuery> queries) override {
+    auto state = std::make_shared<GatherState>();
+    for (const auto& q : queries) {
+      if (q.input >= rt_.input_count()) {
+        state->error = "input " + std::to_string(q.input) + " does not exist";
+        continue;
+      }
+      q.radiance->assign(q.points->size(), RGB{});
+      for (size_t begin = 0; begin < q.points->size(); begin += batch_) {
+        const size_t end = std::min(begin + batch_, q.points->size());
+        ++state->remaining;
+        auto* out = q.radiance;
+        const std::string input_name = rt_.input_name(q.input);
+        rt_.input(q.input).request(
+            wire::Op::shade, encode_shade_request(*q.points, begin, end),
+            [state, out, begin, end, input_name](Result<wire::Message> r) {
+              if (!r) return state->complete_one(r.error().message);
+              auto radiance = decode_radiance(r->body, end - begin);
+              if (!radiance) return state->complete_one(input_name + ": " + radiance.error().message);
+              std::copy(radiance->begin(), radiance->end(), out->begin() + static_cast<ptrdiff_t>(begin));
+              state->complete_one();
+            });
+      }
+    }
+    return Gather(state);
+  }
+
+ private:
+  Runtime& rt_;
+  size_t batch_;
+};
+
+// All-gather among the replicas of a pool, through the director (which knows the pool).
+class DirectorExchange final : public Exchange {
+ public:
+  explicit DirectorExchange(Runtime& rt) : rt_(rt) {}
+  Gather all_gather(std::string part, std::vector<std::string>* parts) override {
+    auto state = std::make_shared<GatherState>();
+    state->remaining = 1;
+    rt_.ask_director(wire::Op::all_gather, Value::Map{{"part", Bytes{std::move(part)}}}, [state, parts](Result<wire::Message> r) {
+      if (!r) return state->complete_one("all_gather: " + r.error().message);
+      const Value* all = r->body.find("parts");
+      if (!all || !all->is_array()) return state->complete_one("all_gather: the director sent no parts");
+      parts->clear();
+      for (const auto& p : all->as_array()) {
+        if (!p.is_bytes()) return state->complete_one("all_gather: a part is not bytes");
+        parts->push_back(p.as_bytes().data);
+      }
+      state->complete_one();
+    });
+    return Gather(state);
+  }
+
+  Gather fetch(const std::string& key, std::string* blob) override {
+    auto state = std::make_shared<GatherState>();
+    state->remaining = 1;
+    rt_.ask_director(wire::Op::fetch, Value::Map{{"key", key}}, [state, blob, key](Result<wire::Message> r) {
+      if (!r) return state->complete_one("fetch '" + key + "': " + r.error().message);
+      const Value* b = r->body.find("blob");
+      if (!b || !b->is_bytes()) return state->complete_one("fetch '" + key + "': the director sent no blob");
+      *blob = b->as_bytes().data;
+      state->complete_one();
+    });
+    return Gather(state);
+  }
+
+ private:
+  Runtime& rt_;
+};
+
+class LightOpActor final : public Actor {
+ public:
+  explicit LightOpActor(const LightOpKind& kind) : kind_(kind) {}
+
+  Status configure(const ActorConfig& config, Runtime& rt) override {
+    try {
+      op_ = create_lightop(kind_, ParamTable(config.params, "lightop '" + rt.name() + "'"));
+    } catch (const ParamError& e) {
+      return make_error(e.what());
+    }
+    auto loaded = Scene::load(config.scene);
+    if (!loaded) return loaded.error();
+    scene_ = std::make_unique<Scene>(std::move(*loaded));
+    tracer_ = std::make_unique<RayTracer>(*scene_);
+    inputs_ = std::make_unique<RemoteInputs>(rt, 4096);
+    if (config.pool) {
+      replica_index_ = static_cast<int>(config.pool->index);
+      replica_count_ = static_cast<int>(config.pool->count);
+    }
+    exchange_ = std::make_unique<DirectorExchange>(rt);  // a lone op's all_gather comes straight back from it
+    return Ok{};
+  }
+
+  void on_phase(wire::Phase phase, Runtime& rt) override {
+    if (phase == wire::Phase::setup) {
+      setup_ = op_->setup(SceneContext{scene_.get(), tracer_.get(), replica_index_, replica_count_, exchange_.get()},
+                          *inputs_);
+      setup_running_ = true;
+      on_progress(rt);
+    } else if (phase == wire::Phase::render) {
+      rt.phase_done(wire::Phase::render);  // a LightOp renders by answering requests
+    }
+  }
+
+  void on_request(const std::string& peer, wire::Op op, wire::Message& m, Runtime& rt) override {
+    if (op != wire::Op::shade) return rt.reply_unknown_op(peer, m, "this actor serves 'shade'");
+    if (!op_) {
+      rt.reply_error(peer, m.header.id, ErrorCode::not_ready, "'" + rt.name() + "' is not configured yet");
+      return;
+    }
+    // Requests that arrive before this op's setup finished (another op's setup may ask it, e.g. an irradiance
+    // pre-pass) wait in the queue until it has.
+    auto points = decode_shade_request(m.body, scene_->materials().size(), scene_->triangle_count());
+    if (!points) {
+      rt.reply_error(peer, m.header.id, ErrorCode::bad_request, points.error().message);
+      return;
+    }
+    auto job = std::make_unique<Job>();
+    job->peer = peer;
+    job->id = m.header.id;
+    job->points = std::move(*points);
+    waiting_.push_back(std::move(job));
+  }
+
+  void on_progress(Runtime& rt) override {
+    if (setup_running_ && setup_.done()) {
+      setup_running_ = false;
+      try {
+        setup_.rethrow_if_failed();
+      } catch (const std::exception& e) {
+        rt.fail("setup failed: " + std::string(e.what()));
+        return;
+      }
+      set_up_ = true;
+      rt.phase_done(wire::Phase::setup);
+    }
+    if (!set_up_) return;
+    // Start one waiting request per turn; the loop polls sockets between requests.
+    if (!waiting_.empty() && running_.size() < kMaxRunning) {
+      auto job = std::move(waiting_.front());
+      waiting_.pop_front();
+      job->radiance.assign(job->points.size(), RGB{});
+      job->task = op_->shade(job->points, job->radiance, *inputs_);
+      running_.push_back(std::move(job));
+    }
+    for (size_t i = 0; i < running_.size();) {
+      Job& job = *running_[i];
+      if (!job.task.done()) {
+        ++i;
+        continue;
+      }
+      try {
+        job.task.rethrow_if_failed();
+        rt.stats().requests += 1;
+        rt.stats().points += job.points.size();
+        rt.reply(job.peer, job.id, encode_radiance(job.radiance));
+      } catch (const std::exception& e) {
+        rt.reply_error(job.peer, job.id, ErrorCode::shade_failed, e.what());
+      }
+      running_.erase(running_.begin() + static_cast<ptrdiff_t>(i));
+    }
+  }
+
+  size_t queue_length() const override { return waiting_.size(); }
+  bool has_local_work() const override { return set_up_ && !waiting_.empty(); }
+
+ private:
+  struct Job {
+    std::string peer;
+    uint64_t id = 0;
+    ShadingPoints points;
+    std::vector<RGB> radiance;
+    Task task;
+  };
+  static constexpr size_t kMaxRunning = 16;
+
+  const LightOpKind& kind_;
+  std::unique_ptr<LightOp> op_;
+  std::unique_ptr<Scene> scene_;
+  std::unique_ptr<RayTracer> tracer_;
+  std::unique_ptr<RemoteInputs> inputs_;
+  std::unique_ptr<Exchange> exchange_;
+  int replica_index_ = 0, replica_count_ = 1;
+  Task setup_;
+  bool setup_running_ = false;
+  bool set_up_ = false;  // setup finished: requests may start
+  std::deque<std::unique_ptr<Job>> waiting_;
+  std::vector<std::unique_ptr<Job>> running_;
+};
+
+}  // namespace
+
+std::unique_ptr<Actor> make_lightop_actor(const std::string& kind) {
+  const LightOpKind* k = find_lightop_kind(kind);
+  if (!k) return nullptr;
+  return std::make_unique<LightOpActor>(*k);
+}
+
+std::unique_ptr<Actor> make_lightop_actor(const LightOpKind& kind) { return std::make_unique<LightOpActor>(kind); }
+
+}  // namespace lf

@@ -1,0 +1,282 @@
+#include "actors/runtime/runtime.hpp"
+
+#include <unistd.h>
+
+#include <csignal>
+
+#include "actors/runtime/hello.hpp"
+#include "core/log.hpp"
+
+namespace lf {
+
+using wire::MsgType;
+using Clock = std::chrono::steady_clock;
+
+namespace {
+volatile std::sig_atomic_t g_stop_signal = 0;
+void on_signal(int sig) { g_stop_signal = sig; }
+}  // namespace
+
+void install_stop_signals() {
+  struct sigaction sa {};
+  sa.sa_handler = on_signal;
+  sigemptyset(&sa.sa_mask);
+  sa.sa_flags = 0;  // no SA_RESTART: a blocking poll returns EINTR and the loop sees the flag
+  sigaction(SIGINT, &sa, nullptr);
+  sigaction(SIGTERM, &sa, nullptr);
+  sigaction(SIGHUP, &sa, nullptr);
+  std::signal(SIGPIPE, SIG_IGN);
+}
+
+bool stop_requested() { return g_stop_signal != 0; }
+int stop_signal() { return g_stop_signal; }
+
+Value ActorStats::to_value(const wire::SocketCounters& t) const {
+  return Value::Map{{"requests", requests},
+                    {"points", points},
+                    {"tiles", tiles},
+                    {"busy_seconds", busy_seconds},
+                    {"peak_queue", uint64_t{peak_queue}},
+                    {"bytes_in", t.bytes_in},
+                    {"bytes_out", t.bytes_out},
+                    {"messages_in", t.messages_in},
+                    {"messages_out", t.messages_out}};
+}
+
+void Actor::on_peer_down(const std::string& name, Runtime& rt) {
+  rt.fail("input '" + name + "' was lost and this actor has no other");
+}
+
+Runtime::Runtime(ActorArgs args)
+    : args_(std::move(args)), control_(wire::Socket::Kind::dealer, args_.name), data_(wire::Socket::Kind::router) {
+  // Let BYE and the last STATS leave before the socket closes.
+  control_.set_linger_ms(2000);
+}
+
+Runtime::~Runtime() = default;
+
+void Runtime::add_busy(Clock::time_point since) {
+  stats_.busy_seconds += std::chrono::duration<double>(Clock::now() - since).count();
+}
+
+void Runtime::send_control(wire::Message m) {
+  m.header.sender = args_.name;
+  control_.send(m);
+}
+
+void Runtime::reply(const std::string& peer, uint64_t id, Value body) {
+  data_.send_to(peer, wire::make_reply(args_.name, id, std::move(body),
+                                       actor_ ? static_cast<uint32_t>(actor_->queue_length()) : 0));
+}
+
+void Runtime::reply_error(const std::string& peer, uint64_t id, ErrorCode code, const std::string& message) {
+  data_.send_to(peer, wire::make_error_reply(args_.name, id, code, message));
+}
+
+void Runtime::reply_unknown_op(const std::string& peer, const wire::Message& request, const std::string& served) {
+  reply_error(peer, request.header.id, ErrorCode::unknown_op,
+              "unknown operation '" + request.header.op + "' (" + served + ")");
+}
+
+void Runtime::ask_director(wire::Op op, Value body, DirectorCallback callback) {
+  uint64_t id = next_director_id_++;
+  director_pending_.emplace(id, std::move(callback));
+  send_control(wire::make_request(args_.name, op, std::move(body), id));
+}
+
+void Runtime::phase_done(wire::Phase phase) { send_control(wire::make_ready(args_.name, phase)); }
+
+void Runtime::fail(const std::string& message) {
+  log_error(message);
+  send_control(wire::make_error_reply(args_.name, 0, ErrorCode::actor_failed, message));
+  stopping_ = true;
+  exit_status_ = 1;
+}
+
+void Runtime::send_stats_and_bye() {
+  wire::SocketCounters total;
+  auto add = [&](const wire::SocketCounters& c) {
+    total.bytes_in += c.bytes_in;
+    total.bytes_out += c.bytes_out;
+    total.messages_in += c.messages_in;
+    total.messages_out += c.messages_out;
+  };
+  add(control_.counters());
+  add(data_.counters());
+  for (auto& c : inputs_) add(c->socket().counters());
+  Value stats = stats_.to_value(total);
+  if (actor_) {
+    Value detail = actor_->extra_stats();
+    if (!detail.is_nil()) stats.as_map()["detail"] = std::move(detail);
+  }
+  send_control(wire::make(MsgType::stats, args_.name, std::move(stats)));
+  send_control(wire::make(MsgType::bye, args_.name));
+}
+
+void Runtime::handle_control(wire::Message& m, Actor& actor) {
+  switch (m.header.type) {
+    case MsgType::config: {
+      if (configured_) return;
+      configured_ = true;
+      auto config = ActorConfig::from_value(m.body);
+      if (!config) return fail(config.error().message);
+      heartbeat_timeout_ = config->heartbeat_timeout;
+      // Connect to every input before the actor configures, so that it may ask them during setup.
+      for (const auto& in : config->inputs) {
+        auto client = std::make_unique<wire::RequestClient>(args_.name, in.name, static_cast<size_t>(in.window));
+        if (auto st = client->connect(in.endpoint); !st) return fail(st.error().message);
+        client->set_timeout(config->request_timeout);
+        inputs_.push_back(std::move(client));
+        input_names_.push_back(in.name);
+      }
+      inputs_changed_ = true;
+      auto started = Clock::now();
+      Status st = actor.configure(*config, *this);
+      add_busy(started);
+      if (!st) return fail(st.error().message);
+      phase_done(wire::Phase::configure);
+      return;
+    }
+    case MsgType::phase: {
+      const auto phase = wire::phase_of(m.header);
+      if (!phase || *phase == wire::Phase::configure) {
+        log_warn("ignored PHASE '" + m.header.op + "' from the director (not a phase this protocol has)");
+        return;
+      }
+      if (*phase == wire::Phase::finish) {
+        send_stats_and_bye();
+        stopping_ = true;
+        return;
+      }
+      auto started = Clock::now();
+      actor.on_phase(*phase, *this);
+      add_busy(started);
+      return;
+    }
+    case MsgType::reply:
+    case MsgType::error: {
+      auto it = director_pending_.find(m.header.id);
+      if (it == director_pending_.end()) return;
+      auto cb = std::move(it->second);
+      director_pending_.erase(it);
+      if (m.header.type == MsgType::error) {
+        cb(wire::error_of(m));
+      } else {
+        cb(std::move(m));
+      }
+      return;
+    }
+    case MsgType::bye:
+      send_stats_and_bye();
+      stopping_ = true;
+      return;
+    case MsgType::heartbeat: return;
+    case MsgType::peer_down: {
+      const Value* name = m.body.find("name");
+      if (name && name->is_string()) actor.on_peer_down(name->as_string(), *this);
+      return;
+    }
+    default: log_warn("ignored a " + std::string(wire::type_name(m.header.type)) + " from the director");
+  }
+}
+
+void Runtime::handle_data(Actor& actor) {
+  while (auto in = data_.receive()) {
+    if (!in->message) {
+      // Refuse, tell the sender if we can, and carry on: a bad packet must never take the actor down.
+      log_warn("dropped a bad message from '" + in->peer + "': " + in->message.error().message);
+      if (!in->peer.empty()) reply_error(in->peer, 0, ErrorCode::bad_message, in->message.error().message);
+      continue;
+    }
+    wire::Message& m = *in->message;
+    if (m.header.type != MsgType::request) {
+      reply_error(in->peer, m.header.id, ErrorCode::bad_message,
+                  "expected a REQUEST on the data socket, got " + std::string(wire::type_name(m.header.type)));
+      continue;
+    }
+    auto started = Clock::now();
+    actor.on_request(in->peer, wire::op_of(m.header), m, *this);
+    add_busy(started);
+    if (stopping_) return;
+  }
+}
+
+int Runtime::run(Actor& actor) {
+  actor_ = &actor;
+  set_log_name(args_.name);
+  auto endpoint = data_.bind(args_.bind);
+  if (!endpoint) {
+    log_error(endpoint.error().message);
+    return 2;
+  }
+  data_endpoint_ = *endpoint;
+  if (auto st = control_.connect(args_.director); !st) {
+    log_error(st.error().message);
+    return 2;
+  }
+  send_control(wire::make(MsgType::hello, args_.name, my_hello(args_.kind, data_endpoint_).to_value()));
+
+  auto last_from_director = Clock::now();
+  auto next_heartbeat = Clock::now() + std::chrono::seconds(1);
+  wire::Poller poller;
+  poller.add(control_);
+  poller.add(data_);
+  size_t polled_inputs = 0;
+
+  while (!stopping_) {
+    if (stop_requested()) {
+      log_debug("stopping on signal " + std::to_string(stop_signal()));
+      return 128 + stop_signal();
+    }
+    if (inputs_changed_) {
+      for (; polled_inputs < inputs_.size(); ++polled_inputs) poller.add(inputs_[polled_inputs]->socket());
+      inputs_changed_ = false;
+    }
+    // While the actor has work of its own, do not sleep in poll.
+    long timeout = actor.has_local_work() ? 0 : 100;
+    if (long due = actor.next_due_ms(); due >= 0) timeout = std::min(timeout, due);
+    const auto& ready = poller.wait(timeout);
+
+    if (ready[0]) {
+      while (auto in = control_.receive()) {
+        if (!in->message) {
+          log_warn("bad message from the director: " + in->message.error().message);
+          continue;
+        }
+        last_from_director = Clock::now();
+        handle_control(*in->message, actor);
+        if (stopping_) break;
+      }
+    }
+    if (stopping_) break;
+    if (ready[1]) handle_data(actor);
+    for (size_t i = 0; i < polled_inputs && !stopping_; ++i) {
+      auto started = Clock::now();
+      if (ready[2 + i]) inputs_[i]->on_readable();
+      inputs_[i]->expire_overdue();
+      add_busy(started);
+    }
+    if (!stopping_) {
+      auto started = Clock::now();
+      actor.on_progress(*this);
+      add_busy(started);
+    }
+    stats_.peak_queue = std::max<uint32_t>(stats_.peak_queue, static_cast<uint32_t>(actor.queue_length()));
+
+    const auto now = Clock::now();
+    if (now >= next_heartbeat) {
+      send_control(wire::make(MsgType::heartbeat, args_.name));
+      // Four beats per timeout (at most one a second), so one late beat is never taken for a death.
+      next_heartbeat = now + std::chrono::duration_cast<Clock::duration>(
+                                 std::chrono::duration<double>(std::min(1.0, heartbeat_timeout_ / 4)));
+    }
+    if (std::chrono::duration<double>(now - last_from_director).count() > heartbeat_timeout_) {
+      log_error("the director has been silent for " + std::to_string(static_cast<int>(heartbeat_timeout_)) +
+                " s; stopping");
+      return 3;
+    }
+  }
+  return exit_status_;
+}
+
+}  // namespace lf

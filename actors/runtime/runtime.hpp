@@ -1,0 +1,129 @@
+#pragma once
+// The actor runtime: one process, one poll loop. It owns the control channel to the director (HELLO, CONFIG,
+// PHASE, HEARTBEAT, STATS, BYE), the data socket where peers send requests, and one RequestClient per input.
+// Actor logic (renderer, LightOp wrapper) is an Actor: handlers the runtime calls; it never touches sockets.
+//
+// Life of an actor process:
+//   start -> bind data socket -> HELLO -> CONFIG (decoded into ActorConfig, inputs connected) -> configure()
+//         -> READY configure
+//         -> PHASE setup -> on_phase("setup") ... phase_done("setup") -> READY setup
+//         -> PHASE render -> on_phase("render") ...
+//         -> PHASE finish (or BYE) -> STATS -> BYE -> exit 0
+// It exits non-zero after fail(), and on its own when the director is silent for longer than the heartbeat
+// timeout or SIGINT/SIGTERM arrives: an actor never outlives its farm.
+#include <chrono>
+#include <functional>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "actors/runtime/actor_config.hpp"
+#include "core/value.hpp"
+#include "transport/client.hpp"
+#include "transport/socket.hpp"
+
+namespace lf {
+
+struct ActorArgs {
+  std::string kind;
+  std::string name;
+  std::string director;               // control endpoint, e.g. tcp://127.0.0.1:5555
+  std::string bind = "tcp://127.0.0.1:*";  // where the data socket listens
+};
+
+struct ActorStats {
+  uint64_t requests = 0;      // requests served (LightOps) or sent (renderers)
+  uint64_t points = 0;        // shading points shaded (LightOps) or traced (renderers)
+  uint64_t tiles = 0;         // renderers only
+  double busy_seconds = 0;    // time inside handlers
+  uint32_t peak_queue = 0;    // longest request queue seen
+  Value to_value(const wire::SocketCounters& totals) const;
+};
+
+class Runtime;
+
+class Actor {
+ public:
+  virtual ~Actor() = default;
+  // CONFIG arrived, decoded and checked; the inputs are connected. Load what is needed; an error stops the actor
+  // and is reported to the director.
+  virtual Status configure(const ActorConfig& config, Runtime& rt) = 0;
+  // PHASE setup or render arrived. Call rt.phase_done(phase) when the phase's work is finished: every actor
+  // answers both (a LightOp answers render at once; it renders by answering requests).
+  virtual void on_phase(wire::Phase phase, Runtime& rt) = 0;
+  // A REQUEST on the data socket (`op` is Op::unknown for a name not in the protocol; the raw name is in the
+  // header). Answer now or later with rt.reply / rt.reply_error.
+  virtual void on_request(const std::string& peer, wire::Op op, wire::Message& request, Runtime& rt) = 0;
+  // After any input's replies were dispatched, and after each request: a chance to make progress.
+  virtual void on_progress(Runtime&) {}
+  // Requests waiting to be served (piggybacked on replies for load balancing).
+  virtual size_t queue_length() const { return 0; }
+  // True while the actor has work it can do right now (the loop then polls without sleeping).
+  virtual bool has_local_work() const { return queue_length() > 0; }
+  // PEER_DOWN: input `name` is gone. By default that ends this actor; a multiplexer re-routes instead.
+  virtual void on_peer_down(const std::string& name, Runtime& rt);
+  // How long the loop may sleep before this actor has something due (ms); -1: nothing due.
+  virtual long next_due_ms() const { return -1; }
+  // Added to STATS under "detail" (e.g. a multiplexer's per-replica counts).
+  virtual Value extra_stats() const { return Value(); }
+};
+
+class Runtime {
+ public:
+  explicit Runtime(ActorArgs args);
+  ~Runtime();
+  // Runs until the farm ends; returns the process exit status.
+  int run(Actor& actor);
+
+  const std::string& name() const { return args_.name; }
+  const std::string& kind() const { return args_.kind; }
+
+  void reply(const std::string& peer, uint64_t id, Value body);
+  void reply_error(const std::string& peer, uint64_t id, ErrorCode code, const std::string& message);
+  // The standard answer to an operation this actor does not serve.
+  void reply_unknown_op(const std::string& peer, const wire::Message& request, const std::string& served);
+
+  size_t input_count() const { return inputs_.size(); }
+  wire::RequestClient& input(size_t i) { return *inputs_[i]; }
+  const std::string& input_name(size_t i) const { return input_names_[i]; }
+
+  using DirectorCallback = std::function<void(Result<wire::Message>)>;
+  // A request to the director (tiles, results), answered by a REPLY on the control channel.
+  void ask_director(wire::Op op, Value body, DirectorCallback callback);
+  void phase_done(wire::Phase phase);
+  // Reports the failure to the director and stops the actor with a non-zero status.
+  void fail(const std::string& message);
+
+  ActorStats& stats() { return stats_; }
+  // Adds the time since `since` to busy time.
+  void add_busy(std::chrono::steady_clock::time_point since);
+
+ private:
+  void handle_control(wire::Message& m, Actor& actor);
+  void handle_data(Actor& actor);
+  void send_control(wire::Message m);
+  void send_stats_and_bye();
+
+  ActorArgs args_;
+  Actor* actor_ = nullptr;
+  wire::Socket control_;
+  wire::Socket data_;
+  std::string data_endpoint_;
+  std::vector<std::unique_ptr<wire::RequestClient>> inputs_;
+  std::vector<std::string> input_names_;
+  std::map<uint64_t, DirectorCallback> director_pending_;
+  uint64_t next_director_id_ = 1;
+  ActorStats stats_;
+  double heartbeat_timeout_ = 30.0;
+  bool configured_ = false;
+  bool stopping_ = false;
+  int exit_status_ = 0;
+  bool inputs_changed_ = false;
+};
+
+// Installs SIGINT/SIGTERM handlers that make poll loops stop; returns true once a signal has arrived.
+void install_stop_signals();
+bool stop_requested();
+int stop_signal();
+
+}  // namespace lf

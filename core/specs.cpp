@@ -1,0 +1,62 @@
+#include "core/specs.hpp"
+
+namespace lf {
+
+static Value vec3(const std::array<double, 3>& a) { return Value::Array{a[0], a[1], a[2]}; }
+
+static std::array<double, 3> vec3_of(const Value* v, std::array<double, 3> fallback) {
+  if (!v || !v->is_array() || v->as_array().size() != 3) return fallback;
+  const auto& a = v->as_array();
+  for (const auto& e : a)
+    if (!e.is_number()) return fallback;
+  return {a[0].as_double(), a[1].as_double(), a[2].as_double()};
+}
+
+static double num(const Value& v, const char* key, double fallback) {
+  const Value* e = v.find(key);
+  return e && e->is_number() ? e->as_double() : fallback;
+}
+
+static std::string str(const Value& v, const char* key) {
+  const Value* e = v.find(key);
+  return e && e->is_string() ? e->as_string() : std::string();
+}
+
+Value SceneSpec::to_value() const { return Value::Map{{"builtin", builtin}, {"file", file}, {"lights", lights}}; }
+
+SceneSpec SceneSpec::from_value(const Value& v) {
+  SceneSpec s;
+  s.builtin = str(v, "builtin");
+  s.file = str(v, "file");
+  if (const Value* l = v.find("lights"); l && l->is_array()) s.lights = l->as_array();
+  return s;
+}
+
+Value CameraSpec::to_value() const {
+  return Value::Map{{"eye", vec3(eye)}, {"at", vec3(at)}, {"up", vec3(up)}, {"fov", fov}};
+}
+
+CameraSpec CameraSpec::from_value(const Value& v) {
+  CameraSpec c;
+  c.eye = vec3_of(v.find("eye"), c.eye);
+  c.at = vec3_of(v.find("at"), c.at);
+  c.up = vec3_of(v.find("up"), c.up);
+  c.fov = num(v, "fov", c.fov);
+  return c;
+}
+
+Value ImageSpec::to_value() const {
+  return Value::Map{{"width", width}, {"height", height}, {"spp", spp}, {"tile", tile}, {"output", output}};
+}
+
+ImageSpec ImageSpec::from_value(const Value& v) {
+  ImageSpec i;
+  i.width = static_cast<int>(num(v, "width", i.width));
+  i.height = static_cast<int>(num(v, "height", i.height));
+  i.spp = static_cast<int>(num(v, "spp", i.spp));
+  i.tile = static_cast<int>(num(v, "tile", i.tile));
+  i.output = str(v, "output");
+  return i;
+}
+
+}  // namespace lf

@@ -1,0 +1,48 @@
+#pragma once
+// What every actor needs to see the same picture: the scene, the camera, the image. The farm's graph and placement
+// (farm/farm_spec.hpp) build on these; CONFIG carries them to each actor.
+#include <array>
+#include <string>
+#include <vector>
+
+#include "core/value.hpp"
+
+namespace lf {
+
+// Where in the script something was declared, so that a later error can point at it.
+struct SourceLoc {
+  std::string file;
+  int line = 0;
+  std::string str() const { return line > 0 ? file + ":" + std::to_string(line) : file; }
+};
+
+struct SceneSpec {
+  std::string builtin;  // e.g. "cornell"; empty when file is set
+  std::string file;     // absolute path of an OBJ file
+  Value::Array lights;  // lights the script adds: {quad = {4 corners}, radiance} | {sphere, radius, radiance} |
+                        // {point, intensity}
+  SourceLoc loc;
+  Value to_value() const;
+  static SceneSpec from_value(const Value& v);
+};
+
+struct CameraSpec {
+  std::array<double, 3> eye{278, 273, -800};
+  std::array<double, 3> at{278, 273, 0};
+  std::array<double, 3> up{0, 1, 0};
+  double fov = 39.3;  // vertical, degrees
+  Value to_value() const;
+  static CameraSpec from_value(const Value& v);
+};
+
+struct ImageSpec {
+  int width = 256;
+  int height = 256;
+  int spp = 4;
+  int tile = 32;
+  std::string output = "out.png";
+  Value to_value() const;
+  static ImageSpec from_value(const Value& v);
+};
+
+}  // namespace lf

@@ -1,0 +1,54 @@
+#pragma once
+// Builders of a FarmSpec: plain functions over the graph, so that what a script means can be tested without Lua.
+// The Lua binding (lua/script.cpp) only reads arguments and calls these; each returns an error message without a
+// location, which the binding raises at the script line.
+#include <string>
+#include <vector>
+
+#include "core/result.hpp"
+#include "farm/farm_spec.hpp"
+#include "farm/kind_params.hpp"
+#include "radiosity/config.hpp"
+
+namespace lf {
+
+// `wanted`, or wanted-2, wanted-3, ... : the first name no actor has.
+std::string unique_name(const FarmSpec& spec, const std::string& wanted);
+// True when actor `i` is the renderers' lighting or some actor's input.
+bool is_wired(const FarmSpec& spec, int i);
+
+// A pool: actor `op` (with, for a nested multiplexer, its replicas) becomes replica 0 and `replicas` - 1 copies are
+// added; the replicas are renamed NAME.0, NAME.1, ... (inner replicas NAME.1.0, ...), and a multiplexer named `name`
+// (usually the op's own: to the network the pool is that op) is added over them.
+struct PoolSpec {
+  int op = -1;
+  int replicas = 2;
+  std::string name;  // empty: the op's name
+  MultiplexerParams params;
+  std::string host = "local";
+  SourceLoc loc;
+  std::vector<double> slowdown;  // debug: one factor >= 1 per replica, or empty
+};
+// Returns the multiplexer's index.
+Result<int> replicate(FarmSpec& spec, const PoolSpec& pool);
+
+// `count` renderers renderer-0 .. renderer-(count-1), all asking actor `lighting`.
+void add_renderers(FarmSpec& spec, int count, int lighting, const RendererParams& params, const std::string& host,
+                   const SourceLoc& loc);
+
+// A radiosity ring: rings x ring_length `radiosity_node` actors NAME.RING.POSITION, each with every other node as an
+// input and `params` plus its own `node` number, then the `radiosity` LightOp named NAME that shades with their
+// solution. Returns the LightOp's index.
+Result<int> expand_ring(FarmSpec& spec, const radiosity::RingConfig& config, const Value::Map& params,
+                        const std::string& name, const std::string& host, const SourceLoc& loc);
+
+// The checks a finished graph must pass: renderers and their lighting exist, names are unique, inputs are in
+// range and form no cycle, every host is declared, and every LightOp is reachable from the renderers' lighting
+// (a dangling one would run for nothing). Errors name the actor's script line.
+Status validate(const FarmSpec& spec);
+
+// The actor graph as Graphviz DOT: one node per actor (renderers folded into one), edges in the direction light
+// flows, one cluster per host; a radiosity ring drawn as rings.
+std::string to_dot(const FarmSpec& spec);
+
+}  // namespace lf

@@ -1,0 +1,32 @@
+#include "farm/farm_spec.hpp"
+
+namespace lf {
+
+int FarmSpec::pool_of(int i) const {
+  for (size_t m = 0; m < actors.size(); ++m)
+    if (actors[m].is_multiplexer())
+      for (int in : actors[m].inputs)
+        if (in == i) return static_cast<int>(m);
+  return -1;
+}
+
+int FarmSpec::renderer_count() const {
+  int n = 0;
+  for (const auto& a : actors) n += a.is_renderer();
+  return n;
+}
+
+int FarmSpec::find(const std::string& name) const {
+  for (size_t i = 0; i < actors.size(); ++i)
+    if (actors[i].name == name) return static_cast<int>(i);
+  return -1;
+}
+
+const HostSpec* FarmSpec::host_of(const ActorSpec& actor) const {
+  static const HostSpec kLocal;
+  for (const auto& h : hosts)
+    if (h.name == actor.host) return &h;
+  return actor.host == kLocal.name ? &kLocal : nullptr;
+}
+
+}  // namespace lf

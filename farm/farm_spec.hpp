@@ -1,0 +1,61 @@
+#pragma once
+// FarmSpec: what a farm script describes once evaluated — scene, camera, image, the actor graph, placement. The
+// Lua binding builds it with the builders in farm/builders.hpp; the director launches and drives it; each actor
+// receives its part as CONFIG.
+#include <string>
+#include <vector>
+
+#include "core/specs.hpp"
+#include "core/value.hpp"
+
+namespace lf {
+
+struct HostSpec {
+  std::string name = "local";
+  std::string launcher = "local";  // which Launcher starts this host's actors (actors/director/launcher.hpp)
+  std::string address = "127.0.0.1";
+  SourceLoc loc;
+};
+
+// Actor kinds the farm itself provides; every other kind is a LightOp (render/lightop_registry.hpp) or "exec".
+inline constexpr const char* kRendererKind = "renderer";
+inline constexpr const char* kMultiplexerKind = "multiplexer";
+inline constexpr const char* kRingNodeKind = "radiosity_node";
+inline constexpr const char* kExecKind = "exec";
+
+// One actor process. Renderers are expanded from `renderers { count = N }` into N specs.
+struct ActorSpec {
+  std::string name;       // unique in the farm, e.g. "direct" or "renderer-1"
+  std::string kind;       // "renderer", "multiplexer", "radiosity_node", "exec" or a LightOp kind such as "direct"
+  Value::Map params;      // the script's parameters, minus wiring keys
+  Value::Map runtime;     // how to run it, not the algorithm: {cmd, cwd} for exec actors
+  Value::Map debug;       // test knobs, never needed in production: {slowdown = factor} (see docs/lua-api.md)
+  std::vector<int> inputs;  // indices into FarmSpec::actors; a multiplexer's inputs are its replicas
+  std::string host = "local";
+  SourceLoc loc;
+  bool is_renderer() const { return kind == kRendererKind; }
+  bool is_multiplexer() const { return kind == kMultiplexerKind; }
+  bool is_ring_node() const { return kind == kRingNodeKind; }
+};
+
+struct FarmSpec {
+  std::string script;
+  SceneSpec scene;
+  CameraSpec camera;
+  ImageSpec image;
+  std::vector<HostSpec> hosts;
+  std::vector<ActorSpec> actors;
+  int lighting = -1;  // index of the MasterLightOp the renderers ask
+  double heartbeat_timeout = 10.0;  // seconds of silence before an actor counts as dead
+  double request_timeout = 120.0;   // seconds a shading request may wait for its answer
+
+  int renderer_count() const;
+  // Index of the multiplexer whose replica actor `i` is, or -1.
+  int pool_of(int i) const;
+  // Index of the actor named `name`, or -1.
+  int find(const std::string& name) const;
+  // The host an actor runs on ("local" unless declared); nullptr for an undeclared name.
+  const HostSpec* host_of(const ActorSpec& actor) const;
+};
+
+}  // namespace lf

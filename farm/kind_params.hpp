@@ -1,0 +1,39 @@
+#pragma once
+// The parameters of the actor kinds the farm provides, defined once: the Lua binding reads a script's table with
+// these (an error names the script line), the director sends the result in CONFIG, and the actor reads it back with
+// the same function into the same struct. LightOps define theirs in their own classes (render/lightop_registry.hpp)
+// and ring nodes in radiosity/config.hpp.
+#include <cstdint>
+#include <string>
+
+#include "core/params.hpp"
+#include "farm/farm_spec.hpp"
+
+namespace lf {
+
+// renderers { batch = 4096, window = 4, tiles_in_flight = 3, mode = "async" }
+struct RendererParams {
+  int64_t batch = 4096;         // shading points per request
+  int64_t window = 4;           // requests in flight to the lighting
+  int64_t tiles_in_flight = 3;  // tiles traced ahead while earlier ones are shaded
+  // Throws ParamError. mode = "sync" (one point per request, one request and one tile at a time: what packets buy)
+  // sets the other three to 1.
+  static RendererParams read(const ParamTable& p);
+  Value::Map to_map() const;
+};
+
+// multiplexer { strategy = "least_loaded", split = 0, window = 4, seed = 0 }
+struct MultiplexerParams {
+  std::string strategy = "least_loaded";  // round_robin | least_loaded | random
+  int64_t split = 0;                      // split requests larger than this across replicas (0: never)
+  int64_t window = 4;                     // requests in flight to each replica
+  int64_t seed = 0;                       // for strategy = "random"
+  static MultiplexerParams read(const ParamTable& p);
+  Value::Map to_map() const;
+};
+
+// How many requests `asker` keeps in flight to each of its inputs: a renderer's and a multiplexer's `window`; 4 for
+// LightOps (their batches come from their own requests).
+int64_t input_window(const ActorSpec& asker);
+
+}  // namespace lf
