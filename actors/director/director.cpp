@@ -9,6 +9,7 @@
 #include <memory>
 #include <thread>
 
+#include "actors/director/actor_configs.hpp"
 #include "actors/director/exchange_service.hpp"
 #include "actors/director/launcher.hpp"
 #include "actors/director/report.hpp"
@@ -18,7 +19,6 @@
 #include "actors/runtime/actor_config.hpp"
 #include "actors/runtime/runtime.hpp"
 #include "core/log.hpp"
-#include "farm/kind_params.hpp"
 #include "render/image.hpp"
 #include "render/scene.hpp"
 #include "transport/socket.hpp"
@@ -152,28 +152,9 @@ class Director final : public ControlOut, public Outbox {
   }
 
   void configure() {
-    for (const auto& [name, a] : supervisor_.actors()) {
-      ActorConfig config;
-      config.params = a.spec->params;
-      config.scene = spec_.scene;
-      config.camera = spec_.camera;
-      config.image = spec_.image;
-      const int64_t window = input_window(*a.spec);
-      for (int in : a.spec->inputs) {
-        const ActorRecord& peer = supervisor_.at(spec_.actors[static_cast<size_t>(in)].name);
-        config.inputs.push_back({peer.name(), peer.endpoint, window});
-      }
-      config.runtime = a.spec->runtime;
-      config.debug = a.spec->debug;
-      config.heartbeat_timeout = spec_.heartbeat_timeout;
-      config.request_timeout = spec_.request_timeout;
-      if (const int pool = spec_.pool_of(a.index); pool >= 0) {
-        const auto& replicas = spec_.actors[static_cast<size_t>(pool)].inputs;
-        const auto at = std::find(replicas.begin(), replicas.end(), a.index) - replicas.begin();
-        config.pool = PoolPlace{spec_.actors[static_cast<size_t>(pool)].name, at, static_cast<int64_t>(replicas.size())};
-      }
-      send(name, wire::make(MsgType::config, "director", config.to_value()));
-    }
+    auto endpoint_of = [&](int i) { return supervisor_.at(spec_.actors[static_cast<size_t>(i)].name).endpoint; };
+    for (const auto& [name, a] : supervisor_.actors())
+      send(name, wire::make(MsgType::config, "director", config_for(spec_, a.index, endpoint_of).to_value()));
   }
 
   // PHASE to everyone, then wait for every READY of it (no timeout: setup and render take what they take).

@@ -1,0 +1,109 @@
+// Every ring body round-trips, and decoders refuse what is out of range or inconsistent.
+#include "actors/codecs/ring_codec.hpp"
+
+#include <gtest/gtest.h>
+
+namespace lf::ring {
+namespace {
+
+radiosity::SamplePacket packet() {
+  radiosity::SamplePacket p;
+  p.origin = 2;
+  p.serial = 77;
+  p.iteration = 5;
+  p.route = 0b1011;
+  p.points = {{1, 2, 3}, {4, 5, 6}};
+  p.normals = {{0, 1, 0}, {0, 0, 1}};
+  p.visible = {0xffff, 0x00f0};
+  return p;
+}
+
+TEST(RingCodec, PacketsRoundTripAndOutOfRangeFieldsAreRefused) {
+  auto back = decode_packet(encode_packet(packet(), 3), 4);
+  ASSERT_TRUE(back.ok()) << back.error().message;
+  EXPECT_EQ(back->home, 3);
+  EXPECT_EQ(back->packet.origin, 2u);
+  EXPECT_EQ(back->packet.serial, 77u);
+  EXPECT_EQ(back->packet.iteration, 5u);
+  EXPECT_EQ(back->packet.route, 0b1011u);
+  EXPECT_EQ(back->packet.visible, packet().visible);
+  EXPECT_EQ(back->packet.points[1].y, 5.0f);
+  EXPECT_EQ(back->packet.normals[1].z, 1.0f);
+  // Node 3 does not exist in a ring of 3 nodes.
+  auto refused = decode_packet(encode_packet(packet(), 3), 3);
+  ASSERT_FALSE(refused.ok());
+  EXPECT_EQ(refused.error().code, ErrorCode::bad_request);
+  Value short_normals = encode_packet(packet(), 0);
+  short_normals.as_map()["n"] = floats_to_bytes(std::vector<float>{0, 1, 0});
+  EXPECT_EQ(decode_packet(short_normals, 4).error().message,
+            "a sample packet needs p, n (3 floats per sample) and v (one u64 per sample)");
+}
+
+TEST(RingCodec, PollsAndTheirRepliesRoundTrip) {
+  auto poll = decode_poll(encode_poll({4, {0, 2}}));
+  ASSERT_TRUE(poll.ok());
+  EXPECT_EQ(poll->iteration, 4);
+  EXPECT_EQ(poll->idle, (std::vector<int>{0, 2}));
+  EXPECT_EQ(decode_poll(Value::Map{}).error().message, "ring.poll needs an iteration");
+
+  auto lent = decode_poll_reply(encode_poll_reply({encode_packet(packet(), 2)}), 4, 2);
+  ASSERT_TRUE(lent.ok());
+  ASSERT_EQ(lent->lent.size(), 1u);
+  EXPECT_EQ(lent->lent[0].serial, 77u);
+  auto idle = decode_poll_reply(encode_poll_reply(true, {1, 9}), 4, 2);  // ring 9 does not exist: dropped
+  ASSERT_TRUE(idle.ok());
+  EXPECT_TRUE(idle->finished);
+  EXPECT_EQ(idle->idle, (std::vector<int>{1}));
+  EXPECT_FALSE(decode_poll_reply(Value::Map{{"packets", Value::Array{Value::Map{}}}}, 4, 2).ok());
+}
+
+TEST(RingCodec, ShooterReportsAndChoicesRoundTrip) {
+  ShooterReport r;
+  r.iteration = 3;
+  r.unshot_power = 1.5;
+  r.emitted_power = 9;
+  r.power_arrived = 0.25;
+  r.candidate = radiosity::Candidate{12, 4.5, RGB{1, 2, 3}};
+  auto back = decode_shooter_report(encode_shooter_report(r));
+  ASSERT_TRUE(back.ok());
+  EXPECT_EQ(back->iteration, 3);
+  EXPECT_EQ(back->unshot_power, 1.5);
+  EXPECT_EQ(back->emitted_power, 9);
+  EXPECT_EQ(back->power_arrived, 0.25);
+  ASSERT_TRUE(back->candidate);
+  EXPECT_EQ(back->candidate->patch, 12u);
+  EXPECT_EQ(back->candidate->unshot, (RGB{1, 2, 3}));
+  r.candidate.reset();
+  EXPECT_FALSE(decode_shooter_report(encode_shooter_report(r))->candidate);
+
+  auto choice = decode_shooter_choice(encode_shooter_choice(ShooterChoice{6, 12, RGB{1, 2, 3}}), 13);
+  ASSERT_TRUE(choice.ok());
+  ASSERT_TRUE(choice->has_value());
+  EXPECT_EQ((*choice)->patch, 12u);
+  auto done = decode_shooter_choice(encode_shooter_choice(std::nullopt), 13);
+  ASSERT_TRUE(done.ok());
+  EXPECT_FALSE(done->has_value());
+  // Patch 12 of a mesh with 12 patches does not exist.
+  EXPECT_EQ(decode_shooter_choice(encode_shooter_choice(ShooterChoice{6, 12, RGB{}}), 12).error().message,
+            "the director sent a malformed shooter");
+}
+
+TEST(RingCodec, ResultsRoundTripLeafElementsOnly) {
+  radiosity::Element a, b;
+  a.patch = 1;
+  a.polygon.count = 3;
+  a.polygon.v[0] = {1, 0, 0};
+  a.radiosity = {0.5f, 0.25f, 0.125f};
+  b = a;
+  b.leaf = false;  // split: its children carry its radiosity
+  auto back = decode_result(encode_result({a, b}), 2);
+  ASSERT_TRUE(back.ok());
+  ASSERT_EQ(back->size(), 1u);
+  EXPECT_EQ((*back)[0].patch, 1u);
+  EXPECT_EQ((*back)[0].polygon.count, 3);
+  EXPECT_EQ((*back)[0].radiosity, a.radiosity);
+  EXPECT_EQ(decode_result(encode_result({a}), 1).error().message, "an element of an unknown patch");
+}
+
+}  // namespace
+}  // namespace lf::ring

@@ -1,0 +1,241 @@
+// The supervisor driven message by message, with a fake launcher: what starts, what HELLO must say, and what each
+// death means in each stage.
+#include "actors/director/supervisor.hpp"
+
+#include <gtest/gtest.h>
+#include <signal.h>
+
+#include <deque>
+
+#include "actors/runtime/hello.hpp"
+#include "farm/builders.hpp"
+
+namespace lf {
+namespace {
+
+using wire::MsgType;
+
+class FakeLauncher final : public Launcher {
+ public:
+  std::string name() const override { return "fake"; }
+  Result<pid_t> start(const LaunchRequest& r) override {
+    started.push_back(r);
+    return next_pid++;
+  }
+  std::optional<ExitReport> reap_one() override {
+    if (exits.empty()) return std::nullopt;
+    auto e = exits.front();
+    exits.pop_front();
+    return e;
+  }
+  void kill(pid_t pid, int signal) override { killed.emplace_back(pid, signal); }
+  void stop_all(std::chrono::milliseconds) override {}
+
+  pid_t next_pid = 100;
+  std::vector<LaunchRequest> started;
+  std::deque<ExitReport> exits;
+  std::vector<std::pair<pid_t, int>> killed;
+};
+
+struct Recorder final : ControlOut {
+  void send(const std::string& actor, wire::Message m) override { sent.emplace_back(actor, std::move(m)); }
+  std::vector<std::pair<std::string, wire::Message>> sent;
+};
+
+int status_exited(int code) { return code << 8; }          // as waitpid reports exit(code)
+int status_killed(int signal) { return signal & 0x7f; }     // as waitpid reports a death by signal
+
+struct SupervisorTest : ::testing::Test {
+  FarmSpec spec;
+  Launchers launchers;
+  FakeLauncher* fake = nullptr;
+  Recorder out;
+  std::vector<std::string> requests, losses;
+  std::unique_ptr<Supervisor> sup;
+
+  // Two renderers asking a pool of two `direct` replicas.
+  void SetUp() override {
+    ActorSpec direct;
+    direct.name = "direct";
+    direct.kind = "direct";
+    direct.loc = {"farm.lua", 3};
+    spec.actors.push_back(direct);
+    PoolSpec pool;
+    pool.op = 0;
+    auto mux = replicate(spec, pool);
+    ASSERT_TRUE(mux.ok());
+    add_renderers(spec, 2, *mux, RendererParams{}, "local", {"farm.lua", 5});
+    spec.heartbeat_timeout = 1.0;
+    auto f = std::make_unique<FakeLauncher>();
+    fake = f.get();
+    launchers.set("local", std::move(f));
+    sup = std::make_unique<Supervisor>(spec, launchers, out,
+                                       Supervisor::Events{[this](ActorRecord& a, wire::Message& m) {
+                                                            requests.push_back(a.name() + " " + m.header.op);
+                                                            return Status(Ok{});
+                                                          },
+                                                          [this](ActorRecord& a, const std::string& why) {
+                                                            losses.push_back(a.name() + " " + why);
+                                                            return Status(Ok{});
+                                                          }});
+    ASSERT_TRUE(sup->launch("tcp://127.0.0.1:5555").ok());
+  }
+
+  Status say(const std::string& peer, wire::Message m) {
+    Result<wire::Message> r(std::move(m));
+    return sup->on_message(peer, r);
+  }
+  void hello_all() {
+    for (auto& [name, a] : sup->actors())
+      ASSERT_TRUE(say(name, wire::make(MsgType::hello, name, my_hello(a.spec->kind, "tcp://x:1").to_value())).ok());
+  }
+  pid_t pid(const std::string& name) { return sup->at(name).pid; }
+};
+
+TEST_F(SupervisorTest, LaunchesEveryActorPointedAtTheDirector) {
+  ASSERT_EQ(fake->started.size(), spec.actors.size());
+  for (size_t i = 0; i < spec.actors.size(); ++i) {
+    const auto& argv = fake->started[i].argv;
+    EXPECT_EQ(argv[1], "actor");
+    EXPECT_EQ(std::vector<std::string>(argv.end() - 6, argv.end()),
+              (std::vector<std::string>{"--kind", spec.actors[i].kind, "--name", spec.actors[i].name, "--director",
+                                        "tcp://127.0.0.1:5555"}));
+    EXPECT_TRUE(fake->started[i].self);
+  }
+}
+
+TEST_F(SupervisorTest, HelloMustNameTheKindAndFloatFormat) {
+  auto wrong = say("direct.0", wire::make(MsgType::hello, "direct.0", my_hello("pathtrace", "tcp://x:1").to_value()));
+  ASSERT_FALSE(wrong.ok());
+  EXPECT_EQ(wrong.error().message, "actor 'direct.0' says it is a 'pathtrace', expected 'direct'");
+  Hello h = my_hello("direct", "tcp://x:1");
+  h.float_format = "f64be";
+  auto floats = say("direct.0", wire::make(MsgType::hello, "direct.0", h.to_value()));
+  EXPECT_EQ(floats.error().message, "actor 'direct.0' is incompatible: float format 'f64be', expected 'f32le'");
+  EXPECT_EQ(floats.error().code, ErrorCode::incompatible);
+  Result<wire::Message> version(make_error("incompatible peer: protocol version 2, expected 1", ErrorCode::incompatible));
+  EXPECT_EQ(sup->on_message("direct.0", version).error().message,
+            "actor 'direct.0' is an incompatible peer: protocol version 2, expected 1; refusing it");
+  // A stranger is ignored; the farm goes on.
+  EXPECT_TRUE(say("mallory", wire::make(MsgType::hello, "mallory", my_hello("direct", "tcp://x:1").to_value())).ok());
+  hello_all();
+  EXPECT_TRUE(sup->all([](const ActorRecord& a) { return a.said_hello; }));
+  EXPECT_EQ(sup->at("direct.1").endpoint, "tcp://x:1");
+}
+
+TEST_F(SupervisorTest, ReadyRequestsAndErrorsAreRouted) {
+  hello_all();
+  ASSERT_TRUE(say("renderer-0", wire::make_ready("renderer-0", wire::Phase::configure)).ok());
+  EXPECT_EQ(sup->at("renderer-0").ready, wire::Phase::configure);
+  std::string late;
+  EXPECT_FALSE(sup->all([](const ActorRecord& a) { return a.ready == wire::Phase::configure; }, &late));
+  EXPECT_EQ(late, "'direct', 'direct.0', 'direct.1', 'renderer-1'");
+  ASSERT_TRUE(say("renderer-1", wire::make_request("renderer-1", wire::Op::tile, Value::Map{}, 4)).ok());
+  EXPECT_EQ(requests, std::vector<std::string>{"renderer-1 tile"});
+  auto failed = say("direct.1", wire::make_error_reply("direct.1", 0, ErrorCode::actor_failed, "no scene"));
+  EXPECT_EQ(failed.error().message, "actor 'direct.1' failed: no scene");
+}
+
+TEST_F(SupervisorTest, ADeathDuringStartUpStopsTheFarm) {
+  sup->set_stage(Stage::hello);
+  auto st = sup->on_exit(ExitReport{pid("direct.0"), status_exited(3)});
+  ASSERT_FALSE(st.ok());
+  EXPECT_EQ(st.error().message,
+            "actor 'direct.0' (pid " + std::to_string(pid("direct.0")) + ") exited with status 3 during start-up");
+}
+
+TEST_F(SupervisorTest, ALostReplicaGoesToItsPoolAndTheLastOneStopsTheFarm) {
+  hello_all();
+  sup->set_stage(Stage::render);
+  ASSERT_TRUE(sup->on_exit(ExitReport{pid("direct.0"), status_killed(SIGKILL)}).ok());
+  EXPECT_EQ(losses, std::vector<std::string>{"direct.0 was killed by signal 9 (Killed)"});
+  ASSERT_FALSE(out.sent.empty());
+  EXPECT_EQ(out.sent.back().first, "direct");
+  EXPECT_EQ(out.sent.back().second.header.type, MsgType::peer_down);
+  EXPECT_EQ(out.sent.back().second.body.find("name")->as_string(), "direct.0");
+  auto last = sup->on_exit(ExitReport{pid("direct.1"), status_exited(1)});
+  ASSERT_FALSE(last.ok());
+  EXPECT_EQ(last.error().message,
+            "lost the last replica of 'direct': direct.0 was killed by signal 9 (Killed), direct.1 exited with status 1");
+  // The multiplexer itself is no replica: its death is fatal.
+  EXPECT_FALSE(sup->on_exit(ExitReport{pid("direct"), status_exited(1)}).ok());
+}
+
+TEST_F(SupervisorTest, LostRenderersAreRecoveredUntilNoneIsLeft) {
+  hello_all();
+  sup->set_stage(Stage::setup);
+  ASSERT_TRUE(sup->on_exit(ExitReport{pid("renderer-1"), status_killed(SIGKILL)}).ok());
+  EXPECT_EQ(losses.size(), 1u);
+  auto all = sup->on_exit(ExitReport{pid("renderer-0"), status_killed(SIGKILL)});
+  ASSERT_FALSE(all.ok());
+  EXPECT_EQ(all.error().message,
+            "every renderer was lost: renderer-0 was killed by signal 9 (Killed), renderer-1 was killed by signal 9 "
+            "(Killed)");
+}
+
+TEST_F(SupervisorTest, SilentActorsAreKilledWhenRecoverableAndStopTheFarmOtherwise) {
+  hello_all();
+  sup->set_stage(Stage::render);
+  const auto later = Clock::now() + std::chrono::seconds(2);
+  // Everyone is silent: the renderers and replicas are killed first (in name order the multiplexer `direct` comes
+  // first, and it cannot be recovered).
+  auto st = sup->check_heartbeats(later);
+  ASSERT_FALSE(st.ok());
+  EXPECT_EQ(st.error().message, "actor 'direct' has been silent for 1 s (missed heartbeats)");
+  ASSERT_TRUE(say("direct", wire::make(MsgType::heartbeat, "direct")).ok());
+  sup->actors().at("direct").last_seen = later;
+  ASSERT_TRUE(sup->check_heartbeats(later).ok());
+  EXPECT_EQ(fake->killed.size(), 4u);  // direct.0, direct.1, renderer-0, renderer-1
+  for (const auto& [p, sig] : fake->killed) EXPECT_EQ(sig, SIGKILL);
+  // Its death then reads as a hang, not as the SIGKILL we sent.
+  ASSERT_TRUE(sup->on_exit(ExitReport{pid("renderer-0"), status_killed(SIGKILL)}).ok());
+  EXPECT_EQ(losses.back(), "renderer-0 stopped answering (no heartbeat for 1 s); it was killed");
+}
+
+TEST_F(SupervisorTest, InTheFinishStageACleanExitIsAnActorFinishing) {
+  hello_all();
+  sup->set_stage(Stage::finish);
+  ASSERT_TRUE(sup->on_exit(ExitReport{pid("renderer-0"), status_exited(0)}).ok());
+  EXPECT_TRUE(sup->at("renderer-0").said_bye);
+  EXPECT_FALSE(sup->on_exit(ExitReport{pid("renderer-1"), status_exited(2)}).ok());
+}
+
+TEST(SupervisorNested, AnEmptiedInnerPoolIsALostReplicaOfTheOuterOne) {
+  FarmSpec spec;
+  ActorSpec direct;
+  direct.name = "direct";
+  direct.kind = "direct";
+  spec.actors.push_back(direct);
+  PoolSpec inner;
+  inner.op = 0;
+  auto in = replicate(spec, inner);
+  PoolSpec outer;
+  outer.op = *in;
+  auto top = replicate(spec, outer);
+  add_renderers(spec, 1, *top, RendererParams{}, "local", {});
+  Launchers launchers;
+  auto f = std::make_unique<FakeLauncher>();
+  FakeLauncher* fake = f.get();
+  launchers.set("local", std::move(f));
+  Recorder out;
+  std::vector<std::string> losses;
+  Supervisor sup(spec, launchers, out,
+                 {[](ActorRecord&, wire::Message&) { return Status(Ok{}); },
+                  [&](ActorRecord& a, const std::string& why) {
+                    losses.push_back(a.name() + ": " + why);
+                    return Status(Ok{});
+                  }});
+  ASSERT_TRUE(sup.launch("tcp://d").ok());
+  sup.set_stage(Stage::render);
+  ASSERT_TRUE(sup.on_exit(ExitReport{sup.at("direct.0.0").pid, status_killed(SIGKILL)}).ok());
+  ASSERT_TRUE(sup.on_exit(ExitReport{sup.at("direct.0.1").pid, status_killed(SIGKILL)}).ok());
+  ASSERT_EQ(fake->killed.size(), 1u);
+  EXPECT_EQ(fake->killed[0].first, sup.at("direct.0").pid);
+  EXPECT_EQ(losses.back(),
+            "direct.0: lost every replica (direct.0.0 was killed by signal 9 (Killed), direct.0.1 was killed by signal "
+            "9 (Killed))");
+  EXPECT_TRUE(sup.at("direct.0").lost);
+}
+
+}  // namespace
+}  // namespace lf

@@ -1,0 +1,116 @@
+// The tile service driven message by message: tiles wait for the render phase and for lost renderers' tiles,
+// results count only from the holder, a lost renderer's tiles go to the others.
+#include "actors/director/tile_service.hpp"
+
+#include <gtest/gtest.h>
+
+#include <set>
+
+#include "actors/director/service_test_support.hpp"
+
+namespace lf {
+namespace {
+
+using test::RecordingOutbox;
+using wire::Op;
+
+ImageSpec image(int w, int h, int tile) {
+  ImageSpec i;
+  i.width = w;
+  i.height = h;
+  i.tile = tile;
+  i.spp = 1;
+  return i;
+}
+
+Value pixels_for(const Value& tile, float v) {
+  const auto& t = tile.find("tile")->as_map();
+  const int64_t n = (t.at("x1").as_int() - t.at("x0").as_int()) * (t.at("y1").as_int() - t.at("y0").as_int());
+  return floats_to_bytes(std::vector<float>(static_cast<size_t>(3 * n), v));
+}
+
+TEST(TileService, TileRequestsWaitForTheRenderPhase) {
+  TileService s(image(32, 32, 16), {"r0"}, false, true);
+  RecordingOutbox out;
+  ASSERT_TRUE(s.on_request("r0", Op::tile, 1, Value::Map{}, out).ok());
+  EXPECT_TRUE(out.take().empty());
+  ASSERT_TRUE(s.on_phase(wire::Phase::render, out).ok());
+  auto sent = out.take();
+  ASSERT_EQ(sent.size(), 1u);
+  EXPECT_EQ(sent[0].actor, "r0");
+  EXPECT_EQ(sent[0].id, 1u);
+  EXPECT_TRUE(sent[0].body.find("tile"));
+}
+
+TEST(TileService, EveryTileOnceThenNoneLeftAndTheFilmIsFilled) {
+  TileService s(image(32, 16, 16), {"r0", "r1"}, false, true);
+  RecordingOutbox out;
+  ASSERT_TRUE(s.on_phase(wire::Phase::render, out).ok());
+  std::set<int64_t> ids;
+  uint64_t req = 1;
+  for (const char* r : {"r0", "r1"}) {
+    ASSERT_TRUE(s.on_request(r, Op::tile, req++, Value::Map{}, out).ok());
+    auto sent = out.take();
+    ASSERT_EQ(sent.size(), 1u);
+    const Value& tile = sent[0].body;
+    ids.insert(tile.find("tile")->find("id")->as_int());
+    ASSERT_TRUE(s.on_request(r, Op::tile_done, req++,
+                             Value::Map{{"id", tile.find("tile")->find("id")->as_int()}, {"pixels", pixels_for(tile, 0.25f)}},
+                             out)
+                    .ok());
+    sent = out.take();
+    ASSERT_EQ(sent.size(), 1u);
+    EXPECT_FALSE(sent[0].refused) << sent[0].message;
+  }
+  EXPECT_EQ(ids.size(), 2u);
+  EXPECT_TRUE(s.finished());
+  // Every tile done: a tile request is answered at once with no tile.
+  ASSERT_TRUE(s.on_request("r0", Op::tile, req, Value::Map{}, out).ok());
+  auto sent = out.take();
+  ASSERT_EQ(sent.size(), 1u);
+  EXPECT_EQ(sent[0].body.find("tile"), nullptr);
+  for (const RGB& p : s.film().pixels) EXPECT_EQ(p, (RGB{0.25f, 0.25f, 0.25f}));
+}
+
+TEST(TileService, ResultsCountOnlyFromTheHolderAndBadBodiesAreRefused) {
+  TileService s(image(16, 16, 16), {"r0", "r1"}, false, true);
+  RecordingOutbox out;
+  ASSERT_TRUE(s.on_phase(wire::Phase::render, out).ok());
+  ASSERT_TRUE(s.on_request("r0", Op::tile, 1, Value::Map{}, out).ok());
+  const Value tile = out.take()[0].body;
+  const int64_t id = tile.find("tile")->find("id")->as_int();
+  ASSERT_TRUE(s.on_request("r1", Op::tile_done, 2, Value::Map{{"id", id}, {"pixels", pixels_for(tile, 1)}}, out).ok());
+  auto sent = out.take();
+  ASSERT_EQ(sent.size(), 1u);
+  EXPECT_TRUE(sent[0].refused);
+  EXPECT_EQ(sent[0].code, ErrorCode::refused);
+  ASSERT_TRUE(s.on_request("r0", Op::tile_done, 3, Value::Map{{"id", id}}, out).ok());
+  sent = out.take();
+  ASSERT_EQ(sent.size(), 1u);
+  EXPECT_EQ(sent[0].code, ErrorCode::bad_request);
+  EXPECT_EQ(sent[0].message, "tile_done needs id and pixels");
+  EXPECT_FALSE(s.finished());
+}
+
+TEST(TileService, ALostRenderersTilesGoToAWaitingOne) {
+  TileService s(image(16, 16, 16), {"r0", "r1"}, false, true);  // one tile
+  RecordingOutbox out;
+  ASSERT_TRUE(s.on_phase(wire::Phase::render, out).ok());
+  ASSERT_TRUE(s.on_request("r0", Op::tile, 1, Value::Map{}, out).ok());
+  const int64_t id = out.take()[0].body.find("tile")->find("id")->as_int();
+  // r1 asks while r0 holds the only tile: it waits rather than hear "none left".
+  ASSERT_TRUE(s.on_request("r1", Op::tile, 2, Value::Map{}, out).ok());
+  EXPECT_TRUE(out.take().empty());
+  // A replica's loss is not this service's business.
+  ASSERT_TRUE(s.on_lost("direct.0", "was killed", out).ok());
+  EXPECT_TRUE(out.take().empty());
+  ASSERT_TRUE(s.on_lost("r0", "was killed by signal 9", out).ok());
+  auto sent = out.take();
+  ASSERT_EQ(sent.size(), 1u);
+  EXPECT_EQ(sent[0].actor, "r1");
+  EXPECT_EQ(sent[0].id, 2u);
+  EXPECT_EQ(sent[0].body.find("tile")->find("id")->as_int(), id);
+}
+
+}  // namespace
+}  // namespace lf

@@ -1,0 +1,51 @@
+// CONFIG decoding: what the director sends comes back field for field; every malformed field is refused by name.
+#include "actors/runtime/actor_config.hpp"
+
+#include <gtest/gtest.h>
+
+namespace lf {
+namespace {
+
+TEST(ActorConfig, RoundTripsEveryField) {
+  ActorConfig c;
+  c.params = Value::Map{{"light_samples", 4}};
+  c.scene = SceneSpec{"cornell", "", {}};
+  c.camera.fov = 45;
+  c.image.width = 64;
+  c.inputs = {{"direct", "tcp://127.0.0.1:5000", 8}, {"caustics", "tcp://127.0.0.1:5001", 2}};
+  c.runtime = Value::Map{{"cwd", "/tmp"}};
+  c.debug = Value::Map{{"slowdown", 4.0}};
+  c.pool = PoolPlace{"direct", 1, 3};
+  c.heartbeat_timeout = 2.5;
+  c.request_timeout = 30;
+  auto back = ActorConfig::from_value(c.to_value());
+  ASSERT_TRUE(back.ok()) << back.error().message;
+  EXPECT_EQ(back->to_value(), c.to_value());
+  EXPECT_EQ(back->inputs[0].window, 8);
+  EXPECT_EQ(back->pool->index, 1);
+  EXPECT_EQ(back->camera.fov, 45);
+}
+
+TEST(ActorConfig, RefusesMalformedFieldsByName) {
+  auto refused = [](Value::Map body) {
+    auto r = ActorConfig::from_value(Value(std::move(body)));
+    EXPECT_FALSE(r.ok());
+    return r.ok() ? std::string() : r.error().message;
+  };
+  EXPECT_EQ(refused({{"params", 3}}), "CONFIG 'params' must be a map");
+  EXPECT_EQ(refused({{"inputs", Value::Array{Value::Map{{"name", "x"}}}}}), "CONFIG names an input without name or endpoint");
+  EXPECT_EQ(refused({{"inputs", Value::Array{Value::Map{{"name", "x"}, {"endpoint", "e"}, {"window", 0}}}}}),
+            "CONFIG input 'x': window must be an integer in [1, 1024]");
+  EXPECT_EQ(refused({{"pool", Value::Map{{"name", "p"}, {"index", 3}, {"count", 2}}}}),
+            "CONFIG 'pool' must be {name, index, count} with 0 <= index < count");
+  EXPECT_EQ(refused({{"heartbeat_timeout", "soon"}}), "CONFIG 'heartbeat_timeout' must be a positive number of seconds");
+  EXPECT_FALSE(ActorConfig::from_value(Value(3)).ok());
+  // The minimal CONFIG of an older director: everything optional has its default.
+  auto minimal = ActorConfig::from_value(Value::Map{{"scene", Value::Map{{"builtin", "cornell"}}}});
+  ASSERT_TRUE(minimal.ok());
+  EXPECT_TRUE(minimal->inputs.empty());
+  EXPECT_EQ(minimal->request_timeout, 120);
+}
+
+}  // namespace
+}  // namespace lf
