@@ -87,14 +87,15 @@ Result<PollRequest> decode_poll(const Value& body) {
   return PollRequest{*it, ring_list(body.find("idle"), INT32_MAX)};
 }
 
-Value encode_poll_reply(const std::vector<Value>& lent_packets) {
-  return Value::Map{{"packets", Value::Array(lent_packets.begin(), lent_packets.end())}};
-}
-
-Value encode_poll_reply(bool finished, const std::vector<int>& idle) {
+Value encode_poll_reply(const PollReply& reply) {
+  if (!reply.lent.empty()) {
+    Value::Array packets;
+    for (const auto& p : reply.lent) packets.push_back(encode_packet(p, static_cast<int>(p.origin)));
+    return Value::Map{{"packets", std::move(packets)}};
+  }
   Value::Array rings;
-  for (int r : idle) rings.push_back(r);
-  return Value::Map{{"finished", finished}, {"idle", std::move(rings)}};
+  for (int r : reply.idle) rings.push_back(r);
+  return Value::Map{{"finished", reply.finished}, {"idle", std::move(rings)}};
 }
 
 Result<PollReply> decode_poll_reply(const Value& body, int nodes, int rings) {

@@ -46,11 +46,16 @@ TEST(RingCodec, PollsAndTheirRepliesRoundTrip) {
   EXPECT_EQ(poll->idle, (std::vector<int>{0, 2}));
   EXPECT_EQ(decode_poll(Value::Map{}).error().message, "ring.poll needs an iteration");
 
-  auto lent = decode_poll_reply(encode_poll_reply({encode_packet(packet(), 2)}), 4, 2);
+  PollReply lending;
+  lending.lent.push_back(packet());
+  auto lent = decode_poll_reply(encode_poll_reply(lending), 4, 2);
   ASSERT_TRUE(lent.ok());
   ASSERT_EQ(lent->lent.size(), 1u);
   EXPECT_EQ(lent->lent[0].serial, 77u);
-  auto idle = decode_poll_reply(encode_poll_reply(true, {1, 9}), 4, 2);  // ring 9 does not exist: dropped
+  PollReply idle_reply;
+  idle_reply.finished = true;
+  idle_reply.idle = {1, 9};
+  auto idle = decode_poll_reply(encode_poll_reply(idle_reply), 4, 2);  // ring 9 does not exist: dropped
   ASSERT_TRUE(idle.ok());
   EXPECT_TRUE(idle->finished);
   EXPECT_EQ(idle->idle, (std::vector<int>{1}));

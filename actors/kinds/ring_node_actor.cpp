@@ -1,21 +1,49 @@
+// radiosity_node: one node of a radiosity ring (seed 003) as an actor. The protocol itself — states, packets,
+// lending and borrowing — is radiosity::RingNodeProtocol (radiosity/ring_protocol.hpp); this file only carries its
+// messages (bodies in actors/codecs/ring_codec.hpp).
+//
+// Accepts on the data socket (from other nodes), each answered at once with REPLY {}:
+//   REQUEST ring.visit / ring.back / ring.return   a sample packet; ERROR bad_request for a malformed one or one
+//                                                  more than one shooter ahead
+//   REQUEST ring.poll {iteration, idle}            -> REPLY {packets: [...]} or {finished, idle}
+//   anything else                                  -> ERROR unknown_op; before CONFIG: ERROR not_ready
+// Sends to the director: ring.shooter (each iteration's report) and ring.result (its elements, when done).
+// Ready: configure once the ring is planned; setup once the director took its elements; render at once.
+// Its inputs are every other node, in node order.
 #include "actors/kinds/ring_node_actor.hpp"
 
 #include <time.h>
 
 #include <chrono>
-#include <deque>
-#include <random>
-#include <set>
 
-#include "core/log.hpp"
 #include "actors/codecs/ring_codec.hpp"
+#include "core/log.hpp"
 #include "radiosity/config.hpp"
+#include "radiosity/ring_protocol.hpp"
 
 namespace lf {
 namespace {
 
 using namespace radiosity;
 using Clock = std::chrono::steady_clock;
+
+std::optional<Hop> hop_of(wire::Op op) {
+  switch (op) {
+    case wire::Op::ring_visit: return Hop::visit;
+    case wire::Op::ring_back: return Hop::back;
+    case wire::Op::ring_return: return Hop::ret;
+    default: return std::nullopt;
+  }
+}
+
+wire::Op op_of(Hop hop) {
+  switch (hop) {
+    case Hop::visit: return wire::Op::ring_visit;
+    case Hop::back: return wire::Op::ring_back;
+    case Hop::ret: return wire::Op::ring_return;
+  }
+  return wire::Op::ring_visit;
+}
 
 class RingNodeActor final : public Actor {
  public:
@@ -38,97 +66,41 @@ class RingNodeActor final : public Actor {
                                        config_.solver, config_.ring);
     if (static_cast<int>(rt.input_count()) != config_.layout.nodes() - 1)
       return make_error("a ring node needs every other node as an input");
-    rng_.seed(static_cast<unsigned>(node) * 7919u + 1);
-    rt_ = &rt;
+    protocol_ = std::make_unique<RingNodeProtocol>(*node_, plan_->mesh, config_);
     return Ok{};
   }
 
   void on_phase(wire::Phase phase, Runtime& rt) override {
     if (phase == wire::Phase::setup) {
       solve_cpu_start_ = cpu_seconds();
-      ask_for_shooter(rt, -1);
+      carry_out(protocol_->start(), rt);
     }
     if (phase == wire::Phase::render) rt.phase_done(wire::Phase::render);  // the solution was handed over in setup
   }
 
   void on_request(const std::string& peer, wire::Op op, wire::Message& m, Runtime& rt) override {
-    if (!node_) return rt.reply_error(peer, m.header.id, ErrorCode::not_ready, "'" + rt.name() + "' is not configured yet");
-    if (op == wire::Op::ring_poll) return on_poll(peer, m, rt);
-    if (op != wire::Op::ring_visit && op != wire::Op::ring_back && op != wire::Op::ring_return)
-      return rt.reply_unknown_op(peer, m, "a ring node serves ring.visit, ring.back, ring.return and ring.poll");
+    if (!protocol_)
+      return rt.reply_error(peer, m.header.id, ErrorCode::not_ready, "'" + rt.name() + "' is not configured yet");
+    if (op == wire::Op::ring_poll) {
+      auto poll = ring::decode_poll(m.body);
+      if (!poll) return rt.reply_error(peer, m.header.id, ErrorCode::bad_request, poll.error().message);
+      return rt.reply(peer, m.header.id, ring::encode_poll_reply(protocol_->on_poll(*poll)));
+    }
+    const auto hop = hop_of(op);
+    if (!hop) return rt.reply_unknown_op(peer, m, "a ring node serves ring.visit, ring.back, ring.return and ring.poll");
     auto decoded = ring::decode_packet(m.body, config_.layout.nodes());
-    if (!decoded) {
-      rt.reply_error(peer, m.header.id, ErrorCode::bad_request, decoded.error().message);
-      return;
-    }
-    // Past the director's barrier a peer is at most one shooter ahead of this node; anything further would only
-    // pile up here.
-    if (decoded->packet.iteration > node_->iteration() + 1) {
-      rt.reply_error(peer, m.header.id, ErrorCode::bad_request,
-                     "a packet of iteration " + std::to_string(decoded->packet.iteration) + " while this node is on " +
-                         std::to_string(node_->iteration()));
-      return;
-    }
+    if (!decoded) return rt.reply_error(peer, m.header.id, ErrorCode::bad_request, decoded.error().message);
+    if (auto st = protocol_->on_packet(*hop, std::move(decoded->packet), decoded->home); !st)
+      return rt.reply_error(peer, m.header.id, ErrorCode::bad_request, st.error().message);
     rt.reply(peer, m.header.id, Value::Map{});
-    inbox_.push_back({op, std::move(decoded->packet), decoded->home});
   }
 
   void on_progress(Runtime& rt) override {
-    // Packets of an iteration this node has not begun wait for its shooter.
-    for (size_t handled = inbox_.size(); handled > 0 && !inbox_.empty(); --handled) {
-      Incoming in = std::move(inbox_.front());
-      inbox_.pop_front();
-      if (!running_ || in.packet.iteration != node_->iteration()) {
-        if (running_ && in.packet.iteration < node_->iteration()) continue;  // stale: cannot happen past the barrier
-        inbox_.push_back(std::move(in));
-        continue;
-      }
-      const auto t = Clock::now();
-      if (in.op == wire::Op::ring_visit) {
-        node_->process(in.packet);
-        forward(rt, std::move(in.packet), in.home);
-      } else if (in.op == wire::Op::ring_back) {
-        came_home(rt, std::move(in.packet));
-      } else {  // ring.return: our packet, run by another ring
-        node_->complete(in.packet);
-      }
-      rt.add_busy(t);
-    }
-    if (!running_) return;
-    // One own packet round the ring at a time (seed 003: never more packets in a ring than nodes).
-    if (own_out_ == 0 && !borrowed_) {
-      if (auto p = node_->take_pending()) {
-        const auto t = Clock::now();
-        ++own_out_;
-        start(rt, std::move(*p));
-        rt.add_busy(t);
-      }
-    }
-    if (node_->finished() && own_out_ == 0 && !borrowed_) {
-      if (!asked_) ask_for_shooter(rt, static_cast<int64_t>(node_->iteration()));
-      if (!lent_to_me_.empty()) {
-        // Borrowed packets go round this ring one at a time, like our own.
-        SamplePacket p = std::move(lent_to_me_.front());
-        lent_to_me_.pop_front();
-        borrowed_ = true;
-        const auto t = Clock::now();
-        node_->process(p);
-        forward(rt, std::move(p), node_->node());
-        rt.add_busy(t);
-      } else {
-        poll(rt);
-      }
-    }
+    if (protocol_) carry_out(protocol_->step(Clock::now()), rt);  // the runtime counts this as busy time
   }
 
-  bool has_local_work() const override {
-    if (!running_) return false;
-    for (const auto& in : inbox_)
-      if (in.packet.iteration == node_->iteration()) return true;
-    return own_out_ == 0 && !borrowed_ && (node_->pending() > 0 || (node_->finished() && !lent_to_me_.empty()));
-  }
-
-  long next_due_ms() const override { return polling_ ? 2 : -1; }
+  bool has_local_work() const override { return protocol_ && protocol_->has_work(); }
+  long next_due_ms() const override { return protocol_ ? protocol_->next_due_ms() : -1; }
 
   Value extra_stats() const override {
     if (!node_) return Value();
@@ -139,7 +111,7 @@ class RingNodeActor final : public Actor {
                       {"packets_lent", static_cast<int64_t>(w.packets_lent)},
                       {"packets_borrowed", static_cast<int64_t>(w.packets_borrowed)},
                       {"samples", static_cast<int64_t>(w.samples)},
-                      {"polls", static_cast<int64_t>(polls_)},
+                      {"polls", static_cast<int64_t>(protocol_->polls())},
                       {"solve_cpu_seconds", solve_cpu_},
                       {"surfaces_held", static_cast<int64_t>(node_->surfaces_held())},
                       {"patches", static_cast<int64_t>(node_->part().patches().size())},
@@ -149,147 +121,54 @@ class RingNodeActor final : public Actor {
   }
 
  private:
-  struct Incoming {
-    wire::Op op;
-    SamplePacket packet;
-    int home;
-  };
-
-  wire::RequestClient& client(int node) {
+  wire::RequestClient& client(Runtime& rt, int node) {
     const int self = node_->node();
-    return rt_->input(static_cast<size_t>(node < self ? node : node - 1));
+    return rt.input(static_cast<size_t>(node < self ? node : node - 1));
   }
 
-  void send(Runtime& rt, int node, wire::Op op, const SamplePacket& p, int home) {
-    client(node).request(op, ring::encode_packet(p, home), [&rt](Result<wire::Message> r) {
-      if (!r) rt.fail("ring: " + r.error().message);
-    });
-  }
-
-  // A packet starts at its home node (here): this position's visibility first, then round the ring.
-  void start(Runtime& rt, SamplePacket p) {
-    node_->process(p);
-    forward(rt, std::move(p), node_->node());
-  }
-
-  void forward(Runtime& rt, SamplePacket p, int home) {
-    const int next = node_->next_position(p, node_->position());
-    if (next >= 0) return send(rt, config_.layout.node(node_->ring(), next), wire::Op::ring_visit, p, home);
-    if (home == node_->node()) return came_home(rt, std::move(p));
-    send(rt, home, wire::Op::ring_back, p, home);
-  }
-
-  void came_home(Runtime& rt, SamplePacket p) {
-    if (static_cast<int>(p.origin) == node_->node()) {
-      if (node_->complete(p)) --own_out_;  // a duplicate or forged packet changes nothing
-      return;
+  void carry_out(std::vector<RingAction> actions, Runtime& rt) {
+    for (auto& a : actions) {
+      switch (a.kind) {
+        case RingAction::Kind::send:
+          client(rt, a.to).request(op_of(a.hop), ring::encode_packet(a.packet, a.home), [&rt](Result<wire::Message> r) {
+            if (!r) rt.fail("ring: " + r.error().message);
+          });
+          break;
+        case RingAction::Kind::ask_shooter:
+          rt.ask_director(wire::Op::ring_shooter, ring::encode_shooter_report(a.report),
+                          [this, &rt](Result<wire::Message> r) { on_shooter(std::move(r), rt); });
+          break;
+        case RingAction::Kind::send_result:
+          solve_cpu_ = cpu_seconds() - solve_cpu_start_;
+          rt.ask_director(wire::Op::ring_result, ring::encode_result(node_->part().elements()),
+                          [this, &rt](Result<wire::Message> r) {
+                            if (!r) return rt.fail("ring: " + r.error().message);
+                            protocol_->on_result_taken();
+                            rt.phase_done(wire::Phase::setup);
+                          });
+          break;
+        case RingAction::Kind::poll:
+          client(rt, a.to).request(wire::Op::ring_poll, ring::encode_poll(a.poll),
+                                   [this, &rt, ring = a.poll_ring, iteration = a.poll.iteration](Result<wire::Message> r) {
+                                     if (!r) return rt.fail("ring: " + r.error().message);
+                                     auto reply = ring::decode_poll_reply(r->body, config_.layout.nodes(),
+                                                                          config_.layout.rings);
+                                     if (!reply) return rt.fail("ring: " + reply.error().message);
+                                     protocol_->on_poll_reply(ring, iteration, std::move(*reply), Clock::now());
+                                   });
+          break;
+      }
     }
-    // Borrowed: back to the node whose samples these are.
-    send(rt, static_cast<int>(p.origin), wire::Op::ring_return, p, static_cast<int>(p.origin));
-    borrowed_ = false;
   }
 
-  void ask_for_shooter(Runtime& rt, int64_t finished_iteration) {
-    asked_ = true;
-    ring::ShooterReport report;
-    report.iteration = finished_iteration;
-    report.unshot_power = node_->unshot_power();
-    report.emitted_power = plan_->mesh.emitted_power();
-    report.power_arrived = finished_iteration >= 0 ? node_->part().shot().power_arrived : 0.0;
-    if (const Candidate c = node_->candidate(); c.patch != UINT32_MAX) report.candidate = c;
-    rt.ask_director(wire::Op::ring_shooter, ring::encode_shooter_report(report),
-                    [this, &rt](Result<wire::Message> r) { on_shooter(rt, std::move(r)); });
-  }
-
-  void on_shooter(Runtime& rt, Result<wire::Message> r) {
+  void on_shooter(Result<wire::Message> r, Runtime& rt) {
     if (!r) return rt.fail("ring: " + r.error().message);
-    polling_ = false;
-    idle_rings_.clear();
-    lent_to_me_.clear();  // cannot hold any: the lenders could not have finished
     auto choice = ring::decode_shooter_choice(r->body, plan_->mesh.patches.size());
     if (!choice) return rt.fail("ring: " + choice.error().message);
-    if (!*choice) return send_result(rt);
-    const auto t = Clock::now();
-    node_->begin_iteration(static_cast<uint32_t>((*choice)->iteration),
-                           make_shooter(plan_->mesh, (*choice)->patch, (*choice)->unshot, config_.solver.shooter_samples));
-    rt.add_busy(t);
-    running_ = true;
-    asked_ = false;
+    auto actions = protocol_->on_shooter(*choice);
+    if (!actions) return rt.fail("ring: " + actions.error().message);
+    carry_out(std::move(*actions), rt);
     on_progress(rt);
-  }
-
-  void send_result(Runtime& rt) {
-    running_ = false;
-    solve_cpu_ = cpu_seconds() - solve_cpu_start_;
-    rt.ask_director(wire::Op::ring_result, ring::encode_result(node_->part().elements()), [&rt](Result<wire::Message> r) {
-      if (!r) return rt.fail("ring: " + r.error().message);
-      rt.phase_done(wire::Phase::setup);
-    });
-  }
-
-  // Dynamic load balancing (seed 003 §6.2): idle, ask a random node at this position in another ring for one of
-  // its packets; one that is idle too answers with the rings it knows to be idle.
-  void poll(Runtime& rt) {
-    polling_ = false;
-    if (!config_.dynamic_balance || config_.layout.rings < 2 || poll_out_) return;
-    std::vector<int> candidates;
-    for (int r = 0; r < config_.layout.rings; ++r)
-      if (r != node_->ring() && !idle_rings_.count(r)) candidates.push_back(r);
-    if (candidates.empty()) return;
-    if (Clock::now() < next_poll_) {
-      polling_ = true;
-      return;
-    }
-    const int ring = candidates[std::uniform_int_distribution<size_t>(0, candidates.size() - 1)(rng_)];
-    const int target = config_.layout.node(ring, node_->position());
-    poll_out_ = true;
-    ++polls_;
-    const uint32_t iteration = node_->iteration();
-    ring::PollRequest request{static_cast<int64_t>(iteration), std::vector<int>(idle_rings_.begin(), idle_rings_.end())};
-    client(target).request(wire::Op::ring_poll, ring::encode_poll(request),
-                           [this, &rt, ring, iteration](Result<wire::Message> r) {
-                             poll_out_ = false;
-                             if (!r) return rt.fail("ring: " + r.error().message);
-                             if (!running_ || node_->iteration() != iteration) return;
-                             auto reply = ring::decode_poll_reply(r->body, config_.layout.nodes(), config_.layout.rings);
-                             if (!reply) return rt.fail("ring: " + reply.error().message);
-                             for (auto& p : reply->lent) {
-                               ++node_->work().packets_borrowed;
-                               lent_to_me_.push_back(std::move(p));
-                             }
-                             if (!lent_to_me_.empty()) return;
-                             idle_rings_.insert(reply->idle.begin(), reply->idle.end());
-                             if (reply->finished) idle_rings_.insert(ring);
-                             // Busy but nothing to lend right now: try again shortly.
-                             next_poll_ = Clock::now() + std::chrono::milliseconds(2);
-                             polling_ = true;
-                           });
-  }
-
-  void on_poll(const std::string& peer, wire::Message& m, Runtime& rt) {
-    auto poll = ring::decode_poll(m.body);
-    if (!poll) return rt.reply_error(peer, m.header.id, ErrorCode::bad_request, poll.error().message);
-    const bool current = running_ && static_cast<int64_t>(node_->iteration()) == poll->iteration;
-    if (current && node_->pending() > 0) {
-      // Half of what waits here, up to kMaxLend: one poll's round trip then buys several packets' work, which
-      // matters when processes share cores and every message waits for the peer to be scheduled.
-      const size_t count = std::min(kMaxLend, std::max<size_t>(1, node_->pending() / 2));
-      std::vector<Value> packets;
-      for (size_t i = 0; i < count; ++i) {
-        auto p = node_->take_pending();
-        ++node_->work().packets_lent;
-        packets.push_back(ring::encode_packet(*p, static_cast<int>(p->origin)));
-      }
-      rt.reply(peer, m.header.id, ring::encode_poll_reply(packets));
-      return;
-    }
-    const bool finished = current && node_->finished() && own_out_ == 0;
-    std::vector<int> idle;
-    if (finished) {
-      idle.push_back(node_->ring());
-      idle.insert(idle.end(), idle_rings_.begin(), idle_rings_.end());
-    }
-    rt.reply(peer, m.header.id, ring::encode_poll_reply(finished, idle));
   }
 
   // CPU time of this process: the work it did, whatever share of a core the OS gave it.
@@ -299,24 +178,11 @@ class RingNodeActor final : public Actor {
     return static_cast<double>(t.tv_sec) + static_cast<double>(t.tv_nsec) * 1e-9;
   }
 
-  static constexpr size_t kMaxLend = 4;
   double solve_cpu_start_ = 0, solve_cpu_ = 0;
-  std::deque<SamplePacket> lent_to_me_;  // borrowed, waiting for their turn round this ring
   RingConfig config_;
   std::unique_ptr<RingPlan> plan_;
   std::unique_ptr<RingNode> node_;
-  Runtime* rt_ = nullptr;
-  std::deque<Incoming> inbox_;
-  bool running_ = false;
-  bool asked_ = false;
-  int own_out_ = 0;
-  bool borrowed_ = false;
-  bool poll_out_ = false;
-  bool polling_ = false;
-  uint64_t polls_ = 0;
-  Clock::time_point next_poll_;
-  std::set<int> idle_rings_;
-  std::mt19937 rng_;
+  std::unique_ptr<RingNodeProtocol> protocol_;
 };
 
 }  // namespace
