@@ -24,13 +24,40 @@ int count(const std::string& text, const std::string& what) {
 }
 
 TEST_F(PluginTest, ExamplesAndBuiltinsPassCheckActor) {
-  for (const auto& args : std::vector<std::vector<std::string>>{
-           {"check-actor", "--", kTint},
-           {"check-actor", "--inputs", "1", "--", kTint},
-           {"check-actor", "--kind", "direct", "--", LIGHTFARM_BINARY, "actor"}}) {
-    auto r = run_lightfarm(args);
+  struct Case {
+    std::vector<std::string> args;
+    int checks;  // hello configure setup render requests [inputs] malformed heartbeat bye orphaned sigterm
+  };
+  for (const auto& c : std::vector<Case>{{{"check-actor", "--", kTint}, 10},
+                                         {{"check-actor", "--inputs", "1", "--", kTint}, 11},
+                                         {{"check-actor", "--kind", "direct", "--", LIGHTFARM_BINARY, "actor"}, 10},
+                                         {{"check-actor", "--inputs", "1", "--", kBroken, "--mode", "ok"}, 11}}) {
+    auto r = run_lightfarm(c.args);
     EXPECT_EQ(r.status, 0) << r.out << r.err;
-    EXPECT_EQ(count(r.out, "PASS "), 8) << r.out;
+    EXPECT_EQ(count(r.out, "PASS "), c.checks) << r.out;
+    EXPECT_EQ(count(r.out, "FAIL "), 0) << r.out;
+    expect_no_leftovers(r);
+  }
+}
+
+// Each way an actor can break the contract fails exactly its own check, saying why.
+TEST_F(PluginTest, EachBrokenContractFailsItsOwnCheck) {
+  struct Case {
+    const char* mode;
+    const char* says;
+  };
+  for (const Case& c :
+       {Case{"no_ready_render", "FAIL render     no READY render within 2 s"},
+        Case{"ignore_input", "FAIL inputs     asked its input nothing while shading"},
+        Case{"ignore_sigterm", "FAIL sigterm    still running 2 s after SIGTERM"},
+        Case{"silent_on_malformed", "FAIL malformed  no ERROR for malformed packet 1: nothing within 2 s"},
+        Case{"wrong_n", "FAIL requests   shade reply says n = 2 but holds 1 radiance values"},
+        Case{"no_routing_id", "FAIL hello      HELLO came from routing id '"}}) {
+    auto r = run_lightfarm({"check-actor", "--inputs", "1", "--timeout", "2", "--", kBroken, "--mode", c.mode});
+    EXPECT_EQ(r.status, 1) << c.mode;
+    EXPECT_NE(r.out.find(c.says), std::string::npos) << c.mode << ":\n" << r.out;
+    // wrong_n also fails the good request after the malformed ones; every other variant fails once.
+    EXPECT_EQ(count(r.out, "FAIL "), std::string(c.mode) == "wrong_n" ? 2 : 1) << c.mode << ":\n" << r.out;
     expect_no_leftovers(r);
   }
 }
@@ -57,7 +84,11 @@ TEST_F(PluginTest, FarmsWithBrokenActorsStopCleanlyNamingTheProblem) {
   };
   for (const Case& c : {Case{"wrong_version", "lightfarm: error: actor 'broken' is an incompatible peer: protocol version 2, expected 1"},
                         Case{"silent", "lightfarm: error: actor 'renderer-0' failed: lighting failed: no answer from 'broken' within 2 s"},
-                        Case{"crash", "lightfarm: error: actor 'broken' (pid "}}) {
+                        Case{"crash", "lightfarm: error: actor 'broken' (pid "},
+                        Case{"no_ready_render", "lightfarm: error: every tile is done, but 'broken' never answered PHASE "
+                                                "render with READY render"},
+                        Case{"wrong_n", "lightfarm: error: actor 'renderer-0' failed: lighting 'broken': shade reply "
+                                        "says n = "}}) {
     auto script = write(std::string(c.mode) + ".lua", "scene { builtin = \"cornell\" }\n"
                                                       "image { width = 32, height = 32, spp = 1 }\n"
                                                       "farm { request_timeout = 2 }\n"
@@ -117,7 +148,7 @@ TEST_F(PluginTest, SdkBuildsAnOutOfTreeLightOpThatRendersInAFarm) {
 
   auto check = run_lightfarm({"check-actor", "--", program});
   EXPECT_EQ(check.status, 0) << check.out << check.err;
-  EXPECT_EQ(count(check.out, "PASS "), 8) << check.out;
+  EXPECT_EQ(count(check.out, "PASS "), 10) << check.out;  // every check but inputs
 
   const std::string script = kSource + "/examples/plugin-cpp/ao_cornell.lua";
   auto one = run_lightfarm({"run", script, "--set", "program=" + program, "--set", "replicas=1", "--set", "width=48",

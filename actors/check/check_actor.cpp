@@ -1,15 +1,20 @@
-// check-actor plays the director for one actor process and checks, each within the timeout:
-//   hello      HELLO arrives, with protocol version 1, float format f32le, the kind it was given, an endpoint
+// check-actor plays the director (and a renderer, and with --inputs constant-light inputs) for one actor process
+// and drives it through a farm's whole life, checking each step of docs/PROTOCOL.md within the timeout:
+//   hello      HELLO arrives from the routing id --name, with protocol version 1, float format f32le, the kind
+//              it was given and an endpoint (the same check the director makes)
 //   configure  CONFIG (the built-in Cornell box, the actor's inputs) is answered with READY configure
 //   setup      PHASE setup is answered with READY setup
+//   render     PHASE render is answered with READY render (the director waits for it from every actor)
 //   requests   shade requests of 1, 100 and 4096 real Cornell box points: a REPLY each, with the request's id,
-//              n radiance triples, all finite and non-negative
-//   malformed  garbage frames on the data socket: the actor answers ERROR or ignores them, and still answers a
-//              good request afterwards
+//              n equal to the points asked, n radiance triples, all finite and non-negative
+//   inputs     (with --inputs N) every input was asked for light while shading
+//   malformed  three undecodable packets are each answered with ERROR bad_message (id 0), an unknown operation
+//              with ERROR unknown_op (its id), and a good request afterwards still with a REPLY
 //   heartbeat  a HEARTBEAT arrives within the heartbeat timeout it was configured with
 //   bye        PHASE finish: STATS and BYE come back and the process exits with status 0
 //   orphaned   a second instance, configured, whose director then falls silent, exits within its heartbeat
 //              timeout plus the check timeout
+//   sigterm    a third instance, configured, exits on SIGTERM within the check timeout
 #include "actors/check/check_actor.hpp"
 
 #include <signal.h>
@@ -46,8 +51,9 @@ class Checker {
     const bool configured = hello && check("configure", [&] { return configure(10.0); });
     const bool set_up = configured && check("setup", [&] { return phase(wire::Phase::setup); });
     if (set_up) {
-      send_control(wire::make_phase("director", wire::Phase::render));
+      check("render", [&] { return phase(wire::Phase::render); });
       check("requests", [&] { return requests(); });
+      if (options_.inputs > 0) check("inputs", [&] { return inputs_asked(); });
       check("malformed", [&] { return malformed(); });
       check("heartbeat", [&] { return heartbeat(); });
       check("bye", [&] { return bye(); });
@@ -59,6 +65,13 @@ class Checker {
         check("orphaned", [&] { return orphaned(1.0); });
       } else {
         report("orphaned", "could not bring a second instance up to CONFIG");
+      }
+      stop_actor();
+      // A third: configured, then SIGTERM.
+      if (start("check-term") && expect_hello().empty() && configure(10.0).empty()) {
+        check("sigterm", [&] { return sigterm(); });
+      } else {
+        report("sigterm", "could not bring a third instance up to CONFIG");
       }
       stop_actor();
     }
@@ -134,6 +147,7 @@ class Checker {
     while (Clock::now() < deadline) {
       poller.wait(20);
       while (auto in = control_->receive()) {
+        last_peer_ = in->peer;
         if (!in->message) return make_error(in->message.error().message);
         if (in->message->header.type == MsgType::heartbeat && !want_heartbeat) {
           saw_heartbeat_ = true;
@@ -153,6 +167,9 @@ class Checker {
     auto m = next_control(options_.timeout);
     if (!m) return "no HELLO: " + m.error().message;
     if (m->header.type != MsgType::hello) return "expected HELLO, got " + std::string(wire::type_name(m->header.type));
+    if (last_peer_ != name_)
+      return "HELLO came from routing id '" + printable(last_peer_) + "', not the actor's --name '" + name_ +
+             "' (set ZMQ_ROUTING_ID to the name before connecting)";
     auto hello = Hello::check(m->body, name_, options_.kind);
     if (!hello) return hello.error().message;
     data_ = std::make_unique<wire::Socket>(wire::Socket::Kind::dealer, "check-renderer");
@@ -216,7 +233,7 @@ class Checker {
           return "ERROR for " + std::to_string(n) + " points: " + (text && text->is_string() ? text->as_string() : "?");
         }
         if (m.header.type != MsgType::reply) return "expected REPLY, got " + std::string(wire::type_name(m.header.type));
-        auto radiance = decode_radiance(m.body, n);
+        auto radiance = decode_radiance(m.body, n);  // n must agree with the request and with the data
         if (!radiance) return radiance.error().message;
         for (const RGB& c : *radiance)
           if (!std::isfinite(c.x) || !std::isfinite(c.y) || !std::isfinite(c.z) || c.x < 0 || c.y < 0 || c.z < 0)
@@ -235,14 +252,77 @@ class Checker {
     return {};
   }
 
+  // The next message on the data socket within the timeout, feeding the fake inputs meanwhile.
+  Result<wire::Message> next_data() {
+    const auto deadline = Clock::now() + std::chrono::duration<double>(options_.timeout);
+    wire::Poller poller;
+    poller.add(*data_);
+    while (Clock::now() < deadline) {
+      pump_fake_input();
+      poller.wait(10);
+      if (auto in = data_->receive()) {
+        if (!in->message) return make_error("undecodable answer: " + in->message.error().message);
+        return std::move(*in->message);
+      }
+      if (auto e = launcher_.reap_one()) {
+        exit_ = *e;
+        return make_error("the actor " + e->describe());
+      }
+    }
+    return make_error("nothing within " + seconds_text(options_.timeout));
+  }
+
   std::string malformed() {
-    data_->send_raw({"\xc1 not msgpack", "\x80"});
-    data_->send_raw({"only one frame"});
-    Header bad;
-    bad.version = 99;
-    data_->send_raw({encode_header(bad), encode_body(Value::Map{})});
+    Header newer;
+    newer.version = 99;
+    const std::vector<std::vector<std::string>> bad{
+        {"\xc1 not msgpack", "\x80"}, {"only one frame"}, {encode_header(newer), encode_body(Value::Map{})}};
+    for (size_t i = 0; i < bad.size(); ++i) {
+      data_->send_raw(bad[i]);
+      auto m = next_data();
+      if (!m) return "no ERROR for malformed packet " + std::to_string(i + 1) + ": " + m.error().message;
+      if (m->header.type != MsgType::error || wire::error_of(*m).code != ErrorCode::bad_message)
+        return "malformed packet " + std::to_string(i + 1) + " was answered with a " +
+               std::string(wire::type_name(m->header.type)) + ", not ERROR bad_message";
+    }
+    wire::Message unknown = wire::make(MsgType::request, "check-renderer", Value::Map{}, 300);
+    unknown.header.op = "no_such_op";
+    data_->send(unknown);
+    auto m = next_data();
+    if (!m) return "no ERROR for an unknown operation: " + m.error().message;
+    if (m->header.type != MsgType::error || m->header.id != 300 || wire::error_of(*m).code != ErrorCode::unknown_op)
+      return "an unknown operation was not answered with ERROR unknown_op and its id";
     if (std::string why = shade(10, 200); !why.empty()) return "after malformed packets: " + why;
     return {};
+  }
+
+  std::string inputs_asked() {
+    if (fake_requests_ > 0) return {};
+    return "asked its input nothing while shading (an actor given inputs must ask them for light)";
+  }
+
+  std::string sigterm() {
+    ::kill(pid_, SIGTERM);
+    const auto deadline = Clock::now() + std::chrono::duration<double>(options_.timeout);
+    while (Clock::now() < deadline) {
+      if (launcher_.reap_one()) return {};
+      std::this_thread::sleep_for(std::chrono::milliseconds(20));
+    }
+    return "still running " + seconds_text(options_.timeout) + " after SIGTERM";
+  }
+
+  static std::string printable(const std::string& id) {
+    std::string out;
+    for (unsigned char c : id) {
+      if (c >= 0x20 && c < 0x7f) {
+        out += static_cast<char>(c);
+      } else {
+        char hex[5];
+        std::snprintf(hex, sizeof hex, "\\x%02x", c);
+        out += hex;
+      }
+    }
+    return out;
   }
 
   using Header = wire::Header;
@@ -297,6 +377,7 @@ class Checker {
     if (!fake_input_) return;
     while (auto in = fake_input_->receive()) {
       if (!in->message) continue;
+      ++fake_requests_;
       const Value* n = in->message->body.find("n");
       const size_t count = n && n->is_int() ? static_cast<size_t>(n->as_int()) : 0;
       std::vector<RGB> half(count, RGB{0.5f, 0.5f, 0.5f});
@@ -314,6 +395,8 @@ class Checker {
   ShadingPoints points_;
   double heartbeat_timeout_ = 10;
   bool saw_heartbeat_ = false;
+  std::string last_peer_;     // routing id of the last control message
+  uint64_t fake_requests_ = 0;  // requests the fake inputs received
   int failures_ = 0;
 };
 

@@ -161,8 +161,21 @@ class Director final : public ControlOut, public Outbox {
   void run_phase(Phase phase) {
     supervisor_.broadcast(wire::make_phase("director", phase));
     for (Service* s : std::initializer_list<Service*>{&tiles_, &exchange_, &ring_}) check(s->on_phase(phase, *this));
-    wait_all(0, [phase](const ActorRecord& a) { return a.ready == phase; });
+    if (phase != Phase::render) return wait_all(0, [phase](const ActorRecord& a) { return a.ready == phase; });
+    // Rendering takes what it takes; once every renderer is done, the others have had PHASE render for the whole
+    // frame and must have said READY render (docs/PROTOCOL.md). One that never does would hang the farm.
+    wait_all(0, [](const ActorRecord& a) { return !a.spec->is_renderer() || a.ready == Phase::render; });
+    const auto deadline = Clock::now() + std::chrono::seconds(kReadyRenderGraceSeconds);
+    while (true) {
+      std::string late;
+      if (supervisor_.all([](const ActorRecord& a) { return a.ready == Phase::render; }, &late)) return;
+      if (Clock::now() > deadline)
+        throw FarmFailure{"every tile is done, but " + late + " never answered PHASE render with READY render (every "
+                          "actor must; docs/PROTOCOL.md, \"Life of an actor\")"};
+      pump(100);
+    }
   }
+  static constexpr int kReadyRenderGraceSeconds = 5;
 
   void finish() {
     if (auto st = write_image(tiles_.film(), spec_.image.output); !st) throw FarmFailure{st.error().message};

@@ -1,65 +1,134 @@
 #!/usr/bin/python3
-"""An actor that gets the protocol wrong on purpose, for tests of check-actor and of the director.
+"""An actor that gets one thing of the protocol wrong on purpose, for tests of check-actor and of the director.
+With --mode ok it gets everything right (a constant light, or its one input's light passed through), so that each
+other mode fails check-actor for its one reason only.
 
-  --mode wrong_version   says HELLO with protocol version 2
-  --mode silent          does everything right but never answers a shade request
-  --mode crash           exits with status 3 on its first shade request
+  --mode ok                   a conforming LightOp
+  --mode wrong_version        says HELLO with protocol version 2
+  --mode silent               never answers a shade request (nor anything else on its data socket)
+  --mode crash                exits with status 3 on its first shade request
+  --mode no_ready_render      never answers PHASE render with READY render
+  --mode ignore_input         answers without asking the input it was given
+  --mode ignore_sigterm       ignores SIGTERM
+  --mode silent_on_malformed  drops malformed packets without an ERROR
+  --mode wrong_n              replies with n one more than the points it holds
+  --mode no_routing_id        connects to the director without its name as routing id
 """
 import argparse
 import os
+import signal
+import struct
 import sys
 import time
 
 import msgpack
 import zmq
 
-HELLO, CONFIG, PHASE, REQUEST, REPLY, ERROR, STATS, HEARTBEAT, BYE, READY = range(1, 11)
+HELLO, CONFIG, PHASE, REQUEST, REPLY, ERROR, STATS, HEARTBEAT, BYE, READY, PEER_DOWN = range(1, 12)
+MODES = ["ok", "wrong_version", "silent", "crash", "no_ready_render", "ignore_input", "ignore_sigterm",
+         "silent_on_malformed", "wrong_n", "no_routing_id"]
 
 
 def main():
     p = argparse.ArgumentParser()
-    p.add_argument("--mode", required=True, choices=["wrong_version", "silent", "crash"])
+    p.add_argument("--mode", required=True, choices=MODES)
     p.add_argument("--kind", required=True)
     p.add_argument("--name", required=True)
     p.add_argument("--director", required=True)
     a = p.parse_args()
+    if a.mode == "ignore_sigterm":
+        signal.signal(signal.SIGTERM, signal.SIG_IGN)
     version = 2 if a.mode == "wrong_version" else 1
     ctx = zmq.Context()
     control = ctx.socket(zmq.DEALER)
-    control.setsockopt(zmq.ROUTING_ID, a.name.encode())
-    control.setsockopt(zmq.LINGER, 0)
+    if a.mode != "no_routing_id":
+        control.setsockopt(zmq.ROUTING_ID, a.name.encode())
+    control.setsockopt(zmq.LINGER, 500)
     control.connect(a.director)
     data = ctx.socket(zmq.ROUTER)
     data.setsockopt(zmq.LINGER, 0)
     data.bind("tcp://127.0.0.1:*")
+    inputs = []
+    waiting = {}  # our request id -> (peer, their id, n)
+    next_id = [1]
+
+    def header(t, op="", id=0):
+        return msgpack.packb({"v": version, "t": t, "id": id, "s": a.name, "op": op, "q": 0})
 
     def send(t, op="", body=None):
-        control.send_multipart([msgpack.packb({"v": version, "t": t, "id": 0, "s": a.name, "op": op, "q": 0}),
-                                msgpack.packb(body)])
+        control.send_multipart([header(t, op), msgpack.packb(body)])
+
+    def reply(peer, id, n, radiance):
+        told = n + 1 if a.mode == "wrong_n" else n
+        data.send_multipart([peer, header(REPLY, id=id), msgpack.packb({"n": told, "L": radiance})])
+
+    def refuse(peer, id, code, message):
+        data.send_multipart([peer, header(ERROR, id=id), msgpack.packb({"code": code, "message": message})])
 
     send(HELLO, body={"kind": a.kind, "pid": os.getpid(), "float_format": "f32le",
                       "endpoint": data.getsockopt_string(zmq.LAST_ENDPOINT)})
-    last, timeout = time.monotonic(), 10.0
+    last, timeout, next_beat = time.monotonic(), 10.0, 0.0
     while time.monotonic() - last < timeout:
-        send(HEARTBEAT)
-        if control.poll(200):
-            header, body = (msgpack.unpackb(f, raw=False) for f in control.recv_multipart())
+        if time.monotonic() >= next_beat:
+            send(HEARTBEAT)
+            next_beat = time.monotonic() + min(1.0, timeout / 4)
+        if control.poll(20):
+            h, body = (msgpack.unpackb(f, raw=False) for f in control.recv_multipart())
             last = time.monotonic()
-            if header["t"] == CONFIG:
+            if h["t"] == CONFIG:
                 timeout = float(body.get("heartbeat_timeout", 10.0))
+                for spec in body.get("inputs") or []:
+                    s = ctx.socket(zmq.DEALER)
+                    s.setsockopt(zmq.ROUTING_ID, a.name.encode())
+                    s.setsockopt(zmq.LINGER, 0)
+                    s.connect(spec["endpoint"])
+                    inputs.append(s)
                 send(READY, "configure", {"phase": "configure"})
-            elif header["t"] == PHASE and header["op"] in ("setup", "render"):
-                send(READY, header["op"], {"phase": header["op"]})
-            elif header["t"] == BYE or (header["t"] == PHASE and header["op"] == "finish"):
+            elif h["t"] == PHASE and h["op"] == "setup":
+                send(READY, "setup", {"phase": "setup"})
+            elif h["t"] == PHASE and h["op"] == "render":
+                if a.mode != "no_ready_render":
+                    send(READY, "render", {"phase": "render"})
+            elif h["t"] == BYE or (h["t"] == PHASE and h["op"] == "finish"):
                 send(STATS, body={})
                 send(BYE)
                 return 0
         while data.poll(0):
-            data.recv_multipart()
+            frames = data.recv_multipart()
+            peer = frames[0]
             if a.mode == "crash":
                 return 3
-            # silent: drop it
-    return 0
+            if a.mode == "silent":
+                continue
+            try:
+                if len(frames) != 3:
+                    raise ValueError("expected 2 frames")
+                h = msgpack.unpackb(frames[1], raw=False)
+                body = msgpack.unpackb(frames[2], raw=False)
+                if not isinstance(h, dict) or h.get("v") != 1:
+                    raise ValueError("bad header")
+            except Exception as e:
+                if a.mode != "silent_on_malformed":
+                    refuse(peer, 0, "bad_message", str(e))
+                continue
+            if h.get("t") != REQUEST or h.get("op") != "shade":
+                refuse(peer, h.get("id", 0), "unknown_op", "serves only 'shade'")
+                continue
+            n = body.get("n", 0)
+            if inputs and a.mode != "ignore_input":
+                rid = next_id[0]
+                next_id[0] += 1
+                waiting[rid] = (peer, h["id"], n)
+                inputs[0].send_multipart([header(REQUEST, "shade", rid), frames[2]])
+            else:
+                reply(peer, h["id"], n, struct.pack("<%df" % (3 * n), *([0.25] * (3 * n))))
+        for s in inputs:
+            while s.poll(0):
+                h, body = (msgpack.unpackb(f, raw=False) for f in s.recv_multipart())
+                if h.get("id") in waiting:
+                    peer, id, n = waiting.pop(h["id"])
+                    reply(peer, id, n, body.get("L", b""))
+    return 3
 
 
 if __name__ == "__main__":
