@@ -1,5 +1,6 @@
 #pragma once
-// Scene: triangles with materials, and the emitters among them. Built-in scenes or OBJ+MTL via tinyobjloader.
+// Scene: triangles with materials, and the emitters among them. Built from a built-in scene (builtin_scenes.cpp) or
+// an OBJ+MTL file via tinyobjloader (obj_scene.cpp), plus the lights a script adds (script_lights.cpp).
 #include <array>
 #include <cstdint>
 #include <string>
@@ -28,6 +29,11 @@ struct Material {
 // 4, 6, 7 and 9 glass (Ni), 2 with Ks > 0 and Ns > 0 glossy, anything else diffuse. Kd + Ks is scaled to at most 1
 // so that no surface creates energy.
 Material material_from_mtl(std::string name, RGB kd, RGB ks, RGB ke, float ns, float ni, int illum);
+
+struct Bounds {
+  Vec3 lo, hi;
+  float diagonal() const { return length(hi - lo); }
+};
 
 struct PointLight {
   Vec3 position;
@@ -66,6 +72,8 @@ class Scene {
   // Probability that pick_emitter chooses triangle t (0 for non-emitters).
   float emitter_probability_of_triangle(uint32_t t) const { return triangle_light_pdf_[t]; }
 
+  // The box around every vertex (after finalize()).
+  const Bounds& bounds() const { return bounds_; }
   // A distance small against the scene's size, for offsetting ray origins.
   float epsilon() const { return epsilon_; }
 
@@ -89,6 +97,7 @@ class Scene {
   std::vector<float> emitter_cdf_;
   std::vector<float> emitter_pdf_;
   std::vector<float> triangle_light_pdf_;
+  Bounds bounds_;
   float epsilon_ = 1e-4f;
 };
 

@@ -113,3 +113,18 @@ TEST(Scene, EveryMcGuireSceneWithALightLoads) {
 }
 
 }  // namespace lf
+
+namespace lf {
+TEST(Scene, BoundsHoldEveryVertexAndGiveTheDiagonal) {
+  auto s = Scene::builtin("cornell");
+  ASSERT_TRUE(s.ok());
+  const Bounds& b = s->bounds();
+  for (const Vec3& v : s->vertices())
+    for (int c = 0; c < 3; ++c) {
+      EXPECT_LE(b.lo[c], v[c]);
+      EXPECT_GE(b.hi[c], v[c]);
+    }
+  // The published box: 556 x 548.8 x 559.2 mm.
+  EXPECT_NEAR(b.diagonal(), std::sqrt(556.0f * 556.0f + 548.8f * 548.8f + 559.2f * 559.2f), 1.0f);
+}
+}  // namespace lf

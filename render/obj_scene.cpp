@@ -1,0 +1,99 @@
+// OBJ + MTL scenes through tinyobjloader, and how an MTL material becomes one of ours.
+#include <tiny_obj_loader.h>
+
+#include <algorithm>
+#include <filesystem>
+
+#include "render/scene.hpp"
+
+namespace lf {
+
+Material material_from_mtl(std::string name, RGB kd, RGB ks, RGB ke, float ns, float ni, int illum) {
+  Material m{std::move(name), kd, ke};
+  m.ks = ks;
+  m.ns = ns;
+  m.ior = ni > 1.0f ? ni : 1.5f;
+  if (illum == 3 || illum == 5) {
+    m.type = Material::Type::mirror;
+    if (is_black(m.ks)) m.ks = {1, 1, 1};
+    m.kd = {};
+  } else if (illum == 4 || illum == 6 || illum == 7 || illum == 9) {
+    m.type = Material::Type::glass;
+    m.kd = {};
+  } else if (illum == 2 && !is_black(ks) && ns > 0) {
+    m.type = Material::Type::glossy;
+    // Per channel kd + ks <= 1.
+    const RGB sum = m.kd + m.ks;
+    const float peak = std::max({sum.x, sum.y, sum.z});
+    if (peak > 1.0f) {
+      m.kd *= 1.0f / peak;
+      m.ks *= 1.0f / peak;
+    }
+  } else {
+    m.ks = {};
+  }
+  return m;
+}
+
+Result<Scene> Scene::load_obj(const std::string& path) {
+  auto s = load_obj_unlit(path);
+  if (!s) return s;
+  if (auto st = s->finalize("scene file '" + path + "'"); !st) return st.error();
+  return s;
+}
+
+Result<Scene> Scene::load_obj_unlit(const std::string& path) {
+  std::error_code ec;
+  if (!std::filesystem::is_regular_file(path, ec)) return make_error("scene file '" + path + "' not found");
+  tinyobj::ObjReaderConfig config;
+  config.triangulate = true;
+  config.vertex_color = false;
+  config.mtl_search_path = std::filesystem::path(path).parent_path().string();
+  tinyobj::ObjReader reader;
+  if (!reader.ParseFromFile(path, config)) {
+    std::string why = reader.Error();
+    while (!why.empty() && (why.back() == '\n' || why.back() == '\r')) why.pop_back();
+    return make_error("cannot read scene file '" + path + "': " + (why.empty() ? "parse error" : why));
+  }
+  const auto& attrib = reader.GetAttrib();
+  const auto& materials = reader.GetMaterials();
+  Scene s;
+  for (const auto& m : materials) {
+    s.add_material(material_from_mtl(m.name, {m.diffuse[0], m.diffuse[1], m.diffuse[2]},
+                                     {m.specular[0], m.specular[1], m.specular[2]},
+                                     {m.emission[0], m.emission[1], m.emission[2]}, m.shininess, m.ior, m.illum));
+  }
+  // Faces without a material get a neutral grey, as most renderers do.
+  const auto fallback = s.add_material({"(default)", {0.5f, 0.5f, 0.5f}, {}});
+  const size_t vertex_count = attrib.vertices.size() / 3;
+  for (const auto& shape : reader.GetShapes()) {
+    const auto& mesh = shape.mesh;
+    size_t index = 0;
+    for (size_t f = 0; f < mesh.num_face_vertices.size(); ++f) {
+      const size_t corners = mesh.num_face_vertices[f];
+      if (corners != 3) {
+        index += corners;
+        continue;
+      }
+      Vec3 p[3];
+      bool valid = true;
+      for (size_t c = 0; c < 3; ++c) {
+        int vi = mesh.indices[index + c].vertex_index;
+        if (vi < 0 || static_cast<size_t>(vi) >= vertex_count) {
+          valid = false;
+          break;
+        }
+        p[c] = {attrib.vertices[3 * vi], attrib.vertices[3 * vi + 1], attrib.vertices[3 * vi + 2]};
+      }
+      index += 3;
+      if (!valid) return make_error("scene file '" + path + "': a face refers to a vertex that does not exist");
+      int mid = f < mesh.material_ids.size() ? mesh.material_ids[f] : -1;
+      uint32_t material = (mid >= 0 && static_cast<size_t>(mid) < materials.size()) ? static_cast<uint32_t>(mid)
+                                                                                      : fallback;
+      s.add_triangle(p[0], p[1], p[2], material);
+    }
+  }
+  return s;
+}
+
+}  // namespace lf

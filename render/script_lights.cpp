@@ -1,0 +1,46 @@
+// The lights a farm script adds to a scene (light { quad | sphere | point }).
+#include "render/scene.hpp"
+
+namespace lf {
+
+static bool vec3_of(const Value* v, Vec3& out) {
+  if (!v || !v->is_array() || v->as_array().size() != 3) return false;
+  for (const auto& e : v->as_array())
+    if (!e.is_number()) return false;
+  const auto& a = v->as_array();
+  out = {static_cast<float>(a[0].as_double()), static_cast<float>(a[1].as_double()), static_cast<float>(a[2].as_double())};
+  return true;
+}
+
+Status Scene::add_script_lights(const Value::Array& lights) {
+  for (size_t i = 0; i < lights.size(); ++i) {
+    const Value& l = lights[i];
+    const std::string which = "light " + std::to_string(i + 1);
+    Vec3 colour;
+    if (const Value* q = l.find("quad")) {
+      if (!vec3_of(l.find("radiance"), colour)) return make_error(which + ": radiance must be {r, g, b}");
+      Vec3 c[4];
+      if (!q->is_array() || q->as_array().size() != 4) return make_error(which + ": quad needs 4 corners");
+      for (int k = 0; k < 4; ++k)
+        if (!vec3_of(&q->as_array()[static_cast<size_t>(k)], c[k])) return make_error(which + ": a corner is not {x, y, z}");
+      add_quad(c[0], c[1], c[2], c[3], add_material({"light (script)", {}, colour}));
+    } else if (const Value* sph = l.find("sphere")) {
+      Vec3 centre;
+      const Value* r = l.find("radius");
+      if (!vec3_of(sph, centre) || !r || !r->is_number() || !(r->as_double() > 0))
+        return make_error(which + ": sphere needs a centre {x, y, z} and a radius > 0");
+      if (!vec3_of(l.find("radiance"), colour)) return make_error(which + ": radiance must be {r, g, b}");
+      add_sphere(centre, static_cast<float>(r->as_double()), 3, add_material({"light (script)", {}, colour}));
+    } else if (const Value* p = l.find("point")) {
+      Vec3 at;
+      if (!vec3_of(p, at)) return make_error(which + ": point must be {x, y, z}");
+      if (!vec3_of(l.find("intensity"), colour)) return make_error(which + ": intensity must be {r, g, b}");
+      add_point_light(at, colour);
+    } else {
+      return make_error(which + ": give quad, sphere or point");
+    }
+  }
+  return Ok{};
+}
+
+}  // namespace lf
