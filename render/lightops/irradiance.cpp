@@ -36,7 +36,7 @@ class Irradiance final : public LightOp {
   Task setup(SceneContext ctx, Inputs& inputs) override {
     ctx_ = ctx;
     const Scene& scene = *ctx.scene;
-    extent_ = 1e4f * scene.epsilon();  // the scene's diagonal
+    extent_ = scene.bounds().diagonal();
     cache_ = std::make_unique<IrradianceCache>(a_, extent_);
     if (inputs.count() != 1) throw LightOpError("irradiance needs one input");
     SoloExchange solo;
