@@ -1,4 +1,5 @@
-# ctest "layering": algorithm code (render/, radiosity/) must not include ZeroMQ, msgpack or transport headers.
+# ctest "layering": algorithm code (render/, radiosity/) must not include ZeroMQ, msgpack or transport headers, and
+# no code compares an operation or phase name as a string.
 # Run as: cmake -DSOURCE_DIR=... -P check_layering.cmake
 set(violations "")
 foreach(dir render radiosity)
@@ -16,3 +17,26 @@ if(violations)
   message(FATAL_ERROR "algorithm code reaches the network:\n  ${text}")
 endif()
 message(STATUS "layering ok: render/ and radiosity/ include no network code")
+
+# Operations and phases are types (transport/protocol.hpp); their wire names live in one table
+# (transport/message.cpp). Nothing else compares a string against one of them.
+set(names "shade|tile|tile_done|all_gather|fetch|ring\\.[a-z]+|configure|setup|render|finish")
+set(string_compare "")
+foreach(dir core transport render radiosity farm lua actors cli tests bench)
+  file(GLOB_RECURSE files "${SOURCE_DIR}/${dir}/*.cpp" "${SOURCE_DIR}/${dir}/*.hpp")
+  foreach(f IN LISTS files)
+    if(f MATCHES "transport/message\\.cpp$")
+      continue()
+    endif()
+    file(STRINGS "${f}" lines REGEX "(==|!=)[ \t]*\"(${names})\"|\"(${names})\"[ \t]*(==|!=)|\\.op[ \t]*(==|!=)[ \t]*\"|compare\\(\"(${names})\"\\)")
+    foreach(line IN LISTS lines)
+      file(RELATIVE_PATH rel "${SOURCE_DIR}" "${f}")
+      list(APPEND string_compare "${rel}: ${line}")
+    endforeach()
+  endforeach()
+endforeach()
+if(string_compare)
+  list(JOIN string_compare "\n  " text)
+  message(FATAL_ERROR "operation or phase names compared as strings (use wire::Op / wire::Phase):\n  ${text}")
+endif()
+message(STATUS "layering ok: operations and phases are compared as types")
