@@ -12,6 +12,12 @@ std::string unique_name(const FarmSpec& spec, const std::string& wanted) {
     if (spec.find(wanted + "-" + std::to_string(i)) < 0) return wanted + "-" + std::to_string(i);
 }
 
+int add_actor(FarmSpec& spec, ActorSpec actor) {
+  actor.name = unique_name(spec, actor.name);
+  spec.actors.push_back(std::move(actor));
+  return static_cast<int>(spec.actors.size() - 1);
+}
+
 bool is_wired(const FarmSpec& spec, int i) {
   if (spec.lighting == i) return true;
   for (const auto& a : spec.actors)

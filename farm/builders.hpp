@@ -14,6 +14,8 @@ namespace lf {
 
 // `wanted`, or wanted-2, wanted-3, ... : the first name no actor has.
 std::string unique_name(const FarmSpec& spec, const std::string& wanted);
+// Adds `actor` under the first free name from its own (direct, direct-2, ...); returns its index.
+int add_actor(FarmSpec& spec, ActorSpec actor);
 // True when actor `i` is the renderers' lighting or some actor's input.
 bool is_wired(const FarmSpec& spec, int i);
 

@@ -7,13 +7,8 @@ namespace lf {
 namespace {
 
 int add(FarmSpec& s, const std::string& name, const std::string& kind, std::vector<int> inputs = {}) {
-  ActorSpec a;
-  a.name = name;
-  a.kind = kind;
-  a.inputs = std::move(inputs);
-  a.loc = {"farm.lua", static_cast<int>(s.actors.size()) + 1};
-  s.actors.push_back(a);
-  return static_cast<int>(s.actors.size() - 1);
+  const int line = static_cast<int>(s.actors.size()) + 1;
+  return add_actor(s, ActorSpec{.name = name, .kind = kind, .inputs = std::move(inputs), .loc = {"farm.lua", line}});
 }
 
 std::vector<std::string> names(const FarmSpec& s) {
@@ -25,7 +20,7 @@ std::vector<std::string> names(const FarmSpec& s) {
 TEST(Builders, UniqueNamesCountUp) {
   FarmSpec s;
   add(s, "direct", "direct");
-  add(s, "direct-2", "direct");
+  EXPECT_EQ(s.actors[static_cast<size_t>(add(s, "direct", "direct"))].name, "direct-2");
   EXPECT_EQ(unique_name(s, "direct"), "direct-3");
   EXPECT_EQ(unique_name(s, "photons"), "photons");
 }

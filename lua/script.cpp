@@ -298,9 +298,8 @@ int l_lightop_table(lua_State* L) {
   ParamTable params = table_params(L, 1, "lightop '" + kind_name + "'");
   with_params(L, [&] { create_lightop(*kind, params); });  // the op validates its own parameters
   a.params = params.values();
-  a.name = unique_name(b.spec, wanted);
-  b.spec.actors.push_back(std::move(a));
-  push_actor(L, static_cast<int>(b.spec.actors.size() - 1));
+  a.name = wanted;
+  push_actor(L, add_actor(b.spec, std::move(a)));
   return 1;
 }
 
@@ -356,9 +355,8 @@ int l_lightop_exec(lua_State* L) {
   a.params = to_value(L, 1, "lightop.exec").as_map();
   a.runtime["cmd"] = std::move(cmd);
   a.runtime["cwd"] = b.script_dir.string();
-  a.name = unique_name(b.spec, wanted);
-  b.spec.actors.push_back(std::move(a));
-  push_actor(L, static_cast<int>(b.spec.actors.size() - 1));
+  a.name = wanted;
+  push_actor(L, add_actor(b.spec, std::move(a)));
   return 1;
 }
 

@@ -218,31 +218,25 @@ class Checker {
   std::string shade(size_t n, uint64_t id) {
     n = std::min(n, points_.size());
     data_->send(wire::make_request("check-renderer", wire::Op::shade, encode_shade_request(points_, 0, n), id));
-    const auto deadline = Clock::now() + std::chrono::duration<double>(options_.timeout);
-    wire::Poller poller;
-    poller.add(*data_);
-    while (Clock::now() < deadline) {
-      pump_fake_input();
-      poller.wait(10);
-      while (auto in = data_->receive()) {
-        if (!in->message) return "undecodable reply: " + in->message.error().message;
-        const auto& m = *in->message;
-        if (m.header.id != id) continue;  // e.g. an ERROR for an earlier malformed packet
-        if (m.header.type == MsgType::error) {
-          const Value* text = m.body.find("message");
-          return "ERROR for " + std::to_string(n) + " points: " + (text && text->is_string() ? text->as_string() : "?");
-        }
-        if (m.header.type != MsgType::reply) return "expected REPLY, got " + std::string(wire::type_name(m.header.type));
-        auto radiance = decode_radiance(m.body, n);  // n must agree with the request and with the data
-        if (!radiance) return radiance.error().message;
-        for (const RGB& c : *radiance)
-          if (!std::isfinite(c.x) || !std::isfinite(c.y) || !std::isfinite(c.z) || c.x < 0 || c.y < 0 || c.z < 0)
-            return "radiance must be finite and non-negative";
-        return {};
+    while (true) {
+      auto m = next_data();
+      if (!m) {
+        if (exit_) return m.error().message + " while shading " + std::to_string(n) + " points";
+        if (m.error().code == ErrorCode::timeout)
+          return "no REPLY to " + std::to_string(n) + " points within " + seconds_text(options_.timeout);
+        return m.error().message;
       }
-      if (auto e = launcher_.reap_one()) return "the actor " + e->describe() + " while shading " + std::to_string(n) + " points";
+      if (m->header.id != id) continue;  // e.g. an ERROR for an earlier malformed packet
+      if (m->header.type == MsgType::error)
+        return "ERROR for " + std::to_string(n) + " points: " + wire::error_of(*m).message;
+      if (m->header.type != MsgType::reply) return "expected REPLY, got " + std::string(wire::type_name(m->header.type));
+      auto radiance = decode_radiance(m->body, n);  // n must agree with the request and with the data
+      if (!radiance) return radiance.error().message;
+      for (const RGB& c : *radiance)
+        if (!std::isfinite(c.x) || !std::isfinite(c.y) || !std::isfinite(c.z) || c.x < 0 || c.y < 0 || c.z < 0)
+          return "radiance must be finite and non-negative";
+      return {};
     }
-    return "no REPLY to " + std::to_string(n) + " points within " + seconds_text(options_.timeout);
   }
 
   std::string requests() {
@@ -269,7 +263,7 @@ class Checker {
         return make_error("the actor " + e->describe());
       }
     }
-    return make_error("nothing within " + seconds_text(options_.timeout));
+    return make_error("nothing within " + seconds_text(options_.timeout), ErrorCode::timeout);
   }
 
   std::string malformed() {

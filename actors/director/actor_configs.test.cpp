@@ -10,17 +10,9 @@ namespace {
 
 TEST(ActorConfigs, EachAskerUsesItsOwnWindowForItsInputs) {
   FarmSpec spec;
-  ActorSpec direct;
-  direct.name = "direct";
-  direct.kind = "direct";
-  spec.actors.push_back(direct);
-  ActorSpec cache;
-  cache.name = "cache";
-  cache.kind = "irradiance";
-  cache.inputs = {0};
-  spec.actors.push_back(cache);
+  const int direct = add_actor(spec, ActorSpec{.name = "direct", .kind = "direct"});
   PoolSpec pool;
-  pool.op = 1;
+  pool.op = add_actor(spec, ActorSpec{.name = "cache", .kind = "irradiance", .inputs = {direct}});
   pool.replicas = 2;
   pool.params.window = 7;
   pool.slowdown = {1, 3};

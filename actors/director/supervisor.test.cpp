@@ -55,13 +55,8 @@ struct SupervisorTest : ::testing::Test {
 
   // Two renderers asking a pool of two `direct` replicas.
   void SetUp() override {
-    ActorSpec direct;
-    direct.name = "direct";
-    direct.kind = "direct";
-    direct.loc = {"farm.lua", 3};
-    spec.actors.push_back(direct);
     PoolSpec pool;
-    pool.op = 0;
+    pool.op = add_actor(spec, ActorSpec{.name = "direct", .kind = "direct", .loc = {"farm.lua", 3}});
     auto mux = replicate(spec, pool);
     ASSERT_TRUE(mux.ok());
     add_renderers(spec, 2, *mux, RendererParams{}, "local", {"farm.lua", 5});
@@ -202,12 +197,8 @@ TEST_F(SupervisorTest, InTheFinishStageACleanExitIsAnActorFinishing) {
 
 TEST(SupervisorNested, AnEmptiedInnerPoolIsALostReplicaOfTheOuterOne) {
   FarmSpec spec;
-  ActorSpec direct;
-  direct.name = "direct";
-  direct.kind = "direct";
-  spec.actors.push_back(direct);
   PoolSpec inner;
-  inner.op = 0;
+  inner.op = add_actor(spec, ActorSpec{.name = "direct", .kind = "direct"});
   auto in = replicate(spec, inner);
   PoolSpec outer;
   outer.op = *in;

@@ -6,9 +6,8 @@
 
 #include <gtest/gtest.h>
 
-#include <thread>
-
 #include "actors/codecs/shade_codec.hpp"
+#include "actors/runtime/inproc_actor.hpp"
 
 namespace lf {
 namespace {
@@ -23,52 +22,36 @@ struct Held {
 
 class MultiplexerWindowTest : public ::testing::Test {
  protected:
-  wire::Socket director{wire::Socket::Kind::router};
+  test::InprocActor pool{"multiplexer", "pool", [] { return make_multiplexer_actor(); }};
   wire::Socket replica[2] = {wire::Socket(wire::Socket::Kind::router), wire::Socket(wire::Socket::Kind::router)};
   std::string replica_endpoint[2];
-  std::string data;
-  std::thread thread;
-  int exit_status = -1;
+  wire::Socket renderer{wire::Socket::Kind::dealer, "renderer-0"};
 
   void SetUp() override {
     static int n = 0;
     ++n;
-    const std::string tag = std::to_string(n);
-    const std::string control = *director.bind("inproc://mux-director-" + tag);
-    for (int r = 0; r < 2; ++r) replica_endpoint[r] = *replica[r].bind("inproc://mux-replica-" + tag + "-" + std::to_string(r));
-    ActorArgs args{"multiplexer", "pool", control, "inproc://mux-data-" + tag};
-    thread = std::thread([this, args] {
-      auto actor = make_multiplexer_actor();
-      Runtime rt(args);
-      exit_status = rt.run(*actor);
-    });
-  }
-  void TearDown() override {
-    director.send_to("pool", wire::make(MsgType::bye, "director"));
-    thread.join();
+    for (int r = 0; r < 2; ++r)
+      replica_endpoint[r] = *replica[r].bind("inproc://mux-replica-" + std::to_string(n) + "-" + std::to_string(r));
   }
 
-  static std::optional<wire::Incoming> receive(wire::Socket& s, int ms) {
-    wire::Poller p;
-    p.add(s);
-    for (int i = 0; i < ms / 5; ++i) {
-      if (auto in = s.receive()) return in;
-      p.wait(5);
-    }
-    return std::nullopt;
-  }
+  static std::optional<wire::Incoming> receive(wire::Socket& s, int ms) { return test::InprocActor::poll(s, ms / 1000.0); }
 
   void bring_up(const std::string& strategy, int64_t window) {
-    auto hello = receive(director, 5000);
-    ASSERT_TRUE(hello && hello->message.ok());
-    data = hello->message->body.find("endpoint")->as_string();
+    pool.next(MsgType::hello);
     ActorConfig config;
     config.params = Value::Map{{"strategy", strategy}, {"window", window}};
     for (int r = 0; r < 2; ++r) config.inputs.push_back({"pool." + std::to_string(r), replica_endpoint[r], window});
-    director.send_to("pool", wire::make(MsgType::config, "director", config.to_value()));
-    auto ready = receive(director, 5000);
-    ASSERT_TRUE(ready && ready->message.ok());
-    ASSERT_EQ(wire::phase_of(ready->message->header), wire::Phase::configure);
+    pool.send(wire::make(MsgType::config, "director", config.to_value()));
+    ASSERT_EQ(wire::phase_of(pool.next(MsgType::ready).header), wire::Phase::configure);
+    ASSERT_TRUE(renderer.connect(pool.data_endpoint()).ok());
+  }
+
+  // `count` shade requests of `n` points each, ids 1..count, all sent at once.
+  void send_requests(uint64_t count, size_t n) {
+    ShadingPoints pts;
+    for (size_t i = 0; i < n; ++i) pts.push_back({1, 1, 1}, {0, 1, 0}, {0, 1, 0}, 0, i);
+    for (uint64_t id = 1; id <= count; ++id)
+      renderer.send(wire::make_request("renderer-0", wire::Op::shade, encode_shade_request(pts, 0, pts.size()), id));
   }
 
   // Everything that reached replica r within `ms`.
@@ -87,19 +70,9 @@ class MultiplexerWindowTest : public ::testing::Test {
   }
 };
 
-ShadingPoints points(size_t n) {
-  ShadingPoints pts;
-  for (size_t i = 0; i < n; ++i) pts.push_back({1, 1, 1}, {0, 1, 0}, {0, 1, 0}, 0, i);
-  return pts;
-}
-
 TEST_F(MultiplexerWindowTest, NoReplicaEverHoldsMoreThanTheWindow) {
   bring_up("round_robin", 3);
-  wire::Socket renderer(wire::Socket::Kind::dealer, "renderer-0");
-  ASSERT_TRUE(renderer.connect(data).ok());
-  const auto pts = points(4);
-  for (uint64_t id = 1; id <= 20; ++id)
-    renderer.send(wire::make_request("renderer-0", wire::Op::shade, encode_shade_request(pts, 0, pts.size()), id));
+  send_requests(20, 4);
   auto held0 = drain(0), held1 = drain(1);
   EXPECT_EQ(held0.size(), 3u);  // the window, not the 4-window stall cap of round robin (12)
   EXPECT_EQ(held1.size(), 3u);
@@ -115,16 +88,12 @@ TEST_F(MultiplexerWindowTest, NoReplicaEverHoldsMoreThanTheWindow) {
 
 TEST_F(MultiplexerWindowTest, AWindowOfOneIsOnePacketPerReplica) {
   bring_up("least_loaded", 1);
-  wire::Socket renderer(wire::Socket::Kind::dealer, "renderer-0");
-  ASSERT_TRUE(renderer.connect(data).ok());
-  const auto pts = points(2);
-  for (uint64_t id = 1; id <= 6; ++id)
-    renderer.send(wire::make_request("renderer-0", wire::Op::shade, encode_shade_request(pts, 0, pts.size()), id));
+  send_requests(6, 2);
   auto held0 = drain(0), held1 = drain(1);
   EXPECT_EQ(held0.size(), 1u);
   EXPECT_EQ(held1.size(), 1u);
   // A lost replica's packet goes to the other, still one at a time.
-  director.send_to("pool", wire::make(MsgType::peer_down, "director", Value::Map{{"name", "pool.1"}}));
+  pool.send(wire::make(MsgType::peer_down, "director", Value::Map{{"name", "pool.1"}}));
   answer(0, held0[0]);
   size_t answered = 1;
   for (int round = 0; round < 10 && answered < 6; ++round) {

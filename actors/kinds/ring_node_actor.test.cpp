@@ -2,9 +2,8 @@
 // hostile peer) over inproc:// sockets. A 1x1 ring needs no other node.
 #include <gtest/gtest.h>
 
-#include <thread>
-
 #include "actors/kinds/ring_node_actor.hpp"
+#include "actors/runtime/inproc_actor.hpp"
 
 namespace lf {
 namespace {
@@ -13,51 +12,11 @@ using wire::MsgType;
 
 class RingNodeActorTest : public ::testing::Test {
  protected:
-  wire::Socket director{wire::Socket::Kind::router};
-  std::string data;
-  std::thread thread;
-  int exit_status = -1;
+  test::InprocActor node{"radiosity_node", "radiosity.0.0", [] { return make_ring_node_actor(); }};
+  wire::Socket& director = node.director;
 
-  void SetUp() override {
-    static int n = 0;
-    ++n;
-    const std::string control = *director.bind("inproc://ring-director-" + std::to_string(n));
-    ActorArgs args{"radiosity_node", "radiosity.0.0", control, "inproc://ring-node-" + std::to_string(n)};
-    thread = std::thread([this, args] {
-      auto actor = make_ring_node_actor();
-      Runtime rt(args);
-      exit_status = rt.run(*actor);
-    });
-  }
-  void TearDown() override {
-    if (thread.joinable()) {
-      director.send_to("radiosity.0.0", wire::make(MsgType::bye, "director"));
-      thread.join();
-    }
-  }
-
-  static wire::Incoming receive(wire::Socket& s) {
-    wire::Poller p;
-    p.add(s);
-    for (int i = 0; i < 1000; ++i) {
-      if (auto in = s.receive()) return std::move(*in);
-      p.wait(10);
-    }
-    ADD_FAILURE() << "nothing arrived within 10 s";
-    return wire::Incoming{{}, make_error("timeout"), 0};
-  }
-
-  // The next message of `type` from the node (heartbeats and STATS in between are skipped).
-  wire::Message next(MsgType type) {
-    while (true) {
-      auto in = receive(director);
-      if (!in.message.ok()) return {};
-      if (in.message->header.type == MsgType::heartbeat && type != MsgType::heartbeat) continue;
-      EXPECT_EQ(in.message->header.type, type) << wire::type_name(in.message->header.type) << " "
-                                               << to_json(in.message->body);
-      return std::move(*in.message);
-    }
-  }
+  static wire::Incoming receive(wire::Socket& s) { return test::InprocActor::receive(s); }
+  wire::Message next(MsgType type) { return node.next(type); }
 
   void reply(const wire::Message& request, Value body) {
     director.send_to("radiosity.0.0", wire::make_reply("director", request.header.id, std::move(body)));
@@ -65,8 +24,8 @@ class RingNodeActorTest : public ::testing::Test {
 };
 
 TEST_F(RingNodeActorTest, SolvesThroughTheDirectorAndRefusesHostilePackets) {
-  auto hello = next(MsgType::hello);
-  data = hello.body.find("endpoint")->as_string();
+  next(MsgType::hello);
+  const std::string data = node.data_endpoint();
   director.send_to("radiosity.0.0",
                    wire::make(MsgType::config, "director",
                               Value::Map{{"params", Value::Map{{"node", 0}, {"patch_size", 140.0}, {"max_iterations", 3}}},
@@ -143,8 +102,7 @@ TEST_F(RingNodeActorTest, SolvesThroughTheDirectorAndRefusesHostilePackets) {
   auto stats = next(MsgType::stats);
   EXPECT_GT(stats.body.find("detail")->find("rays")->as_int(), 0);
   next(MsgType::bye);
-  thread.join();
-  EXPECT_EQ(exit_status, 0);
+  EXPECT_EQ(node.join(), 0);
 }
 
 }  // namespace

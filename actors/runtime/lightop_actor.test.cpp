@@ -2,8 +2,7 @@
 // the director and a renderer over inproc:// sockets (CZMQ's habit), and checks every reply.
 #include <gtest/gtest.h>
 
-#include <thread>
-
+#include "actors/runtime/inproc_actor.hpp"
 #include "actors/runtime/lightop_actor.hpp"
 #include "actors/codecs/shade_codec.hpp"
 #include "render/lightop_registry.hpp"
@@ -16,63 +15,24 @@ using wire::MsgType;
 
 class LightOpActorTest : public ::testing::Test {
  protected:
-  wire::Socket director{wire::Socket::Kind::router};
-  std::string control, data;
-  std::thread thread;
-  int exit_status = -1;
+  test::InprocActor actor{"direct", "direct", [] { return make_lightop_actor("direct"); }};
 
-  void SetUp() override {
-    static int n = 0;
-    ++n;
-    control = *director.bind("inproc://director-" + std::to_string(n));
-    ActorArgs args{"direct", "direct", control, "inproc://direct-" + std::to_string(n)};
-    thread = std::thread([this, args] {
-      auto actor = make_lightop_actor("direct");
-      Runtime rt(args);
-      exit_status = rt.run(*actor);
-    });
-  }
-  void TearDown() override {
-    if (thread.joinable()) {
-      director.send_to("direct", wire::make(MsgType::bye, "director"));
-      thread.join();
-    }
-  }
-
-  static wire::Incoming receive(wire::Socket& s) {
-    wire::Poller p;
-    p.add(s);
-    for (int i = 0; i < 500; ++i) {
-      if (auto in = s.receive()) return std::move(*in);
-      p.wait(10);
-    }
-    ADD_FAILURE() << "nothing arrived within 5 s";
-    return wire::Incoming{{}, make_error("timeout"), 0};
-  }
-
-  wire::Message expect_from_director_side(MsgType type) {
-    auto in = receive(director);
-    EXPECT_TRUE(in.message.ok()) << in.message.error().message;
-    EXPECT_EQ(in.peer, "direct");
-    EXPECT_EQ(in.message->header.type, type) << wire::type_name(in.message->header.type);
-    return std::move(*in.message);
-  }
+  static wire::Incoming receive(wire::Socket& s) { return test::InprocActor::receive(s); }
 
   // HELLO -> CONFIG -> READY configure -> PHASE setup -> READY setup
   void bring_up(Value::Map params) {
-    auto hello = expect_from_director_side(MsgType::hello);
+    auto hello = actor.next(MsgType::hello);
     EXPECT_EQ(hello.body.find("kind")->as_string(), "direct");
-    data = hello.body.find("endpoint")->as_string();
-    director.send_to("direct", wire::make(MsgType::config, "director",
+    actor.send(wire::make(MsgType::config, "director",
                                           Value::Map{{"params", std::move(params)},
                                                      {"scene", Value::Map{{"builtin", "cornell"}}},
                                                      {"inputs", Value::Array{}}}));
     while (true) {
-      auto m = expect_from_director_side(MsgType::ready);
+      auto m = actor.next(MsgType::ready);
       if (wire::phase_of(m.header) == wire::Phase::configure) break;
     }
-    director.send_to("direct", wire::make_phase("director", wire::Phase::setup));
-    EXPECT_EQ(wire::phase_of(expect_from_director_side(MsgType::ready).header), wire::Phase::setup);
+    actor.send(wire::make_phase("director", wire::Phase::setup));
+    EXPECT_EQ(wire::phase_of(actor.next(MsgType::ready).header), wire::Phase::setup);
   }
 };
 
@@ -86,7 +46,7 @@ ShadingPoints floor_points(size_t n) {
 TEST_F(LightOpActorTest, ShadesLikeTheInProcessOpAndSurvivesBadPackets) {
   bring_up(Value::Map{{"light_samples", 4}});
   wire::Socket renderer(wire::Socket::Kind::dealer, "renderer-0");
-  ASSERT_TRUE(renderer.connect(data).ok());
+  ASSERT_TRUE(renderer.connect(actor.data_endpoint()).ok());
 
   // Garbage, an unknown operation, and an inconsistent batch: each answered with ERROR, none fatal.
   ASSERT_TRUE(renderer.send_raw({"\xc1\xc1", "\x80"}));
@@ -130,27 +90,25 @@ TEST_F(LightOpActorTest, ShadesLikeTheInProcessOpAndSurvivesBadPackets) {
   EXPECT_GT(average((*radiance)[0]), 0.0f);
 
   // finish: STATS counts the one good request, then BYE, then the runtime returns 0.
-  director.send_to("direct", wire::make_phase("director", wire::Phase::finish));
+  actor.send(wire::make_phase("director", wire::Phase::finish));
   wire::Message stats;
-  do stats = expect_from_director_side(MsgType::stats);
+  do stats = actor.next(MsgType::stats);
   while (stats.header.type != MsgType::stats);
   EXPECT_EQ(stats.body.find("requests")->as_int(), 1);
   EXPECT_EQ(stats.body.find("points")->as_int(), 64);
-  expect_from_director_side(MsgType::bye);
-  thread.join();
-  EXPECT_EQ(exit_status, 0);
+  actor.next(MsgType::bye);
+  EXPECT_EQ(actor.join(), 0);
 }
 
 TEST_F(LightOpActorTest, BadParametersFailConfigurationWithTheReason) {
-  expect_from_director_side(MsgType::hello);
-  director.send_to("direct", wire::make(MsgType::config, "director",
+  actor.next(MsgType::hello);
+  actor.send(wire::make(MsgType::config, "director",
                                         Value::Map{{"params", Value::Map{{"light_samples", "many"}}},
                                                    {"scene", Value::Map{{"builtin", "cornell"}}}}));
-  auto err = expect_from_director_side(MsgType::error);
+  auto err = actor.next(MsgType::error);
   EXPECT_EQ(err.body.find("message")->as_string(),
             "lightop 'direct': parameter 'light_samples' must be an integer, got a string");
-  thread.join();
-  EXPECT_EQ(exit_status, 1);
+  EXPECT_EQ(actor.join(), 1);
 }
 
 }  // namespace
