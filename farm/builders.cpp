@@ -30,6 +30,9 @@ namespace {
 
 ActorSpec& at(FarmSpec& spec, int i) { return spec.actors[static_cast<size_t>(i)]; }
 
+// hosts[i % n], or "local" for an empty list.
+std::string spread(const std::vector<std::string>& hosts, size_t i) { return hosts.empty() ? "local" : hosts[i % hosts.size()]; }
+
 // The actor itself and, for a multiplexer, its replicas' subtrees (not their inputs, which replicas share).
 void subtree(const FarmSpec& spec, int i, std::vector<int>& out) {
   out.push_back(i);
@@ -90,6 +93,12 @@ Result<int> replicate(FarmSpec& spec, const PoolSpec& pool) {
       if (!moving.count(static_cast<int>(i)) && spec.actors[i].name == name)
         return make_error("multiplexer: replica name '" + name + "' is already taken");
   for (const auto& [n, name] : new_names) at(spec, n).name = name;
+  if (!pool.hosts.empty())
+    for (int r = 0; r < pool.replicas; ++r) {
+      std::vector<int> mine;
+      subtree(spec, roots[static_cast<size_t>(r)], mine);
+      for (int n : mine) at(spec, n).host = spread(pool.hosts, static_cast<size_t>(r));
+    }
   for (size_t r = 0; r < pool.slowdown.size(); ++r) {
     if (pool.slowdown[r] == 1.0) continue;
     ActorSpec& root = at(spec, roots[r]);
@@ -102,14 +111,14 @@ Result<int> replicate(FarmSpec& spec, const PoolSpec& pool) {
   m.kind = kMultiplexerKind;
   m.params = pool.params.to_map();
   m.inputs = roots;
-  m.host = pool.host;
+  m.host = spread(pool.hosts, 0);
   m.loc = pool.loc;
   spec.actors.push_back(std::move(m));
   return static_cast<int>(spec.actors.size() - 1);
 }
 
-void add_renderers(FarmSpec& spec, int count, int lighting, const RendererParams& params, const std::string& host,
-                   const SourceLoc& loc) {
+void add_renderers(FarmSpec& spec, int count, int lighting, const RendererParams& params,
+                   const std::vector<std::string>& hosts, const SourceLoc& loc) {
   spec.lighting = lighting;
   for (int i = 0; i < count; ++i) {
     ActorSpec a;
@@ -117,14 +126,14 @@ void add_renderers(FarmSpec& spec, int count, int lighting, const RendererParams
     a.kind = kRendererKind;
     a.params = params.to_map();
     a.inputs = {lighting};
-    a.host = host;
+    a.host = spread(hosts, static_cast<size_t>(i));
     a.loc = loc;
     spec.actors.push_back(std::move(a));
   }
 }
 
 Result<int> expand_ring(FarmSpec& spec, const radiosity::RingConfig& config, const Value::Map& params,
-                        const std::string& name, const std::string& host, const SourceLoc& loc) {
+                        const std::string& name, const std::vector<std::string>& hosts, const SourceLoc& loc) {
   if (spec.find(name) >= 0) return make_error("radiosity: name '" + name + "' is already taken");
   const int first = static_cast<int>(spec.actors.size());
   const int nodes = config.layout.nodes();
@@ -137,14 +146,14 @@ Result<int> expand_ring(FarmSpec& spec, const radiosity::RingConfig& config, con
     n.params["node"] = static_cast<int64_t>(i);
     for (int j = 0; j < nodes; ++j)
       if (j != i) n.inputs.push_back(first + j);
-    n.host = host;
+    n.host = spread(hosts, static_cast<size_t>(i));
     n.loc = loc;
     spec.actors.push_back(std::move(n));
   }
   ActorSpec op;
   op.kind = "radiosity";
   op.name = name;  // the op reads the solution, not the ring's settings: it takes no parameters
-  op.host = host;
+  op.host = spread(hosts, 0);
   op.loc = loc;
   spec.actors.push_back(std::move(op));
   return static_cast<int>(spec.actors.size() - 1);

@@ -19,15 +19,19 @@ int add_actor(FarmSpec& spec, ActorSpec actor);
 // True when actor `i` is the renderers' lighting or some actor's input.
 bool is_wired(const FarmSpec& spec, int i);
 
+// Placement lists (host = {h1, h2, ...}) spread actors round robin in declaration order: replica, renderer or ring
+// node i goes to hosts[i % n], and a pool's multiplexer or a ring's LightOp to hosts[0].
+
 // A pool: actor `op` (with, for a nested multiplexer, its replicas) becomes replica 0 and `replicas` - 1 copies are
 // added; the replicas are renamed NAME.0, NAME.1, ... (inner replicas NAME.1.0, ...), and a multiplexer named `name`
-// (usually the op's own: to the network the pool is that op) is added over them.
+// (usually the op's own: to the network the pool is that op) is added over them. With `hosts`, replica i and its
+// subtree go to hosts[i % n]; without, the replicas stay where the op was placed and the multiplexer is local.
 struct PoolSpec {
   int op = -1;
   int replicas = 2;
   std::string name;  // empty: the op's name
   MultiplexerParams params;
-  std::string host = "local";
+  std::vector<std::string> hosts;
   SourceLoc loc;
   std::vector<double> slowdown;  // debug: one factor >= 1 per replica, or empty
 };
@@ -35,14 +39,14 @@ struct PoolSpec {
 Result<int> replicate(FarmSpec& spec, const PoolSpec& pool);
 
 // `count` renderers renderer-0 .. renderer-(count-1), all asking actor `lighting`.
-void add_renderers(FarmSpec& spec, int count, int lighting, const RendererParams& params, const std::string& host,
-                   const SourceLoc& loc);
+void add_renderers(FarmSpec& spec, int count, int lighting, const RendererParams& params,
+                   const std::vector<std::string>& hosts, const SourceLoc& loc);
 
 // A radiosity ring: rings x ring_length `radiosity_node` actors NAME.RING.POSITION, each with every other node as an
 // input and `params` plus its own `node` number, then the `radiosity` LightOp named NAME that shades with their
 // solution. Returns the LightOp's index.
 Result<int> expand_ring(FarmSpec& spec, const radiosity::RingConfig& config, const Value::Map& params,
-                        const std::string& name, const std::string& host, const SourceLoc& loc);
+                        const std::string& name, const std::vector<std::string>& hosts, const SourceLoc& loc);
 
 // The checks a finished graph must pass: renderers and their lighting exist, names are unique, inputs are in
 // range and form no cycle, every host is declared, and every LightOp is reachable from the renderers' lighting

@@ -94,7 +94,7 @@ TEST(Builders, RenderersAndTheirParametersAreDefinedOnce) {
   RendererParams p = RendererParams::read(ParamTable(Value::Map{{"mode", "sync"}}, "renderers"));
   EXPECT_EQ(p.batch, 1);
   EXPECT_EQ(p.window, 1);
-  add_renderers(s, 3, direct, p, "local", {});
+  add_renderers(s, 3, direct, p, {}, {});
   EXPECT_EQ(s.renderer_count(), 3);
   EXPECT_EQ(s.lighting, direct);
   // What the actor reads back from its CONFIG is what the script said.
@@ -120,7 +120,7 @@ TEST(Builders, ExpandRingWiresEveryNodeToEveryOther) {
   FarmSpec s;
   Value::Map params{{"rings", 2}, {"ring_length", 2}};
   auto config = radiosity::read_ring_config(ParamTable(params, "radiosity"));
-  auto op = expand_ring(s, config, params, "radiosity", "local", {});
+  auto op = expand_ring(s, config, params, "radiosity", {}, {});
   ASSERT_TRUE(op.ok());
   EXPECT_EQ(s.actors[static_cast<size_t>(*op)].kind, "radiosity");
   EXPECT_TRUE(s.actors[static_cast<size_t>(*op)].params.empty());
@@ -130,7 +130,7 @@ TEST(Builders, ExpandRingWiresEveryNodeToEveryOther) {
     EXPECT_EQ(s.actors[static_cast<size_t>(i)].params.at("node").as_int(), i);
     EXPECT_EQ(s.actors[static_cast<size_t>(i)].inputs.size(), 3u);
   }
-  EXPECT_EQ(expand_ring(s, config, params, "radiosity", "local", {}).error().message,
+  EXPECT_EQ(expand_ring(s, config, params, "radiosity", {}, {}).error().message,
             "radiosity: name 'radiosity' is already taken");
 }
 
@@ -138,7 +138,7 @@ TEST(Builders, ValidateFindsDanglingOpsCyclesAndUndeclaredHosts) {
   FarmSpec s;
   const int direct = add(s, "direct", "direct");
   EXPECT_EQ(validate(s).error().message, "the script declares no renderers (add renderers { lighting = ... })");
-  add_renderers(s, 1, direct, RendererParams{}, "local", {});
+  add_renderers(s, 1, direct, RendererParams{}, {}, {});
   EXPECT_TRUE(validate(s).ok());
   add(s, "lonely", "direct");
   EXPECT_EQ(validate(s).error().message,
@@ -153,11 +153,11 @@ TEST(Builders, ValidateFindsDanglingOpsCyclesAndUndeclaredHosts) {
 
 TEST(Builders, DotGroupsByHostAndDrawsRingsWithoutParsingNames) {
   FarmSpec s;
-  s.hosts.push_back(HostSpec{"far", "local", "127.0.0.1", {}});
+  s.hosts.push_back(HostSpec{.name = "far"});
   Value::Map params{{"rings", 1}, {"ring_length", 2}};
-  auto op = expand_ring(s, radiosity::read_ring_config(ParamTable(params, "radiosity")), params, "rad", "far", {});
+  auto op = expand_ring(s, radiosity::read_ring_config(ParamTable(params, "radiosity")), params, "rad", {"far"}, {});
   ASSERT_TRUE(op.ok());
-  add_renderers(s, 2, *op, RendererParams{}, "local", {});
+  add_renderers(s, 2, *op, RendererParams{}, {}, {});
   const std::string dot = to_dot(s);
   EXPECT_NE(dot.find("subgraph \"cluster_far\""), std::string::npos);
   EXPECT_NE(dot.find("\"rad.0.0\" -> \"rad.0.1\";"), std::string::npos);

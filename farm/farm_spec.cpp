@@ -29,4 +29,10 @@ const HostSpec* FarmSpec::host_of(const ActorSpec& actor) const {
   return actor.host == kLocal.name ? &kLocal : nullptr;
 }
 
+bool FarmSpec::has_remote_hosts() const {
+  for (const auto& a : actors)
+    if (const HostSpec* h = host_of(a); h && h->remote()) return true;
+  return false;
+}
+
 }  // namespace lf

@@ -13,8 +13,14 @@ namespace lf {
 struct HostSpec {
   std::string name = "local";
   std::string launcher = "local";  // which Launcher starts this host's actors (actors/director/launcher.hpp)
-  std::string address = "127.0.0.1";
+  std::string address = "127.0.0.1";  // where its actors listen, and (ssh) where to reach it
+  // ssh hosts:
+  std::string user;        // login name; empty: ssh's default
+  int port = 0;            // 0: ssh's default
+  std::string ssh_config;  // an ssh_config file (ssh -F); empty: the user's
+  std::string lightfarm;   // the lightfarm binary on the host; empty: this binary's path
   SourceLoc loc;
+  bool remote() const { return launcher != "local"; }
 };
 
 // Actor kinds the farm itself provides; every other kind is a LightOp (render/lightop_registry.hpp) or "exec".
@@ -48,6 +54,7 @@ struct FarmSpec {
   int lighting = -1;  // index of the MasterLightOp the renderers ask
   double heartbeat_timeout = 10.0;  // seconds of silence before an actor counts as dead
   double request_timeout = 120.0;   // seconds a shading request may wait for its answer
+  std::string director_address;     // where remote actors reach the director; empty: found from the routes
 
   int renderer_count() const;
   // Index of the multiplexer whose replica actor `i` is, or -1.
@@ -56,6 +63,8 @@ struct FarmSpec {
   int find(const std::string& name) const;
   // The host an actor runs on ("local" unless declared); nullptr for an undeclared name.
   const HostSpec* host_of(const ActorSpec& actor) const;
+  // True when some actor runs on a host that is not this machine.
+  bool has_remote_hosts() const;
 };
 
 }  // namespace lf

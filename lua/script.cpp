@@ -128,27 +128,43 @@ void push_actor(lua_State* L, int index) {
   luaL_setmetatable(L, kActorMeta);
 }
 
-// Takes `host = h` out of a table (if present) and returns the host's name.
-std::string take_host(lua_State* L, int table, Builder& b) {
+// One host: a handle made by host "name" { ... }, or a declared host's name.
+std::string host_name(lua_State* L, int idx, Builder& b) {
+  if (auto* name = static_cast<std::string*>(luaL_testudata(L, idx, kHostMeta))) return *name;
+  if (lua_type(L, idx) != LUA_TSTRING) luaL_error(L, "host must be a host (made with host \"name\" { ... }) or its name");
+  std::string host = lua_tostring(L, idx);
+  bool known = host == "local";
+  for (const auto& h : b.spec.hosts) known = known || h.name == host;
+  if (!known) luaL_error(L, "host '%s' is not declared (declare it with host \"%s\" { ... })", host.c_str(), host.c_str());
+  return host;
+}
+
+// Takes `host = h` or `host = {h1, h2, ...}` out of a table (if present): the hosts, in order; empty when absent.
+std::vector<std::string> take_hosts(lua_State* L, int table, Builder& b) {
   lua_getfield(L, table, "host");
-  std::string host = "local";
-  if (!lua_isnil(L, -1)) {
-    auto* name = static_cast<std::string*>(luaL_testudata(L, -1, kHostMeta));
-    if (name) {
-      host = *name;
-    } else if (lua_type(L, -1) == LUA_TSTRING) {
-      host = lua_tostring(L, -1);
-      bool known = host == "local";
-      for (const auto& h : b.spec.hosts) known = known || h.name == host;
-      if (!known) luaL_error(L, "host '%s' is not declared (declare it with host \"%s\" { ... })", host.c_str(), host.c_str());
-    } else {
-      luaL_error(L, "host must be a host (made with host \"name\" { ... }) or its name");
+  std::vector<std::string> hosts;
+  if (lua_istable(L, -1) && !luaL_testudata(L, -1, kHostMeta)) {
+    const lua_Integer n = luaL_len(L, -1);
+    if (n < 1) luaL_error(L, "host = { ... } needs at least one host");
+    for (lua_Integer i = 1; i <= n; ++i) {
+      lua_geti(L, -1, i);
+      hosts.push_back(host_name(L, -1, b));
+      lua_pop(L, 1);
     }
+  } else if (!lua_isnil(L, -1)) {
+    hosts.push_back(host_name(L, -1, b));
   }
   lua_pop(L, 1);
   lua_pushnil(L);
   lua_setfield(L, table, "host");
-  return host;
+  return hosts;
+}
+
+// One host for an actor that is a single process.
+std::string take_host(lua_State* L, int table, Builder& b) {
+  auto hosts = take_hosts(L, table, b);
+  if (hosts.size() > 1) luaL_error(L, "one actor runs on one host; a list of hosts is for multiplexer, renderers and radiosity");
+  return hosts.empty() ? "local" : hosts[0];
 }
 
 // scene { builtin = "cornell" } | scene { file = "room.obj" }
@@ -214,7 +230,7 @@ int l_image(lua_State* L) {
   return 0;
 }
 
-// host "name" { launcher = "local", address = "127.0.0.1" } -> host handle
+// host "name" { launcher = "local" | "ssh", address = "10.0.0.11", user, port, ssh_config, lightfarm } -> host handle
 int l_host_table(lua_State* L) {
   Builder& b = builder(L);
   const char* name = luaL_checkstring(L, lua_upvalueindex(2));
@@ -223,11 +239,27 @@ int l_host_table(lua_State* L) {
   h.name = name;
   with_params(L, [&] {
     h.launcher = p.get_string("launcher", "local", {"local", "ssh", "slurm"});
-    h.address = p.get_string("address", "127.0.0.1");
+    h.address = p.get_string("address", h.launcher == "local" ? "127.0.0.1" : "");
+    if (h.launcher == "ssh") {
+      h.user = p.get_string("user", "");
+      h.port = static_cast<int>(p.get_int("port", 0, 0, 65535));
+      h.ssh_config = p.get_string("ssh_config", "");
+      h.lightfarm = p.get_string("lightfarm", "");
+    }
     p.report_unused();
   });
-  if (h.launcher != "local")
-    luaL_error(L, "host '%s': launcher '%s' is not available yet (only \"local\")", name, h.launcher.c_str());
+  if (h.launcher == "slurm")
+    luaL_error(L, "host '%s': launcher 'slurm' is not available yet (\"local\" or \"ssh\")", name);
+  if (h.name == "local") luaL_error(L, "host 'local' is this machine; give another name");
+  if (h.address.empty())
+    luaL_error(L, "host '%s': an ssh host needs address = \"...\" (where its actors listen and ssh reaches it)", name);
+  if (!h.ssh_config.empty()) {
+    fs::path f(h.ssh_config);
+    if (f.is_relative()) f = b.script_dir / f;
+    std::error_code ec;
+    if (!fs::is_regular_file(f, ec)) luaL_error(L, "host '%s': ssh_config '%s' not found", name, f.string().c_str());
+    h.ssh_config = fs::absolute(f).lexically_normal().string();
+  }
   for (const auto& other : b.spec.hosts)
     if (other.name == h.name) luaL_error(L, "host '%s' is declared twice", name);
   h.loc = caller_loc(L);
@@ -389,7 +421,7 @@ int l_multiplexer(lua_State* L) {
   lua_pop(L, 1);
   lua_pushnil(L);
   lua_setfield(L, 1, "name");
-  pool.host = take_host(L, 1, b);
+  pool.hosts = take_hosts(L, 1, b);
   ParamTable p = table_params(L, 1, "multiplexer");
   with_params(L, [&] {
     pool.replicas = static_cast<int>(p.get_int("replicas", 2, 1, 64));
@@ -416,7 +448,7 @@ int l_renderers(lua_State* L) {
   lua_pop(L, 1);
   lua_pushnil(L);
   lua_setfield(L, 1, "lighting");
-  std::string host = take_host(L, 1, b);
+  const auto hosts = take_hosts(L, 1, b);
   ParamTable p = table_params(L, 1, "renderers");
   int count = 1;
   RendererParams params;
@@ -425,7 +457,7 @@ int l_renderers(lua_State* L) {
     params = RendererParams::read(p);
     p.report_unused();
   });
-  add_renderers(b.spec, count, lighting, params, host, caller_loc(L));
+  add_renderers(b.spec, count, lighting, params, hosts, caller_loc(L));
   b.have_renderers = true;
   return 0;
 }
@@ -441,6 +473,7 @@ int l_radiosity(lua_State* L) {
   ActorSpec op;
   op.kind = "radiosity";
   op.loc = caller_loc(L);
+  const auto hosts = take_hosts(L, 1, b);  // before take_wiring, which allows one host only
   const std::string wanted = take_wiring(L, b, op, "radiosity", "radiosity");
   if (!op.inputs.empty()) luaL_error(L, "radiosity takes no inputs (it solves the scene itself)");
   ParamTable p = table_params(L, 1, "radiosity");
@@ -451,7 +484,7 @@ int l_radiosity(lua_State* L) {
   });
   Value::Map params = p.values();
   if (!config.ply.empty()) params["ply"] = fs::absolute(config.ply).lexically_normal().string();
-  auto index = expand_ring(b.spec, config, params, unique_name(b.spec, wanted), op.host, op.loc);
+  auto index = expand_ring(b.spec, config, params, unique_name(b.spec, wanted), hosts, op.loc);
   if (!index) luaL_error(L, "%s", index.error().message.c_str());
   b.have_radiosity = true;
   push_actor(L, *index);
@@ -492,6 +525,7 @@ int l_farm(lua_State* L) {
   with_params(L, [&] {
     b.spec.heartbeat_timeout = p.get_float("heartbeat_timeout", b.spec.heartbeat_timeout, 0.5, 3600);
     b.spec.request_timeout = p.get_float("request_timeout", b.spec.request_timeout, 0.1, 86400);
+    b.spec.director_address = p.get_string("director_address", b.spec.director_address);
     p.report_unused();
   });
   return 0;

@@ -1,5 +1,14 @@
 #include "transport/socket.hpp"
 
+#include <arpa/inet.h>
+#include <netdb.h>
+#include <netinet/in.h>
+#include <sys/socket.h>
+#include <unistd.h>
+
+#include <cerrno>
+#include <cstring>
+
 #include <zmq.hpp>
 #include <zmq_addon.hpp>
 
@@ -134,6 +143,36 @@ const std::vector<bool>& Poller::wait(long timeout_ms) {
   }
   for (size_t i = 0; i < items.size(); ++i) ready_[i] = (items[i].revents & ZMQ_POLLIN) != 0;
   return ready_;
+}
+
+Result<std::string> local_address_towards(const std::string& host) {
+  addrinfo hints{};
+  hints.ai_family = AF_INET;
+  hints.ai_socktype = SOCK_DGRAM;
+  addrinfo* found = nullptr;
+  if (int rc = ::getaddrinfo(host.c_str(), "9", &hints, &found); rc != 0 || !found)
+    return make_error("cannot resolve '" + host + "': " + ::gai_strerror(rc));
+  const int fd = ::socket(AF_INET, SOCK_DGRAM | SOCK_CLOEXEC, 0);
+  std::string out;
+  std::string why;
+  if (fd < 0) {
+    why = std::strerror(errno);
+  } else if (::connect(fd, found->ai_addr, found->ai_addrlen) != 0) {  // a UDP connect only picks the route
+    why = std::strerror(errno);
+  } else {
+    sockaddr_in local{};
+    socklen_t len = sizeof local;
+    char text[INET_ADDRSTRLEN] = {};
+    if (::getsockname(fd, reinterpret_cast<sockaddr*>(&local), &len) == 0 &&
+        ::inet_ntop(AF_INET, &local.sin_addr, text, sizeof text))
+      out = text;
+    else
+      why = std::strerror(errno);
+  }
+  if (fd >= 0) ::close(fd);
+  ::freeaddrinfo(found);
+  if (out.empty()) return make_error("no route to '" + host + "': " + why);
+  return out;
 }
 
 }  // namespace lf::wire

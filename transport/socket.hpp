@@ -57,6 +57,10 @@ class Socket {
   SocketCounters counters_;
 };
 
+// The address of this machine's interface that packets to `host` (a name or IPv4 address) leave from: where that
+// host can reach us. Sends nothing.
+Result<std::string> local_address_towards(const std::string& host);
+
 // Waits until one of the sockets has input or the timeout passes.
 class Poller {
  public:

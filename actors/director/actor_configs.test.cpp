@@ -20,7 +20,7 @@ TEST(ActorConfigs, EachAskerUsesItsOwnWindowForItsInputs) {
   ASSERT_TRUE(mux.ok());
   RendererParams renderer;
   renderer.window = 5;
-  add_renderers(spec, 1, *mux, renderer, "local", {});
+  add_renderers(spec, 1, *mux, renderer, {}, {});
   auto endpoint = [](int i) { return "tcp://host:" + std::to_string(6000 + i); };
 
   const ActorConfig m = config_for(spec, *mux, endpoint);

@@ -83,7 +83,7 @@ class Director final : public ControlOut, public Outbox {
     } join_image_io{image_io};
     try {
       stage(Stage::prepare, [&] { prepare(); }, false);
-      stage(Stage::launch, [&] { check(supervisor_.launch(control_endpoint_)); });
+      stage(Stage::launch, [&] { check(supervisor_.launch(control_endpoint_, local_address_)); });
       stage(Stage::hello, [&] { wait_all(30.0, [](const ActorRecord& a) { return a.said_hello; }); });
       stage(Stage::configure, [&] {
         configure();
@@ -145,10 +145,30 @@ class Director final : public ControlOut, public Outbox {
                             "' does not exist or is not writable"};
       }
     }
-    auto endpoint = control_.bind("tcp://127.0.0.1:*");
+    // A farm on one machine talks over loopback; one that spans hosts listens where they all reach it.
+    if (spec_.has_remote_hosts()) {
+      auto address = director_address();
+      if (!address) throw FarmFailure{address.error().message};
+      local_address_ = *address;
+    }
+    auto endpoint = control_.bind("tcp://" + (local_address_.empty() ? std::string("127.0.0.1") : local_address_) + ":*");
     if (!endpoint) throw FarmFailure{endpoint.error().message};
     control_endpoint_ = *endpoint;
     control_.set_linger_ms(0);
+  }
+
+  // Where the remote hosts reach this machine: farm { director_address }, or the source address of the route to
+  // the first remote host.
+  Result<std::string> director_address() const {
+    if (!spec_.director_address.empty()) return spec_.director_address;
+    for (const auto& a : spec_.actors) {
+      const HostSpec* h = spec_.host_of(a);
+      if (!h || !h->remote()) continue;
+      auto source = wire::local_address_towards(h->address);
+      if (!source) return make_error("host '" + h->name + "': " + source.error().message + " (set farm { director_address })");
+      return source;
+    }
+    return std::string("127.0.0.1");
   }
 
   void configure() {
@@ -260,6 +280,7 @@ class Director final : public ControlOut, public Outbox {
   Launchers launchers_;
   wire::Socket control_{wire::Socket::Kind::router};
   std::string control_endpoint_;
+  std::string local_address_;  // set when the farm spans hosts: where this machine's actors and the director listen
   Supervisor supervisor_;
   TileService tiles_;
   ExchangeService exchange_;

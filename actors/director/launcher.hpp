@@ -30,6 +30,9 @@ struct LaunchRequest {
   std::vector<std::string> argv;  // argv[0] is replaced by this lightfarm binary when `self`
   bool self = true;               // run this lightfarm binary; false: run argv[0], looked up on PATH
   std::string cwd;                // working directory of the actor, if set
+  // The child's stdin is a pipe this launcher holds open until the child is reaped: it reads EOF the moment the
+  // director is gone, whatever killed it (ssh forwards that EOF to the remote actor's lifeline).
+  bool hold_stdin = false;
 };
 
 class Launcher {

@@ -1,4 +1,5 @@
 #include "actors/director/local_launcher.hpp"
+#include "actors/director/ssh_launcher.hpp"
 
 #include <fcntl.h>
 #include <signal.h>
@@ -40,15 +41,22 @@ Result<pid_t> LocalLauncher::start(const LaunchRequest& options) {
   // A pipe with O_CLOEXEC tells the parent whether exec succeeded: it closes on exec, or carries errno.
   int fds[2];
   if (::pipe2(fds, O_CLOEXEC) != 0) return make_error(std::string("pipe: ") + std::strerror(errno));
+  int lifeline[2] = {-1, -1};
+  if (options.hold_stdin && ::pipe2(lifeline, O_CLOEXEC) != 0) {
+    ::close(fds[0]);
+    ::close(fds[1]);
+    return make_error(std::string("pipe: ") + std::strerror(errno));
+  }
   const pid_t parent = ::getpid();
   pid_t pid = ::fork();
   if (pid < 0) {
-    ::close(fds[0]);
-    ::close(fds[1]);
+    for (int fd : {fds[0], fds[1], lifeline[0], lifeline[1]})
+      if (fd >= 0) ::close(fd);
     return make_error(std::string("fork: ") + std::strerror(errno));
   }
   if (pid == 0) {
     ::close(fds[0]);
+    if (lifeline[0] >= 0) ::dup2(lifeline[0], STDIN_FILENO);  // dup2 clears O_CLOEXEC on the copy
     ::prctl(PR_SET_PDEATHSIG, SIGKILL);
     if (::getppid() != parent) ::_exit(126);  // the director died between fork and prctl
     sigset_t none;
@@ -71,6 +79,7 @@ Result<pid_t> LocalLauncher::start(const LaunchRequest& options) {
     ::_exit(127);
   }
   ::close(fds[1]);
+  if (lifeline[0] >= 0) ::close(lifeline[0]);
   int err = 0;
   ssize_t n;
   do {
@@ -80,10 +89,20 @@ Result<pid_t> LocalLauncher::start(const LaunchRequest& options) {
   if (n == static_cast<ssize_t>(sizeof err)) {
     int status;
     ::waitpid(pid, &status, 0);
+    if (lifeline[1] >= 0) ::close(lifeline[1]);
     return make_error("cannot run " + args[0] + ": " + std::strerror(err));
   }
   children_.insert(pid);
+  if (lifeline[1] >= 0) held_stdin_[pid] = lifeline[1];
   return pid;
+}
+
+void LocalLauncher::forget(pid_t pid) {
+  children_.erase(pid);
+  if (auto it = held_stdin_.find(pid); it != held_stdin_.end()) {
+    ::close(it->second);
+    held_stdin_.erase(it);
+  }
 }
 
 void LocalLauncher::kill(pid_t pid, int signal) {
@@ -95,7 +114,7 @@ std::optional<ExitReport> LocalLauncher::reap_one() {
     int status = 0;
     pid_t r = ::waitpid(pid, &status, WNOHANG);
     if (r == pid) {
-      children_.erase(pid);
+      forget(pid);
       return ExitReport{pid, status};
     }
   }
@@ -122,10 +141,13 @@ void LocalLauncher::stop_all(std::chrono::milliseconds grace) {
     }
   }
   children_.clear();
+  for (auto& [pid, fd] : held_stdin_) ::close(fd);
+  held_stdin_.clear();
 }
 
 Result<std::unique_ptr<Launcher>> make_launcher(const HostSpec& host) {
   if (host.launcher == "local") return std::unique_ptr<Launcher>(std::make_unique<LocalLauncher>());
+  if (host.launcher == "ssh") return std::unique_ptr<Launcher>(std::make_unique<SshLauncher>(host));
   return make_error("host '" + host.name + "': launcher '" + host.launcher + "' is not available in this build");
 }
 

@@ -2,6 +2,7 @@
 // LocalLauncher: fork/exec on this machine. Children stay in the director's process group (Ctrl-C on a terminal
 // reaches them all) and get PR_SET_PDEATHSIG=SIGKILL, so even a director killed with SIGKILL leaves nothing
 // running. Every child is reaped.
+#include <map>
 #include <set>
 
 #include "actors/director/launcher.hpp"
@@ -22,8 +23,11 @@ class LocalLauncher final : public Launcher {
   void stop_all(std::chrono::milliseconds grace) override;
 
  private:
+  void forget(pid_t pid);
+
   std::string exe_;
   std::set<pid_t> children_;
+  std::map<pid_t, int> held_stdin_;  // write ends of held stdin pipes
 };
 
 // The path of the running lightfarm binary.

@@ -28,7 +28,7 @@ struct RingFixture : ::testing::Test {
   void SetUp() override {
     Value::Map params{{"rings", 1}, {"ring_length", 2}, {"patch_size", 140.0}, {"max_iterations", 2}};
     config = radiosity::read_ring_config(ParamTable(params, "radiosity"));
-    ASSERT_TRUE(expand_ring(spec, config, params, "radiosity", "local", {}).ok());
+    ASSERT_TRUE(expand_ring(spec, config, params, "radiosity", {}, {}).ok());
     ring = std::make_unique<RingService>(spec, exchange, true, false);
     auto loaded = Scene::builtin("cornell");
     ASSERT_TRUE(loaded.ok());

@@ -32,7 +32,7 @@ void Supervisor::send(const std::string& name, wire::Message m) {
   out_.send(name, std::move(m));
 }
 
-Status Supervisor::launch(const std::string& director_endpoint) {
+Status Supervisor::launch(const std::string& director_endpoint, const std::string& local_address) {
   for (const auto& a : spec_.actors) {
     LaunchRequest how;
     how.argv = {"lightfarm", "actor"};
@@ -46,6 +46,8 @@ Status Supervisor::launch(const std::string& director_endpoint) {
     how.argv.insert(how.argv.end(), {"--kind", a.kind, "--name", a.name, "--director", director_endpoint});
     const HostSpec* host = spec_.host_of(a);
     if (!host) return make_error(a.loc.str() + ": actor '" + a.name + "' is placed on undeclared host '" + a.host + "'");
+    if (!local_address.empty())
+      how.argv.insert(how.argv.end(), {"--bind", "tcp://" + (host->remote() ? host->address : local_address) + ":*"});
     auto pid = launchers_.start(*host, how);
     if (!pid) return make_error(a.loc.str() + ": cannot start actor '" + a.name + "': " + pid.error().message);
     ActorRecord& r = actors_.at(a.name);

@@ -63,7 +63,9 @@ class Supervisor {
   Supervisor(const FarmSpec& spec, Launchers& launchers, ControlOut& out, Events events);
 
   // Starts every actor (`lightfarm actor ...`, or an exec actor's own command) pointed at `director_endpoint`.
-  Status launch(const std::string& director_endpoint);
+  // With `local_address` (a farm that spans hosts), every actor also gets `--bind tcp://ADDRESS:*`: its host's
+  // address, or `local_address` for this machine's actors, so that actors on other hosts reach its data socket.
+  Status launch(const std::string& director_endpoint, const std::string& local_address = {});
   void set_stage(Stage stage) { stage_ = stage; }
   Stage stage() const { return stage_; }
 

@@ -59,7 +59,7 @@ struct SupervisorTest : ::testing::Test {
     pool.op = add_actor(spec, ActorSpec{.name = "direct", .kind = "direct", .loc = {"farm.lua", 3}});
     auto mux = replicate(spec, pool);
     ASSERT_TRUE(mux.ok());
-    add_renderers(spec, 2, *mux, RendererParams{}, "local", {"farm.lua", 5});
+    add_renderers(spec, 2, *mux, RendererParams{}, {}, {"farm.lua", 5});
     spec.heartbeat_timeout = 1.0;
     auto f = std::make_unique<FakeLauncher>();
     fake = f.get();
@@ -203,7 +203,7 @@ TEST(SupervisorNested, AnEmptiedInnerPoolIsALostReplicaOfTheOuterOne) {
   PoolSpec outer;
   outer.op = *in;
   auto top = replicate(spec, outer);
-  add_renderers(spec, 1, *top, RendererParams{}, "local", {});
+  add_renderers(spec, 1, *top, RendererParams{}, {}, {});
   Launchers launchers;
   auto f = std::make_unique<FakeLauncher>();
   FakeLauncher* fake = f.get();

@@ -5,7 +5,7 @@ With an input, it asks the input for the light at each point and multiplies it b
 Without one, it paints surface normals as colour: (normal + 1) / 2 * scale.
 
 Parameters (from the farm script): color = {r, g, b} (default {1, 1, 1}), scale (default 1).
-Run by the farm as:  ./tint.py --kind exec --name NAME --director ENDPOINT
+Run by the farm as:  ./tint.py --kind exec --name NAME --director ENDPOINT [--bind ENDPOINT]
 """
 import argparse
 import os
@@ -21,7 +21,7 @@ HELLO, CONFIG, PHASE, REQUEST, REPLY, ERROR, STATS, HEARTBEAT, BYE, READY, PEER_
 
 
 class Actor:
-    def __init__(self, kind, name, director):
+    def __init__(self, kind, name, director, bind):
         self.kind, self.name = kind, name
         self.ctx = zmq.Context()
         self.control = self.ctx.socket(zmq.DEALER)
@@ -30,7 +30,7 @@ class Actor:
         self.control.connect(director)
         self.data = self.ctx.socket(zmq.ROUTER)
         self.data.setsockopt(zmq.LINGER, 0)
-        self.data.bind("tcp://127.0.0.1:*")
+        self.data.bind(bind)
         self.endpoint = self.data.getsockopt_string(zmq.LAST_ENDPOINT)
         self.input = None            # DEALER to our input, if the script wired one
         self.next_id = 1
@@ -196,8 +196,9 @@ def main():
     parser.add_argument("--kind", required=True)
     parser.add_argument("--name", required=True)
     parser.add_argument("--director", required=True)
+    parser.add_argument("--bind", default="tcp://127.0.0.1:*")  # given when the farm spans hosts
     args = parser.parse_args()
-    actor = Actor(args.kind, args.name, args.director)
+    actor = Actor(args.kind, args.name, args.director, args.bind)
     try:
         code = actor.run()
     except KeyboardInterrupt:

@@ -35,6 +35,7 @@ def main():
     p.add_argument("--kind", required=True)
     p.add_argument("--name", required=True)
     p.add_argument("--director", required=True)
+    p.add_argument("--bind", default="tcp://127.0.0.1:*")
     a = p.parse_args()
     if a.mode == "ignore_sigterm":
         signal.signal(signal.SIGTERM, signal.SIG_IGN)
@@ -47,7 +48,7 @@ def main():
     control.connect(a.director)
     data = ctx.socket(zmq.ROUTER)
     data.setsockopt(zmq.LINGER, 0)
-    data.bind("tcp://127.0.0.1:*")
+    data.bind(a.bind)
     inputs = []
     waiting = {}  # our request id -> (peer, their id, n)
     next_id = [1]

@@ -1,0 +1,165 @@
+// Farms across hosts (issue 11): the hosts are network namespaces on this machine running Debian's OpenSSH server
+// (tests/rig/hosts.sh), the actors start over real ssh. Images equal the one-machine run bit for bit; bad hosts
+// stop the farm at launch naming the host and ssh's words; nothing is left running here or on any host.
+#include <gtest/gtest.h>
+#include <signal.h>
+
+#include <fstream>
+#include <cstring>
+#include <map>
+
+#include "render/image.hpp"
+#include "tests/farm_harness.hpp"
+
+namespace lf::test {
+namespace {
+
+const std::string kSource = LIGHTFARM_SOURCE_DIR;
+const std::string kRig = kSource + "/tests/rig/hosts.sh";
+
+// The rig of the running test, torn down on Ctrl-C too.
+std::string g_rig_dir;
+void tear_down_on_signal(int sig) {
+  if (!g_rig_dir.empty() && ::fork() == 0) {
+    ::execl("/bin/bash", "bash", kRig.c_str(), "down", g_rig_dir.c_str(), static_cast<char*>(nullptr));
+    ::_exit(127);
+  }
+  ::wait(nullptr);
+  ::signal(sig, SIG_DFL);
+  ::raise(sig);
+}
+
+int sh(const std::string& cmd) {
+  const int rc = std::system(cmd.c_str());
+  return WIFEXITED(rc) ? WEXITSTATUS(rc) : -1;
+}
+
+class HostsTest : public FarmFixture {
+ protected:
+  std::map<std::string, std::string> address;  // h1 -> 10.213.x.11
+  std::string rig;
+
+  void SetUp() override {
+    FarmFixture::SetUp();
+    rig = path("rig");
+    g_rig_dir = rig;
+    ::signal(SIGINT, tear_down_on_signal);
+    ::signal(SIGTERM, tear_down_on_signal);
+    const int rc = sh(kRig + " up " + rig + " 3 > " + path("rig.log") + " 2>&1");
+    if (rc == 77) GTEST_SKIP() << read_file(path("rig.log"));
+    ASSERT_EQ(rc, 0) << read_file(path("rig.log"));
+    std::ifstream hosts(rig + "/hosts");
+    std::string name, addr;
+    while (hosts >> name >> addr) address[name] = addr;
+    ASSERT_EQ(address.size(), 3u);
+  }
+  void TearDown() override {
+    if (!rig.empty()) sh(kRig + " down " + rig);
+    g_rig_dir.clear();
+    FarmFixture::TearDown();
+  }
+
+  // host "h1" { ... } declarations for every rig host, as Lua locals h1, h2, h3.
+  std::string host_lines(const std::string& extra = "") const {
+    std::string lua;
+    for (const auto& [name, addr] : address)
+      lua += "local " + name + " = host \"" + name + "\" { launcher = \"ssh\", address = \"" + addr +
+             "\", ssh_config = \"" + rig + "/ssh_config\"" + extra + " }\n";
+    return lua;
+  }
+
+  // Nothing of the farm is left here, and nothing but sshd runs on any host.
+  void expect_nothing_left(const RunResult& r) {
+    expect_no_leftovers(r);
+    std::string remote;
+    EXPECT_TRUE(Farm::eventually(
+        [&] {
+          sh(kRig + " pids " + rig + " > " + path("pids") + " 2>&1");
+          remote = read_file(path("pids"));
+          return remote.empty();
+        },
+        5.0))
+        << "left running on the hosts:\n" << remote;
+  }
+
+  Image render(const std::string& script, const std::vector<std::string>& sets, const std::string& out) {
+    std::vector<std::string> args{"run", script, "--quiet", "--output", path(out)};
+    for (const auto& s : sets) args.insert(args.end(), {"--set", s});
+    auto r = run_lightfarm(args);
+    EXPECT_EQ(r.status, 0) << r.err;
+    expect_nothing_left(r);
+    auto img = read_image(path(out));
+    EXPECT_TRUE(img.ok()) << out;
+    return img.ok() ? *img : Image{};
+  }
+};
+
+bool same_pixels(const Image& a, const Image& b) {
+  return a.width == b.width && a.height == b.height && a.width > 0 &&
+         std::memcmp(a.pixels.data(), b.pixels.data(), a.pixels.size() * sizeof(RGB)) == 0;
+}
+
+TEST_F(HostsTest, ThePoolNetworkOverThreeSshHostsGivesTheLocalPixels) {
+  const std::string body = "scene { builtin = \"cornell\" }\n"
+                           "image { width = 96, height = 96, spp = 4 }\n";
+  auto local = write("local.lua", body +
+                                      "local direct = multiplexer { lightop \"direct\" { light_samples = 2 }, replicas = 3 }\n"
+                                      "renderers { count = 2, lighting = direct }\n");
+  auto spread = write("spread.lua", body + host_lines() +
+                                        "local direct = multiplexer { lightop \"direct\" { light_samples = 2 }, replicas = 3,\n"
+                                        "                             host = { h1, h2, h3 } }\n"
+                                        "renderers { count = 2, lighting = direct, host = { h2, h3 } }\n");
+  const Image a = render(local, {}, "local.exr");
+  const Image b = render(spread, {}, "spread.exr");
+  EXPECT_TRUE(same_pixels(a, b));
+}
+
+TEST_F(HostsTest, TheCausticsNetworkWithItsPhotonPoolAcrossHostsGivesTheLocalPixels) {
+  const std::string script = kSource + "/examples/cornell_glass.lua";
+  const std::vector<std::string> small{"width=64", "height=64", "spp=2", "photons=40000", "prepass=1000"};
+  const Image a = render(script, small, "glass-local.exr");
+  // The same network, its photon-map replicas on h1 and h2, a cache on h3, the rest here.
+  std::string text = host_lines() + read_file(script);
+  auto place = [&](const std::string& what, const std::string& with) {
+    const auto at = text.find(what);
+    ASSERT_NE(at, std::string::npos) << what;
+    text.replace(at, what.size(), with);
+  };
+  place("replicas = param(\"photon_replicas\", 2)", "replicas = param(\"photon_replicas\", 2), host = { h1, h2 }");
+  place("name = \"bounce1\",", "name = \"bounce1\", host = h3,");
+  const std::string spread = write("glass.lua", text);
+  const Image b = render(spread, small, "glass-spread.exr");
+  EXPECT_TRUE(same_pixels(a, b));
+}
+
+TEST_F(HostsTest, BadHostsStopTheFarmAtLaunchNamingTheHostAndSshsWords) {
+  const std::string wrong_key = rig + "/wrong_id";
+  ASSERT_EQ(sh("ssh-keygen -q -t ed25519 -N '' -f " + wrong_key), 0);
+  ASSERT_EQ(sh("sed 's#IdentityFile .*/id$#IdentityFile " + wrong_key + "#' " + rig + "/ssh_config > " + rig +
+               "/ssh_config_wrong"),
+            0);
+  const std::string subnet = address["h1"].substr(0, address["h1"].rfind('.'));
+  struct Case {
+    std::string name, host, says;
+  };
+  for (const Case& c : std::vector<Case>{
+           {"unreachable", "address = \"" + subnet + ".99\", ssh_config = \"" + rig + "/ssh_config\"",
+            "host 'far' (" + subnet + ".99): ssh failed: ssh: connect to host " + subnet + ".99 port 22:"},
+           {"wrong key", "address = \"" + address["h1"] + "\", ssh_config = \"" + rig + "/ssh_config_wrong\"",
+            "host 'far' (" + address["h1"] + "): ssh failed: root@" + address["h1"] + ": Permission denied (publickey)"},
+           {"no binary", "address = \"" + address["h1"] + "\", ssh_config = \"" + rig + "/ssh_config\", lightfarm = \"/no/lightfarm\"",
+            "host 'far' (" + address["h1"] + "): no lightfarm executable at '/no/lightfarm' there"}}) {
+    auto script = write("bad.lua", "scene { builtin = \"cornell\" }\nimage { width = 16, height = 16, spp = 1 }\n"
+                                   "local far = host \"far\" { launcher = \"ssh\", " + c.host + " }\n"
+                                   "renderers { count = 1, lighting = lightop \"direct\" { host = far } }\n");
+    auto r = run_lightfarm({"run", script, "--output", path("bad.png")});
+    EXPECT_EQ(r.status, 1) << c.name << ": " << r.err;
+    EXPECT_NE(r.err.find(c.says), std::string::npos) << c.name << ":\n" << r.err;
+    EXPECT_NE(r.err.find("bad.lua:4: cannot start actor 'direct'"), std::string::npos) << r.err;
+    EXPECT_FALSE(fs::exists(path("bad.png")));
+    expect_nothing_left(r);
+  }
+}
+
+}  // namespace
+}  // namespace lf::test

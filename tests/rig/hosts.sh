@@ -1,0 +1,116 @@
+#!/usr/bin/env bash
+# Hosts for multi-host tests: network namespaces on this machine, joined by veth pairs to a bridge, each running
+# Debian's OpenSSH server with a key made for the test. Addresses come from 10.213.0.0/16, which exists only inside
+# the test (nothing is routed anywhere else; the root namespace reaches the hosts through the bridge).
+#
+#   hosts.sh up DIR N [ID]   make hosts 1..N (ID in 1..250 picks the subnet 10.213.ID.0/24; default: from DIR)
+#                            and write DIR/ssh_config (Host h1..hN), DIR/hosts (name address per line),
+#                            DIR/director_address (the bridge's address, which every host reaches)
+#   hosts.sh down DIR        kill everything running in the hosts, remove them and the bridge (always safe)
+#   hosts.sh pids DIR        processes still running in any host apart from its sshd listener, one "host pid cmd"
+#                            per line
+#
+# Needs root (CAP_NET_ADMIN); exits 77 with a message when it cannot create a namespace.
+set -euo pipefail
+cmd=${1:?usage: hosts.sh up|down|pids DIR [N] [ID]}
+dir=${2:?usage: hosts.sh up|down|pids DIR [N] [ID]}
+
+down() {
+  [ -f "$dir/state" ] || return 0
+  # shellcheck disable=SC1091
+  . "$dir/state"
+  for ns in $namespaces; do
+    if ip netns list | grep -qw "$ns"; then
+      for pid in $(ip netns pids "$ns" 2>/dev/null); do kill -9 "$pid" 2>/dev/null || true; done
+      ip netns del "$ns" 2>/dev/null || true
+    fi
+  done
+  ip link del "$bridge" 2>/dev/null || true
+  rm -f "$dir/state"
+}
+
+pids() {
+  [ -f "$dir/state" ] || return 0
+  # shellcheck disable=SC1091
+  . "$dir/state"
+  local i=0
+  for ns in $namespaces; do
+    i=$((i + 1))
+    local listener
+    listener=$(cat "$dir/sshd-$i.pid" 2>/dev/null || echo 0)
+    for pid in $(ip netns pids "$ns" 2>/dev/null); do
+      [ "$pid" = "$listener" ] && continue
+      local cmdline
+      cmdline=$(tr '\0' ' ' 2>/dev/null < "/proc/$pid/cmdline") || continue  # gone meanwhile
+      echo "h$i $pid ${cmdline:0:120}"
+    done
+  done
+}
+
+up() {
+  local n=${3:?hosts.sh up DIR N}
+  local id=${4:-$(( $(cksum <<< "$dir" | cut -d' ' -f1) % 250 + 1 ))}
+  mkdir -p "$dir"
+  down
+  local bridge="lfbr$id" namespaces=""
+  if ! ip netns add "lfh$id-probe" 2>/dev/null; then
+    echo "hosts.sh: cannot create network namespaces here (needs root with CAP_NET_ADMIN)" >&2
+    exit 77
+  fi
+  ip netns del "lfh$id-probe"
+  for i in $(seq 1 "$n"); do namespaces="$namespaces lfh$id-$i"; done
+  printf 'bridge=%s\nnamespaces="%s"\n' "$bridge" "$namespaces" > "$dir/state"
+  trap 'down; exit 1' ERR
+  ip link add "$bridge" type bridge
+  ip addr add "10.213.$id.1/24" dev "$bridge"
+  ip link set "$bridge" up
+  echo "10.213.$id.1" > "$dir/director_address"
+
+  [ -f "$dir/id" ] || ssh-keygen -q -t ed25519 -N '' -f "$dir/id"
+  [ -f "$dir/host_key" ] || ssh-keygen -q -t ed25519 -N '' -f "$dir/host_key"
+  cp "$dir/id.pub" "$dir/authorized_keys"
+  chmod 600 "$dir/authorized_keys"
+  mkdir -p /run/sshd
+  : > "$dir/hosts"
+  : > "$dir/ssh_config"
+  local i=0
+  for ns in $namespaces; do
+    i=$((i + 1))
+    local addr="10.213.$id.$((i + 10))"
+    ip netns add "$ns"
+    ip link add "lfv$id-$i" type veth peer name eth0 netns "$ns"
+    ip link set "lfv$id-$i" master "$bridge" up
+    ip -n "$ns" addr add "$addr/24" dev eth0
+    ip -n "$ns" link set eth0 up
+    ip -n "$ns" link set lo up
+    ip netns exec "$ns" /usr/sbin/sshd -h "$dir/host_key" -o "ListenAddress=$addr" -o "PidFile=$dir/sshd-$i.pid" \
+      -o "AuthorizedKeysFile=$dir/authorized_keys" -o PermitRootLogin=prohibit-password -o PasswordAuthentication=no \
+      -o UsePAM=no -o StrictModes=no -o MaxSessions=64 -o MaxStartups=64:30:128 -o "SetEnv=LIGHTFARM_RIG=$ns"
+    echo "h$i $addr" >> "$dir/hosts"
+    cat >> "$dir/ssh_config" <<CFG
+Host h$i $addr
+  HostName $addr
+  User root
+  IdentityFile $dir/id
+  IdentitiesOnly yes
+  UserKnownHostsFile /dev/null
+  StrictHostKeyChecking no
+  LogLevel ERROR
+CFG
+  done
+  # Wait until every sshd answers.
+  for i in $(seq 1 "$n"); do
+    for _ in $(seq 1 50); do
+      ssh -F "$dir/ssh_config" -o BatchMode=yes -o ConnectTimeout=2 "h$i" true 2>/dev/null && break
+      sleep 0.1
+    done
+  done
+  trap - ERR
+}
+
+case "$cmd" in
+  up) up "$@" ;;
+  down) down ;;
+  pids) pids ;;
+  *) echo "hosts.sh: unknown command '$cmd'" >&2; exit 2 ;;
+esac
