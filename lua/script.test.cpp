@@ -3,6 +3,8 @@
 #include "render/lightop_registry.hpp"
 
 #include <gtest/gtest.h>
+
+#include <map>
 #include <unistd.h>
 
 #include <filesystem>
@@ -157,9 +159,17 @@ TEST_F(ScriptTest, FarmSettingsAndHosts) {
   auto r = evaluate_script(write("farm.lua", std::string(kCornell) + "farm { heartbeat_timeout = 2.5 }\n"));
   ASSERT_TRUE(r.ok()) << r.error().message;
   EXPECT_DOUBLE_EQ(r->heartbeat_timeout, 2.5);
-  EXPECT_EQ(error_of("farm { heartbeat = 3 }\n"), "farm.lua:1: farm: unknown parameter 'heartbeat' (known: heartbeat_timeout, request_timeout)");
+  EXPECT_EQ(error_of("farm { heartbeat = 3 }\n"),
+            "farm.lua:1: farm: unknown parameter 'heartbeat' (known: director_address, heartbeat_timeout, request_timeout)");
   EXPECT_EQ(error_of("local h = host \"gpu1\" { launcher = \"ssh\" }\n"),
-            "farm.lua:1: host 'gpu1': launcher 'ssh' is not available yet (only \"local\")");
+            "farm.lua:1: host 'gpu1': an ssh host needs address = \"...\" (where its actors listen and ssh reaches it)");
+  EXPECT_EQ(error_of("local h = host \"gpu1\" { launcher = \"slurm\" }\n"),
+            "farm.lua:1: host 'gpu1': launcher 'slurm' is not available yet (\"local\" or \"ssh\")");
+  EXPECT_EQ(error_of("local h = host \"gpu1\" { launcher = \"ssh\", address = \"10.0.0.1\", ssh_config = \"nope\" }\n"),
+            "farm.lua:1: host 'gpu1': ssh_config '" + (dir / "nope").string() + "' not found");
+  EXPECT_EQ(error_of("local h = host \"gpu1\" { address = \"10.0.0.1\" }\n"
+                     "local d = lightop \"direct\" { host = { h, h } }\n"),
+            "farm.lua:2: one actor runs on one host; a list of hosts is for multiplexer, renderers and radiosity");
   EXPECT_EQ(error_of("local d = lightop \"direct\" { host = \"gpu1\" }\n"),
             "farm.lua:1: host 'gpu1' is not declared (declare it with host \"gpu1\" { ... })");
   auto ok = evaluate_script(write("farm.lua", std::string("local h = host \"here\" { launcher = \"local\" }\n") +
@@ -167,6 +177,28 @@ TEST_F(ScriptTest, FarmSettingsAndHosts) {
                                                   "renderers { lighting = lightop \"direct\" { host = h } }\n"));
   ASSERT_TRUE(ok.ok()) << ok.error().message;
   EXPECT_EQ(ok->actors[0].host, "here");
+}
+
+TEST_F(ScriptTest, HostListsSpreadReplicasRenderersAndRingNodesRoundRobin) {
+  auto r = evaluate_script(write("farm.lua", std::string(
+      "local a = host \"a\" { launcher = \"ssh\", address = \"10.0.0.1\", user = \"render\", port = 2222 }\n"
+      "local b = host \"b\" { launcher = \"ssh\", address = \"10.0.0.2\" }\n"
+      "scene { builtin = \"cornell\" }\n"
+      "local d = multiplexer { lightop \"direct\" {}, replicas = 3, host = { a, b } }\n"
+      "renderers { count = 3, lighting = d, host = { b, \"local\" } }\n")));
+  ASSERT_TRUE(r.ok()) << r.error().message;
+  std::map<std::string, std::string> where;
+  for (const auto& actor : r->actors) where[actor.name] = actor.host;
+  EXPECT_EQ(where, (std::map<std::string, std::string>{{"direct", "a"}, {"direct.0", "a"}, {"direct.1", "b"},
+                                                        {"direct.2", "a"}, {"renderer-0", "b"}, {"renderer-1", "local"},
+                                                        {"renderer-2", "b"}}));
+  EXPECT_TRUE(r->has_remote_hosts());
+  ASSERT_EQ(r->hosts.size(), 2u);
+  EXPECT_EQ(r->hosts[0].user, "render");
+  EXPECT_EQ(r->hosts[0].port, 2222);
+  const std::string dot = to_dot(*r);
+  EXPECT_NE(dot.find("subgraph \"cluster_a\""), std::string::npos);
+  EXPECT_NE(dot.find("subgraph \"cluster_b\""), std::string::npos);
 }
 
 TEST_F(ScriptTest, MissingScriptIsAnError) {
