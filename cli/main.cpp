@@ -28,7 +28,7 @@ usage:
       Turn a farm script into processes and an image.
   lightfarm graph SCRIPT [--set NAME=VALUE]...
       Print the script's actor graph as Graphviz DOT; launches nothing.
-  lightfarm actor --kind KIND --name NAME --director ENDPOINT [--bind ENDPOINT]
+  lightfarm actor --kind KIND --name NAME --director ENDPOINT [--bind ENDPOINT] [--curve]
       Host one actor (the director runs this; see docs/PROTOCOL.md).
   lightfarm check-actor [--kind KIND] [--timeout SECONDS] [--inputs N] -- COMMAND [ARG]...
       Launch COMMAND as an actor and check it against the protocol; PASS/FAIL per check.
@@ -130,7 +130,7 @@ int cmd_run(int argc, char** argv, bool graph_only) {
 int cmd_actor(int argc, char** argv) {
   Args args;
   std::string error;
-  if (!parse(argc, argv, 2, {"kind", "name", "director", "bind"}, {}, args, error)) return usage_error(error);
+  if (!parse(argc, argv, 2, {"kind", "name", "director", "bind"}, {"curve"}, args, error)) return usage_error(error);
   for (const char* required : {"kind", "name", "director"})
     if (!args.options.count(required)) return usage_error(std::string("actor needs --") + required);
   lf::ActorArgs a;
@@ -139,6 +139,14 @@ int cmd_actor(int argc, char** argv) {
   a.director = args.options["director"];
   if (args.options.count("bind")) a.bind = args.options["bind"];
   lf::set_log_name(a.name);
+  if (args.options.count("curve")) {
+    auto keys = lf::read_farm_keys_from_stdin();
+    if (!keys) {
+      lf::log_error(keys.error().message);
+      return 2;
+    }
+    a.keys = std::move(*keys);
+  }
   auto actor = lf::make_actor(a.kind);
   if (!actor) {
     lf::log_error("unknown actor kind '" + a.kind + "' (known kinds: " + lf::actor_kind_list() + ")");

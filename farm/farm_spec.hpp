@@ -55,6 +55,7 @@ struct FarmSpec {
   double heartbeat_timeout = 10.0;  // seconds of silence before an actor counts as dead
   double request_timeout = 120.0;   // seconds a shading request may wait for its answer
   std::string director_address;     // where remote actors reach the director; empty: found from the routes
+  std::string security = "curve";   // "curve": every link authenticated and encrypted; "none": to measure its cost
 
   int renderer_count() const;
   // Index of the multiplexer whose replica actor `i` is, or -1.

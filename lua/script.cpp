@@ -518,7 +518,8 @@ int l_light(lua_State* L) {
   return 0;
 }
 
-// farm { heartbeat_timeout = 10, request_timeout = 120 }: settings of the farm as a whole.
+// farm { heartbeat_timeout = 10, request_timeout = 120, director_address, security = "curve" }: settings of the
+// farm as a whole.
 int l_farm(lua_State* L) {
   Builder& b = builder(L);
   ParamTable p = table_params(L, 1, "farm");
@@ -526,6 +527,7 @@ int l_farm(lua_State* L) {
     b.spec.heartbeat_timeout = p.get_float("heartbeat_timeout", b.spec.heartbeat_timeout, 0.5, 3600);
     b.spec.request_timeout = p.get_float("request_timeout", b.spec.request_timeout, 0.1, 86400);
     b.spec.director_address = p.get_string("director_address", b.spec.director_address);
+    b.spec.security = p.get_string("security", b.spec.security, {"curve", "none"});
     p.report_unused();
   });
   return 0;

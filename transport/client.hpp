@@ -21,6 +21,10 @@ class RequestClient {
 
   RequestClient(std::string self_name, std::string peer_name, size_t window);
 
+  // CURVE for this link: this client's keypair and the peer's public key (before connect).
+  void use_curve(const std::string& public_key, const std::string& secret_key, const std::string& server_key) {
+    socket_.make_curve_client(public_key, secret_key, server_key);
+  }
   Status connect(const std::string& endpoint);
   void request(Op op, Value body, Callback callback);
   // Reads every waiting reply and runs its callback. Replies whose id is not outstanding (late or duplicated)

@@ -16,11 +16,13 @@
 
 namespace lf::wire {
 
-namespace {
-zmq::context_t& context() {
+zmq::context_t& zmq_context() {
   static zmq::context_t ctx(1);
   return ctx;
 }
+
+namespace {
+zmq::context_t& context() { return zmq_context(); }
 }  // namespace
 
 struct Socket::Impl {
@@ -47,6 +49,21 @@ Socket::~Socket() = default;
 void* Socket::native() { return impl_->socket.handle(); }
 
 void Socket::set_linger_ms(int ms) { impl_->socket.set(zmq::sockopt::linger, ms); }
+
+void Socket::make_curve_server(const std::string& secret_key) {
+  auto& s = impl_->socket;
+  s.set(zmq::sockopt::curve_server, 1);
+  s.set(zmq::sockopt::curve_secretkey, secret_key);
+  s.set(zmq::sockopt::zap_domain, "lightfarm");
+}
+
+void Socket::make_curve_client(const std::string& public_key, const std::string& secret_key,
+                               const std::string& server_key) {
+  auto& s = impl_->socket;
+  s.set(zmq::sockopt::curve_serverkey, server_key);
+  s.set(zmq::sockopt::curve_publickey, public_key);
+  s.set(zmq::sockopt::curve_secretkey, secret_key);
+}
 
 Result<std::string> Socket::bind(const std::string& endpoint) {
   try {

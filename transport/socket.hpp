@@ -47,6 +47,10 @@ class Socket {
   std::optional<Incoming> receive();
 
   void set_linger_ms(int ms);
+  // CURVE, before bind/connect: a server with its secret key (clients are checked by this process's
+  // Authenticator), or a client with its keypair and the server's public key. All keys Z85.
+  void make_curve_server(const std::string& secret_key);
+  void make_curve_client(const std::string& public_key, const std::string& secret_key, const std::string& server_key);
   const SocketCounters& counters() const { return counters_; }
   void* native();  // for Poller
 

@@ -6,7 +6,8 @@
 
 namespace lf {
 
-ActorConfig config_for(const FarmSpec& spec, int actor, const std::function<std::string(int)>& endpoint_of) {
+ActorConfig config_for(const FarmSpec& spec, int actor, const std::function<std::string(int)>& endpoint_of,
+                       const std::function<std::string(int)>& key_of) {
   const ActorSpec& a = spec.actors[static_cast<size_t>(actor)];
   ActorConfig config;
   config.params = a.params;
@@ -14,7 +15,9 @@ ActorConfig config_for(const FarmSpec& spec, int actor, const std::function<std:
   config.camera = spec.camera;
   config.image = spec.image;
   const int64_t window = input_window(a);
-  for (int in : a.inputs) config.inputs.push_back({spec.actors[static_cast<size_t>(in)].name, endpoint_of(in), window});
+  for (int in : a.inputs)
+    config.inputs.push_back({spec.actors[static_cast<size_t>(in)].name, endpoint_of(in), window,
+                             key_of ? key_of(in) : std::string()});
   config.runtime = a.runtime;
   config.debug = a.debug;
   config.heartbeat_timeout = spec.heartbeat_timeout;

@@ -10,7 +10,8 @@
 
 namespace lf {
 
-// `endpoint_of(i)`: the data endpoint actor i said in its HELLO.
-ActorConfig config_for(const FarmSpec& spec, int actor, const std::function<std::string(int)>& endpoint_of);
+// `endpoint_of(i)`: the data endpoint actor i said in its HELLO; `key_of(i)` (for a CURVE farm): its public key.
+ActorConfig config_for(const FarmSpec& spec, int actor, const std::function<std::string(int)>& endpoint_of,
+                       const std::function<std::string(int)>& key_of = {});
 
 }  // namespace lf

@@ -7,6 +7,7 @@
 #include <filesystem>
 #include <map>
 #include <memory>
+#include <set>
 #include <thread>
 
 #include "actors/director/actor_configs.hpp"
@@ -21,6 +22,7 @@
 #include "core/log.hpp"
 #include "render/image.hpp"
 #include "render/scene.hpp"
+#include "transport/security.hpp"
 #include "transport/socket.hpp"
 
 namespace lf {
@@ -83,7 +85,11 @@ class Director final : public ControlOut, public Outbox {
     } join_image_io{image_io};
     try {
       stage(Stage::prepare, [&] { prepare(); }, false);
-      stage(Stage::launch, [&] { check(supervisor_.launch(control_endpoint_, local_address_)); });
+      stage(Stage::launch, [&] {
+        std::function<std::string(const ActorSpec&)> keys_of;
+        if (!actor_keys_.empty()) keys_of = [&](const ActorSpec& a) { return farm_keys_for(a.name); };
+        check(supervisor_.launch(control_endpoint_, local_address_, keys_of));
+      });
       stage(Stage::hello, [&] { wait_all(30.0, [](const ActorRecord& a) { return a.said_hello; }); });
       stage(Stage::configure, [&] {
         configure();
@@ -151,6 +157,7 @@ class Director final : public ControlOut, public Outbox {
       if (!address) throw FarmFailure{address.error().message};
       local_address_ = *address;
     }
+    if (spec_.security == "curve") make_keys();
     auto endpoint = control_.bind("tcp://" + (local_address_.empty() ? std::string("127.0.0.1") : local_address_) + ":*");
     if (!endpoint) throw FarmFailure{endpoint.error().message};
     control_endpoint_ = *endpoint;
@@ -171,10 +178,31 @@ class Director final : public ControlOut, public Outbox {
     return std::string("127.0.0.1");
   }
 
+  // CURVE: a keypair for the director and one for each actor; the director lets in only the actors' keys.
+  void make_keys() {
+    director_keys_ = wire::make_curve_keypair();
+    if (director_keys_.public_key.empty()) throw FarmFailure{"cannot make CURVE keys (ZeroMQ built without CURVE?)"};
+    std::set<std::string> allowed;
+    for (const auto& a : spec_.actors) allowed.insert((actor_keys_[a.name] = wire::make_curve_keypair()).public_key);
+    authenticator_ = std::make_unique<wire::Authenticator>(allowed);
+    control_.make_curve_server(director_keys_.secret_key);
+  }
+
+  std::string farm_keys_for(const std::string& actor) const {
+    wire::FarmKeys k;
+    k.own = actor_keys_.at(actor);
+    k.director = director_keys_.public_key;
+    for (const auto& [name, keys] : actor_keys_) k.allowed.push_back(keys.public_key);
+    return k.to_line();
+  }
+
   void configure() {
     auto endpoint_of = [&](int i) { return supervisor_.at(spec_.actors[static_cast<size_t>(i)].name).endpoint; };
+    std::function<std::string(int)> key_of;
+    if (!actor_keys_.empty())
+      key_of = [&](int i) { return actor_keys_.at(spec_.actors[static_cast<size_t>(i)].name).public_key; };
     for (const auto& [name, a] : supervisor_.actors())
-      send(name, wire::make(MsgType::config, "director", config_for(spec_, a.index, endpoint_of).to_value()));
+      send(name, wire::make(MsgType::config, "director", config_for(spec_, a.index, endpoint_of, key_of).to_value()));
   }
 
   // PHASE to everyone, then wait for every READY of it (no timeout: setup and render take what they take).
@@ -278,6 +306,10 @@ class Director final : public ControlOut, public Outbox {
   const FarmSpec& spec_;
   RunOptions options_;
   Launchers launchers_;
+  // CURVE (farm { security = "curve" }): declared before the control socket, whose handshakes it serves.
+  std::unique_ptr<wire::Authenticator> authenticator_;
+  wire::CurveKeys director_keys_;
+  std::map<std::string, wire::CurveKeys> actor_keys_;
   wire::Socket control_{wire::Socket::Kind::router};
   std::string control_endpoint_;
   std::string local_address_;  // set when the farm spans hosts: where this machine's actors and the director listen

@@ -33,6 +33,8 @@ struct LaunchRequest {
   // The child's stdin is a pipe this launcher holds open until the child is reaped: it reads EOF the moment the
   // director is gone, whatever killed it (ssh forwards that EOF to the remote actor's lifeline).
   bool hold_stdin = false;
+  // Written to the child's stdin first (the farm's keys): never on a command line or in the environment.
+  std::string stdin_text;
 };
 
 class Launcher {

@@ -42,7 +42,8 @@ Result<pid_t> LocalLauncher::start(const LaunchRequest& options) {
   int fds[2];
   if (::pipe2(fds, O_CLOEXEC) != 0) return make_error(std::string("pipe: ") + std::strerror(errno));
   int lifeline[2] = {-1, -1};
-  if (options.hold_stdin && ::pipe2(lifeline, O_CLOEXEC) != 0) {
+  const bool stdin_pipe = options.hold_stdin || !options.stdin_text.empty();
+  if (stdin_pipe && ::pipe2(lifeline, O_CLOEXEC) != 0) {
     ::close(fds[0]);
     ::close(fds[1]);
     return make_error(std::string("pipe: ") + std::strerror(errno));
@@ -93,7 +94,17 @@ Result<pid_t> LocalLauncher::start(const LaunchRequest& options) {
     return make_error("cannot run " + args[0] + ": " + std::strerror(err));
   }
   children_.insert(pid);
-  if (lifeline[1] >= 0) held_stdin_[pid] = lifeline[1];
+  if (lifeline[1] >= 0) {
+    // A few hundred bytes: the pipe holds them, so this never blocks.
+    for (size_t done = 0; done < options.stdin_text.size();) {
+      const ssize_t w = ::write(lifeline[1], options.stdin_text.data() + done, options.stdin_text.size() - done);
+      if (w < 0 && errno == EINTR) continue;
+      if (w <= 0) break;
+      done += static_cast<size_t>(w);
+    }
+    if (options.hold_stdin) held_stdin_[pid] = lifeline[1];
+    else ::close(lifeline[1]);
+  }
   return pid;
 }
 

@@ -16,10 +16,11 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 
-// Starts the actor in the background and watches stdin: EOF means the director is gone. (A background job of a
-// non-interactive shell reads /dev/null unless told otherwise, hence fd 3.)
+// Hands the actor the first line of stdin (its keys, or an empty line), starts it in the background and watches
+// the rest of stdin: EOF means the director is gone. (A background job of a non-interactive shell reads /dev/null
+// unless told otherwise, hence fd 3.)
 constexpr const char* kLifeline =
-    "cd \"$0\" || exit 127; exec 3<&0; \"$@\" </dev/null 3<&- & p=$!; "
+    "cd \"$0\" || exit 127; exec 3<&0; IFS= read -r k <&3; printf '%s\\n' \"$k\" | \"$@\" 3<&- & p=$!; "
     "(cat <&3 >/dev/null 2>&1; kill -TERM $p 2>/dev/null && { sleep 2; kill -KILL $p 2>/dev/null; }) "
     ">/dev/null 2>&1 & exec 3<&-; wait $p";
 
@@ -143,6 +144,7 @@ Result<pid_t> SshLauncher::start(const LaunchRequest& request) {
   client.argv.push_back(command);
   client.self = false;
   client.hold_stdin = true;
+  client.stdin_text = request.stdin_text.empty() ? "\n" : request.stdin_text;  // the lifeline reads one line first
   return clients_.start(client);
 }
 

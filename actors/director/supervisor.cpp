@@ -32,7 +32,8 @@ void Supervisor::send(const std::string& name, wire::Message m) {
   out_.send(name, std::move(m));
 }
 
-Status Supervisor::launch(const std::string& director_endpoint, const std::string& local_address) {
+Status Supervisor::launch(const std::string& director_endpoint, const std::string& local_address,
+                          const std::function<std::string(const ActorSpec&)>& stdin_of) {
   for (const auto& a : spec_.actors) {
     LaunchRequest how;
     how.argv = {"lightfarm", "actor"};
@@ -48,6 +49,10 @@ Status Supervisor::launch(const std::string& director_endpoint, const std::strin
     if (!host) return make_error(a.loc.str() + ": actor '" + a.name + "' is placed on undeclared host '" + a.host + "'");
     if (!local_address.empty())
       how.argv.insert(how.argv.end(), {"--bind", "tcp://" + (host->remote() ? host->address : local_address) + ":*"});
+    if (stdin_of) {
+      how.argv.push_back("--curve");
+      how.stdin_text = stdin_of(a) + "\n";
+    }
     auto pid = launchers_.start(*host, how);
     if (!pid) return make_error(a.loc.str() + ": cannot start actor '" + a.name + "': " + pid.error().message);
     ActorRecord& r = actors_.at(a.name);

@@ -65,7 +65,9 @@ class Supervisor {
   // Starts every actor (`lightfarm actor ...`, or an exec actor's own command) pointed at `director_endpoint`.
   // With `local_address` (a farm that spans hosts), every actor also gets `--bind tcp://ADDRESS:*`: its host's
   // address, or `local_address` for this machine's actors, so that actors on other hosts reach its data socket.
-  Status launch(const std::string& director_endpoint, const std::string& local_address = {});
+  // `stdin_of(actor)` (a CURVE farm): the keys line each actor reads, which adds `--curve` to its arguments.
+  Status launch(const std::string& director_endpoint, const std::string& local_address = {},
+                const std::function<std::string(const ActorSpec&)>& stdin_of = {});
   void set_stage(Stage stage) { stage_ = stage; }
   Stage stage() const { return stage_; }
 

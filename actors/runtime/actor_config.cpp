@@ -4,7 +4,11 @@ namespace lf {
 
 Value ActorConfig::to_value() const {
   Value::Array ins;
-  for (const auto& in : inputs) ins.push_back(Value::Map{{"name", in.name}, {"endpoint", in.endpoint}, {"window", in.window}});
+  for (const auto& in : inputs) {
+    Value::Map entry{{"name", in.name}, {"endpoint", in.endpoint}, {"window", in.window}};
+    if (!in.key.empty()) entry["key"] = in.key;
+    ins.push_back(std::move(entry));
+  }
   Value::Map m{{"params", params},
                {"scene", scene.to_value()},
                {"camera", camera.to_value()},
@@ -66,7 +70,12 @@ Result<ActorConfig> ActorConfig::from_value(const Value& body) {
       if (window && (!window->is_int() || window->as_int() < 1 || window->as_int() > 1024))
         return make_error("CONFIG input '" + name->as_string() + "': window must be an integer in [1, 1024]",
                           ErrorCode::bad_request);
-      c.inputs.push_back({name->as_string(), endpoint->as_string(), window ? window->as_int() : 4});
+      const Value* key = in.find("key");
+      if (key && (!key->is_string() || key->as_string().size() != 40))
+        return make_error("CONFIG input '" + name->as_string() + "': key must be a 40-character Z85 public key",
+                          ErrorCode::bad_request);
+      c.inputs.push_back({name->as_string(), endpoint->as_string(), window ? window->as_int() : 4,
+                          key ? key->as_string() : std::string()});
     }
   }
   if (const Value* pool = body.find("pool"); pool && !pool->is_nil()) {

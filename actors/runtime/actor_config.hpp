@@ -16,6 +16,7 @@ struct InputSpec {
   std::string name;      // the input actor's name
   std::string endpoint;  // its data socket
   int64_t window = 4;    // requests this actor keeps in flight to it
+  std::string key;       // its CURVE public key (Z85), when the farm speaks CURVE
 };
 
 // A replica's place in its pool: all_gather answers in replica order.

@@ -2,6 +2,7 @@
 
 #include <unistd.h>
 
+#include <cerrno>
 #include <csignal>
 
 #include "actors/runtime/hello.hpp"
@@ -29,6 +30,19 @@ void install_stop_signals() {
 }
 
 bool stop_requested() { return g_stop_signal != 0; }
+
+Result<wire::FarmKeys> read_farm_keys_from_stdin() {
+  std::string line;
+  char c;
+  while (line.size() < 65536) {
+    const ssize_t n = ::read(STDIN_FILENO, &c, 1);  // byte by byte: nothing after the line is consumed
+    if (n < 0 && errno == EINTR) continue;
+    if (n <= 0 || c == '\n') break;
+    line += c;
+  }
+  if (line.empty()) return make_error("--curve: no keys on standard input");
+  return wire::FarmKeys::from_line(line);
+}
 int stop_signal() { return g_stop_signal; }
 
 Value ActorStats::to_value(const wire::SocketCounters& t) const {
@@ -51,6 +65,12 @@ Runtime::Runtime(ActorArgs args)
     : args_(std::move(args)), control_(wire::Socket::Kind::dealer, args_.name), data_(wire::Socket::Kind::router) {
   // Let BYE and the last STATS leave before the socket closes.
   control_.set_linger_ms(2000);
+  if (args_.keys) {
+    const auto& k = *args_.keys;
+    authenticator_ = std::make_unique<wire::Authenticator>(std::set<std::string>(k.allowed.begin(), k.allowed.end()));
+    control_.make_curve_client(k.own.public_key, k.own.secret_key, k.director);
+    data_.make_curve_server(k.own.secret_key);
+  }
 }
 
 Runtime::~Runtime() = default;
@@ -124,6 +144,10 @@ void Runtime::handle_control(wire::Message& m, Actor& actor) {
       // Connect to every input before the actor configures, so that it may ask them during setup.
       for (const auto& in : config->inputs) {
         auto client = std::make_unique<wire::RequestClient>(args_.name, in.name, static_cast<size_t>(in.window));
+        if (args_.keys) {
+          if (in.key.empty()) return fail("CONFIG gives input '" + in.name + "' no key, and this farm speaks CURVE");
+          client->use_curve(args_.keys->own.public_key, args_.keys->own.secret_key, in.key);
+        }
         if (auto st = client->connect(in.endpoint); !st) return fail(st.error().message);
         client->set_timeout(config->request_timeout);
         inputs_.push_back(std::move(client));

@@ -14,12 +14,14 @@
 #include <chrono>
 #include <functional>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
 #include "actors/runtime/actor_config.hpp"
 #include "core/value.hpp"
 #include "transport/client.hpp"
+#include "transport/security.hpp"
 #include "transport/socket.hpp"
 
 namespace lf {
@@ -29,6 +31,7 @@ struct ActorArgs {
   std::string name;
   std::string director;               // control endpoint, e.g. tcp://127.0.0.1:5555
   std::string bind = "tcp://127.0.0.1:*";  // where the data socket listens
+  std::optional<wire::FarmKeys> keys;       // set: every link is CURVE (--curve; the keys come on stdin)
 };
 
 struct ActorStats {
@@ -105,6 +108,7 @@ class Runtime {
   void send_stats_and_bye();
 
   ActorArgs args_;
+  std::unique_ptr<wire::Authenticator> authenticator_;  // before the sockets: it serves their handshakes
   Actor* actor_ = nullptr;
   wire::Socket control_;
   wire::Socket data_;
@@ -120,6 +124,10 @@ class Runtime {
   int exit_status_ = 0;
   bool inputs_changed_ = false;
 };
+
+// The farm's keys, from the first line of standard input (--curve): never on the command line or in the
+// environment, where other users of the host could read them.
+Result<wire::FarmKeys> read_farm_keys_from_stdin();
 
 // Installs SIGINT/SIGTERM handlers that make poll loops stop; returns true once a signal has arrived.
 void install_stop_signals();

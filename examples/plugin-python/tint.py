@@ -5,7 +5,7 @@ With an input, it asks the input for the light at each point and multiplies it b
 Without one, it paints surface normals as colour: (normal + 1) / 2 * scale.
 
 Parameters (from the farm script): color = {r, g, b} (default {1, 1, 1}), scale (default 1).
-Run by the farm as:  ./tint.py --kind exec --name NAME --director ENDPOINT [--bind ENDPOINT]
+Run by the farm as:  ./tint.py --kind exec --name NAME --director ENDPOINT [--bind ENDPOINT] [--curve]
 """
 import argparse
 import os
@@ -15,20 +15,33 @@ import time
 
 import msgpack
 import zmq
+import zmq.utils.z85
 
 PROTOCOL = 1
 HELLO, CONFIG, PHASE, REQUEST, REPLY, ERROR, STATS, HEARTBEAT, BYE, READY, PEER_DOWN = range(1, 12)
 
 
 class Actor:
-    def __init__(self, kind, name, director, bind):
+    def __init__(self, kind, name, director, bind, keys=None):
         self.kind, self.name = kind, name
         self.ctx = zmq.Context()
+        # CURVE (--curve): keys = (own public, own secret, director public, {every public key of the farm}).
+        self.keys = keys
+        self.zap = None
+        if keys:
+            self.zap = self.ctx.socket(zmq.REP)  # ZeroMQ asks it about every client of our data socket
+            self.zap.bind("inproc://zeromq.zap.01")
         self.control = self.ctx.socket(zmq.DEALER)
         self.control.setsockopt(zmq.ROUTING_ID, name.encode())
+        if keys:
+            self.curve_client(self.control, keys[2])
         self.control.setsockopt(zmq.LINGER, 1000)
         self.control.connect(director)
         self.data = self.ctx.socket(zmq.ROUTER)
+        if keys:
+            self.data.setsockopt(zmq.CURVE_SERVER, 1)
+            self.data.setsockopt_string(zmq.CURVE_SECRETKEY, keys[1])
+            self.data.setsockopt_string(zmq.ZAP_DOMAIN, "lightfarm")
         self.data.setsockopt(zmq.LINGER, 0)
         self.data.bind(bind)
         self.endpoint = self.data.getsockopt_string(zmq.LAST_ENDPOINT)
@@ -40,6 +53,19 @@ class Actor:
         self.requests = self.points = 0
 
     # --- the wire -----------------------------------------------------------------------------------------
+    def curve_client(self, socket, server_key):
+        socket.setsockopt_string(zmq.CURVE_SERVERKEY, server_key)
+        socket.setsockopt_string(zmq.CURVE_PUBLICKEY, self.keys[0])
+        socket.setsockopt_string(zmq.CURVE_SECRETKEY, self.keys[1])
+
+    def on_zap(self):
+        """ZAP: let in a CURVE client only if its key is one of the farm's."""
+        frames = self.zap.recv_multipart()
+        version, request_id, mechanism = frames[0], frames[1], frames[5]
+        allowed = mechanism == b"CURVE" and len(frames) > 6 and zmq.utils.z85.encode(frames[6]).decode() in self.keys[3]
+        self.zap.send_multipart([version, request_id, b"200" if allowed else b"400",
+                                 b"OK" if allowed else b"not a key of this farm", b"", b""])
+
     def header(self, t, id=0, op="", q=0):
         return msgpack.packb({"v": PROTOCOL, "t": t, "id": id, "s": self.name, "op": op, "q": q})
 
@@ -96,6 +122,8 @@ class Actor:
         if inputs:
             self.input = self.ctx.socket(zmq.DEALER)
             self.input.setsockopt(zmq.ROUTING_ID, self.name.encode())
+            if self.keys:
+                self.curve_client(self.input, inputs[0]["key"])
             self.input.setsockopt(zmq.LINGER, 0)
             self.input.connect(inputs[0]["endpoint"])
 
@@ -139,7 +167,11 @@ class Actor:
             poller.register(self.data, zmq.POLLIN)
             if self.input is not None:
                 poller.register(self.input, zmq.POLLIN)
+            if self.zap is not None:
+                poller.register(self.zap, zmq.POLLIN)
             ready = dict(poller.poll(100))
+            if self.zap is not None and self.zap in ready:
+                self.on_zap()
             now = time.monotonic()
             if self.control in ready:
                 while self.control.poll(0):
@@ -197,8 +229,16 @@ def main():
     parser.add_argument("--name", required=True)
     parser.add_argument("--director", required=True)
     parser.add_argument("--bind", default="tcp://127.0.0.1:*")  # given when the farm spans hosts
+    parser.add_argument("--curve", action="store_true")  # the farm's keys come on the first line of stdin
     args = parser.parse_args()
-    actor = Actor(args.kind, args.name, args.director, args.bind)
+    keys = None
+    if args.curve:
+        words = sys.stdin.readline().split()
+        if len(words) < 5 or words[0] != "LFKEYS1":
+            print("%s: --curve: no keys on standard input" % args.name, file=sys.stderr)
+            return 2
+        keys = (words[1], words[2], words[3], set(words[4:]))
+    actor = Actor(args.kind, args.name, args.director, args.bind, keys)
     try:
         code = actor.run()
     except KeyboardInterrupt:

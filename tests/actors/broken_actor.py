@@ -23,6 +23,7 @@ import time
 
 import msgpack
 import zmq
+import zmq.utils.z85
 
 HELLO, CONFIG, PHASE, REQUEST, REPLY, ERROR, STATS, HEARTBEAT, BYE, READY, PEER_DOWN = range(1, 12)
 MODES = ["ok", "wrong_version", "silent", "crash", "no_ready_render", "ignore_input", "ignore_sigterm",
@@ -36,18 +37,37 @@ def main():
     p.add_argument("--name", required=True)
     p.add_argument("--director", required=True)
     p.add_argument("--bind", default="tcp://127.0.0.1:*")
+    p.add_argument("--curve", action="store_true")
     a = p.parse_args()
     if a.mode == "ignore_sigterm":
         signal.signal(signal.SIGTERM, signal.SIG_IGN)
     version = 2 if a.mode == "wrong_version" else 1
     ctx = zmq.Context()
+    keys = None
+    if a.curve:  # own public, own secret, director public, the farm's keys
+        words = sys.stdin.readline().split()
+        keys = (words[1], words[2], words[3], set(words[4:]))
+        zap = ctx.socket(zmq.REP)
+        zap.bind("inproc://zeromq.zap.01")
+
+    def curve_client(s, server_key):
+        if keys:
+            s.setsockopt_string(zmq.CURVE_SERVERKEY, server_key)
+            s.setsockopt_string(zmq.CURVE_PUBLICKEY, keys[0])
+            s.setsockopt_string(zmq.CURVE_SECRETKEY, keys[1])
+
     control = ctx.socket(zmq.DEALER)
+    curve_client(control, keys[2] if keys else None)
     if a.mode != "no_routing_id":
         control.setsockopt(zmq.ROUTING_ID, a.name.encode())
     control.setsockopt(zmq.LINGER, 500)
     control.connect(a.director)
     data = ctx.socket(zmq.ROUTER)
     data.setsockopt(zmq.LINGER, 0)
+    if keys:
+        data.setsockopt(zmq.CURVE_SERVER, 1)
+        data.setsockopt_string(zmq.CURVE_SECRETKEY, keys[1])
+        data.setsockopt_string(zmq.ZAP_DOMAIN, "lightfarm")
     data.bind(a.bind)
     inputs = []
     waiting = {}  # our request id -> (peer, their id, n)
@@ -73,6 +93,10 @@ def main():
         if time.monotonic() >= next_beat:
             send(HEARTBEAT)
             next_beat = time.monotonic() + min(1.0, timeout / 4)
+        while keys and zap.poll(0):  # ZAP: only the farm's keys
+            f = zap.recv_multipart()
+            ok = f[5] == b"CURVE" and zmq.utils.z85.encode(f[6]).decode() in keys[3]
+            zap.send_multipart([f[0], f[1], b"200" if ok else b"400", b"", b"", b""])
         if control.poll(20):
             h, body = (msgpack.unpackb(f, raw=False) for f in control.recv_multipart())
             last = time.monotonic()
@@ -82,6 +106,7 @@ def main():
                     s = ctx.socket(zmq.DEALER)
                     s.setsockopt(zmq.ROUTING_ID, a.name.encode())
                     s.setsockopt(zmq.LINGER, 0)
+                    curve_client(s, spec.get("key"))
                     s.connect(spec["endpoint"])
                     inputs.append(s)
                 send(READY, "configure", {"phase": "configure"})

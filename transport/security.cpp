@@ -1,0 +1,104 @@
+#include "transport/security.hpp"
+
+#include <zmq.hpp>
+
+#include <chrono>
+#include <sstream>
+
+#include "core/log.hpp"
+#include "transport/socket.hpp"
+
+namespace lf::wire {
+
+zmq::context_t& zmq_context();  // socket.cpp: every socket of the process, the ZAP handler's too
+
+CurveKeys make_curve_keypair() {
+  char pub[41] = {}, sec[41] = {};
+  if (zmq_curve_keypair(pub, sec) != 0) return {};
+  return {pub, sec};
+}
+
+std::string FarmKeys::to_line() const {
+  std::string line = "LFKEYS1 " + own.public_key + " " + own.secret_key + " " + director;
+  for (const auto& k : allowed) line += " " + k;
+  return line;
+}
+
+Result<FarmKeys> FarmKeys::from_line(const std::string& line) {
+  std::istringstream in(line);
+  std::string magic;
+  FarmKeys k;
+  in >> magic >> k.own.public_key >> k.own.secret_key >> k.director;
+  if (magic != "LFKEYS1") return make_error("the keys on standard input do not start with LFKEYS1");
+  for (std::string key; in >> key;) k.allowed.push_back(key);
+  auto z85 = [](const std::string& s) { return s.size() == 40; };
+  if (!z85(k.own.public_key) || !z85(k.own.secret_key) || !z85(k.director) || k.allowed.empty())
+    return make_error("the keys on standard input are incomplete (each key is 40 Z85 characters)");
+  for (const auto& a : k.allowed)
+    if (!z85(a)) return make_error("the keys on standard input are incomplete (each key is 40 Z85 characters)");
+  return k;
+}
+
+Authenticator::Authenticator(std::set<std::string> allowed) : allowed_(std::move(allowed)) {
+  thread_ = std::thread([this] { serve(); });
+}
+
+Authenticator::~Authenticator() {
+  stop_ = true;
+  thread_.join();
+}
+
+void Authenticator::serve() {
+  zmq::socket_t zap(zmq_context(), zmq::socket_type::rep);
+  zap.set(zmq::sockopt::linger, 0);
+  zap.bind("inproc://zeromq.zap.01");
+  using Clock = std::chrono::steady_clock;
+  auto last_log = Clock::now() - std::chrono::seconds(2);
+  uint64_t unlogged = 0;
+  std::string last_address;
+  while (!stop_) {
+    zmq::pollitem_t item{zap.handle(), 0, ZMQ_POLLIN, 0};
+    zmq::poll(&item, 1, std::chrono::milliseconds(100));
+    if (item.revents & ZMQ_POLLIN) {
+      // ZAP request: version, request id, domain, address, identity, mechanism, credentials...
+      std::vector<zmq::message_t> frames;
+      while (true) {
+        zmq::message_t f;
+        if (!zap.recv(f, zmq::recv_flags::dontwait)) break;
+        const bool more = f.more();
+        frames.push_back(std::move(f));
+        if (!more) break;
+      }
+      if (frames.size() < 6) continue;
+      const std::string mechanism = frames[5].to_string();
+      bool ok = false;
+      if (mechanism == "CURVE" && frames.size() >= 7 && frames[6].size() == 32) {
+        char z85[41] = {};
+        zmq_z85_encode(z85, static_cast<const uint8_t*>(frames[6].data()), 32);
+        ok = allowed_.count(z85) > 0;
+      }
+      const std::string status = ok ? "200" : "400";
+      const std::string text = ok ? "OK" : "not a key of this farm";
+      zap.send(frames[0], zmq::send_flags::sndmore);
+      zap.send(frames[1], zmq::send_flags::sndmore);
+      zap.send(zmq::buffer(status), zmq::send_flags::sndmore);
+      zap.send(zmq::buffer(text), zmq::send_flags::sndmore);
+      zap.send(zmq::buffer(std::string()), zmq::send_flags::sndmore);
+      zap.send(zmq::buffer(std::string()), zmq::send_flags::none);
+      if (!ok) {
+        ++refused_;
+        ++unlogged;
+        last_address = frames[3].to_string();
+      }
+    }
+    // Refusals are logged at most once a second, with how many there were: a stranger cannot flood the log.
+    if (unlogged > 0 && Clock::now() - last_log >= std::chrono::seconds(1)) {
+      log_warn("refused " + std::to_string(unlogged) + " connection" + (unlogged > 1 ? "s" : "") + " (latest from " +
+               last_address + ") that did not present a key of this farm");
+      unlogged = 0;
+      last_log = Clock::now();
+    }
+  }
+}
+
+}  // namespace lf::wire
