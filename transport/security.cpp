@@ -48,18 +48,48 @@ Authenticator::~Authenticator() {
   thread_.join();
 }
 
+void Authenticator::watch(Socket& server) {
+  static std::atomic<int> next{0};
+  const std::string endpoint = "inproc://lightfarm-monitor-" + std::to_string(next++);
+  zmq_socket_monitor(server.native(), endpoint.c_str(),
+                     ZMQ_EVENT_HANDSHAKE_FAILED_NO_DETAIL | ZMQ_EVENT_HANDSHAKE_FAILED_PROTOCOL);
+  std::lock_guard<std::mutex> lock(mutex_);
+  monitors_.push_back(endpoint);
+}
+
 void Authenticator::serve() {
   zmq::socket_t zap(zmq_context(), zmq::socket_type::rep);
   zap.set(zmq::sockopt::linger, 0);
   zap.bind("inproc://zeromq.zap.01");
+  std::vector<zmq::socket_t> monitors;
   using Clock = std::chrono::steady_clock;
   auto last_log = Clock::now() - std::chrono::seconds(2);
   uint64_t unlogged = 0;
   std::string last_address;
   while (!stop_) {
-    zmq::pollitem_t item{zap.handle(), 0, ZMQ_POLLIN, 0};
-    zmq::poll(&item, 1, std::chrono::milliseconds(100));
-    if (item.revents & ZMQ_POLLIN) {
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      for (const auto& endpoint : monitors_) {
+        monitors.emplace_back(zmq_context(), zmq::socket_type::pair);
+        monitors.back().set(zmq::sockopt::linger, 0);
+        monitors.back().connect(endpoint);
+      }
+      monitors_.clear();
+    }
+    std::vector<zmq::pollitem_t> items{{zap.handle(), 0, ZMQ_POLLIN, 0}};
+    for (auto& m : monitors) items.push_back({m.handle(), 0, ZMQ_POLLIN, 0});
+    zmq::poll(items.data(), items.size(), std::chrono::milliseconds(100));
+    for (size_t i = 1; i < items.size(); ++i) {
+      if (!(items[i].revents & ZMQ_POLLIN)) continue;
+      // A monitor event: 6 bytes (event, value), then the socket's endpoint.
+      zmq::message_t event, where;
+      if (!monitors[i - 1].recv(event, zmq::recv_flags::dontwait)) continue;
+      if (event.more()) (void)monitors[i - 1].recv(where, zmq::recv_flags::dontwait);
+      ++refused_;
+      ++unlogged;
+      last_address = "a client of " + where.to_string() + " without CURVE";
+    }
+    if (items[0].revents & ZMQ_POLLIN) {
       // ZAP request: version, request id, domain, address, identity, mechanism, credentials...
       std::vector<zmq::message_t> frames;
       while (true) {
@@ -88,13 +118,13 @@ void Authenticator::serve() {
       if (!ok) {
         ++refused_;
         ++unlogged;
-        last_address = frames[3].to_string();
+        last_address = frames[3].to_string() + " with an unknown key";
       }
     }
     // Refusals are logged at most once a second, with how many there were: a stranger cannot flood the log.
     if (unlogged > 0 && Clock::now() - last_log >= std::chrono::seconds(1)) {
-      log_warn("refused " + std::to_string(unlogged) + " connection" + (unlogged > 1 ? "s" : "") + " (latest from " +
-               last_address + ") that did not present a key of this farm");
+      log_warn("refused " + std::to_string(unlogged) + " connection" + (unlogged > 1 ? "s" : "") +
+               " that did not present a key of this farm (latest: " + last_address + ")");
       unlogged = 0;
       last_log = Clock::now();
     }

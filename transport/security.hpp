@@ -6,6 +6,7 @@
 // process checks them and logs refusals, at most one line a second.
 #include <atomic>
 #include <memory>
+#include <mutex>
 #include <set>
 #include <string>
 #include <thread>
@@ -35,14 +36,19 @@ struct FarmKeys {
   static Result<FarmKeys> from_line(const std::string& line);
 };
 
+class Socket;
+
 // Serves ZAP (ZeroMQ's authentication protocol) for this process while it lives: a CURVE client is let in only if
-// its public key is in `allowed`.
+// its public key is in `allowed`. Watched server sockets also report handshakes that fail before ZAP is asked (a
+// client without CURVE at all); every refusal is counted and logged, at most one line a second.
 class Authenticator {
  public:
   explicit Authenticator(std::set<std::string> allowed);
   ~Authenticator();
   Authenticator(const Authenticator&) = delete;
   Authenticator& operator=(const Authenticator&) = delete;
+  // Call from the socket's thread, before it binds.
+  void watch(Socket& server);
   uint64_t refused() const { return refused_; }
 
  private:
@@ -50,6 +56,8 @@ class Authenticator {
   std::set<std::string> allowed_;
   std::atomic<bool> stop_{false};
   std::atomic<uint64_t> refused_{0};
+  std::mutex mutex_;
+  std::vector<std::string> monitors_;  // inproc endpoints of socket monitors, for the thread to connect
   std::thread thread_;
 };
 

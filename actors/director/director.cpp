@@ -186,6 +186,7 @@ class Director final : public ControlOut, public Outbox {
     for (const auto& a : spec_.actors) allowed.insert((actor_keys_[a.name] = wire::make_curve_keypair()).public_key);
     authenticator_ = std::make_unique<wire::Authenticator>(allowed);
     control_.make_curve_server(director_keys_.secret_key);
+    authenticator_->watch(control_);
   }
 
   std::string farm_keys_for(const std::string& actor) const {

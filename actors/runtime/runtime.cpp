@@ -70,6 +70,7 @@ Runtime::Runtime(ActorArgs args)
     authenticator_ = std::make_unique<wire::Authenticator>(std::set<std::string>(k.allowed.begin(), k.allowed.end()));
     control_.make_curve_client(k.own.public_key, k.own.secret_key, k.director);
     data_.make_curve_server(k.own.secret_key);
+    authenticator_->watch(data_);
   }
 }
 
