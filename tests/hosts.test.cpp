@@ -163,3 +163,42 @@ TEST_F(HostsTest, BadHostsStopTheFarmAtLaunchNamingTheHostAndSshsWords) {
 
 }  // namespace
 }  // namespace lf::test
+
+namespace lf::test {
+namespace {
+
+// A whole host lost mid-frame — its network cut, or everything on it SIGKILLed at once: the heartbeats (or the
+// exits) tell, its renderer's tiles and its replica's packets are redone elsewhere, and the image is the
+// fault-free one. The pool's multiplexer and the other actors live on h1 and here.
+TEST_F(HostsTest, AHostLostMidFrameChangesNoPixel) {
+  const std::string body = "scene { builtin = \"cornell\" }\n"
+                           "image { width = 96, height = 96, spp = 256, tile = 16 }\n"
+                           "farm { heartbeat_timeout = 2 }\n";
+  auto local = write("local.lua", body + "local direct = multiplexer { lightop \"direct\" { light_samples = 2 }, replicas = 3 }\n"
+                                         "renderers { count = 2, lighting = direct }\n");
+  auto spread = write("spread.lua", body + host_lines() +
+                                        "local direct = multiplexer { lightop \"direct\" { light_samples = 2 }, replicas = 3,\n"
+                                        "                             host = { h1, h2, h3 } }\n"
+                                        "renderers { count = 2, lighting = direct, host = { h2, \"local\" } }\n");
+  const Image expected = render(local, {}, "local.exr");
+  for (const std::string how : {"cut", "kill"}) {
+    SCOPED_TRACE(how);
+    Farm farm({"run", spread, "--output", path(how + ".exr")});
+    // Mid-frame: once the first tiles are in.
+    ASSERT_TRUE(Farm::eventually([&] { return farm.err_so_far().find("render 10%") != std::string::npos; }, 60.0))
+        << farm.err_so_far();
+    ASSERT_EQ(sh(kRig + " " + how + " " + rig + " 2"), 0);
+    auto r = farm.wait(120);
+    if (how == "cut") sh(kRig + " mend " + rig + " 2");
+    EXPECT_EQ(r.status, 0) << r.err;
+    EXPECT_NE(r.err.find("renderer 'renderer-0'"), std::string::npos) << r.err;
+    EXPECT_NE(r.err.find("replica 'direct.1'"), std::string::npos) << r.err;
+    auto img = read_image(path(how + ".exr"));
+    ASSERT_TRUE(img.ok()) << r.err;
+    EXPECT_TRUE(same_pixels(expected, *img));
+    expect_nothing_left(r);
+  }
+}
+
+}  // namespace
+}  // namespace lf::test

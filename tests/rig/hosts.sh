@@ -9,6 +9,8 @@
 #   hosts.sh down DIR        kill everything running in the hosts, remove them and the bridge (always safe)
 #   hosts.sh pids DIR        processes still running in any host apart from its sshd listener, one "host pid cmd"
 #                            per line
+#   hosts.sh cut DIR I       cut host I off the network (its veth down); `hosts.sh mend DIR I` joins it again
+#   hosts.sh kill DIR I      SIGKILL everything running in host I but its sshd listener
 #
 # Needs root (CAP_NET_ADMIN); exits 77 with a message when it cannot create a namespace.
 set -euo pipefail
@@ -108,8 +110,17 @@ CFG
   trap - ERR
 }
 
+veth() {
+  # shellcheck disable=SC1091
+  . "$dir/state"
+  echo "lfv${bridge#lfbr}-$1"
+}
+
 case "$cmd" in
   up) up "$@" ;;
+  cut) ip link set "$(veth "${3:?hosts.sh cut DIR I}")" down ;;
+  mend) ip link set "$(veth "${3:?hosts.sh mend DIR I}")" up ;;
+  kill) pids | awk -v h="h${3:?hosts.sh kill DIR I}" '$1 == h { print $2 }' | xargs -r kill -9 2>/dev/null || true ;;
   down) down ;;
   pids) pids ;;
   *) echo "hosts.sh: unknown command '$cmd'" >&2; exit 2 ;;
