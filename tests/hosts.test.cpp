@@ -155,7 +155,7 @@ TEST_F(HostsTest, BadHostsStopTheFarmAtLaunchNamingTheHostAndSshsWords) {
     auto r = run_lightfarm({"run", script, "--output", path("bad.png")});
     EXPECT_EQ(r.status, 1) << c.name << ": " << r.err;
     EXPECT_NE(r.err.find(c.says), std::string::npos) << c.name << ":\n" << r.err;
-    EXPECT_NE(r.err.find("bad.lua:4: cannot start actor 'direct'"), std::string::npos) << r.err;
+    EXPECT_NE(r.err.find("lightfarm: error: cannot start the farm: host 'far'"), std::string::npos) << r.err;
     EXPECT_FALSE(fs::exists(path("bad.png")));
     expect_nothing_left(r);
   }

@@ -41,6 +41,9 @@ class Launcher {
  public:
   virtual ~Launcher() = default;
   virtual std::string name() const = 0;
+  // Gets ready to start actors (an ssh connection and a check of the host); called for every host at once before
+  // any actor starts, so hosts connect in parallel. An error names the host.
+  virtual Status prepare() { return Ok{}; }
   // Starts the actor; an error says why it could not start (missing program, ...).
   virtual Result<pid_t> start(const LaunchRequest& request) = 0;
   // An actor that has exited, if any (never blocks).
@@ -59,6 +62,8 @@ class Launchers {
   // Installs `launcher` for `host` (tests give fakes).
   void set(const std::string& host, std::unique_ptr<Launcher> launcher);
   Result<Launcher*> for_host(const HostSpec& host);
+  // Makes the launcher of each of `hosts` and prepares them all at once; the first error, if any.
+  Status prepare(const std::vector<const HostSpec*>& hosts);
   Result<pid_t> start(const HostSpec& host, const LaunchRequest& request);
   std::optional<ExitReport> reap_one();
   void kill(pid_t pid, int signal);

@@ -10,6 +10,7 @@
 #include <cerrno>
 #include <cstring>
 #include <filesystem>
+#include <algorithm>
 #include <thread>
 
 namespace lf {
@@ -170,6 +171,23 @@ Result<Launcher*> Launchers::for_host(const HostSpec& host) {
   auto made = make_launcher(host);
   if (!made) return made.error();
   return (by_host_[host.name] = std::move(*made)).get();
+}
+
+Status Launchers::prepare(const std::vector<const HostSpec*>& hosts) {
+  std::vector<Launcher*> launchers;
+  for (const HostSpec* h : hosts) {
+    auto l = for_host(*h);
+    if (!l) return l.error();
+    if (std::find(launchers.begin(), launchers.end(), *l) == launchers.end()) launchers.push_back(*l);
+  }
+  std::vector<Status> results(launchers.size(), Status(Ok{}));
+  std::vector<std::thread> threads;
+  for (size_t i = 0; i < launchers.size(); ++i)
+    threads.emplace_back([&, i] { results[i] = launchers[i]->prepare(); });
+  for (auto& t : threads) t.join();
+  for (const auto& r : results)
+    if (!r) return r;
+  return Ok{};
 }
 
 Result<pid_t> Launchers::start(const HostSpec& host, const LaunchRequest& request) {

@@ -20,6 +20,7 @@ class SshLauncher final : public Launcher {
   ~SshLauncher() override;
 
   std::string name() const override { return "ssh"; }
+  Status prepare() override { return connect(true); }
   Result<pid_t> start(const LaunchRequest& request) override;
   std::optional<ExitReport> reap_one() override { return clients_.reap_one(); }
   void kill(pid_t pid, int signal) override { clients_.kill(pid, signal); }

@@ -34,6 +34,13 @@ void Supervisor::send(const std::string& name, wire::Message m) {
 
 Status Supervisor::launch(const std::string& director_endpoint, const std::string& local_address,
                           const std::function<std::string(const ActorSpec&)>& stdin_of) {
+  std::vector<const HostSpec*> hosts;
+  for (const auto& a : spec_.actors) {
+    const HostSpec* host = spec_.host_of(a);
+    if (!host) return make_error(a.loc.str() + ": actor '" + a.name + "' is placed on undeclared host '" + a.host + "'");
+    if (std::find(hosts.begin(), hosts.end(), host) == hosts.end()) hosts.push_back(host);
+  }
+  if (auto st = launchers_.prepare(hosts); !st) return make_error("cannot start the farm: " + st.error().message);
   for (const auto& a : spec_.actors) {
     LaunchRequest how;
     how.argv = {"lightfarm", "actor"};
