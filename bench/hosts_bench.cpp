@@ -1,0 +1,99 @@
+// Farms across hosts (issue 11): hosts are network namespaces on this machine with their own sshd
+// (tests/rig/hosts.sh; needs root). Prints, for each figure, min/median/max over --runs, and writes
+// bench-hosts.json:
+//   launch to first tile, 12 actors (8 replicas, 3 renderers, the multiplexer) over 3 ssh hosts vs all local
+//   render throughput of the pool network (2 renderers + 3 direct replicas) across 3 ssh hosts vs all local
+//   render throughput with CURVE vs security = "none", on one machine
+// Usage: build/bench/hosts_bench [--runs N] [--json FILE]
+#include <cstdio>
+#include <fstream>
+#include <map>
+
+#include "bench/bench_util.hpp"
+#include "core/value.hpp"
+
+namespace {
+
+const std::string kRig = std::string(LIGHTFARM_SOURCE_DIR) + "/tests/rig/hosts.sh";
+std::string g_rig;
+
+void rig_down() {
+  if (!g_rig.empty()) std::system((kRig + " down " + g_rig).c_str());
+}
+
+struct Spread {
+  double min = 0, median = 0, max = 0;
+};
+Spread spread(std::vector<double> v) {
+  std::sort(v.begin(), v.end());
+  return {v.front(), bench::median(v), v.back()};
+}
+lf::Value to_value(const Spread& s) { return lf::Value::Map{{"min", s.min}, {"median", s.median}, {"max", s.max}}; }
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  int runs = 5;
+  std::string json_path = "bench-hosts.json";
+  for (int i = 1; i + 1 < argc; i += 2) {
+    std::string a = argv[i];
+    if (a == "--runs") runs = std::atoi(argv[i + 1]);
+    else if (a == "--json") json_path = argv[i + 1];
+  }
+  g_rig = (bench::fs::temp_directory_path() / ("lightfarm-bench-rig-" + std::to_string(::getpid()))).string();
+  std::atexit(rig_down);
+  const int rc = std::system((kRig + " up " + g_rig + " 3 > /dev/null").c_str());
+  if (rc != 0) {
+    std::fprintf(stderr, "hosts_bench: cannot make namespace hosts (needs root; %s)\n", kRig.c_str());
+    return 1;
+  }
+  std::ifstream hosts_file(g_rig + "/hosts");
+  std::string hosts_lua, name, addr;
+  while (hosts_file >> name >> addr)
+    hosts_lua += "local " + name + " = host \"" + name + "\" { launcher = \"ssh\", address = \"" + addr +
+                 "\", ssh_config = \"" + g_rig + "/ssh_config\" }\n";
+  const std::string head = "scene { builtin = \"cornell\" }\nfarm { security = param(\"security\", \"curve\") }\n";
+  auto script = [&](const std::string& file, const std::string& image, const std::string& pool_hosts,
+                    const std::string& renderer_hosts, int replicas, int renderers, bool remote) {
+    return bench::temp_script(
+        file, head + (remote ? hosts_lua : "") + image + "local d = multiplexer { lightop \"direct\" {}, replicas = " +
+                  std::to_string(replicas) + pool_hosts + " }\nrenderers { count = " + std::to_string(renderers) +
+                  ", lighting = d" + renderer_hosts + " }\n");
+  };
+  const std::string tiny = "image { width = 64, height = 64, spp = 1, tile = 16 }\n";
+  const std::string frame = "image { width = 256, height = 256, spp = 32 }\n";
+  const auto launch_remote = script("launch-remote.lua", tiny, ", host = { h1, h2, h3 }", ", host = { h1, h2, h3 }", 8, 3, true);
+  const auto launch_local = script("launch-local.lua", tiny, "", "", 8, 3, false);
+  const auto pool_remote = script("pool-remote.lua", frame, ", host = { h1, h2, h3 }", ", host = { h2, h3 }", 3, 2, true);
+  const auto pool_local = script("pool-local.lua", frame, "", "", 3, 2, false);
+
+  std::map<std::string, std::vector<double>> v;
+  for (int r = 0; r < runs; ++r) {
+    // Interleaved, so that a noisy moment hits both sides of a ratio.
+    v["first_tile_remote"].push_back(bench::run_farm(launch_remote, {}).number("first_tile_seconds"));
+    v["first_tile_local"].push_back(bench::run_farm(launch_local, {}).number("first_tile_seconds"));
+    const double remote = bench::run_farm(pool_remote, {}).number("render_samples_per_second");
+    const double local = bench::run_farm(pool_local, {}).number("render_samples_per_second");
+    v["throughput_remote_over_local"].push_back(remote / local);
+    const double curve = bench::run_farm(pool_local, {"security=curve"}).number("render_samples_per_second");
+    const double none = bench::run_farm(pool_local, {"security=none"}).number("render_samples_per_second");
+    v["throughput_curve_over_none"].push_back(curve / none);
+    v["samples_per_second_local_curve"].push_back(curve);
+    v["samples_per_second_local_none"].push_back(none);
+    std::fprintf(stderr, "run %d/%d done\n", r + 1, runs);
+  }
+  std::printf("lightfarm hosts benchmark: 3 namespace hosts over ssh (veth + bridge on one 2-core machine), %d runs\n",
+              runs);
+  std::printf("%-46s %9s %9s %9s\n", "figure", "min", "median", "max");
+  lf::Value::Map doc;
+  for (const char* key : {"first_tile_remote", "first_tile_local", "throughput_remote_over_local",
+                          "throughput_curve_over_none", "samples_per_second_local_curve",
+                          "samples_per_second_local_none"}) {
+    const Spread s = spread(v[key]);
+    std::printf("%-46s %9.3f %9.3f %9.3f\n", key, s.min, s.median, s.max);
+    doc[key] = to_value(s);
+  }
+  std::ofstream(json_path) << lf::to_json(doc, 2) << "\n";
+  std::printf("wrote %s\n", json_path.c_str());
+  return 0;
+}
