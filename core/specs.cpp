@@ -22,12 +22,21 @@ static std::string str(const Value& v, const char* key) {
   return e && e->is_string() ? e->as_string() : std::string();
 }
 
-Value SceneSpec::to_value() const { return Value::Map{{"builtin", builtin}, {"file", file}, {"lights", lights}}; }
+Value SceneSpec::to_value() const {
+  Value::Map m{{"builtin", builtin}, {"file", file}, {"lights", lights}};
+  if (!cache.empty()) {
+    m["cache"] = cache;
+    m["hash"] = hash;
+  }
+  return m;
+}
 
 SceneSpec SceneSpec::from_value(const Value& v) {
   SceneSpec s;
   s.builtin = str(v, "builtin");
   s.file = str(v, "file");
+  s.cache = str(v, "cache");
+  s.hash = str(v, "hash");
   if (const Value* l = v.find("lights"); l && l->is_array()) s.lights = l->as_array();
   return s;
 }

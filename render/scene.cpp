@@ -1,6 +1,7 @@
 // The scene structure: triangles, materials, lights and the light distribution. Built-in scenes are in
 // builtin_scenes.cpp, OBJ/MTL loading in obj_scene.cpp, the lights a script adds in script_lights.cpp.
 #include "render/scene.hpp"
+#include "render/scene_file.hpp"
 
 #include <algorithm>
 #include <filesystem>
@@ -113,6 +114,8 @@ size_t Scene::pick_emitter(float u, float& probability) const {
 
 Result<Scene> Scene::load(const SceneSpec& spec) {
   const bool file = !spec.file.empty();
+  if (!spec.cache.empty())
+    return load_cached_scene(spec.cache, spec.hash, file ? "scene file '" + spec.file + "'" : "the shipped scene");
   auto s = file ? load_obj_unlit(spec.file) : builtin_unlit(spec.builtin.empty() ? "cornell" : spec.builtin);
   if (!s) return s;
   if (auto st = s->add_script_lights(spec.lights); !st) return st.error();

@@ -92,6 +92,7 @@ class Farm {
     std::vector<std::string> env;
     for (char** e = environ; *e; ++e) env.emplace_back(*e);
     env.push_back("LIGHTFARM_TEST_TAG=" + tag_);
+    env.push_back("LIGHTFARM_CACHE=" + (dir_ / "cache").string());  // shipped scenes: this farm's own cache
     env.insert(env.end(), env_extra.begin(), env_extra.end());
     std::vector<char*> cargv, cenv;
     for (auto& a : argv) cargv.push_back(a.data());

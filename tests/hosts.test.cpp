@@ -202,3 +202,90 @@ TEST_F(HostsTest, AHostLostMidFrameChangesNoPixel) {
 
 }  // namespace
 }  // namespace lf::test
+
+namespace lf::test {
+namespace {
+
+// A room lit by a ceiling panel, as OBJ + MTL: a scene only the director reads.
+const char* kRoomObj = R"(mtllib room.mtl
+v -1 0 -1
+v 1 0 -1
+v 1 0 1
+v -1 0 1
+v -1 2 -1
+v 1 2 -1
+v 1 2 1
+v -1 2 1
+v -0.3 1.99 -0.3
+v 0.3 1.99 -0.3
+v 0.3 1.99 0.3
+v -0.3 1.99 0.3
+usemtl white
+f 1 2 3 4
+f 8 7 6 5
+f 5 6 2 1
+usemtl red
+f 4 8 5 1
+usemtl green
+f 2 6 7 3
+usemtl light
+f 12 11 10 9
+)";
+const char* kRoomMtl = "newmtl white\nKd 0.7 0.7 0.7\nnewmtl red\nKd 0.7 0.1 0.1\nnewmtl green\nKd 0.1 0.7 0.1\n"
+                       "newmtl light\nKd 0.5 0.5 0.5\nKe 10 10 10\n";
+
+// The number after "key": in a JSON text.
+double json_number(const std::string& text, const std::string& key) {
+  auto pos = text.find("\"" + key + "\"");
+  return pos == std::string::npos ? -1 : std::strtod(text.c_str() + text.find(':', pos) + 1, nullptr);
+}
+
+// The stats JSON's scene.bytes_shipped for `host` (a small parser for a flat map).
+int64_t shipped_to(const std::string& stats, const std::string& host) {
+  const auto at = stats.find("\"bytes_shipped\"");
+  if (at == std::string::npos) return -1;
+  const auto key = stats.find("\"" + host + "\"", at);
+  return key == std::string::npos ? -1 : std::strtoll(stats.c_str() + stats.find(':', key) + 1, nullptr, 10);
+}
+
+TEST_F(HostsTest, TheSceneTravelsOncePerHostAndIsThenReusedFromItsCache) {
+  write("room.obj", kRoomObj);
+  write("room.mtl", kRoomMtl);
+  const std::string body = "scene { file = \"room.obj\" }\n"
+                           "camera { eye = {0, 1, 3.5}, at = {0, 1, 0}, fov = 45 }\n"
+                           "image { width = 48, height = 48, spp = 4 }\n";
+  auto local = write("local.lua", body + "renderers { count = 2, lighting = multiplexer { lightop \"direct\" {}, replicas = 3 } }\n");
+  auto spread = write("spread.lua", body + host_lines() +
+                                        "local d = multiplexer { lightop \"direct\" {}, replicas = 3, host = { h1, h2, h3 } }\n"
+                                        "renderers { count = 2, lighting = d }\n");
+  const Image expected = render(local, {}, "local.exr");
+  int64_t size = 0;
+  for (int run = 1; run <= 2; ++run) {
+    SCOPED_TRACE("run " + std::to_string(run));
+    auto r = run_lightfarm({"run", spread, "--quiet", "--output", path("spread.exr"), "--stats-json", path("stats.json")},
+                           {"LIGHTFARM_CACHE=" + path("director-cache")});
+    ASSERT_EQ(r.status, 0) << r.err;
+    expect_nothing_left(r);
+    const std::string stats = read_file(path("stats.json"));
+    size = static_cast<int64_t>(json_number(stats, "bytes"));
+    ASSERT_GT(size, 0) << stats;
+    for (const char* h : {"h1", "h2", "h3"}) EXPECT_EQ(shipped_to(stats, h), run == 1 ? size : 0) << h << stats;
+    EXPECT_EQ(shipped_to(stats, "local"), 0) << stats;
+    auto img = read_image(path("spread.exr"));
+    ASSERT_TRUE(img.ok());
+    EXPECT_TRUE(same_pixels(expected, *img));
+  }
+  // Each host keeps its own copy, named by the content hash.
+  for (int i = 1; i <= 3; ++i) {
+    size_t files = 0;
+    for (const auto& f : fs::directory_iterator(rig + "/cache-h" + std::to_string(i) + "/scenes")) {
+      ++files;
+      EXPECT_EQ(static_cast<int64_t>(fs::file_size(f.path())), size);
+      EXPECT_EQ(f.path().extension(), ".lfscene");
+    }
+    EXPECT_EQ(files, 1u);
+  }
+}
+
+}  // namespace
+}  // namespace lf::test

@@ -22,6 +22,7 @@
 #include "core/log.hpp"
 #include "render/image.hpp"
 #include "render/scene.hpp"
+#include "render/scene_file.hpp"
 #include "transport/security.hpp"
 #include "transport/socket.hpp"
 
@@ -86,6 +87,7 @@ class Director final : public ControlOut, public Outbox {
     try {
       stage(Stage::prepare, [&] { prepare(); }, false);
       stage(Stage::launch, [&] {
+        ship_scene();
         std::function<std::string(const ActorSpec&)> keys_of;
         if (!actor_keys_.empty()) keys_of = [&](const ActorSpec& a) { return farm_keys_for(a.name); };
         check(supervisor_.launch(control_endpoint_, local_address_, keys_of));
@@ -142,6 +144,11 @@ class Director final : public ControlOut, public Outbox {
     // The director reads the scene once itself, so a broken scene stops the farm before anything launches.
     auto scene = Scene::load(spec_.scene);
     if (!scene) throw FarmFailure{spec_.scene.loc.str() + ": " + scene.error().message};
+    // A scene from a file travels to the hosts in its binary form; actors never parse the OBJ themselves.
+    if (!spec_.scene.file.empty()) {
+      scene_bytes_ = scene_to_bytes(*scene);
+      scene_hash_ = content_hash(scene_bytes_);
+    }
     if (ring_.active()) {
       check(ring_.prepare(*scene));
       if (!ring_.ply_path().empty()) {
@@ -178,6 +185,24 @@ class Director final : public ControlOut, public Outbox {
     return std::string("127.0.0.1");
   }
 
+  // Every host that runs an actor gets the scene once (its cache may have it already); hosts connect in parallel.
+  void ship_scene() {
+    if (scene_bytes_.empty()) return;
+    std::vector<const HostSpec*> hosts;
+    for (const auto& a : spec_.actors)
+      if (const HostSpec* h = spec_.host_of(a); h && std::find(hosts.begin(), hosts.end(), h) == hosts.end())
+        hosts.push_back(h);
+    if (auto st = launchers_.prepare(hosts); !st) throw FarmFailure{"cannot start the farm: " + st.error().message};
+    for (const HostSpec* h : hosts) {
+      auto launcher = launchers_.for_host(*h);
+      if (!launcher) throw FarmFailure{launcher.error().message};
+      auto shipped = (*launcher)->ship(scene_bytes_, scene_hash_);
+      if (!shipped) throw FarmFailure{"cannot start the farm: " + shipped.error().message};
+      scene_paths_[h->name] = shipped->path;
+      scene_sent_[h->name] = shipped->bytes_sent;
+    }
+  }
+
   // CURVE: a keypair for the director and one for each actor; the director lets in only the actors' keys.
   void make_keys() {
     director_keys_ = wire::make_curve_keypair();
@@ -202,8 +227,14 @@ class Director final : public ControlOut, public Outbox {
     std::function<std::string(int)> key_of;
     if (!actor_keys_.empty())
       key_of = [&](int i) { return actor_keys_.at(spec_.actors[static_cast<size_t>(i)].name).public_key; };
-    for (const auto& [name, a] : supervisor_.actors())
-      send(name, wire::make(MsgType::config, "director", config_for(spec_, a.index, endpoint_of, key_of).to_value()));
+    for (const auto& [name, a] : supervisor_.actors()) {
+      ActorConfig config = config_for(spec_, a.index, endpoint_of, key_of);
+      if (!scene_bytes_.empty()) {
+        config.scene.cache = scene_paths_.at(a.spec->host);
+        config.scene.hash = scene_hash_;
+      }
+      send(name, wire::make(MsgType::config, "director", config.to_value()));
+    }
   }
 
   // PHASE to everyone, then wait for every READY of it (no timeout: setup and render take what they take).
@@ -299,6 +330,12 @@ class Director final : public ControlOut, public Outbox {
     f.render_seconds = render_seconds_;
     f.first_tile_seconds = std::chrono::duration<double>(render_start_ - start_).count() + tiles_.first_tile_seconds();
     if (ring_.active()) f.radiosity = ring_.report();
+    if (!scene_bytes_.empty()) {
+      Value::Map sent;
+      for (const auto& [host, bytes] : scene_sent_) sent[host] = static_cast<int64_t>(bytes);
+      f.scene = Value::Map{{"hash", scene_hash_}, {"bytes", static_cast<int64_t>(scene_bytes_.size())},
+                           {"bytes_shipped", std::move(sent)}};
+    }
     if (!options_.quiet) print_report(spec_, supervisor_, f);
     if (!options_.stats_json.empty())
       if (auto st = write_stats_json(spec_, supervisor_, f, options_.stats_json); !st) log_warn(st.error().message);
@@ -311,6 +348,9 @@ class Director final : public ControlOut, public Outbox {
   std::unique_ptr<wire::Authenticator> authenticator_;
   wire::CurveKeys director_keys_;
   std::map<std::string, wire::CurveKeys> actor_keys_;
+  std::string scene_bytes_, scene_hash_;           // a scene from a file, as shipped
+  std::map<std::string, std::string> scene_paths_;  // host -> the scene's path in its cache
+  std::map<std::string, uint64_t> scene_sent_;      // host -> bytes that crossed to it
   wire::Socket control_{wire::Socket::Kind::router};
   std::string control_endpoint_;
   std::string local_address_;  // set when the farm spans hosts: where this machine's actors and the director listen

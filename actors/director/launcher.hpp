@@ -44,6 +44,13 @@ class Launcher {
   // Gets ready to start actors (an ssh connection and a check of the host); called for every host at once before
   // any actor starts, so hosts connect in parallel. An error names the host.
   virtual Status prepare() { return Ok{}; }
+  // Puts `bytes` (a scene, named by its content hash) in the host's cache unless it is there already; returns its
+  // path on the host and how many bytes crossed to it (0 when cached).
+  struct Shipped {
+    std::string path;
+    uint64_t bytes_sent = 0;
+  };
+  virtual Result<Shipped> ship(const std::string& bytes, const std::string& hash) = 0;
   // Starts the actor; an error says why it could not start (missing program, ...).
   virtual Result<pid_t> start(const LaunchRequest& request) = 0;
   // An actor that has exited, if any (never blocks).
@@ -52,6 +59,10 @@ class Launcher {
   // Waits up to `grace` for actors to exit, then SIGTERM, then SIGKILL; reaps them all.
   virtual void stop_all(std::chrono::milliseconds grace) = 0;
 };
+
+// Where this machine caches shipped scenes: $LIGHTFARM_CACHE, else $XDG_CACHE_HOME/lightfarm, else
+// ~/.cache/lightfarm; scenes live in its `scenes/` folder as HASH.lfscene.
+std::string local_cache_dir();
 
 // The launcher a host's `launcher` names; an error for one this build does not have.
 Result<std::unique_ptr<Launcher>> make_launcher(const HostSpec& host);

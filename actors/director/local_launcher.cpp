@@ -9,7 +9,9 @@
 
 #include <cerrno>
 #include <cstring>
+#include <cstdlib>
 #include <filesystem>
+#include <fstream>
 #include <algorithm>
 #include <thread>
 
@@ -155,6 +157,37 @@ void LocalLauncher::stop_all(std::chrono::milliseconds grace) {
   children_.clear();
   for (auto& [pid, fd] : held_stdin_) ::close(fd);
   held_stdin_.clear();
+}
+
+std::string local_cache_dir() {
+  if (const char* c = std::getenv("LIGHTFARM_CACHE"); c && *c) return c;
+  if (const char* x = std::getenv("XDG_CACHE_HOME"); x && *x) return std::string(x) + "/lightfarm";
+  const char* home = std::getenv("HOME");
+  return std::string(home && *home ? home : "/tmp") + "/.cache/lightfarm";
+}
+
+Result<Launcher::Shipped> LocalLauncher::ship(const std::string& bytes, const std::string& hash) {
+  namespace fs = std::filesystem;
+  const fs::path dir = fs::path(local_cache_dir()) / "scenes";
+  const fs::path file = dir / (hash + ".lfscene");
+  std::error_code ec;
+  if (fs::is_regular_file(file, ec) && fs::file_size(file, ec) == bytes.size()) return Shipped{file.string(), 0};
+  fs::create_directories(dir, ec);
+  if (ec) return make_error("cannot make the scene cache '" + dir.string() + "': " + ec.message());
+  // Written under a name of this process, then renamed: a farm never reads a half-written scene.
+  const fs::path partial = dir / (hash + ".partial." + std::to_string(::getpid()));
+  {
+    std::ofstream out(partial, std::ios::binary);
+    out.write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
+    out.close();
+    if (!out) {
+      fs::remove(partial, ec);
+      return make_error("cannot write the scene cache '" + partial.string() + "'");
+    }
+  }
+  fs::rename(partial, file, ec);
+  if (ec) return make_error("cannot write the scene cache '" + file.string() + "': " + ec.message());
+  return Shipped{file.string(), 0};  // written here, nothing crossed a network
 }
 
 Result<std::unique_ptr<Launcher>> make_launcher(const HostSpec& host) {

@@ -17,6 +17,7 @@ class LocalLauncher final : public Launcher {
   LocalLauncher& operator=(const LocalLauncher&) = delete;
 
   std::string name() const override { return "local"; }
+  Result<Shipped> ship(const std::string& bytes, const std::string& hash) override;
   Result<pid_t> start(const LaunchRequest& request) override;
   std::optional<ExitReport> reap_one() override;
   void kill(pid_t pid, int signal) override;

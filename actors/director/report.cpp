@@ -69,6 +69,7 @@ Status write_stats_json(const FarmSpec& spec, const Supervisor& supervisor, cons
                          {"totals", Value::Map{{"renderer_shading_requests", shading_requests}, {"messages_sent", messages}}},
                          {"actors", std::move(actors)}};
   if (!f.radiosity.is_nil()) doc.as_map()["radiosity"] = f.radiosity;
+  if (!f.scene.is_nil()) doc.as_map()["scene"] = f.scene;
   std::ofstream out(path);
   out << to_json(doc, 2) << "\n";
   if (!out) return make_error("could not write stats to '" + path + "'");

@@ -17,6 +17,7 @@ struct RunFigures {
   double render_seconds = 0;
   double first_tile_seconds = 0;  // from the director's start
   Value radiosity;                // the ring's report, or nil
+  Value scene;                    // a shipped scene: {hash, bytes, bytes_shipped: {host: bytes}}, or nil
 };
 
 void print_report(const FarmSpec& spec, const Supervisor& supervisor, const RunFigures& figures);

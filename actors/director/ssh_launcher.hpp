@@ -21,6 +21,7 @@ class SshLauncher final : public Launcher {
 
   std::string name() const override { return "ssh"; }
   Status prepare() override { return connect(true); }
+  Result<Shipped> ship(const std::string& bytes, const std::string& hash) override;
   Result<pid_t> start(const LaunchRequest& request) override;
   std::optional<ExitReport> reap_one() override { return clients_.reap_one(); }
   void kill(pid_t pid, int signal) override { clients_.kill(pid, signal); }

@@ -1,7 +1,9 @@
 #!/usr/bin/env bash
 # Hosts for multi-host tests: network namespaces on this machine, joined by veth pairs to a bridge, each running
 # Debian's OpenSSH server with a key made for the test. Addresses come from 10.213.0.0/16, which exists only inside
-# the test (nothing is routed anywhere else; the root namespace reaches the hosts through the bridge).
+# the test (nothing is routed anywhere else; the root namespace reaches the hosts through the bridge). The hosts
+# share this machine's file system, so each gets a cache folder of its own (LIGHTFARM_CACHE=DIR/cache-hI), as
+# separate machines would have.
 #
 #   hosts.sh up DIR N [ID]   make hosts 1..N (ID in 1..250 picks the subnet 10.213.ID.0/24; default: from DIR)
 #                            and write DIR/ssh_config (Host h1..hN), DIR/hosts (name address per line),
@@ -87,7 +89,8 @@ up() {
     ip -n "$ns" link set lo up
     ip netns exec "$ns" /usr/sbin/sshd -h "$dir/host_key" -o "ListenAddress=$addr" -o "PidFile=$dir/sshd-$i.pid" \
       -o "AuthorizedKeysFile=$dir/authorized_keys" -o PermitRootLogin=prohibit-password -o PasswordAuthentication=no \
-      -o UsePAM=no -o StrictModes=no -o MaxSessions=64 -o MaxStartups=64:30:128 -o "SetEnv=LIGHTFARM_RIG=$ns"
+      -o UsePAM=no -o StrictModes=no -o MaxSessions=64 -o MaxStartups=64:30:128 \
+      -o "SetEnv=LIGHTFARM_RIG=$ns LIGHTFARM_CACHE=$dir/cache-h$i"
     echo "h$i $addr" >> "$dir/hosts"
     cat >> "$dir/ssh_config" <<CFG
 Host h$i $addr
