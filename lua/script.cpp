@@ -15,6 +15,7 @@
 
 #include "core/params.hpp"
 #include "farm/builders.hpp"
+#include "farm/slurm_hosts.hpp"
 #include "radiosity/config.hpp"
 #include "render/lightop_registry.hpp"
 #include "render/scene.hpp"
@@ -240,19 +241,19 @@ int l_host_table(lua_State* L) {
   with_params(L, [&] {
     h.launcher = p.get_string("launcher", "local", {"local", "ssh", "slurm"});
     h.address = p.get_string("address", h.launcher == "local" ? "127.0.0.1" : "");
+    if (h.launcher != "local") h.lightfarm = p.get_string("lightfarm", "");
     if (h.launcher == "ssh") {
       h.user = p.get_string("user", "");
       h.port = static_cast<int>(p.get_int("port", 0, 0, 65535));
       h.ssh_config = p.get_string("ssh_config", "");
-      h.lightfarm = p.get_string("lightfarm", "");
     }
     p.report_unused();
   });
-  if (h.launcher == "slurm")
-    luaL_error(L, "host '%s': launcher 'slurm' is not available yet (\"local\" or \"ssh\")", name);
+
   if (h.name == "local") luaL_error(L, "host 'local' is this machine; give another name");
   if (h.address.empty())
-    luaL_error(L, "host '%s': an ssh host needs address = \"...\" (where its actors listen and ssh reaches it)", name);
+    luaL_error(L, "host '%s': a%s host needs address = \"...\" (where its actors listen%s)", name,
+               h.launcher == "ssh" ? "n ssh" : " slurm", h.launcher == "ssh" ? " and ssh reaches it" : "");
   if (!h.ssh_config.empty()) {
     fs::path f(h.ssh_config);
     if (f.is_relative()) f = b.script_dir / f;
@@ -267,6 +268,28 @@ int l_host_table(lua_State* L) {
   auto* ud = static_cast<std::string*>(lua_newuserdatauv(L, sizeof(std::string), 0));
   new (ud) std::string(h.name);
   luaL_setmetatable(L, kHostMeta);
+  return 1;
+}
+
+// slurm_hosts() -> {host, ...}: the nodes of the Slurm allocation the farm runs in (farm/slurm_hosts.hpp).
+int l_slurm_hosts(lua_State* L) {
+  Builder& b = builder(L);
+  auto hosts = slurm_allocation_hosts();
+  if (!hosts) luaL_error(L, "%s", hosts.error().message.c_str());
+  lua_createtable(L, static_cast<int>(hosts->size()), 0);
+  int i = 0;
+  for (HostSpec& h : *hosts) {
+    bool known = false;
+    for (const auto& other : b.spec.hosts) known = known || other.name == h.name;
+    if (!known) {
+      h.loc = caller_loc(L);
+      b.spec.hosts.push_back(h);
+    }
+    auto* ud = static_cast<std::string*>(lua_newuserdatauv(L, sizeof(std::string), 0));
+    new (ud) std::string(h.name);
+    luaL_setmetatable(L, kHostMeta);
+    lua_rawseti(L, -2, ++i);
+  }
   return 1;
 }
 
@@ -571,7 +594,7 @@ int host_gc(lua_State* L) {
 }
 
 const luaL_Reg kFarmLib[] = {{"scene", l_scene},   {"camera", l_camera},       {"image", l_image},
-                             {"renderers", l_renderers}, {"host", l_host},
+                             {"renderers", l_renderers}, {"host", l_host}, {"slurm_hosts", l_slurm_hosts},
                              {"param", l_param},   {"farm", l_farm},       {"multiplexer", l_multiplexer},
                              {"light", l_light},   {"radiosity", l_radiosity},
                              {nullptr, nullptr}};

@@ -289,3 +289,62 @@ TEST_F(HostsTest, TheSceneTravelsOncePerHostAndIsThenReusedFromItsCache) {
 
 }  // namespace
 }  // namespace lf::test
+
+namespace lf::test {
+namespace {
+
+// A real Slurm cluster over the same hosts (tests/rig/slurm.sh): the farm runs inside `salloc`, finds its nodes
+// with slurm_hosts() and starts every actor as a job step.
+class SlurmTest : public HostsTest {
+ protected:
+  void SetUp() override {
+    HostsTest::SetUp();
+    if (IsSkipped() || HasFatalFailure()) return;
+    const int rc = sh(std::string(LIGHTFARM_SOURCE_DIR) + "/tests/rig/slurm.sh up " + rig + " > " + path("slurm.log") + " 2>&1");
+    if (rc == 77) GTEST_SKIP() << read_file(path("slurm.log"));
+    ASSERT_EQ(rc, 0) << read_file(path("slurm.log"));
+    slurm_up = true;
+  }
+  void TearDown() override {
+    if (slurm_up) sh(std::string(LIGHTFARM_SOURCE_DIR) + "/tests/rig/slurm.sh down " + rig);
+    HostsTest::TearDown();
+  }
+
+  // `salloc -N nodes lightfarm args...`, tagged like any farm of the harness.
+  RunResult run_in_allocation(int nodes, const std::vector<std::string>& args) {
+    RunResult r;
+    r.tag = unique_tag();
+    std::string cmd = "cd " + path("") + " && LIGHTFARM_TEST_TAG=" + r.tag + " LIGHTFARM_CACHE=" + path("cache") +
+                      " SLURM_CONF=" + rig + "/slurm.conf salloc --quiet -N " + std::to_string(nodes) + " " +
+                      LIGHTFARM_BINARY;
+    for (const auto& a : args) cmd += " '" + a + "'";
+    r.status = sh(cmd + " > " + path("salloc.out") + " 2> " + path("salloc.err"));
+    r.out = read_file(path("salloc.out"));
+    r.err = read_file(path("salloc.err"));
+    return r;
+  }
+  bool slurm_up = false;
+};
+
+TEST_F(SlurmTest, ThePoolNetworkAcrossAnAllocationGivesTheLocalPixels) {
+  const std::string body = "scene { builtin = \"cornell\" }\nimage { width = 96, height = 96, spp = 4 }\n";
+  auto local = write("local.lua", body + "renderers { count = 2, lighting = multiplexer { lightop \"direct\" {}, replicas = 3 } }\n");
+  auto slurm = write("slurm.lua", body + "local nodes = slurm_hosts()\n"
+                                       "local d = multiplexer { lightop \"direct\" {}, replicas = 3, host = nodes }\n"
+                                       "renderers { count = 2, lighting = d, host = nodes }\n");
+  const Image expected = render(local, {}, "local.exr");
+  auto r = run_in_allocation(3, {"run", slurm, "--quiet", "--output", path("slurm.exr")});
+  ASSERT_EQ(r.status, 0) << r.err;
+  expect_nothing_left(r);
+  auto img = read_image(path("slurm.exr"));
+  ASSERT_TRUE(img.ok()) << r.err;
+  EXPECT_TRUE(same_pixels(expected, *img));
+  // Outside an allocation, slurm_hosts() says so at its line.
+  auto outside = run_lightfarm({"run", slurm, "--output", path("outside.exr")});
+  EXPECT_EQ(outside.status, 2);
+  EXPECT_NE(outside.err.find("slurm.lua:3: slurm_hosts(): not inside a Slurm allocation"), std::string::npos)
+      << outside.err;
+}
+
+}  // namespace
+}  // namespace lf::test

@@ -1,4 +1,5 @@
 #include "actors/director/local_launcher.hpp"
+#include "actors/director/slurm_launcher.hpp"
 #include "actors/director/ssh_launcher.hpp"
 
 #include <fcntl.h>
@@ -193,6 +194,7 @@ Result<Launcher::Shipped> LocalLauncher::ship(const std::string& bytes, const st
 Result<std::unique_ptr<Launcher>> make_launcher(const HostSpec& host) {
   if (host.launcher == "local") return std::unique_ptr<Launcher>(std::make_unique<LocalLauncher>());
   if (host.launcher == "ssh") return std::unique_ptr<Launcher>(std::make_unique<SshLauncher>(host));
+  if (host.launcher == "slurm") return std::unique_ptr<Launcher>(std::make_unique<SlurmLauncher>(host));
   return make_error("host '" + host.name + "': launcher '" + host.launcher + "' is not available in this build");
 }
 

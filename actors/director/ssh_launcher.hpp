@@ -42,7 +42,4 @@ class SshLauncher final : public Launcher {
   bool checked_lightfarm_ = false;
 };
 
-// `text` quoted for a POSIX shell.
-std::string shell_quote(const std::string& text);
-
 }  // namespace lf

@@ -9,8 +9,8 @@
 #                            and write DIR/ssh_config (Host h1..hN), DIR/hosts (name address per line),
 #                            DIR/director_address (the bridge's address, which every host reaches)
 #   hosts.sh down DIR        kill everything running in the hosts, remove them and the bridge (always safe)
-#   hosts.sh pids DIR        processes still running in any host apart from its sshd listener, one "host pid cmd"
-#                            per line
+#   hosts.sh pids DIR        processes still running in any host apart from the rig's daemons (sshd, slurmd), one
+#                            "host pid cmd" per line
 #   hosts.sh cut DIR I       cut host I off the network (its veth down); `hosts.sh mend DIR I` joins it again
 #   hosts.sh kill DIR I      SIGKILL everything running in host I but its sshd listener
 #
@@ -40,10 +40,11 @@ pids() {
   local i=0
   for ns in $namespaces; do
     i=$((i + 1))
-    local listener
-    listener=$(cat "$dir/sshd-$i.pid" 2>/dev/null || echo 0)
+    # The daemons the rig started (sshd, and slurmd when tests/rig/slurm.sh runs) are not the farm's.
+    local daemons
+    daemons=" $(cat "$dir"/*.pid 2>/dev/null | tr '\n' ' ') "
     for pid in $(ip netns pids "$ns" 2>/dev/null); do
-      [ "$pid" = "$listener" ] && continue
+      [[ "$daemons" == *" $pid "* ]] && continue
       local cmdline
       cmdline=$(tr '\0' ' ' 2>/dev/null < "/proc/$pid/cmdline") || continue  # gone meanwhile
       echo "h$i $pid ${cmdline:0:120}"

@@ -1,0 +1,35 @@
+#pragma once
+// What the remote launchers (ssh, slurm) share: the shell lifeline an actor runs under on its host, running a
+// command with its output captured, and shipping a scene into a host's cache.
+#include <string>
+#include <vector>
+
+#include "actors/director/launcher.hpp"
+
+namespace lf {
+
+// `sh -c kLifeline CWD PROGRAM ARGS...`: hands the actor the first line of stdin (its keys, or an empty line),
+// starts it in the background and watches the rest of stdin: EOF — the farm ended, the director killed the client
+// that carries this, or the director died — sends the actor SIGTERM, then SIGKILL 2 s later.
+extern const char* const kLifeline;
+
+// The host's scene cache, by the same rule as this machine's (local_cache_dir), in the host's own environment.
+inline constexpr const char* kCacheDir = "d=\"${LIGHTFARM_CACHE:-${XDG_CACHE_HOME:-$HOME/.cache}/lightfarm}/scenes\"; ";
+
+struct Captured {
+  int status = -1;  // as from waitpid; -1: timed out (the child was killed)
+  std::string output;
+};
+// Runs argv with stdout and stderr captured, `input` on its stdin (else /dev/null), for at most `seconds`.
+Captured run_captured(const std::vector<std::string>& argv, double seconds, const std::string* input = nullptr);
+std::string last_line(std::string text);
+// `text` quoted for a POSIX shell.
+std::string shell_quote(const std::string& text);
+
+std::string cache_check_script(const std::string& hash, size_t size);
+std::string cache_write_script(const std::string& hash);
+// Ships `bytes` with `prefix` + a shell script as the remote command (the script is the last argument).
+Result<Launcher::Shipped> ship_through(const std::vector<std::string>& prefix, const std::string& who,
+                                       const std::string& bytes, const std::string& hash);
+
+}  // namespace lf
