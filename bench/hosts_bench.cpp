@@ -1,13 +1,15 @@
 // Farms across hosts (issue 11): hosts are network namespaces on this machine with their own sshd
 // (tests/rig/hosts.sh; needs root). Prints, for each figure, min/median/max over --runs, and writes
 // bench-hosts.json:
-//   launch to first tile, 12 actors (8 replicas, 3 renderers, the multiplexer) over 3 ssh hosts vs all local
+//   launch to first tile, 12 actors (8 replicas, 3 renderers, the multiplexer) over 3 ssh hosts, over a Slurm
+//   allocation of the same 3 hosts (job steps), and all local
 //   render throughput of the pool network (2 renderers + 3 direct replicas) across 3 ssh hosts vs all local
 //   render throughput with CURVE vs security = "none", on one machine
 // Usage: build/bench/hosts_bench [--runs N] [--json FILE]
 #include <cstdio>
 #include <fstream>
 #include <map>
+#include <sstream>
 
 #include "bench/bench_util.hpp"
 #include "core/value.hpp"
@@ -17,8 +19,28 @@ namespace {
 const std::string kRig = std::string(LIGHTFARM_SOURCE_DIR) + "/tests/rig/hosts.sh";
 std::string g_rig;
 
+const std::string kSlurmRig = std::string(LIGHTFARM_SOURCE_DIR) + "/tests/rig/slurm.sh";
+
 void rig_down() {
-  if (!g_rig.empty()) std::system((kRig + " down " + g_rig).c_str());
+  if (g_rig.empty()) return;
+  std::system((kSlurmRig + " down " + g_rig + " 2>/dev/null").c_str());
+  std::system((kRig + " down " + g_rig).c_str());
+}
+
+// first_tile_seconds of `lightfarm run script` inside `salloc -N nodes` on the rig's Slurm cluster.
+double first_tile_in_allocation(const std::string& script, int nodes) {
+  const std::string stats = g_rig + "/slurm-stats.json";
+  const std::string cmd = "SLURM_CONF=" + g_rig + "/slurm.conf salloc --quiet -N " + std::to_string(nodes) + " " +
+                          LIGHTFARM_BINARY + " run " + script + " --quiet --output " + g_rig + "/slurm.exr --stats-json " +
+                          stats;
+  if (std::system(cmd.c_str()) != 0) {
+    std::fprintf(stderr, "hosts_bench: the farm under salloc failed\n");
+    std::exit(1);
+  }
+  std::ifstream in(stats);
+  std::stringstream text;
+  text << in.rdbuf();
+  return bench::json_number(text.str(), "first_tile_seconds");
 }
 
 struct Spread {
@@ -47,6 +69,8 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "hosts_bench: cannot make namespace hosts (needs root; %s)\n", kRig.c_str());
     return 1;
   }
+  const bool slurm = std::system((kSlurmRig + " up " + g_rig + " > /dev/null 2>&1").c_str()) == 0;
+  if (!slurm) std::fprintf(stderr, "hosts_bench: no Slurm cluster on the rig (tests/rig/slurm.sh); skipping its figure\n");
   std::ifstream hosts_file(g_rig + "/hosts");
   std::string hosts_lua, name, addr;
   while (hosts_file >> name >> addr)
@@ -66,12 +90,17 @@ int main(int argc, char** argv) {
   const auto launch_local = script("launch-local.lua", tiny, "", "", 8, 3, false);
   const auto pool_remote = script("pool-remote.lua", frame, ", host = { h1, h2, h3 }", ", host = { h2, h3 }", 3, 2, true);
   const auto pool_local = script("pool-local.lua", frame, "", "", 3, 2, false);
+  const auto launch_slurm = bench::temp_script(
+      "launch-slurm.lua", head + tiny + "local nodes = slurm_hosts()\n"
+                                        "local d = multiplexer { lightop \"direct\" {}, replicas = 8, host = nodes }\n"
+                                        "renderers { count = 3, lighting = d, host = nodes }\n");
 
   std::map<std::string, std::vector<double>> v;
   for (int r = 0; r < runs; ++r) {
     // Interleaved, so that a noisy moment hits both sides of a ratio.
     v["first_tile_remote"].push_back(bench::run_farm(launch_remote, {}).number("first_tile_seconds"));
     v["first_tile_local"].push_back(bench::run_farm(launch_local, {}).number("first_tile_seconds"));
+    if (slurm) v["first_tile_slurm"].push_back(first_tile_in_allocation(launch_slurm, 3));
     const double remote = bench::run_farm(pool_remote, {}).number("render_samples_per_second");
     const double local = bench::run_farm(pool_local, {}).number("render_samples_per_second");
     v["throughput_remote_over_local"].push_back(remote / local);
@@ -86,9 +115,10 @@ int main(int argc, char** argv) {
               runs);
   std::printf("%-46s %9s %9s %9s\n", "figure", "min", "median", "max");
   lf::Value::Map doc;
-  for (const char* key : {"first_tile_remote", "first_tile_local", "throughput_remote_over_local",
+  for (const char* key : {"first_tile_remote", "first_tile_slurm", "first_tile_local", "throughput_remote_over_local",
                           "throughput_curve_over_none", "samples_per_second_local_curve",
                           "samples_per_second_local_none"}) {
+    if (v[key].empty()) continue;
     const Spread s = spread(v[key]);
     std::printf("%-46s %9.3f %9.3f %9.3f\n", key, s.min, s.median, s.max);
     doc[key] = to_value(s);
