@@ -3,6 +3,7 @@
 // bench-hosts.json:
 //   launch to first tile, 12 actors (8 replicas, 3 renderers, the multiplexer) over 3 ssh hosts, over a Slurm
 //   allocation of the same 3 hosts (job steps), and all local
+//   the same 12 actors on Lost Empire (225k triangles, shipped once, then cached), over ssh and local
 //   render throughput of the pool network (2 renderers + 3 direct replicas) across 3 ssh hosts vs all local
 //   render throughput with CURVE vs security = "none", on one machine
 // Usage: build/bench/hosts_bench [--runs N] [--json FILE]
@@ -95,12 +96,36 @@ int main(int argc, char** argv) {
                                         "local d = multiplexer { lightop \"direct\" {}, replicas = 8, host = nodes }\n"
                                         "renderers { count = 3, lighting = d, host = nodes }\n");
 
+  // A real interior (Lost Empire, 225k triangles, ../shared/scenes): the director parses it, the hosts get it once.
+  const std::string big_obj = std::string(LIGHTFARM_SOURCE_DIR) + "/../shared/scenes/lost_empire/lost_empire.obj";
+  const bool have_big = bench::fs::exists(big_obj);
+  const std::string big_head = "scene { file = \"" + big_obj + "\" }\ncamera { eye = {-25, 28, 55}, at = {0, 8, 0}, fov = 60 }\n"
+                               "light { point = {0, 40, 0}, intensity = {4000, 3600, 3000} }\n"
+                               "farm { security = param(\"security\", \"curve\") }\n";
+  const auto big_remote = bench::temp_script(
+      "big-remote.lua", big_head + hosts_lua + tiny +
+                            "local d = multiplexer { lightop \"direct\" {}, replicas = 8, host = { h1, h2, h3 } }\n"
+                            "renderers { count = 3, lighting = d, host = { h1, h2, h3 } }\n");
+  const auto big_local = bench::temp_script(
+      "big-local.lua", big_head + tiny + "local d = multiplexer { lightop \"direct\" {}, replicas = 8 }\n"
+                                         "renderers { count = 3, lighting = d }\n");
+  if (have_big) {
+    // The first farm ships the scene to each host; the figures below are with it cached, as every later farm is.
+    const auto first = bench::run_farm(big_remote, {});
+    std::printf("Lost Empire: %.0f bytes shipped to each host by the first farm (first tile %.3f s)\n",
+                first.number("h1"), first.number("first_tile_seconds"));
+  }
+
   std::map<std::string, std::vector<double>> v;
   for (int r = 0; r < runs; ++r) {
     // Interleaved, so that a noisy moment hits both sides of a ratio.
     v["first_tile_remote"].push_back(bench::run_farm(launch_remote, {}).number("first_tile_seconds"));
     v["first_tile_local"].push_back(bench::run_farm(launch_local, {}).number("first_tile_seconds"));
     if (slurm) v["first_tile_slurm"].push_back(first_tile_in_allocation(launch_slurm, 3));
+    if (have_big) {
+      v["big_first_tile_remote"].push_back(bench::run_farm(big_remote, {}).number("first_tile_seconds"));
+      v["big_first_tile_local"].push_back(bench::run_farm(big_local, {}).number("first_tile_seconds"));
+    }
     const double remote = bench::run_farm(pool_remote, {}).number("render_samples_per_second");
     const double local = bench::run_farm(pool_local, {}).number("render_samples_per_second");
     v["throughput_remote_over_local"].push_back(remote / local);
@@ -115,7 +140,8 @@ int main(int argc, char** argv) {
               runs);
   std::printf("%-46s %9s %9s %9s\n", "figure", "min", "median", "max");
   lf::Value::Map doc;
-  for (const char* key : {"first_tile_remote", "first_tile_slurm", "first_tile_local", "throughput_remote_over_local",
+  for (const char* key : {"first_tile_remote", "first_tile_slurm", "first_tile_local", "big_first_tile_remote",
+                          "big_first_tile_local", "throughput_remote_over_local",
                           "throughput_curve_over_none", "samples_per_second_local_curve",
                           "samples_per_second_local_none"}) {
     if (v[key].empty()) continue;
