@@ -114,6 +114,7 @@ class Director final : public ControlOut, public Outbox {
     // No actor outlives the farm, whatever happened above.
     supervisor_.send_bye_to_all();
     launchers_.stop_all(std::chrono::milliseconds(status == 0 ? 3000 : 300));
+    remove_local_sockets();
     if (status == 0) report();
     return status;
   }
@@ -185,6 +186,18 @@ class Director final : public ControlOut, public Outbox {
     return std::string("127.0.0.1");
   }
 
+  // An actor removes its IPC folder when it exits; one that was killed cannot, so the director does for this
+  // machine's actors (the folder is the actor's mkdtemp, /tmp/lightfarm-actor-XXXXXX, nothing else).
+  void remove_local_sockets() {
+    for (const auto& [name, a] : supervisor_.actors()) {
+      const HostSpec* h = spec_.host_of(*a.spec);
+      if (!h || h->remote() || a.local_endpoint.rfind("ipc:///tmp/lightfarm-actor-", 0) != 0) continue;
+      const std::filesystem::path dir = std::filesystem::path(a.local_endpoint.substr(6)).parent_path();
+      std::error_code ec;
+      std::filesystem::remove_all(dir, ec);
+    }
+  }
+
   // Every host that runs an actor gets the scene once (its cache may have it already); hosts connect in parallel.
   void ship_scene() {
     if (scene_bytes_.empty()) return;
@@ -229,6 +242,17 @@ class Director final : public ControlOut, public Outbox {
       key_of = [&](int i) { return actor_keys_.at(spec_.actors[static_cast<size_t>(i)].name).public_key; };
     for (const auto& [name, a] : supervisor_.actors()) {
       ActorConfig config = config_for(spec_, a.index, endpoint_of, key_of);
+      // Inputs on the same host are reached over their IPC socket, without CURVE: the 0700 folder keeps other
+      // users out, and a process of the same user could read the keys anyway. Only an actor that offers such a
+      // socket itself is known to connect to one.
+      for (size_t k = 0; k < config.inputs.size() && !a.local_endpoint.empty(); ++k) {
+        const ActorSpec& input = spec_.actors[static_cast<size_t>(a.spec->inputs[k])];
+        const ActorRecord& peer = supervisor_.at(input.name);
+        if (input.host == a.spec->host && !peer.local_endpoint.empty()) {
+          config.inputs[k].endpoint = peer.local_endpoint;
+          config.inputs[k].key.clear();
+        }
+      }
       if (!scene_bytes_.empty()) {
         config.scene.cache = scene_paths_.at(a.spec->host);
         config.scene.hash = scene_hash_;

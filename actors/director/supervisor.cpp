@@ -111,6 +111,7 @@ Status Supervisor::on_message(const std::string& peer, Result<wire::Message>& me
       auto hello = Hello::check(m.body, peer, a.spec->kind);
       if (!hello) return hello.error();
       a.endpoint = hello->endpoint;
+      a.local_endpoint = hello->local_endpoint;
       a.said_hello = true;
       return Ok{};
     }

@@ -33,6 +33,7 @@ struct ActorRecord {
   int index = -1;  // in FarmSpec::actors
   pid_t pid = 0;
   std::string endpoint;  // its data socket, from HELLO
+  std::string local_endpoint;  // its same-host IPC socket, if it offered one
   std::optional<wire::Phase> ready;  // the last phase it said READY for
   bool said_hello = false;
   bool said_bye = false;

@@ -7,7 +7,9 @@
 namespace lf {
 
 Value Hello::to_value() const {
-  return Value::Map{{"kind", kind}, {"pid", pid}, {"endpoint", endpoint}, {"float_format", float_format}};
+  Value::Map m{{"kind", kind}, {"pid", pid}, {"endpoint", endpoint}, {"float_format", float_format}};
+  if (!local_endpoint.empty()) m["local_endpoint"] = local_endpoint;
+  return m;
 }
 
 Result<Hello> Hello::check(const Value& body, const std::string& name, const std::string& expected_kind) {
@@ -19,6 +21,9 @@ Result<Hello> Hello::check(const Value& body, const std::string& name, const std
   h.kind = text("kind");
   h.endpoint = text("endpoint");
   h.float_format = text("float_format");
+  h.local_endpoint = text("local_endpoint");
+  if (!h.local_endpoint.empty() && h.local_endpoint.rfind("ipc://", 0) != 0)
+    return make_error("actor '" + name + "' offers a local endpoint that is not ipc://", ErrorCode::bad_request);
   if (const Value* pid = body.find("pid"); pid && pid->is_int()) h.pid = pid->as_int();
   if (h.float_format != wire::kFloatFormat)
     return make_error("actor '" + name + "' is incompatible: float format '" + (h.float_format.empty() ? "?" : h.float_format) +

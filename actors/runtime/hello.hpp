@@ -14,6 +14,7 @@ struct Hello {
   int64_t pid = 0;       // the actor's process id on its host (informational)
   std::string endpoint;  // its data socket
   std::string float_format;
+  std::string local_endpoint;  // optional: an IPC endpoint for actors on the same host (CURVE farms)
 
   Value to_value() const;
   // Decodes and checks a HELLO from actor `name` started as `expected_kind`. ErrorCode::incompatible for another

@@ -3,6 +3,7 @@
 #include <unistd.h>
 
 #include <cerrno>
+#include <filesystem>
 #include <csignal>
 
 #include "actors/runtime/hello.hpp"
@@ -74,7 +75,18 @@ Runtime::Runtime(ActorArgs args)
   }
 }
 
-Runtime::~Runtime() = default;
+Runtime::~Runtime() {
+  local_.reset();
+  if (!local_dir_.empty()) {
+    std::error_code ec;
+    std::filesystem::remove_all(local_dir_, ec);
+  }
+}
+
+wire::Socket& Runtime::socket_of(const std::string& peer) {
+  auto it = reply_via_.find(peer);
+  return it == reply_via_.end() ? data_ : *it->second;
+}
 
 void Runtime::add_busy(Clock::time_point since) {
   stats_.busy_seconds += std::chrono::duration<double>(Clock::now() - since).count();
@@ -86,12 +98,12 @@ void Runtime::send_control(wire::Message m) {
 }
 
 void Runtime::reply(const std::string& peer, uint64_t id, Value body) {
-  data_.send_to(peer, wire::make_reply(args_.name, id, std::move(body),
+  socket_of(peer).send_to(peer, wire::make_reply(args_.name, id, std::move(body),
                                        actor_ ? static_cast<uint32_t>(actor_->queue_length()) : 0));
 }
 
 void Runtime::reply_error(const std::string& peer, uint64_t id, ErrorCode code, const std::string& message) {
-  data_.send_to(peer, wire::make_error_reply(args_.name, id, code, message));
+  socket_of(peer).send_to(peer, wire::make_error_reply(args_.name, id, code, message));
 }
 
 void Runtime::reply_unknown_op(const std::string& peer, const wire::Message& request, const std::string& served) {
@@ -124,6 +136,7 @@ void Runtime::send_stats_and_bye() {
   };
   add(control_.counters());
   add(data_.counters());
+  if (local_) add(local_->counters());
   for (auto& c : inputs_) add(c->socket().counters());
   Value stats = stats_.to_value(total);
   if (actor_) {
@@ -146,8 +159,10 @@ void Runtime::handle_control(wire::Message& m, Actor& actor) {
       for (const auto& in : config->inputs) {
         auto client = std::make_unique<wire::RequestClient>(args_.name, in.name, static_cast<size_t>(in.window));
         if (args_.keys) {
-          if (in.key.empty()) return fail("CONFIG gives input '" + in.name + "' no key, and this farm speaks CURVE");
-          client->use_curve(args_.keys->own.public_key, args_.keys->own.secret_key, in.key);
+          // Only a same-host IPC endpoint goes without CURVE.
+          if (in.key.empty() && in.endpoint.rfind("ipc://", 0) != 0)
+            return fail("CONFIG gives input '" + in.name + "' no key, and this farm speaks CURVE");
+          if (!in.key.empty()) client->use_curve(args_.keys->own.public_key, args_.keys->own.secret_key, in.key);
         }
         if (auto st = client->connect(in.endpoint); !st) return fail(st.error().message);
         client->set_timeout(config->request_timeout);
@@ -205,8 +220,9 @@ void Runtime::handle_control(wire::Message& m, Actor& actor) {
   }
 }
 
-void Runtime::handle_data(Actor& actor) {
-  while (auto in = data_.receive()) {
+void Runtime::handle_data(Actor& actor, wire::Socket& socket) {
+  while (auto in = socket.receive()) {
+    if (!in->peer.empty()) reply_via_[in->peer] = &socket;
     if (!in->message) {
       // Refuse, tell the sender if we can, and carry on: a bad packet must never take the actor down.
       log_warn("dropped a bad message from '" + in->peer + "': " + in->message.error().message);
@@ -235,17 +251,35 @@ int Runtime::run(Actor& actor) {
     return 2;
   }
   data_endpoint_ = *endpoint;
+  if (args_.keys) {
+    char dir[] = "/tmp/lightfarm-actor-XXXXXX";  // mkdtemp: mode 0700
+    if (::mkdtemp(dir)) {
+      local_dir_ = dir;
+      local_ = std::make_unique<wire::Socket>(wire::Socket::Kind::router);
+      auto bound = local_->bind("ipc://" + local_dir_ + "/data");
+      if (bound) {
+        local_endpoint_ = *bound;
+      } else {
+        log_warn("no same-host IPC socket (" + bound.error().message + "); peers here use CURVE over TCP");
+        local_.reset();
+      }
+    }
+  }
   if (auto st = control_.connect(args_.director); !st) {
     log_error(st.error().message);
     return 2;
   }
-  send_control(wire::make(MsgType::hello, args_.name, my_hello(args_.kind, data_endpoint_).to_value()));
+  Hello hello = my_hello(args_.kind, data_endpoint_);
+  hello.local_endpoint = local_endpoint_;
+  send_control(wire::make(MsgType::hello, args_.name, hello.to_value()));
 
   auto last_from_director = Clock::now();
   auto next_heartbeat = Clock::now() + std::chrono::seconds(1);
   wire::Poller poller;
   poller.add(control_);
   poller.add(data_);
+  if (local_) poller.add(*local_);
+  const size_t first_input = local_ ? 3 : 2;
   size_t polled_inputs = 0;
 
   while (!stopping_) {
@@ -274,10 +308,11 @@ int Runtime::run(Actor& actor) {
       }
     }
     if (stopping_) break;
-    if (ready[1]) handle_data(actor);
+    if (ready[1]) handle_data(actor, data_);
+    if (local_ && ready[2] && !stopping_) handle_data(actor, *local_);
     for (size_t i = 0; i < polled_inputs && !stopping_; ++i) {
       auto started = Clock::now();
-      if (ready[2 + i]) inputs_[i]->on_readable();
+      if (ready[first_input + i]) inputs_[i]->on_readable();
       inputs_[i]->expire_overdue();
       add_busy(started);
     }

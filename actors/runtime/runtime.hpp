@@ -13,6 +13,7 @@
 // timeout or SIGINT/SIGTERM arrives: an actor never outlives its farm.
 #include <chrono>
 #include <functional>
+#include <map>
 #include <memory>
 #include <optional>
 #include <string>
@@ -103,7 +104,8 @@ class Runtime {
 
  private:
   void handle_control(wire::Message& m, Actor& actor);
-  void handle_data(Actor& actor);
+  void handle_data(Actor& actor, wire::Socket& socket);
+  wire::Socket& socket_of(const std::string& peer);
   void send_control(wire::Message m);
   void send_stats_and_bye();
 
@@ -113,6 +115,11 @@ class Runtime {
   wire::Socket control_;
   wire::Socket data_;
   std::string data_endpoint_;
+  // A CURVE farm's actors on one host talk over IPC in a folder only this user can enter (0700): no encryption
+  // where the operating system already keeps strangers out (docs/decisions.md). Peers that used it get answers on it.
+  std::unique_ptr<wire::Socket> local_;
+  std::string local_dir_, local_endpoint_;
+  std::map<std::string, wire::Socket*> reply_via_;
   std::vector<std::unique_ptr<wire::RequestClient>> inputs_;
   std::vector<std::string> input_names_;
   std::map<uint64_t, DirectorCallback> director_pending_;
