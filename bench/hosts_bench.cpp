@@ -5,7 +5,7 @@
 //   allocation of the same 3 hosts (job steps), and all local
 //   the same 12 actors on Lost Empire (225k triangles, shipped once, then cached), over ssh and local
 //   render throughput of the pool network (2 renderers + 3 direct replicas) across 3 ssh hosts vs all local
-//   render throughput with CURVE vs security = "none", on one machine
+//   render throughput with CURVE vs security = "none", on one machine (same-host links are IPC either way)
 // Usage: build/bench/hosts_bench [--runs N] [--json FILE]
 #include <cstdio>
 #include <fstream>
@@ -129,6 +129,10 @@ int main(int argc, char** argv) {
     const double remote = bench::run_farm(pool_remote, {}).number("render_samples_per_second");
     const double local = bench::run_farm(pool_local, {}).number("render_samples_per_second");
     v["throughput_remote_over_local"].push_back(remote / local);
+    // The same without CURVE on either side: what spreading over hosts costs apart from encryption.
+    const double remote_plain = bench::run_farm(pool_remote, {"security=none"}).number("render_samples_per_second");
+    const double local_plain = bench::run_farm(pool_local, {"security=none"}).number("render_samples_per_second");
+    v["throughput_remote_over_local_none"].push_back(remote_plain / local_plain);
     const double curve = bench::run_farm(pool_local, {"security=curve"}).number("render_samples_per_second");
     const double none = bench::run_farm(pool_local, {"security=none"}).number("render_samples_per_second");
     v["throughput_curve_over_none"].push_back(curve / none);
@@ -141,7 +145,7 @@ int main(int argc, char** argv) {
   std::printf("%-46s %9s %9s %9s\n", "figure", "min", "median", "max");
   lf::Value::Map doc;
   for (const char* key : {"first_tile_remote", "first_tile_slurm", "first_tile_local", "big_first_tile_remote",
-                          "big_first_tile_local", "throughput_remote_over_local",
+                          "big_first_tile_local", "throughput_remote_over_local", "throughput_remote_over_local_none",
                           "throughput_curve_over_none", "samples_per_second_local_curve",
                           "samples_per_second_local_none"}) {
     if (v[key].empty()) continue;
