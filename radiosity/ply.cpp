@@ -1,6 +1,9 @@
 #include "radiosity/ply.hpp"
 
+#include <unistd.h>
+
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -76,7 +79,10 @@ static unsigned char srgb8(float linear) {
 }
 
 Status write_ply(const RadiosityField& field, const std::string& path) {
-  const std::string temp = path + ".partial";
+  // A name of this write alone: two farms (or two threads) writing the same PLY never share a temporary file; the
+  // last rename wins whole.
+  static std::atomic<uint64_t> writes{0};
+  const std::string temp = path + ".partial-" + std::to_string(::getpid()) + "-" + std::to_string(writes++);
   {
     std::ofstream out(temp, std::ios::binary);
     if (!out) return make_error("cannot write '" + path + "'");
@@ -98,7 +104,8 @@ Status write_ply(const RadiosityField& field, const std::string& path) {
       out.write(reinterpret_cast<const char*>(&three), 1);
       out.write(reinterpret_cast<const char*>(t.data()), 3 * sizeof(uint32_t));
     }
-    if (!out.flush()) {
+    out.close();
+    if (!out) {
       std::remove(temp.c_str());
       return make_error("cannot write '" + path + "' (disk full?)");
     }

@@ -119,3 +119,58 @@ TEST(SerialSolver, CornellBoxLightsTheRoomPlausiblyAndSubdividesAtShadows) {
 
 }  // namespace
 }  // namespace lf::radiosity
+
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <thread>
+
+#include "radiosity/ply.hpp"
+
+namespace lf::radiosity {
+namespace {
+
+// Two writers of the same PLY at once (two farms in one folder): each writes under a name of its own and the
+// last rename wins, so the file is always one whole solution, never a mix, and no temporary file is left.
+TEST(Ply, ConcurrentWritersNeverCorruptEachOther) {
+  auto field = [](size_t triangles) {
+    RadiosityField f;
+    for (size_t t = 0; t < triangles; ++t) {
+      const uint32_t base = static_cast<uint32_t>(f.position.size());
+      for (int c = 0; c < 3; ++c) {
+        f.position.push_back({float(t), float(c), 0});
+        f.radiosity.push_back({1, 1, 1});
+        f.emission.push_back({0, 0, 0});
+      }
+      f.triangles.push_back({base, base + 1, base + 2});
+    }
+    return f;
+  };
+  const RadiosityField small = field(10), large = field(5000);
+  const auto dir = std::filesystem::temp_directory_path() / ("lightfarm-ply-" + std::to_string(::getpid()));
+  std::filesystem::create_directories(dir);
+  const std::string path = (dir / "room.ply").string();
+  std::thread a([&] {
+    for (int i = 0; i < 40; ++i) EXPECT_TRUE(write_ply(small, path).ok());
+  });
+  std::thread b([&] {
+    for (int i = 0; i < 40; ++i) EXPECT_TRUE(write_ply(large, path).ok());
+  });
+  a.join();
+  b.join();
+  std::ifstream in(path, std::ios::binary);
+  std::stringstream text;
+  text << in.rdbuf();
+  const std::string bytes = text.str();
+  const size_t header_end = bytes.find("end_header\n") + 11;
+  const bool is_small = bytes.find("element vertex 30\n") != std::string::npos;
+  const size_t vertices = is_small ? 30 : 15000, faces = is_small ? 10 : 5000;
+  EXPECT_EQ(bytes.size(), header_end + vertices * 27 + faces * 13);  // 6 floats + 3 bytes; 1 + 3 u32
+  size_t files = 0;
+  for (const auto& f : std::filesystem::directory_iterator(dir)) files += f.is_regular_file();
+  EXPECT_EQ(files, 1u);
+  std::filesystem::remove_all(dir);
+}
+
+}  // namespace
+}  // namespace lf::radiosity

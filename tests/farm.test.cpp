@@ -116,6 +116,17 @@ TEST_F(FarmTest, StatsJsonCarriesPhasesAndActors) {
   expect_no_leftovers(r);
 }
 
+// Stats asked for and not written is a failure, said as one: exit 1, the reason, and the image still there.
+TEST_F(FarmTest, UnwritableStatsJsonFailsTheRun) {
+  auto r = render_cornell(path("c.png"), {"--stats-json", path("no/such/dir/stats.json")});
+  EXPECT_EQ(r.status, 1) << r.err;
+  EXPECT_NE(r.err.find("lightfarm: error: could not write stats to '" + path("no/such/dir/stats.json") + "'"),
+            std::string::npos)
+      << r.err;
+  EXPECT_TRUE(fs::exists(path("c.png")));
+  expect_no_leftovers(r);
+}
+
 TEST_F(FarmTest, LuaSyntaxErrorNamesFileAndLine) {
   auto script = write("bad.lua", "scene { builtin = \"cornell\" }\nimage { width = }\n");
   auto r = run_lightfarm({"run", script, "--output", path("x.png")});

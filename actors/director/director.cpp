@@ -115,7 +115,7 @@ class Director final : public ControlOut, public Outbox {
     supervisor_.send_bye_to_all();
     launchers_.stop_all(std::chrono::milliseconds(status == 0 ? 3000 : 300));
     remove_local_sockets();
-    if (status == 0) report();
+    if (status == 0) status = report();
     return status;
   }
 
@@ -347,7 +347,9 @@ class Director final : public ControlOut, public Outbox {
     return Ok{};
   }
 
-  void report() {
+  // The tables, and the stats file if asked for; 1 when that file cannot be written (the image is there, but
+  // what was asked for is not).
+  int report() {
     RunFigures f;
     f.stage_seconds = stage_seconds_;
     f.total_seconds = seconds_since(start_);
@@ -362,7 +364,11 @@ class Director final : public ControlOut, public Outbox {
     }
     if (!options_.quiet) print_report(spec_, supervisor_, f);
     if (!options_.stats_json.empty())
-      if (auto st = write_stats_json(spec_, supervisor_, f, options_.stats_json); !st) log_warn(st.error().message);
+      if (auto st = write_stats_json(spec_, supervisor_, f, options_.stats_json); !st) {
+        log_error(st.error().message);
+        return 1;
+      }
+    return 0;
   }
 
   const FarmSpec& spec_;
