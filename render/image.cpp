@@ -96,6 +96,27 @@ const ImageModule& image_module() {
 
 void preload_image_io() { (void)image_module(); }
 
+namespace {
+
+// The file is on disk (fsync) and, for PNG, ends with its IEND chunk.
+Status check_written(const std::string& file, const std::string& ext) {
+  const int fd = ::open(file.c_str(), O_RDONLY | O_CLOEXEC);
+  if (fd < 0) return make_error(std::strerror(errno));
+  Status result = Ok{};
+  if (::fsync(fd) != 0) result = make_error(std::string("cannot flush it to disk: ") + std::strerror(errno));
+  if (result && ext == ".png") {
+    static const unsigned char kIend[12] = {0, 0, 0, 0, 'I', 'E', 'N', 'D', 0xAE, 0x42, 0x60, 0x82};
+    unsigned char tail[12] = {};
+    const off_t size = ::lseek(fd, 0, SEEK_END);
+    if (size < 12 || ::pread(fd, tail, 12, size - 12) != 12 || std::memcmp(tail, kIend, 12) != 0)
+      result = make_error("the PNG came out incomplete (disk full or file size limit?)");
+  }
+  ::close(fd);
+  return result;
+}
+
+}  // namespace
+
 Status write_image(const Image& image, const std::string& path) {
   if (auto st = check_output_path(path); !st) return st;
   const auto& module = image_module();
@@ -123,10 +144,17 @@ Status write_image(const Image& image, const std::string& path) {
     fs::remove(temp, ec);
     return make_error("cannot write '" + path + "': " + err);
   }
+  // Some writers (PNG) report success on a full disk: check that the file is whole and on disk before it
+  // replaces anything, so a failed write keeps the previous image.
+  if (auto st = check_written(temp.string(), ext); !st) {
+    fs::remove(temp, ec);
+    return make_error("cannot write '" + path + "': " + st.error().message);
+  }
   fs::rename(temp, target, ec);
   if (ec) {
+    const std::string why = ec.message();  // before remove() overwrites ec
     fs::remove(temp, ec);
-    return make_error("cannot write '" + path + "': " + ec.message());
+    return make_error("cannot write '" + path + "': " + why);
   }
   return Ok{};
 }

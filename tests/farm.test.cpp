@@ -127,6 +127,32 @@ TEST_F(FarmTest, UnwritableStatsJsonFailsTheRun) {
   expect_no_leftovers(r);
 }
 
+// A PNG that does not fit (a full disk: a 48 KiB tmpfs this test mounts) is an error, exit 1, and the previous
+// image stays whole; the writer's own success is not believed (libpng reports none of it).
+TEST_F(FarmTest, APngOntoAFullDiskFailsAndKeepsTheOldImage) {
+  const std::string disk = path("disk");
+  fs::create_directories(disk);
+  if (std::system(("mount -t tmpfs -o size=48k tmpfs " + disk + " 2>/dev/null").c_str()) != 0)
+    GTEST_SKIP() << "cannot mount a tmpfs here (needs root)";
+  struct Unmount {
+    std::string dir;
+    ~Unmount() { std::system(("umount " + dir).c_str()); }
+  } unmount{disk};
+  const std::string out = disk + "/c.png";
+  auto small = run_lightfarm({"run", kCornellScript, "--quiet", "--output", out, "--set", "width=16", "--set",
+                              "height=16", "--set", "spp=1"});
+  ASSERT_EQ(small.status, 0) << small.err;
+  const std::string before = read_file(out);
+  auto big = run_lightfarm({"run", kCornellScript, "--quiet", "--output", out, "--set", "width=256", "--set",
+                            "height=256", "--set", "spp=1"});
+  EXPECT_EQ(big.status, 1) << big.err;
+  EXPECT_NE(big.err.find("lightfarm: error: cannot write '" + out + "': the PNG came out incomplete"), std::string::npos)
+      << big.err;
+  EXPECT_EQ(read_file(out), before);
+  EXPECT_EQ(std::distance(fs::directory_iterator(disk), fs::directory_iterator{}), 1);  // no partial file left
+  expect_no_leftovers(big);
+}
+
 TEST_F(FarmTest, LuaSyntaxErrorNamesFileAndLine) {
   auto script = write("bad.lua", "scene { builtin = \"cornell\" }\nimage { width = }\n");
   auto r = run_lightfarm({"run", script, "--output", path("x.png")});
