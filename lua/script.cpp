@@ -9,6 +9,8 @@
 #include <unistd.h>
 
 #include <cmath>
+#include <cstdio>
+#include <cstdlib>
 #include <filesystem>
 #include <map>
 #include <set>
@@ -627,6 +629,55 @@ std::string finish(Builder& b) {
 
 }  // namespace
 
+namespace {
+
+// The script's budgets (ScriptOptions): memory through Lua's allocator, instructions through a count hook, which
+// also remembers the line last seen so that a memory error can name it.
+struct Budget {
+  size_t used = 0, memory_limit = 0;
+  uint64_t instructions = 0, instruction_limit = 0;
+  std::string where;  // "file:line" last seen by the hook
+  bool out_of_memory = false;
+};
+constexpr int kHookEvery = 1000;
+
+void* budget_alloc(void* ud, void* ptr, size_t osize, size_t nsize) {
+  auto* b = static_cast<Budget*>(ud);
+  const size_t old = ptr ? osize : 0;  // without a block, osize is a type tag
+  if (nsize == 0) {
+    std::free(ptr);
+    b->used -= old;
+    return nullptr;
+  }
+  if (nsize > old && b->used - old + nsize > b->memory_limit) {
+    b->out_of_memory = true;
+    return nullptr;  // Lua raises "not enough memory"
+  }
+  void* p = std::realloc(ptr, nsize);
+  if (p) b->used = b->used - old + nsize;
+  return p;
+}
+
+void budget_hook(lua_State* L, lua_Debug* ar) {
+  Budget* b = nullptr;
+  lua_getallocf(L, reinterpret_cast<void**>(&b));
+  b->instructions += kHookEvery;
+  if (lua_getinfo(L, "Sl", ar) && ar->currentline > 0) b->where = std::string(ar->short_src) + ":" + std::to_string(ar->currentline);
+  if (b->instructions > b->instruction_limit) {
+    // Named at the line running now (luaL_error would name the caller's, which the main chunk has not).
+    lua_pushfstring(L, "%s: the script ran for more than %d million Lua instructions (an endless loop?); a farm "
+                    "script describes a farm and ends", b->where.c_str(), static_cast<int>(b->instruction_limit / 1000000));
+    lua_error(L);
+  }
+}
+
+int lua_panic(lua_State* L) {
+  std::fprintf(stderr, "lightfarm: error: Lua: %s\n", lua_tostring(L, -1));
+  std::abort();
+}
+
+}  // namespace
+
 Result<FarmSpec> evaluate_script(const std::string& path, const ScriptOptions& options) {
   std::error_code ec;
   if (!fs::is_regular_file(path, ec)) return make_error("script '" + path + "' not found");
@@ -635,8 +686,13 @@ Result<FarmSpec> evaluate_script(const std::string& path, const ScriptOptions& o
   b.spec.script = path;
   b.script_dir = fs::absolute(fs::path(path)).parent_path();
 
-  lua_State* L = luaL_newstate();
+  Budget budget;
+  budget.memory_limit = options.memory_budget;
+  budget.instruction_limit = options.instruction_budget;
+  lua_State* L = lua_newstate(budget_alloc, &budget);
   if (!L) return make_error("cannot create a Lua state");
+  lua_atpanic(L, lua_panic);
+  lua_sethook(L, budget_hook, LUA_MASKCOUNT, kHookEvery);
   open_libs(L);
   luaL_newmetatable(L, kActorMeta);
   lua_pushcfunction(L, actor_tostring);
@@ -666,6 +722,9 @@ Result<FarmSpec> evaluate_script(const std::string& path, const ScriptOptions& o
   std::string failure;
   if (luaL_loadfile(L, path.c_str()) != LUA_OK || lua_pcall(L, 0, 0, 0) != LUA_OK) {
     failure = lua_isstring(L, -1) ? lua_tostring(L, -1) : "script failed with a non-string error";
+    if (budget.out_of_memory)
+      failure = (budget.where.empty() ? path : budget.where) + ": the script used more than " +
+                std::to_string(budget.memory_limit >> 20) + " MiB of memory (a table that keeps growing?)";
   }
   lua_close(L);
   if (!failure.empty()) return make_error(failure);

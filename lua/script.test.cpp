@@ -253,3 +253,30 @@ TEST_F(ScriptTest, RadiosityDeclaresItsRingNodesAndReturnsTheLightOp) {
 }
 
 }  // namespace lf
+
+namespace lf {
+namespace {
+
+// A script describes a farm and ends: an endless loop and a table that keeps growing are errors at their line,
+// within the budgets (small ones here, so the test is quick).
+TEST_F(ScriptTest, ScriptsHaveAnInstructionAndAMemoryBudget) {
+  ScriptOptions small;
+  small.instruction_budget = 5'000'000;
+  small.memory_budget = 8u << 20;
+  auto loop = evaluate_script(write("farm.lua", "scene { builtin = \"cornell\" }\nlocal n = 0\nwhile true do n = n + 1 end\n"), small);
+  ASSERT_FALSE(loop.ok());
+  EXPECT_EQ(loop.error().message, (dir / "farm.lua").string() +
+                                      ":3: the script ran for more than 5 million Lua instructions (an endless loop?); "
+                                      "a farm script describes a farm and ends");
+  auto bomb = evaluate_script(write("farm.lua", "scene { builtin = \"cornell\" }\nlocal t = {}\nwhile true do\n"
+                                                "  t[#t + 1] = string.rep(\"x\", 1000) .. #t\nend\n"),
+                              small);
+  ASSERT_FALSE(bomb.ok());
+  EXPECT_EQ(bomb.error().message,
+            (dir / "farm.lua").string() + ":4: the script used more than 8 MiB of memory (a table that keeps growing?)");
+  // Real scripts are far inside the default budgets.
+  EXPECT_TRUE(evaluate_script(std::string(LIGHTFARM_SOURCE_DIR) + "/examples/cornell_glass_radiosity.lua").ok());
+}
+
+}  // namespace
+}  // namespace lf
