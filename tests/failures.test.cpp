@@ -125,3 +125,28 @@ TEST_F(FailureTest, LosingTheLastReplicaOrEveryRendererStopsTheFarmNamingIt) {
 
 }  // namespace
 }  // namespace lf::test
+
+namespace lf::test {
+namespace {
+
+// Liveness apart from work (issue 12): one shade batch that computes for about two seconds — 4096 points, 4096
+// light samples each — in a farm whose heartbeat timeout is one second. The actor's heartbeat thread keeps
+// beating through it, so the farm finishes (before, the director declared the actor dead).
+TEST(Liveness, ALongShadeIsNotTakenForDeath) {
+  const auto dir = fs::temp_directory_path() / ("lightfarm-liveness-" + std::to_string(::getpid()));
+  fs::create_directories(dir);
+  const std::string script = (dir / "long.lua").string();
+  std::ofstream(script) << "scene { builtin = \"cornell\" }\nimage { width = 64, height = 64, spp = 1 }\n"
+                           "farm { heartbeat_timeout = 1 }\n"
+                           "renderers { count = 1, lighting = lightop \"direct\" { light_samples = 4096 } }\n";
+  auto r = run_lightfarm({"run", script, "--quiet", "--output", (dir / "long.png").string()});
+  EXPECT_EQ(r.status, 0) << r.err;
+  EXPECT_EQ(r.err.find("silent"), std::string::npos) << r.err;
+  EXPECT_TRUE(fs::exists(dir / "long.png"));
+  auto left = wait_no_leftovers(r.tag);
+  EXPECT_TRUE(left.empty());
+  fs::remove_all(dir);
+}
+
+}  // namespace
+}  // namespace lf::test

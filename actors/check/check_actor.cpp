@@ -147,12 +147,12 @@ class Checker {
     while (Clock::now() < deadline) {
       poller.wait(20);
       while (auto in = control_->receive()) {
-        last_peer_ = in->peer;
-        if (!in->message) return make_error(in->message.error().message);
-        if (in->message->header.type == MsgType::heartbeat && !want_heartbeat) {
-          saw_heartbeat_ = true;
+        if (in->message && in->message->header.type == MsgType::heartbeat && !want_heartbeat) {
+          saw_heartbeat_ = true;  // from the actor's control socket or its heartbeat thread's
           continue;
         }
+        last_peer_ = in->peer;
+        if (!in->message) return make_error(in->message.error().message);
         return std::move(*in->message);
       }
       if (auto e = launcher_.reap_one()) {

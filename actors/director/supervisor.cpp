@@ -91,6 +91,15 @@ bool Supervisor::all(const std::function<bool(const ActorRecord&)>& done, std::s
 
 Status Supervisor::on_message(const std::string& peer, Result<wire::Message>& message) {
   auto it = actors_.find(peer);
+  // An actor's heartbeat thread speaks under NAME#heartbeat; it says nothing but HEARTBEAT.
+  static const std::string kBeat = "#heartbeat";
+  if (it == actors_.end() && peer.size() > kBeat.size() && peer.compare(peer.size() - kBeat.size(), kBeat.size(), kBeat) == 0) {
+    auto owner = actors_.find(peer.substr(0, peer.size() - kBeat.size()));
+    if (owner != actors_.end() && message && message->header.type == MsgType::heartbeat) {
+      if (!owner->second.lost) owner->second.last_seen = Clock::now();
+      return Ok{};
+    }
+  }
   if (!message) {
     const Error& e = message.error();
     if (it != actors_.end() && e.code == ErrorCode::incompatible)

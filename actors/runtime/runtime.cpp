@@ -75,7 +75,30 @@ Runtime::Runtime(ActorArgs args)
   }
 }
 
+std::string heartbeat_identity(const std::string& actor) { return actor + "#heartbeat"; }
+
+void Runtime::start_heartbeats() {
+  heartbeat_thread_ = std::thread([this] {
+    wire::Socket beat(wire::Socket::Kind::dealer, heartbeat_identity(args_.name));
+    if (args_.keys) beat.make_curve_client(args_.keys->own.public_key, args_.keys->own.secret_key, args_.keys->director);
+    if (!beat.connect(args_.director)) return;
+    while (!heartbeat_stop_) {
+      beat.send(wire::make(MsgType::heartbeat, args_.name));
+      // Four beats per timeout, at least one a second, so one late beat is never taken for a death.
+      const auto until = Clock::now() + std::chrono::duration_cast<Clock::duration>(
+                                            std::chrono::duration<double>(heartbeat_interval_.load()));
+      while (!heartbeat_stop_ && Clock::now() < until) std::this_thread::sleep_for(std::chrono::milliseconds(20));
+    }
+  });
+}
+
+void Runtime::stop_heartbeats() {
+  heartbeat_stop_ = true;
+  if (heartbeat_thread_.joinable()) heartbeat_thread_.join();
+}
+
 Runtime::~Runtime() {
+  stop_heartbeats();
   local_.reset();
   if (!local_dir_.empty()) {
     std::error_code ec;
@@ -155,6 +178,7 @@ void Runtime::handle_control(wire::Message& m, Actor& actor) {
       auto config = ActorConfig::from_value(m.body);
       if (!config) return fail(config.error().message);
       heartbeat_timeout_ = config->heartbeat_timeout;
+      heartbeat_interval_ = std::min(1.0, heartbeat_timeout_ / 4);
       // Connect to every input before the actor configures, so that it may ask them during setup.
       for (const auto& in : config->inputs) {
         auto client = std::make_unique<wire::RequestClient>(args_.name, in.name, static_cast<size_t>(in.window));
@@ -274,7 +298,7 @@ int Runtime::run(Actor& actor) {
   send_control(wire::make(MsgType::hello, args_.name, hello.to_value()));
 
   auto last_from_director = Clock::now();
-  auto next_heartbeat = Clock::now() + std::chrono::seconds(1);
+  start_heartbeats();
   wire::Poller poller;
   poller.add(control_);
   poller.add(data_);
@@ -296,16 +320,22 @@ int Runtime::run(Actor& actor) {
     if (long due = actor.next_due_ms(); due >= 0) timeout = std::min(timeout, due);
     const auto& ready = poller.wait(timeout);
 
-    if (ready[0]) {
-      while (auto in = control_.receive()) {
-        if (!in->message) {
-          log_warn("bad message from the director: " + in->message.error().message);
-          continue;
-        }
-        last_from_director = Clock::now();
-        handle_control(*in->message, actor);
-        if (stopping_) break;
+    (void)ready[0];  // the control socket is drained every turn, readable or not: see below
+    while (auto in = control_.receive()) {
+      if (!in->message) {
+        log_warn("bad message from the director: " + in->message.error().message);
+        continue;
       }
+      last_from_director = Clock::now();
+      handle_control(*in->message, actor);
+      if (stopping_) break;
+    }
+    // Judged right after reading what the director sent: a long piece of work here must not look like its silence
+    // (its heartbeats wait in the queue meanwhile).
+    if (std::chrono::duration<double>(Clock::now() - last_from_director).count() > heartbeat_timeout_) {
+      log_error("the director has been silent for " + std::to_string(static_cast<int>(heartbeat_timeout_)) +
+                " s; stopping");
+      return 3;
     }
     if (stopping_) break;
     if (ready[1]) handle_data(actor, data_);
@@ -323,18 +353,6 @@ int Runtime::run(Actor& actor) {
     }
     stats_.peak_queue = std::max<uint32_t>(stats_.peak_queue, static_cast<uint32_t>(actor.queue_length()));
 
-    const auto now = Clock::now();
-    if (now >= next_heartbeat) {
-      send_control(wire::make(MsgType::heartbeat, args_.name));
-      // Four beats per timeout (at most one a second), so one late beat is never taken for a death.
-      next_heartbeat = now + std::chrono::duration_cast<Clock::duration>(
-                                 std::chrono::duration<double>(std::min(1.0, heartbeat_timeout_ / 4)));
-    }
-    if (std::chrono::duration<double>(now - last_from_director).count() > heartbeat_timeout_) {
-      log_error("the director has been silent for " + std::to_string(static_cast<int>(heartbeat_timeout_)) +
-                " s; stopping");
-      return 3;
-    }
   }
   return exit_status_;
 }

@@ -11,12 +11,14 @@
 //         -> PHASE finish (or BYE) -> STATS -> BYE -> exit 0
 // It exits non-zero after fail(), and on its own when the director is silent for longer than the heartbeat
 // timeout or SIGINT/SIGTERM arrives: an actor never outlives its farm.
+#include <atomic>
 #include <chrono>
 #include <functional>
 #include <map>
 #include <memory>
 #include <optional>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include "actors/runtime/actor_config.hpp"
@@ -126,6 +128,13 @@ class Runtime {
   uint64_t next_director_id_ = 1;
   ActorStats stats_;
   double heartbeat_timeout_ = 30.0;
+  // Heartbeats come from a thread with a control socket of its own (routing id NAME#heartbeat), so that one long
+  // shade or setup never looks like death; a stopped or killed process still goes silent.
+  void start_heartbeats();
+  void stop_heartbeats();
+  std::thread heartbeat_thread_;
+  std::atomic<bool> heartbeat_stop_{false};
+  std::atomic<double> heartbeat_interval_{1.0};
   bool configured_ = false;
   bool stopping_ = false;
   int exit_status_ = 0;
@@ -135,6 +144,9 @@ class Runtime {
 // The farm's keys, from the first line of standard input (--curve): never on the command line or in the
 // environment, where other users of the host could read them.
 Result<wire::FarmKeys> read_farm_keys_from_stdin();
+
+// The routing id an actor's heartbeat thread uses towards the director.
+std::string heartbeat_identity(const std::string& actor);
 
 // Installs SIGINT/SIGTERM handlers that make poll loops stop; returns true once a signal has arrived.
 void install_stop_signals();
