@@ -150,3 +150,35 @@ TEST(Liveness, ALongShadeIsNotTakenForDeath) {
 
 }  // namespace
 }  // namespace lf::test
+
+namespace lf::test {
+namespace {
+
+// Nothing an actor starts outlives the farm: an exec actor leaves a child in its process group and one that
+// escaped it with setsid; after the farm, neither is running (both carry the farm's tag in their environment).
+TEST(ProcessGroups, WhatAnActorStartedDiesWithTheFarm) {
+  const auto dir = fs::temp_directory_path() / ("lightfarm-groups-" + std::to_string(::getpid()));
+  fs::create_directories(dir);
+  const std::string script = (dir / "forking.lua").string();
+  std::ofstream(script) << "scene { builtin = \"cornell\" }\nimage { width = 32, height = 32, spp = 1 }\n"
+                           "local f = lightop.exec { cmd = {\"" LIGHTFARM_SOURCE_DIR "/tests/actors/forking_actor.sh\"}, "
+                           "name = \"forking\" }\n"
+                           "renderers { count = 1, lighting = f }\n";
+  for (const bool interrupt : {false, true}) {
+    Farm farm({"run", script, "--quiet", "--output", (dir / "f.png").string()});
+    if (interrupt) {
+      ASSERT_TRUE(Farm::eventually([&] { return !actor_pids(farm.tag(), "forking").empty(); }, 10.0));
+      ::kill(farm.pid(), SIGTERM);
+    }
+    auto r = farm.wait();
+    EXPECT_EQ(r.status, interrupt ? 128 + SIGTERM : 0) << r.err;
+    auto left = wait_no_leftovers(r.tag);
+    std::string names;
+    for (pid_t p : left) names += read_file("/proc/" + std::to_string(p) + "/cmdline") + "; ";
+    EXPECT_TRUE(left.empty()) << (interrupt ? "after SIGTERM: " : "") << left.size() << " left: " << names;
+  }
+  fs::remove_all(dir);
+}
+
+}  // namespace
+}  // namespace lf::test

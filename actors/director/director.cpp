@@ -1,5 +1,6 @@
 #include "actors/director/director.hpp"
 
+#include <sys/prctl.h>
 #include <unistd.h>
 
 #include <chrono>
@@ -13,6 +14,7 @@
 #include "actors/director/actor_configs.hpp"
 #include "actors/director/exchange_service.hpp"
 #include "actors/director/launcher.hpp"
+#include "actors/director/local_launcher.hpp"
 #include "actors/director/report.hpp"
 #include "actors/director/ring_service.hpp"
 #include "actors/director/supervisor.hpp"
@@ -76,6 +78,8 @@ class Director final : public ControlOut, public Outbox {
 
   int run() {
     install_stop_signals();
+    // Orphans of actors (a daemonised grandchild) become ours, so that kill_orphans() can end them.
+    ::prctl(PR_SET_CHILD_SUBREAPER, 1);
     start_ = Clock::now();
     int status = 0;
     // Loading OpenImageIO takes ~0.2 s; do it while the actors start instead of after the last tile.
@@ -114,6 +118,7 @@ class Director final : public ControlOut, public Outbox {
     // No actor outlives the farm, whatever happened above.
     supervisor_.send_bye_to_all();
     launchers_.stop_all(std::chrono::milliseconds(status == 0 ? 3000 : 300));
+    kill_orphans();
     remove_local_sockets();
     if (status == 0) status = report();
     return status;

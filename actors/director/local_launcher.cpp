@@ -62,6 +62,7 @@ Result<pid_t> LocalLauncher::start(const LaunchRequest& options) {
   if (pid == 0) {
     ::close(fds[0]);
     if (lifeline[0] >= 0) ::dup2(lifeline[0], STDIN_FILENO);  // dup2 clears O_CLOEXEC on the copy
+    ::setpgid(0, 0);  // a process group of its own: whatever the actor starts is killed with it
     ::prctl(PR_SET_PDEATHSIG, SIGKILL);
     if (::getppid() != parent) ::_exit(126);  // the director died between fork and prctl
     sigset_t none;
@@ -97,6 +98,7 @@ Result<pid_t> LocalLauncher::start(const LaunchRequest& options) {
     if (lifeline[1] >= 0) ::close(lifeline[1]);
     return make_error("cannot run " + args[0] + ": " + std::strerror(err));
   }
+  ::setpgid(pid, pid);  // also here: whichever runs first, the group exists before anyone signals it
   children_.insert(pid);
   if (lifeline[1] >= 0) {
     // A few hundred bytes: the pipe holds them, so this never blocks.
@@ -121,7 +123,7 @@ void LocalLauncher::forget(pid_t pid) {
 }
 
 void LocalLauncher::kill(pid_t pid, int signal) {
-  if (children_.count(pid)) ::kill(pid, signal);
+  if (children_.count(pid)) ::kill(-pid, signal);  // the whole group
 }
 
 std::optional<ExitReport> LocalLauncher::reap_one() {
@@ -130,10 +132,31 @@ std::optional<ExitReport> LocalLauncher::reap_one() {
     pid_t r = ::waitpid(pid, &status, WNOHANG);
     if (r == pid) {
       forget(pid);
+      ::kill(-pid, SIGKILL);  // what it started and left behind goes with it
       return ExitReport{pid, status};
     }
   }
   return std::nullopt;
+}
+
+void kill_orphans() {
+  // With the director a child subreaper, anything an actor started that left its group (setsid, a double fork)
+  // was reparented here: kill and reap every child this process did not launch itself.
+  const std::string me = std::to_string(::getpid());
+  std::error_code ec;
+  for (const auto& entry : std::filesystem::directory_iterator("/proc", ec)) {
+    const std::string name = entry.path().filename().string();
+    if (name.find_first_not_of("0123456789") != std::string::npos) continue;
+    std::ifstream status(entry.path() / "status");
+    std::string line;
+    while (std::getline(status, line))
+      if (line.rfind("PPid:", 0) == 0) {
+        if (line.substr(line.find_first_not_of(" \t", 5)) == me) ::kill(static_cast<pid_t>(std::stol(name)), SIGKILL);
+        break;
+      }
+  }
+  while (::waitpid(-1, nullptr, WNOHANG) > 0) {
+  }
 }
 
 void LocalLauncher::stop_all(std::chrono::milliseconds grace) {
@@ -147,9 +170,9 @@ void LocalLauncher::stop_all(std::chrono::milliseconds grace) {
     }
   };
   wait_until(Clock::now() + grace);
-  for (pid_t pid : children_) ::kill(pid, SIGTERM);
+  for (pid_t pid : children_) ::kill(-pid, SIGTERM);
   wait_until(Clock::now() + std::chrono::milliseconds(1500));
-  for (pid_t pid : children_) ::kill(pid, SIGKILL);
+  for (pid_t pid : children_) ::kill(-pid, SIGKILL);
   for (pid_t pid : children_) {
     int status;
     while (::waitpid(pid, &status, 0) < 0 && errno == EINTR) {

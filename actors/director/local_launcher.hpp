@@ -1,7 +1,7 @@
 #pragma once
-// LocalLauncher: fork/exec on this machine. Children stay in the director's process group (Ctrl-C on a terminal
-// reaches them all) and get PR_SET_PDEATHSIG=SIGKILL, so even a director killed with SIGKILL leaves nothing
-// running. Every child is reaped.
+// LocalLauncher: fork/exec on this machine. Each child is the leader of its own process group, signalled and killed
+// as a group, so whatever an actor starts dies with it; it gets PR_SET_PDEATHSIG=SIGKILL, so even a director killed
+// with SIGKILL leaves no actor running. Every child is reaped.
 #include <map>
 #include <set>
 
@@ -30,6 +30,10 @@ class LocalLauncher final : public Launcher {
   std::set<pid_t> children_;
   std::map<pid_t, int> held_stdin_;  // write ends of held stdin pipes
 };
+
+// Kills and reaps every child of this process (a child subreaper) that no launcher started: what actors left
+// behind outside their process groups. Call when no launcher has children left.
+void kill_orphans();
 
 // The path of the running lightfarm binary.
 std::string self_executable();
