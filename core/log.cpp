@@ -28,4 +28,15 @@ void log_debug(const std::string& m) {
   if (enabled) emit("debug: ", m);
 }
 
+void RateLimitedLog::warn(const std::string& message, std::chrono::steady_clock::time_point now) {
+  if (logged_ && now - last_ < std::chrono::seconds(1)) {
+    ++held_;
+    return;
+  }
+  sink_(held_ == 0 ? message : message + " (and " + std::to_string(held_) + " more like it in the last second)");
+  held_ = 0;
+  last_ = now;
+  logged_ = true;
+}
+
 }  // namespace lf

@@ -1,5 +1,8 @@
 #pragma once
 // One line per message on stderr, prefixed with who speaks ("lightfarm" or the actor's name).
+#include <chrono>
+#include <cstdint>
+#include <functional>
 #include <string>
 
 namespace lf {
@@ -10,6 +13,22 @@ void log_warn(const std::string& message);
 void log_error(const std::string& message);
 // Debug lines appear only when LIGHTFARM_DEBUG is set in the environment.
 void log_debug(const std::string& message);
+
+// Warnings anyone outside the farm can cause (bad or stranger messages) go through one of these: at most one line
+// a second, and the next line says how many like it were held back, so nobody can flood the log.
+class RateLimitedLog {
+ public:
+  using Sink = std::function<void(const std::string&)>;
+  explicit RateLimitedLog(Sink sink = log_warn) : sink_(std::move(sink)) {}
+  void warn(const std::string& message) { warn(message, std::chrono::steady_clock::now()); }
+  void warn(const std::string& message, std::chrono::steady_clock::time_point now);
+
+ private:
+  Sink sink_;
+  std::chrono::steady_clock::time_point last_{};
+  bool logged_ = false;
+  uint64_t held_ = 0;
+};
 
 // "1.5 s", "10 s": a duration as messages show it.
 std::string seconds_text(double seconds);

@@ -53,7 +53,7 @@ void RequestClient::expire_overdue() {
 void RequestClient::on_readable() {
   while (auto in = socket_.receive()) {
     if (!in->message) {
-      log_warn("dropped a bad message from " + peer_name_ + ": " + in->message.error().message);
+      bad_messages_.warn("dropped a bad message from " + peer_name_ + ": " + in->message.error().message);
       continue;
     }
     Message& m = *in->message;

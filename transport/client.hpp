@@ -9,6 +9,7 @@
 #include <map>
 #include <string>
 
+#include "core/log.hpp"
 #include "transport/socket.hpp"
 
 namespace lf::wire {
@@ -69,6 +70,7 @@ class RequestClient {
   double timeout_ = 0;
   uint32_t peer_queue_ = 0;
   uint64_t dropped_ = 0;
+  RateLimitedLog bad_messages_;
 };
 
 }  // namespace lf::wire

@@ -104,11 +104,11 @@ Status Supervisor::on_message(const std::string& peer, Result<wire::Message>& me
     const Error& e = message.error();
     if (it != actors_.end() && e.code == ErrorCode::incompatible)
       return make_error("actor '" + peer + "' is an " + e.message + "; refusing it");
-    log_warn("dropped a bad control message from '" + peer + "': " + e.message);
+    strangers_.warn("dropped a bad control message from '" + peer + "': " + e.message);
     return Ok{};
   }
   if (it == actors_.end()) {
-    log_warn("ignored a message from '" + peer + "', which is not part of this farm");
+    strangers_.warn("ignored a message from '" + peer + "', which is not part of this farm");
     return Ok{};
   }
   ActorRecord& a = it->second;

@@ -20,6 +20,7 @@
 
 #include "actors/director/launcher.hpp"
 #include "actors/director/stage.hpp"
+#include "core/log.hpp"
 #include "core/result.hpp"
 #include "farm/farm_spec.hpp"
 #include "transport/message.hpp"
@@ -104,6 +105,7 @@ class Supervisor {
   std::map<std::string, ActorRecord> actors_;
   Stage stage_ = Stage::prepare;
   Clock::time_point last_heartbeat_ = Clock::now();
+  RateLimitedLog strangers_;  // bad or foreign control messages: logged, never flooding
 };
 
 }  // namespace lf

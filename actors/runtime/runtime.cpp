@@ -249,7 +249,7 @@ void Runtime::handle_data(Actor& actor, wire::Socket& socket) {
     if (!in->peer.empty()) reply_via_[in->peer] = &socket;
     if (!in->message) {
       // Refuse, tell the sender if we can, and carry on: a bad packet must never take the actor down.
-      log_warn("dropped a bad message from '" + in->peer + "': " + in->message.error().message);
+      bad_messages_.warn("dropped a bad message from '" + in->peer + "': " + in->message.error().message);
       if (!in->peer.empty()) reply_error(in->peer, 0, ErrorCode::bad_message, in->message.error().message);
       continue;
     }

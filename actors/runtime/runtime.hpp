@@ -22,6 +22,7 @@
 #include <vector>
 
 #include "actors/runtime/actor_config.hpp"
+#include "core/log.hpp"
 #include "core/value.hpp"
 #include "transport/client.hpp"
 #include "transport/security.hpp"
@@ -122,6 +123,7 @@ class Runtime {
   std::unique_ptr<wire::Socket> local_;
   std::string local_dir_, local_endpoint_;
   std::map<std::string, wire::Socket*> reply_via_;
+  RateLimitedLog bad_messages_;  // anyone can send garbage; it must not flood the log
   std::vector<std::unique_ptr<wire::RequestClient>> inputs_;
   std::vector<std::string> input_names_;
   std::map<uint64_t, DirectorCallback> director_pending_;
