@@ -1,12 +1,12 @@
 #include "core/result.hpp"
 
-#include <array>
+#include "core/name_table.hpp"
 
 namespace lf {
 
 namespace {
 // The one table of error code names (docs/PROTOCOL.md, "ERROR").
-constexpr std::array<std::pair<ErrorCode, std::string_view>, 12> kErrorCodes{{
+constexpr std::pair<ErrorCode, std::string_view> kErrorCodes[] = {
     {ErrorCode::failed, "failed"},
     {ErrorCode::bad_message, "bad_message"},
     {ErrorCode::unknown_op, "unknown_op"},
@@ -19,19 +19,15 @@ constexpr std::array<std::pair<ErrorCode, std::string_view>, 12> kErrorCodes{{
     {ErrorCode::incompatible, "incompatible"},
     {ErrorCode::timeout, "timeout"},
     {ErrorCode::unreachable, "unreachable"},
-}};
+};
 }  // namespace
 
 std::string_view error_code_name(ErrorCode code) {
-  for (const auto& [c, name] : kErrorCodes)
-    if (c == code) return name;
-  return "failed";
+  return name_in<ErrorCode>(kErrorCodes, code).value_or("failed");
 }
 
 ErrorCode error_code_from_name(std::string_view name) {
-  for (const auto& [c, n] : kErrorCodes)
-    if (n == name) return c;
-  return ErrorCode::failed;
+  return value_in<ErrorCode>(kErrorCodes, name).value_or(ErrorCode::failed);
 }
 
 }  // namespace lf

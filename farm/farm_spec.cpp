@@ -1,5 +1,7 @@
 #include "farm/farm_spec.hpp"
 
+#include <algorithm>
+
 namespace lf {
 
 int FarmSpec::pool_of(int i) const {
@@ -27,6 +29,13 @@ const HostSpec* FarmSpec::host_of(const ActorSpec& actor) const {
   for (const auto& h : hosts)
     if (h.name == actor.host) return &h;
   return actor.host == kLocal.name ? &kLocal : nullptr;
+}
+
+std::vector<const HostSpec*> FarmSpec::hosts_in_use() const {
+  std::vector<const HostSpec*> used;
+  for (const auto& a : actors)
+    if (const HostSpec* h = host_of(a); h && std::find(used.begin(), used.end(), h) == used.end()) used.push_back(h);
+  return used;
 }
 
 bool FarmSpec::has_remote_hosts() const {

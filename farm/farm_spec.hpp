@@ -64,6 +64,8 @@ struct FarmSpec {
   int find(const std::string& name) const;
   // The host an actor runs on ("local" unless declared); nullptr for an undeclared name.
   const HostSpec* host_of(const ActorSpec& actor) const;
+  // The hosts that run at least one actor, each once, in the order actors first name them.
+  std::vector<const HostSpec*> hosts_in_use() const;
   // True when some actor runs on a host that is not this machine.
   bool has_remote_hosts() const;
 };

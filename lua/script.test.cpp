@@ -166,10 +166,11 @@ TEST_F(ScriptTest, FarmSettingsAndHosts) {
             "farm.lua:1: host 'gpu1': an ssh host needs address = \"...\" (where its actors listen and ssh reaches it)");
   EXPECT_EQ(error_of("local h = host \"gpu1\" { launcher = \"slurm\" }\n"),
             "farm.lua:1: host 'gpu1': a slurm host needs address = \"...\" (where its actors listen)");
-  if (!std::getenv("SLURM_JOB_NODELIST") && !std::getenv("SLURM_NODELIST"))
+  if (!std::getenv("SLURM_JOB_NODELIST") && !std::getenv("SLURM_NODELIST")) {
     EXPECT_EQ(error_of("local hs = slurm_hosts()\n"),
               "farm.lua:1: slurm_hosts(): not inside a Slurm allocation (SLURM_JOB_NODELIST is not set; run the farm "
               "under salloc or sbatch)");
+  }
   EXPECT_EQ(error_of("local h = host \"gpu1\" { launcher = \"ssh\", address = \"10.0.0.1\", ssh_config = \"nope\" }\n"),
             "farm.lua:1: host 'gpu1': ssh_config '" + (dir / "nope").string() + "' not found");
   EXPECT_EQ(error_of("local h = host \"gpu1\" { address = \"10.0.0.1\" }\n"

@@ -132,40 +132,26 @@ namespace {
 // Liveness apart from work (issue 12): one shade batch that computes for about two seconds — 4096 points, 4096
 // light samples each — in a farm whose heartbeat timeout is one second. The actor's heartbeat thread keeps
 // beating through it, so the farm finishes (before, the director declared the actor dead).
-TEST(Liveness, ALongShadeIsNotTakenForDeath) {
-  const auto dir = fs::temp_directory_path() / ("lightfarm-liveness-" + std::to_string(::getpid()));
-  fs::create_directories(dir);
-  const std::string script = (dir / "long.lua").string();
-  std::ofstream(script) << "scene { builtin = \"cornell\" }\nimage { width = 64, height = 64, spp = 1 }\n"
-                           "farm { heartbeat_timeout = 1 }\n"
-                           "renderers { count = 1, lighting = lightop \"direct\" { light_samples = 4096 } }\n";
-  auto r = run_lightfarm({"run", script, "--quiet", "--output", (dir / "long.png").string()});
+TEST_F(FailureTest, ALongShadeIsNotTakenForDeath) {
+  const std::string script = write("long.lua", "scene { builtin = \"cornell\" }\nimage { width = 64, height = 64, spp = 1 }\n"
+                                               "farm { heartbeat_timeout = 1 }\n"
+                                               "renderers { count = 1, lighting = lightop \"direct\" { light_samples = 4096 } }\n");
+  auto r = run_lightfarm({"run", script, "--quiet", "--output", path("long.png")});
   EXPECT_EQ(r.status, 0) << r.err;
   EXPECT_EQ(r.err.find("silent"), std::string::npos) << r.err;
-  EXPECT_TRUE(fs::exists(dir / "long.png"));
-  auto left = wait_no_leftovers(r.tag);
-  EXPECT_TRUE(left.empty());
-  fs::remove_all(dir);
+  EXPECT_TRUE(fs::exists(path("long.png")));
+  expect_no_leftovers(r);
 }
-
-}  // namespace
-}  // namespace lf::test
-
-namespace lf::test {
-namespace {
 
 // Nothing an actor starts outlives the farm: an exec actor leaves a child in its process group and one that
 // escaped it with setsid; after the farm, neither is running (both carry the farm's tag in their environment).
-TEST(ProcessGroups, WhatAnActorStartedDiesWithTheFarm) {
-  const auto dir = fs::temp_directory_path() / ("lightfarm-groups-" + std::to_string(::getpid()));
-  fs::create_directories(dir);
-  const std::string script = (dir / "forking.lua").string();
-  std::ofstream(script) << "scene { builtin = \"cornell\" }\nimage { width = 32, height = 32, spp = 1 }\n"
-                           "local f = lightop.exec { cmd = {\"" LIGHTFARM_SOURCE_DIR "/tests/actors/forking_actor.sh\"}, "
-                           "name = \"forking\" }\n"
-                           "renderers { count = 1, lighting = f }\n";
+TEST_F(FailureTest, WhatAnActorStartedDiesWithTheFarm) {
+  const std::string script = write("forking.lua", "scene { builtin = \"cornell\" }\nimage { width = 32, height = 32, spp = 1 }\n"
+                                                  "local f = lightop.exec { cmd = {\"" LIGHTFARM_SOURCE_DIR
+                                                  "/tests/actors/forking_actor.sh\"}, name = \"forking\" }\n"
+                                                  "renderers { count = 1, lighting = f }\n");
   for (const bool interrupt : {false, true}) {
-    Farm farm({"run", script, "--quiet", "--output", (dir / "f.png").string()});
+    Farm farm({"run", script, "--quiet", "--output", path("f.png")});
     if (interrupt) {
       ASSERT_TRUE(Farm::eventually([&] { return !actor_pids(farm.tag(), "forking").empty(); }, 10.0));
       ::kill(farm.pid(), SIGTERM);
@@ -177,7 +163,6 @@ TEST(ProcessGroups, WhatAnActorStartedDiesWithTheFarm) {
     for (pid_t p : left) names += read_file("/proc/" + std::to_string(p) + "/cmdline") + "; ";
     EXPECT_TRUE(left.empty()) << (interrupt ? "after SIGTERM: " : "") << left.size() << " left: " << names;
   }
-  fs::remove_all(dir);
 }
 
 }  // namespace

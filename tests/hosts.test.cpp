@@ -82,6 +82,15 @@ class HostsTest : public FarmFixture {
         << "left running on the hosts:\n" << remote;
   }
 
+  // The pool network (2 renderers, 3 `direct` replicas) twice: local.lua all here, spread.lua with the replicas on
+  // h1..h3 and the renderers on `renderer_hosts`. Returns the two scripts' paths.
+  std::pair<std::string, std::string> pool_scripts(const std::string& head, const std::string& renderer_hosts) {
+    const std::string pool = "local direct = multiplexer { lightop \"direct\" { light_samples = 2 }, replicas = 3";
+    return {write("local.lua", head + pool + " }\nrenderers { count = 2, lighting = direct }\n"),
+            write("spread.lua", head + host_lines() + pool + ",\n                             host = { h1, h2, h3 } }\n"
+                                "renderers { count = 2, lighting = direct, host = " + renderer_hosts + " }\n")};
+  }
+
   Image render(const std::string& script, const std::vector<std::string>& sets, const std::string& out) {
     std::vector<std::string> args{"run", script, "--quiet", "--output", path(out)};
     for (const auto& s : sets) args.insert(args.end(), {"--set", s});
@@ -100,15 +109,9 @@ bool same_pixels(const Image& a, const Image& b) {
 }
 
 TEST_F(HostsTest, ThePoolNetworkOverThreeSshHostsGivesTheLocalPixels) {
-  const std::string body = "scene { builtin = \"cornell\" }\n"
-                           "image { width = 96, height = 96, spp = 4 }\n";
-  auto local = write("local.lua", body +
-                                      "local direct = multiplexer { lightop \"direct\" { light_samples = 2 }, replicas = 3 }\n"
-                                      "renderers { count = 2, lighting = direct }\n");
-  auto spread = write("spread.lua", body + host_lines() +
-                                        "local direct = multiplexer { lightop \"direct\" { light_samples = 2 }, replicas = 3,\n"
-                                        "                             host = { h1, h2, h3 } }\n"
-                                        "renderers { count = 2, lighting = direct, host = { h2, h3 } }\n");
+  const auto [local, spread] = pool_scripts("scene { builtin = \"cornell\" }\n"
+                                           "image { width = 96, height = 96, spp = 4 }\n",
+                                           "{ h2, h3 }");
   const Image a = render(local, {}, "local.exr");
   const Image b = render(spread, {}, "spread.exr");
   EXPECT_TRUE(same_pixels(a, b));
@@ -171,15 +174,10 @@ namespace {
 // exits) tell, its renderer's tiles and its replica's packets are redone elsewhere, and the image is the
 // fault-free one. The pool's multiplexer and the other actors live on h1 and here.
 TEST_F(HostsTest, AHostLostMidFrameChangesNoPixel) {
-  const std::string body = "scene { builtin = \"cornell\" }\n"
-                           "image { width = 96, height = 96, spp = 256, tile = 16 }\n"
-                           "farm { heartbeat_timeout = 2 }\n";
-  auto local = write("local.lua", body + "local direct = multiplexer { lightop \"direct\" { light_samples = 2 }, replicas = 3 }\n"
-                                         "renderers { count = 2, lighting = direct }\n");
-  auto spread = write("spread.lua", body + host_lines() +
-                                        "local direct = multiplexer { lightop \"direct\" { light_samples = 2 }, replicas = 3,\n"
-                                        "                             host = { h1, h2, h3 } }\n"
-                                        "renderers { count = 2, lighting = direct, host = { h2, \"local\" } }\n");
+  const auto [local, spread] = pool_scripts("scene { builtin = \"cornell\" }\n"
+                                           "image { width = 96, height = 96, spp = 256, tile = 16 }\n"
+                                           "farm { heartbeat_timeout = 2 }\n",
+                                           "{ h2, \"local\" }");
   const Image expected = render(local, {}, "local.exr");
   for (const std::string how : {"cut", "kill"}) {
     SCOPED_TRACE(how);

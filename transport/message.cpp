@@ -4,6 +4,8 @@
 
 #include <cmath>
 
+#include "core/name_table.hpp"
+
 namespace lf::wire {
 
 std::string_view type_name(MsgType type) {
@@ -51,29 +53,10 @@ constexpr std::pair<Phase, std::string_view> kPhases[] = {
 };
 }  // namespace
 
-std::string_view op_name(Op op) {
-  for (const auto& [o, name] : kOps)
-    if (o == op) return name;
-  return "?";
-}
-
-Op op_from_name(std::string_view name) {
-  for (const auto& [o, n] : kOps)
-    if (n == name) return o;
-  return Op::unknown;
-}
-
-std::string_view phase_name(Phase phase) {
-  for (const auto& [p, name] : kPhases)
-    if (p == phase) return name;
-  return "?";
-}
-
-std::optional<Phase> phase_from_name(std::string_view name) {
-  for (const auto& [p, n] : kPhases)
-    if (n == name) return p;
-  return std::nullopt;
-}
+std::string_view op_name(Op op) { return name_in<Op>(kOps, op).value_or("?"); }
+Op op_from_name(std::string_view name) { return value_in<Op>(kOps, name).value_or(Op::unknown); }
+std::string_view phase_name(Phase phase) { return name_in<Phase>(kPhases, phase).value_or("?"); }
+std::optional<Phase> phase_from_name(std::string_view name) { return value_in<Phase>(kPhases, name); }
 
 Op op_of(const Header& header) { return header.type == MsgType::request ? op_from_name(header.op) : Op::unknown; }
 

@@ -3,6 +3,7 @@
 #include <sys/prctl.h>
 #include <unistd.h>
 
+#include <array>
 #include <chrono>
 #include <cstdio>
 #include <filesystem>
@@ -72,7 +73,7 @@ class Director final : public ControlOut, public Outbox {
         tiles_(spec.image, renderers_of(spec), options.progress_on_terminal, options.quiet),
         exchange_(pools_of(spec)),
         ring_(spec, exchange_, options.quiet, options.progress_on_terminal) {
-    for (Service* s : std::initializer_list<Service*>{&tiles_, &exchange_, &ring_})
+    for (Service* s : all_services_)
       for (wire::Op op : s->ops()) services_[op] = s;
   }
 
@@ -206,10 +207,7 @@ class Director final : public ControlOut, public Outbox {
   // Every host that runs an actor gets the scene once (its cache may have it already); hosts connect in parallel.
   void ship_scene() {
     if (scene_bytes_.empty()) return;
-    std::vector<const HostSpec*> hosts;
-    for (const auto& a : spec_.actors)
-      if (const HostSpec* h = spec_.host_of(a); h && std::find(hosts.begin(), hosts.end(), h) == hosts.end())
-        hosts.push_back(h);
+    const auto hosts = spec_.hosts_in_use();
     if (auto st = launchers_.prepare(hosts); !st) throw FarmFailure{"cannot start the farm: " + st.error().message};
     for (const HostSpec* h : hosts) {
       auto launcher = launchers_.for_host(*h);
@@ -269,7 +267,7 @@ class Director final : public ControlOut, public Outbox {
   // PHASE to everyone, then wait for every READY of it (no timeout: setup and render take what they take).
   void run_phase(Phase phase) {
     supervisor_.broadcast(wire::make_phase("director", phase));
-    for (Service* s : std::initializer_list<Service*>{&tiles_, &exchange_, &ring_}) check(s->on_phase(phase, *this));
+    for (Service* s : all_services_) check(s->on_phase(phase, *this));
     if (phase != Phase::render) return wait_all(0, [phase](const ActorRecord& a) { return a.ready == phase; });
     // Rendering takes what it takes; once every renderer is done, the others have had PHASE render for the whole
     // frame and must have said READY render (docs/PROTOCOL.md). One that never does would hang the farm.
@@ -347,7 +345,7 @@ class Director final : public ControlOut, public Outbox {
   }
 
   Status lost(ActorRecord& a, const std::string& why) {
-    for (Service* s : std::initializer_list<Service*>{&tiles_, &exchange_, &ring_})
+    for (Service* s : all_services_)
       if (auto st = s->on_lost(a.name(), why, *this); !st) return st;
     return Ok{};
   }
@@ -393,7 +391,8 @@ class Director final : public ControlOut, public Outbox {
   TileService tiles_;
   ExchangeService exchange_;
   RingService ring_;
-  std::map<wire::Op, Service*> services_;
+  const std::array<Service*, 3> all_services_{&tiles_, &exchange_, &ring_};
+  std::map<wire::Op, Service*> services_;  // by the operation each serves
   std::vector<std::pair<std::string, double>> stage_seconds_;
   Clock::time_point start_, render_start_;
   double render_seconds_ = 0;

@@ -6,6 +6,7 @@
 #include <unistd.h>
 
 #include <cerrno>
+#include <cstring>
 #include <chrono>
 #include <thread>
 
@@ -24,8 +25,13 @@ Captured run_captured(const std::vector<std::string>& argv, double seconds, cons
   Captured c;
   int out[2], in[2] = {-1, -1};
   if (::pipe2(out, O_CLOEXEC) != 0) return c;
-  if (input && ::pipe2(in, O_CLOEXEC) != 0) return c;
-  const pid_t pid = ::fork();
+  const pid_t pid = (input && ::pipe2(in, O_CLOEXEC) != 0) ? -1 : ::fork();
+  if (pid < 0) {  // never go on to waitpid(-1, ...): that would reap one of the farm's actors
+    for (int fd : {out[0], out[1], in[0], in[1]})
+      if (fd >= 0) ::close(fd);
+    c.output = std::string("cannot start ") + argv[0] + ": " + std::strerror(errno);
+    return c;
+  }
   if (pid == 0) {
     ::dup2(out[1], STDOUT_FILENO);
     ::dup2(out[1], STDERR_FILENO);
@@ -41,6 +47,7 @@ Captured run_captured(const std::vector<std::string>& argv, double seconds, cons
     ::execvp(args[0], args.data());
     ::_exit(127);
   }
+  c.ran = true;
   ::close(out[1]);
   std::thread writer;
   if (input) {

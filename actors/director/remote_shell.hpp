@@ -17,7 +17,8 @@ extern const char* const kLifeline;
 inline constexpr const char* kCacheDir = "d=\"${LIGHTFARM_CACHE:-${XDG_CACHE_HOME:-$HOME/.cache}/lightfarm}/scenes\"; ";
 
 struct Captured {
-  int status = -1;  // as from waitpid; -1: timed out (the child was killed)
+  bool ran = false;  // false: it could not even start (output says why)
+  int status = -1;   // as from waitpid; -1: timed out (the child was killed)
   std::string output;
 };
 // Runs argv with stdout and stderr captured, `input` on its stdin (else /dev/null), for at most `seconds`.

@@ -27,6 +27,7 @@ Status SlurmLauncher::prepare() {
   auto argv = srun();
   argv.insert(argv.end(), {"sh", "-c", "test -x " + shell_quote(lightfarm_) + " && echo lightfarm-ok"});
   const Captured c = run_captured(argv, 60.0);
+  if (!c.ran) return make_error(who + ": " + c.output);
   if (c.status == -1) return make_error(who + ": srun did not start a step within 60 s");
   if (c.output.find("lightfarm-ok") == std::string::npos) {
     if (WIFEXITED(c.status) && WEXITSTATUS(c.status) == 1 && c.output.find("srun:") == std::string::npos)

@@ -48,6 +48,7 @@ Status SshLauncher::connect(bool need_lightfarm) {
   argv.push_back(need_lightfarm ? "test -x " + shell_quote(lightfarm_) + " && echo lightfarm-ok" : "echo lightfarm-ok");
   const Captured c = run_captured(argv, 15.0);
   const std::string who = "host '" + host_.name + "' (" + target() + ")";
+  if (!c.ran) return make_error(who + ": " + c.output);
   if (c.status == -1) return make_error(who + ": ssh did not connect within 15 s");
   if (WIFEXITED(c.status) && WEXITSTATUS(c.status) == 255)
     return make_error(who + ": ssh failed: " + last_line(c.output));

@@ -6,6 +6,7 @@
 #include <algorithm>
 
 #include "actors/runtime/hello.hpp"
+#include "actors/runtime/runtime.hpp"
 #include "core/log.hpp"
 
 namespace lf {
@@ -34,13 +35,8 @@ void Supervisor::send(const std::string& name, wire::Message m) {
 
 Status Supervisor::launch(const std::string& director_endpoint, const std::string& local_address,
                           const std::function<std::string(const ActorSpec&)>& stdin_of) {
-  std::vector<const HostSpec*> hosts;
-  for (const auto& a : spec_.actors) {
-    const HostSpec* host = spec_.host_of(a);
-    if (!host) return make_error(a.loc.str() + ": actor '" + a.name + "' is placed on undeclared host '" + a.host + "'");
-    if (std::find(hosts.begin(), hosts.end(), host) == hosts.end()) hosts.push_back(host);
-  }
-  if (auto st = launchers_.prepare(hosts); !st) return make_error("cannot start the farm: " + st.error().message);
+  if (auto st = launchers_.prepare(spec_.hosts_in_use()); !st)
+    return make_error("cannot start the farm: " + st.error().message);
   for (const auto& a : spec_.actors) {
     LaunchRequest how;
     how.argv = {"lightfarm", "actor"};
@@ -91,10 +87,9 @@ bool Supervisor::all(const std::function<bool(const ActorRecord&)>& done, std::s
 
 Status Supervisor::on_message(const std::string& peer, Result<wire::Message>& message) {
   auto it = actors_.find(peer);
-  // An actor's heartbeat thread speaks under NAME#heartbeat; it says nothing but HEARTBEAT.
-  static const std::string kBeat = "#heartbeat";
-  if (it == actors_.end() && peer.size() > kBeat.size() && peer.compare(peer.size() - kBeat.size(), kBeat.size(), kBeat) == 0) {
-    auto owner = actors_.find(peer.substr(0, peer.size() - kBeat.size()));
+  // An actor's heartbeat thread speaks under its own routing id; it says nothing but HEARTBEAT.
+  if (const auto beats_for = it == actors_.end() ? heartbeat_owner(peer) : std::nullopt) {
+    auto owner = actors_.find(*beats_for);
     if (owner != actors_.end() && message && message->header.type == MsgType::heartbeat) {
       if (!owner->second.lost) owner->second.last_seen = Clock::now();
       return Ok{};

@@ -9,8 +9,7 @@ namespace lf {
 using Clock = std::chrono::steady_clock;
 
 TileService::TileService(const ImageSpec& image, std::vector<std::string> renderers, bool terminal, bool quiet)
-    : image_(image),
-      renderers_(std::move(renderers)),
+    : renderers_(std::move(renderers)),
       master_(image.width, image.height, image.tile),
       progress_(terminal, quiet, master_.total(), static_cast<uint64_t>(image.tile) * image.tile * image.spp) {}
 

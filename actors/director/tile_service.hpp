@@ -39,7 +39,6 @@ class TileService final : public Service {
  private:
   void serve_waiting(Outbox& out);
 
-  ImageSpec image_;
   std::vector<std::string> renderers_;
   RenderMaster master_;
   Progress progress_;

@@ -75,7 +75,16 @@ Runtime::Runtime(ActorArgs args)
   }
 }
 
-std::string heartbeat_identity(const std::string& actor) { return actor + "#heartbeat"; }
+namespace {
+constexpr std::string_view kHeartbeatSuffix = "#heartbeat";
+}
+
+std::string heartbeat_identity(const std::string& actor) { return actor + std::string(kHeartbeatSuffix); }
+
+std::optional<std::string> heartbeat_owner(const std::string& identity) {
+  if (identity.size() <= kHeartbeatSuffix.size() || !identity.ends_with(kHeartbeatSuffix)) return std::nullopt;
+  return identity.substr(0, identity.size() - kHeartbeatSuffix.size());
+}
 
 void Runtime::start_heartbeats() {
   heartbeat_thread_ = std::thread([this] {
@@ -320,7 +329,7 @@ int Runtime::run(Actor& actor) {
     if (long due = actor.next_due_ms(); due >= 0) timeout = std::min(timeout, due);
     const auto& ready = poller.wait(timeout);
 
-    (void)ready[0];  // the control socket is drained every turn, readable or not: see below
+    // The control socket is drained every turn, readable or not: see the silence check below.
     while (auto in = control_.receive()) {
       if (!in->message) {
         log_warn("bad message from the director: " + in->message.error().message);

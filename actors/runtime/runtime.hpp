@@ -147,8 +147,10 @@ class Runtime {
 // environment, where other users of the host could read them.
 Result<wire::FarmKeys> read_farm_keys_from_stdin();
 
-// The routing id an actor's heartbeat thread uses towards the director.
+// The routing id an actor's heartbeat thread uses towards the director, and back: the actor a routing id beats for
+// (nullopt for any other id).
 std::string heartbeat_identity(const std::string& actor);
+std::optional<std::string> heartbeat_owner(const std::string& identity);
 
 // Installs SIGINT/SIGTERM handlers that make poll loops stop; returns true once a signal has arrived.
 void install_stop_signals();
