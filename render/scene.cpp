@@ -1,7 +1,7 @@
 // The scene structure: triangles, materials, lights and the light distribution. Built-in scenes are in
 // builtin_scenes.cpp, OBJ/MTL loading in obj_scene.cpp, the lights a script adds in script_lights.cpp.
 #include "render/scene.hpp"
-#include "render/scene_file.hpp"
+#include "render/scene_image.hpp"
 
 #include <algorithm>
 #include <filesystem>
@@ -26,6 +26,16 @@ void Scene::add_triangle(Vec3 a, Vec3 b, Vec3 c, uint32_t material) {
   material_of_.push_back(material);
   normals_.push_back(n / len);
   areas_.push_back(0.5f * len);
+  view_owned_arrays();
+}
+
+void Scene::view_owned_arrays() {
+  vertex_view_ = vertices_;
+  triangle_view_ = triangles_;
+  material_view_ = material_of_;
+  normal_view_ = normals_;
+  area_view_ = areas_;
+  light_pdf_view_ = triangle_light_pdf_;
 }
 
 void Scene::add_sphere(Vec3 center, float radius, int subdivisions, uint32_t material) {
@@ -102,6 +112,7 @@ Status Scene::finalize(const std::string& what) {
   emitter_cdf_.back() = 1.0f;
   triangle_light_pdf_.assign(triangles_.size(), 0.0f);
   for (size_t i = 0; i < emitters_.size(); ++i) triangle_light_pdf_[emitters_[i]] = emitter_pdf_[i];
+  view_owned_arrays();
   return Ok{};
 }
 
@@ -115,7 +126,7 @@ size_t Scene::pick_emitter(float u, float& probability) const {
 Result<Scene> Scene::load(const SceneSpec& spec) {
   const bool file = !spec.file.empty();
   if (!spec.cache.empty())
-    return load_cached_scene(spec.cache, spec.hash, file ? "scene file '" + spec.file + "'" : "the shipped scene");
+    return load_shared_scene(spec.cache, spec.hash, file ? "scene file '" + spec.file + "'" : "the shipped scene");
   auto s = file ? load_obj_unlit(spec.file) : builtin_unlit(spec.builtin.empty() ? "cornell" : spec.builtin);
   if (!s) return s;
   if (auto st = s->add_script_lights(spec.lights); !st) return st.error();

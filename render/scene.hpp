@@ -3,6 +3,8 @@
 // an OBJ+MTL file via tinyobjloader (obj_scene.cpp), plus the lights a script adds (script_lights.cpp).
 #include <array>
 #include <cstdint>
+#include <memory>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -42,6 +44,13 @@ struct PointLight {
 
 class Scene {
  public:
+  Scene() = default;
+  // Moving keeps the per-triangle views valid (a vector's move keeps its buffer); a copy would not, so none.
+  Scene(Scene&&) = default;
+  Scene& operator=(Scene&&) = default;
+  Scene(const Scene&) = delete;
+  Scene& operator=(const Scene&) = delete;
+
   uint32_t add_material(Material m);
   // Adds a planar quad a-b-c-d as two triangles; its front (emitting) side is the one (b-a)x(c-a) points to.
   void add_quad(Vec3 a, Vec3 b, Vec3 c, Vec3 d, uint32_t material);
@@ -54,15 +63,18 @@ class Scene {
   // Builds the light distribution. An error if the scene has no triangles or no light.
   Status finalize(const std::string& what);
 
-  size_t triangle_count() const { return material_of_.size(); }
-  const std::vector<Vec3>& vertices() const { return vertices_; }
-  const std::vector<std::array<uint32_t, 3>>& triangles() const { return triangles_; }
+  size_t triangle_count() const { return material_view_.size(); }
+  std::span<const Vec3> vertices() const { return vertex_view_; }
+  std::span<const std::array<uint32_t, 3>> triangles() const { return triangle_view_; }
   const Material& material(uint32_t id) const { return materials_[id]; }
   const std::vector<Material>& materials() const { return materials_; }
-  uint32_t material_of(uint32_t triangle) const { return material_of_[triangle]; }
-  Vec3 vertex(uint32_t triangle, int corner) const { return vertices_[triangles_[triangle][corner]]; }
-  Vec3 normal(uint32_t triangle) const { return normals_[triangle]; }  // unit, from the winding
-  float area(uint32_t triangle) const { return areas_[triangle]; }
+  uint32_t material_of(uint32_t triangle) const { return material_view_[triangle]; }
+  Vec3 vertex(uint32_t triangle, int corner) const { return vertex_view_[triangle_view_[triangle][corner]]; }
+  Vec3 normal(uint32_t triangle) const { return normal_view_[triangle]; }  // unit, from the winding
+  float area(uint32_t triangle) const { return area_view_[triangle]; }
+  // True when the per-triangle arrays live in a memory-mapped scene image that other processes on this host
+  // share (render/scene_image.hpp); the vertex array is then padded for Embree's 16-byte loads.
+  bool shares_storage() const { return storage_ != nullptr; }
 
   // Lights: emitter triangles, then point lights, chosen with probability proportional to emitted flux.
   const std::vector<uint32_t>& emitters() const { return emitters_; }
@@ -70,7 +82,7 @@ class Scene {
   // Picks a light for u in [0,1); an index below emitters().size() is a triangle, above it a point light.
   size_t pick_emitter(float u, float& probability) const;
   // Probability that pick_emitter chooses triangle t (0 for non-emitters).
-  float emitter_probability_of_triangle(uint32_t t) const { return triangle_light_pdf_[t]; }
+  float emitter_probability_of_triangle(uint32_t t) const { return light_pdf_view_[t]; }
 
   // The box around every vertex (after finalize()).
   const Bounds& bounds() const { return bounds_; }
@@ -86,6 +98,11 @@ class Scene {
   static const std::vector<std::string>& builtin_names();
 
  private:
+  friend class SceneImage;
+  // Points the per-triangle views at the vectors below (a scene being built, or loaded the ordinary way).
+  void view_owned_arrays();
+
+  // Per-triangle arrays while building; a mapped scene leaves them empty and views its image instead.
   std::vector<Vec3> vertices_;
   std::vector<std::array<uint32_t, 3>> triangles_;
   std::vector<uint32_t> material_of_;
@@ -97,6 +114,13 @@ class Scene {
   std::vector<float> emitter_cdf_;
   std::vector<float> emitter_pdf_;
   std::vector<float> triangle_light_pdf_;
+  std::span<const Vec3> vertex_view_;
+  std::span<const std::array<uint32_t, 3>> triangle_view_;
+  std::span<const uint32_t> material_view_;
+  std::span<const Vec3> normal_view_;
+  std::span<const float> area_view_;
+  std::span<const float> light_pdf_view_;
+  std::shared_ptr<const void> storage_;  // the mapping the views point into, when mapped
   Bounds bounds_;
   float epsilon_ = 1e-4f;
 };

@@ -7,87 +7,40 @@
 
 #include <cstring>
 
+#include "render/byte_io.hpp"
+
 namespace lf {
 
 namespace {
 
 constexpr std::string_view kMagic = "LFSCENE1";
-
-void put_u32(std::string& out, uint32_t v) {
-  char b[4];
-  std::memcpy(b, &v, 4);
-  out.append(b, 4);
-}
-void put_f32(std::string& out, float v) {
-  char b[4];
-  std::memcpy(b, &v, 4);
-  out.append(b, 4);
-}
-void put_rgb(std::string& out, const RGB& c) {
-  put_f32(out, c.x);
-  put_f32(out, c.y);
-  put_f32(out, c.z);
-}
-
-// Reads from a byte range, failing (not throwing) on a short read.
-class Reader {
- public:
-  explicit Reader(std::string_view bytes) : bytes_(bytes) {}
-  bool u32(uint32_t& v) { return take(&v, 4); }
-  bool f32(float& v) { return take(&v, 4); }
-  bool u8(uint8_t& v) { return take(&v, 1); }
-  bool vec(Vec3& v) { return f32(v.x) && f32(v.y) && f32(v.z); }
-  bool str(std::string& s, uint32_t n) {
-    if (bytes_.size() - at_ < n) return false;
-    s.assign(bytes_.substr(at_, n));
-    at_ += n;
-    return true;
-  }
-  // Whether n items of `size` bytes can still be read (so a hostile count cannot make us allocate).
-  bool room(uint64_t n, size_t size) const { return n <= (bytes_.size() - at_) / size; }
-  bool done() const { return at_ == bytes_.size(); }
-
- private:
-  bool take(void* out, size_t n) {
-    if (bytes_.size() - at_ < n) return false;
-    std::memcpy(out, bytes_.data() + at_, n);
-    at_ += n;
-    return true;
-  }
-  std::string_view bytes_;
-  size_t at_ = 0;
-};
+using bytes::put;
+using bytes::put_rgb;
+using bytes::Reader;
+using bytes::put_material;
+using bytes::read_material;
 
 }  // namespace
 
 std::string scene_to_bytes(const Scene& scene) {
   std::string out(kMagic);
-  put_u32(out, static_cast<uint32_t>(scene.materials().size()));
-  for (const Material& m : scene.materials()) {
-    put_u32(out, static_cast<uint32_t>(m.name.size()));
-    out += m.name;
-    put_rgb(out, m.kd);
-    put_rgb(out, m.ke);
-    put_rgb(out, m.ks);
-    put_f32(out, m.ns);
-    put_f32(out, m.ior);
-    out.push_back(static_cast<char>(m.type));
-  }
+  put<uint32_t>(out, static_cast<uint32_t>(scene.materials().size()));
+  for (const Material& m : scene.materials()) put_material(out, m);
   const auto n = static_cast<uint32_t>(scene.triangle_count());
-  put_u32(out, n);
+  put<uint32_t>(out, n);
   for (uint32_t t = 0; t < n; ++t)
     for (int c = 0; c < 3; ++c) {
       const Vec3 v = scene.vertex(t, c);
-      put_f32(out, v.x);
-      put_f32(out, v.y);
-      put_f32(out, v.z);
+      put<float>(out, v.x);
+      put<float>(out, v.y);
+      put<float>(out, v.z);
     }
-  for (uint32_t t = 0; t < n; ++t) put_u32(out, scene.material_of(t));
-  put_u32(out, static_cast<uint32_t>(scene.point_lights().size()));
+  for (uint32_t t = 0; t < n; ++t) put<uint32_t>(out, scene.material_of(t));
+  put<uint32_t>(out, static_cast<uint32_t>(scene.point_lights().size()));
   for (const PointLight& p : scene.point_lights()) {
-    put_f32(out, p.position.x);
-    put_f32(out, p.position.y);
-    put_f32(out, p.position.z);
+    put<float>(out, p.position.x);
+    put<float>(out, p.position.y);
+    put<float>(out, p.position.z);
     put_rgb(out, p.intensity);
   }
   return out;
@@ -102,12 +55,7 @@ Result<Scene> scene_from_bytes(std::string_view bytes, const std::string& what) 
   if (!r.u32(materials) || !r.room(materials, 50)) return bad();
   for (uint32_t i = 0; i < materials; ++i) {
     Material m;
-    uint32_t len = 0;
-    uint8_t type = 0;
-    if (!r.u32(len) || !r.str(m.name, len)) return bad();
-    if (!r.vec(m.kd) || !r.vec(m.ke) || !r.vec(m.ks) || !r.f32(m.ns) || !r.f32(m.ior) || !r.u8(type) || type > 3)
-      return bad();
-    m.type = static_cast<Material::Type>(type);
+    if (!read_material(r, m)) return bad();
     s.add_material(std::move(m));
   }
   uint32_t n = 0;

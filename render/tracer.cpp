@@ -1,6 +1,7 @@
 #include "render/tracer.hpp"
 
 #include <embree3/rtcore.h>
+#include <malloc.h>
 
 #include <stdexcept>
 #include <string>
@@ -23,22 +24,33 @@ RayTracer::RayTracer(const Scene& scene) : impl_(std::make_unique<Impl>()), scen
   if (!impl_->device) throw std::runtime_error("Embree: cannot create a device");
   impl_->scene = rtcNewScene(impl_->device);
   RTCGeometry geom = rtcNewGeometry(impl_->device, RTC_GEOMETRY_TYPE_TRIANGLE);
-  auto* vb = static_cast<float*>(rtcSetNewGeometryBuffer(geom, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3,
-                                                         3 * sizeof(float), scene.vertices().size()));
-  for (size_t i = 0; i < scene.vertices().size(); ++i) {
-    vb[3 * i] = scene.vertices()[i].x;
-    vb[3 * i + 1] = scene.vertices()[i].y;
-    vb[3 * i + 2] = scene.vertices()[i].z;
+  if (scene.shares_storage()) {
+    // The scene image is mapped by every actor of this host; Embree reads it in place (padded for its loads).
+    rtcSetSharedGeometryBuffer(geom, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, scene.vertices().data(), 0,
+                               sizeof(Vec3), scene.vertices().size());
+    rtcSetSharedGeometryBuffer(geom, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, scene.triangles().data(), 0,
+                               3 * sizeof(unsigned), scene.triangles().size());
+  } else {
+    auto* vb = static_cast<float*>(rtcSetNewGeometryBuffer(geom, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3,
+                                                           3 * sizeof(float), scene.vertices().size()));
+    for (size_t i = 0; i < scene.vertices().size(); ++i) {
+      vb[3 * i] = scene.vertices()[i].x;
+      vb[3 * i + 1] = scene.vertices()[i].y;
+      vb[3 * i + 2] = scene.vertices()[i].z;
+    }
+    auto* ib = static_cast<unsigned*>(rtcSetNewGeometryBuffer(geom, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3,
+                                                              3 * sizeof(unsigned), scene.triangles().size()));
+    for (size_t i = 0; i < scene.triangles().size(); ++i)
+      for (int c = 0; c < 3; ++c) ib[3 * i + c] = scene.triangles()[i][c];
   }
-  auto* ib = static_cast<unsigned*>(rtcSetNewGeometryBuffer(geom, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3,
-                                                            3 * sizeof(unsigned), scene.triangles().size()));
-  for (size_t i = 0; i < scene.triangles().size(); ++i)
-    for (int c = 0; c < 3; ++c) ib[3 * i + c] = scene.triangles()[i][c];
   rtcCommitGeometry(geom);
   rtcAttachGeometry(impl_->scene, geom);
   rtcReleaseGeometry(geom);
   rtcCommitScene(impl_->scene);
   if (rtcGetDeviceError(impl_->device) != RTC_ERROR_NONE) throw std::runtime_error("Embree: cannot build the scene");
+  // The build's temporaries (half again the BVH's size) stay in the heap after they are freed; give them back,
+  // since every actor of a host holds its own BVH.
+  ::malloc_trim(0);
 }
 
 RayTracer::~RayTracer() = default;

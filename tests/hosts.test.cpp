@@ -273,15 +273,20 @@ TEST_F(HostsTest, TheSceneTravelsOncePerHostAndIsThenReusedFromItsCache) {
     ASSERT_TRUE(img.ok());
     EXPECT_TRUE(same_pixels(expected, *img));
   }
-  // Each host keeps its own copy, named by the content hash.
+  // Each host keeps its own copy, named by the content hash, and the image its actors made of it and share; no
+  // temporary is left.
   for (int i = 1; i <= 3; ++i) {
-    size_t files = 0;
+    std::vector<std::string> names;
     for (const auto& f : fs::directory_iterator(rig + "/cache-h" + std::to_string(i) + "/scenes")) {
-      ++files;
-      EXPECT_EQ(static_cast<int64_t>(fs::file_size(f.path())), size);
-      EXPECT_EQ(f.path().extension(), ".lfscene");
+      names.push_back(f.path().filename().string());
+      if (f.path().extension() == ".lfscene") EXPECT_EQ(static_cast<int64_t>(fs::file_size(f.path())), size);
     }
-    EXPECT_EQ(files, 1u);
+    std::sort(names.begin(), names.end());
+    ASSERT_EQ(names.size(), 3u) << "host h" << i;
+    const std::string stem = names[0];
+    EXPECT_EQ(fs::path(stem).extension(), ".lfscene");
+    EXPECT_EQ(names[1], stem + ".image");
+    EXPECT_EQ(names[2], stem + ".lock");
   }
 }
 

@@ -1,8 +1,11 @@
 #include "actors/runtime/runtime.hpp"
 
+#include <time.h>
 #include <unistd.h>
 
 #include <cerrno>
+#include <fstream>
+#include <sstream>
 #include <filesystem>
 #include <csignal>
 
@@ -46,8 +49,44 @@ Result<wire::FarmKeys> read_farm_keys_from_stdin() {
 }
 int stop_signal() { return g_stop_signal; }
 
+namespace {
+// Seconds since this process was exec'd (its start time in /proc, 10 ms resolution); 0 where unknown.
+double seconds_since_process_start() {
+  std::ifstream in("/proc/self/stat");
+  std::string stat((std::istreambuf_iterator<char>(in)), {});
+  const auto close = stat.rfind(')');  // the command name may hold spaces; fields resume after it
+  if (close == std::string::npos) return 0;
+  std::istringstream fields(stat.substr(close + 2));
+  std::string field;
+  for (int i = 3; i < 22 && fields >> field; ++i) {
+  }
+  unsigned long long start_ticks = 0;
+  if (!(fields >> start_ticks)) return 0;
+  timespec now {};
+  ::clock_gettime(CLOCK_BOOTTIME, &now);
+  return static_cast<double>(now.tv_sec) + now.tv_nsec * 1e-9 -
+         static_cast<double>(start_ticks) / static_cast<double>(::sysconf(_SC_CLK_TCK));
+}
+
+// This process's proportional set size: pages shared with other processes (a mapped scene image, libraries)
+// count by their share, so the sum over a host's actors is what the farm takes there. 0 where unknown.
+uint64_t proportional_set_bytes() {
+  std::ifstream in("/proc/self/smaps_rollup");
+  std::string key;
+  uint64_t kb = 0;
+  while (in >> key) {
+    if (key == "Pss:" && in >> kb) return kb * 1024;
+    in.ignore(1 << 20, '\n');
+  }
+  return 0;
+}
+}  // namespace
+
 Value ActorStats::to_value(const wire::SocketCounters& t) const {
   return Value::Map{{"requests", requests},
+                    {"start_seconds", start_seconds},
+                    {"configure_seconds", configure_seconds},
+                    {"memory_pss_bytes", proportional_set_bytes()},
                     {"points", points},
                     {"tiles", tiles},
                     {"busy_seconds", busy_seconds},
@@ -207,6 +246,8 @@ void Runtime::handle_control(wire::Message& m, Actor& actor) {
       Status st = actor.configure(*config, *this);
       add_busy(started);
       if (!st) return fail(st.error().message);
+      stats_.configure_seconds = std::chrono::duration<double>(Clock::now() - started).count();
+      stats_.start_seconds = seconds_since_process_start();
       phase_done(wire::Phase::configure);
       return;
     }

@@ -44,6 +44,8 @@ struct ActorStats {
   uint64_t tiles = 0;         // renderers only
   double busy_seconds = 0;    // time inside handlers
   uint32_t peak_queue = 0;    // longest request queue seen
+  double start_seconds = 0;      // from the process's start (exec) to READY configure
+  double configure_seconds = 0;  // CONFIG to READY configure: loading the scene, building the BVH
   Value to_value(const wire::SocketCounters& totals) const;
 };
 

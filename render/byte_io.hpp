@@ -1,0 +1,75 @@
+#pragma once
+// Little helpers for the scene's binary forms (scene_file, scene_image): append plain values to a byte string,
+// and read them back from a byte range without ever reading past its end.
+#include <cstdint>
+#include <cstring>
+#include <string>
+#include <string_view>
+
+#include "render/scene.hpp"
+
+namespace lf::bytes {
+
+template <class T>
+void put(std::string& out, const T& v) {
+  char b[sizeof(T)];
+  std::memcpy(b, &v, sizeof(T));
+  out.append(b, sizeof(T));
+}
+inline void put_rgb(std::string& out, const RGB& c) {
+  put(out, c.x);
+  put(out, c.y);
+  put(out, c.z);
+}
+
+// Reads from a byte range, failing (not throwing) on a short read.
+class Reader {
+ public:
+  explicit Reader(std::string_view bytes) : bytes_(bytes) {}
+  bool u32(uint32_t& v) { return take(&v, 4); }
+  bool f32(float& v) { return take(&v, 4); }
+  bool u8(uint8_t& v) { return take(&v, 1); }
+  bool vec(Vec3& v) { return f32(v.x) && f32(v.y) && f32(v.z); }
+  bool str(std::string& s, uint32_t n) {
+    if (bytes_.size() - at_ < n) return false;
+    s.assign(bytes_.substr(at_, n));
+    at_ += n;
+    return true;
+  }
+  // Whether n items of `size` bytes can still be read (so a hostile count cannot make us allocate).
+  bool room(uint64_t n, size_t size) const { return n <= (bytes_.size() - at_) / size; }
+  bool done() const { return at_ == bytes_.size(); }
+
+ private:
+  bool take(void* out, size_t n) {
+    if (bytes_.size() - at_ < n) return false;
+    std::memcpy(out, bytes_.data() + at_, n);
+    at_ += n;
+    return true;
+  }
+  std::string_view bytes_;
+  size_t at_ = 0;
+};
+
+// A material as both binary forms store it: u32 name length, name, f32 kd[3] ke[3] ks[3], f32 ns, f32 ior, u8 type.
+inline void put_material(std::string& out, const Material& m) {
+  put(out, static_cast<uint32_t>(m.name.size()));
+  out += m.name;
+  put_rgb(out, m.kd);
+  put_rgb(out, m.ke);
+  put_rgb(out, m.ks);
+  put(out, m.ns);
+  put(out, m.ior);
+  out.push_back(static_cast<char>(m.type));
+}
+inline bool read_material(Reader& r, Material& m) {
+  uint32_t len = 0;
+  uint8_t type = 0;
+  if (!r.u32(len) || !r.str(m.name, len)) return false;
+  if (!r.vec(m.kd) || !r.vec(m.ke) || !r.vec(m.ks) || !r.f32(m.ns) || !r.f32(m.ior) || !r.u8(type) || type > 3)
+    return false;
+  m.type = static_cast<Material::Type>(type);
+  return true;
+}
+
+}  // namespace lf::bytes
