@@ -198,6 +198,37 @@ TEST_F(HostsTest, AHostLostMidFrameChangesNoPixel) {
   }
 }
 
+// The director SIGKILLed mid-frame with actors on three hosts: the lifelines end the remote actors, ssh's master
+// connections expire (ControlPersist), and the next farm sweeps the folders the dead director could not remove.
+TEST_F(HostsTest, AKilledDirectorLeavesNothingOnAnyHost) {
+  const auto [local, spread] = pool_scripts("scene { builtin = \"cornell\" }\n"
+                                           "image { width = 96, height = 96, spp = 1024, tile = 16 }\n"
+                                           "farm { heartbeat_timeout = 2 }\n",
+                                           "{ h2, h3 }");
+  Farm farm({"run", spread, "--output", path("killed.exr")});
+  ASSERT_TRUE(Farm::eventually([&] { return farm.err_so_far().find("render 10%") != std::string::npos; }, 60.0))
+      << farm.err_so_far();
+  const std::string control_dirs = "/tmp/lightfarm-ssh-" + std::to_string(farm.pid()) + "-";
+  auto left_dirs = [&] {
+    size_t n = 0;
+    for (const auto& e : fs::directory_iterator("/tmp")) n += e.path().string().rfind(control_dirs, 0) == 0;
+    return n;
+  };
+  EXPECT_EQ(left_dirs(), 3u);  // one per host
+  ::kill(farm.pid(), SIGKILL);
+  auto r = farm.wait(10);
+  EXPECT_EQ(r.status, 128 + SIGKILL);
+  // Remote actors go within their lifeline's 2 s; the masters after ControlPersist (5 s) once their sessions end.
+  auto left = wait_no_leftovers(r.tag, 15.0);
+  EXPECT_TRUE(left.empty()) << left.size() << " processes of the farm left here, e.g. "
+                            << read_file("/proc/" + std::to_string(left.empty() ? 0 : left[0]) + "/cmdline");
+  expect_nothing_left(r);
+  EXPECT_FALSE(fs::exists(path("killed.exr")));
+  // The next farm here starts by sweeping the dead director's control folder.
+  render(local, {}, "after.exr");
+  EXPECT_EQ(left_dirs(), 0u);
+}
+
 }  // namespace
 }  // namespace lf::test
 

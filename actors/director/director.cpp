@@ -23,6 +23,7 @@
 #include "actors/runtime/actor_config.hpp"
 #include "actors/runtime/runtime.hpp"
 #include "core/log.hpp"
+#include "core/private_dir.hpp"
 #include "render/image.hpp"
 #include "render/scene.hpp"
 #include "render/scene_file.hpp"
@@ -400,6 +401,11 @@ class Director final : public ControlOut, public Outbox {
 
 }  // namespace
 
-int run_farm(const FarmSpec& spec, const RunOptions& options) { return Director(spec, options).run(); }
+int run_farm(const FarmSpec& spec, const RunOptions& options) {
+  // Folders an earlier director or actor here could not remove (it was SIGKILLed) go before this farm starts.
+  sweep_stale_private_dirs("ssh");
+  sweep_stale_private_dirs("actor");
+  return Director(spec, options).run();
+}
 
 }  // namespace lf

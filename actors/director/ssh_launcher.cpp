@@ -1,5 +1,6 @@
 #include "actors/director/ssh_launcher.hpp"
 #include "actors/director/remote_shell.hpp"
+#include "core/private_dir.hpp"
 
 #include <fcntl.h>
 #include <signal.h>
@@ -16,8 +17,7 @@ namespace lf {
 
 SshLauncher::SshLauncher(HostSpec host) : host_(std::move(host)) {
   lightfarm_ = host_.lightfarm.empty() ? self_executable() : host_.lightfarm;
-  char dir[] = "/tmp/lightfarm-ssh-XXXXXX";
-  if (::mkdtemp(dir)) control_dir_ = dir;
+  control_dir_ = make_private_dir("ssh");
 }
 
 SshLauncher::~SshLauncher() {
@@ -34,7 +34,7 @@ std::vector<std::string> SshLauncher::ssh_command() const {
   std::vector<std::string> argv{"ssh"};
   if (!host_.ssh_config.empty()) argv.insert(argv.end(), {"-F", host_.ssh_config});
   if (host_.port > 0) argv.insert(argv.end(), {"-p", std::to_string(host_.port)});
-  for (const char* option : {"BatchMode=yes", "ConnectTimeout=5", "ControlMaster=auto", "ControlPersist=10",
+  for (const char* option : {"BatchMode=yes", "ConnectTimeout=5", "ControlMaster=auto", "ControlPersist=5",
                              "ServerAliveInterval=5", "ServerAliveCountMax=3"})
     argv.insert(argv.end(), {"-o", option});
   argv.insert(argv.end(), {"-o", "ControlPath=" + control_dir_ + "/%C", "-T", target()});

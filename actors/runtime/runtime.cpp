@@ -11,6 +11,7 @@
 
 #include "actors/runtime/hello.hpp"
 #include "core/log.hpp"
+#include "core/private_dir.hpp"
 
 namespace lf {
 
@@ -326,9 +327,10 @@ int Runtime::run(Actor& actor) {
   }
   data_endpoint_ = *endpoint;
   if (args_.keys) {
-    char dir[] = "/tmp/lightfarm-actor-XXXXXX";  // mkdtemp: mode 0700
-    if (::mkdtemp(dir)) {
-      local_dir_ = dir;
+    // What actors of this host SIGKILLed earlier left behind goes first.
+    sweep_stale_private_dirs("actor");
+    local_dir_ = make_private_dir("actor");
+    if (!local_dir_.empty()) {
       local_ = std::make_unique<wire::Socket>(wire::Socket::Kind::router);
       auto bound = local_->bind("ipc://" + local_dir_ + "/data");
       if (bound) {
