@@ -3,6 +3,7 @@
 // bench-hosts.json:
 //   launch to first tile, 12 actors (8 replicas, 3 renderers, the multiplexer) over 3 ssh hosts, over a Slurm
 //   allocation of the same 3 hosts (job steps), and all local
+//   starting 12 and 48 processes in that allocation as one job step each (SlurmLauncher's way) vs one step per node
 //   the same 12 actors on Lost Empire (225k triangles, shipped once, then cached), over ssh and local
 //   render throughput of the pool network (2 renderers + 3 direct replicas) across 3 ssh hosts vs all local
 //   render throughput with CURVE vs security = "none", on one machine (same-host links are IPC either way)
@@ -42,6 +43,20 @@ double first_tile_in_allocation(const std::string& script, int nodes) {
   std::stringstream text;
   text << in.rdbuf();
   return bench::json_number(text.str(), "first_tile_seconds");
+}
+
+// Seconds to start `processes` processes over the allocation's 3 nodes as one job step each and as one step per
+// node (bench/slurm_steps.sh), or {-1, -1} if it failed.
+std::pair<double, double> step_launch(int processes) {
+  const std::string out = g_rig + "/steps.txt";
+  const std::string cmd = "SLURM_CONF=" + g_rig + "/slurm.conf salloc --quiet -N 3 " + LIGHTFARM_SOURCE_DIR +
+                          "/bench/slurm_steps.sh " + std::to_string(processes) + " > " + out;
+  if (std::system(cmd.c_str()) != 0) return {-1, -1};
+  std::ifstream in(out);
+  std::string a, b;
+  double per_actor = -1, per_node = -1;
+  in >> a >> per_actor >> b >> per_node;
+  return {per_actor, per_node};
 }
 
 struct Spread {
@@ -121,7 +136,15 @@ int main(int argc, char** argv) {
     // Interleaved, so that a noisy moment hits both sides of a ratio.
     v["first_tile_remote"].push_back(bench::run_farm(launch_remote, {}).number("first_tile_seconds"));
     v["first_tile_local"].push_back(bench::run_farm(launch_local, {}).number("first_tile_seconds"));
-    if (slurm) v["first_tile_slurm"].push_back(first_tile_in_allocation(launch_slurm, 3));
+    if (slurm) {
+      v["first_tile_slurm"].push_back(first_tile_in_allocation(launch_slurm, 3));
+      for (int processes : {12, 48}) {
+        const auto [per_actor, per_node] = step_launch(processes);
+        const std::string n = std::to_string(processes);
+        v["slurm_start_" + n + "_as_steps_per_actor"].push_back(per_actor);
+        v["slurm_start_" + n + "_as_one_step_per_node"].push_back(per_node);
+      }
+    }
     if (have_big) {
       v["big_first_tile_remote"].push_back(bench::run_farm(big_remote, {}).number("first_tile_seconds"));
       v["big_first_tile_local"].push_back(bench::run_farm(big_local, {}).number("first_tile_seconds"));
@@ -144,7 +167,9 @@ int main(int argc, char** argv) {
               runs);
   std::printf("%-46s %9s %9s %9s\n", "figure", "min", "median", "max");
   lf::Value::Map doc;
-  for (const char* key : {"first_tile_remote", "first_tile_slurm", "first_tile_local", "big_first_tile_remote",
+  for (const char* key : {"first_tile_remote", "first_tile_slurm", "first_tile_local",
+                          "slurm_start_12_as_steps_per_actor", "slurm_start_12_as_one_step_per_node",
+                          "slurm_start_48_as_steps_per_actor", "slurm_start_48_as_one_step_per_node", "big_first_tile_remote",
                           "big_first_tile_local", "throughput_remote_over_local", "throughput_remote_over_local_none",
                           "throughput_curve_over_none", "samples_per_second_local_curve",
                           "samples_per_second_local_none"}) {
