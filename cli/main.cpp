@@ -198,9 +198,16 @@ int main(int argc, char** argv) {
     std::printf("lightfarm %s (protocol %u)\n", LIGHTFARM_VERSION, lf::wire::kProtocolVersion);
     return 0;
   }
-  if (cmd == "run") return cmd_run(argc, argv, false);
-  if (cmd == "graph") return cmd_run(argc, argv, true);
-  if (cmd == "actor") return cmd_actor(argc, argv);
-  if (cmd == "check-actor") return cmd_check_actor(argc, argv);
+  // Allocation failure anywhere is a message and exit 1, never an abort (the director and the runtime catch it
+  // where they can still stop their actors; this is the last line).
+  try {
+    if (cmd == "run") return cmd_run(argc, argv, false);
+    if (cmd == "graph") return cmd_run(argc, argv, true);
+    if (cmd == "actor") return cmd_actor(argc, argv);
+    if (cmd == "check-actor") return cmd_check_actor(argc, argv);
+  } catch (const std::bad_alloc&) {
+    std::fprintf(stderr, "lightfarm: error: out of memory\n");
+    return 1;
+  }
   return usage_error("unknown command '" + cmd + "'");
 }

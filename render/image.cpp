@@ -2,6 +2,7 @@
 
 #include <dlfcn.h>
 #include <fcntl.h>
+#include <signal.h>
 #include <unistd.h>
 
 #include <cerrno>
@@ -115,6 +116,24 @@ Status check_written(const std::string& file, const std::string& ext) {
   return result;
 }
 
+// Removes `.STEM.partial-PID.EXT` files beside `target` whose writer no longer runs (a director SIGKILLed while
+// writing cannot remove its own).
+void sweep_stale_partials(const fs::path& target) {
+  const std::string head = "." + target.stem().string() + ".partial-", ext = target.extension().string();
+  std::error_code ec;
+  const fs::path dir = target.parent_path().empty() ? fs::path(".") : target.parent_path();
+  for (fs::directory_iterator it(dir, ec), end; !ec && it != end; it.increment(ec)) {
+    const std::string name = it->path().filename().string();
+    if (name.size() <= head.size() + ext.size() || name.rfind(head, 0) != 0 || !name.ends_with(ext)) continue;
+    const std::string pid = name.substr(head.size(), name.size() - head.size() - ext.size());
+    if (pid.find_first_not_of("0123456789") != std::string::npos) continue;
+    if (::kill(static_cast<pid_t>(std::stol(pid)), 0) != 0 && errno == ESRCH) {
+      std::error_code rm;
+      fs::remove(it->path(), rm);
+    }
+  }
+}
+
 }  // namespace
 
 Status write_image(const Image& image, const std::string& path) {
@@ -123,6 +142,7 @@ Status write_image(const Image& image, const std::string& path) {
   if (!module.write) return make_error(module.error);
   const std::string ext = extension_of(path);
   fs::path target(path);
+  sweep_stale_partials(target);
   fs::path temp = target.parent_path() /
                   ("." + target.stem().string() + ".partial-" + std::to_string(::getpid()) + target.extension().string());
   const bool linear = is_float_format(ext);

@@ -1,6 +1,10 @@
 // Pools, packets and failures (issue 4): multiplexed networks render the same pixels as plain ones, and a frame
 // survives a renderer or replica killed or stopped in the middle of it — with the fault-free image, bit for bit.
 #include <gtest/gtest.h>
+#include <signal.h>
+#include <sys/wait.h>
+
+#include <thread>
 
 #include "render/image.hpp"
 #include "tests/farm_harness.hpp"
@@ -163,6 +167,90 @@ TEST_F(FailureTest, WhatAnActorStartedDiesWithTheFarm) {
     for (pid_t p : left) names += read_file("/proc/" + std::to_string(p) + "/cmdline") + "; ";
     EXPECT_TRUE(left.empty()) << (interrupt ? "after SIGTERM: " : "") << left.size() << " left: " << names;
   }
+}
+
+// The process state letter of `pid` ('T' when stopped), from /proc.
+char process_state(pid_t pid) {
+  const std::string stat = read_file("/proc/" + std::to_string(pid) + "/stat");
+  const auto close = stat.rfind(')');
+  return close == std::string::npos || close + 2 >= stat.size() ? '?' : stat[close + 2];
+}
+
+// Ctrl-Z and fg (issue 12): SIGTSTP to the director stops its actors and itself; three times the heartbeat timeout
+// later SIGCONT resumes them all, nobody is taken for dead, and the image is the one an unpaused run makes.
+TEST_F(FailureTest, CtrlZThenFgResumesTheFarm) {
+  const auto args = small(kSlowPool, {"spp=64", "slowdown=3", "heartbeat_timeout=1"});
+  Image reference = render(small(kSlowPool, {"spp=64", "heartbeat_timeout=1"}), "reference.exr");
+  auto run = args;
+  run.insert(run.end(), {"--output", path("paused.exr")});
+  Farm farm(run);
+  ASSERT_TRUE(Farm::eventually([&] { return farm.err_so_far().find("render 20%") != std::string::npos; }, 60))
+      << farm.err_so_far();
+  const auto replicas = actor_pids(farm.tag(), "direct.0");
+  ASSERT_EQ(replicas.size(), 1u);
+  ::kill(farm.pid(), SIGTSTP);
+  EXPECT_TRUE(Farm::eventually([&] { return process_state(farm.pid()) == 'T' && process_state(replicas[0]) == 'T'; }, 5))
+      << "director " << process_state(farm.pid()) << ", replica " << process_state(replicas[0]);
+  std::this_thread::sleep_for(std::chrono::seconds(3));
+  ::kill(farm.pid(), SIGCONT);
+  auto r = farm.wait(120);
+  EXPECT_EQ(r.status, 0) << r.err;
+  EXPECT_EQ(r.err.find("silent"), std::string::npos) << r.err;
+  EXPECT_TRUE(wait_no_leftovers(r.tag).empty());
+  auto img = read_image(path("paused.exr"));
+  ASSERT_TRUE(img.ok()) << r.err;
+  EXPECT_TRUE(img->pixels == reference.pixels);
+}
+
+// A director stopped from outside (SIGSTOP cannot be caught) for longer than the heartbeat timeout: its actors
+// leave, and the director says why instead of blaming the first of them.
+TEST_F(FailureTest, AStoppedDirectorSaysItWasStoppedInsteadOfBlamingAnActor) {
+  auto run = small(kSlowPool, {"spp=64", "slowdown=3", "heartbeat_timeout=1"});
+  run.insert(run.end(), {"--output", path("stopped.exr")});
+  Farm farm(run);
+  ASSERT_TRUE(Farm::eventually([&] { return farm.err_so_far().find("render 20%") != std::string::npos; }, 60))
+      << farm.err_so_far();
+  ::kill(farm.pid(), SIGSTOP);
+  std::this_thread::sleep_for(std::chrono::seconds(3));
+  ::kill(farm.pid(), SIGCONT);
+  auto r = farm.wait(60);
+  EXPECT_EQ(r.status, 1) << r.err;
+  const auto says = r.err.find("lightfarm: error: this director was stopped for ");
+  EXPECT_NE(says, std::string::npos) << r.err;
+  EXPECT_NE(r.err.find(" s, longer than heartbeat_timeout (1 s): its actors took it for dead", says), std::string::npos)
+      << r.err;
+  EXPECT_EQ(r.err.find("lost the last replica"), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(path("stopped.exr")));
+  EXPECT_TRUE(wait_no_leftovers(r.tag).empty());
+}
+
+// An image too big for the memory the farm may use is a message and exit 1, not an abort (exit 134).
+TEST_F(FailureTest, AnImageTooBigForMemoryIsAnErrorNotACrash) {
+  const std::string script = write("huge.lua", "scene { builtin = \"cornell\" }\nimage { width = 16384, height = 16384 }\n"
+                                               "renderers { count = 1, lighting = lightop \"direct\" {} }\n");
+  const std::string cmd = "ulimit -v 2000000; exec " LIGHTFARM_BINARY " run " + script + " --output " + path("huge.png") +
+                          " 2> " + path("huge.err");
+  const int rc = std::system(("bash -c '" + cmd + "'").c_str());
+  ASSERT_TRUE(WIFEXITED(rc));
+  EXPECT_EQ(WEXITSTATUS(rc), 1);
+  EXPECT_EQ(read_file(path("huge.err")),
+            "lightfarm: error: out of memory for a 16384x16384 image; nothing was rendered\n");
+  EXPECT_FALSE(fs::exists(path("huge.png")));
+}
+
+// A director SIGKILLed while writing leaves its temporary image; the next farm writing there removes it (and
+// never one whose writer still runs).
+TEST_F(FailureTest, ADeadWritersPartialImageIsRemovedByTheNextFarm) {
+  const pid_t dead = ::fork();
+  if (dead == 0) ::_exit(0);
+  ::waitpid(dead, nullptr, 0);
+  const std::string stale = path(".out.partial-" + std::to_string(dead) + ".png");
+  const std::string live = path(".out.partial-" + std::to_string(::getpid()) + ".png");
+  write(".out.partial-" + std::to_string(dead) + ".png", "half an image");
+  write(".out.partial-" + std::to_string(::getpid()) + ".png", "being written");
+  render(small(kCornell, {"width=16", "height=16", "spp=1"}), "out.png");
+  EXPECT_FALSE(fs::exists(stale));
+  EXPECT_TRUE(fs::exists(live));
 }
 
 }  // namespace

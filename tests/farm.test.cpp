@@ -179,18 +179,23 @@ TEST_F(FarmTest, MissingSceneFileIsOneClearMessage) {
   expect_no_leftovers(r);
 }
 
+// A bad command line exits 2 (README): an output that cannot be written is one, found before launching.
 TEST_F(FarmTest, UnwritableOutputStopsBeforeLaunching) {
   auto r = render_cornell("/proc/lightfarm-cannot-write-here.png");
-  EXPECT_EQ(r.status, 1);
+  EXPECT_EQ(r.status, 2);
   EXPECT_NE(r.err.find("lightfarm: error: output '/proc/lightfarm-cannot-write-here.png': directory '/proc' is not writable"),
             std::string::npos)
       << r.err;
   EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << "expected one message, got:\n" << r.err;
   auto missing_dir = render_cornell(path("no/such/dir/x.png"));
-  EXPECT_EQ(missing_dir.status, 1);
+  EXPECT_EQ(missing_dir.status, 2);
   EXPECT_NE(missing_dir.err.find("does not exist"), std::string::npos) << missing_dir.err;
+  auto device = render_cornell("/dev/full");
+  EXPECT_EQ(device.status, 2);
+  EXPECT_EQ(device.err, "lightfarm: error: output '/dev/full': unsupported image format '' (use .exr, .png or .tif)\n");
   expect_no_leftovers(r);
   expect_no_leftovers(missing_dir);
+  expect_no_leftovers(device);
 }
 
 TEST_F(FarmTest, ActorDyingDuringStartUpStopsTheFarmCleanly) {

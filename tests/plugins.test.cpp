@@ -83,7 +83,7 @@ TEST_F(PluginTest, FarmsWithBrokenActorsStopCleanlyNamingTheProblem) {
     const char* says;
   };
   for (const Case& c : {Case{"wrong_version", "lightfarm: error: actor 'broken' is an incompatible peer: protocol version 2, expected 1"},
-                        Case{"silent", "lightfarm: error: actor 'renderer-0' failed: lighting failed: no answer from 'broken' within 2 s"},
+                        Case{"silent", "lightfarm: error: actor 'renderer-0' failed: lighting failed: no answer from 'broken' within 2 s (request 1, shade, waited 2"},
                         Case{"crash", "lightfarm: error: actor 'broken' (pid "},
                         Case{"no_ready_render", "lightfarm: error: every tile is done, but 'broken' never answered PHASE "
                                                 "render with READY render"},

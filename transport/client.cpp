@@ -1,5 +1,7 @@
 #include "transport/client.hpp"
 
+#include <cmath>
+
 #include "core/log.hpp"
 
 namespace lf::wire {
@@ -33,20 +35,36 @@ void RequestClient::abandon_all() {
   queue_.clear();
 }
 
+void RequestClient::restart_deadlines() {
+  const auto now = std::chrono::steady_clock::now();
+  for (auto& [id, o] : outstanding_) o.sent = now;
+}
+
 void RequestClient::expire_overdue() {
   if (timeout_ <= 0 || outstanding_.empty()) return;
   const auto now = std::chrono::steady_clock::now();
-  std::vector<std::pair<Callback, Op>> expired;  // the op: kept for a message that names it (issue 12)
+  struct Expired {
+    Callback callback;
+    Op op;
+    uint64_t id;
+    double waited;
+  };
+  std::vector<Expired> expired;
   for (auto it = outstanding_.begin(); it != outstanding_.end();) {
-    if (std::chrono::duration<double>(now - it->second.sent).count() > timeout_) {
-      expired.emplace_back(std::move(it->second.callback), it->second.op);
+    const double waited = std::chrono::duration<double>(now - it->second.sent).count();
+    if (waited > timeout_) {
+      expired.push_back({std::move(it->second.callback), it->second.op, it->first, waited});
       it = outstanding_.erase(it);
     } else {
       ++it;
     }
   }
-  for (auto& [cb, op] : expired)
-    cb(make_error("no answer from '" + peer_name_ + "' within " + seconds_text(timeout_), ErrorCode::timeout));
+  // Which request, and how long it waited: a live peer that makes no progress must be findable from the message.
+  for (auto& e : expired)
+    e.callback(make_error("no answer from '" + peer_name_ + "' within " + seconds_text(timeout_) + " (request " +
+                              std::to_string(e.id) + ", " + std::string(op_name(e.op)) + ", waited " +
+                              seconds_text(std::round(e.waited * 10) / 10) + ")",
+                          ErrorCode::timeout));
   pump();
 }
 

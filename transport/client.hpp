@@ -38,6 +38,8 @@ class RequestClient {
   void set_timeout(double seconds) { timeout_ = seconds; }
   // Fails every request older than the timeout; call it from the poll loop.
   void expire_overdue();
+  // The whole farm was paused (Ctrl-Z): time spent stopped is nobody's fault, so outstanding requests wait anew.
+  void restart_deadlines();
 
   size_t outstanding() const { return outstanding_.size(); }
   size_t queued() const { return queue_.size(); }

@@ -58,6 +58,7 @@ void Authenticator::watch(Socket& server) {
 }
 
 void Authenticator::serve() {
+  block_signals_in_this_thread();
   zmq::socket_t zap(zmq_context(), zmq::socket_type::rep);
   zap.set(zmq::sockopt::linger, 0);
   zap.bind("inproc://zeromq.zap.01");
@@ -78,7 +79,11 @@ void Authenticator::serve() {
     }
     std::vector<zmq::pollitem_t> items{{zap.handle(), 0, ZMQ_POLLIN, 0}};
     for (auto& m : monitors) items.push_back({m.handle(), 0, ZMQ_POLLIN, 0});
-    zmq::poll(items.data(), items.size(), std::chrono::milliseconds(100));
+    try {
+      zmq::poll(items.data(), items.size(), std::chrono::milliseconds(100));
+    } catch (const zmq::error_t&) {
+      continue;  // EINTR; the loop checks stop_
+    }
     for (size_t i = 1; i < items.size(); ++i) {
       if (!(items[i].revents & ZMQ_POLLIN)) continue;
       // A monitor event: 6 bytes (event, value), then the socket's endpoint.

@@ -3,6 +3,8 @@
 #include <arpa/inet.h>
 #include <netdb.h>
 #include <netinet/in.h>
+#include <pthread.h>
+#include <signal.h>
 #include <sys/socket.h>
 #include <unistd.h>
 
@@ -141,6 +143,13 @@ std::optional<Incoming> Socket::receive() {
   }
   in.message = decode(frames[first].to_string_view(), frames[first + 1].to_string_view());
   return in;
+}
+
+void block_signals_in_this_thread() {
+  sigset_t set;
+  sigemptyset(&set);
+  for (int sig : {SIGINT, SIGTERM, SIGHUP, SIGCONT, SIGTSTP, SIGCHLD}) sigaddset(&set, sig);
+  pthread_sigmask(SIG_BLOCK, &set, nullptr);
 }
 
 void Poller::add(Socket& s) {

@@ -65,6 +65,10 @@ class Socket {
 // host can reach us. Sends nothing.
 Result<std::string> local_address_towards(const std::string& host);
 
+// For helper threads (heartbeats, the ZAP handler): signals go to the main thread, whose loop checks its flags;
+// here they would only interrupt a poll.
+void block_signals_in_this_thread();
+
 // Waits until one of the sockets has input or the timeout passes.
 class Poller {
  public:

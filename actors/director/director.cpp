@@ -4,6 +4,8 @@
 #include <unistd.h>
 
 #include <array>
+#include <cmath>
+#include <csignal>
 #include <chrono>
 #include <cstdio>
 #include <filesystem>
@@ -80,6 +82,7 @@ class Director final : public ControlOut, public Outbox {
 
   int run() {
     install_stop_signals();
+    install_suspend_signal();
     // Orphans of actors (a daemonised grandchild) become ours, so that kill_orphans() can end them.
     ::prctl(PR_SET_CHILD_SUBREAPER, 1);
     start_ = Clock::now();
@@ -114,8 +117,18 @@ class Director final : public ControlOut, public Outbox {
       stage(Stage::finish, [&] { finish(); });
     } catch (const FarmFailure& f) {
       if (tiles_.drawing_progress()) std::fprintf(stderr, "\n");
-      log_error(f.message);
-      status = f.status;
+      if (image_written_ && f.status > 128) {
+        // The image is whole and in place: the farm's work is done, only the actors' goodbyes were cut short.
+        log_warn(f.message + " after the image was written");
+      } else {
+        log_error(f.message);
+        status = f.status;
+      }
+    } catch (const std::bad_alloc&) {
+      if (tiles_.drawing_progress()) std::fprintf(stderr, "\n");
+      log_error("out of memory (the image is " + std::to_string(spec_.image.width) + "x" +
+                std::to_string(spec_.image.height) + "); stopping the farm");
+      status = 1;
     }
     // No actor outlives the farm, whatever happened above.
     supervisor_.send_bye_to_all();
@@ -148,7 +161,8 @@ class Director final : public ControlOut, public Outbox {
   }
 
   void prepare() {
-    if (auto st = check_output_path(spec_.image.output); !st) throw FarmFailure{st.error().message};
+    // An output that cannot be written is a bad command line or script (exit 2), found before anything starts.
+    if (auto st = check_output_path(spec_.image.output); !st) throw FarmFailure{st.error().message, 2};
     // The director reads the scene once itself, so a broken scene stops the farm before anything launches.
     auto scene = Scene::load(spec_.scene);
     if (!scene) throw FarmFailure{spec_.scene.loc.str() + ": " + scene.error().message};
@@ -284,9 +298,44 @@ class Director final : public ControlOut, public Outbox {
     }
   }
   static constexpr int kReadyRenderGraceSeconds = 5;
+  Clock::time_point last_awake_ = Clock::now();  // the last time notice_outside_stop() ran
+  bool image_written_ = false;
+
+  // Stopped from outside (SIGSTOP, a debugger) and continued: for longer than the heartbeat timeout, the actors took
+  // this director for dead and are going; say so rather than blame the first of them whose exit arrives.
+  void notice_outside_stop() {
+    if (take_resumed()) {
+      const double away = seconds_since(last_awake_);
+      if (away > spec_.heartbeat_timeout)
+        throw FarmFailure{"this director was stopped for " + seconds_text(std::round(away)) +
+                          ", longer than heartbeat_timeout (" + seconds_text(spec_.heartbeat_timeout) +
+                          "): its actors took it for dead"};
+      supervisor_.forgive_silence(Clock::now());
+    }
+    last_awake_ = Clock::now();
+  }
+
+  // Ctrl-Z: stop this machine's actors, then this process; on `fg`, continue them and forgive the time spent
+  // stopped (heartbeats, and the actors' own clocks through their SIGCONT). Remote actors cannot be stopped: a
+  // pause longer than heartbeat_timeout loses them (pools recover; docs/lua-api.md).
+  void suspend_farm() {
+    const auto stopped_at = Clock::now();
+    launchers_.pause_all(true);
+    ::signal(SIGTSTP, SIG_DFL);
+    ::raise(SIGTSTP);  // stops here until SIGCONT
+    install_suspend_signal();
+    launchers_.pause_all(false);
+    take_resumed();  // that SIGCONT was this pause's
+    const double paused = seconds_since(stopped_at);
+    if (paused > spec_.heartbeat_timeout && launchers_.any_remote())
+      log_warn("the farm was suspended for " + seconds_text(std::round(paused)) +
+               "; actors on other hosts cannot be, and may have taken the director for dead");
+    supervisor_.forgive_silence(Clock::now());
+  }
 
   void finish() {
     if (auto st = write_image(tiles_.film(), spec_.image.output); !st) throw FarmFailure{st.error().message};
+    image_written_ = true;
     supervisor_.broadcast(wire::make_phase("director", Phase::finish));
     // Wait for every actor's STATS and BYE, and for its process to end.
     const auto deadline = Clock::now() + std::chrono::seconds(10);
@@ -315,9 +364,12 @@ class Director final : public ControlOut, public Outbox {
     if (stop_requested())
       throw FarmFailure{"interrupted by signal " + std::to_string(stop_signal()) + "; stopping the farm",
                         128 + stop_signal()};
+    if (take_suspend_request()) suspend_farm();
+    notice_outside_stop();
     wire::Poller poller;
     poller.add(control_);
     poller.wait(std::min<long>(timeout_ms, static_cast<long>(spec_.heartbeat_timeout * 250)));
+    notice_outside_stop();  // the stop may have come during the wait: before reading what it left behind
     while (auto in = control_.receive()) check(supervisor_.on_message(in->peer, in->message));
     while (auto exit = launchers_.reap_one()) {
       // Its last words (an ERROR with the reason, or BYE) may still be in flight: read them before judging.
@@ -405,7 +457,14 @@ int run_farm(const FarmSpec& spec, const RunOptions& options) {
   // Folders an earlier director or actor here could not remove (it was SIGKILLed) go before this farm starts.
   sweep_stale_private_dirs("ssh");
   sweep_stale_private_dirs("actor");
-  return Director(spec, options).run();
+  try {
+    return Director(spec, options).run();
+  } catch (const std::bad_alloc&) {
+    // The film is allocated before any actor starts: nothing to stop yet.
+    log_error("out of memory for a " + std::to_string(spec.image.width) + "x" + std::to_string(spec.image.height) +
+              " image; nothing was rendered");
+    return 1;
+  }
 }
 
 }  // namespace lf

@@ -58,6 +58,9 @@ class Launcher {
   virtual void kill(pid_t pid, int signal) = 0;
   // Waits up to `grace` for actors to exit, then SIGTERM, then SIGKILL; reaps them all.
   virtual void stop_all(std::chrono::milliseconds grace) = 0;
+  // Ctrl-Z: stops (`stop`) or continues every actor this launcher can pause. Remote actors cannot be (stopping
+  // their ssh client or srun would not reach them), so by default nothing happens.
+  virtual void pause_all(bool /*stop*/) {}
 };
 
 // Where this machine caches shipped scenes: $LIGHTFARM_CACHE, else $XDG_CACHE_HOME/lightfarm, else
@@ -79,6 +82,9 @@ class Launchers {
   std::optional<ExitReport> reap_one();
   void kill(pid_t pid, int signal);
   void stop_all(std::chrono::milliseconds grace);
+  void pause_all(bool stop);
+  // Whether any launcher is not this machine's (its actors keep running while the director is stopped).
+  bool any_remote() const;
 
  private:
   std::map<std::string, std::unique_ptr<Launcher>> by_host_;

@@ -126,6 +126,10 @@ void LocalLauncher::kill(pid_t pid, int signal) {
   if (children_.count(pid)) ::kill(-pid, signal);  // the whole group
 }
 
+void LocalLauncher::pause_all(bool stop) {
+  for (pid_t pid : children_) ::kill(-pid, stop ? SIGSTOP : SIGCONT);
+}
+
 std::optional<ExitReport> LocalLauncher::reap_one() {
   for (pid_t pid : children_) {
     int status = 0;
@@ -267,6 +271,16 @@ std::optional<ExitReport> Launchers::reap_one() {
 
 void Launchers::kill(pid_t pid, int signal) {
   if (auto it = owner_.find(pid); it != owner_.end()) it->second->kill(pid, signal);
+}
+
+void Launchers::pause_all(bool stop) {
+  for (auto& [host, launcher] : by_host_) launcher->pause_all(stop);
+}
+
+bool Launchers::any_remote() const {
+  for (const auto& [host, launcher] : by_host_)
+    if (launcher->name() != "local") return true;
+  return false;
 }
 
 void Launchers::stop_all(std::chrono::milliseconds grace) {

@@ -21,6 +21,7 @@ class LocalLauncher final : public Launcher {
   Result<pid_t> start(const LaunchRequest& request) override;
   std::optional<ExitReport> reap_one() override;
   void kill(pid_t pid, int signal) override;
+  void pause_all(bool stop) override;
   void stop_all(std::chrono::milliseconds grace) override;
 
  private:

@@ -80,6 +80,8 @@ class Supervisor {
   // Actors silent for longer than the heartbeat timeout: recoverable ones are killed (their exit then counts as a
   // loss), any other stops the farm.
   Status check_heartbeats(Clock::time_point now);
+  // The whole farm was paused (Ctrl-Z): nobody's silence until `now` counts.
+  void forgive_silence(Clock::time_point now);
   // HEARTBEAT to every live actor, at most 4 per timeout and 1 a second.
   void send_heartbeats(Clock::time_point now);
   // The same message to every live actor that said hello.

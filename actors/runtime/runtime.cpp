@@ -20,7 +20,11 @@ using Clock = std::chrono::steady_clock;
 
 namespace {
 volatile std::sig_atomic_t g_stop_signal = 0;
+volatile std::sig_atomic_t g_resumed = 0;
+volatile std::sig_atomic_t g_suspend_requested = 0;
 void on_signal(int sig) { g_stop_signal = sig; }
+void on_continue(int) { g_resumed = 1; }
+void on_terminal_stop(int) { g_suspend_requested = 1; }
 }  // namespace
 
 void install_stop_signals() {
@@ -31,10 +35,21 @@ void install_stop_signals() {
   sigaction(SIGINT, &sa, nullptr);
   sigaction(SIGTERM, &sa, nullptr);
   sigaction(SIGHUP, &sa, nullptr);
+  sa.sa_handler = on_continue;
+  sigaction(SIGCONT, &sa, nullptr);
   std::signal(SIGPIPE, SIG_IGN);
 }
 
+void install_suspend_signal() {
+  struct sigaction sa {};
+  sa.sa_handler = on_terminal_stop;
+  sigemptyset(&sa.sa_mask);
+  sigaction(SIGTSTP, &sa, nullptr);
+}
+
 bool stop_requested() { return g_stop_signal != 0; }
+bool take_resumed() { return g_resumed != 0 && (g_resumed = 0, true); }
+bool take_suspend_request() { return g_suspend_requested != 0 && (g_suspend_requested = 0, true); }
 
 Result<wire::FarmKeys> read_farm_keys_from_stdin() {
   std::string line;
@@ -128,6 +143,7 @@ std::optional<std::string> heartbeat_owner(const std::string& identity) {
 
 void Runtime::start_heartbeats() {
   heartbeat_thread_ = std::thread([this] {
+    wire::block_signals_in_this_thread();
     wire::Socket beat(wire::Socket::Kind::dealer, heartbeat_identity(args_.name));
     if (args_.keys) beat.make_curve_client(args_.keys->own.public_key, args_.keys->own.secret_key, args_.keys->director);
     if (!beat.connect(args_.director)) return;
@@ -381,6 +397,13 @@ int Runtime::run(Actor& actor) {
       last_from_director = Clock::now();
       handle_control(*in->message, actor);
       if (stopping_) break;
+    }
+    if (take_resumed()) {
+      // This process was stopped (the director's Ctrl-Z, or a debugger): the silence was ours, not the
+      // director's, and requests in flight waited for the same reason. Checked here, since the stop may have
+      // come anywhere in this turn.
+      last_from_director = Clock::now();
+      for (auto& in : inputs_) in->restart_deadlines();
     }
     // Judged right after reading what the director sent: a long piece of work here must not look like its silence
     // (its heartbeats wait in the queue meanwhile).

@@ -156,6 +156,11 @@ std::optional<std::string> heartbeat_owner(const std::string& identity);
 
 // Installs SIGINT/SIGTERM handlers that make poll loops stop; returns true once a signal has arrived.
 void install_stop_signals();
+// The director's Ctrl-Z: SIGTSTP only sets a flag (take_suspend_request), so that it pauses its actors first.
+void install_suspend_signal();
+// True once after a SIGCONT: this process was stopped, and time passed that nobody could account for.
+bool take_resumed();
+bool take_suspend_request();
 bool stop_requested();
 int stop_signal();
 
