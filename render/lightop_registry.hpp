@@ -18,6 +18,8 @@ struct LightOpKind {
   int max_inputs;  // -1: any number
   // Reads its parameters from the table; throws ParamError on a bad value. The caller reports unused ones.
   std::unique_ptr<LightOp> (*create)(const ParamTable& params);
+  // Replicas in a pool pool their setup (all_gather): one lost during setup takes a share nobody else has.
+  bool shares_setup = false;
 };
 
 std::span<const LightOpKind* const> lightop_kinds();

@@ -169,6 +169,23 @@ TEST_F(FailureTest, WhatAnActorStartedDiesWithTheFarm) {
   }
 }
 
+// A photon-map replica lost while the pool shoots and shares its photons: its share exists nowhere else. The
+// farm says so at once, without first claiming that the others take its work.
+TEST_F(FailureTest, APhotonReplicaLostDuringSetupIsNamedOnce) {
+  Farm farm({"run", kSource + "/examples/cornell_glass.lua", "--set", "photons=8000000", "--set", "width=64", "--set",
+             "height=64", "--set", "spp=1", "--quiet", "--output", path("glass.png")});
+  std::vector<pid_t> replica;
+  ASSERT_TRUE(Farm::eventually([&] { return !(replica = actor_pids(farm.tag(), "photonmap.1")).empty(); }, 20));
+  std::this_thread::sleep_for(std::chrono::milliseconds(600));  // configured, shooting
+  ::kill(replica[0], SIGKILL);
+  auto r = farm.wait(60);
+  EXPECT_EQ(r.status, 1) << r.err;
+  EXPECT_EQ(r.err, "lightfarm: error: replica 'photonmap.1' was killed by signal 9 (Killed) during setup; the replicas "
+                   "of 'photonmap' share their setup (photonmap), so its share cannot be redone\n");
+  EXPECT_FALSE(fs::exists(path("glass.png")));
+  EXPECT_TRUE(wait_no_leftovers(r.tag).empty());
+}
+
 // The process state letter of `pid` ('T' when stopped), from /proc.
 char process_state(pid_t pid) {
   const std::string stat = read_file("/proc/" + std::to_string(pid) + "/stat");

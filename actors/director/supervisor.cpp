@@ -8,6 +8,7 @@
 #include "actors/runtime/hello.hpp"
 #include "actors/runtime/runtime.hpp"
 #include "core/log.hpp"
+#include "render/lightop_registry.hpp"
 
 namespace lf {
 
@@ -183,6 +184,12 @@ Status Supervisor::lose(ActorRecord& a, const std::string& why) {
     any_left = any_left || !rep.lost;
     if (rep.lost) replicas += (replicas.empty() ? "" : ", ") + rep.name() + " " + rep.loss;
   }
+  // A replica whose pool shares its setup, lost before the setup is over: its share exists nowhere else. Said at
+  // once, rather than "sends its work to the others" and a failure later.
+  if (stage_ == Stage::setup)
+    if (const LightOpKind* kind = find_lightop_kind(a.spec->kind); kind && kind->shares_setup)
+      return make_error("replica '" + a.name() + "' " + why + " during setup; the replicas of '" + pool.name() +
+                        "' share their setup (" + std::string(kind->name) + "), so its share cannot be redone");
   if (!any_left) {
     if (spec_.pool_of(pool.index) >= 0 && !pool.exited) {
       // A nested pool with no replica left is itself a lost replica of the pool above.

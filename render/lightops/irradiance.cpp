@@ -183,6 +183,6 @@ class Irradiance final : public LightOp {
 
 extern const LightOpKind irradiance_kind{
     "irradiance", "Ward irradiance caching with irradiance gradients over its input's light", 1, 1,
-    [](const ParamTable& p) -> std::unique_ptr<LightOp> { return std::make_unique<Irradiance>(p); }};
+    [](const ParamTable& p) -> std::unique_ptr<LightOp> { return std::make_unique<Irradiance>(p); }, true};
 
 }  // namespace lf

@@ -274,6 +274,6 @@ class PhotonMap final : public LightOp {
 
 extern const LightOpKind photonmap_kind{
     "photonmap", "caustics from a caustic photon map (k nearest photons, cone filter)", 0, 0,
-    [](const ParamTable& p) -> std::unique_ptr<LightOp> { return std::make_unique<PhotonMap>(p); }};
+    [](const ParamTable& p) -> std::unique_ptr<LightOp> { return std::make_unique<PhotonMap>(p); }, true};
 
 }  // namespace lf
