@@ -1,0 +1,43 @@
+#!/usr/bin/env bash
+# Runs every libFuzzer target (tests/fuzz/) for RUNS executions (default 10 M) from its seed corpus and reports
+# executions, coverage (edges, features), speed and findings; writes bench-fuzz.json. Needs the fuzz build:
+#   CXX=clang++ cmake -S . -B build-fuzz -DLIGHTFARM_FUZZ=ON -DLIGHTFARM_TESTS=OFF -DLIGHTFARM_BENCH=OFF
+#   cmake --build build-fuzz -j2 --target fuzz_wire fuzz_scene_file fuzz_obj fuzz_script
+# Usage: bench/fuzz_bench.sh [RUNS] [TARGET...]
+set -euo pipefail
+cd "$(dirname "$0")/.."
+runs=${1:-10000000}
+shift || true
+targets=("$@")
+[ ${#targets[@]} -gt 0 ] || targets=(wire scene_file obj script)
+json="bench-fuzz.json"
+echo "{" > "$json"
+printf "%-12s %12s %8s %8s %10s %9s %s\n" target executions edges features exec/s seconds findings
+first=1
+for t in "${targets[@]}"; do
+  work=$(mktemp -d)
+  artifacts=$(mktemp -d)
+  start=$(date +%s)
+  set +e
+  "build-fuzz/fuzz/fuzz_$t" -runs="$runs" -timeout=10 -rss_limit_mb=2048 -print_final_stats=1 \
+    -artifact_prefix="$artifacts/" "$work" "tests/fuzz/corpus/$t" > "$work.log" 2>&1
+  rc=$?
+  set -e
+  secs=$(( $(date +%s) - start ))
+  done_line=$(grep -E "^#[0-9]+.*DONE" "$work.log" | tail -1 || true)
+  execs=$(grep -oE "stat::number_of_executed_units: [0-9]+" "$work.log" | awk '{print $2}' || echo 0)
+  edges=$(sed -nE 's/.*cov: ([0-9]+).*/\1/p' <<< "$done_line")
+  features=$(sed -nE 's/.*ft: ([0-9]+).*/\1/p' <<< "$done_line")
+  speed=$(sed -nE 's/.*exec\/s: ([0-9]+).*/\1/p' <<< "$done_line")
+  findings=$(find "$artifacts" -type f | wc -l)
+  [ "$rc" -eq 0 ] || findings=$((findings > 0 ? findings : 1))
+  printf "%-12s %12s %8s %8s %10s %9s %s\n" "$t" "${execs:-0}" "${edges:-?}" "${features:-?}" "${speed:-?}" "$secs" "$findings"
+  [ $first -eq 1 ] || echo "," >> "$json"
+  first=0
+  printf '  "%s": {"executions": %s, "edges": %s, "features": %s, "exec_per_second": %s, "seconds": %s, "findings": %s}' \
+    "$t" "${execs:-0}" "${edges:-0}" "${features:-0}" "${speed:-0}" "$secs" "$findings" >> "$json"
+  [ "$findings" -eq 0 ] || { echo "  findings in $artifacts; log $work.log"; continue; }
+  rm -rf "$work" "$work.log" "$artifacts"
+done
+printf "\n}\n" >> "$json"
+echo "wrote $json"

@@ -1,0 +1,84 @@
+// Writes the fuzz targets' seed corpora (tests/fuzz/corpus/TARGET/): one valid input of each kind each target
+// reads, so that fuzzing starts from the accepted formats rather than from nothing. Run by hand after a format
+// changes: build-fuzz/tests/fuzz/make_seeds tests/fuzz/corpus
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <string>
+
+#include "actors/codecs/ring_codec.hpp"
+#include "actors/codecs/shade_codec.hpp"
+#include "actors/runtime/actor_config.hpp"
+#include "actors/runtime/hello.hpp"
+#include "render/scene_file.hpp"
+#include "render/scene_image.hpp"
+#include "transport/message.hpp"
+
+namespace fs = std::filesystem;
+
+namespace {
+
+fs::path g_root;
+
+void seed(const std::string& target, const std::string& name, const std::string& bytes) {
+  fs::create_directories(g_root / target);
+  std::ofstream(g_root / target / name, std::ios::binary) << bytes;
+}
+
+// fuzz_wire's input: one byte saying where the header ends, the header frame, the body frame.
+void wire_seed(const std::string& name, const lf::wire::Message& m) {
+  const std::string header = lf::wire::encode_header(m.header), body = lf::wire::encode_body(m.body);
+  seed("wire", name, std::string(1, static_cast<char>(header.size())) + header + body);
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  if (argc != 2) {
+    std::fprintf(stderr, "usage: make_seeds CORPUS_DIR\n");
+    return 2;
+  }
+  g_root = argv[1];
+  using namespace lf;
+
+  ShadingPoints pts;
+  for (uint32_t i = 0; i < 3; ++i)
+    pts.push_back({0.1f * i, 1, 0}, {0, 1, 0}, {0, 0, 1}, i % 2, 1000 + i, i);
+  wire_seed("shade_request", wire::make_request("renderer-0", wire::Op::shade, encode_shade_request(pts, 0, 3), 7));
+  const std::vector<RGB> light{{1, 2, 3}, {4, 5, 6}};
+  wire_seed("shade_reply", wire::make_reply("direct", 7, encode_radiance(light), 2));
+  wire_seed("hello", wire::make(wire::MsgType::hello, "direct", my_hello("direct", "tcp://127.0.0.1:5000").to_value()));
+  ActorConfig config;
+  config.params = Value::Map{{"light_samples", int64_t{2}}};
+  config.scene.builtin = "cornell";
+  config.inputs.push_back({"photonmap", "tcp://127.0.0.1:5001", 4, ""});
+  config.pool = PoolPlace{"direct", 0, 2};
+  wire_seed("config", wire::make(wire::MsgType::config, "director", config.to_value()));
+  wire_seed("poll", wire::make_request("ring0.1", wire::Op::unknown, ring::encode_poll(radiosity::PollRequest{}), 3));
+  wire_seed("shooter_report", wire::make(wire::MsgType::reply, "ring0.0", ring::encode_shooter_report(radiosity::ShooterReport{}), 4));
+
+  auto cornell = Scene::builtin("cornell");
+  seed("scene_file", "cornell.lfscene", scene_to_bytes(*cornell));
+  seed("scene_file", "cornell.image", SceneImage::encode(*cornell, "00000000fuzz0000"));
+
+  seed("obj", "room.obj",
+       "mtllib fuzz.mtl\nv -1 0 -1\nv 1 0 -1\nv 1 0 1\nv -1 0 1\nv -1 2 -1\nv 1 2 -1\nv 1 2 1\nv -1 2 1\n"
+       "newmtl white\nKd 0.7 0.7 0.7\nnewmtl light\nKd 0.5 0.5 0.5\nKe 10 10 10\nillum 2\nNs 10\nKs 0.1 0.1 0.1\n"
+       "usemtl white\nf 1 2 3 4\nf 8 7 6 5\nusemtl light\nf 5 6 2 1\nvt 0 0\nvn 0 1 0\nf 1/1/1 2/1/1 3/1/1\n");
+
+  seed("script", "pool.lua",
+       "scene { builtin = \"cornell\" }\nimage { width = 64, height = 64, spp = param(\"spp\", 4) }\n"
+       "local d = multiplexer { lightop \"direct\" { light_samples = 2 }, replicas = 3 }\n"
+       "renderers { count = 2, lighting = d }\n");
+  seed("script", "glass.lua",
+       "scene { builtin = \"cornell_glass\" }\nlight { point = {0, 1.5, 0}, intensity = {1, 1, 1} }\n"
+       "local c = multiplexer { lightop \"photonmap\" { photons = 1000 }, replicas = 2 }\n"
+       "local s = lightop \"combine\" { inputs = { lightop \"direct\" {}, c } }\n"
+       "local h = host \"h1\" { launcher = \"ssh\", address = \"10.0.0.1\" }\n"
+       "renderers { count = 1, lighting = s }\nfarm { security = \"none\", heartbeat_timeout = 2 }\n");
+  seed("script", "radiosity.lua",
+       "scene { builtin = \"cornell\" }\nradiosity { rings = 2, nodes_per_ring = 2 }\n"
+       "renderers { count = 1, lighting = lightop \"radiosity\" {} }\n");
+  std::printf("wrote seeds under %s\n", g_root.c_str());
+  return 0;
+}
