@@ -130,3 +130,79 @@ TEST(Direct, BadParametersAreReported) {
 }
 
 }  // namespace lf
+
+namespace lf {
+
+// A closed room built as a voxel world is (Lost Empire: every block face its own pair of triangles), here with a
+// single layer of unit faces on the integer grid and a point light inside. Shadow rays from points outside must
+// never get through — not between faces sharing an edge, not at shared corners (the light on an integer position
+// sees the lattice points outside through exactly those), not through the ray offset. Points inside are lit.
+TEST(Direct, AClosedRoomOfSmallBlocksLeaksNoLight) {
+  constexpr int kOuter = 8;  // the room is the cube [0,8]^3
+  for (const Vec3 light : {Vec3{4, 4, 4}, Vec3{3.37f, 4.41f, 2.23f}}) {
+    Scene scene;
+    const uint32_t rock = scene.add_material({"rock", {0.8f, 0.8f, 0.8f}, {}});
+    // Unit quads on a plane, wound to face `facing` (+1 or -1 along `axis`).
+    auto face_grid = [&](int axis, float at, int lo, int hi, int facing) {
+      for (int a = lo; a < hi; ++a)
+        for (int b = lo; b < hi; ++b) {
+          auto corner = [&](float u, float v) {
+            Vec3 p;
+            float* c = &p.x;
+            c[axis] = at;
+            c[(axis + 1) % 3] = u;
+            c[(axis + 2) % 3] = v;
+            return p;
+          };
+          const Vec3 p0 = corner(a, b), p1 = corner(a + 1, b), p2 = corner(a + 1, b + 1), p3 = corner(a, b + 1);
+          if (facing > 0) scene.add_quad(p0, p1, p2, p3, rock);
+          else scene.add_quad(p0, p3, p2, p1, rock);
+        }
+    };
+    for (int axis = 0; axis < 3; ++axis) {
+      face_grid(axis, 0, 0, kOuter, +1);  // the room's walls, facing in
+      face_grid(axis, kOuter, 0, kOuter, -1);
+    }
+    scene.add_point_light(light, {100, 100, 100});
+    ASSERT_TRUE(scene.finalize("blocks").ok());
+    RayTracer tracer(scene);
+    auto op = create_lightop(*find_lightop_kind("direct"), ParamTable(Value::Map{}, "lightop 'direct'"));
+    LocalInputs none;
+    run_to_completion(op->setup(SceneContext{&scene, &tracer}, none));
+
+    // Outside: planes one unit away from each wall, on a lattice of step 1/4 (from x = -1, a ray to the light at
+    // x = 4 crosses the wall at 4/5 of the way: lattice points map onto the wall's edges and corners) and at
+    // random points.
+    ShadingPoints outside, inside;
+    Rng rng(11, 0);
+    auto add = [&](ShadingPoints& pts, int axis, float at, float sign, float u, float v) {
+      Vec3 p, n;
+      (&p.x)[axis] = at;
+      (&p.x)[(axis + 1) % 3] = u;
+      (&p.x)[(axis + 2) % 3] = v;
+      (&n.x)[axis] = sign;
+      pts.push_back(p, n, n, rock, sample_key(static_cast<uint32_t>(pts.size()), 0));
+    };
+    for (int axis = 0; axis < 3; ++axis)
+      for (int side : {0, 1}) {
+        const float wall = static_cast<float>(side * kOuter), toward = side ? -1.0f : 1.0f;
+        for (int i = -4; i <= 4 * kOuter + 4; ++i)
+          for (int j = -4; j <= 4 * kOuter + 4; ++j) add(outside, axis, wall - toward, toward, i / 4.0f, j / 4.0f);
+        for (int k = 0; k < 500; ++k)
+          add(outside, axis, wall - toward, toward, -1 + (kOuter + 2) * rng.uniform(), -1 + (kOuter + 2) * rng.uniform());
+        for (int k = 0; k < 100; ++k)
+          add(inside, axis, wall, toward, kOuter * rng.uniform(), kOuter * rng.uniform());
+      }
+    std::vector<RGB> out(outside.size()), in(inside.size());
+    run_to_completion(op->shade(outside, out, none));
+    run_to_completion(op->shade(inside, in, none));
+    size_t leaks = 0, lit = 0;
+    for (const RGB& c : out) leaks += !is_black(c);
+    for (const RGB& c : in) lit += !is_black(c);
+    EXPECT_EQ(leaks, 0u) << "light (" << light.x << ", " << light.y << ", " << light.z << "): " << leaks << " of "
+                         << outside.size() << " points outside the room receive its light";
+    EXPECT_EQ(lit, inside.size());
+  }
+}
+
+}  // namespace lf
