@@ -55,7 +55,8 @@ CameraSpec CameraSpec::from_value(const Value& v) {
 }
 
 Value ImageSpec::to_value() const {
-  return Value::Map{{"width", width}, {"height", height}, {"spp", spp}, {"tile", tile}, {"output", output}};
+  return Value::Map{{"width", width}, {"height", height},   {"spp", spp},           {"tile", tile},
+                    {"output", output}, {"exposure", exposure}, {"tonemap", tonemap}};
 }
 
 ImageSpec ImageSpec::from_value(const Value& v) {
@@ -65,6 +66,8 @@ ImageSpec ImageSpec::from_value(const Value& v) {
   i.spp = static_cast<int>(num(v, "spp", i.spp));
   i.tile = static_cast<int>(num(v, "tile", i.tile));
   i.output = str(v, "output");
+  i.exposure = num(v, "exposure", 0);
+  if (const Value* t = v.find("tonemap"); t && t->is_string()) i.tonemap = t->as_string();
   return i;
 }
 

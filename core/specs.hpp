@@ -45,6 +45,10 @@ struct ImageSpec {
   int spp = 4;
   int tile = 32;
   std::string output = "out.png";
+  // For 8-bit outputs (PNG, TIFF) only: scale by 2^exposure, then map to [0, 1] ("clamp", "reinhard", "aces").
+  // EXR stays linear and untouched.
+  double exposure = 0;
+  std::string tonemap = "clamp";
   Value to_value() const;
   static ImageSpec from_value(const Value& v);
 };

@@ -19,6 +19,7 @@
 #include "farm/builders.hpp"
 #include "farm/slurm_hosts.hpp"
 #include "radiosity/config.hpp"
+#include "render/image.hpp"
 #include "render/lightop_registry.hpp"
 #include "render/scene.hpp"
 
@@ -215,7 +216,7 @@ int l_camera(lua_State* L) {
   return 0;
 }
 
-// image { width = 512, height = 512, spp = 16, tile = 16, output = "cornell.png" }
+// image { width = 512, height = 512, spp = 16, tile = 16, output = "cornell.png", exposure = 0, tonemap = "clamp" }
 int l_image(lua_State* L) {
   Builder& b = builder(L);
   if (b.have_image) luaL_error(L, "image is declared twice");
@@ -227,6 +228,8 @@ int l_image(lua_State* L) {
     i.spp = static_cast<int>(p.get_int("spp", i.spp, 1, 65536));
     i.tile = static_cast<int>(p.get_int("tile", i.tile, 1, 1024));
     i.output = p.get_string("output", i.output);
+    i.exposure = p.get_float("exposure", i.exposure, -20, 20);
+    i.tonemap = p.get_string("tonemap", i.tonemap, display_tonemaps());
     p.report_unused();
   });
   b.have_image = true;

@@ -46,6 +46,22 @@ Status check_output_path(const std::string& path) {
   return Ok{};
 }
 
+const std::vector<std::string>& display_tonemaps() {
+  static const std::vector<std::string> names{"clamp", "reinhard", "aces"};
+  return names;
+}
+
+float display_value(float linear, const Display& display) {
+  const float v = std::max(0.0f, linear * std::exp2(display.exposure));
+  if (display.tonemap == "reinhard") return v / (1.0f + v);
+  if (display.tonemap == "aces") {
+    // Narkowicz 2015: a fit of the ACES reference rendering transform, per channel.
+    const float mapped = (v * (2.51f * v + 0.03f)) / (v * (2.43f * v + 0.59f) + 0.14f);
+    return std::clamp(mapped, 0.0f, 1.0f);
+  }
+  return std::min(v, 1.0f);
+}
+
 static float to_srgb(float linear) {
   linear = std::clamp(linear, 0.0f, 1.0f);
   return linear <= 0.0031308f ? 12.92f * linear : 1.055f * std::pow(linear, 1.0f / 2.4f) - 0.055f;
@@ -136,7 +152,7 @@ void sweep_stale_partials(const fs::path& target) {
 
 }  // namespace
 
-Status write_image(const Image& image, const std::string& path) {
+Status write_image(const Image& image, const std::string& path, const Display& display) {
   if (auto st = check_output_path(path); !st) return st;
   const auto& module = image_module();
   if (!module.write) return make_error(module.error);
@@ -150,9 +166,9 @@ Status write_image(const Image& image, const std::string& path) {
   if (!linear) {
     bytes.resize(image.pixels.size() * 3);
     for (size_t i = 0; i < image.pixels.size(); ++i) {
-      bytes[3 * i] = static_cast<unsigned char>(std::lround(255.0f * to_srgb(image.pixels[i].x)));
-      bytes[3 * i + 1] = static_cast<unsigned char>(std::lround(255.0f * to_srgb(image.pixels[i].y)));
-      bytes[3 * i + 2] = static_cast<unsigned char>(std::lround(255.0f * to_srgb(image.pixels[i].z)));
+      bytes[3 * i] = static_cast<unsigned char>(std::lround(255.0f * to_srgb(display_value(image.pixels[i].x, display))));
+      bytes[3 * i + 1] = static_cast<unsigned char>(std::lround(255.0f * to_srgb(display_value(image.pixels[i].y, display))));
+      bytes[3 * i + 2] = static_cast<unsigned char>(std::lround(255.0f * to_srgb(display_value(image.pixels[i].z, display))));
     }
   }
   char err[512] = {0};

@@ -21,7 +21,18 @@ struct Image {
 
 // An error if the extension is not one we write, or the directory does not exist or is not writable.
 Status check_output_path(const std::string& path);
-Status write_image(const Image& image, const std::string& path);
+// How an 8-bit output shows linear radiance: scaled by 2^exposure, then mapped to [0, 1] per channel by the tone
+// map ("clamp": min(v, 1); "reinhard": v / (1 + v); "aces": Narkowicz's fit of the ACES filmic curve), then sRGB.
+// Float outputs (EXR) ignore it: they keep the linear values.
+struct Display {
+  float exposure = 0;
+  std::string tonemap = "clamp";
+};
+const std::vector<std::string>& display_tonemaps();
+// One linear channel value as the display maps it, before sRGB encoding (in [0, 1]).
+float display_value(float linear, const Display& display);
+
+Status write_image(const Image& image, const std::string& path, const Display& display = {});
 Result<Image> read_image(const std::string& path);  // linear RGB (sRGB files are decoded)
 // Loads the image module (OpenImageIO and its ~250 libraries) now, on this thread. The director calls it on a
 // background thread while its actors start, so writing the image later costs only the write.

@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 #include <unistd.h>
 
+#include <array>
 #include <filesystem>
 
 namespace lf {
@@ -37,6 +38,37 @@ TEST_F(ImageTest, ExrKeepsLinearFloats) {
   ASSERT_TRUE(back.ok()) << back.error().message;
   EXPECT_EQ(back->pixels, img.pixels);  // values above 1 survive in EXR
   EXPECT_EQ(files_in_dir(), 1u);        // no temporary left beside it
+}
+
+// Exposure and tone maps change 8-bit outputs only: each as its closed form, read back through sRGB decoding.
+TEST_F(ImageTest, ExposureAndToneMapsShapePngsAndLeaveExrLinear) {
+  EXPECT_FLOAT_EQ(display_value(0.2f, {1, "clamp"}), 0.4f);
+  EXPECT_FLOAT_EQ(display_value(0.8f, {1, "clamp"}), 1.0f);
+  EXPECT_FLOAT_EQ(display_value(1.0f, {0, "reinhard"}), 0.5f);
+  EXPECT_FLOAT_EQ(display_value(1.5f, {1, "reinhard"}), 0.75f);
+  EXPECT_NEAR(display_value(1.0f, {0, "aces"}), 2.54f / 3.16f, 1e-6f);
+  EXPECT_FLOAT_EQ(display_value(100.0f, {0, "aces"}), 1.0f);
+  EXPECT_FLOAT_EQ(display_value(-3.0f, {2, "reinhard"}), 0.0f);
+  Image img(3, 1);
+  img.pixels = {{0.2f, 0.2f, 0.2f}, {1.0f, 1.0f, 1.0f}, {3.0f, 3.0f, 3.0f}};
+  struct Case {
+    Display display;
+    std::array<float, 3> expect;
+  };
+  for (const Case& c : {Case{{1, "clamp"}, {0.4f, 1.0f, 1.0f}}, Case{{0, "reinhard"}, {0.2f / 1.2f, 0.5f, 0.75f}},
+                        Case{{-1, "reinhard"}, {0.1f / 1.1f, 0.5f / 1.5f, 0.6f}}}) {
+    const auto path = (dir / ("t-" + c.display.tonemap + ".png")).string();
+    ASSERT_TRUE(write_image(img, path, c.display).ok());
+    auto back = read_image(path);
+    ASSERT_TRUE(back.ok());
+    for (int i = 0; i < 3; ++i) EXPECT_NEAR(back->pixels[static_cast<size_t>(i)].y, c.expect[static_cast<size_t>(i)], 0.006f)
+        << c.display.tonemap << " exposure " << c.display.exposure << " pixel " << i;
+  }
+  const auto exr = (dir / "t.exr").string();
+  ASSERT_TRUE(write_image(img, exr, {3, "aces"}).ok());
+  auto linear = read_image(exr);
+  ASSERT_TRUE(linear.ok());
+  EXPECT_EQ(linear->pixels, img.pixels);
 }
 
 TEST_F(ImageTest, PngIsSrgbEncodedAndClamped) {

@@ -334,7 +334,8 @@ class Director final : public ControlOut, public Outbox {
   }
 
   void finish() {
-    if (auto st = write_image(tiles_.film(), spec_.image.output); !st) throw FarmFailure{st.error().message};
+    const Display display{static_cast<float>(spec_.image.exposure), spec_.image.tonemap};
+    if (auto st = write_image(tiles_.film(), spec_.image.output, display); !st) throw FarmFailure{st.error().message};
     image_written_ = true;
     supervisor_.broadcast(wire::make_phase("director", Phase::finish));
     // Wait for every actor's STATS and BYE, and for its process to end.
