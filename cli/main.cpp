@@ -152,9 +152,12 @@ int cmd_actor(int argc, char** argv) {
     lf::log_error("unknown actor kind '" + a.kind + "' (known kinds: " + lf::actor_kind_list() + ")");
     return 2;
   }
-  // Fault injection for the failure tests (CONTRIBUTING.md): this actor dies before it says hello.
-  if (const char* fault = std::getenv("LIGHTFARM_FAULT"); fault && std::string(fault) == "crash-at-start:" + a.name)
-    std::abort();
+  // Fault injection for the failure tests (CONTRIBUTING.md): the actors named in
+  // LIGHTFARM_FAULT=crash-at-start:NAME[,NAME...] die before they say hello.
+  if (const char* fault = std::getenv("LIGHTFARM_FAULT"); fault && std::string_view(fault).starts_with("crash-at-start:")) {
+    std::string names = "," + std::string(fault).substr(std::string_view("crash-at-start:").size()) + ",";
+    if (names.find("," + a.name + ",") != std::string::npos) std::abort();
+  }
   lf::install_stop_signals();
   lf::Runtime runtime(a);
   return runtime.run(*actor);

@@ -186,6 +186,24 @@ TEST_F(FailureTest, APhotonReplicaLostDuringSetupIsNamedOnce) {
   EXPECT_TRUE(wait_no_leftovers(r.tag).empty());
 }
 
+// A renderer and a pool replica that die before saying hello (LIGHTFARM_FAULT aborts them at start) are left out:
+// the pool is configured without the replica, the other renderer takes every tile, and the image is the
+// fault-free one. (The chaos soak found frames failing when a kill landed before the render.)
+TEST_F(FailureTest, RenderersAndReplicasLostAtStartUpAreLeftOut) {
+  const auto args = small(kPool, {"width=48", "height=48", "spp=4"});
+  Image reference = render(args, "reference.exr");
+  auto run = args;
+  run.insert(run.end(), {"--output", path("faulty.exr")});
+  auto r = run_lightfarm(run, {"LIGHTFARM_FAULT=crash-at-start:renderer-1,direct.1"});
+  EXPECT_EQ(r.status, 0) << r.err;
+  EXPECT_NE(r.err.find("renderer 'renderer-1' was killed by signal 6 (Aborted)"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("replica 'direct.1' was killed by signal 6 (Aborted)"), std::string::npos) << r.err;
+  EXPECT_TRUE(wait_no_leftovers(r.tag).empty());
+  auto img = read_image(path("faulty.exr"));
+  ASSERT_TRUE(img.ok()) << r.err;
+  EXPECT_TRUE(img->pixels == reference.pixels);
+}
+
 // The process state letter of `pid` ('T' when stopped), from /proc.
 char process_state(pid_t pid) {
   const std::string stat = read_file("/proc/" + std::to_string(pid) + "/stat");

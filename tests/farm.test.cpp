@@ -198,11 +198,13 @@ TEST_F(FarmTest, UnwritableOutputStopsBeforeLaunching) {
   expect_no_leftovers(device);
 }
 
+// The farm's only `direct` (no replica to take over) dying at start-up stops it (renderers and pool replicas are
+// recovered: FailureTest.RenderersAndReplicasLostAtStartUpAreLeftOut).
 TEST_F(FarmTest, ActorDyingDuringStartUpStopsTheFarmCleanly) {
   auto r = run_lightfarm({"run", kCornellScript, "--output", path("x.png"), "--set", "width=32", "--set", "height=32"},
-                         {"LIGHTFARM_FAULT=crash-at-start:renderer-1"});
+                         {"LIGHTFARM_FAULT=crash-at-start:direct"});
   EXPECT_EQ(r.status, 1);
-  EXPECT_NE(r.err.find("lightfarm: error: actor 'renderer-1' (pid "), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("lightfarm: error: actor 'direct' (pid "), std::string::npos) << r.err;
   EXPECT_NE(r.err.find("was killed by signal 6 (Aborted) during start-up"), std::string::npos) << r.err;
   EXPECT_EQ(files_in_dir(), 0u) << "no image, not even a partial one";
   expect_no_leftovers(r);

@@ -258,7 +258,8 @@ class Director final : public ControlOut, public Outbox {
     std::function<std::string(int)> key_of;
     if (!actor_keys_.empty())
       key_of = [&](int i) { return actor_keys_.at(spec_.actors[static_cast<size_t>(i)].name).public_key; };
-    for (const auto& [name, a] : supervisor_.actors()) {
+    for (auto& [name, a] : supervisor_.actors()) {
+      if (a.lost) continue;
       ActorConfig config = config_for(spec_, a.index, endpoint_of, key_of);
       // Inputs on the same host are reached over their IPC socket, without CURVE: the 0700 folder keeps other
       // users out, and a process of the same user could read the keys anyway. Only an actor that offers such a
@@ -275,7 +276,13 @@ class Director final : public ControlOut, public Outbox {
         config.scene.cache = scene_paths_.at(a.spec->host);
         config.scene.hash = scene_hash_;
       }
+      // A replica lost before its pool was configured is left out of the pool (it never said where it listens).
+      std::vector<InputSpec> inputs;
+      for (auto& in : config.inputs)
+        if (!supervisor_.at(in.name).lost) inputs.push_back(std::move(in));
+      config.inputs = std::move(inputs);
       send(name, wire::make(MsgType::config, "director", config.to_value()));
+      a.configured = true;
     }
   }
 

@@ -136,9 +136,10 @@ Status Supervisor::on_message(const std::string& peer, Result<wire::Message>& me
   }
 }
 
-// Renderers and pool replicas may be lost during setup and render: their work goes to the others.
+// Renderers and pool replicas may be lost from the moment they should say hello until the frame is done: their
+// work goes to the others (one lost before its pool's CONFIG is simply left out of it).
 bool Supervisor::recoverable(const ActorRecord& a) const {
-  if (stage_ != Stage::setup && stage_ != Stage::render) return false;
+  if (stage_ < Stage::hello || stage_ > Stage::render) return false;
   return a.spec->is_renderer() || spec_.pool_of(a.index) >= 0;
 }
 
@@ -186,10 +187,12 @@ Status Supervisor::lose(ActorRecord& a, const std::string& why) {
   }
   // A replica whose pool shares its setup, lost before the setup is over: its share exists nowhere else. Said at
   // once, rather than "sends its work to the others" and a failure later.
-  if (stage_ == Stage::setup)
+  if (stage_ <= Stage::setup)
     if (const LightOpKind* kind = find_lightop_kind(a.spec->kind); kind && kind->shares_setup)
-      return make_error("replica '" + a.name() + "' " + why + " during setup; the replicas of '" + pool.name() +
-                        "' share their setup (" + std::string(kind->name) + "), so its share cannot be redone");
+      return make_error("replica '" + a.name() + "' " + why + " during " +
+                        (starting_up(stage_) ? std::string("start-up") : std::string("setup")) + "; the replicas of '" +
+                        pool.name() + "' share their setup (" + std::string(kind->name) +
+                        "), so its share cannot be redone");
   if (!any_left) {
     if (spec_.pool_of(pool.index) >= 0 && !pool.exited) {
       // A nested pool with no replica left is itself a lost replica of the pool above.
@@ -200,7 +203,8 @@ Status Supervisor::lose(ActorRecord& a, const std::string& why) {
   }
   if (auto st = events_.lost(a, why); !st) return st;
   log_warn("replica '" + a.name() + "' " + why + "; '" + pool.name() + "' sends its work to the others");
-  send(pool.name(), wire::make(MsgType::peer_down, "director", Value::Map{{"name", a.name()}}));
+  // A pool not yet configured hears nothing: its CONFIG will leave the replica out.
+  if (pool.configured) send(pool.name(), wire::make(MsgType::peer_down, "director", Value::Map{{"name", a.name()}}));
   return Ok{};
 }
 

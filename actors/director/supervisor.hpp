@@ -39,7 +39,8 @@ struct ActorRecord {
   bool said_hello = false;
   bool said_bye = false;
   bool exited = false;
-  bool lost = false;         // died or hung during setup/render, and the farm went on without it
+  bool lost = false;         // died or hung after launch, and the farm went on without it
+  bool configured = false;   // CONFIG was sent
   bool killed_hung = false;  // SIGKILLed for missing heartbeats
   std::string loss;          // why it was lost
   Clock::time_point last_seen;

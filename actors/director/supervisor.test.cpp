@@ -132,16 +132,23 @@ TEST_F(SupervisorTest, ReadyRequestsAndErrorsAreRouted) {
   EXPECT_EQ(failed.error().message, "actor 'direct.1' failed: no scene");
 }
 
-TEST_F(SupervisorTest, ADeathDuringStartUpStopsTheFarm) {
+TEST_F(SupervisorTest, ADeathDuringStartUpStopsTheFarmUnlessAnotherTakesOver) {
   sup->set_stage(Stage::hello);
-  auto st = sup->on_exit(ExitReport{pid("direct.0"), status_exited(3)});
+  // A replica before its pool is configured: left out of the pool's CONFIG, so nobody is told.
+  const size_t sent = out.sent.size();
+  ASSERT_TRUE(sup->on_exit(ExitReport{pid("direct.0"), status_exited(3)}).ok());
+  EXPECT_TRUE(sup->at("direct.0").lost);
+  EXPECT_EQ(out.sent.size(), sent);
+  // The multiplexer has nobody to take over.
+  auto st = sup->on_exit(ExitReport{pid("direct"), status_exited(3)});
   ASSERT_FALSE(st.ok());
   EXPECT_EQ(st.error().message,
-            "actor 'direct.0' (pid " + std::to_string(pid("direct.0")) + ") exited with status 3 during start-up");
+            "actor 'direct' (pid " + std::to_string(pid("direct")) + ") exited with status 3 during start-up");
 }
 
 TEST_F(SupervisorTest, ALostReplicaGoesToItsPoolAndTheLastOneStopsTheFarm) {
   hello_all();
+  sup->actors().at("direct").configured = true;
   sup->set_stage(Stage::render);
   ASSERT_TRUE(sup->on_exit(ExitReport{pid("direct.0"), status_killed(SIGKILL)}).ok());
   EXPECT_EQ(losses, std::vector<std::string>{"direct.0 was killed by signal 9 (Killed)"});
