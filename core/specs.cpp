@@ -24,6 +24,7 @@ static std::string str(const Value& v, const char* key) {
 
 Value SceneSpec::to_value() const {
   Value::Map m{{"builtin", builtin}, {"file", file}, {"lights", lights}};
+  if (!materials.empty()) m["materials"] = materials;
   if (!cache.empty()) {
     m["cache"] = cache;
     m["hash"] = hash;
@@ -38,6 +39,7 @@ SceneSpec SceneSpec::from_value(const Value& v) {
   s.cache = str(v, "cache");
   s.hash = str(v, "hash");
   if (const Value* l = v.find("lights"); l && l->is_array()) s.lights = l->as_array();
+  if (const Value* m = v.find("materials"); m && m->is_array()) s.materials = m->as_array();
   return s;
 }
 

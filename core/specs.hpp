@@ -21,6 +21,7 @@ struct SceneSpec {
   std::string file;     // absolute path of an OBJ file
   Value::Array lights;  // lights the script adds: {quad = {4 corners}, radiance} | {sphere, radius, radiance} |
                         // {point, intensity}
+  Value::Array materials;  // the script's changes to named materials: {name, emission?, kd?, ks?, ns?, ior?, type?}
   // Set by the director for its actors: the scene, lights included, as shipped to the actor's host
   // (render/scene_file.hpp); an actor then reads that and never the OBJ file.
   std::string cache;  // its path on the actor's host

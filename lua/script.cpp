@@ -8,11 +8,13 @@
 #include <lua.hpp>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
 #include <map>
+#include <optional>
 #include <set>
 
 #include "core/params.hpp"
@@ -38,6 +40,7 @@ struct Builder {
   std::set<std::string> consumed_params;
   bool have_scene = false, have_camera = false, have_image = false, have_renderers = false;
   bool have_radiosity = false;
+  std::optional<std::vector<std::string>> material_names;  // the scene's, read once for material { } checks
 };
 
 Builder& builder(lua_State* L) { return *static_cast<Builder*>(lua_touserdata(L, lua_upvalueindex(1))); }
@@ -546,6 +549,69 @@ int l_light(lua_State* L) {
   return 0;
 }
 
+// material "Name" { emission = {r, g, b}, kd = {r, g, b}, ks = {r, g, b}, ns = 20, ior = 1.5, type = "glossy" }:
+// changes a material of the scene by name (an OBJ's MTL, or a built-in scene's); the scene must come first.
+int l_material_table(lua_State* L) {
+  Builder& b = builder(L);
+  const std::string name = luaL_checkstring(L, lua_upvalueindex(2));
+  if (!b.have_scene) luaL_error(L, "material \"%s\" needs scene { ... } before it", name.c_str());
+  if (!b.material_names) {
+    std::vector<std::string> names;
+    if (!b.spec.scene.file.empty()) {
+      auto listed = Scene::obj_material_names(b.spec.scene.file);
+      if (listed) names = *listed;
+    } else if (auto s = Scene::builtin_unlit(b.spec.scene.builtin)) {
+      for (const auto& m : s->materials()) names.push_back(m.name);
+    }
+    b.material_names = std::move(names);
+  }
+  const auto& names = *b.material_names;
+  if (std::find(names.begin(), names.end(), name) == names.end()) {
+    std::string known;
+    for (size_t i = 0; i < names.size() && i < 12; ++i) known += (i ? ", " : "") + names[i];
+    if (names.size() > 12) known += ", ... (" + std::to_string(names.size()) + " in all)";
+    luaL_error(L, "material '%s' is not in the scene (its materials: %s)", name.c_str(),
+               known.empty() ? "none" : known.c_str());
+  }
+  for (const auto& m : b.spec.scene.materials)
+    if (m.find("name")->as_string() == name) luaL_error(L, "material '%s' is changed twice", name.c_str());
+  ParamTable p = table_params(L, 1, "material '" + name + "'");
+  Value::Map change{{"name", name}};
+  with_params(L, [&] {
+    auto colour = [&](const char* key, double max) {
+      if (!p.has(key)) return;
+      const auto c = p.get_vec3(key, {0, 0, 0});
+      for (double v : c)
+        if (!(v >= 0 && v <= max))
+          throw ParamError("material '" + name + "': " + key + " must be between 0 and " + (max > 1 ? "1e6" : "1") +
+                           " in each channel");
+      change[key] = Value::Array{c[0], c[1], c[2]};
+    };
+    colour("emission", 1e6);
+    colour("kd", 1);
+    colour("ks", 1);
+    if (p.has("ns")) change["ns"] = p.get_float("ns", 0, 0, 1e6);
+    if (p.has("ior")) change["ior"] = p.get_float("ior", 1.5, 1, 3);
+    if (p.has("type")) change["type"] = p.get_string("type", "diffuse", {"diffuse", "glossy", "mirror", "glass"});
+    p.report_unused();
+  });
+  // The scene's own check (kd + ks at most 1) with the words it would use later.
+  Scene probe;
+  probe.add_material({name, {}, {}});
+  if (auto st = probe.apply_material_overrides(Value::Array{Value(change)}); !st)
+    luaL_error(L, "%s", st.error().message.c_str());
+  b.spec.scene.materials.push_back(std::move(change));
+  return 0;
+}
+
+int l_material(lua_State* L) {
+  luaL_checkstring(L, 1);
+  lua_pushvalue(L, lua_upvalueindex(1));
+  lua_pushvalue(L, 1);
+  lua_pushcclosure(L, l_material_table, 2);
+  return 1;
+}
+
 // farm { heartbeat_timeout = 10, request_timeout = 120, director_address, security = "curve" }: settings of the
 // farm as a whole.
 int l_farm(lua_State* L) {
@@ -601,7 +667,7 @@ int host_gc(lua_State* L) {
 const luaL_Reg kFarmLib[] = {{"scene", l_scene},   {"camera", l_camera},       {"image", l_image},
                              {"renderers", l_renderers}, {"host", l_host}, {"slurm_hosts", l_slurm_hosts},
                              {"param", l_param},   {"farm", l_farm},       {"multiplexer", l_multiplexer},
-                             {"light", l_light},   {"radiosity", l_radiosity},
+                             {"light", l_light},   {"radiosity", l_radiosity}, {"material", l_material},
                              {nullptr, nullptr}};
 
 void open_libs(lua_State* L) {

@@ -92,6 +92,30 @@ TEST_F(ScriptTest, UnknownKindNamesLineAndKnownKinds) {
             "farm.lua:3: unknown LightOp kind 'photon' (known kinds: " + lightop_kind_list() + ")");
 }
 
+// material "Name" { ... } changes a named material of the scene; errors at the line for what cannot be.
+TEST_F(ScriptTest, MaterialChangesNameTheirLineWhenWrong) {
+  auto spec = evaluate_script(write("m.lua", "scene { builtin = \"cornell\" }\nmaterial \"light\" { emission = {34, 24, 8} }\n"
+                                    "material \"red\" { kd = {0.5, 0, 0}, ks = {0.2, 0, 0}, ns = 40, type = \"glossy\" }\n"
+                                    "renderers { count = 1, lighting = lightop \"direct\" {} }\n"));
+  ASSERT_TRUE(spec.ok()) << spec.error().message;
+  ASSERT_EQ(spec->scene.materials.size(), 2u);
+  EXPECT_EQ(spec->scene.materials[0].find("name")->as_string(), "light");
+  EXPECT_EQ(spec->scene.materials[1].find("type")->as_string(), "glossy");
+  EXPECT_EQ(error_of("scene { builtin = \"cornell\" }\n\nmaterial \"lamp\" { emission = {1, 1, 1} }\n"),
+            "farm.lua:3: material 'lamp' is not in the scene (its materials: white, red, green, light)");
+  EXPECT_EQ(error_of("material \"light\" { emission = {1, 1, 1} }\nscene { builtin = \"cornell\" }\n"),
+            "farm.lua:1: material \"light\" needs scene { ... } before it");
+  EXPECT_EQ(error_of("scene { builtin = \"cornell\" }\nmaterial \"red\" { kd = {0.9, 0, 0}, ks = {0.5, 0, 0} }\n"),
+            "farm.lua:2: material 'red': kd + ks exceeds 1 in some channel, so the surface would create energy");
+  EXPECT_EQ(error_of("scene { builtin = \"cornell\" }\nmaterial \"red\" { kd = {2, 0, 0} }\n"),
+            "farm.lua:2: material 'red': kd must be between 0 and 1 in each channel");
+  EXPECT_EQ(error_of("scene { builtin = \"cornell\" }\nmaterial \"red\" { glow = 1 }\n").rfind(
+                "farm.lua:2: material 'red': unknown parameter 'glow'", 0),
+            0u);
+  EXPECT_EQ(error_of("scene { builtin = \"cornell\" }\nmaterial \"red\" { ns = 1 }\nmaterial \"red\" { ns = 2 }\n"),
+            "farm.lua:3: material 'red' is changed twice");
+}
+
 TEST_F(ScriptTest, BadParametersNameLineAndParameter) {
   EXPECT_EQ(error_of("local d = lightop \"direct\" { light_sample = 4 }\n"),
             "farm.lua:1: lightop 'direct': unknown parameter 'light_sample' (known: light_samples, seed)");

@@ -3,6 +3,10 @@
 
 #include <algorithm>
 #include <filesystem>
+#include <cctype>
+#include <map>
+#include <sstream>
+#include <fstream>
 
 #include "render/scene.hpp"
 
@@ -94,6 +98,28 @@ Result<Scene> Scene::load_obj_unlit(const std::string& path) {
     }
   }
   return s;
+}
+
+Result<std::vector<std::string>> Scene::obj_material_names(const std::string& path) {
+  std::ifstream obj(path);
+  if (!obj) return make_error("scene file '" + path + "' not found");
+  const auto dir = std::filesystem::path(path).parent_path();
+  std::vector<std::string> names;
+  std::string line;
+  while (std::getline(obj, line)) {
+    if (line.rfind("mtllib", 0) != 0 || line.size() < 7 || !std::isspace(static_cast<unsigned char>(line[6]))) continue;
+    std::istringstream libs(line.substr(7));
+    std::string lib;
+    while (libs >> lib) {
+      std::ifstream mtl(dir / lib);
+      std::map<std::string, int> index;
+      std::vector<tinyobj::material_t> materials;
+      std::string warning, error;
+      if (mtl) tinyobj::LoadMtl(&index, &materials, &mtl, &warning, &error);
+      for (const auto& m : materials) names.push_back(m.name);
+    }
+  }
+  return names;
 }
 
 }  // namespace lf

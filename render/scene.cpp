@@ -129,6 +129,7 @@ Result<Scene> Scene::load(const SceneSpec& spec) {
     return load_shared_scene(spec.cache, spec.hash, file ? "scene file '" + spec.file + "'" : "the shipped scene");
   auto s = file ? load_obj_unlit(spec.file) : builtin_unlit(spec.builtin.empty() ? "cornell" : spec.builtin);
   if (!s) return s;
+  if (auto st = s->apply_material_overrides(spec.materials); !st) return st.error();
   if (auto st = s->add_script_lights(spec.lights); !st) return st.error();
   const std::string what = file ? "scene file '" + spec.file + "'" : "built-in scene '" + spec.builtin + "'";
   if (auto st = s->finalize(what); !st) return st.error();

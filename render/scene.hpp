@@ -60,6 +60,9 @@ class Scene {
   void add_point_light(Vec3 position, RGB intensity) { point_lights_.push_back({position, intensity}); }
   // Adds the lights a script declares (SceneSpec::lights); an error names what is wrong with one.
   Status add_script_lights(const Value::Array& lights);
+  // Applies the script's changes to named materials (SceneSpec::materials): emission, kd, ks, ns, ior, type. An
+  // unknown name, or kd + ks above 1 (a surface that creates energy), is an error naming the material.
+  Status apply_material_overrides(const Value::Array& overrides);
   // Builds the light distribution. An error if the scene has no triangles or no light.
   Status finalize(const std::string& what);
 
@@ -95,6 +98,8 @@ class Scene {
   static Result<Scene> builtin_unlit(const std::string& name);
   static Result<Scene> load_obj_unlit(const std::string& path);
   static Result<Scene> load(const SceneSpec& spec);
+  // The material names an OBJ file's MTL libraries declare, without reading its geometry (for script checks).
+  static Result<std::vector<std::string>> obj_material_names(const std::string& path);
   static const std::vector<std::string>& builtin_names();
 
  private:

@@ -1,6 +1,8 @@
 // The lights a farm script adds to a scene (light { quad | sphere | point }).
 #include "render/scene.hpp"
 
+#include <algorithm>
+
 namespace lf {
 
 static bool vec3_of(const Value* v, Vec3& out) {
@@ -39,6 +41,45 @@ Status Scene::add_script_lights(const Value::Array& lights) {
     } else {
       return make_error(which + ": give quad, sphere or point");
     }
+  }
+  return Ok{};
+}
+
+Status Scene::apply_material_overrides(const Value::Array& overrides) {
+  for (const Value& o : overrides) {
+    const Value* name = o.find("name");
+    if (!name || !name->is_string()) return make_error("a material change names no material");
+    Material* m = nullptr;
+    for (auto& candidate : materials_)
+      if (candidate.name == name->as_string()) m = &candidate;
+    if (!m) return make_error("material '" + name->as_string() + "' is not in the scene");
+    const std::string which = "material '" + m->name + "'";
+    Vec3 c;
+    if (const Value* v = o.find("emission")) {
+      if (!vec3_of(v, c)) return make_error(which + ": emission must be {r, g, b}");
+      m->ke = c;
+    }
+    if (const Value* v = o.find("kd")) {
+      if (!vec3_of(v, c)) return make_error(which + ": kd must be {r, g, b}");
+      m->kd = c;
+    }
+    if (const Value* v = o.find("ks")) {
+      if (!vec3_of(v, c)) return make_error(which + ": ks must be {r, g, b}");
+      m->ks = c;
+    }
+    if (const Value* v = o.find("ns"); v && v->is_number()) m->ns = static_cast<float>(v->as_double());
+    if (const Value* v = o.find("ior"); v && v->is_number()) m->ior = static_cast<float>(v->as_double());
+    if (const Value* v = o.find("type"); v && v->is_string()) {
+      const std::string& t = v->as_string();
+      if (t == "diffuse") m->type = Material::Type::diffuse;
+      else if (t == "glossy") m->type = Material::Type::glossy;
+      else if (t == "mirror") m->type = Material::Type::mirror;
+      else if (t == "glass") m->type = Material::Type::glass;
+      else return make_error(which + ": unknown type '" + t + "'");
+    }
+    const RGB sum = m->kd + m->ks;
+    if (m->type != Material::Type::glass && std::max({sum.x, sum.y, sum.z}) > 1.0f + 1e-6f)
+      return make_error(which + ": kd + ks exceeds 1 in some channel, so the surface would create energy");
   }
   return Ok{};
 }

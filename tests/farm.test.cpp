@@ -94,6 +94,44 @@ TEST_F(FarmTest, CornellBoxImageLooksLikeTheCornellBox) {
   EXPECT_LT(average(mean("none")), 0.05f * average(mean("red")));
 }
 
+// material "..." { ... } changes the picture as stated: twice the light's emission is twice every pixel under
+// `direct` (light picked by relative flux, so its pdf is unchanged), for a built-in scene (each actor applies the
+// change) and for an OBJ (the director applies it and ships the changed scene).
+TEST_F(FarmTest, MaterialChangesReachEveryActor) {
+  write("room.obj", "mtllib room.mtl\nv -1 0 -1\nv 1 0 -1\nv 1 0 1\nv -1 0 1\nv -1 2 -1\nv 1 2 -1\nv 1 2 1\nv -1 2 1\n"
+                    "v -0.3 1.99 -0.3\nv 0.3 1.99 -0.3\nv 0.3 1.99 0.3\nv -0.3 1.99 0.3\nusemtl white\nf 1 2 3 4\nf 8 7 6 5\n"
+                    "f 5 6 2 1\nf 4 8 5 1\nf 2 6 7 3\nusemtl lamp\nf 12 11 10 9\n");
+  write("room.mtl", "newmtl white\nKd 0.7 0.7 0.7\nnewmtl lamp\nKd 0.5 0.5 0.5\nKe 10 10 10\n");
+  struct Case {
+    std::string scene, light, emission;
+  };
+  for (const Case& c : {Case{"builtin = \"cornell\"", "light", "{34, 24, 8}"},
+                        Case{"file = \"room.obj\"", "lamp", "{20, 20, 20}"}}) {
+    const std::string head = "scene { " + c.scene + " }\n" +
+                             (c.scene.find("room") != std::string::npos
+                                  ? "camera { eye = {0, 1, 3.5}, at = {0, 1, 0}, fov = 50 }\n"
+                                  : "") +
+                             "image { width = 32, height = 32, spp = 2 }\n";
+    const std::string tail = "renderers { count = 2, lighting = lightop \"direct\" {} }\n";
+    auto plain = run_lightfarm({"run", write("plain.lua", head + tail), "--output", path("plain.exr"), "--quiet"});
+    auto brighter = run_lightfarm({"run", write("bright.lua", head + "material \"" + c.light + "\" { emission = " +
+                                                                  c.emission + " }\n" + tail),
+                                   "--output", path("bright.exr"), "--quiet"});
+    ASSERT_EQ(plain.status, 0) << plain.err;
+    ASSERT_EQ(brighter.status, 0) << brighter.err;
+    auto a = read_image(path("plain.exr"));
+    auto b = read_image(path("bright.exr"));
+    ASSERT_TRUE(a.ok() && b.ok());
+    double lit = 0;
+    for (size_t i = 0; i < a->pixels.size(); ++i) {
+      lit += a->pixels[i].y;
+      EXPECT_FLOAT_EQ(b->pixels[i].x, 2 * a->pixels[i].x) << c.scene << " pixel " << i;
+      EXPECT_FLOAT_EQ(b->pixels[i].y, 2 * a->pixels[i].y) << c.scene << " pixel " << i;
+    }
+    EXPECT_GT(lit, 0) << c.scene;
+  }
+}
+
 TEST_F(FarmTest, RendererCountDoesNotChangeAPixel) {
   auto one = render_cornell(path("one.exr"), {"--set", "renderers=1"});
   auto three = render_cornell(path("three.exr"), {"--set", "renderers=3"});
