@@ -328,9 +328,9 @@ class Director final : public ControlOut, public Outbox {
   void suspend_farm() {
     const auto stopped_at = Clock::now();
     launchers_.pause_all(true);
-    ::signal(SIGTSTP, SIG_DFL);
-    ::raise(SIGTSTP);  // stops here until SIGCONT
-    install_suspend_signal();
+    // SIGSTOP, not SIGTSTP re-raised: the kernel discards a default-action SIGTSTP in an orphaned process group
+    // (a farm started from a script or a service), which would leave the actors stopped and the director running.
+    ::raise(SIGSTOP);  // stops here until SIGCONT
     launchers_.pause_all(false);
     take_resumed();  // that SIGCONT was this pause's
     const double paused = seconds_since(stopped_at);
