@@ -558,8 +558,8 @@ int l_material_table(lua_State* L) {
   if (!b.material_names) {
     std::vector<std::string> names;
     if (!b.spec.scene.file.empty()) {
-      auto listed = Scene::obj_material_names(b.spec.scene.file);
-      if (listed) names = *listed;
+      auto listed = Scene::catalogue_obj(b.spec.scene.file);
+      if (listed) names = listed->material_names;
     } else if (auto s = Scene::builtin_unlit(b.spec.scene.builtin)) {
       for (const auto& m : s->materials()) names.push_back(m.name);
     }

@@ -5,6 +5,7 @@
 #include <filesystem>
 #include <cctype>
 #include <map>
+#include <set>
 #include <sstream>
 #include <fstream>
 
@@ -63,6 +64,9 @@ Result<Scene> Scene::load_obj_unlit(const std::string& path) {
   const auto& materials = reader.GetMaterials();
   Scene s;
   for (const auto& m : materials) {
+    const bool ambient = m.ambient[0] > 0 || m.ambient[1] > 0 || m.ambient[2] > 0;
+    const bool emits = m.emission[0] > 0 || m.emission[1] > 0 || m.emission[2] > 0;
+    if (ambient && !emits) s.ambient_only_.push_back(m.name);
     s.add_material(material_from_mtl(m.name, {m.diffuse[0], m.diffuse[1], m.diffuse[2]},
                                      {m.specular[0], m.specular[1], m.specular[2]},
                                      {m.emission[0], m.emission[1], m.emission[2]}, m.shininess, m.ior, m.illum));
@@ -100,26 +104,45 @@ Result<Scene> Scene::load_obj_unlit(const std::string& path) {
   return s;
 }
 
-Result<std::vector<std::string>> Scene::obj_material_names(const std::string& path) {
+Result<ObjCatalogue> Scene::catalogue_obj(const std::string& path) {
   std::ifstream obj(path);
   if (!obj) return make_error("scene file '" + path + "' not found");
   const auto dir = std::filesystem::path(path).parent_path();
-  std::vector<std::string> names;
+  ObjCatalogue out;
+  std::set<std::string> known, reported;
+  std::vector<std::pair<int, std::string>> uses;  // usemtl lines, checked once every mtllib is read
   std::string line;
-  while (std::getline(obj, line)) {
-    if (line.rfind("mtllib", 0) != 0 || line.size() < 7 || !std::isspace(static_cast<unsigned char>(line[6]))) continue;
-    std::istringstream libs(line.substr(7));
-    std::string lib;
-    while (libs >> lib) {
-      std::ifstream mtl(dir / lib);
+  for (int number = 1; std::getline(obj, line); ++number) {
+    const bool mtllib = line.rfind("mtllib", 0) == 0, usemtl = line.rfind("usemtl", 0) == 0;
+    if ((!mtllib && !usemtl) || line.size() < 7 || !std::isspace(static_cast<unsigned char>(line[6]))) continue;
+    std::istringstream words(line.substr(7));
+    std::string word;
+    if (usemtl) {
+      if (words >> word) uses.emplace_back(number, word);
+      continue;
+    }
+    while (words >> word) {
+      std::ifstream mtl(dir / word);
+      if (!mtl) {
+        out.warnings.push_back(path + ":" + std::to_string(number) + ": material library '" + word +
+                               "' not found beside the OBJ; its faces get a grey default");
+        continue;
+      }
       std::map<std::string, int> index;
       std::vector<tinyobj::material_t> materials;
       std::string warning, error;
-      if (mtl) tinyobj::LoadMtl(&index, &materials, &mtl, &warning, &error);
-      for (const auto& m : materials) names.push_back(m.name);
+      tinyobj::LoadMtl(&index, &materials, &mtl, &warning, &error);
+      for (const auto& m : materials) {
+        out.material_names.push_back(m.name);
+        known.insert(m.name);
+      }
     }
   }
-  return names;
+  for (const auto& [number, name] : uses)
+    if (!known.count(name) && reported.insert(name).second)
+      out.warnings.push_back(path + ":" + std::to_string(number) + ": usemtl '" + name +
+                             "' names no material of its libraries; those faces get a grey default");
+  return out;
 }
 
 }  // namespace lf

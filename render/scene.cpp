@@ -101,8 +101,12 @@ Status Scene::finalize(const std::string& what) {
     power.push_back(4.0 * kPi * average(p.intensity));
     total += power.back();
   }
-  if (power.empty() || !(total > 0))
-    return make_error(what + ": the scene has no light (no material with Ke > 0, and the script adds none)");
+  if (power.empty() || !(total > 0)) {
+    std::string hint;
+    for (const auto& name : ambient_only_) hint += (hint.empty() ? "" : ", ") + name;
+    if (!hint.empty()) hint = "; " + hint + " ha" + (ambient_only_.size() > 1 ? "ve" : "s") + " Ka but no Ke: did you mean Ke?";
+    return make_error(what + ": the scene has no light (no material with Ke > 0, and the script adds none)" + hint);
+  }
   double running = 0;
   for (double p : power) {
     running += p;

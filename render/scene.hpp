@@ -42,6 +42,11 @@ struct PointLight {
   RGB intensity;  // W/sr per channel
 };
 
+struct ObjCatalogue {
+  std::vector<std::string> material_names;
+  std::vector<std::string> warnings;
+};
+
 class Scene {
  public:
   Scene() = default;
@@ -98,8 +103,9 @@ class Scene {
   static Result<Scene> builtin_unlit(const std::string& name);
   static Result<Scene> load_obj_unlit(const std::string& path);
   static Result<Scene> load(const SceneSpec& spec);
-  // The material names an OBJ file's MTL libraries declare, without reading its geometry (for script checks).
-  static Result<std::vector<std::string>> obj_material_names(const std::string& path);
+  // What an OBJ file's text says apart from its geometry: its libraries' material names (for script checks) and
+  // warnings naming file and line (a missing library, a usemtl of an unknown material). Reads no geometry.
+  static Result<ObjCatalogue> catalogue_obj(const std::string& path);
   static const std::vector<std::string>& builtin_names();
 
  private:
@@ -126,6 +132,7 @@ class Scene {
   std::span<const float> area_view_;
   std::span<const float> light_pdf_view_;
   std::shared_ptr<const void> storage_;  // the mapping the views point into, when mapped
+  std::vector<std::string> ambient_only_;  // OBJ materials with Ka but no Ke: named if the scene ends up unlit
   Bounds bounds_;
   float epsilon_ = 1e-4f;
 };

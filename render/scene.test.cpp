@@ -3,6 +3,8 @@
 #include <gtest/gtest.h>
 
 #include <filesystem>
+#include <fstream>
+#include <unistd.h>
 
 namespace lf {
 
@@ -127,4 +129,43 @@ TEST(Scene, BoundsHoldEveryVertexAndGiveTheDiagonal) {
   // The published box: 556 x 548.8 x 559.2 mm.
   EXPECT_NEAR(b.diagonal(), std::sqrt(556.0f * 556.0f + 548.8f * 548.8f + 559.2f * 559.2f), 1.0f);
 }
+}  // namespace lf
+
+namespace lf {
+
+// Diagnostics of an OBJ's text, each naming file and line; a hint when an unlit scene has Ka where Ke was meant;
+// a bent light quad is an error.
+TEST(Scene, ObjDiagnosticsNameFileAndLine) {
+  const auto dir = std::filesystem::temp_directory_path() / ("lightfarm-diag-" + std::to_string(::getpid()));
+  std::filesystem::create_directories(dir);
+  const std::string a = (dir / "a.obj").string(), b = (dir / "b.obj").string();
+  std::ofstream(a) << "mtllib missing.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nusemtl nothing\nf 1 2 3\n";
+  std::ofstream(b) << "mtllib b.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nusemtl nothere\nf 1 2 3\nusemtl glow\nf 1 2 3\n"
+                      "usemtl nothere\nf 1 2 3\n";
+  std::ofstream(dir / "b.mtl") << "newmtl glow\nKd 0.5 0.5 0.5\nKa 5 5 5\n";
+  auto ca = Scene::catalogue_obj(a);
+  ASSERT_TRUE(ca.ok());
+  EXPECT_EQ(ca->warnings, (std::vector<std::string>{
+                              a + ":1: material library 'missing.mtl' not found beside the OBJ; its faces get a grey default",
+                              a + ":5: usemtl 'nothing' names no material of its libraries; those faces get a grey default"}));
+  auto cb = Scene::catalogue_obj(b);
+  ASSERT_TRUE(cb.ok());
+  EXPECT_EQ(cb->material_names, std::vector<std::string>{"glow"});
+  EXPECT_EQ(cb->warnings, std::vector<std::string>{
+                              b + ":5: usemtl 'nothere' names no material of its libraries; those faces get a grey default"});
+  auto unlit = Scene::load_obj(b);
+  ASSERT_FALSE(unlit.ok());
+  EXPECT_EQ(unlit.error().message, "scene file '" + b + "': the scene has no light (no material with Ke > 0, and the "
+                                   "script adds none); glow has Ka but no Ke: did you mean Ke?");
+  std::filesystem::remove_all(dir);
+
+  Scene s;
+  auto bent = s.add_script_lights(Value::Array{Value::Map{
+      {"quad", Value::Array{Value::Array{0.0, 0.0, 0.0}, Value::Array{1.0, 0.0, 0.0}, Value::Array{1.0, 1.0, 0.5},
+                            Value::Array{0.0, 1.0, 0.0}}},
+      {"radiance", Value::Array{1.0, 1.0, 1.0}}}});
+  ASSERT_FALSE(bent.ok());
+  EXPECT_EQ(bent.error().message.rfind("light 1: the quad is not planar (its 4th corner is ", 0), 0u) << bent.error().message;
+}
+
 }  // namespace lf

@@ -2,6 +2,7 @@
 #include "render/scene.hpp"
 
 #include <algorithm>
+#include <cmath>
 
 namespace lf {
 
@@ -25,6 +26,14 @@ Status Scene::add_script_lights(const Value::Array& lights) {
       if (!q->is_array() || q->as_array().size() != 4) return make_error(which + ": quad needs 4 corners");
       for (int k = 0; k < 4; ++k)
         if (!vec3_of(&q->as_array()[static_cast<size_t>(k)], c[k])) return make_error(which + ": a corner is not {x, y, z}");
+      // Two triangles of a bent quad would emit in two directions: refuse it rather than light something else.
+      const Vec3 n = normalize(cross(c[1] - c[0], c[2] - c[0]));
+      const float size = std::max(length(c[2] - c[0]), length(c[3] - c[1]));
+      const float off = std::abs(dot(c[3] - c[0], n));
+      if (!(size > 0)) return make_error(which + ": the quad has no area");
+      if (!(off <= 1e-4f * size))
+        return make_error(which + ": the quad is not planar (its 4th corner is " + std::to_string(off) +
+                          " off the plane of the first three)");
       add_quad(c[0], c[1], c[2], c[3], add_material({"light (script)", {}, colour}));
     } else if (const Value* sph = l.find("sphere")) {
       Vec3 centre;

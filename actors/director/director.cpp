@@ -164,6 +164,9 @@ class Director final : public ControlOut, public Outbox {
     // An output that cannot be written is a bad command line or script (exit 2), found before anything starts.
     if (auto st = check_output_path(spec_.image.output); !st) throw FarmFailure{st.error().message, 2};
     // The director reads the scene once itself, so a broken scene stops the farm before anything launches.
+    if (!spec_.scene.file.empty())
+      if (auto catalogue = Scene::catalogue_obj(spec_.scene.file))
+        for (const auto& warning : catalogue->warnings) log_warn(warning);
     auto scene = Scene::load(spec_.scene);
     if (!scene) throw FarmFailure{spec_.scene.loc.str() + ": " + scene.error().message};
     // A scene from a file travels to the hosts in its binary form; actors never parse the OBJ themselves.
