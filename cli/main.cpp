@@ -17,6 +17,7 @@
 #include "core/log.hpp"
 #include "farm/builders.hpp"
 #include "lua/script.hpp"
+#include "render/scene_report.hpp"
 #include "transport/protocol.hpp"
 
 namespace {
@@ -32,6 +33,9 @@ usage:
       Host one actor (the director runs this; see docs/PROTOCOL.md).
   lightfarm check-actor [--kind KIND] [--timeout SECONDS] [--inputs N] -- COMMAND [ARG]...
       Launch COMMAND as an actor and check it against the protocol; PASS/FAIL per check.
+  lightfarm scene FILE.obj
+      Describe an OBJ scene: triangles, bounds, materials, emitters and their flux, textures, warnings, and a
+      camera { } that frames it.
   lightfarm --help | --version
 
 options:
@@ -208,6 +212,16 @@ int main(int argc, char** argv) {
     if (cmd == "graph") return cmd_run(argc, argv, true);
     if (cmd == "actor") return cmd_actor(argc, argv);
     if (cmd == "check-actor") return cmd_check_actor(argc, argv);
+    if (cmd == "scene") {
+      if (argc != 3) return usage_error("scene needs one FILE.obj");
+      auto text = lf::describe_scene(argv[2]);
+      if (!text) {
+        std::fprintf(stderr, "lightfarm: error: %s\n", text.error().message.c_str());
+        return 2;
+      }
+      std::fputs(text->c_str(), stdout);
+      return 0;
+    }
   } catch (const std::bad_alloc&) {
     std::fprintf(stderr, "lightfarm: error: out of memory\n");
     return 1;

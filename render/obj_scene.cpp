@@ -135,6 +135,12 @@ Result<ObjCatalogue> Scene::catalogue_obj(const std::string& path) {
       for (const auto& m : materials) {
         out.material_names.push_back(m.name);
         known.insert(m.name);
+        for (const auto& [slot, name] : {std::pair{"map_Kd", &m.diffuse_texname}, {"map_Ks", &m.specular_texname},
+                                         {"map_d", &m.alpha_texname}, {"map_Ke", &m.emissive_texname}})
+          if (!name->empty()) {
+            std::error_code ec;
+            out.textures.push_back({m.name, slot, *name, std::filesystem::is_regular_file(dir / *name, ec)});
+          }
       }
     }
   }

@@ -43,7 +43,12 @@ struct PointLight {
 };
 
 struct ObjCatalogue {
+  struct Texture {
+    std::string material, slot, path;  // slot: the MTL statement (map_Kd, map_d, ...); path as found
+    bool found = false;
+  };
   std::vector<std::string> material_names;
+  std::vector<Texture> textures;
   std::vector<std::string> warnings;
 };
 

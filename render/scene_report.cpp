@@ -1,0 +1,109 @@
+#include "render/scene_report.hpp"
+
+#include <cmath>
+#include <cstdio>
+#include <map>
+
+#include "render/scene.hpp"
+
+namespace lf {
+
+namespace {
+
+std::string format(const char* fmt, double a, double b = 0, double c = 0) {
+  char buf[128];
+  std::snprintf(buf, sizeof buf, fmt, a, b, c);
+  return buf;
+}
+std::string vec(Vec3 v) { return format("{%.4g, %.4g, %.4g}", v.x, v.y, v.z); }
+
+const char* kind_name(Material::Type t) {
+  switch (t) {
+    case Material::Type::diffuse: return "diffuse";
+    case Material::Type::glossy: return "glossy";
+    case Material::Type::mirror: return "mirror";
+    case Material::Type::glass: return "glass";
+  }
+  return "?";
+}
+
+}  // namespace
+
+Result<std::string> describe_scene(const std::string& obj_path) {
+  auto catalogue = Scene::catalogue_obj(obj_path);
+  if (!catalogue) return catalogue.error();
+  auto scene = Scene::load_obj_unlit(obj_path);
+  if (!scene) return scene.error();
+  const Scene& s = *scene;
+  if (s.triangle_count() == 0) return make_error("scene file '" + obj_path + "' has no triangles");
+
+  Vec3 lo = s.vertex(0, 0), hi = lo;
+  for (const Vec3& v : s.vertices()) {
+    lo = {std::min(lo.x, v.x), std::min(lo.y, v.y), std::min(lo.z, v.z)};
+    hi = {std::max(hi.x, v.x), std::max(hi.y, v.y), std::max(hi.z, v.z)};
+  }
+  struct Use {
+    size_t faces = 0;
+    double area = 0;
+  };
+  std::map<uint32_t, Use> used;
+  for (uint32_t t = 0; t < s.triangle_count(); ++t) {
+    Use& u = used[s.material_of(t)];
+    ++u.faces;
+    u.area += s.area(t);
+  }
+
+  std::string out = "scene file " + obj_path + "\n";
+  out += "  triangles  " + std::to_string(s.triangle_count()) + "\n";
+  out += "  bounds     " + vec(lo) + " to " + vec(hi) + format(", diagonal %.4g\n", length(hi - lo));
+  out += "  materials  " + std::to_string(s.materials().size() - 1) + " (+ a grey default for faces without one)\n";
+  double total_flux = 0;
+  size_t emitting_faces = 0;
+  for (uint32_t m = 0; m < s.materials().size(); ++m) {
+    const Material& mat = s.material(m);
+    const auto it = used.find(m);
+    if (mat.name == "(default)" && it == used.end()) continue;
+    std::string line = "    " + mat.name + "  " + kind_name(mat.type) + "  kd " + vec(mat.kd);
+    if (mat.type != Material::Type::diffuse) line += "  ks " + vec(mat.ks);
+    line += "  faces " + std::to_string(it == used.end() ? 0 : it->second.faces);
+    if (mat.emissive() && it != used.end()) {
+      const double flux = kPi * it->second.area * average(mat.ke);  // one-sided Lambertian emitter
+      total_flux += flux;
+      emitting_faces += it->second.faces;
+      line += "  emits " + vec(mat.ke) + format("  flux %.4g", flux);
+    }
+    out += line + "\n";
+  }
+  out += emitting_faces ? "  emitters   " + std::to_string(emitting_faces) + " triangles" + format(", flux %.4g\n", total_flux)
+                        : "  emitters   none: add light { } or material \"Name\" { emission = {r, g, b} } in the script\n";
+  // One line per texture file: which statements use it, for how many materials, and whether it is there.
+  struct Use_ {
+    std::map<std::string, int> slots;
+    bool found = false;
+  };
+  std::map<std::string, Use_> files;
+  for (const auto& t : catalogue->textures) {
+    ++files[t.path].slots[t.slot];
+    files[t.path].found = t.found;
+  }
+  size_t missing = 0;
+  for (const auto& [path, u] : files) missing += !u.found;
+  out += "  textures   " + std::to_string(files.size()) + " file" + (files.size() == 1 ? "" : "s") +
+         (missing ? " (" + std::to_string(missing) + " missing)" : "") + "\n";
+  for (const auto& [path, u] : files) {
+    std::string slots;
+    for (const auto& [slot, n] : u.slots) slots += (slots.empty() ? "" : ", ") + slot + " of " + std::to_string(n);
+    out += "    " + path + "  " + slots + (u.found ? "" : "  (missing)") + "\n";
+  }
+  for (const auto& w : catalogue->warnings) out += "  warning    " + w + "\n";
+
+  // A camera that frames the bounding sphere from the +z side, a little above, with a 45-degree field of view.
+  const Vec3 centre = (lo + hi) * 0.5f;
+  const float radius = 0.5f * length(hi - lo);
+  const float distance = radius / std::sin(0.5f * 45.0f * kPi / 180.0f);  // the sphere fits the view cone
+  const Vec3 eye = centre + normalize(Vec3{0, 0.35f, 1}) * distance;
+  out += "  camera     camera { eye = " + vec(eye) + ", at = " + vec(centre) + ", fov = 45 }\n";
+  return out;
+}
+
+}  // namespace lf
