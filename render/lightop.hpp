@@ -182,6 +182,9 @@ class LightOp {
   // Writes the radiance leaving each point towards its wo into radiance[i] (radiance.size() == points.size()).
   // Emission of the point itself is not included: the renderer adds what the camera sees directly.
   virtual Task shade(const ShadingPoints& points, std::span<RGB> radiance, Inputs& inputs) = 0;
+  // What the op did, for STATS and the end-of-run table (a map of numbers; nil when there is nothing to tell):
+  // how to tune it comes from here (docs/lua-api.md).
+  virtual Value stats() const { return Value(); }
 };
 
 // Inputs served in-process: each input is another LightOp in the same address space, called directly.

@@ -32,6 +32,20 @@ void print_report(const FarmSpec& spec, const Supervisor& supervisor, const RunF
                  num(s.stats, "bytes_in") / 1048576.0, num(s.stats, "bytes_out") / 1048576.0,
                  num(s.stats, "busy_seconds"), num(s.stats, "peak_queue"));
   }
+  // What each LightOp says about its own work (STATS detail): cache coverage, photons, ...
+  bool header = false;
+  for (const auto& a : spec.actors) {
+    const ActorRecord& s = supervisor.at(a.name);
+    const Value* detail = s.stats.find("detail");
+    if (s.lost || a.is_multiplexer() || a.is_ring_node() || !detail || !detail->is_map() || detail->as_map().empty())
+      continue;
+    if (!header) std::fprintf(stderr, "\n%-14s %s\n", "lightop", "figures");
+    header = true;
+    std::string line;
+    for (const auto& [key, v] : detail->as_map())
+      if (v.is_number()) line += (line.empty() ? "" : ", ") + key + " " + std::to_string(static_cast<long long>(v.as_double()));
+    std::fprintf(stderr, "%-14s %s\n", a.name.c_str(), line.c_str());
+  }
   std::fprintf(stderr, "\nrender: %.2f M samples/s\n", samples / f.render_seconds / 1e6);
   std::printf("wrote %s (%dx%d, %d spp)\n", spec.image.output.c_str(), spec.image.width, spec.image.height,
               spec.image.spp);

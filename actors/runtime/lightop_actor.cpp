@@ -192,6 +192,8 @@ class LightOpActor final : public Actor {
 
   size_t queue_length() const override { return waiting_.size(); }
   bool has_local_work() const override { return set_up_ && !waiting_.empty(); }
+  // The op's own figures (cache hits, photons, ...) under STATS "detail".
+  Value extra_stats() const override { return op_ ? op_->stats() : Value(); }
 
  private:
   struct Job {

@@ -83,6 +83,18 @@ class Irradiance final : public LightOp {
     cache_->freeze();  // rendering only reads it
   }
 
+  // records: the cache's size; lookups: diffuse points asked for; served_a/_2a/_4a: answered by records valid under
+  // a, else under the relaxed bounds; own_values: points that paid for their own hemisphere (raise `prepass` or `a`
+  // when this is more than a few percent).
+  Value stats() const override {
+    return Value::Map{{"records", static_cast<int64_t>(cache_ ? cache_->size() : 0)},
+                      {"lookups", static_cast<int64_t>(lookups_)},
+                      {"served_a", static_cast<int64_t>(served_[0])},
+                      {"served_2a", static_cast<int64_t>(served_[1])},
+                      {"served_4a", static_cast<int64_t>(served_[2])},
+                      {"own_values", static_cast<int64_t>(own_values_)}};
+  }
+
   Task shade(const ShadingPoints& points, std::span<RGB> radiance, Inputs& inputs) override {
     const Scene& scene = *ctx_.scene;
     std::vector<Candidate> misses;
@@ -96,9 +108,13 @@ class Irradiance final : public LightOp {
       // whose own samples would miss the next cache down a network in turn.
       RGB e;
       static constexpr float kBounds[] = {1.0f, 2.0f, 4.0f};
-      if (cache_->lookup_first(points.position[i], points.normal[i], kBounds, e) >= 0) {
+      const int bound = cache_->lookup_first(points.position[i], points.normal[i], kBounds, e);
+      ++lookups_;
+      if (bound >= 0) {
+        ++served_[bound];
         radiance[i] = m.kd * e * (1.0f / kPi);
       } else {
+        ++own_values_;
         misses.push_back(Candidate{points.position[i], points.normal[i], splitmix64(points.key[i] ^ 0x1e7)});
         miss_owner.push_back(i);
       }
@@ -113,6 +129,8 @@ class Irradiance final : public LightOp {
   }
 
  private:
+  uint64_t lookups_ = 0, own_values_ = 0;
+  uint64_t served_[3] = {0, 0, 0};
   struct Candidate {
     Vec3 x, n;
     uint64_t key;

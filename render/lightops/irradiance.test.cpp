@@ -127,6 +127,16 @@ TEST(Irradiance, OneBounceOfDirectMatchesThePathTracer) {
   run_to_completion(irr->setup(ctx, to_direct));
   std::vector<RGB> bounce(pts.size());
   run_to_completion(irr->shade(pts, bounce, to_direct));
+  // Its figures account for every diffuse point: served by records under a, 2a or 4a, or computed on its own.
+  const Value st = irr->stats();
+  auto count = [&](const char* key) { return st.find(key)->as_int(); };
+  int64_t diffuse = 0;
+  for (size_t i = 0; i < pts.size(); ++i)
+    diffuse += !scene->material(pts.material[i]).specular() && !is_black(scene->material(pts.material[i]).kd);
+  EXPECT_EQ(count("lookups"), diffuse);
+  EXPECT_EQ(count("served_a") + count("served_2a") + count("served_4a") + count("own_values"), count("lookups"));
+  EXPECT_GT(count("records"), 100);
+  EXPECT_GT(count("served_a"), count("lookups") / 2);
 
   auto path = [&](int depth) {
     auto pt = make("pathtrace", Value::Map{{"max_depth", depth}, {"samples", 2048}, {"rr_depth", 100}});

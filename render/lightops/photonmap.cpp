@@ -123,6 +123,7 @@ class PhotonMap final : public LightOp {
       radiance[i] = RGB{};
       const Material& m = scene.material(points.material[i]);
       if (m.specular() || cloud_.photons.empty()) continue;
+      ++lookups_;
       if (irradiance_tree_ && m.type == Material::Type::diffuse) {
         // The nearest precomputed estimate, if it lies on a surface facing the same way.
         const float q[3] = {points.position[i].x, points.position[i].y, points.position[i].z};
@@ -134,6 +135,7 @@ class PhotonMap final : public LightOp {
         if (one.size() == 0) continue;  // no caustic photon within max_radius
         const IrradiancePoint& e = irradiance_.points[nearest];
         if (dot(e.normal, points.normal[i]) > 0.9f) {
+          ++served_precomputed_;
           radiance[i] = m.kd * e.irradiance * (1.0f / kPi);
           continue;
         }
@@ -145,7 +147,19 @@ class PhotonMap final : public LightOp {
     co_return;
   }
 
+ public:
+  // photons_shot: by the whole pool; photons_stored: in this map (caustic photons only); lookups: non-specular
+  // points asked for; served_precomputed: answered by the nearest precomputed irradiance (`precompute`), the rest
+  // by a k-nearest estimate.
+  Value stats() const override {
+    return Value::Map{{"photons_shot", static_cast<int64_t>(photons_)},
+                      {"photons_stored", static_cast<int64_t>(cloud_.photons.size())},
+                      {"lookups", static_cast<int64_t>(lookups_)},
+                      {"served_precomputed", static_cast<int64_t>(served_precomputed_)}};
+  }
+
  private:
+  uint64_t lookups_ = 0, served_precomputed_ = 0;
   // sum f(wi) * flux * w / (pi r^2 norm) over the k nearest photons within max_radius that arrived on n's side.
   template <class Brdf>
   RGB estimate(Vec3 x, Vec3 n, Brdf&& f) const {
