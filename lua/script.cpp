@@ -301,13 +301,17 @@ int l_slurm_hosts(lua_State* L) {
   return 1;
 }
 
-int l_host(lua_State* L) {
+// NAME "x" { ... } (host, material): a function of the name returning the one that takes the table, with the
+// builder and the name as its upvalues.
+int with_name(lua_State* L, lua_CFunction takes_table) {
   luaL_checkstring(L, 1);
   lua_pushvalue(L, lua_upvalueindex(1));
   lua_pushvalue(L, 1);
-  lua_pushcclosure(L, l_host_table, 2);
+  lua_pushcclosure(L, takes_table, 2);
   return 1;
 }
+
+int l_host(lua_State* L) { return with_name(L, l_host_table); }
 
 // Takes the wiring keys (input, inputs, name, host) out of the table at index 1 into `a`; returns the wanted name.
 std::string take_wiring(lua_State* L, Builder& b, ActorSpec& a, const std::string& what, const std::string& default_name) {
@@ -604,13 +608,7 @@ int l_material_table(lua_State* L) {
   return 0;
 }
 
-int l_material(lua_State* L) {
-  luaL_checkstring(L, 1);
-  lua_pushvalue(L, lua_upvalueindex(1));
-  lua_pushvalue(L, 1);
-  lua_pushcclosure(L, l_material_table, 2);
-  return 1;
-}
+int l_material(lua_State* L) { return with_name(L, l_material_table); }
 
 // farm { heartbeat_timeout = 10, request_timeout = 120, director_address, security = "curve" }: settings of the
 // farm as a whole.
