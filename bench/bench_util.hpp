@@ -14,6 +14,8 @@
 #include <string>
 #include <vector>
 
+#include "core/value.hpp"
+
 namespace bench {
 
 namespace fs = std::filesystem;
@@ -22,6 +24,16 @@ using Clock = std::chrono::steady_clock;
 inline double median(std::vector<double> v) {
   std::sort(v.begin(), v.end());
   return v.empty() ? 0 : v[v.size() / 2];
+}
+
+// min / median / max of repeated runs, as the benches print and write them.
+struct Spread {
+  double min = 0, median = 0, max = 0;
+  lf::Value to_value() const { return lf::Value::Map{{"min", min}, {"median", median}, {"max", max}}; }
+};
+inline Spread spread(std::vector<double> v) {
+  std::sort(v.begin(), v.end());
+  return v.empty() ? Spread{} : Spread{v.front(), bench::median(v), v.back()};
 }
 
 // The number after "key": in a JSON text (the director's stats are flat enough for this).

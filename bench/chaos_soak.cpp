@@ -104,8 +104,8 @@ int main(int argc, char** argv) {
       const std::string out = (dir / (net.name + ".exr")).string();
       fs::remove(out);
       Farm farm({"run", net.script, "--output", out});
-      std::map<std::string, int> alive;  // per group index: members not yet killed
-      for (size_t g = 0; g < net.groups.size(); ++g) alive[std::to_string(g)] = static_cast<int>(net.groups[g].size());
+      std::vector<size_t> alive;  // per group: members not yet hit
+      for (const auto& group : net.groups) alive.push_back(group.size());
       std::set<std::string> hit;
       const int planned = 1 + static_cast<int>(rng() % 3);
       std::uniform_real_distribution<double> when(0.3, 2.5);
@@ -117,7 +117,7 @@ int main(int argc, char** argv) {
         // A victim whose group keeps a survivor.
         std::vector<std::pair<size_t, std::string>> candidates;
         for (size_t g = 0; g < net.groups.size(); ++g)
-          if (alive[std::to_string(g)] > 1)
+          if (alive[g] > 1)
             for (const auto& name : net.groups[g])
               if (!hit.count(name) && (rendering || !net.render_only.count(name))) candidates.emplace_back(g, name);
         if (candidates.empty()) break;
@@ -125,7 +125,7 @@ int main(int argc, char** argv) {
         const auto pids = lf::test::actor_pids(farm.tag(), victim);
         if (pids.empty()) continue;
         hit.insert(victim);
-        --alive[std::to_string(group)];  // a stopped one may be declared dead: count it gone either way
+        --alive[group];  // a stopped one may be declared dead: count it gone either way
         ++faults;
         if (rng() % 5 < 3) {
           ::kill(pids[0], SIGKILL);

@@ -60,14 +60,6 @@ std::pair<double, double> step_launch(int processes) {
   return {per_actor, per_node};
 }
 
-struct Spread {
-  double min = 0, median = 0, max = 0;
-};
-Spread spread(std::vector<double> v) {
-  std::sort(v.begin(), v.end());
-  return {v.front(), bench::median(v), v.back()};
-}
-lf::Value to_value(const Spread& s) { return lf::Value::Map{{"min", s.min}, {"median", s.median}, {"max", s.max}}; }
 
 }  // namespace
 
@@ -177,9 +169,9 @@ int main(int argc, char** argv) {
                           "throughput_curve_over_none_across_hosts", "throughput_curve_over_none", "samples_per_second_local_curve",
                           "samples_per_second_local_none"}) {
     if (v[key].empty()) continue;
-    const Spread s = spread(v[key]);
+    const bench::Spread s = bench::spread(v[key]);
     std::printf("%-46s %9.3f %9.3f %9.3f\n", key, s.min, s.median, s.max);
-    doc[key] = to_value(s);
+    doc[key] = s.to_value();
   }
   std::ofstream(json_path) << lf::to_json(doc, 2) << "\n";
   std::printf("wrote %s\n", json_path.c_str());

@@ -18,13 +18,6 @@
 
 namespace {
 
-struct Spread {
-  double min = 0, median = 0, max = 0;
-};
-Spread spread(std::vector<double> v) {
-  std::sort(v.begin(), v.end());
-  return {v.front(), bench::median(v), v.back()};
-}
 
 template <class F>
 double seconds(F&& f) {
@@ -129,9 +122,9 @@ int main(int argc, char** argv) {
   for (const char* key : {"parse_obj_seconds", "read_shipped_private_seconds", "make_shared_image_seconds",
                           "map_shared_image_seconds", "build_bvh_seconds", "actor_start_seconds_2_replicas", "actor_start_seconds_6_replicas",
                           "farm_pss_mb_2_replicas", "farm_pss_mb_6_replicas", "growth_mb_per_extra_actor"}) {
-    const Spread s = spread(v[key]);
+    const bench::Spread s = bench::spread(v[key]);
     std::printf("%-32s %9.3f %9.3f %9.3f\n", key, s.min, s.median, s.max);
-    doc[key] = lf::Value::Map{{"min", s.min}, {"median", s.median}, {"max", s.max}};
+    doc[key] = s.to_value();
   }
   std::ofstream(json_path) << lf::to_json(doc, 2) << "\n";
   std::printf("wrote %s\n", json_path.c_str());

@@ -22,6 +22,11 @@ std::string make_private_dir(const std::string& kind) {
   return ::mkdtemp(buffer.data()) ? std::string(buffer.data()) : std::string();
 }
 
+bool owner_is_gone(std::string_view pid) {
+  if (pid.empty() || pid.size() > 9 || pid.find_first_not_of("0123456789") != std::string_view::npos) return false;
+  return ::kill(static_cast<pid_t>(std::stol(std::string(pid))), 0) != 0 && errno == ESRCH;
+}
+
 int sweep_stale_private_dirs(const std::string& kind) {
   namespace fs = std::filesystem;
   const std::string start = prefix(kind);
@@ -32,12 +37,10 @@ int sweep_stale_private_dirs(const std::string& kind) {
     if (name.rfind(start, 0) != 0) continue;
     const std::string rest = name.substr(start.size());
     const auto dash = rest.find('-');
-    if (dash == 0 || dash == std::string::npos || rest.find_first_not_of("0123456789") != dash) continue;
-    const pid_t owner = static_cast<pid_t>(std::stol(rest.substr(0, dash)));
+    if (dash == std::string::npos) continue;
     struct stat st {};
     if (::lstat(it->path().c_str(), &st) != 0 || !S_ISDIR(st.st_mode) || st.st_uid != ::getuid()) continue;
-    // Only a folder whose owner is gone: a live process (or a pid now reused) keeps its folder.
-    if (::kill(owner, 0) == 0 || errno != ESRCH) continue;
+    if (!owner_is_gone(std::string_view(rest).substr(0, dash))) continue;
     std::error_code rm;
     fs::remove_all(it->path(), rm);
     if (!rm) ++swept;

@@ -2,7 +2,6 @@
 
 #include <dlfcn.h>
 #include <fcntl.h>
-#include <signal.h>
 #include <unistd.h>
 
 #include <cerrno>
@@ -13,6 +12,8 @@
 #include <cstdlib>
 #include <filesystem>
 #include <vector>
+
+#include "core/private_dir.hpp"
 
 namespace lf {
 
@@ -51,16 +52,28 @@ const std::vector<std::string>& display_tonemaps() {
   return names;
 }
 
-float display_value(float linear, const Display& display) {
-  const float v = std::max(0.0f, linear * std::exp2(display.exposure));
-  if (display.tonemap == "reinhard") return v / (1.0f + v);
-  if (display.tonemap == "aces") {
-    // Narkowicz 2015: a fit of the ACES reference rendering transform, per channel.
-    const float mapped = (v * (2.51f * v + 0.03f)) / (v * (2.43f * v + 0.59f) + 0.14f);
-    return std::clamp(mapped, 0.0f, 1.0f);
+namespace {
+// A Display read once per image, not per pixel: the exposure's factor and the curve.
+struct ToneCurve {
+  enum class Kind { clamp, reinhard, aces } kind = Kind::clamp;
+  float scale = 1;
+  explicit ToneCurve(const Display& d)
+      : kind(d.tonemap == "reinhard" ? Kind::reinhard : d.tonemap == "aces" ? Kind::aces : Kind::clamp),
+        scale(std::exp2(d.exposure)) {}
+  float operator()(float linear) const {
+    const float v = std::max(0.0f, linear * scale);
+    switch (kind) {
+      case Kind::reinhard: return v / (1.0f + v);
+      case Kind::aces:  // Narkowicz 2015: a fit of the ACES reference rendering transform, per channel.
+        return std::clamp((v * (2.51f * v + 0.03f)) / (v * (2.43f * v + 0.59f) + 0.14f), 0.0f, 1.0f);
+      case Kind::clamp: break;
+    }
+    return std::min(v, 1.0f);
   }
-  return std::min(v, 1.0f);
-}
+};
+}  // namespace
+
+float display_value(float linear, const Display& display) { return ToneCurve(display)(linear); }
 
 static float to_srgb(float linear) {
   linear = std::clamp(linear, 0.0f, 1.0f);
@@ -141,9 +154,7 @@ void sweep_stale_partials(const fs::path& target) {
   for (fs::directory_iterator it(dir, ec), end; !ec && it != end; it.increment(ec)) {
     const std::string name = it->path().filename().string();
     if (name.size() <= head.size() + ext.size() || name.rfind(head, 0) != 0 || !name.ends_with(ext)) continue;
-    const std::string pid = name.substr(head.size(), name.size() - head.size() - ext.size());
-    if (pid.find_first_not_of("0123456789") != std::string::npos) continue;
-    if (::kill(static_cast<pid_t>(std::stol(pid)), 0) != 0 && errno == ESRCH) {
+    if (owner_is_gone(std::string_view(name).substr(head.size(), name.size() - head.size() - ext.size()))) {
       std::error_code rm;
       fs::remove(it->path(), rm);
     }
@@ -164,11 +175,12 @@ Status write_image(const Image& image, const std::string& path, const Display& d
   const bool linear = is_float_format(ext);
   std::vector<unsigned char> bytes;
   if (!linear) {
+    const ToneCurve curve(display);
     bytes.resize(image.pixels.size() * 3);
     for (size_t i = 0; i < image.pixels.size(); ++i) {
-      bytes[3 * i] = static_cast<unsigned char>(std::lround(255.0f * to_srgb(display_value(image.pixels[i].x, display))));
-      bytes[3 * i + 1] = static_cast<unsigned char>(std::lround(255.0f * to_srgb(display_value(image.pixels[i].y, display))));
-      bytes[3 * i + 2] = static_cast<unsigned char>(std::lround(255.0f * to_srgb(display_value(image.pixels[i].z, display))));
+      bytes[3 * i] = static_cast<unsigned char>(std::lround(255.0f * to_srgb(curve(image.pixels[i].x))));
+      bytes[3 * i + 1] = static_cast<unsigned char>(std::lround(255.0f * to_srgb(curve(image.pixels[i].y))));
+      bytes[3 * i + 2] = static_cast<unsigned char>(std::lround(255.0f * to_srgb(curve(image.pixels[i].z))));
     }
   }
   char err[512] = {0};

@@ -9,6 +9,15 @@
 
 namespace lf {
 
+Bounds bounds_of(std::span<const Vec3> points) {
+  Vec3 lo = points[0], hi = points[0];
+  for (const auto& v : points) {
+    lo = {std::min(lo.x, v.x), std::min(lo.y, v.y), std::min(lo.z, v.z)};
+    hi = {std::max(hi.x, v.x), std::max(hi.y, v.y), std::max(hi.z, v.z)};
+  }
+  return Bounds{lo, hi};
+}
+
 uint32_t Scene::add_material(Material m) {
   materials_.push_back(std::move(m));
   return static_cast<uint32_t>(materials_.size() - 1);
@@ -77,13 +86,8 @@ void Scene::add_quad(Vec3 a, Vec3 b, Vec3 c, Vec3 d, uint32_t material) {
 
 Status Scene::finalize(const std::string& what) {
   if (triangles_.empty()) return make_error(what + ": the scene has no triangles");
-  Vec3 lo = vertices_[0], hi = vertices_[0];
-  for (const auto& v : vertices_) {
-    lo = {std::min(lo.x, v.x), std::min(lo.y, v.y), std::min(lo.z, v.z)};
-    hi = {std::max(hi.x, v.x), std::max(hi.y, v.y), std::max(hi.z, v.z)};
-  }
-  bounds_ = Bounds{lo, hi};
-  epsilon_ = std::max(1e-4f * length(hi - lo), 1e-6f);
+  bounds_ = bounds_of(vertices_);
+  epsilon_ = std::max(1e-4f * bounds_.diagonal(), 1e-6f);
 
   emitters_.clear();
   emitter_cdf_.clear();

@@ -36,6 +36,8 @@ struct Bounds {
   Vec3 lo, hi;
   float diagonal() const { return length(hi - lo); }
 };
+// The box around `points` (not empty).
+Bounds bounds_of(std::span<const Vec3> points);
 
 struct PointLight {
   Vec3 position;

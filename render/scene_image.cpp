@@ -217,22 +217,26 @@ Result<Scene> load_shared_scene(const std::string& shipped, const std::string& h
   if (!scene) return scene;
   const std::string bytes = SceneImage::encode(*scene, hash);
   const std::string temp = image + ".tmp." + std::to_string(::getpid());
+  // Why it could not be made, taken where it failed (errno would be overwritten by the clean-up).
+  std::string why;
   const int fd = ::open(temp.c_str(), O_CREAT | O_TRUNC | O_WRONLY | O_CLOEXEC, 0644);
-  bool written = fd >= 0;
-  for (size_t at = 0; written && at < bytes.size();) {
+  if (fd < 0) why = std::strerror(errno);
+  for (size_t at = 0; why.empty() && at < bytes.size();) {
     const ssize_t n = ::write(fd, bytes.data() + at, bytes.size() - at);
     if (n < 0 && errno == EINTR) continue;
-    if (n <= 0) written = false;
+    if (n <= 0) why = n < 0 ? std::strerror(errno) : "nothing written";
     else at += static_cast<size_t>(n);
   }
-  if (fd >= 0 && ::close(fd) != 0) written = false;
-  if (written && ::rename(temp.c_str(), image.c_str()) == 0) {
-    if (auto mapped = SceneImage::map(image, hash, what)) return mapped;
+  if (fd >= 0 && ::close(fd) != 0 && why.empty()) why = std::strerror(errno);
+  if (why.empty() && ::rename(temp.c_str(), image.c_str()) != 0) why = std::strerror(errno);
+  if (why.empty()) {
+    auto mapped = SceneImage::map(image, hash, what);
+    if (mapped) return mapped;
+    why = mapped.error().message;
   }
   ::unlink(temp.c_str());
   // Still correct, only not shared: this actor keeps its own copy.
-  log_warn(what + ": cannot make the shared scene image '" + image + "' (" + std::strerror(errno) +
-           "); this actor keeps a private copy");
+  log_warn(what + ": cannot make the shared scene image '" + image + "' (" + why + "); this actor keeps a private copy");
   return scene;
 }
 

@@ -37,11 +37,8 @@ Result<std::string> describe_scene(const std::string& obj_path) {
   const Scene& s = *scene;
   if (s.triangle_count() == 0) return make_error("scene file '" + obj_path + "' has no triangles");
 
-  Vec3 lo = s.vertex(0, 0), hi = lo;
-  for (const Vec3& v : s.vertices()) {
-    lo = {std::min(lo.x, v.x), std::min(lo.y, v.y), std::min(lo.z, v.z)};
-    hi = {std::max(hi.x, v.x), std::max(hi.y, v.y), std::max(hi.z, v.z)};
-  }
+  const Bounds bounds = bounds_of(s.vertices());
+  const Vec3 lo = bounds.lo, hi = bounds.hi;
   struct Use {
     size_t faces = 0;
     double area = 0;
@@ -55,7 +52,7 @@ Result<std::string> describe_scene(const std::string& obj_path) {
 
   std::string out = "scene file " + obj_path + "\n";
   out += "  triangles  " + std::to_string(s.triangle_count()) + "\n";
-  out += "  bounds     " + vec(lo) + " to " + vec(hi) + format(", diagonal %.4g\n", length(hi - lo));
+  out += "  bounds     " + vec(lo) + " to " + vec(hi) + format(", diagonal %.4g\n", bounds.diagonal());
   out += "  materials  " + std::to_string(s.materials().size() - 1) + " (+ a grey default for faces without one)\n";
   double total_flux = 0;
   size_t emitting_faces = 0;
@@ -77,11 +74,11 @@ Result<std::string> describe_scene(const std::string& obj_path) {
   out += emitting_faces ? "  emitters   " + std::to_string(emitting_faces) + " triangles" + format(", flux %.4g\n", total_flux)
                         : "  emitters   none: add light { } or material \"Name\" { emission = {r, g, b} } in the script\n";
   // One line per texture file: which statements use it, for how many materials, and whether it is there.
-  struct Use_ {
+  struct TextureUse {
     std::map<std::string, int> slots;
     bool found = false;
   };
-  std::map<std::string, Use_> files;
+  std::map<std::string, TextureUse> files;
   for (const auto& t : catalogue->textures) {
     ++files[t.path].slots[t.slot];
     files[t.path].found = t.found;
@@ -99,7 +96,7 @@ Result<std::string> describe_scene(const std::string& obj_path) {
 
   // A camera that frames the bounding sphere from the +z side, a little above, with a 45-degree field of view.
   const Vec3 centre = (lo + hi) * 0.5f;
-  const float radius = 0.5f * length(hi - lo);
+  const float radius = 0.5f * bounds.diagonal();
   const float distance = radius / std::sin(0.5f * 45.0f * kPi / 180.0f);  // the sphere fits the view cone
   const Vec3 eye = centre + normalize(Vec3{0, 0.35f, 1}) * distance;
   out += "  camera     camera { eye = " + vec(eye) + ", at = " + vec(centre) + ", fov = 45 }\n";

@@ -204,13 +204,6 @@ TEST_F(FailureTest, RenderersAndReplicasLostAtStartUpAreLeftOut) {
   EXPECT_TRUE(img->pixels == reference.pixels);
 }
 
-// The process state letter of `pid` ('T' when stopped), from /proc.
-char process_state(pid_t pid) {
-  const std::string stat = read_file("/proc/" + std::to_string(pid) + "/stat");
-  const auto close = stat.rfind(')');
-  return close == std::string::npos || close + 2 >= stat.size() ? '?' : stat[close + 2];
-}
-
 // Ctrl-Z and fg (issue 12): SIGTSTP to the director stops its actors and itself; three times the heartbeat timeout
 // later SIGCONT resumes them all, nobody is taken for dead, and the image is the one an unpaused run makes.
 TEST_F(FailureTest, CtrlZThenFgResumesTheFarm) {

@@ -41,6 +41,13 @@ inline std::string unique_tag() {
   return "lftest-" + std::to_string(::getpid()) + "-" + std::to_string(n++);
 }
 
+// The process state letter of `pid` from /proc ('T' stopped, 'Z' zombie), '?' when it is gone.
+inline char process_state(pid_t pid) {
+  const std::string stat = read_file("/proc/" + std::to_string(pid) + "/stat");
+  const auto close = stat.rfind(')');  // the command name may hold spaces and parentheses
+  return close == std::string::npos || close + 2 >= stat.size() ? '?' : stat[close + 2];
+}
+
 // PIDs of live (non-zombie) processes whose environment carries LIGHTFARM_TEST_TAG=tag.
 inline std::vector<pid_t> leftover_processes(const std::string& tag) {
   std::vector<pid_t> found;
@@ -50,10 +57,9 @@ inline std::vector<pid_t> leftover_processes(const std::string& tag) {
     if (name.find_first_not_of("0123456789") != std::string::npos) continue;
     std::string env = read_file(entry.path() / "environ");
     if (env.find(needle + '\0') == std::string::npos && env.find(needle) == std::string::npos) continue;
-    std::string stat = read_file(entry.path() / "stat");
-    auto close = stat.rfind(')');
-    if (close != std::string::npos && close + 2 < stat.size() && stat[close + 2] == 'Z') continue;
-    found.push_back(static_cast<pid_t>(std::stoi(name)));
+    const auto pid = static_cast<pid_t>(std::stoi(name));
+    if (process_state(pid) == 'Z') continue;
+    found.push_back(pid);
   }
   return found;
 }

@@ -141,7 +141,8 @@ class Director final : public ControlOut, public Outbox {
     supervisor_.send_bye_to_all();
     launchers_.stop_all(std::chrono::milliseconds(status == 0 ? 3000 : 300));
     kill_orphans();
-    remove_local_sockets();
+    // An actor removes its IPC folder when it exits; one that was killed cannot. Every actor here is reaped by now.
+    sweep_stale_private_dirs("actor");
     if (status == 0) status = report();
     return status;
   }
@@ -215,18 +216,6 @@ class Director final : public ControlOut, public Outbox {
       return source;
     }
     return std::string("127.0.0.1");
-  }
-
-  // An actor removes its IPC folder when it exits; one that was killed cannot, so the director does for this
-  // machine's actors (the folder is the actor's, /tmp/lightfarm-actor-PID-XXXXXX, nothing else).
-  void remove_local_sockets() {
-    for (const auto& [name, a] : supervisor_.actors()) {
-      const HostSpec* h = spec_.host_of(*a.spec);
-      if (!h || h->remote() || a.local_endpoint.rfind("ipc:///tmp/lightfarm-actor-", 0) != 0) continue;
-      const std::filesystem::path dir = std::filesystem::path(a.local_endpoint.substr(6)).parent_path();
-      std::error_code ec;
-      std::filesystem::remove_all(dir, ec);
-    }
   }
 
   // Every host that runs an actor gets the scene once (its cache may have it already); hosts connect in parallel.
