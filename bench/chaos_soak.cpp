@@ -4,9 +4,10 @@
 // /tmp, /dev/shm and the output folder (goal 0). Writes bench-chaos.json.
 //
 // Victims are what the farm promises to survive: a renderer while another lives, a pool replica while another of
-// its pool lives (photon-map replicas only once rendering began: their shares cannot be redone during setup).
+// its pool lives (photon-map replicas only once rendering began: their shares cannot be redone during setup), and
+// any radiosity ring node (restarted; the ring rolls back to its checkpoint).
 // Stops last 0.2-3 s against a heartbeat timeout of 1.5 s, so some are taken for death and some are not.
-// Usage: build/bench/chaos_soak [--frames N per network] [--seed S] [--json FILE]
+// Usage: build/bench/chaos_soak [--frames N per network] [--seed S] [--only NETWORK] [--json FILE]
 #include <cstdio>
 #include <fstream>
 #include <map>
@@ -28,6 +29,7 @@ struct Network {
   std::string script;
   std::vector<std::vector<std::string>> groups;  // each group: actors of which at least one must survive
   std::set<std::string> render_only;             // victims only once "render" has begun
+  std::set<std::string> restarted;               // victims at any time, none need survive (ring nodes)
 };
 
 // Files lightfarm leaves in shared places: private folders, shared memory, temporary images in `out_dir`.
@@ -48,11 +50,13 @@ int main(int argc, char** argv) {
   int frames = 10;
   unsigned seed = 1;
   std::string json_path = "bench-chaos.json";
+  std::string only;  // one network by name
   for (int i = 1; i + 1 < argc; i += 2) {
     std::string a = argv[i];
     if (a == "--frames") frames = std::atoi(argv[i + 1]);
     else if (a == "--seed") seed = static_cast<unsigned>(std::atoi(argv[i + 1]));
     else if (a == "--json") json_path = argv[i + 1];
+    else if (a == "--only") only = argv[i + 1];
   }
   const fs::path dir = fs::temp_directory_path() / ("chaos-" + std::to_string(::getpid()));
   fs::create_directories(dir);
@@ -82,6 +86,16 @@ int main(int argc, char** argv) {
                                  "renderers { count = 3, lighting = outer }\n"),
        {{"renderer-0", "renderer-1", "renderer-2"}, {"direct.0.0", "direct.0.1"}, {"direct.1.0", "direct.1.1"}},
        {}},
+      {"radiosity",
+       bench::temp_script("chaos-radiosity.lua",
+                          "scene { builtin = \"cornell\" }\nimage { width = 64, height = 64, spp = 16, tile = 16 }\n"
+                          "farm { heartbeat_timeout = 1.5 }\n"
+                          "local ring = radiosity { rings = 2, ring_length = 2, patch_size = 60, converge = 0, "
+                          "max_iterations = 60, checkpoint_every = 5 }\n"
+                          "renderers { count = 2, lighting = ring }\n"),
+       {{"renderer-0", "renderer-1"}},
+       {},
+       {"radiosity.0.0", "radiosity.0.1", "radiosity.1.0", "radiosity.1.1"}},
   };
 
   std::mt19937 rng(seed);
@@ -90,6 +104,7 @@ int main(int argc, char** argv) {
   std::printf("%-9s %7s %9s %9s %7s %8s %11s %7s\n", "network", "frames", "finished", "differing", "failed", "orphans",
               "files_left", "faults");
   for (const auto& net : networks) {
+    if (!only.empty() && net.name != only) continue;
     const std::string reference_path = (dir / (net.name + "-reference.exr")).string();
     bench::run_farm(net.script, {}, reference_path);
     auto reference = lf::read_image(reference_path);
@@ -120,12 +135,14 @@ int main(int argc, char** argv) {
           if (alive[g] > 1)
             for (const auto& name : net.groups[g])
               if (!hit.count(name) && (rendering || !net.render_only.count(name))) candidates.emplace_back(g, name);
+        for (const auto& name : net.restarted)
+          if (!hit.count(name)) candidates.emplace_back(net.groups.size(), name);
         if (candidates.empty()) break;
         const auto [group, victim] = candidates[rng() % candidates.size()];
         const auto pids = lf::test::actor_pids(farm.tag(), victim);
         if (pids.empty()) continue;
         hit.insert(victim);
-        --alive[group];  // a stopped one may be declared dead: count it gone either way
+        if (group < alive.size()) --alive[group];  // a stopped one may be declared dead: count it gone either way
         ++faults;
         if (rng() % 5 < 3) {
           ::kill(pids[0], SIGKILL);

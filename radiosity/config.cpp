@@ -32,6 +32,7 @@ RingConfig read_ring_config(const ParamTable& p) {
   c.static_balance = balance == "static" || balance == "static+dynamic";
   c.dynamic_balance = balance == "dynamic" || balance == "static+dynamic";
   c.ply = p.get_string("ply", "");
+  c.checkpoint_every = static_cast<int>(p.get_int("checkpoint_every", c.checkpoint_every, 0, 1000000));
   return c;
 }
 

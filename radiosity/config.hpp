@@ -17,6 +17,8 @@ struct RingConfig {
   bool static_balance = false;
   bool dynamic_balance = false;
   std::string ply;  // where to write the solution; empty: nowhere
+  int checkpoint_every = 10;  // iterations between the nodes' checkpoints at the director; 0: none (a lost node
+                              // restarts the solve from the beginning)
   std::string balance_name() const;
 };
 

@@ -29,6 +29,21 @@ void RingNode::begin_iteration(uint32_t iteration, const Shooter& shooter) {
   make_packets();
 }
 
+Status RingNode::restore(int64_t iteration, std::vector<Element> leaves) {
+  if (iteration < 0) {
+    part_.reset();
+  } else if (auto st = part_.restore(std::move(leaves)); !st) {
+    return st;
+  }
+  iteration_ = iteration < 0 ? 0 : static_cast<uint32_t>(iteration);
+  shooter_ = Shooter{};
+  pending_.clear();
+  pending_head_ = 0;
+  out_.clear();
+  round_visible_.clear();
+  return Ok{};
+}
+
 void RingNode::make_packets() {
   // A round's samples that need rays, packed in order: a packet closes at S samples or when one more sample would
   // make it visit more than V positions.

@@ -37,6 +37,7 @@ struct SamplePacket {
   uint32_t origin = 0;     // node whose samples these are
   uint64_t serial = 0;     // the origin's number for it
   uint32_t iteration = 0;
+  uint32_t epoch = 0;      // the ring's run since its last rollback (ring_protocol.hpp): older ones are dropped
   uint64_t route = 0;      // positions still to visit
   std::vector<Vec3> points, normals;
   std::vector<uint64_t> visible;  // per sample: sub-areas not yet found blocked
@@ -64,6 +65,9 @@ class RingNode {
   double unshot_power() const { return part_.unshot_power(); }
 
   void begin_iteration(uint32_t iteration, const Shooter& shooter);
+  // Back to the end of `iteration` (-1: before the first), with `leaves` this node's elements then (ignored for
+  // -1): whatever was under way is dropped. The ring's recovery from a lost node (ring_protocol.hpp).
+  Status restore(int64_t iteration, std::vector<Element> leaves);
   uint32_t iteration() const { return iteration_; }
   const Shooter& shooter() const { return shooter_; }
   // Own packets not yet sent out, first come first served (also what a polling idle node may take).

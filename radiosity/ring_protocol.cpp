@@ -25,6 +25,7 @@ RingNodeProtocol::RingNodeProtocol(RingNode& node, const Mesh& mesh, const RingC
 
 ShooterReport RingNodeProtocol::report(int64_t finished_iteration) const {
   ShooterReport r;
+  r.epoch = epoch_;
   r.iteration = finished_iteration;
   r.unshot_power = node_.unshot_power();
   r.emitted_power = mesh_.emitted_power();
@@ -61,7 +62,28 @@ Result<std::vector<RingAction>> RingNodeProtocol::on_shooter(const std::optional
   return std::vector<RingAction>{};
 }
 
+Result<std::vector<RingAction>> RingNodeProtocol::on_rollback(Rollback rollback) {
+  if (rollback.epoch <= epoch_) return std::vector<RingAction>{};
+  if (auto st = node_.restore(rollback.iteration, std::move(rollback.elements)); !st) return st.error();
+  epoch_ = rollback.epoch;
+  inbox_.clear();
+  lent_to_me_.clear();
+  own_out_ = 0;
+  borrowed_ = false;
+  poll_out_ = false;  // its answer, if one comes, is of the old epoch
+  polling_ = false;
+  idle_rings_.clear();
+  // Report the checkpoint's state again: the director's choice of the next shooter is then the one it made before.
+  state_ = State::awaiting;
+  RingAction ask;
+  ask.kind = RingAction::Kind::ask_shooter;
+  ask.report = report(rollback.iteration);
+  ask.report.power_arrived = 0;  // that shot's figure is not part of a checkpoint
+  return std::vector<RingAction>{std::move(ask)};
+}
+
 Status RingNodeProtocol::on_packet(Hop hop, SamplePacket packet, int home) {
+  if (packet.epoch != epoch_) return Ok{};  // sent before a rollback: its work is being redone
   // Past the director's barrier a peer is at most one shooter ahead of this node; anything further would only
   // pile up here.
   if (packet.iteration > node_.iteration() + 1)
@@ -76,6 +98,7 @@ void RingNodeProtocol::send(std::vector<RingAction>& out, int to, Hop hop, Sampl
   a.kind = RingAction::Kind::send;
   a.to = to;
   a.hop = hop;
+  p.epoch = epoch_;
   a.packet = std::move(p);
   a.home = home;
   out.push_back(std::move(a));
@@ -135,6 +158,12 @@ std::vector<RingAction> RingNodeProtocol::step(Clock::time_point now) {
       RingAction ask;
       ask.kind = RingAction::Kind::ask_shooter;
       ask.report = report(static_cast<int64_t>(node_.iteration()));
+      if (config_.checkpoint_every > 0 && (node_.iteration() + 1) % static_cast<uint32_t>(config_.checkpoint_every) == 0) {
+        std::vector<Element> leaves;
+        for (const Element& e : node_.part().elements())
+          if (e.leaf) leaves.push_back(e);
+        ask.report.checkpoint = std::move(leaves);
+      }
       out.push_back(std::move(ask));
     }
     if (!lent_to_me_.empty()) {
@@ -171,14 +200,17 @@ void RingNodeProtocol::poll(std::vector<RingAction>& out, Clock::time_point now)
   a.kind = RingAction::Kind::poll;
   a.to = config_.layout.node(ring, node_.position());
   a.poll_ring = ring;
-  a.poll = PollRequest{static_cast<int64_t>(node_.iteration()), std::vector<int>(idle_rings_.begin(), idle_rings_.end())};
+  a.poll = PollRequest{epoch_, static_cast<int64_t>(node_.iteration()),
+                       std::vector<int>(idle_rings_.begin(), idle_rings_.end())};
   out.push_back(std::move(a));
 }
 
-void RingNodeProtocol::on_poll_reply(int ring, int64_t iteration, PollReply reply, Clock::time_point now) {
+void RingNodeProtocol::on_poll_reply(int ring, const PollRequest& poll, PollReply reply, Clock::time_point now) {
+  if (poll.epoch != epoch_) return;  // a poll from before a rollback, which forgot it
   poll_out_ = false;
-  if (!running() || static_cast<int64_t>(node_.iteration()) != iteration) return;
+  if (!running() || static_cast<int64_t>(node_.iteration()) != poll.iteration) return;
   for (auto& p : reply.lent) {
+    if (p.epoch != epoch_) continue;
     ++node_.work().packets_borrowed;
     lent_to_me_.push_back(std::move(p));
   }
@@ -192,13 +224,14 @@ void RingNodeProtocol::on_poll_reply(int ring, int64_t iteration, PollReply repl
 
 PollReply RingNodeProtocol::on_poll(const PollRequest& poll) {
   PollReply reply;
-  const bool current = running() && static_cast<int64_t>(node_.iteration()) == poll.iteration;
+  const bool current = running() && poll.epoch == epoch_ && static_cast<int64_t>(node_.iteration()) == poll.iteration;
   if (current && node_.pending() > 0) {
     // Half of what waits here, up to kMaxLend: one poll's round trip then buys several packets' work, which
     // matters when processes share cores and every message waits for the peer to be scheduled.
     const size_t count = std::min(kMaxLend, std::max<size_t>(1, node_.pending() / 2));
     for (size_t i = 0; i < count; ++i) {
       reply.lent.push_back(std::move(*node_.take_pending()));
+      reply.lent.back().epoch = epoch_;
       ++node_.work().packets_lent;
     }
     return reply;

@@ -12,6 +12,14 @@
 //   gathering       the director said done: the node sent its elements
 //   done            the director took them
 // Packets of an iteration the node has not begun wait in its inbox; older ones are dropped.
+//
+// Recovery (seed 003 has none; docs/decisions.md): a node's elements exist nowhere else, so when one is lost the
+// director restarts it and rolls the whole ring back to its last checkpoint: every `checkpoint_every` iterations each
+// node's report carries its leaf elements, and a rollback hands each node its own back (or starts them all afresh
+// when there is none). The rollback opens a new epoch; packets, polls, reports and results of an older epoch are
+// dropped. Iterations are deterministic (visibility does not depend on which node or ring traced it, and a round's
+// sums run in element order), so the ring then repeats the lost iterations exactly and the solution equals the
+// fault-free one.
 #include <chrono>
 #include <deque>
 #include <optional>
@@ -28,11 +36,20 @@ namespace lf::radiosity {
 
 // What a node tells the director when its iteration is done (-1: before the first).
 struct ShooterReport {
+  uint32_t epoch = 0;
   int64_t iteration = -1;
   double unshot_power = 0;
   double emitted_power = 0;
   double power_arrived = 0;
   std::optional<Candidate> candidate;
+  std::optional<std::vector<Element>> checkpoint;  // this node's leaf elements, every checkpoint_every iterations
+};
+
+// The director's rollback: back to the end of `iteration` (-1: the start) with this node's checkpointed elements.
+struct Rollback {
+  uint32_t epoch = 0;
+  int64_t iteration = -1;
+  std::vector<Element> elements;
 };
 
 // The director's answer: the next shooter, or none (converged or stopped).
@@ -43,6 +60,7 @@ struct ShooterChoice {
 };
 
 struct PollRequest {
+  uint32_t epoch = 0;
   int64_t iteration = 0;
   std::vector<int> idle;  // rings the poller knows are idle
 };
@@ -86,13 +104,17 @@ class RingNodeProtocol {
   Result<std::vector<RingAction>> on_shooter(const std::optional<ShooterChoice>& choice);
   // The director took the elements.
   void on_result_taken() { state_ = State::done; }
+  // The director rolled the ring back (a node was lost). From any state; a repeat of an epoch already begun changes
+  // nothing. An error for elements this node does not hold.
+  Result<std::vector<RingAction>> on_rollback(Rollback rollback);
+  uint32_t epoch() const { return epoch_; }
   // A packet from another node. An error (to refuse it with) for one more than one shooter ahead, which no
   // conforming peer sends past the director's barrier.
   Status on_packet(Hop hop, SamplePacket packet, int home);
   // Another ring's idle node asks for work.
   PollReply on_poll(const PollRequest& poll);
-  // The answer to our poll of `ring` for `iteration`.
-  void on_poll_reply(int ring, int64_t iteration, PollReply reply, std::chrono::steady_clock::time_point now);
+  // The answer to our poll of `ring` (as it was sent: `poll` says for which epoch and iteration).
+  void on_poll_reply(int ring, const PollRequest& poll, PollReply reply, std::chrono::steady_clock::time_point now);
   // Makes what progress it can: processes the inbox, sends own packets, reports, borrows, polls.
   std::vector<RingAction> step(std::chrono::steady_clock::time_point now);
 
@@ -120,6 +142,7 @@ class RingNodeProtocol {
   const Mesh& mesh_;
   RingConfig config_;
   State state_ = State::configured;
+  uint32_t epoch_ = 0;
   std::deque<Inbound> inbox_;
   std::deque<SamplePacket> lent_to_me_;  // borrowed, waiting for their turn round this ring
   int own_out_ = 0;                      // own packets round the ring (at most one)

@@ -64,7 +64,7 @@ Outcome run(const Scene& scene, const RingConfig& config, unsigned seed) {
           break;
         case RingAction::Kind::poll:
           if (m.poll_reply) {
-            sender.on_poll_reply(m.action.poll_ring, m.action.poll.iteration, std::move(*m.poll_reply), now);
+            sender.on_poll_reply(m.action.poll_ring, m.action.poll, std::move(*m.poll_reply), now);
           } else {
             m.poll_reply = protocols[static_cast<size_t>(m.action.to)]->on_poll(m.action.poll);
             out.lent += m.poll_reply->lent.size();

@@ -29,15 +29,40 @@ Part::Part(const Mesh& mesh, std::vector<uint32_t> patches, SolverSettings setti
   std::sort(patches_.begin(), patches_.end());
   split_threshold_ = static_cast<float>(settings_.subdivide * mesh.mean_emission());
   local_of_patch_.assign(mesh.patches.size(), -1);
-  patch_elements_.resize(patches_.size());
+  for (size_t i = 0; i < patches_.size(); ++i) local_of_patch_[patches_[i]] = static_cast<int32_t>(i);
+  reset();
+}
+
+void Part::reset() {
+  elements_.clear();
+  patch_elements_.assign(patches_.size(), {});
   for (size_t i = 0; i < patches_.size(); ++i) {
-    const Patch& p = mesh.patches[patches_[i]];
-    local_of_patch_[patches_[i]] = static_cast<int32_t>(i);
+    const Patch& p = mesh_.patches[patches_[i]];
     for (const auto& piece : tile(p.polygon, p.element_tiles)) {
       patch_elements_[i].push_back(static_cast<uint32_t>(elements_.size()));
       elements_.push_back({piece, patches_[i], 0, true, p.emission, p.emission});
     }
   }
+  shooter_ = nullptr;
+  round_.clear();
+  shot_ = {};
+}
+
+Status Part::restore(std::vector<Element> leaves) {
+  std::vector<std::vector<uint32_t>> lists(patches_.size());
+  for (uint32_t i = 0; i < leaves.size(); ++i) {
+    const Element& e = leaves[i];
+    if (e.patch >= local_of_patch_.size() || local_of_patch_[e.patch] < 0)
+      return make_error("a checkpoint element of patch " + std::to_string(e.patch) + ", which this part does not hold");
+    if (!e.leaf || e.depth < 0 || e.depth > settings_.max_depth) return make_error("a checkpoint element that cannot be");
+    lists[static_cast<size_t>(local_of_patch_[e.patch])].push_back(i);
+  }
+  elements_ = std::move(leaves);
+  patch_elements_ = std::move(lists);
+  shooter_ = nullptr;
+  round_.clear();
+  shot_ = {};
+  return Ok{};
 }
 
 size_t Part::leaf_count() const {

@@ -13,6 +13,7 @@
 #include <span>
 #include <vector>
 
+#include "core/result.hpp"
 #include "radiosity/mesh.hpp"
 
 namespace lf::radiosity {
@@ -90,6 +91,14 @@ class Part {
   const std::vector<uint32_t>& patches() const { return patches_; }
   const std::vector<Element>& elements() const { return elements_; }
   size_t leaf_count() const;
+
+  // Back to the state before the first shot.
+  void reset();
+  // Back to a checkpoint: the leaf elements this part had after some shot, in their order then (what
+  // elements() gave, split parents left out: nothing reads them again, and leaves keep their relative order, so every
+  // later sum adds the same numbers in the same order). An error, and no change, for elements of patches held
+  // elsewhere.
+  Status restore(std::vector<Element> leaves);
 
  private:
   void prepare_round(std::vector<uint32_t> elements);

@@ -31,6 +31,9 @@ enum class MsgType : uint8_t {
   bye = 9,        // director -> actor: stop now; actor -> director: stopping
   ready = 10,     // actor -> director: finished a phase (body names it)
   peer_down = 11, // director -> actor: one of your inputs is gone (body: {name}); re-route its work
+  peer_moved = 12, // director -> actor: one of your inputs was restarted (body: {name, endpoint, key}); what was
+                   // outstanding with it is forgotten
+  rollback = 13,   // director -> ring node: back to a checkpoint in a new epoch (body: actors/codecs/ring_codec.hpp)
 };
 
 std::string_view type_name(MsgType type);

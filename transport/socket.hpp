@@ -73,6 +73,10 @@ void block_signals_in_this_thread();
 class Poller {
  public:
   void add(Socket& socket);
+  void clear() {
+    sockets_.clear();
+    ready_.clear();
+  }
   // Returns, for each added socket in order, whether it is readable. timeout_ms < 0 waits forever.
   // Interrupted by a signal: returns all false.
   const std::vector<bool>& wait(long timeout_ms);

@@ -14,7 +14,8 @@ Value encode_packet(const SamplePacket& p, int home) {
       normals.push_back(p.normals[i][c]);
     }
   return Value::Map{{"o", static_cast<int64_t>(p.origin)}, {"s", static_cast<int64_t>(p.serial)},
-                    {"it", static_cast<int64_t>(p.iteration)}, {"r", static_cast<int64_t>(p.route)},
+                    {"it", static_cast<int64_t>(p.iteration)}, {"e", static_cast<int64_t>(p.epoch)},
+                    {"r", static_cast<int64_t>(p.route)},
                     {"home", static_cast<int64_t>(home)},     {"p", floats_to_bytes(points)},
                     {"n", floats_to_bytes(normals)},          {"v", u64_to_bytes(p.visible)}};
 }
@@ -52,9 +53,10 @@ Value rgb_value(const RGB& c) { return Value::Array{double(c.x), double(c.y), do
 
 Result<PacketMessage> decode_packet(const Value& body, int nodes) {
   auto origin = integer(body, "o", 0, nodes - 1), serial = integer(body, "s", 0, INT64_MAX),
-       it = integer(body, "it", 0, INT32_MAX), route = integer(body, "r", INT64_MIN, INT64_MAX),
-       home = integer(body, "home", 0, nodes - 1);
-  if (!origin || !serial || !it || !route || !home) return bad("a sample packet needs o, s, it, r and home in range");
+       it = integer(body, "it", 0, INT32_MAX), epoch = integer(body, "e", 0, UINT32_MAX),
+       route = integer(body, "r", INT64_MIN, INT64_MAX), home = integer(body, "home", 0, nodes - 1);
+  if (!origin || !serial || !it || !epoch || !route || !home)
+    return bad("a sample packet needs o, s, it, e, r and home in range");
   const Value *p = body.find("p"), *n = body.find("n"), *v = body.find("v");
   std::vector<float> points, normals;
   PacketMessage out;
@@ -70,6 +72,7 @@ Result<PacketMessage> decode_packet(const Value& body, int nodes) {
   packet.origin = static_cast<uint32_t>(*origin);
   packet.serial = static_cast<uint64_t>(*serial);
   packet.iteration = static_cast<uint32_t>(*it);
+  packet.epoch = static_cast<uint32_t>(*epoch);
   packet.route = static_cast<uint64_t>(*route);
   out.home = static_cast<int>(*home);
   return out;
@@ -78,13 +81,14 @@ Result<PacketMessage> decode_packet(const Value& body, int nodes) {
 Value encode_poll(const PollRequest& poll) {
   Value::Array idle;
   for (int r : poll.idle) idle.push_back(r);
-  return Value::Map{{"iteration", poll.iteration}, {"idle", std::move(idle)}};
+  return Value::Map{{"epoch", static_cast<int64_t>(poll.epoch)}, {"iteration", poll.iteration}, {"idle", std::move(idle)}};
 }
 
 Result<PollRequest> decode_poll(const Value& body) {
   auto it = integer(body, "iteration", INT64_MIN, INT64_MAX);
-  if (!it) return bad("ring.poll needs an iteration");
-  return PollRequest{*it, ring_list(body.find("idle"), INT32_MAX)};
+  auto epoch = integer(body, "epoch", 0, UINT32_MAX);
+  if (!it || !epoch) return bad("ring.poll needs an epoch and an iteration");
+  return PollRequest{static_cast<uint32_t>(*epoch), *it, ring_list(body.find("idle"), INT32_MAX)};
 }
 
 Value encode_poll_reply(const PollReply& reply) {
@@ -114,7 +118,8 @@ Result<PollReply> decode_poll_reply(const Value& body, int nodes, int rings) {
 }
 
 Value encode_shooter_report(const ShooterReport& r) {
-  Value::Map body{{"iteration", r.iteration},
+  Value::Map body{{"epoch", static_cast<int64_t>(r.epoch)},
+                  {"iteration", r.iteration},
                   {"unshot_power", r.unshot_power},
                   {"emitted_power", r.emitted_power},
                   {"power_arrived", r.power_arrived}};
@@ -122,14 +127,22 @@ Value encode_shooter_report(const ShooterReport& r) {
     body["candidate"] = Value::Map{{"patch", static_cast<int64_t>(r.candidate->patch)},
                                    {"power", r.candidate->power},
                                    {"unshot", rgb_value(r.candidate->unshot)}};
+  if (r.checkpoint) body["checkpoint"] = encode_elements(*r.checkpoint);
   return body;
 }
 
-Result<ShooterReport> decode_shooter_report(const Value& body) {
+Result<ShooterReport> decode_shooter_report(const Value& body, size_t patches) {
   ShooterReport r;
   auto it = integer(body, "iteration", -1, INT32_MAX);
-  if (!it) return bad("ring.shooter needs an iteration");
+  auto epoch = integer(body, "epoch", 0, UINT32_MAX);
+  if (!it || !epoch) return bad("ring.shooter needs an epoch and an iteration");
   r.iteration = *it;
+  r.epoch = static_cast<uint32_t>(*epoch);
+  if (const Value* c = body.find("checkpoint"); c && !c->is_nil()) {
+    auto elements = decode_elements(*c, patches);
+    if (!elements) return bad("a checkpoint: " + elements.error().message);
+    r.checkpoint = std::move(*elements);
+  }
   auto number = [&](const char* key) {
     const Value* v = body.find(key);
     return v && v->is_number() ? v->as_double() : 0.0;
@@ -164,13 +177,14 @@ Result<std::optional<ShooterChoice>> decode_shooter_choice(const Value& body, si
   return std::optional<ShooterChoice>{ShooterChoice{*it, static_cast<uint32_t>(*patch), *unshot}};
 }
 
-Value encode_result(const std::vector<radiosity::Element>& elements) {
-  std::vector<uint32_t> patch, corners;
+Value encode_elements(const std::vector<radiosity::Element>& elements) {
+  std::vector<uint32_t> patch, corners, depth;
   std::vector<float> points, radiosity, unshot;
   for (const auto& e : elements) {
     if (!e.leaf) continue;
     patch.push_back(e.patch);
     corners.push_back(static_cast<uint32_t>(e.polygon.count));
+    depth.push_back(static_cast<uint32_t>(e.depth));
     for (const Vec3& v : e.polygon.v)
       for (int c = 0; c < 3; ++c) points.push_back(v[c]);
     for (int c = 0; c < 3; ++c) {
@@ -180,26 +194,29 @@ Value encode_result(const std::vector<radiosity::Element>& elements) {
   }
   return Value::Map{{"patch", u32_to_bytes(patch)}, {"corners", u32_to_bytes(corners)},
                     {"points", floats_to_bytes(points)}, {"radiosity", floats_to_bytes(radiosity)},
-                    {"unshot", floats_to_bytes(unshot)}};
+                    {"unshot", floats_to_bytes(unshot)}, {"depth", u32_to_bytes(depth)}};
 }
 
-Result<std::vector<radiosity::Element>> decode_result(const Value& body, size_t patches) {
-  std::vector<uint32_t> patch, corners;
+Result<std::vector<radiosity::Element>> decode_elements(const Value& body, size_t patches) {
+  std::vector<uint32_t> patch, corners, depth;
   std::vector<float> points, radiosity, unshot;
   const Value *p = body.find("patch"), *c = body.find("corners"), *x = body.find("points"), *b = body.find("radiosity"),
-              *u = body.find("unshot");
-  if (!p || !c || !x || !b || !u || !p->is_bytes() || !c->is_bytes() || !x->is_bytes() || !b->is_bytes() ||
-      !u->is_bytes() || !bytes_to_u32(p->as_bytes(), patch) || !bytes_to_u32(c->as_bytes(), corners) ||
-      !bytes_to_floats(x->as_bytes(), points) || !bytes_to_floats(b->as_bytes(), radiosity) ||
-      !bytes_to_floats(u->as_bytes(), unshot) || corners.size() != patch.size() ||
-      points.size() != 12 * patch.size() || radiosity.size() != 3 * patch.size() || unshot.size() != radiosity.size())
-    return bad("a malformed result");
+              *u = body.find("unshot"), *d = body.find("depth");
+  if (!p || !c || !x || !b || !u || !d || !p->is_bytes() || !c->is_bytes() || !x->is_bytes() || !b->is_bytes() ||
+      !u->is_bytes() || !d->is_bytes() || !bytes_to_u32(p->as_bytes(), patch) || !bytes_to_u32(c->as_bytes(), corners) ||
+      !bytes_to_u32(d->as_bytes(), depth) || !bytes_to_floats(x->as_bytes(), points) ||
+      !bytes_to_floats(b->as_bytes(), radiosity) || !bytes_to_floats(u->as_bytes(), unshot) ||
+      corners.size() != patch.size() || depth.size() != patch.size() || points.size() != 12 * patch.size() ||
+      radiosity.size() != 3 * patch.size() || unshot.size() != radiosity.size())
+    return bad("malformed elements");
   std::vector<radiosity::Element> elements;
   elements.reserve(patch.size());
   for (size_t i = 0; i < patch.size(); ++i) {
-    if (patch[i] >= patches || (corners[i] != 3 && corners[i] != 4)) return bad("an element of an unknown patch");
+    if (patch[i] >= patches || (corners[i] != 3 && corners[i] != 4) || depth[i] > kMaxElementDepth)
+      return bad("an element of an unknown patch");
     radiosity::Element e;
     e.patch = patch[i];
+    e.depth = static_cast<int>(depth[i]);
     e.polygon.count = static_cast<int>(corners[i]);
     for (size_t k = 0; k < 4; ++k)
       e.polygon.v[k] = {points[12 * i + 3 * k], points[12 * i + 3 * k + 1], points[12 * i + 3 * k + 2]};
@@ -208,6 +225,36 @@ Result<std::vector<radiosity::Element>> decode_result(const Value& body, size_t 
     elements.push_back(e);
   }
   return elements;
+}
+
+Value encode_result(const std::vector<radiosity::Element>& elements, uint32_t epoch) {
+  Value body = encode_elements(elements);
+  body.as_map()["epoch"] = static_cast<int64_t>(epoch);
+  return body;
+}
+
+Result<ResultMessage> decode_result(const Value& body, size_t patches) {
+  auto epoch = integer(body, "epoch", 0, UINT32_MAX);
+  if (!epoch) return bad("ring.result needs an epoch");
+  auto elements = decode_elements(body, patches);
+  if (!elements) return bad("a malformed result");
+  return ResultMessage{static_cast<uint32_t>(*epoch), std::move(*elements)};
+}
+
+Value encode_rollback(const radiosity::Rollback& r) {
+  Value body = encode_elements(r.elements);
+  body.as_map()["epoch"] = static_cast<int64_t>(r.epoch);
+  body.as_map()["iteration"] = r.iteration;
+  return body;
+}
+
+Result<radiosity::Rollback> decode_rollback(const Value& body, size_t patches) {
+  auto epoch = integer(body, "epoch", 1, UINT32_MAX);
+  auto it = integer(body, "iteration", -1, INT32_MAX);
+  if (!epoch || !it) return bad("a rollback needs an epoch (from 1) and an iteration");
+  auto elements = decode_elements(body, patches);
+  if (!elements) return bad("a rollback: " + elements.error().message);
+  return radiosity::Rollback{static_cast<uint32_t>(*epoch), *it, std::move(*elements)};
 }
 
 }  // namespace lf::ring

@@ -40,11 +40,12 @@ TEST(RingCodec, PacketsRoundTripAndOutOfRangeFieldsAreRefused) {
 }
 
 TEST(RingCodec, PollsAndTheirRepliesRoundTrip) {
-  auto poll = decode_poll(encode_poll({4, {0, 2}}));
+  auto poll = decode_poll(encode_poll({2, 4, {0, 2}}));
   ASSERT_TRUE(poll.ok());
+  EXPECT_EQ(poll->epoch, 2u);
   EXPECT_EQ(poll->iteration, 4);
   EXPECT_EQ(poll->idle, (std::vector<int>{0, 2}));
-  EXPECT_EQ(decode_poll(Value::Map{}).error().message, "ring.poll needs an iteration");
+  EXPECT_EQ(decode_poll(Value::Map{{"iteration", 4}}).error().message, "ring.poll needs an epoch and an iteration");
 
   PollReply lending;
   lending.lent.push_back(packet());
@@ -69,9 +70,12 @@ TEST(RingCodec, ShooterReportsAndChoicesRoundTrip) {
   r.emitted_power = 9;
   r.power_arrived = 0.25;
   r.candidate = radiosity::Candidate{12, 4.5, RGB{1, 2, 3}};
-  auto back = decode_shooter_report(encode_shooter_report(r));
+  r.epoch = 5;
+  auto back = decode_shooter_report(encode_shooter_report(r), 13);
   ASSERT_TRUE(back.ok());
+  EXPECT_EQ(back->epoch, 5u);
   EXPECT_EQ(back->iteration, 3);
+  EXPECT_FALSE(back->checkpoint);
   EXPECT_EQ(back->unshot_power, 1.5);
   EXPECT_EQ(back->emitted_power, 9);
   EXPECT_EQ(back->power_arrived, 0.25);
@@ -79,7 +83,19 @@ TEST(RingCodec, ShooterReportsAndChoicesRoundTrip) {
   EXPECT_EQ(back->candidate->patch, 12u);
   EXPECT_EQ(back->candidate->unshot, (RGB{1, 2, 3}));
   r.candidate.reset();
-  EXPECT_FALSE(decode_shooter_report(encode_shooter_report(r))->candidate);
+  EXPECT_FALSE(decode_shooter_report(encode_shooter_report(r), 13)->candidate);
+  // A checkpoint travels with its elements' depth (splitting depends on it); one of a patch the mesh does not have
+  // is refused.
+  radiosity::Element e;
+  e.patch = 12;
+  e.depth = 2;
+  e.unshot = {0.5f, 0, 1};
+  r.checkpoint = std::vector<radiosity::Element>{e};
+  auto with = decode_shooter_report(encode_shooter_report(r), 13);
+  ASSERT_TRUE(with.ok() && with->checkpoint && with->checkpoint->size() == 1u);
+  EXPECT_EQ((*with->checkpoint)[0].depth, 2);
+  EXPECT_EQ((*with->checkpoint)[0].unshot, e.unshot);
+  EXPECT_FALSE(decode_shooter_report(encode_shooter_report(r), 12).ok());
 
   auto choice = decode_shooter_choice(encode_shooter_choice(ShooterChoice{6, 12, RGB{1, 2, 3}}), 13);
   ASSERT_TRUE(choice.ok());
@@ -101,13 +117,36 @@ TEST(RingCodec, ResultsRoundTripLeafElementsOnly) {
   a.radiosity = {0.5f, 0.25f, 0.125f};
   b = a;
   b.leaf = false;  // split: its children carry its radiosity
-  auto back = decode_result(encode_result({a, b}), 2);
+  auto back = decode_result(encode_result({a, b}, 3), 2);
   ASSERT_TRUE(back.ok());
-  ASSERT_EQ(back->size(), 1u);
-  EXPECT_EQ((*back)[0].patch, 1u);
-  EXPECT_EQ((*back)[0].polygon.count, 3);
-  EXPECT_EQ((*back)[0].radiosity, a.radiosity);
-  EXPECT_EQ(decode_result(encode_result({a}), 1).error().message, "an element of an unknown patch");
+  EXPECT_EQ(back->epoch, 3u);
+  ASSERT_EQ(back->elements.size(), 1u);
+  EXPECT_EQ(back->elements[0].patch, 1u);
+  EXPECT_EQ(back->elements[0].polygon.count, 3);
+  EXPECT_EQ(back->elements[0].radiosity, a.radiosity);
+  EXPECT_EQ(decode_result(encode_result({a}, 0), 1).error().message, "a malformed result");
+  EXPECT_EQ(decode_elements(encode_elements({a}), 1).error().message, "an element of an unknown patch");
+}
+
+TEST(RingCodec, RollbacksRoundTripAndNeedAnEpochPastTheFirst) {
+  radiosity::Element a;
+  a.patch = 1;
+  a.depth = 1;
+  a.radiosity = {0.5f, 0.25f, 0.125f};
+  auto back = decode_rollback(encode_rollback({2, 9, {a}}), 2);
+  ASSERT_TRUE(back.ok());
+  EXPECT_EQ(back->epoch, 2u);
+  EXPECT_EQ(back->iteration, 9);
+  ASSERT_EQ(back->elements.size(), 1u);
+  EXPECT_EQ(back->elements[0].depth, 1);
+  auto start = decode_rollback(encode_rollback({1, -1, {}}), 2);
+  ASSERT_TRUE(start.ok());
+  EXPECT_EQ(start->iteration, -1);
+  EXPECT_TRUE(start->elements.empty());
+  EXPECT_EQ(decode_rollback(encode_rollback({0, 9, {a}}), 2).error().message,
+            "a rollback needs an epoch (from 1) and an iteration");
+  a.depth = 9;  // deeper than any ring may split
+  EXPECT_FALSE(decode_rollback(encode_rollback({2, 9, {a}}), 2).ok());
 }
 
 }  // namespace

@@ -72,7 +72,10 @@ class Director final : public ControlOut, public Outbox {
         options_(options),
         supervisor_(spec, launchers_, *this,
                     Supervisor::Events{[this](ActorRecord& a, wire::Message& m) { return dispatch(a, m); },
-                                       [this](ActorRecord& a, const std::string& why) { return lost(a, why); }}),
+                                       [this](ActorRecord& a, const std::string& why) { return lost(a, why); },
+                                       [this](const ActorRecord& a) { return needs_restart(a); },
+                                       [this](ActorRecord& a) { return configure_actor(a); },
+                                       [this](ActorRecord& a) { return rejoin(a); }}),
         tiles_(spec.image, renderers_of(spec), options.progress_on_terminal, options.quiet),
         exchange_(pools_of(spec)),
         ring_(spec, exchange_, options.quiet, options.progress_on_terminal) {
@@ -148,6 +151,9 @@ class Director final : public ControlOut, public Outbox {
   }
 
   // ControlOut and Outbox: everything leaves through the control socket.
+  void tell(const std::string& actor, wire::MsgType type, Value body) override {
+    send(actor, wire::make(type, "director", std::move(body)));
+  }
   void send(const std::string& actor, wire::Message m) override {
     m.header.sender = "director";
     if (!control_.send_to(actor, m)) log_debug("could not send to '" + actor + "'");
@@ -253,43 +259,81 @@ class Director final : public ControlOut, public Outbox {
   }
 
   void configure() {
+    for (auto& [name, a] : supervisor_.actors())
+      if (!a.lost) check(configure_actor(a));
+  }
+
+  // Where `receiver` reaches its input `input`: inputs on the same host over their IPC socket, without CURVE (the
+  // 0700 folder keeps other users out, and a process of the same user could read the keys anyway); only an actor
+  // that offers such a socket itself is known to connect to one. Otherwise TCP, with the input's public key.
+  std::pair<std::string, std::string> endpoint_for(const ActorRecord& receiver, const ActorRecord& input) const {
+    if (input.spec->host == receiver.spec->host && !receiver.local_endpoint.empty() && !input.local_endpoint.empty())
+      return {input.local_endpoint, ""};
+    return {input.endpoint, actor_keys_.empty() ? "" : actor_keys_.at(input.name()).public_key};
+  }
+
+  Status configure_actor(ActorRecord& a) {
     auto endpoint_of = [&](int i) { return supervisor_.at(spec_.actors[static_cast<size_t>(i)].name).endpoint; };
     std::function<std::string(int)> key_of;
     if (!actor_keys_.empty())
       key_of = [&](int i) { return actor_keys_.at(spec_.actors[static_cast<size_t>(i)].name).public_key; };
-    for (auto& [name, a] : supervisor_.actors()) {
-      if (a.lost) continue;
-      ActorConfig config = config_for(spec_, a.index, endpoint_of, key_of);
-      // Inputs on the same host are reached over their IPC socket, without CURVE: the 0700 folder keeps other
-      // users out, and a process of the same user could read the keys anyway. Only an actor that offers such a
-      // socket itself is known to connect to one.
-      for (size_t k = 0; k < config.inputs.size() && !a.local_endpoint.empty(); ++k) {
-        const ActorSpec& input = spec_.actors[static_cast<size_t>(a.spec->inputs[k])];
-        const ActorRecord& peer = supervisor_.at(input.name);
-        if (input.host == a.spec->host && !peer.local_endpoint.empty()) {
-          config.inputs[k].endpoint = peer.local_endpoint;
-          config.inputs[k].key.clear();
-        }
-      }
-      if (!scene_bytes_.empty()) {
-        config.scene.cache = scene_paths_.at(a.spec->host);
-        config.scene.hash = scene_hash_;
-      }
-      // A replica lost before its pool was configured is left out of the pool (it never said where it listens).
-      std::vector<InputSpec> inputs;
-      for (auto& in : config.inputs)
-        if (!supervisor_.at(in.name).lost) inputs.push_back(std::move(in));
-      config.inputs = std::move(inputs);
-      send(name, wire::make(MsgType::config, "director", config.to_value()));
-      a.configured = true;
+    ActorConfig config = config_for(spec_, a.index, endpoint_of, key_of);
+    for (auto& in : config.inputs) std::tie(in.endpoint, in.key) = endpoint_for(a, supervisor_.at(in.name));
+    if (!scene_bytes_.empty()) {
+      config.scene.cache = scene_paths_.at(a.spec->host);
+      config.scene.hash = scene_hash_;
     }
+    // A replica lost before its pool was configured is left out of the pool (it never said where it listens).
+    std::vector<InputSpec> inputs;
+    for (auto& in : config.inputs)
+      if (!supervisor_.at(in.name).lost) inputs.push_back(std::move(in));
+    config.inputs = std::move(inputs);
+    send(a.name(), wire::make(MsgType::config, "director", config.to_value()));
+    a.configured = true;
+    return Ok{};
+  }
+
+  bool needs_restart(const ActorRecord& a) const {
+    for (const Service* s : all_services_)
+      if (s->needs_restart(a.name())) return true;
+    return false;
+  }
+
+  // A restarted actor is configured: every configured actor that has it as an input learns where it listens now,
+  // the services take it back (the ring rolls back once all its restarted nodes are here), and it joins the phase
+  // under way.
+  Status rejoin(ActorRecord& moved) {
+    for (auto& [name, a] : supervisor_.actors()) {
+      if (a.lost || !a.configured || a.exited || &a == &moved) continue;
+      for (int input : a.spec->inputs) {
+        if (input != moved.index) continue;
+        const auto [endpoint, key] = endpoint_for(a, moved);
+        send(name, wire::make(MsgType::peer_moved, "director",
+                              Value::Map{{"name", moved.name()}, {"endpoint", endpoint}, {"key", key}}));
+      }
+    }
+    for (Service* s : all_services_)
+      if (auto st = s->on_rejoined(moved.name(), *this); !st) return st;
+    if (supervisor_.stage() >= Stage::setup) send(moved.name(), wire::make_phase("director", Phase::setup));
+    if (supervisor_.stage() >= Stage::render) send(moved.name(), wire::make_phase("director", Phase::render));
+    return Ok{};
   }
 
   // PHASE to everyone, then wait for every READY of it (no timeout: setup and render take what they take).
   void run_phase(Phase phase) {
     supervisor_.broadcast(wire::make_phase("director", phase));
     for (Service* s : all_services_) check(s->on_phase(phase, *this));
-    if (phase != Phase::render) return wait_all(0, [phase](const ActorRecord& a) { return a.ready == phase; });
+    if (phase != Phase::render) {
+      wait_all(0, [phase](const ActorRecord& a) { return a.ready == phase; });
+      // A READY sent before a rollback counts for nothing: the services say when the phase's work is really in.
+      auto complete = [&] {
+        for (const Service* s : all_services_)
+          if (!s->phase_complete(phase)) return false;
+        return true;
+      };
+      while (!complete() || !supervisor_.all([phase](const ActorRecord& a) { return a.ready == phase; })) pump(100);
+      return;
+    }
     // Rendering takes what it takes; once every renderer is done, the others have had PHASE render for the whole
     // frame and must have said READY render (docs/PROTOCOL.md). One that never does would hang the farm.
     wait_all(0, [](const ActorRecord& a) { return !a.spec->is_renderer() || a.ready == Phase::render; });

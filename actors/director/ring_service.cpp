@@ -1,5 +1,6 @@
 #include "actors/director/ring_service.hpp"
 
+#include <algorithm>
 #include <chrono>
 #include <cstdio>
 
@@ -56,13 +57,29 @@ Status RingService::on_request(const std::string& actor, wire::Op op, uint64_t i
 Status RingService::on_shooter(const std::string& node, uint64_t id, const Value& body, Outbox& out) {
   const int at = index_of(node);
   if (at < 0) return make_error("'" + node + "' is not a ring node");
-  auto report = ring::decode_shooter_report(body);
+  auto report = ring::decode_shooter_report(body, plan_ ? plan_->mesh.patches.size() : 0);
   if (!report) return make_error("ring node '" + node + "' sent " + report.error().message);
+  // Sent before a rollback (the node is being rolled back, or was restarted and waits for it): dropped unanswered.
+  if (report->epoch != epoch_ || !restarting_.empty()) return Ok{};
   if (report->iteration != iteration_)
     return make_error("ring node '" + node + "' reported iteration " + std::to_string(report->iteration) +
                       " while the ring is on " + std::to_string(iteration_));
   asked_[at] = {id, *report};
   if (asked_.size() < nodes_.size()) return Ok{};
+  // Every node's elements at the end of this iteration: the ring can come back here if a node is lost.
+  size_t with_checkpoint = 0;
+  for (auto& [i, a] : asked_) with_checkpoint += a.report.checkpoint ? 1 : 0;
+  if (with_checkpoint == nodes_.size()) {
+    checkpoint_ = Checkpoint{iteration_, {}, 0};
+    for (auto& [i, a] : asked_) {
+      checkpoint_.bytes += a.report.checkpoint->size() * ring::kElementWireBytes;
+      checkpoint_.elements[i] = std::move(*a.report.checkpoint);
+    }
+    ++checkpoints_;
+    checkpoint_bytes_ += checkpoint_.bytes;
+  } else if (with_checkpoint > 0) {
+    return make_error("ring nodes disagree about checkpointing iteration " + std::to_string(iteration_));
+  }
   // Everyone is done with this shooter: choose the next one from the nodes' candidates (in node order, so ties
   // break the same way every time).
   Candidate best;
@@ -75,7 +92,7 @@ Status RingService::on_shooter(const std::string& node, uint64_t id, const Value
   const double fraction = emitted > 0 ? unshot / emitted : 0;
   const double t = now_seconds();
   if (iteration_ < 0) {
-    started_ = t;
+    if (started_ == 0) started_ = t;  // a rollback to the start keeps the first start
   } else {
     iteration_seconds_.push_back(t - last_);
     unshot_fraction_.push_back(fraction);
@@ -112,8 +129,9 @@ Status RingService::on_result(const std::string& node, uint64_t id, const Value&
   if (!plan_) return make_error("ring node '" + node + "' sent a result before the ring was planned");
   auto decoded = ring::decode_result(body, plan_->mesh.patches.size());
   if (!decoded) return make_error("ring node '" + node + "' sent " + decoded.error().message);
+  if (decoded->epoch != epoch_ || !restarting_.empty() || solved()) return Ok{};  // from before a rollback
   auto& elements = results_[at];
-  elements.insert(elements.end(), decoded->begin(), decoded->end());
+  elements.insert(elements.end(), decoded->elements.begin(), decoded->elements.end());
   out.reply(node, id, Value::Map{});
   if (results_.size() < nodes_.size()) return Ok{};
   std::vector<Element> all;
@@ -131,11 +149,49 @@ Status RingService::on_result(const std::string& node, uint64_t id, const Value&
   return Ok{};
 }
 
+Status RingService::on_lost(const std::string& node, const std::string& why, Outbox&) {
+  const int at = index_of(node);
+  if (at < 0 || solved()) return Ok{};
+  if (!plan_) return make_error("ring node '" + node + "' was lost before the ring was planned");
+  // Everything since the checkpoint is redone: forget it, and drop whatever the nodes still send about it.
+  ++epoch_;
+  restarting_.insert(at);
+  recoveries_.push_back({node, why, iteration_ == INT64_MIN ? static_cast<int64_t>(shooters_.size()) : iteration_,
+                         checkpoint_.iteration});
+  asked_.clear();
+  results_.clear();
+  const int64_t c = checkpoint_.iteration;
+  iteration_ = c;
+  shooters_.resize(static_cast<size_t>(c + 1));
+  iteration_seconds_.resize(static_cast<size_t>(std::max<int64_t>(c, 0)));
+  unshot_fraction_.resize(static_cast<size_t>(std::max<int64_t>(c, 0)));
+  if (!quiet_)
+    log_info(c < 0 ? std::string("radiosity: the ring starts the solve again (no checkpoint yet)")
+                   : "radiosity: the ring goes back to its checkpoint after iteration " + std::to_string(c));
+  return Ok{};
+}
+
+Status RingService::on_rejoined(const std::string& node, Outbox& out) {
+  const int at = index_of(node);
+  if (at < 0 || !restarting_.erase(at) || !restarting_.empty()) return Ok{};
+  for (size_t i = 0; i < nodes_.size(); ++i) {
+    ring::Rollback rollback{epoch_, checkpoint_.iteration, {}};
+    if (auto it = checkpoint_.elements.find(static_cast<int>(i)); it != checkpoint_.elements.end())
+      rollback.elements = it->second;
+    out.tell(nodes_[i], wire::MsgType::rollback, ring::encode_rollback(rollback));
+  }
+  return Ok{};
+}
+
 Value RingService::report() const {
   Value::Array seconds(iteration_seconds_.begin(), iteration_seconds_.end());
   Value::Array fractions(unshot_fraction_.begin(), unshot_fraction_.end());
   Value::Array shooters;
   for (uint32_t s : shooters_) shooters.push_back(static_cast<int64_t>(s));
+  Value::Array recoveries;
+  for (const auto& r : recoveries_)
+    recoveries.push_back(Value::Map{{"node", r.node}, {"why", r.why}, {"lost_at_iteration", r.lost_at},
+                                    {"resumed_from_iteration", r.resumed_from}});
   return Value::Map{{"rings", config_.layout.rings},
                     {"ring_length", config_.layout.length},
                     {"balance", config_.balance_name()},
@@ -145,6 +201,10 @@ Value RingService::report() const {
                     {"unshot_fraction", std::move(fractions)},
                     {"shooters", std::move(shooters)},
                     {"patches", static_cast<int64_t>(plan_ ? plan_->mesh.patches.size() : 0)},
+                    {"checkpoint_every", config_.checkpoint_every},
+                    {"checkpoints", static_cast<int64_t>(checkpoints_)},
+                    {"checkpoint_bytes", static_cast<int64_t>(checkpoint_bytes_)},
+                    {"recoveries", std::move(recoveries)},
                     {"ambient", Value::Array{double(ambient_.x), double(ambient_.y), double(ambient_.z)}}};
 }
 

@@ -9,8 +9,15 @@
 //                                         the PLY and publishes the solution as "radiosity" on the exchange, for
 //                                         the `radiosity` LightOp.
 // A node reporting the wrong iteration, or a malformed report or result, stops the farm.
+//
+// Recovery: the nodes' reports carry their elements every checkpoint_every iterations, and the service keeps the
+// last complete set. A node lost before the solution is in is restarted (needs_restart); the service opens a new
+// epoch at once (reports and results of the old one are dropped unanswered) and, once every restarted node has
+// rejoined, sends each node ROLLBACK to the checkpoint (or to the start, when there is none yet). The nodes then
+// report that iteration again, and the ring goes on from there exactly as it went before.
 #include <map>
 #include <optional>
+#include <set>
 #include <string>
 #include <vector>
 
@@ -37,11 +44,16 @@ class RingService final : public Service {
 
   std::vector<wire::Op> ops() const override { return {wire::Op::ring_shooter, wire::Op::ring_result}; }
   Status on_request(const std::string& actor, wire::Op op, uint64_t id, const Value& body, Outbox& out) override;
+  Status on_lost(const std::string& actor, const std::string& why, Outbox& out) override;
+  bool needs_restart(const std::string& actor) const override { return index_of(actor) >= 0 && !solved(); }
+  Status on_rejoined(const std::string& actor, Outbox& out) override;
+  bool phase_complete(wire::Phase phase) const override { return phase != wire::Phase::setup || !active() || solved(); }
 
   const std::string& ply_path() const { return config_.ply; }
   bool solved() const { return !solution_.empty(); }
   const std::string& solution() const { return solution_; }
-  Value report() const;  // iterations, seconds, unshot fraction, per-iteration figures
+  Value report() const;  // iterations, seconds, unshot fraction, per-iteration figures, recoveries
+  uint32_t epoch() const { return epoch_; }
 
  private:
   int index_of(const std::string& node) const;
@@ -66,6 +78,20 @@ class RingService final : public Service {
   std::vector<uint32_t> shooters_;
   double started_ = 0, last_ = 0;
   std::map<int, std::vector<radiosity::Element>> results_;
+  uint32_t epoch_ = 0;
+  struct Checkpoint {
+    int64_t iteration = -1;  // -1: none (the start)
+    std::map<int, std::vector<radiosity::Element>> elements;  // per node
+    uint64_t bytes = 0;      // their size on the wire
+  } checkpoint_;
+  uint64_t checkpoints_ = 0, checkpoint_bytes_ = 0;
+  std::set<int> restarting_;
+  struct Recovery {
+    std::string node, why;
+    int64_t lost_at = 0;      // the iteration the ring was on
+    int64_t resumed_from = -1;  // the checkpoint's iteration
+  };
+  std::vector<Recovery> recoveries_;
   std::string solution_;
   RGB ambient_;
 };

@@ -19,6 +19,8 @@ class Outbox {
   virtual ~Outbox() = default;
   virtual void reply(const std::string& actor, uint64_t id, Value body) = 0;
   virtual void refuse(const std::string& actor, uint64_t id, ErrorCode code, const std::string& message) = 0;
+  // A message the director starts (not an answer), e.g. ROLLBACK.
+  virtual void tell(const std::string& actor, wire::MsgType type, Value body) = 0;
 };
 
 class Service {
@@ -34,6 +36,13 @@ class Service {
   // `actor` was lost (died or hung) in setup or render, and the farm goes on without it: its work goes elsewhere.
   // An error stops the farm (the work cannot be redone).
   virtual Status on_lost(const std::string& /*actor*/, const std::string& /*why*/, Outbox&) { return Ok{}; }
+  // Whether `actor`, lost, had work that exists nowhere else and must be restarted (Supervisor: ring nodes).
+  virtual bool needs_restart(const std::string& /*actor*/) const { return false; }
+  // A restarted `actor` is configured again and its peers know where it listens.
+  virtual Status on_rejoined(const std::string& /*actor*/, Outbox&) { return Ok{}; }
+  // Whether the service's part of `phase` is done, beyond every actor's READY (the ring's solution is in: a READY
+  // setup sent before a rollback does not count).
+  virtual bool phase_complete(wire::Phase) const { return true; }
 };
 
 }  // namespace lf

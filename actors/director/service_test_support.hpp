@@ -1,5 +1,6 @@
 #pragma once
 // What the director service tests share: an Outbox that records every answer in order.
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -13,7 +14,8 @@ struct Sent {
   bool refused = false;
   ErrorCode code = ErrorCode::failed;
   std::string message;  // when refused
-  Value body;           // when replied
+  Value body;           // when replied or told
+  std::optional<wire::MsgType> told;  // set: a message the service started
 };
 
 class RecordingOutbox final : public Outbox {
@@ -21,6 +23,9 @@ class RecordingOutbox final : public Outbox {
   void reply(const std::string& actor, uint64_t id, Value body) override { sent.push_back({actor, id, false, {}, {}, std::move(body)}); }
   void refuse(const std::string& actor, uint64_t id, ErrorCode code, const std::string& message) override {
     sent.push_back({actor, id, true, code, message, {}});
+  }
+  void tell(const std::string& actor, wire::MsgType type, Value body) override {
+    sent.push_back({actor, 0, false, {}, {}, std::move(body), type});
   }
   // Takes what was sent so far.
   std::vector<Sent> take() { return std::exchange(sent, {}); }

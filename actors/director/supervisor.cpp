@@ -38,7 +38,21 @@ Status Supervisor::launch(const std::string& director_endpoint, const std::strin
                           const std::function<std::string(const ActorSpec&)>& stdin_of) {
   if (auto st = launchers_.prepare(spec_.hosts_in_use()); !st)
     return make_error("cannot start the farm: " + st.error().message);
+  director_endpoint_ = director_endpoint;
+  local_address_ = local_address;
+  stdin_of_ = stdin_of;
   for (const auto& a : spec_.actors) {
+    auto pid = start(a);
+    if (!pid) return pid.error();
+    ActorRecord& r = actors_.at(a.name);
+    r.pid = *pid;
+    r.last_seen = Clock::now();
+  }
+  return Ok{};
+}
+
+Result<pid_t> Supervisor::start(const ActorSpec& a) {
+  {
     LaunchRequest how;
     how.argv = {"lightfarm", "actor"};
     if (auto cmd = a.runtime.find("cmd"); cmd != a.runtime.end() && cmd->second.is_array()) {
@@ -48,22 +62,19 @@ Status Supervisor::launch(const std::string& director_endpoint, const std::strin
       how.self = false;
       if (auto cwd = a.runtime.find("cwd"); cwd != a.runtime.end() && cwd->second.is_string()) how.cwd = cwd->second.as_string();
     }
-    how.argv.insert(how.argv.end(), {"--kind", a.kind, "--name", a.name, "--director", director_endpoint});
+    how.argv.insert(how.argv.end(), {"--kind", a.kind, "--name", a.name, "--director", director_endpoint_});
     const HostSpec* host = spec_.host_of(a);
     if (!host) return make_error(a.loc.str() + ": actor '" + a.name + "' is placed on undeclared host '" + a.host + "'");
-    if (!local_address.empty())
-      how.argv.insert(how.argv.end(), {"--bind", "tcp://" + (host->remote() ? host->address : local_address) + ":*"});
-    if (stdin_of) {
+    if (!local_address_.empty())
+      how.argv.insert(how.argv.end(), {"--bind", "tcp://" + (host->remote() ? host->address : local_address_) + ":*"});
+    if (stdin_of_) {
       how.argv.push_back("--curve");
-      how.stdin_text = stdin_of(a) + "\n";
+      how.stdin_text = stdin_of_(a) + "\n";
     }
     auto pid = launchers_.start(*host, how);
     if (!pid) return make_error(a.loc.str() + ": cannot start actor '" + a.name + "': " + pid.error().message);
-    ActorRecord& r = actors_.at(a.name);
-    r.pid = *pid;
-    r.last_seen = Clock::now();
+    return *pid;
   }
-  return Ok{};
 }
 
 void Supervisor::broadcast(const wire::Message& message) {
@@ -118,11 +129,19 @@ Status Supervisor::on_message(const std::string& peer, Result<wire::Message>& me
       a.endpoint = hello->endpoint;
       a.local_endpoint = hello->local_endpoint;
       a.said_hello = true;
+      if (a.rejoining) return events_.hello_again(a);
       return Ok{};
     }
     case MsgType::ready:
-      if (auto phase = wire::phase_of(m.header)) a.ready = *phase;
-      else log_warn("'" + peer + "' said READY for '" + m.header.op + "', which is not a phase");
+      if (auto phase = wire::phase_of(m.header)) {
+        a.ready = *phase;
+        if (a.rejoining && *phase == wire::Phase::configure) {
+          a.rejoining = false;
+          return events_.configured_again(a);
+        }
+      } else {
+        log_warn("'" + peer + "' said READY for '" + m.header.op + "', which is not a phase");
+      }
       return Ok{};
     case MsgType::error:
       return make_error("actor '" + peer + "' failed: " + wire::error_of(m).message);
@@ -157,10 +176,43 @@ Status Supervisor::on_exit(const ExitReport& r) {
                                                 "); it was killed"
                                           : r.describe();
     if (recoverable(a)) return lose(a, why);
+    if (restartable(a)) return restart(a, why);
     const std::string when = starting_up(stage_) ? "during start-up" : "during " + std::string(stage_name(stage_));
     return make_error("actor '" + name + "' (pid " + std::to_string(r.pid) + ") " + why + " " + when);
   }
   return Ok{};
+}
+
+// Ring nodes from the moment they should say hello until the frame is done (whether one is still needed is the ring
+// service's to say).
+bool Supervisor::restartable(const ActorRecord& a) const {
+  return a.spec->is_ring_node() && stage_ >= Stage::hello && stage_ <= Stage::render;
+}
+
+Status Supervisor::restart(ActorRecord& a, const std::string& why) {
+  if (!events_.needs_restart || !events_.needs_restart(a)) {
+    a.lost = true;
+    a.loss = why;
+    log_warn("ring node '" + a.name() + "' " + why + " after the ring's solution was complete; it is not needed any more");
+    return Ok{};
+  }
+  if (a.restarts >= kMaxRestarts)
+    return make_error("ring node '" + a.name() + "' " + why + " during " + std::string(stage_name(stage_)) +
+                      ", after " + std::to_string(a.restarts) + " restarts; stopping the farm");
+  ++a.restarts;
+  log_warn("ring node '" + a.name() + "' " + why + "; restarting it (" + std::to_string(a.restarts) + " of at most " +
+           std::to_string(kMaxRestarts) + ")");
+  auto pid = start(*a.spec);
+  if (!pid) return make_error("cannot restart ring node '" + a.name() + "': " + pid.error().message);
+  const bool was_configured = a.configured;
+  a.pid = *pid;
+  a.said_hello = a.said_bye = a.exited = a.configured = a.killed_hung = false;
+  a.ready.reset();
+  a.last_seen = Clock::now();
+  // Before its CONFIG the new process simply joins like everyone else; after it, it rejoins a farm under way.
+  if (!was_configured) return Ok{};
+  a.rejoining = true;
+  return events_.lost(a, why);
 }
 
 Status Supervisor::lose(ActorRecord& a, const std::string& why) {
@@ -217,7 +269,7 @@ Status Supervisor::check_heartbeats(Clock::time_point now) {
   for (auto& [name, a] : actors_) {
     if (a.exited || a.said_bye || a.lost || a.killed_hung) continue;
     if (seconds_between(a.last_seen, now) <= spec_.heartbeat_timeout) continue;
-    if (recoverable(a)) {
+    if (recoverable(a) || restartable(a)) {
       // A hung process (e.g. SIGSTOPped) counts as dead; SIGKILL makes sure it can never answer late.
       a.killed_hung = true;
       launchers_.kill(a.pid, SIGKILL);

@@ -6,6 +6,11 @@
 //     it can never answer late) is *lost*: the services hear of it (its tiles go back), and a replica's pool gets
 //     PEER_DOWN and re-sends its packets; the last renderer, or a pool's last replica, stops the farm naming each
 //     loss (a nested pool left empty is itself a lost replica of the pool above);
+//   - a radiosity ring node that dies or hangs from start-up to the end of render (its elements exist nowhere
+//     else) is *restarted*: the same command again, up to kMaxRestarts times. One not yet configured just joins
+//     like the others; otherwise the services hear of the loss (the ring service rolls the ring back), the director
+//     configures the new process when it says HELLO and tells the others where it listens once it is READY
+//     configure. One lost after the ring's solution is complete is simply lost;
 //   - any other death, an ERROR from an actor, or a bad HELLO stops the farm with a message naming the actor.
 // Socket-free: the director passes messages in and sends what the supervisor says through ControlOut, so the
 // supervisor is tested by feeding it messages and exits (supervisor.test.cpp).
@@ -42,6 +47,8 @@ struct ActorRecord {
   bool lost = false;         // died or hung after launch, and the farm went on without it
   bool configured = false;   // CONFIG was sent
   bool killed_hung = false;  // SIGKILLed for missing heartbeats
+  int restarts = 0;          // times this actor's process was started again
+  bool rejoining = false;    // restarted, and not yet READY configure
   std::string loss;          // why it was lost
   Clock::time_point last_seen;
   Value stats;
@@ -61,7 +68,13 @@ class Supervisor {
   struct Events {
     std::function<Status(ActorRecord&, wire::Message&)> request;
     std::function<Status(ActorRecord&, const std::string& why)> lost;
+    // Whether a ring node's loss leaves work undone (then it is restarted; otherwise just lost).
+    std::function<bool(const ActorRecord&)> needs_restart;
+    // A restarted actor said HELLO (it needs its CONFIG), and then READY configure (it can rejoin the phase).
+    std::function<Status(ActorRecord&)> hello_again;
+    std::function<Status(ActorRecord&)> configured_again;
   };
+  static constexpr int kMaxRestarts = 3;
 
   Supervisor(const FarmSpec& spec, Launchers& launchers, ControlOut& out, Events events);
 
@@ -98,7 +111,10 @@ class Supervisor {
 
  private:
   bool recoverable(const ActorRecord& a) const;
+  bool restartable(const ActorRecord& a) const;
   Status lose(ActorRecord& a, const std::string& why);
+  Status restart(ActorRecord& a, const std::string& why);
+  Result<pid_t> start(const ActorSpec& a);
   void send(const std::string& name, wire::Message m);
 
   const FarmSpec& spec_;
@@ -106,6 +122,9 @@ class Supervisor {
   ControlOut& out_;
   Events events_;
   std::map<std::string, ActorRecord> actors_;
+  // How launch() started actors, for restarts.
+  std::string director_endpoint_, local_address_;
+  std::function<std::string(const ActorSpec&)> stdin_of_;
   Stage stage_ = Stage::prepare;
   Clock::time_point last_heartbeat_ = Clock::now();
   RateLimitedLog strangers_;  // bad or foreign control messages: logged, never flooding

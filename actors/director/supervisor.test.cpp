@@ -9,6 +9,7 @@
 
 #include "actors/runtime/hello.hpp"
 #include "farm/builders.hpp"
+#include "radiosity/config.hpp"
 
 namespace lf {
 namespace {
@@ -234,6 +235,81 @@ TEST(SupervisorNested, AnEmptiedInnerPoolIsALostReplicaOfTheOuterOne) {
             "direct.0: lost every replica (direct.0.0 was killed by signal 9 (Killed), direct.0.1 was killed by signal "
             "9 (Killed))");
   EXPECT_TRUE(sup.at("direct.0").lost);
+}
+
+// A ring node that dies during setup is started again with the same command (at most kMaxRestarts times); the
+// services hear of the loss, and of the new process's HELLO and READY configure. Once the ring no longer needs it
+// (the solution is in), a loss is just a loss.
+TEST(SupervisorRing, ALostRingNodeIsRestartedUntilItsBudgetIsSpent) {
+  FarmSpec spec;
+  Value::Map params{{"rings", 1}, {"ring_length", 2}};
+  const auto config = radiosity::read_ring_config(ParamTable(params, "radiosity"));
+  ASSERT_TRUE(expand_ring(spec, config, params, "radiosity", {}, {}).ok());
+  Launchers launchers;
+  auto f = std::make_unique<FakeLauncher>();
+  FakeLauncher* fake = f.get();
+  launchers.set("local", std::move(f));
+  Recorder out;
+  std::vector<std::string> events;
+  bool needed = true;
+  Supervisor sup(spec, launchers, out,
+                 {[](ActorRecord&, wire::Message&) { return Status(Ok{}); },
+                  [&](ActorRecord& a, const std::string& why) {
+                    events.push_back("lost " + a.name() + ": " + why);
+                    return Status(Ok{});
+                  },
+                  [&](const ActorRecord&) { return needed; },
+                  [&](ActorRecord& a) {
+                    events.push_back("hello again " + a.name());
+                    return Status(Ok{});
+                  },
+                  [&](ActorRecord& a) {
+                    events.push_back("configured again " + a.name());
+                    return Status(Ok{});
+                  }});
+  ASSERT_TRUE(sup.launch("tcp://d").ok());
+  const size_t launched = fake->started.size();
+  const int node_index = sup.at("radiosity.0.1").index;
+  sup.set_stage(Stage::setup);
+  auto say = [&](const std::string& peer, wire::Message m) {
+    Result<wire::Message> r(std::move(m));
+    return sup.on_message(peer, r);
+  };
+  for (int round = 1; round <= Supervisor::kMaxRestarts; ++round) {
+    sup.actors().at("radiosity.0.1").configured = true;  // as the director's CONFIG (first, or after hello again)
+    const pid_t old = sup.at("radiosity.0.1").pid;
+    ASSERT_TRUE(sup.on_exit(ExitReport{old, status_killed(SIGKILL)}).ok());
+    ASSERT_EQ(fake->started.size(), launched + static_cast<size_t>(round));
+    EXPECT_EQ(fake->started.back().argv, fake->started[static_cast<size_t>(node_index)].argv);  // the same command
+    const ActorRecord& node = sup.at("radiosity.0.1");
+    EXPECT_NE(node.pid, old);
+    EXPECT_FALSE(node.lost || node.exited || node.said_hello);
+    EXPECT_EQ(node.restarts, round);
+    ASSERT_TRUE(say("radiosity.0.1", wire::make(MsgType::hello, "radiosity.0.1",
+                                                my_hello("radiosity_node", "tcp://x:2").to_value())).ok());
+    ASSERT_TRUE(say("radiosity.0.1", wire::make_ready("radiosity.0.1", wire::Phase::configure)).ok());
+  }
+  EXPECT_EQ(events.size(), 3u * Supervisor::kMaxRestarts);
+  EXPECT_EQ(events[0], "lost radiosity.0.1: was killed by signal 9 (Killed)");
+  EXPECT_EQ(events[1], "hello again radiosity.0.1");
+  EXPECT_EQ(events[2], "configured again radiosity.0.1");
+  auto spent = sup.on_exit(ExitReport{sup.at("radiosity.0.1").pid, status_exited(1)});
+  ASSERT_FALSE(spent.ok());
+  EXPECT_EQ(spent.error().message,
+            "ring node 'radiosity.0.1' exited with status 1 during setup, after 3 restarts; stopping the farm");
+
+  // Not yet configured (a loss in the hello stage): started again, and it joins like the others.
+  sup.set_stage(Stage::hello);
+  ASSERT_TRUE(sup.on_exit(ExitReport{sup.at("radiosity.0.0").pid, status_killed(SIGKILL)}).ok());
+  EXPECT_EQ(fake->started.size(), launched + Supervisor::kMaxRestarts + 1);
+  EXPECT_FALSE(sup.at("radiosity.0.0").rejoining);
+  EXPECT_EQ(events.size(), 3u * Supervisor::kMaxRestarts);
+
+  needed = false;
+  sup.set_stage(Stage::render);
+  ASSERT_TRUE(sup.on_exit(ExitReport{sup.at("radiosity.0.0").pid, status_killed(SIGKILL)}).ok());
+  EXPECT_TRUE(sup.at("radiosity.0.0").lost);
+  EXPECT_EQ(fake->started.size(), launched + Supervisor::kMaxRestarts + 1);
 }
 
 }  // namespace

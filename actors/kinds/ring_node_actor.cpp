@@ -9,6 +9,8 @@
 //   anything else                                  -> ERROR unknown_op; before CONFIG: ERROR not_ready
 // Sends to the director: ring.shooter (each iteration's report) and ring.result (its elements, when done).
 // Ready: configure once the ring is planned; setup once the director took its elements; render at once.
+// From the director: PEER_MOVED (another node was restarted; the runtime reconnects) and ROLLBACK (back to a
+// checkpoint in a new epoch), which may come in any state, also after READY setup.
 // Its inputs are every other node, in node order.
 #include "actors/kinds/ring_node_actor.hpp"
 
@@ -95,6 +97,19 @@ class RingNodeActor final : public Actor {
     rt.reply(peer, m.header.id, Value::Map{});
   }
 
+  // Whatever was outstanding with the old process is redone after the ROLLBACK that follows.
+  void on_peer_moved(const std::string& name, Runtime&) override { log_debug("ring node '" + name + "' was restarted"); }
+
+  void on_rollback(const Value& body, Runtime& rt) override {
+    if (!protocol_) return rt.fail("ring: a rollback before CONFIG");
+    auto rollback = ring::decode_rollback(body, plan_->mesh.patches.size());
+    if (!rollback) return rt.fail("ring: " + rollback.error().message);
+    auto actions = protocol_->on_rollback(std::move(*rollback));
+    if (!actions) return rt.fail("ring: " + actions.error().message);
+    carry_out(std::move(*actions), rt);
+    on_progress(rt);
+  }
+
   void on_progress(Runtime& rt) override {
     if (protocol_) carry_out(protocol_->step(Clock::now()), rt);  // the runtime counts this as busy time
   }
@@ -140,7 +155,7 @@ class RingNodeActor final : public Actor {
           break;
         case RingAction::Kind::send_result:
           solve_cpu_ = cpu_seconds() - solve_cpu_start_;
-          rt.ask_director(wire::Op::ring_result, ring::encode_result(node_->part().elements()),
+          rt.ask_director(wire::Op::ring_result, ring::encode_result(node_->part().elements(), protocol_->epoch()),
                           [this, &rt](Result<wire::Message> r) {
                             if (!r) return rt.fail("ring: " + r.error().message);
                             protocol_->on_result_taken();
@@ -149,12 +164,12 @@ class RingNodeActor final : public Actor {
           break;
         case RingAction::Kind::poll:
           client(rt, a.to).request(wire::Op::ring_poll, ring::encode_poll(a.poll),
-                                   [this, &rt, ring = a.poll_ring, iteration = a.poll.iteration](Result<wire::Message> r) {
+                                   [this, &rt, ring = a.poll_ring, poll = a.poll](Result<wire::Message> r) {
                                      if (!r) return rt.fail("ring: " + r.error().message);
                                      auto reply = ring::decode_poll_reply(r->body, config_.layout.nodes(),
                                                                           config_.layout.rings);
                                      if (!reply) return rt.fail("ring: " + reply.error().message);
-                                     protocol_->on_poll_reply(ring, iteration, std::move(*reply), Clock::now());
+                                     protocol_->on_poll_reply(ring, poll, std::move(*reply), Clock::now());
                                    });
           break;
       }

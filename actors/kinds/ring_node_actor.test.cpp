@@ -56,8 +56,8 @@ TEST_F(RingNodeActorTest, SolvesThroughTheDirectorAndRefusesHostilePackets) {
     return in.message->body.find("message")->as_string();
   };
   EXPECT_NE(refused("ring.teleport", Value::Map{}, 1).find("unknown operation 'ring.teleport'"), std::string::npos);
-  EXPECT_EQ(refused("ring.visit", Value::Map{{"o", 0}}, 2), "a sample packet needs o, s, it, r and home in range");
-  Value packet = Value::Map{{"o", 0}, {"s", 0}, {"it", 0}, {"r", 1}, {"home", 0},
+  EXPECT_EQ(refused("ring.visit", Value::Map{{"o", 0}}, 2), "a sample packet needs o, s, it, e, r and home in range");
+  Value packet = Value::Map{{"o", 0}, {"s", 0}, {"it", 0}, {"e", 0}, {"r", 1}, {"home", 0},
                             {"p", floats_to_bytes(std::vector<float>(6, 1.0f))},
                             {"n", floats_to_bytes(std::vector<float>(3, 0.0f))},
                             {"v", u64_to_bytes(std::vector<uint64_t>(2, 1))}};
@@ -65,8 +65,8 @@ TEST_F(RingNodeActorTest, SolvesThroughTheDirectorAndRefusesHostilePackets) {
             "a sample packet needs p, n (3 floats per sample) and v (one u64 per sample)");
   Value stranger = packet;
   stranger.as_map()["o"] = 7;  // there is one node
-  EXPECT_EQ(refused("ring.back", stranger, 4), "a sample packet needs o, s, it, r and home in range");
-  EXPECT_EQ(refused("ring.poll", Value::Map{}, 5), "ring.poll needs an iteration");
+  EXPECT_EQ(refused("ring.back", stranger, 4), "a sample packet needs o, s, it, e, r and home in range");
+  EXPECT_EQ(refused("ring.poll", Value::Map{}, 5), "ring.poll needs an epoch and an iteration");
   Value early = packet;
   early.as_map()["n"] = floats_to_bytes(std::vector<float>(6, 0.0f));
   early.as_map()["it"] = 40;
@@ -97,6 +97,21 @@ TEST_F(RingNodeActorTest, SolvesThroughTheDirectorAndRefusesHostilePackets) {
   EXPECT_GT(patches.size(), 50u);
   reply(result, Value::Map{});
   EXPECT_EQ(wire::phase_of(next(MsgType::ready).header), wire::Phase::setup);
+
+  // Another node was lost: the director rolls the ring back to the start in epoch 1. Done or not, the node starts
+  // over and reports what it reported first; a packet of epoch 0 is then acknowledged and dropped.
+  director.send_to("radiosity.0.0", wire::make(MsgType::rollback, "director",
+                                               Value::Map{{"epoch", 1}, {"iteration", -1}, {"patch", Bytes{}},
+                                                          {"corners", Bytes{}}, {"points", Bytes{}},
+                                                          {"radiosity", Bytes{}}, {"unshot", Bytes{}},
+                                                          {"depth", Bytes{}}}));
+  auto again = next(MsgType::request);
+  ASSERT_EQ(wire::op_of(again.header), wire::Op::ring_shooter);
+  EXPECT_EQ(again.body.find("epoch")->as_int(), 1);
+  EXPECT_EQ(again.body.find("iteration")->as_int(), -1);
+  EXPECT_EQ(*again.body.find("candidate"), *first.body.find("candidate"));
+  intruder.send(wire::make_request("intruder", wire::Op::ring_visit, forged, 8));
+  EXPECT_EQ(receive(intruder).message->header.type, MsgType::reply);
 
   director.send_to("radiosity.0.0", wire::make_phase("director", wire::Phase::finish));
   auto stats = next(MsgType::stats);

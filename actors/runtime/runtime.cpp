@@ -3,6 +3,7 @@
 #include <time.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cerrno>
 #include <fstream>
 #include <sstream>
@@ -116,6 +117,12 @@ Value ActorStats::to_value(const wire::SocketCounters& t) const {
 void Actor::on_peer_down(const std::string& name, Runtime& rt) {
   rt.fail("input '" + name + "' was lost and this actor has no other");
 }
+
+void Actor::on_peer_moved(const std::string& name, Runtime& rt) {
+  rt.fail("input '" + name + "' was restarted, and this actor cannot redo what it had asked of it");
+}
+
+void Actor::on_rollback(const Value&, Runtime& rt) { rt.fail("the director asked for a rollback, which only ring nodes do"); }
 
 Runtime::Runtime(ActorArgs args)
     : args_(std::move(args)), control_(wire::Socket::Kind::dealer, args_.name), data_(wire::Socket::Kind::router) {
@@ -245,18 +252,13 @@ void Runtime::handle_control(wire::Message& m, Actor& actor) {
       heartbeat_timeout_ = config->heartbeat_timeout;
       heartbeat_interval_ = std::min(1.0, heartbeat_timeout_ / 4);
       // Connect to every input before the actor configures, so that it may ask them during setup.
+      request_timeout_ = config->request_timeout;
       for (const auto& in : config->inputs) {
-        auto client = std::make_unique<wire::RequestClient>(args_.name, in.name, static_cast<size_t>(in.window));
-        if (args_.keys) {
-          // Only a same-host IPC endpoint goes without CURVE.
-          if (in.key.empty() && in.endpoint.rfind("ipc://", 0) != 0)
-            return fail("CONFIG gives input '" + in.name + "' no key, and this farm speaks CURVE");
-          if (!in.key.empty()) client->use_curve(args_.keys->own.public_key, args_.keys->own.secret_key, in.key);
-        }
-        if (auto st = client->connect(in.endpoint); !st) return fail(st.error().message);
-        client->set_timeout(config->request_timeout);
-        inputs_.push_back(std::move(client));
+        auto client = connect_input(in.name, in.endpoint, in.key, static_cast<size_t>(in.window));
+        if (!client) return fail(client.error().message);
+        inputs_.push_back(std::move(*client));
         input_names_.push_back(in.name);
+        input_windows_.push_back(static_cast<size_t>(in.window));
       }
       inputs_changed_ = true;
       auto started = Clock::now();
@@ -307,8 +309,43 @@ void Runtime::handle_control(wire::Message& m, Actor& actor) {
       if (name && name->is_string()) actor.on_peer_down(name->as_string(), *this);
       return;
     }
+    case MsgType::peer_moved: {
+      const Value *name = m.body.find("name"), *endpoint = m.body.find("endpoint"), *key = m.body.find("key");
+      if (!name || !name->is_string() || !endpoint || !endpoint->is_string())
+        return log_warn("ignored a PEER_MOVED without name and endpoint");
+      const auto at = std::find(input_names_.begin(), input_names_.end(), name->as_string());
+      if (at == input_names_.end()) return log_warn("ignored a PEER_MOVED about '" + name->as_string() + "', not an input");
+      const size_t i = static_cast<size_t>(at - input_names_.begin());
+      auto client = connect_input(*at, endpoint->as_string(), key && key->is_string() ? key->as_string() : "",
+                                  input_windows_[i]);
+      if (!client) return fail(client.error().message);
+      inputs_[i] = std::move(*client);  // the old socket closes, and with it whatever was outstanding there
+      inputs_changed_ = true;
+      actor.on_peer_moved(*at, *this);
+      return;
+    }
+    case MsgType::rollback: {
+      auto started = Clock::now();
+      actor.on_rollback(m.body, *this);
+      add_busy(started);
+      return;
+    }
     default: log_warn("ignored a " + std::string(wire::type_name(m.header.type)) + " from the director");
   }
+}
+
+Result<std::unique_ptr<wire::RequestClient>> Runtime::connect_input(const std::string& name, const std::string& endpoint,
+                                                                    const std::string& key, size_t window) {
+  auto client = std::make_unique<wire::RequestClient>(args_.name, name, window);
+  if (args_.keys) {
+    // Only a same-host IPC endpoint goes without CURVE.
+    if (key.empty() && endpoint.rfind("ipc://", 0) != 0)
+      return make_error("the director gives input '" + name + "' no key, and this farm speaks CURVE");
+    if (!key.empty()) client->use_curve(args_.keys->own.public_key, args_.keys->own.secret_key, key);
+  }
+  if (auto st = client->connect(endpoint); !st) return st.error();
+  client->set_timeout(request_timeout_);
+  return client;
 }
 
 void Runtime::handle_data(Actor& actor, wire::Socket& socket) {
@@ -380,7 +417,13 @@ int Runtime::run(Actor& actor) {
       return 128 + stop_signal();
     }
     if (inputs_changed_) {
-      for (; polled_inputs < inputs_.size(); ++polled_inputs) poller.add(inputs_[polled_inputs]->socket());
+      // Inputs were connected, or one was replaced (PEER_MOVED): the poller is made again around the live sockets.
+      poller.clear();
+      poller.add(control_);
+      poller.add(data_);
+      if (local_) poller.add(*local_);
+      for (auto& in : inputs_) poller.add(in->socket());
+      polled_inputs = inputs_.size();
       inputs_changed_ = false;
     }
     // While the actor has work of its own, do not sleep in poll.

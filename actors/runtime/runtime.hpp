@@ -71,6 +71,12 @@ class Actor {
   virtual bool has_local_work() const { return queue_length() > 0; }
   // PEER_DOWN: input `name` is gone. By default that ends this actor; a multiplexer re-routes instead.
   virtual void on_peer_down(const std::string& name, Runtime& rt);
+  // PEER_MOVED: input `name` was restarted; the runtime has connected to its new endpoint and forgotten what was
+  // outstanding with the old process (no callbacks run). By default that ends this actor; a ring node's ROLLBACK
+  // follows, which redoes the work.
+  virtual void on_peer_moved(const std::string& name, Runtime& rt);
+  // ROLLBACK (ring nodes): the director rolls the phase's work back to a checkpoint. By default that ends this actor.
+  virtual void on_rollback(const Value& body, Runtime& rt);
   // How long the loop may sleep before this actor has something due (ms); -1: nothing due.
   virtual long next_due_ms() const { return -1; }
   // Added to STATS under "detail" (e.g. a multiplexer's per-replica counts).
@@ -109,6 +115,9 @@ class Runtime {
 
  private:
   void handle_control(wire::Message& m, Actor& actor);
+  // Connects input `name` at `endpoint` (with the peer's CURVE `key`, empty for a same-host IPC endpoint).
+  Result<std::unique_ptr<wire::RequestClient>> connect_input(const std::string& name, const std::string& endpoint,
+                                                             const std::string& key, size_t window);
   void handle_data(Actor& actor, wire::Socket& socket);
   wire::Socket& socket_of(const std::string& peer);
   void send_control(wire::Message m);
@@ -132,6 +141,8 @@ class Runtime {
   uint64_t next_director_id_ = 1;
   ActorStats stats_;
   double heartbeat_timeout_ = 30.0;
+  double request_timeout_ = 0;
+  std::vector<size_t> input_windows_;
   // Heartbeats come from a thread with a control socket of its own (routing id NAME#heartbeat), so that one long
   // shade or setup never looks like death; a stopped or killed process still goes silent.
   void start_heartbeats();

@@ -27,8 +27,9 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   (void)lf::ring::decode_packet(v, 4);
   (void)lf::ring::decode_poll(v);
   (void)lf::ring::decode_poll_reply(v, 4, 2);
-  (void)lf::ring::decode_shooter_report(v);
+  (void)lf::ring::decode_shooter_report(v, 16);
   (void)lf::ring::decode_shooter_choice(v, 16);
   (void)lf::ring::decode_result(v, 16);
+  (void)lf::ring::decode_rollback(v, 16);
   return 0;
 }

@@ -56,6 +56,26 @@ int main(int argc, char** argv) {
   wire_seed("config", wire::make(wire::MsgType::config, "director", config.to_value()));
   wire_seed("poll", wire::make_request("ring0.1", wire::Op::unknown, ring::encode_poll(radiosity::PollRequest{}), 3));
   wire_seed("shooter_report", wire::make(wire::MsgType::reply, "ring0.0", ring::encode_shooter_report(radiosity::ShooterReport{}), 4));
+  radiosity::Element element;
+  element.patch = 3;
+  element.depth = 1;
+  element.polygon.count = 4;
+  element.radiosity = {0.5f, 0.25f, 0.125f};
+  radiosity::ShooterReport checkpointed;
+  checkpointed.epoch = 1;
+  checkpointed.iteration = 9;
+  checkpointed.candidate = radiosity::Candidate{3, 1.5, RGB{1, 1, 1}};
+  checkpointed.checkpoint = std::vector{element, element};
+  wire_seed("shooter_checkpoint", wire::make_request("ring0.0", wire::Op::ring_shooter, ring::encode_shooter_report(checkpointed), 5));
+  wire_seed("rollback", wire::make(wire::MsgType::rollback, "director", ring::encode_rollback({2, 9, {element}})));
+  radiosity::SamplePacket packet;
+  packet.origin = 1;
+  packet.epoch = 2;
+  packet.route = 6;
+  packet.points = {{0, 1, 0}};
+  packet.normals = {{0, 0, 1}};
+  packet.visible = {0xff};
+  wire_seed("packet", wire::make_request("ring0.1", wire::Op::ring_visit, ring::encode_packet(packet, 1), 6));
 
   auto cornell = Scene::builtin("cornell");
   seed("scene_file", "cornell.lfscene", scene_to_bytes(*cornell));
