@@ -104,6 +104,25 @@ TEST_F(PluginTest, FarmsWithBrokenActorsStopCleanlyNamingTheProblem) {
   }
 }
 
+// Once the image is written the farm's work is done: an actor that then ends badly (here it exits 3 on PHASE
+// finish; a cut host's ssh exits 255) is a warning, and the exit status is 0.
+TEST_F(PluginTest, AnActorEndingBadlyAfterTheImageIsWrittenIsAWarning) {
+  auto script = write("finish.lua", "scene { builtin = \"cornell\" }\n"
+                                    "image { width = 16, height = 16, spp = 1 }\n"
+                                    "local b = lightop.exec { cmd = {\"" + kBroken + "\", \"--mode\", \"crash_at_finish\"}, "
+                                    "name = \"broken\" }\n"
+                                    "renderers { count = 1, lighting = b }\n");
+  auto r = run_lightfarm({"run", script, "--output", path("finish.png")});
+  EXPECT_EQ(r.status, 0) << r.err;
+  EXPECT_NE(r.err.find("lightfarm: warning: actor 'broken' (pid "), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("exited with status 3 during finish after the image was written"), std::string::npos) << r.err;
+  EXPECT_EQ(r.err.find("error:"), std::string::npos) << r.err;
+  auto image = read_image(path("finish.png"));
+  ASSERT_TRUE(image.ok()) << image.error().message;
+  EXPECT_EQ(image->width, 16);
+  expect_no_leftovers(r);
+}
+
 TEST_F(PluginTest, PythonTintMultipliesItsInputsLight) {
   auto plain_script = write("plain.lua", "scene { builtin = \"cornell\" }\n"
                                          "image { width = 48, height = 48, spp = 2, tile = 16 }\n"

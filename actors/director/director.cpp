@@ -127,8 +127,9 @@ class Director final : public ControlOut, public Outbox {
       stage(Stage::finish, [&] { finish(); });
     } catch (const FarmFailure& f) {
       if (tiles_.drawing_progress()) std::fprintf(stderr, "\n");
-      if (image_written_ && f.status > 128) {
-        // The image is whole and in place: the farm's work is done, only the actors' goodbyes were cut short.
+      if (image_written_) {
+        // The image is whole and in place: the farm's work is done, only the actors' goodbyes were cut short (a
+        // signal, or an actor or its host that did not end cleanly).
         log_warn(f.message + " after the image was written");
       } else {
         log_error(f.message);

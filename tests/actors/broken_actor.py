@@ -13,6 +13,7 @@ other mode fails check-actor for its one reason only.
   --mode silent_on_malformed  drops malformed packets without an ERROR
   --mode wrong_n              replies with n one more than the points it holds
   --mode no_routing_id        connects to the director without its name as routing id
+  --mode crash_at_finish      exits with status 3 on PHASE finish, without STATS or BYE
 """
 import argparse
 import os
@@ -27,7 +28,7 @@ import zmq.utils.z85
 
 HELLO, CONFIG, PHASE, REQUEST, REPLY, ERROR, STATS, HEARTBEAT, BYE, READY, PEER_DOWN = range(1, 12)
 MODES = ["ok", "wrong_version", "silent", "crash", "no_ready_render", "ignore_input", "ignore_sigterm",
-         "silent_on_malformed", "wrong_n", "no_routing_id"]
+         "silent_on_malformed", "wrong_n", "no_routing_id", "crash_at_finish"]
 
 
 def main():
@@ -116,6 +117,8 @@ def main():
                 if a.mode != "no_ready_render":
                     send(READY, "render", {"phase": "render"})
             elif h["t"] == BYE or (h["t"] == PHASE and h["op"] == "finish"):
+                if a.mode == "crash_at_finish":
+                    return 3
                 send(STATS, body={})
                 send(BYE)
                 return 0
