@@ -1,5 +1,5 @@
-// Chaos soak (issue 12): frames of mixed networks while random recoverable actors are SIGKILLed, or SIGSTOPped and
-// continued, at random moments of the render. Reports per network: frames, frames finished, finished frames whose
+// Chaos soak (issue 12): frames of mixed networks (pools, photon maps, irradiance caches, radiosity rings) while
+// random recoverable actors are SIGKILLed, or SIGSTOPped and continued, at random moments of the frame. Reports per network: frames, frames finished, finished frames whose
 // image differs from the fault-free one (goal 0), failed frames, processes left behind (goal 0) and files left in
 // /tmp, /dev/shm and the output folder (goal 0). Writes bench-chaos.json.
 //
@@ -86,6 +86,15 @@ int main(int argc, char** argv) {
                                  "renderers { count = 3, lighting = outer }\n"),
        {{"renderer-0", "renderer-1", "renderer-2"}, {"direct.0.0", "direct.0.1"}, {"direct.1.0", "direct.1.1"}},
        {}},
+      {"cache",
+       bench::temp_script("chaos-cache.lua",
+                          "scene { builtin = \"cornell\" }\nimage { width = 96, height = 96, spp = 64, tile = 16 }\n"
+                          "farm { heartbeat_timeout = 1.5 }\n"
+                          "local d = multiplexer { lightop \"direct\" {}, replicas = 2 }\n"
+                          "local c = multiplexer { lightop \"irradiance\" { input = d, prepass = 4000 }, replicas = 2 }\n"
+                          "renderers { count = 2, lighting = lightop \"combine\" { inputs = { d, c } } }\n"),
+       {{"renderer-0", "renderer-1"}, {"irradiance.0", "irradiance.1"}, {"direct.0", "direct.1"}},
+       {"irradiance.0", "irradiance.1"}},
       {"radiosity",
        bench::temp_script("chaos-radiosity.lua",
                           "scene { builtin = \"cornell\" }\nimage { width = 64, height = 64, spp = 16, tile = 16 }\n"

@@ -168,10 +168,12 @@ void IrradianceCache::for_candidates(Vec3 x, Visit&& visit) const {
   }
 }
 
-int IrradianceCache::lookup_first(Vec3 x, Vec3 n, std::span<const float> relax, RGB& irradiance) const {
+int IrradianceCache::lookup_first(Vec3 x, Vec3 n, std::span<const float> relax, RGB& irradiance,
+                                  uint32_t* records) const {
   constexpr size_t kMaxBounds = 4;
   const size_t bounds = std::min(relax.size(), kMaxBounds);
   double weight_sum[kMaxBounds] = {};
+  uint32_t count[kMaxBounds] = {};
   RGB sum[kMaxBounds] = {};
   const float widest = a_ * relax[bounds - 1];
   for_candidates(x, [&](const IrradianceRecord& r) {
@@ -193,11 +195,13 @@ int IrradianceCache::lookup_first(Vec3 x, Vec3 n, std::span<const float> relax, 
       if (error >= a_ * relax[b]) continue;
       sum[b] += e * w;
       weight_sum[b] += w;
+      ++count[b];
     }
   });
   for (size_t b = 0; b < bounds; ++b)
     if (weight_sum[b] > 0) {
       irradiance = sum[b] * static_cast<float>(1.0 / weight_sum[b]);
+      if (records) *records = count[b];
       return static_cast<int>(b);
     }
   return -1;

@@ -46,8 +46,9 @@ class IrradianceCache {
   bool lookup(Vec3 x, Vec3 n, RGB& irradiance, float relax = 1.0f) const;
   // The lookups under bounds relax[0] * a, relax[1] * a, ... (ascending, at most 4 of them, each at most
   // kMaxRelax) in one pass over the records: the index of the first that found records, its irradiance in
-  // `irradiance`, or -1. Gives exactly what the separate lookups would.
-  int lookup_first(Vec3 x, Vec3 n, std::span<const float> relax, RGB& irradiance) const;
+  // `irradiance`, or -1. Gives exactly what the separate lookups would. `records`, if given: how many records that
+  // answer averaged.
+  int lookup_first(Vec3 x, Vec3 n, std::span<const float> relax, RGB& irradiance, uint32_t* records = nullptr) const;
   static constexpr float kMaxRelax = 4.0f;
   // No more inserts: builds a one-level grid in which every record is listed in each cell its widest valid
   // sphere touches, so that a lookup reads one cell instead of 27 per octree level. Lookups then give the same

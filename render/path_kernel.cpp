@@ -30,7 +30,8 @@ struct Pending {
 
 }  // namespace
 
-void trace_paths(const SceneContext& ctx, const ShadingPoints& points, std::span<RGB> radiance, const PathOptions& o) {
+void trace_paths(const SceneContext& ctx, const ShadingPoints& points, std::span<RGB> radiance, const PathOptions& o,
+                 PathTally* tally) {
   const Scene& scene = *ctx.scene;
   const float eps = scene.epsilon();
   const size_t n = points.size();
@@ -49,7 +50,10 @@ void trace_paths(const SceneContext& ctx, const ShadingPoints& points, std::span
   std::vector<size_t> continuing;
   std::vector<Bsdf::Sample> samples;
 
+  if (tally) tally->paths += paths.size();
   for (int depth = 1; depth <= o.max_depth; ++depth) {
+    if (tally)
+      for (const Path& path : paths) tally->vertices += path.alive ? 1 : 0;
     // Next-event estimation.
     rays.clear();
     pending.clear();

@@ -21,6 +21,13 @@ struct PathOptions {
   bool light_only_on_diffuse = false;
 };
 
-void trace_paths(const SceneContext& ctx, const ShadingPoints& points, std::span<RGB> radiance, const PathOptions& o);
+// Counted as paths go: each path, and each vertex at which one gathered light (the first included).
+struct PathTally {
+  uint64_t paths = 0;
+  uint64_t vertices = 0;
+};
+
+void trace_paths(const SceneContext& ctx, const ShadingPoints& points, std::span<RGB> radiance, const PathOptions& o,
+                 PathTally* tally = nullptr);
 
 }  // namespace lf

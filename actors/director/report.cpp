@@ -42,8 +42,13 @@ void print_report(const FarmSpec& spec, const Supervisor& supervisor, const RunF
     if (!header) std::fprintf(stderr, "\n%-14s %s\n", "lightop", "figures");
     header = true;
     std::string line;
-    for (const auto& [key, v] : detail->as_map())
-      if (v.is_number()) line += (line.empty() ? "" : ", ") + key + " " + std::to_string(static_cast<long long>(v.as_double()));
+    for (const auto& [key, v] : detail->as_map()) {
+      if (!v.is_number()) continue;
+      char number[32];
+      if (v.is_int()) std::snprintf(number, sizeof number, "%lld", static_cast<long long>(v.as_int()));
+      else std::snprintf(number, sizeof number, "%.3g", v.as_double());
+      line += (line.empty() ? "" : ", ") + key + " " + number;
+    }
     std::fprintf(stderr, "%-14s %s\n", a.name.c_str(), line.c_str());
   }
   std::fprintf(stderr, "\nrender: %.2f M samples/s\n", samples / f.render_seconds / 1e6);

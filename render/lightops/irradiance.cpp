@@ -87,12 +87,14 @@ class Irradiance final : public LightOp {
   // a, else under the relaxed bounds; own_values: points that paid for their own hemisphere (raise `prepass` or `a`
   // when this is more than a few percent).
   Value stats() const override {
+    const uint64_t served = served_[0] + served_[1] + served_[2];
     return Value::Map{{"records", static_cast<int64_t>(cache_ ? cache_->size() : 0)},
                       {"lookups", static_cast<int64_t>(lookups_)},
                       {"served_a", static_cast<int64_t>(served_[0])},
                       {"served_2a", static_cast<int64_t>(served_[1])},
                       {"served_4a", static_cast<int64_t>(served_[2])},
-                      {"own_values", static_cast<int64_t>(own_values_)}};
+                      {"own_values", static_cast<int64_t>(own_values_)},
+                      {"records_per_lookup", served ? static_cast<double>(records_used_) / served : 0.0}};
   }
 
   Task shade(const ShadingPoints& points, std::span<RGB> radiance, Inputs& inputs) override {
@@ -108,10 +110,12 @@ class Irradiance final : public LightOp {
       // whose own samples would miss the next cache down a network in turn.
       RGB e;
       static constexpr float kBounds[] = {1.0f, 2.0f, 4.0f};
-      const int bound = cache_->lookup_first(points.position[i], points.normal[i], kBounds, e);
+      uint32_t records = 0;
+      const int bound = cache_->lookup_first(points.position[i], points.normal[i], kBounds, e, &records);
       ++lookups_;
       if (bound >= 0) {
         ++served_[bound];
+        records_used_ += records;
         radiance[i] = m.kd * e * (1.0f / kPi);
       } else {
         ++own_values_;
@@ -129,7 +133,7 @@ class Irradiance final : public LightOp {
   }
 
  private:
-  uint64_t lookups_ = 0, own_values_ = 0;
+  uint64_t lookups_ = 0, own_values_ = 0, records_used_ = 0;
   uint64_t served_[3] = {0, 0, 0};
   struct Candidate {
     Vec3 x, n;

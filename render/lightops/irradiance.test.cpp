@@ -137,6 +137,9 @@ TEST(Irradiance, OneBounceOfDirectMatchesThePathTracer) {
   EXPECT_EQ(count("served_a") + count("served_2a") + count("served_4a") + count("own_values"), count("lookups"));
   EXPECT_GT(count("records"), 100);
   EXPECT_GT(count("served_a"), count("lookups") / 2);
+  const double per_lookup = st.find("records_per_lookup")->as_double();
+  EXPECT_GE(per_lookup, 1.0);  // a served point averaged at least one record, and never more than there are
+  EXPECT_LT(per_lookup, static_cast<double>(count("records")));
 
   auto path = [&](int depth) {
     auto pt = make("pathtrace", Value::Map{{"max_depth", depth}, {"samples", 2048}, {"rr_depth", 100}});

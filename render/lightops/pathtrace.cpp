@@ -23,12 +23,18 @@ class PathTrace final : public LightOp {
   }
 
   Task shade(const ShadingPoints& points, std::span<RGB> radiance, Inputs&) override {
-    trace_paths(ctx_, points, radiance, options_);
+    trace_paths(ctx_, points, radiance, options_, &tally_);
     co_return;
+  }
+
+  Value stats() const override {
+    return Value::Map{{"paths", static_cast<int64_t>(tally_.paths)},
+                      {"mean_path_vertices", tally_.paths ? static_cast<double>(tally_.vertices) / tally_.paths : 0.0}};
   }
 
  private:
   PathOptions options_;
+  PathTally tally_;
   SceneContext ctx_;
 };
 

@@ -39,13 +39,23 @@ TEST(PathTrace, FurnaceConvergesToEOverOneMinusRho) {
       pts.push_back({u, 0.0f, 1 - u}, {0, 1, 0}, normalize(Vec3{0.3f, 1, 0.2f}), m, sample_key(i, 0));
       pts.push_back({0.0f, u, 0.5f}, {1, 0, 0}, {1, 0, 0}, m, sample_key(i, 1));
     }
-    auto out = shade("pathtrace", Value::Map{{"samples", 4096}, {"max_depth", 1000}}, s, tracer, pts);
+    auto op = create_lightop(*find_lightop_kind("pathtrace"),
+                             ParamTable(Value::Map{{"samples", 4096}, {"max_depth", 1000}}, "pathtrace"));
+    LocalInputs none;
+    run_to_completion(op->setup(SceneContext{&s, &tracer}, none));
+    std::vector<RGB> out(pts.size());
+    run_to_completion(op->shade(pts, out, none));
     double mean = 0;
     for (const RGB& l : out) mean += l.y;
     mean /= static_cast<double>(out.size());
     const double expected = rho * e / (1 - rho);
     EXPECT_NEAR(mean / expected, 1.0, 0.02) << "rho " << rho;
     EXPECT_NEAR((e + mean) / (e / (1 - rho)), 1.0, 0.02) << "total radiance vs E / (1 - rho)";
+    // Path length: vertices 1-3 always (roulette starts after the third), the fourth with probability rho^3 (the
+    // throughput then), each later one with probability rho: 3 + rho^3 / (1 - rho) on average.
+    const Value st = op->stats();
+    EXPECT_EQ(st.find("paths")->as_int(), 4096 * 16);
+    EXPECT_NEAR(st.find("mean_path_vertices")->as_double() / (3 + rho * rho * rho / (1 - rho)), 1.0, 0.02) << "rho " << rho;
   }
 }
 

@@ -105,6 +105,7 @@ class PhotonMap final : public LightOp {
     }
     tree_ = std::make_unique<KdTree>(3, cloud_, nanoflann::KDTreeSingleIndexAdaptorParams(16));
     tree_->buildIndex();
+    kd_depth_ = depth_of(tree_->root_node);
     if (precompute_ > 0) {
       irradiance_.points.clear();
       for (size_t j = 0; j < cloud_.photons.size(); j += precompute_) {
@@ -155,10 +156,22 @@ class PhotonMap final : public LightOp {
     return Value::Map{{"photons_shot", static_cast<int64_t>(photons_)},
                       {"photons_stored", static_cast<int64_t>(cloud_.photons.size())},
                       {"lookups", static_cast<int64_t>(lookups_)},
-                      {"served_precomputed", static_cast<int64_t>(served_precomputed_)}};
+                      {"served_precomputed", static_cast<int64_t>(served_precomputed_)},
+                      {"kd_depth", kd_depth_},
+                      {"estimates", static_cast<int64_t>(estimates_)},
+                      {"mean_radius", estimates_ ? radius_sum_ / static_cast<double>(estimates_) : 0.0}};
   }
 
  private:
+  // Levels of the kd-tree, leaves included (buckets of at most 16 photons).
+  template <class Node>
+  static int depth_of(const Node* node) {
+    if (!node) return 0;
+    return 1 + std::max(depth_of(node->child1), depth_of(node->child2));
+  }
+  int kd_depth_ = 0;
+  mutable uint64_t estimates_ = 0;  // density estimates made (lookups and precomputed ones) that found photons
+  mutable double radius_sum_ = 0;   // and the sum of their gather radii
   uint64_t lookups_ = 0, served_precomputed_ = 0;
   // sum f(wi) * flux * w / (pi r^2 norm) over the k nearest photons within max_radius that arrived on n's side.
   template <class Brdf>
@@ -179,6 +192,8 @@ class PhotonMap final : public LightOp {
     if (found == 0) return {};
     const float r2 = dist2[found - 1] > 0 ? dist2[found - 1] : max_r2;
     const float r = std::sqrt(r2);
+    ++estimates_;
+    radius_sum_ += r;
     RGB sum{};
     for (size_t j = 0; j < found; ++j) {
       const Photon& ph = cloud_.photons[index[j]];

@@ -59,6 +59,15 @@ TEST(PhotonMap, FloorMirrorCausticMatchesTheMirroredLight) {
       ref += ks * expected[i].y;
     }
     EXPECT_NEAR(sum / ref, 1.0, 0.05) << "precompute " << precompute;  // averaged over the points
+    // Its figures: a balanced kd-tree of buckets of at most 16 photons has at least log2(stored / 16) + 1 levels;
+    // every estimate's radius is at most max_radius.
+    const Value st = pm->stats();
+    const double stored = static_cast<double>(st.find("photons_stored")->as_int());
+    EXPECT_GE(st.find("kd_depth")->as_int(), static_cast<int64_t>(std::ceil(std::log2(stored / 16))) + 1);
+    EXPECT_LE(st.find("kd_depth")->as_int(), 64);
+    EXPECT_GE(st.find("estimates")->as_int(), static_cast<int64_t>(pts.size()) / 2);
+    EXPECT_GT(st.find("mean_radius")->as_double(), 0.0);
+    EXPECT_LE(st.find("mean_radius")->as_double(), 0.3 + 1e-6);
   }
 }
 
