@@ -549,6 +549,7 @@ int l_light(lua_State* L) {
     why = why.substr(why.find(':') + 2);
     luaL_error(L, "light: %s", why.c_str());
   }
+  if (const SourceLoc at = caller_loc(L); at.line > 0) light.as_map()["at"] = at.str();
   b.spec.scene.lights.push_back(std::move(light));
   return 0;
 }

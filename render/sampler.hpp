@@ -48,6 +48,7 @@ inline constexpr uint64_t pathtrace = 3;
 inline constexpr uint64_t specular = 4;
 inline constexpr uint64_t photons = 5;
 inline constexpr uint64_t irradiance = 6;
+inline constexpr uint64_t light_check = 7;  // render/light_checks.cpp
 }  // namespace streams
 
 }  // namespace lf

@@ -4,6 +4,7 @@
 #include <cstdio>
 #include <map>
 
+#include "render/light_checks.hpp"
 #include "render/scene.hpp"
 
 namespace lf {
@@ -34,8 +35,12 @@ Result<std::string> describe_scene(const std::string& obj_path) {
   if (!catalogue) return catalogue.error();
   auto scene = Scene::load_obj_unlit(obj_path);
   if (!scene) return scene.error();
+  if (scene->triangle_count() == 0) return make_error("scene file '" + obj_path + "' has no triangles");
+  // With emitters of its own, how much of each one's flux meets nothing (light_checks.hpp).
+  std::map<std::string, double> escaping;
+  if (scene->finalize(obj_path).ok())
+    for (const auto& e : light_escapes(*scene)) escaping[e.light] = e.escaping;
   const Scene& s = *scene;
-  if (s.triangle_count() == 0) return make_error("scene file '" + obj_path + "' has no triangles");
 
   const Bounds bounds = bounds_of(s.vertices());
   const Vec3 lo = bounds.lo, hi = bounds.hi;
@@ -68,6 +73,8 @@ Result<std::string> describe_scene(const std::string& obj_path) {
       total_flux += flux;
       emitting_faces += it->second.faces;
       line += "  emits " + vec(mat.ke) + format("  flux %.4g", flux);
+      if (auto e = escaping.find("material '" + mat.name + "'"); e != escaping.end())
+        line += format("  escaping %.0f%%", 100 * e->second);
     }
     out += line + "\n";
   }

@@ -36,6 +36,8 @@ TEST(SceneReport, DescribesARoomAndFramesIt) {
   char flux[32];
   std::snprintf(flux, sizeof flux, "%.4g", kPi * 0.36 * 10);
   EXPECT_NE(t.find("  emitters   2 triangles, flux " + std::string(flux) + "\n"), std::string::npos) << t;
+  // The lamp lights an open room (three walls): part of its flux leaves (light_checks.test.cpp checks the share).
+  EXPECT_NE(t.find("  flux " + std::string(flux) + "  escaping "), std::string::npos) << t;
   EXPECT_NE(t.find("  textures   2 files (1 missing)\n    cutout.png  map_d of 1  (missing)\n    wood.png  map_Kd of 2\n"),
             std::string::npos)
       << t;

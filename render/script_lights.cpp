@@ -19,6 +19,9 @@ Status Scene::add_script_lights(const Value::Array& lights) {
   for (size_t i = 0; i < lights.size(); ++i) {
     const Value& l = lights[i];
     const std::string which = "light " + std::to_string(i + 1);
+    // Where the script said it ("farm.lua:12"), for diagnostics about what it lights (light_checks.hpp).
+    const Value* at = l.find("at");
+    const std::string material_name = at && at->is_string() ? "light at " + at->as_string() : "light (script)";
     Vec3 colour;
     if (const Value* q = l.find("quad")) {
       if (!vec3_of(l.find("radiance"), colour)) return make_error(which + ": radiance must be {r, g, b}");
@@ -34,14 +37,14 @@ Status Scene::add_script_lights(const Value::Array& lights) {
       if (!(off <= 1e-4f * size))
         return make_error(which + ": the quad is not planar (its 4th corner is " + std::to_string(off) +
                           " off the plane of the first three)");
-      add_quad(c[0], c[1], c[2], c[3], add_material({"light (script)", {}, colour}));
+      add_quad(c[0], c[1], c[2], c[3], add_material({material_name, {}, colour}));
     } else if (const Value* sph = l.find("sphere")) {
       Vec3 centre;
       const Value* r = l.find("radius");
       if (!vec3_of(sph, centre) || !r || !r->is_number() || !(r->as_double() > 0))
         return make_error(which + ": sphere needs a centre {x, y, z} and a radius > 0");
       if (!vec3_of(l.find("radiance"), colour)) return make_error(which + ": radiance must be {r, g, b}");
-      add_sphere(centre, static_cast<float>(r->as_double()), 3, add_material({"light (script)", {}, colour}));
+      add_sphere(centre, static_cast<float>(r->as_double()), 3, add_material({material_name, {}, colour}));
     } else if (const Value* p = l.find("point")) {
       Vec3 at;
       if (!vec3_of(p, at)) return make_error(which + ": point must be {x, y, z}");

@@ -20,6 +20,7 @@
 #include "actors/director/local_launcher.hpp"
 #include "actors/director/report.hpp"
 #include "actors/director/ring_service.hpp"
+#include "render/light_checks.hpp"
 #include "actors/director/supervisor.hpp"
 #include "actors/director/tile_service.hpp"
 #include "actors/runtime/actor_config.hpp"
@@ -184,6 +185,13 @@ class Director final : public ControlOut, public Outbox {
         for (const auto& warning : catalogue->warnings) log_warn(warning);
     auto scene = Scene::load(spec_.scene);
     if (!scene) throw FarmFailure{spec_.scene.loc.str() + ": " + scene.error().message};
+    // Lights whose flux mostly meets nothing: a quad wound away from the room, a light outside the geometry.
+    std::vector<std::string> point_labels;
+    for (const Value& l : spec_.scene.lights)
+      if (l.find("point"))
+        point_labels.push_back(l.find("at") && l.find("at")->is_string() ? l.find("at")->as_string() + ": light"
+                                                                         : "a script's point light");
+    for (const auto& warning : escaping_light_warnings(light_escapes(*scene, point_labels))) log_warn(warning);
     // A scene from a file travels to the hosts in its binary form; actors never parse the OBJ themselves.
     if (!spec_.scene.file.empty()) {
       scene_bytes_ = scene_to_bytes(*scene);
