@@ -191,7 +191,10 @@ class Director final : public ControlOut, public Outbox {
       if (l.find("point"))
         point_labels.push_back(l.find("at") && l.find("at")->is_string() ? l.find("at")->as_string() + ": light"
                                                                          : "a script's point light");
-    for (const auto& warning : escaping_light_warnings(light_escapes(*scene, point_labels))) log_warn(warning);
+    auto escapes = light_escapes(*scene, point_labels);
+    for (auto& e : escapes)
+      if (e.light.rfind("material '", 0) == 0 && !spec_.scene.file.empty()) e.light = spec_.scene.file + ": " + e.light;
+    for (const auto& warning : escaping_light_warnings(escapes)) log_warn(warning);
     // A scene from a file travels to the hosts in its binary form; actors never parse the OBJ themselves.
     if (!spec_.scene.file.empty()) {
       scene_bytes_ = scene_to_bytes(*scene);
