@@ -10,6 +10,7 @@
 // In a farm the runtime turns that into an asynchronous batched request and serves other batches meanwhile;
 // in-process the input is called directly. Asking several inputs in one gather() runs them concurrently.
 #include <coroutine>
+#include <functional>
 #include <cstdint>
 #include <exception>
 #include <memory>
@@ -171,6 +172,12 @@ struct SceneContext {
   int replica_index = 0;
   int replica_count = 1;
   Exchange* exchange = nullptr;  // never null in setup(): SoloExchange when not in a pool
+  // How far a long setup is ("shooting photons", done, total); the runtime tells the director, which shows it.
+  // Call it as often as convenient: the runtime passes on a few a second. May be empty (tests).
+  std::function<void(const char* what, uint64_t done, uint64_t total)> progress;
+  void report(const char* what, uint64_t done, uint64_t total) const {
+    if (progress) progress(what, done, total);
+  }
 };
 
 class LightOp {

@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cstring>
 #include <map>
 
 #include "render/camera.hpp"
@@ -151,6 +152,35 @@ TEST_F(FarmTest, StatsJsonCarriesPhasesAndActors) {
   for (const char* key : {"\"phases_seconds\"", "\"render\"", "\"setup\"", "\"actors\"", "\"renderer-0\"",
                           "\"direct\"", "\"busy_seconds\"", "\"peak_queue\"", "\"bytes_in\""})
     EXPECT_NE(json.find(key), std::string::npos) << key << " missing from " << json;
+  expect_no_leftovers(r);
+}
+
+// A long setup step says how far it is: a cache's pre-pass against a slowed `direct` takes seconds, and the log
+// shows its quarters in order, ending at 100%; --quiet shows none.
+TEST_F(FarmTest, ALongCachePrePassShowsItsProgress) {
+  const std::string script = write("prepass.lua", R"(
+scene { builtin = "cornell" }
+image { width = 16, height = 16, spp = 1 }
+local slow = multiplexer { lightop "direct" {}, replicas = 1, slowdown = {40} }
+renderers { lighting = lightop "irradiance" { input = slow, prepass = 2000 } }
+)");
+  auto r = run_lightfarm({"run", script, "--output", path("p.png")});
+  ASSERT_EQ(r.status, 0) << r.err;
+  const size_t last = r.err.find("lightfarm: irradiance: cache pre-pass 100% (2000 of 2000)\n");
+  ASSERT_NE(last, std::string::npos) << r.err;
+  size_t at = 0, lines = 0;
+  int previous = 0;
+  for (size_t found; (found = r.err.find("irradiance: cache pre-pass ", at)) != std::string::npos; at = found + 1) {
+    const int percent = std::atoi(r.err.c_str() + found + std::strlen("irradiance: cache pre-pass "));
+    EXPECT_GT(percent, previous) << r.err;
+    EXPECT_EQ(percent % 25, 0) << r.err;
+    previous = percent;
+    ++lines;
+  }
+  EXPECT_GE(lines, 2u) << r.err;  // the step takes seconds: at least one quarter before the end
+  auto quiet = run_lightfarm({"run", script, "--output", path("q.png"), "--quiet"});
+  ASSERT_EQ(quiet.status, 0) << quiet.err;
+  EXPECT_EQ(quiet.err.find("pre-pass"), std::string::npos) << quiet.err;
   expect_no_leftovers(r);
 }
 

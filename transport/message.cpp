@@ -23,12 +23,13 @@ std::string_view type_name(MsgType type) {
     case MsgType::peer_down: return "PEER_DOWN";
     case MsgType::peer_moved: return "PEER_MOVED";
     case MsgType::rollback: return "ROLLBACK";
+    case MsgType::progress: return "PROGRESS";
   }
   return "?";
 }
 
 std::optional<MsgType> type_from_number(uint64_t n) {
-  if (n >= 1 && n <= 13) return static_cast<MsgType>(n);
+  if (n >= 1 && n <= 14) return static_cast<MsgType>(n);
   return std::nullopt;
 }
 

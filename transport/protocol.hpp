@@ -34,6 +34,7 @@ enum class MsgType : uint8_t {
   peer_moved = 12, // director -> actor: one of your inputs was restarted (body: {name, endpoint, key}); what was
                    // outstanding with it is forgotten
   rollback = 13,   // director -> ring node: back to a checkpoint in a new epoch (body: actors/codecs/ring_codec.hpp)
+  progress = 14,   // actor -> director: how far a long setup is (body: {what, done, total}); a few a second at most
 };
 
 std::string_view type_name(MsgType type);

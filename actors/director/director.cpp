@@ -76,7 +76,9 @@ class Director final : public ControlOut, public Outbox {
                                        [this](ActorRecord& a, const std::string& why) { return lost(a, why); },
                                        [this](const ActorRecord& a) { return needs_restart(a); },
                                        [this](ActorRecord& a) { return configure_actor(a); },
-                                       [this](ActorRecord& a) { return rejoin(a); }}),
+                                       [this](ActorRecord& a) { return rejoin(a); },
+                                       [this](const ActorRecord& a, const std::string& what, uint64_t done,
+                                              uint64_t total) { show_progress(a, what, done, total); }}),
         tiles_(spec.image, renderers_of(spec), options.progress_on_terminal, options.quiet),
         exchange_(pools_of(spec)),
         ring_(spec, exchange_, options.quiet, options.progress_on_terminal) {
@@ -183,8 +185,12 @@ class Director final : public ControlOut, public Outbox {
     if (!spec_.scene.file.empty())
       if (auto catalogue = Scene::catalogue_obj(spec_.scene.file))
         for (const auto& warning : catalogue->warnings) log_warn(warning);
+    const auto load_start = Clock::now();
     auto scene = Scene::load(spec_.scene);
     if (!scene) throw FarmFailure{spec_.scene.loc.str() + ": " + scene.error().message};
+    if (const double took = seconds_since(load_start); took >= 1.0 && !options_.quiet)
+      log_info("scene: read " + spec_.scene.file + " (" + std::to_string(scene->triangle_count()) + " triangles) in " +
+               seconds_text(std::round(took * 10) / 10));
     // Lights whose flux mostly meets nothing: a quad wound away from the room, a light outside the geometry.
     std::vector<std::string> point_labels;
     for (const Value& l : spec_.scene.lights)
@@ -304,6 +310,24 @@ class Director final : public ControlOut, public Outbox {
     a.configured = true;
     return Ok{};
   }
+
+  // A long setup step (photons, a cache's pre-pass) as it goes: a line at each quarter, per actor and step, once
+  // the step has taken a second (short ones say nothing).
+  void show_progress(const ActorRecord& a, const std::string& what, uint64_t done, uint64_t total) {
+    if (options_.quiet) return;
+    const int quarter = static_cast<int>(4 * done / total);
+    auto [step, fresh] = progress_shown_.try_emplace(a.name() + "\n" + what, StepShown{Clock::now(), 0});
+    if (quarter <= step->second.quarter || seconds_since(step->second.first) < 1.0) return;
+    step->second.quarter = quarter;
+    if (tiles_.drawing_progress()) std::fprintf(stderr, "\n");
+    log_info(a.name() + ": " + what + " " + std::to_string(25 * quarter) + "% (" + std::to_string(done) + " of " +
+             std::to_string(total) + ")");
+  }
+  struct StepShown {
+    Clock::time_point first;  // the step's first report
+    int quarter = 0;          // the last quarter shown
+  };
+  std::map<std::string, StepShown> progress_shown_;
 
   bool needs_restart(const ActorRecord& a) const {
     for (const Service* s : all_services_)

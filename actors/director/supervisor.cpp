@@ -146,6 +146,17 @@ Status Supervisor::on_message(const std::string& peer, Result<wire::Message>& me
     case MsgType::error:
       return make_error("actor '" + peer + "' failed: " + wire::error_of(m).message);
     case MsgType::stats: a.stats = m.body; return Ok{};
+    case MsgType::progress: {
+      const Value *what = m.body.find("what"), *done = m.body.find("done"), *total = m.body.find("total");
+      if (what && what->is_string() && done && done->is_int() && total && total->is_int() && done->as_int() >= 0 &&
+          total->as_int() > 0 && done->as_int() <= total->as_int() && what->as_string().size() <= 64) {
+        if (events_.progress)
+          events_.progress(a, what->as_string(), static_cast<uint64_t>(done->as_int()), static_cast<uint64_t>(total->as_int()));
+      } else {
+        strangers_.warn("'" + peer + "' sent a malformed PROGRESS");
+      }
+      return Ok{};
+    }
     case MsgType::bye: a.said_bye = true; return Ok{};
     case MsgType::heartbeat: return Ok{};
     case MsgType::request: return events_.request(a, m);

@@ -73,6 +73,8 @@ class Supervisor {
     // A restarted actor said HELLO (it needs its CONFIG), and then READY configure (it can rejoin the phase).
     std::function<Status(ActorRecord&)> hello_again;
     std::function<Status(ActorRecord&)> configured_again;
+    // PROGRESS from an actor: `what` is `done` of `total`.
+    std::function<void(const ActorRecord&, const std::string& what, uint64_t done, uint64_t total)> progress;
   };
   static constexpr int kMaxRestarts = 3;
 

@@ -122,8 +122,9 @@ class LightOpActor final : public Actor {
 
   void on_phase(wire::Phase phase, Runtime& rt) override {
     if (phase == wire::Phase::setup) {
-      setup_ = op_->setup(SceneContext{scene_.get(), tracer_.get(), replica_index_, replica_count_, exchange_.get()},
-                          *inputs_);
+      SceneContext ctx{scene_.get(), tracer_.get(), replica_index_, replica_count_, exchange_.get(), {}};
+      ctx.progress = [&rt](const char* what, uint64_t done, uint64_t total) { rt.report_progress(what, done, total); };
+      setup_ = op_->setup(std::move(ctx), *inputs_);
       setup_running_ = true;
       on_progress(rt);
     } else if (phase == wire::Phase::render) {

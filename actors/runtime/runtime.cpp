@@ -221,6 +221,15 @@ void Runtime::fail(const std::string& message) {
   exit_status_ = 1;
 }
 
+void Runtime::report_progress(const std::string& what, uint64_t done, uint64_t total) {
+  const auto now = Clock::now();
+  auto [last, first] = progress_sent_.try_emplace(what, now);
+  if (!first && done < total && now - last->second < std::chrono::milliseconds(250)) return;
+  last->second = now;
+  send_control(wire::make(MsgType::progress, args_.name,
+                          Value::Map{{"what", what}, {"done", static_cast<int64_t>(done)}, {"total", static_cast<int64_t>(total)}}));
+}
+
 void Runtime::send_stats_and_bye() {
   wire::SocketCounters total;
   auto add = [&](const wire::SocketCounters& c) {

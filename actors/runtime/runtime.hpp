@@ -108,6 +108,8 @@ class Runtime {
   void phase_done(wire::Phase phase);
   // Reports the failure to the director and stops the actor with a non-zero status.
   void fail(const std::string& message);
+  // PROGRESS of a long setup step to the director: at most 4 a second per step, and always its first and last.
+  void report_progress(const std::string& what, uint64_t done, uint64_t total);
 
   ActorStats& stats() { return stats_; }
   // Adds the time since `since` to busy time.
@@ -154,6 +156,7 @@ class Runtime {
   bool stopping_ = false;
   int exit_status_ = 0;
   bool inputs_changed_ = false;
+  std::map<std::string, std::chrono::steady_clock::time_point> progress_sent_;
 };
 
 // The farm's keys, from the first line of standard input (--curve): never on the command line or in the

@@ -55,6 +55,7 @@ class Irradiance final : public LightOp {
     }
     const uint32_t round_size = 512;
     for (uint32_t first = 0; first < prepass_ && !tris.empty(); first += round_size) {
+      ctx.report("cache pre-pass", first, prepass_);
       std::vector<Candidate> open;
       for (uint32_t c = first; c < std::min(prepass_, first + round_size); ++c) {
         Rng rng(splitmix64(c), streams::irradiance ^ (seed_ << 8) ^ 0x9e37);
@@ -80,6 +81,7 @@ class Irradiance final : public LightOp {
         for (const auto& rec : records) cache_->insert(rec);
       }
     }
+    ctx.report("cache pre-pass", prepass_, prepass_);
     cache_->freeze();  // rendering only reads it
   }
 

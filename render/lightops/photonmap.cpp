@@ -87,7 +87,8 @@ class PhotonMap final : public LightOp {
     if (max_radius_ <= 0) max_radius_ = 1000 * scene.epsilon();  // 10 % of the scene's diagonal
     const uint64_t begin = photons_ * static_cast<uint64_t>(ctx.replica_index) / static_cast<uint64_t>(ctx.replica_count);
     const uint64_t end = photons_ * static_cast<uint64_t>(ctx.replica_index + 1) / static_cast<uint64_t>(ctx.replica_count);
-    std::vector<Photon> mine = shoot(scene, *ctx.tracer, begin, end);
+    std::vector<Photon> mine = shoot(scene, *ctx.tracer, begin, end, ctx);
+    ctx.report("shooting photons", end - begin, end - begin);
 
     std::string part(mine.size() * sizeof(Photon), '\0');
     if (!mine.empty()) std::memcpy(part.data(), mine.data(), part.size());
@@ -213,7 +214,8 @@ class PhotonMap final : public LightOp {
     return estimate(x, n, [](Vec3) { return RGB{1, 1, 1}; });
   }
 
-  std::vector<Photon> shoot(const Scene& scene, const RayTracer& tracer, uint64_t begin, uint64_t end) const {
+  std::vector<Photon> shoot(const Scene& scene, const RayTracer& tracer, uint64_t begin, uint64_t end,
+                            const SceneContext& ctx) const {
     // Total emitted flux: pi * area * Le summed over emitters; every photon carries 1 / photons of it.
     RGB total{};
     for (uint32_t t : scene.emitters()) total += scene.material(scene.material_of(t)).ke * (kPi * scene.area(t));
@@ -229,6 +231,7 @@ class PhotonMap final : public LightOp {
     };
     const uint64_t batch = 4096;
     for (uint64_t first = begin; first < end; first += batch) {
+      ctx.report("shooting photons", first - begin, end - begin);
       std::vector<Flight> flights;
       for (uint64_t j = first; j < std::min(end, first + batch); ++j) {
         Rng rng(splitmix64(j), streams::photons ^ (seed_ << 8));

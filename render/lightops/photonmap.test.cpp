@@ -47,7 +47,17 @@ TEST(PhotonMap, FloorMirrorCausticMatchesTheMirroredLight) {
                              ParamTable(Value::Map{{"photons", 2000000}, {"k", 400}, {"max_radius", 0.3},
                                                    {"precompute", precompute}},
                                         "pm"));
-    run_to_completion(pm->setup(SceneContext{&real, &real_tracer}, none));
+    std::vector<std::pair<uint64_t, uint64_t>> reports;
+    SceneContext ctx{&real, &real_tracer};
+    ctx.progress = [&](const char* what, uint64_t done, uint64_t total) {
+      EXPECT_STREQ(what, "shooting photons");
+      reports.emplace_back(done, total);
+    };
+    run_to_completion(pm->setup(ctx, none));
+    // Shooting said how far it was, in order, up to every photon.
+    ASSERT_GE(reports.size(), 2u);
+    for (size_t r = 1; r < reports.size(); ++r) EXPECT_GE(reports[r].first, reports[r - 1].first);
+    EXPECT_EQ(reports.back(), (std::pair<uint64_t, uint64_t>{2000000, 2000000}));
     std::vector<RGB> caustic(pts.size());
     run_to_completion(pm->shade(pts, caustic, none));
     double sum = 0, ref = 0;
