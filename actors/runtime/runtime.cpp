@@ -156,10 +156,13 @@ void Runtime::start_heartbeats() {
     if (!beat.connect(args_.director)) return;
     while (!heartbeat_stop_) {
       beat.send(wire::make(MsgType::heartbeat, args_.name));
-      // Four beats per timeout, at least one a second, so one late beat is never taken for a death.
-      const auto until = Clock::now() + std::chrono::duration_cast<Clock::duration>(
-                                            std::chrono::duration<double>(heartbeat_interval_.load()));
-      while (!heartbeat_stop_ && Clock::now() < until) std::this_thread::sleep_for(std::chrono::milliseconds(20));
+      // Four beats per timeout, at least one a second, so one late beat is never taken for a death. The interval
+      // is read again while waiting: CONFIG may shorten it (a 1 s timeout) in the middle of the first wait.
+      const auto sent = Clock::now();
+      auto due = [&] {
+        return sent + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(heartbeat_interval_.load()));
+      };
+      while (!heartbeat_stop_ && Clock::now() < due()) std::this_thread::sleep_for(std::chrono::milliseconds(20));
     }
   });
 }
