@@ -11,10 +11,12 @@ image  { width = param("width", 512), height = param("height", 512), spp = param
 local direct   = lightop "direct" { light_samples = param("light_samples", 2) }
 local caustics = multiplexer { lightop "photonmap" { photons = param("photons", 1000000), k = 100 },
                                replicas = param("photon_replicas", 2) }
--- Indirect light: a cache over direct light (one bounce), and a cache over that plus direct (two bounces).
-local bounce1  = lightop "irradiance" { input = direct, name = "bounce1", prepass = param("prepass", 20000) }
+-- Indirect light: a cache over direct light (one bounce), and a cache over that plus direct (two bounces). The
+-- first serves the second's hemisphere rays, anywhere in the box: its records are spread by area; the second's go
+-- where the camera looks (the default).
+local bounce1  = lightop "irradiance" { input = direct, name = "bounce1", placement = "area", prepass = param("prepass", 20000) }
 local lit1     = lightop "combine" { inputs = { direct, caustics, bounce1 }, name = "lit1" }
-local indirect = lightop "irradiance" { input = lit1, name = "indirect", prepass = param("prepass", 20000) }
+local indirect = lightop "irradiance" { input = lit1, name = "indirect" }
 -- What leaves a surface a mirror/glass chain lands on.
 local landing  = lightop "combine" { inputs = { direct, caustics, indirect }, name = "landing" }
 local specular = lightop "specular" { input = landing }

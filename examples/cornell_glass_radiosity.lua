@@ -26,7 +26,7 @@ local solution = radiosity { rings = 1, ring_length = 2, patch_size = 140, eleme
 -- Two replicas of the cache (each builds the same records, sharing the pre-pass; measured 512x512, 16 spp: the
 -- single cache process was busy the whole render, 12.3 s, the pool renders in 9.3-10.0 s, pixels unchanged).
 local bounced  = lightop "combine" { inputs = { solution, gathered }, name = "bounced" }
-local indirect = multiplexer { lightop "irradiance" { input = bounced, name = "indirect", prepass = param("prepass", 4000) },
+local indirect = multiplexer { lightop "irradiance" { input = bounced, name = "indirect" },
                                replicas = param("cache_replicas", 2) }
 local landing  = lightop "combine" { inputs = { direct, caustics, indirect }, name = "landing" }
 local specular = lightop "specular" { input = landing }

@@ -20,6 +20,7 @@
 #include <vector>
 
 #include "core/params.hpp"
+#include "render/camera.hpp"
 #include "render/math.hpp"
 #include "render/scene.hpp"
 #include "render/tracer.hpp"
@@ -172,6 +173,9 @@ struct SceneContext {
   int replica_index = 0;
   int replica_count = 1;
   Exchange* exchange = nullptr;  // never null in setup(): SoloExchange when not in a pool
+  // The farm's camera and image size, for ops that place work where the camera looks (null in some tests).
+  const Camera* camera = nullptr;
+  int width = 0, height = 0;
   // How far a long setup is ("shooting photons", done, total); the runtime tells the director, which shows it.
   // Call it as often as convenient: the runtime passes on a few a second. May be empty (tests).
   std::function<void(const char* what, uint64_t done, uint64_t total)> progress;

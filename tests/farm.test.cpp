@@ -162,7 +162,7 @@ TEST_F(FarmTest, ALongCachePrePassShowsItsProgress) {
 scene { builtin = "cornell" }
 image { width = 16, height = 16, spp = 1 }
 local slow = multiplexer { lightop "direct" {}, replicas = 1, slowdown = {40} }
-renderers { lighting = lightop "irradiance" { input = slow, prepass = 2000 } }
+renderers { lighting = lightop "irradiance" { input = slow, placement = "area", prepass = 2000 } }
 )");
   auto r = run_lightfarm({"run", script, "--output", path("p.png")});
   ASSERT_EQ(r.status, 0) << r.err;

@@ -111,6 +111,9 @@ class LightOpActor final : public Actor {
     if (!loaded) return loaded.error();
     scene_ = std::make_unique<Scene>(std::move(*loaded));
     tracer_ = std::make_unique<RayTracer>(*scene_);
+    camera_ = std::make_unique<Camera>(config.camera, config.image.width, config.image.height);
+    width_ = config.image.width;
+    height_ = config.image.height;
     inputs_ = std::make_unique<RemoteInputs>(rt, 4096);
     if (config.pool) {
       replica_index_ = static_cast<int>(config.pool->index);
@@ -122,7 +125,10 @@ class LightOpActor final : public Actor {
 
   void on_phase(wire::Phase phase, Runtime& rt) override {
     if (phase == wire::Phase::setup) {
-      SceneContext ctx{scene_.get(), tracer_.get(), replica_index_, replica_count_, exchange_.get(), {}};
+      SceneContext ctx{scene_.get(), tracer_.get(), replica_index_, replica_count_, exchange_.get()};
+      ctx.camera = camera_.get();
+      ctx.width = width_;
+      ctx.height = height_;
       ctx.progress = [&rt](const char* what, uint64_t done, uint64_t total) { rt.report_progress(what, done, total); };
       setup_ = op_->setup(std::move(ctx), *inputs_);
       setup_running_ = true;
@@ -210,6 +216,8 @@ class LightOpActor final : public Actor {
   std::unique_ptr<LightOp> op_;
   std::unique_ptr<Scene> scene_;
   std::unique_ptr<RayTracer> tracer_;
+  std::unique_ptr<Camera> camera_;
+  int width_ = 0, height_ = 0;
   std::unique_ptr<RemoteInputs> inputs_;
   std::unique_ptr<Exchange> exchange_;
   int replica_index_ = 0, replica_count_ = 1;

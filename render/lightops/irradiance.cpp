@@ -29,6 +29,9 @@ class Irradiance final : public LightOp {
         m_(static_cast<int>(p.get_int("theta", 8, 2, 256))),
         n_(static_cast<int>(p.get_int("phi", 24, 3, 1024))),
         prepass_(static_cast<uint32_t>(p.get_int("prepass", 20000, 0, 10000000))),
+        placement_(p.get_string("placement", "camera", {"camera", "area"}) == "camera" ? Placement::camera : Placement::area),
+        stride_(static_cast<int>(p.get_int("stride", 8, 1, 64))),
+        finest_(static_cast<int>(p.get_int("finest", 2, 1, 64))),
         min_spacing_(static_cast<float>(p.get_float("min_spacing", 0.002, 0, 1))),
         max_spacing_(static_cast<float>(p.get_float("max_spacing", 0.2, 0, 10))),
         seed_(static_cast<uint64_t>(p.get_int("seed", 0, 0, INT32_MAX))) {}
@@ -42,31 +45,16 @@ class Irradiance final : public LightOp {
     SoloExchange solo;
     Exchange& exchange = ctx.exchange ? *ctx.exchange : solo;
 
-    // Pre-pass points: stratified over the area of non-emitting, non-specular triangles, in a fixed order.
-    std::vector<uint32_t> tris;
-    std::vector<double> cdf;
-    double total = 0;
-    for (uint32_t t = 0; t < scene.triangle_count(); ++t) {
-      const Material& m = scene.material(scene.material_of(t));
-      if (m.specular() || is_black(m.kd)) continue;
-      total += scene.area(t);
-      tris.push_back(t);
-      cdf.push_back(total);
-    }
+    const std::vector<Candidate> candidates = placement_ == Placement::camera ? camera_candidates(ctx) : area_candidates(scene);
     const uint32_t round_size = 512;
-    for (uint32_t first = 0; first < prepass_ && !tris.empty(); first += round_size) {
-      ctx.report("cache pre-pass", first, prepass_);
+    const uint64_t total_candidates = candidates.size();
+    for (size_t first = 0; first < candidates.size(); first += round_size) {
+      ctx.report("cache pre-pass", first, total_candidates);
+      // The round's points the cache cannot serve yet become records.
       std::vector<Candidate> open;
-      for (uint32_t c = first; c < std::min(prepass_, first + round_size); ++c) {
-        Rng rng(splitmix64(c), streams::irradiance ^ (seed_ << 8) ^ 0x9e37);
-        const double target = (static_cast<double>(c) + rng.uniform()) / prepass_ * total;
-        const size_t i = std::min(tris.size() - 1, static_cast<size_t>(std::lower_bound(cdf.begin(), cdf.end(), target) -
-                                                                       cdf.begin()));
-        const uint32_t t = tris[i];
-        const float su = std::sqrt(rng.uniform()), v = rng.uniform();
-        const Vec3 x = scene.vertex(t, 0) * (1 - su) + scene.vertex(t, 1) * (su * (1 - v)) + scene.vertex(t, 2) * (su * v);
+      for (size_t c = first; c < std::min(candidates.size(), first + round_size); ++c) {
         RGB unused;
-        if (!cache_->lookup(x, scene.normal(t), unused)) open.push_back(Candidate{x, scene.normal(t), splitmix64(c ^ 0x1c)});
+        if (!cache_->lookup(candidates[c].x, candidates[c].n, unused)) open.push_back(candidates[c]);
       }
       // This replica's contiguous share of the open points; shares concatenate back into candidate order.
       const size_t r = static_cast<size_t>(ctx.replica_index), count = static_cast<size_t>(ctx.replica_count);
@@ -81,7 +69,7 @@ class Irradiance final : public LightOp {
         for (const auto& rec : records) cache_->insert(rec);
       }
     }
-    ctx.report("cache pre-pass", prepass_, prepass_);
+    ctx.report("cache pre-pass", total_candidates, std::max<uint64_t>(total_candidates, 1));
     cache_->freeze();  // rendering only reads it
   }
 
@@ -142,6 +130,90 @@ class Irradiance final : public LightOp {
     uint64_t key;
   };
 
+  // `prepass` points stratified over the area of non-emitting, non-specular triangles, in a fixed order (front
+  // sides): for a cache whose points come from other ops' hemispheres, anywhere in the scene.
+  std::vector<Candidate> area_candidates(const Scene& scene) const {
+    std::vector<uint32_t> tris;
+    std::vector<double> cdf;
+    double total = 0;
+    for (uint32_t t = 0; t < scene.triangle_count(); ++t) {
+      const Material& m = scene.material(scene.material_of(t));
+      if (m.specular() || is_black(m.kd)) continue;
+      total += scene.area(t);
+      tris.push_back(t);
+      cdf.push_back(total);
+    }
+    std::vector<Candidate> out;
+    if (tris.empty()) return out;
+    for (uint32_t c = 0; c < prepass_; ++c) {
+      Rng rng(splitmix64(c), streams::irradiance ^ (seed_ << 8) ^ 0x9e37);
+      const double target = (static_cast<double>(c) + rng.uniform()) / prepass_ * total;
+      const size_t i =
+          std::min(tris.size() - 1, static_cast<size_t>(std::lower_bound(cdf.begin(), cdf.end(), target) - cdf.begin()));
+      const uint32_t t = tris[i];
+      const float su = std::sqrt(rng.uniform()), v = rng.uniform();
+      const Vec3 x = scene.vertex(t, 0) * (1 - su) + scene.vertex(t, 1) * (su * (1 - v)) + scene.vertex(t, 2) * (su * v);
+      out.push_back(Candidate{x, scene.normal(t), splitmix64(c ^ 0x1c)});
+    }
+    return out;
+  }
+
+  // Where the camera looks: the first diffuse hit through pixel centres, coarse to fine — every `stride`-th pixel
+  // in x and y, then the pixels of the grid at half that spacing not yet visited, down to every `finest`-th — so
+  // that the pre-pass (which keeps only candidates no record serves yet) lays records over the whole view first and
+  // then adds them only where the coarse ones do not reach: edges, small and thin things. Camera rays follow
+  // mirrors and glass (refraction, else reflection) for up to 4 bounces as the specular op's rays go, and the
+  // point is on the side the ray came from. The same on every replica and layout.
+  std::vector<Candidate> camera_candidates(const SceneContext& ctx) const {
+    if (!ctx.camera) throw LightOpError("irradiance: placement = \"camera\" needs the farm's camera (use \"area\")");
+    const Scene& scene = *ctx.scene;
+    std::vector<Ray> rays;
+    for (int step = stride_, coarser = 0; step >= std::min(finest_, stride_); coarser = step, step /= 2) {
+      for (int y = 0; y < ctx.height; y += step)
+        for (int x = 0; x < ctx.width; x += step) {
+          if (coarser && x % coarser == 0 && y % coarser == 0) continue;  // a coarser level's pixel
+          rays.push_back(ctx.camera->ray(static_cast<float>(x) + 0.5f, static_cast<float>(y) + 0.5f));
+        }
+    }
+    std::vector<std::pair<uint64_t, Candidate>> found;  // by camera ray
+    std::vector<Hit> hits(rays.size());
+    std::vector<uint64_t> ids(rays.size());
+    for (size_t i = 0; i < ids.size(); ++i) ids[i] = i;
+    const float eps = scene.epsilon();
+    for (int bounce = 0; bounce <= 4 && !rays.empty(); ++bounce) {
+      hits.resize(rays.size());
+      ctx.tracer->intersect(rays, hits);
+      std::vector<Ray> next;
+      std::vector<uint64_t> next_ids;
+      for (size_t i = 0; i < rays.size(); ++i) {
+        if (!hits[i].valid()) continue;
+        const uint32_t t = hits[i].triangle;
+        const Vec3 wo = -rays[i].direction, ng = scene.normal(t);
+        const bool front = dot(ng, wo) > 0;
+        const Vec3 n = front ? ng : -ng;
+        const Vec3 p = rays[i].origin + rays[i].direction * hits[i].t;
+        const Material& m = scene.material(scene.material_of(t));
+        if (!m.specular()) {
+          if (!is_black(m.kd)) found.emplace_back(ids[i], Candidate{p, n, splitmix64(ids[i] ^ 0xca3e5a)});
+          continue;
+        }
+        Vec3 dir = reflect(wo, n);
+        if (m.type == Material::Type::glass)
+          if (auto t_dir = refract(wo, n, front ? m.ior : 1.0f / m.ior)) dir = *t_dir;
+        const Vec3 side = dot(dir, n) > 0 ? n : -n;
+        next.push_back(Ray{p + side * eps, dir});
+        next_ids.push_back(ids[i]);
+      }
+      rays = std::move(next);
+      ids = std::move(next_ids);
+    }
+    // The camera rays' order (coarse to fine), whichever bounce found the point.
+    std::sort(found.begin(), found.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
+    std::vector<Candidate> out;
+    for (const auto& [id, c] : found) out.push_back(c);
+    return out;
+  }
+
   // One record per candidate, from M x N hemisphere samples whose radiance comes from the input in one batch.
   Task compute(std::span<const Candidate> candidates, Inputs& inputs, std::vector<IrradianceRecord>& out) {
     const Scene& scene = *ctx_.scene;
@@ -196,6 +268,8 @@ class Irradiance final : public LightOp {
   float a_;
   int m_, n_;
   uint32_t prepass_;
+  enum class Placement { camera, area } placement_;
+  int stride_, finest_;
   float min_spacing_, max_spacing_;
   uint64_t seed_;
   float extent_ = 1;

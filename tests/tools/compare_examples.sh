@@ -20,7 +20,7 @@ cases=(
   "cornell_pool.lua|width=128 height=128 spp=4"
   "pathtrace.lua|width=96 height=96 spp=4"
   "cornell_glass.lua|width=96 height=96 spp=2 photons=100000 prepass=2000"
-  "cornell_glass_radiosity.lua|width=96 height=96 spp=2 photons=50000 prepass=1000"
+  "cornell_glass_radiosity.lua|width=96 height=96 spp=2 photons=50000"
   "radiosity_room.lua|width=96 height=72 spp=2 iterations=60"
   "plugin-python/tinted_cornell.lua|"
 )
