@@ -1,5 +1,7 @@
 #pragma once
 // Sampling a point on the scene's area lights, shared by every LightOp that does next-event estimation.
+#include <optional>
+
 #include "render/math.hpp"
 #include "render/sampler.hpp"
 #include "render/scene.hpp"
@@ -28,6 +30,28 @@ inline LightSample sample_light(const Scene& scene, Rng& rng) {
   const float v = rng.uniform();
   const Vec3 y = scene.vertex(tri, 0) * (1 - su) + scene.vertex(tri, 1) * (su * (1 - v)) + scene.vertex(tri, 2) * (su * v);
   return LightSample{y, scene.normal(tri), tri, scene.material(scene.material_of(tri)).ke, p_tri / scene.area(tri)};
+}
+
+// Picks a light by what it can give point x facing n (the scene's light tree), and a uniform point on it; nullopt
+// when no light can reach x's side.
+inline std::optional<LightSample> sample_light_at(const Scene& scene, Vec3 x, Vec3 n, Rng& rng) {
+  size_t e = 0;
+  float p_light = 0;
+  if (!scene.light_tree().pick(x, n, rng.uniform(), e, p_light)) return std::nullopt;
+  if (e >= scene.emitters().size()) {
+    const PointLight& p = scene.point_lights()[e - scene.emitters().size()];
+    return LightSample{p.position, {}, UINT32_MAX, p.intensity, p_light, true};
+  }
+  const uint32_t tri = scene.emitters()[e];
+  const float su = std::sqrt(rng.uniform());
+  const float v = rng.uniform();
+  const Vec3 y = scene.vertex(tri, 0) * (1 - su) + scene.vertex(tri, 1) * (su * (1 - v)) + scene.vertex(tri, 2) * (su * v);
+  return LightSample{y, scene.normal(tri), tri, scene.material(scene.material_of(tri)).ke, p_light / scene.area(tri)};
+}
+
+// The area density with which sample_light_at(x, n) draws a point on emitter triangle `tri`.
+inline float light_pdf_area_at(const Scene& scene, uint32_t tri, Vec3 x, Vec3 n) {
+  return scene.light_tree().probability(x, n, scene.emitter_index_of(tri)) / scene.area(tri);
 }
 
 // The area density with which sample_light draws a point on triangle `tri` (for MIS when a BSDF-sampled ray hits

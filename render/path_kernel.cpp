@@ -63,7 +63,10 @@ void trace_paths(const SceneContext& ctx, const ShadingPoints& points, std::span
       const Material& m = scene.material(path.material);
       const Bsdf bsdf(m);
       if (bsdf.is_delta()) continue;
-      const LightSample ls = sample_light(scene, path.rng);
+      std::optional<LightSample> picked =
+          o.light_tree ? sample_light_at(scene, path.x, path.n, path.rng) : sample_light(scene, path.rng);
+      if (!picked) continue;
+      const LightSample& ls = *picked;
       const Vec3 d = ls.point - path.x;
       const float dist2 = dot(d, d);
       if (!(dist2 > 0)) continue;
@@ -135,7 +138,8 @@ void trace_paths(const SceneContext& ctx, const ShadingPoints& points, std::span
         float w = 1.0f;
         if (!path.delta) {
           const float cos_y = dot(ng, wo);
-          const float light_pdf = light_pdf_area(scene, tri) * hits[r].t * hits[r].t / cos_y;
+          const float pdf_area = o.light_tree ? light_pdf_area_at(scene, tri, path.x, path.n) : light_pdf_area(scene, tri);
+          const float light_pdf = pdf_area * hits[r].t * hits[r].t / cos_y;
           w = power_heuristic(path.bsdf_pdf, light_pdf);
         }
         path.L += path.beta * hit_material.ke * w;

@@ -19,6 +19,8 @@ struct PathOptions {
   uint64_t stream = 0;        // random stream of the calling op (sampler.hpp)
   // With max_depth 1: on diffuse surfaces use light sampling alone (a BSDF ray adds cost, not quality there).
   bool light_only_on_diffuse = false;
+  // Choose lights through the scene's light tree (by what each can give the point), or else by power alone.
+  bool light_tree = true;
 };
 
 // Counted as paths go: each path, and each vertex at which one gathered light (the first included).

@@ -121,7 +121,13 @@ Status Scene::finalize(const std::string& what) {
   triangle_light_pdf_.assign(triangles_.size(), 0.0f);
   for (size_t i = 0; i < emitters_.size(); ++i) triangle_light_pdf_[emitters_[i]] = emitter_pdf_[i];
   view_owned_arrays();
+  light_tree_ = std::make_shared<const LightTree>(*this);
   return Ok{};
+}
+
+size_t Scene::emitter_index_of(uint32_t t) const {
+  // emitters_ lists triangles in increasing order (finalize() and the scene image both keep it so).
+  return static_cast<size_t>(std::lower_bound(emitters_.begin(), emitters_.end(), t) - emitters_.begin());
 }
 
 size_t Scene::pick_emitter(float u, float& probability) const {

@@ -10,6 +10,7 @@
 
 #include "core/specs.hpp"
 #include "core/result.hpp"
+#include "render/light_tree.hpp"
 #include "render/math.hpp"
 
 namespace lf {
@@ -98,6 +99,10 @@ class Scene {
   size_t pick_emitter(float u, float& probability) const;
   // Probability that pick_emitter chooses triangle t (0 for non-emitters).
   float emitter_probability_of_triangle(uint32_t t) const { return light_pdf_view_[t]; }
+  // The lights by what each can give a point (render/light_tree.hpp), in the same numbering (after finalize()).
+  const LightTree& light_tree() const { return *light_tree_; }
+  // The index of emitter triangle t in emitters() (t must be an emitter).
+  size_t emitter_index_of(uint32_t t) const;
 
   // The box around every vertex (after finalize()).
   const Bounds& bounds() const { return bounds_; }
@@ -138,6 +143,7 @@ class Scene {
   std::span<const Vec3> normal_view_;
   std::span<const float> area_view_;
   std::span<const float> light_pdf_view_;
+  std::shared_ptr<const LightTree> light_tree_;
   std::shared_ptr<const void> storage_;  // the mapping the views point into, when mapped
   std::vector<std::string> ambient_only_;  // OBJ materials with Ka but no Ke: named if the scene ends up unlit
   Bounds bounds_;

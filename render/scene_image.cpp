@@ -176,8 +176,9 @@ Result<Scene> SceneImage::map(const std::string& path, const std::string& hash, 
   const uint64_t lights = uint64_t{h.emitters} + h.point_lights;
   if (h.emitters > h.triangles || !r.room(uint64_t{h.emitters} + 2 * lights, 4)) return bad("light counts");
   s.emitters_.resize(h.emitters);
-  for (uint32_t& e : s.emitters_)
-    if (!r.u32(e) || e >= h.triangles) return bad("emitters");
+  for (size_t i = 0; i < s.emitters_.size(); ++i)  // in increasing order, as finalize() lists them
+    if (!r.u32(s.emitters_[i]) || s.emitters_[i] >= h.triangles || (i > 0 && s.emitters_[i] <= s.emitters_[i - 1]))
+      return bad("emitters");
   s.emitter_cdf_.resize(lights);
   s.emitter_pdf_.resize(lights);
   for (float& c : s.emitter_cdf_) r.f32(c);
@@ -193,6 +194,7 @@ Result<Scene> SceneImage::map(const std::string& path, const std::string& hash, 
   s.bounds_ = Bounds{{h.lo[0], h.lo[1], h.lo[2]}, {h.hi[0], h.hi[1], h.hi[2]}};
   s.epsilon_ = h.epsilon;
   s.storage_ = std::move(mapping);
+  s.light_tree_ = std::make_shared<const LightTree>(s);
   return s;
 }
 

@@ -1,6 +1,7 @@
 #pragma once
 // Helpers for render/ tests: closed forms and an in-process stand-in for a pool's all-gather.
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <memory>
 #include <string>
@@ -12,13 +13,24 @@
 namespace lf::test {
 
 // Lambert's contour formula: the form factor from a differential area at p with normal n to a polygon,
-// F = 1/(2 pi) sum_i angle(r_i, r_i+1) n . unit(r_i x r_i+1), r_i unit vectors to the corners.
+// F = 1/(2 pi) sum_i angle(r_i, r_i+1) n . unit(r_i x r_i+1), r_i unit vectors to the corners. In double: for a small
+// polygon far away the angles are tiny and float's acos of a cosine near 1 is off by percents.
 inline double form_factor(Vec3 p, Vec3 n, const std::vector<Vec3>& polygon) {
+  using D3 = std::array<double, 3>;
+  auto unit_to = [&](Vec3 q) {
+    const D3 d{static_cast<double>(q.x) - p.x, static_cast<double>(q.y) - p.y, static_cast<double>(q.z) - p.z};
+    const double l = std::sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
+    return D3{d[0] / l, d[1] / l, d[2] / l};
+  };
   double sum = 0;
   for (size_t i = 0; i < polygon.size(); ++i) {
-    Vec3 a = normalize(polygon[i] - p), b = normalize(polygon[(i + 1) % polygon.size()] - p);
-    double angle = std::acos(std::clamp(static_cast<double>(dot(a, b)), -1.0, 1.0));
-    sum += angle * dot(n, normalize(cross(a, b)));
+    const D3 a = unit_to(polygon[i]), b = unit_to(polygon[(i + 1) % polygon.size()]);
+    const D3 c{a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]};
+    const double sine = std::sqrt(c[0] * c[0] + c[1] * c[1] + c[2] * c[2]);
+    if (sine == 0) continue;
+    const double cosine = a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
+    const double angle = std::atan2(sine, cosine);  // accurate for small angles, unlike acos
+    sum += angle * (n.x * c[0] + n.y * c[1] + n.z * c[2]) / sine;
   }
   return std::abs(sum) / (2 * M_PI);
 }

@@ -1,7 +1,8 @@
 // direct: light arriving straight from the area lights.
 //
-// `light_samples` samples per point. Each draws an emitter triangle with probability proportional to its power and
-// a uniform point on it, and casts a shadow ray; on glossy surfaces it also samples the BSDF, and the two are
+// `light_samples` samples per point. Each draws a light through the scene's light tree (by what each light can give
+// the point: power, distance, orientation; render/light_tree.hpp), or with `light_sampling = "power"` by power
+// alone, and a uniform point on it, and casts a shadow ray; on glossy surfaces it also samples the BSDF, and the two are
 // combined by multiple importance sampling (render/path_kernel.cpp with one vertex). On diffuse surfaces light
 // sampling alone is used. Emitters emit on the side their winding faces. Mirrors and glass get nothing here:
 // that is `specular`'s job.
@@ -16,6 +17,7 @@ class DirectLight final : public LightOp {
  public:
   explicit DirectLight(const ParamTable& p)
       : light_samples_(static_cast<int>(p.get_int("light_samples", 1, 1, 1 << 20))),
+        light_tree_(p.get_string("light_sampling", "tree", {"tree", "power"}) == "tree"),
         seed_(static_cast<uint64_t>(p.get_int("seed", 0, 0, INT32_MAX))) {}
 
   Task setup(SceneContext ctx, Inputs&) override {
@@ -29,12 +31,14 @@ class DirectLight final : public LightOp {
     o.samples = light_samples_;
     o.stream = streams::direct ^ (seed_ << 8);
     o.light_only_on_diffuse = true;
+    o.light_tree = light_tree_;
     trace_paths(ctx_, points, radiance, o);
     co_return;
   }
 
  private:
   int light_samples_;
+  bool light_tree_;
   uint64_t seed_;
   SceneContext ctx_;
 };
