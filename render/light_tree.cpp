@@ -62,6 +62,12 @@ LightTree::LightTree(const Scene& scene) {
   if (!items.empty()) build(items, 0, items.size(), 0, 0);
 }
 
+void LightTree::finish(Node& node) {
+  node.centre = (node.lo + node.hi) * 0.5f;
+  node.radius = length(node.hi - node.lo) * 0.5f;
+  node.sin_spread = sine_of(node.cos_spread);
+}
+
 uint32_t LightTree::build(std::vector<Item>& items, size_t first, size_t last, int depth, uint64_t trail) {
   const uint32_t index = static_cast<uint32_t>(nodes_.size());
   nodes_.emplace_back();
@@ -76,6 +82,7 @@ uint32_t LightTree::build(std::vector<Item>& items, size_t first, size_t last, i
     leaf.power = it.power;
     leaf.light = it.light;
     leaf.leaf = true;
+    finish(leaf);
     trail_[it.light] = trail;
     leaf_depth_[it.light] = static_cast<uint8_t>(depth);
     return index;
@@ -104,6 +111,7 @@ uint32_t LightTree::build(std::vector<Item>& items, size_t first, size_t last, i
   node.power = l.power + r.power;
   merge_cones(l.axis, l.cos_spread, r.axis, r.cos_spread, node.axis, node.cos_spread);
   node.right = right;
+  finish(node);
   nodes_[index] = node;
   return index;
 }
@@ -114,22 +122,20 @@ uint32_t LightTree::build(std::vector<Item>& items, size_t first, size_t last, i
 // angle too). Zero when every light of the node faces away from x or lies below x's horizon: those cannot
 // contribute. All emitters are one-sided and Lambertian: nothing leaves beyond 90 degrees of a normal.
 float LightTree::importance(const Node& node, Vec3 x, Vec3 n) const {
-  const Vec3 centre = (node.lo + node.hi) * 0.5f;
-  const Vec3 half = (node.hi - node.lo) * 0.5f;
-  const float r2 = dot(half, half);
-  const Vec3 d = x - centre;
-  const float d2 = dot(d, d);
+  const Vec3 d = x - node.centre;
+  const float d2 = dot(d, d), r2 = node.radius * node.radius;
   const float falloff = node.power / std::max({d2, r2, 1e-20f});
   if (d2 <= r2) return falloff;  // x among the lights: no angle can be bounded
-  const float cos_b = std::sqrt(std::max(0.0f, 1.0f - r2 / d2)), sin_b = sine_of(cos_b);
-  const Vec3 wi = d / std::sqrt(d2);  // from the lights to x
+  const float inverse_d = 1.0f / std::sqrt(d2);
+  const float sin_b = node.radius * inverse_d, cos_b = sine_of(sin_b);
+  const Vec3 wi = d * inverse_d;  // from the lights to x
   // cos of max(0, theta_w - theta_o - theta_b) at the lights.
   float cos_x = 1, sin_x = 0;
   const float cos_w = dot(node.axis, wi);
   if (cos_w < node.cos_spread) {
-    const float sin_w = sine_of(cos_w), sin_o = sine_of(node.cos_spread);
-    cos_x = cos_w * node.cos_spread + sin_w * sin_o;
-    sin_x = sin_w * node.cos_spread - cos_w * sin_o;
+    const float sin_w = sine_of(cos_w);
+    cos_x = cos_w * node.cos_spread + sin_w * node.sin_spread;
+    sin_x = sin_w * node.cos_spread - cos_w * node.sin_spread;
   }
   const float cos_at_lights = cos_x >= cos_b ? 1.0f : cos_x * cos_b + sin_x * sin_b;
   if (cos_at_lights <= 0) return 0;

@@ -37,8 +37,10 @@ class LightTree {
  private:
   struct Node {
     Vec3 lo, hi;         // box around the lights' points
+    Vec3 centre;         // of the box, and the radius of the sphere around it (precomputed for importance())
+    float radius = 0;
     Vec3 axis;           // emitting directions lie within `cos_spread` of it (cos_spread -1: any direction)
-    float cos_spread = 1;
+    float cos_spread = 1, sin_spread = 0;
     float power = 0;
     uint32_t right = 0;  // interior: the right child (the left is the next node); leaf: unused
     uint32_t light = 0;  // leaf: the light
@@ -51,6 +53,7 @@ class LightTree {
   };
 
   uint32_t build(std::vector<Item>& items, size_t first, size_t last, int depth, uint64_t trail);
+  static void finish(Node& node);  // the precomputed fields, from the box and cone
   float importance(const Node& node, Vec3 x, Vec3 n) const;
 
   std::vector<Node> nodes_;

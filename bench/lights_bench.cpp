@@ -1,0 +1,105 @@
+// Many lights (issue 13, item 6): direct light on Lost Empire (examples/lost_empire.lua: 1636 torch triangles and
+// the lava), lights chosen through the light tree vs by power alone. For each sample count both are rendered in the
+// same run, interleaved, `--runs` times; the figures are the relative RMSE against a high-sample reference (tree,
+// kept between runs with --reference) and the render phase's seconds (median). The figure of merit is the usual
+// efficiency 1 / (RMSE² × seconds): how much less time the tree needs for the same noise.
+//
+//   build/bench/lights_bench [--json FILE] [--runs N] [--reference FILE.exr] [--reference-spp N]
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <string>
+
+#include "bench/bench_util.hpp"
+#include "render/image.hpp"
+
+namespace {
+
+double relative_rmse(const lf::Image& a, const lf::Image& ref) {
+  double se = 0, mean = 0;
+  for (size_t i = 0; i < ref.pixels.size(); ++i) {
+    const double d = lf::average(a.pixels[i]) - lf::average(ref.pixels[i]);
+    se += d * d;
+    mean += lf::average(ref.pixels[i]);
+  }
+  const double n = static_cast<double>(ref.pixels.size());
+  return std::sqrt(se / n) / (mean / n);
+}
+
+struct Render {
+  lf::Image image;
+  double render_seconds;
+};
+
+Render render(const std::string& script, const std::vector<std::string>& sets) {
+  const std::string out =
+      (bench::fs::temp_directory_path() / ("lightfarm-lights-" + std::to_string(::getpid()) + ".exr")).string();
+  const bench::FarmRun run = bench::run_farm(script, sets, out);
+  auto img = lf::read_image(out);
+  bench::fs::remove(out);
+  if (!img) {
+    std::fprintf(stderr, "%s\n", img.error().message.c_str());
+    std::exit(1);
+  }
+  return {*img, run.number("render")};
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  std::string json_path = "bench-lights.json", reference_file;
+  int runs = 3, reference_spp = 1024;
+  for (int i = 1; i + 1 < argc; i += 2) {
+    const std::string a = argv[i];
+    if (a == "--json") json_path = argv[i + 1];
+    else if (a == "--runs") runs = std::atoi(argv[i + 1]);
+    else if (a == "--reference") reference_file = argv[i + 1];
+    else if (a == "--reference-spp") reference_spp = std::atoi(argv[i + 1]);
+  }
+  const std::string script = std::string(LIGHTFARM_SOURCE_DIR) + "/examples/lost_empire.lua";
+  if (!bench::fs::exists(std::string(LIGHTFARM_SOURCE_DIR) + "/../shared/scenes/lost_empire/lost_empire.obj")) {
+    std::printf("Lost Empire is not in ../shared/scenes: nothing to measure\n");
+    return 0;
+  }
+  lf::Image reference;
+  if (auto kept = reference_file.empty() ? lf::Result<lf::Image>(lf::make_error("none")) : lf::read_image(reference_file)) {
+    reference = *kept;
+    std::printf("reference: %s (kept from an earlier run)\n", reference_file.c_str());
+  } else {
+    Render r = render(script, {"spp=" + std::to_string(reference_spp), "light_samples=4"});
+    reference = r.image;
+    if (!reference_file.empty()) (void)lf::write_image(reference, reference_file);
+    std::printf("reference: tree, %d spp x 4 light samples, render %.1f s\n", reference_spp, r.render_seconds);
+  }
+
+  std::printf("\n%5s %-6s %10s %10s %10s\n", "spp", "lights", "rel. RMSE", "render s", "efficiency");
+  lf::Value::Array rows;
+  std::vector<double> gains;
+  for (int spp : {4, 16, 64}) {
+    std::vector<double> seconds[2];
+    double rmse[2] = {0, 0};
+    const char* names[2] = {"tree", "power"};
+    for (int run = 0; run < runs; ++run)
+      for (int k = 0; k < 2; ++k) {
+        Render r = render(script, {"spp=" + std::to_string(spp), std::string("light_sampling=") + names[k]});
+        seconds[k].push_back(r.render_seconds);
+        rmse[k] = relative_rmse(r.image, reference);  // the same every run: images are deterministic
+      }
+    double efficiency[2];
+    for (int k = 0; k < 2; ++k) {
+      const bench::Spread s = bench::spread(seconds[k]);
+      efficiency[k] = 1.0 / (rmse[k] * rmse[k] * s.median);
+      std::printf("%5d %-6s %10.4f %10.3f %10.1f   (render s min %.3f max %.3f)\n", spp, names[k], rmse[k], s.median,
+                  efficiency[k], s.min, s.max);
+      rows.push_back(lf::Value::Map{{"spp", spp}, {"lights", names[k]}, {"relative_rmse", rmse[k]},
+                                    {"render_seconds", s.to_value()}, {"efficiency", efficiency[k]}});
+    }
+    gains.push_back(efficiency[0] / efficiency[1]);
+    std::printf("%5d tree / power efficiency %.2f\n", spp, gains.back());
+  }
+  const bench::Spread g = bench::spread(gains);
+  std::printf("\ntree / power efficiency over sample counts: min %.2f median %.2f max %.2f\n", g.min, g.median, g.max);
+  std::ofstream(json_path) << lf::to_json(lf::Value::Map{{"rows", rows}, {"tree_over_power_efficiency", g.to_value()}}, 2)
+                           << "\n";
+  std::printf("wrote %s\n", json_path.c_str());
+}
