@@ -141,3 +141,34 @@ TEST_F(NetworkTest, CornellGlassNetworksAgreeWithThePathTracer) {
 
 }  // namespace
 }  // namespace lf::test
+
+namespace lf::test {
+namespace {
+
+// A real interior does not change the rule that the image does not depend on the layout (issue 13): Lost Empire,
+// its torches lit, direct light through the light tree plus a camera-placed irradiance cache, at 64x48 — one
+// renderer and a single cache against three renderers and the cache as a pool of two replicas (which build their
+// records in shares and exchange them). Bit for bit.
+TEST_F(NetworkTest, LostEmpireIsTheSameOnEveryLayout) {
+  const std::string obj = kSource + "/../shared/scenes/lost_empire/lost_empire.obj";
+  if (!fs::exists(obj)) GTEST_SKIP() << "no " << obj;
+  const std::string script = write("empire.lua", "scene { file = \"" + obj + R"(" }
+material "Torch" { emission = {9, 9, 6}, kd = {0, 0, 0} }
+camera { eye = {-5, 18, -30}, at = {5, 12, 5}, fov = 70 }
+image { width = 64, height = 48, spp = 2, tile = 16 }
+local direct = lightop "direct" { light_samples = 2 }
+local cache = lightop "irradiance" { input = direct, theta = 4, phi = 12 }
+local indirect = param("cache_replicas", 1) > 1 and multiplexer { cache, replicas = param("cache_replicas", 1) } or cache
+renderers { count = param("renderers", 1), lighting = lightop "combine" { inputs = { direct, indirect } } }
+)");
+  const Image single = render({"run", script, "--set", "renderers=1", "--set", "cache_replicas=1"}, "single.exr");
+  const Image spread = render({"run", script, "--set", "renderers=3", "--set", "cache_replicas=2"}, "spread.exr");
+  ASSERT_EQ(single.pixels.size(), spread.pixels.size());
+  EXPECT_TRUE(single.pixels == spread.pixels) << "images differ between layouts";
+  double sum = 0;
+  for (const RGB& p : single.pixels) sum += average(p);
+  EXPECT_GT(sum, 0) << "a black image proves nothing";
+}
+
+}  // namespace
+}  // namespace lf::test
