@@ -17,27 +17,9 @@ struct LightSample {
   bool is_point = false;
 };
 
-// Picks an emitter triangle by power and a uniform point on it.
-inline LightSample sample_light(const Scene& scene, Rng& rng) {
-  float p_tri = 0;
-  const size_t e = scene.pick_emitter(rng.uniform(), p_tri);
-  if (e >= scene.emitters().size()) {
-    const PointLight& p = scene.point_lights()[e - scene.emitters().size()];
-    return LightSample{p.position, {}, UINT32_MAX, p.intensity, p_tri, true};
-  }
-  const uint32_t tri = scene.emitters()[e];
-  const float su = std::sqrt(rng.uniform());
-  const float v = rng.uniform();
-  const Vec3 y = scene.vertex(tri, 0) * (1 - su) + scene.vertex(tri, 1) * (su * (1 - v)) + scene.vertex(tri, 2) * (su * v);
-  return LightSample{y, scene.normal(tri), tri, scene.material(scene.material_of(tri)).ke, p_tri / scene.area(tri)};
-}
-
-// Picks a light by what it can give point x facing n (the scene's light tree), and a uniform point on it; nullopt
-// when no light can reach x's side.
-inline std::optional<LightSample> sample_light_at(const Scene& scene, Vec3 x, Vec3 n, Rng& rng) {
-  size_t e = 0;
-  float p_light = 0;
-  if (!scene.light_tree().pick(x, n, rng.uniform(), e, p_light)) return std::nullopt;
+// Light e (Scene's numbering: a triangle below emitters().size(), else a point light), chosen with probability
+// p_light, as a sample: a uniform point on a triangle.
+inline LightSample light_sample_of(const Scene& scene, size_t e, float p_light, Rng& rng) {
   if (e >= scene.emitters().size()) {
     const PointLight& p = scene.point_lights()[e - scene.emitters().size()];
     return LightSample{p.position, {}, UINT32_MAX, p.intensity, p_light, true};
@@ -47,6 +29,22 @@ inline std::optional<LightSample> sample_light_at(const Scene& scene, Vec3 x, Ve
   const float v = rng.uniform();
   const Vec3 y = scene.vertex(tri, 0) * (1 - su) + scene.vertex(tri, 1) * (su * (1 - v)) + scene.vertex(tri, 2) * (su * v);
   return LightSample{y, scene.normal(tri), tri, scene.material(scene.material_of(tri)).ke, p_light / scene.area(tri)};
+}
+
+// Picks a light by power and a uniform point on it.
+inline LightSample sample_light(const Scene& scene, Rng& rng) {
+  float p_light = 0;
+  const size_t e = scene.pick_emitter(rng.uniform(), p_light);
+  return light_sample_of(scene, e, p_light, rng);
+}
+
+// Picks a light by what it can give point x facing n (the scene's light tree), and a uniform point on it; nullopt
+// when no light can reach x's side.
+inline std::optional<LightSample> sample_light_at(const Scene& scene, Vec3 x, Vec3 n, Rng& rng) {
+  size_t e = 0;
+  float p_light = 0;
+  if (!scene.light_tree().pick(x, n, rng.uniform(), e, p_light)) return std::nullopt;
+  return light_sample_of(scene, e, p_light, rng);
 }
 
 // The area density with which sample_light_at(x, n) draws a point on emitter triangle `tri`.

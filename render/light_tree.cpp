@@ -58,7 +58,6 @@ LightTree::LightTree(const Scene& scene) {
                      static_cast<uint32_t>(emitters.size() + i)});
   }
   trail_.assign(items.size(), 0);
-  leaf_depth_.assign(items.size(), 0);
   if (!items.empty()) build(items, 0, items.size(), 0, 0);
 }
 
@@ -84,7 +83,6 @@ uint32_t LightTree::build(std::vector<Item>& items, size_t first, size_t last, i
     leaf.leaf = true;
     finish(leaf);
     trail_[it.light] = trail;
-    leaf_depth_[it.light] = static_cast<uint8_t>(depth);
     return index;
   }
   // Halve at the median along the widest extent of the centroids: a balanced tree (depth ceil(log2 n), so a

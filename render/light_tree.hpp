@@ -58,7 +58,6 @@ class LightTree {
 
   std::vector<Node> nodes_;
   std::vector<uint64_t> trail_;  // per light: the turns from the root to its leaf (bit d set: right at depth d)
-  std::vector<uint8_t> leaf_depth_;
   int depth_ = 0;
 };
 

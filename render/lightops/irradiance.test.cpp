@@ -115,6 +115,28 @@ ShadingPoints camera_points(const Scene& scene, int size) {
   return work.points;
 }
 
+// The cache's light summed over the points against one bounce of the path tracer there (depth 2 minus depth 1,
+// `samples` paths per point): 1 when the cache is right.
+double cached_over_one_bounce(const SceneContext& ctx, const ShadingPoints& pts, const std::vector<RGB>& cached,
+                              int samples) {
+  LocalInputs none;
+  auto path = [&](int depth) {
+    auto pt = make("pathtrace", Value::Map{{"max_depth", depth}, {"samples", samples}, {"rr_depth", 100}});
+    run_to_completion(pt->setup(ctx, none));
+    std::vector<RGB> out(pts.size());
+    run_to_completion(pt->shade(pts, out, none));
+    return out;
+  };
+  const auto two = path(2), one = path(1);
+  double sum = 0, reference = 0;
+  for (size_t i = 0; i < pts.size(); ++i) {
+    sum += average(cached[i]);
+    reference += average(two[i]) - average(one[i]);
+  }
+  EXPECT_GT(reference, 0);
+  return reference > 0 ? sum / reference : 0;
+}
+
 // irradiance(input = direct) is one diffuse bounce of direct light: pathtrace at depth 2 minus depth 1.
 TEST(Irradiance, OneBounceOfDirectMatchesThePathTracer) {
   auto scene = Scene::builtin("cornell");
@@ -143,78 +165,68 @@ TEST(Irradiance, OneBounceOfDirectMatchesThePathTracer) {
   EXPECT_GE(per_lookup, 1.0);  // a served point averaged at least one record, and never more than there are
   EXPECT_LT(per_lookup, static_cast<double>(count("records")));
 
-  auto path = [&](int depth) {
-    auto pt = make("pathtrace", Value::Map{{"max_depth", depth}, {"samples", 2048}, {"rr_depth", 100}});
-    run_to_completion(pt->setup(ctx, none));
-    std::vector<RGB> out(pts.size());
-    run_to_completion(pt->shade(pts, out, none));
-    return out;
-  };
-  auto two = path(2), one = path(1);
-  double cached = 0, reference = 0;
-  for (size_t i = 0; i < pts.size(); ++i) {
-    cached += average(bounce[i]);
-    reference += average(two[i]) - average(one[i]);
-  }
-  ASSERT_GT(reference, 0);
-  EXPECT_NEAR(cached / reference, 1.0, 0.05) << "one bounce over the image";
+  EXPECT_NEAR(cached_over_one_bounce(ctx, pts, bounce, 2048), 1.0, 0.05) << "one bounce over the image";
 }
 
-// Records where the camera looks (issue 13): on the built-in room at 160 x 120, the cache placed by a coarse camera
-// pass (every 8th pixel, then every 4th and 2nd where records do not yet reach) serves at least 95 % of the image's points from its records, and one bounce over the image
-// still matches the path tracer's depth 2 minus depth 1 (on every 16th point).
+// A camera-placed cache over `direct` on a scene, seen by a w x h camera: the image's points at 1 spp, what the
+// cache gives them, and its STATS.
+struct CameraCache {
+  RayTracer tracer;
+  Camera camera;
+  SceneContext ctx;
+  ShadingPoints pts;
+  std::vector<RGB> bounce;
+  Value stats;
+  CameraCache(const Scene& scene, const CameraSpec& view, int w, int h, int light_samples, Value::Map cache_params)
+      : tracer(scene), camera(view, w, h), ctx{&scene, &tracer} {
+    ctx.camera = &camera;
+    ctx.width = w;
+    ctx.height = h;
+    ImageSpec image;
+    image.width = w;
+    image.height = h;
+    image.spp = 1;
+    TileWork work;
+    trace_tile(scene, tracer, camera, image, TileRect{0, 0, w, h}, work);
+    pts = work.points;
+    LocalInputs none;
+    auto direct = make("direct", Value::Map{{"light_samples", light_samples}});
+    run_to_completion(direct->setup(ctx, none));
+    LocalInputs to_direct({{direct.get(), &none}});
+    auto irr = make("irradiance", std::move(cache_params));  // placement = "camera" is the default
+    run_to_completion(irr->setup(ctx, to_direct));
+    bounce.resize(pts.size());
+    run_to_completion(irr->shade(pts, bounce, to_direct));
+    stats = irr->stats();
+  }
+  double count(const char* key) const { return static_cast<double>(stats.find(key)->as_int()); }
+  // Share of the looked-up points that records served (under a, 2a or 4a) rather than their own value.
+  double served() const { return (count("served_a") + count("served_2a") + count("served_4a")) / count("lookups"); }
+  std::string figures() const {
+    return "records " + std::to_string(count("records")) + ", own values " + std::to_string(count("own_values"));
+  }
+};
+
+// Records where the camera looks (issue 13): on the built-in room at 160 x 120, the cache placed by the camera pass
+// (every 8th pixel, then every 4th and 2nd where records do not yet reach) serves at least 95 % of the image's
+// points from its records, and one bounce over the image still matches the path tracer's depth 2 minus depth 1 (on
+// every 16th point).
 TEST(Irradiance, RecordsWhereTheCameraLooksServeTheImage) {
   auto scene = Scene::builtin("room");
-  RayTracer tracer(*scene);
   const int w = 160, h = 120;
-  const Camera camera(CameraSpec{{3.0, 1.55, 0.25}, {2.7, 0.9, 4.0}, {0, 1, 0}, 62}, w, h);
-  ImageSpec image;
-  image.width = w;
-  image.height = h;
-  image.spp = 1;
-  TileWork work;
-  trace_tile(*scene, tracer, camera, image, TileRect{0, 0, w, h}, work);
-  const ShadingPoints& pts = work.points;
-  SceneContext ctx{&*scene, &tracer};
-  ctx.camera = &camera;
-  ctx.width = w;
-  ctx.height = h;
-  LocalInputs none;
-  auto direct = make("direct", Value::Map{{"light_samples", 4}});
-  run_to_completion(direct->setup(ctx, none));
-  LocalInputs to_direct({{direct.get(), &none}});
-  auto irr = make("irradiance");  // placement = "camera" is the default
-  run_to_completion(irr->setup(ctx, to_direct));
-  std::vector<RGB> bounce(pts.size());
-  run_to_completion(irr->shade(pts, bounce, to_direct));
-  const Value st = irr->stats();
-  auto count = [&](const char* key) { return static_cast<double>(st.find(key)->as_int()); };
-  ASSERT_GT(count("lookups"), 0.9 * static_cast<double>(pts.size()));
-  const double served = count("served_a") + count("served_2a") + count("served_4a");
-  EXPECT_GE(served / count("lookups"), 0.95) << "records " << count("records") << ", own values " << count("own_values");
-  EXPECT_LE(count("records"), 80.0 * 60.0);  // at most one per candidate
+  CameraCache c(*scene, CameraSpec{{3.0, 1.55, 0.25}, {2.7, 0.9, 4.0}, {0, 1, 0}, 62}, w, h, 4, {});
+  ASSERT_GT(c.count("lookups"), 0.9 * static_cast<double>(c.pts.size()));
+  EXPECT_GE(c.served(), 0.95) << c.figures();
+  EXPECT_LE(c.count("records"), 80.0 * 60.0);  // at most one per candidate
 
   ShadingPoints some;
   std::vector<RGB> cached;
+  const ShadingPoints& pts = c.pts;
   for (size_t i = 0; i < pts.size(); i += 16) {
     some.push_back(pts.position[i], pts.normal[i], pts.wo[i], pts.material[i], pts.key[i], pts.triangle[i]);
-    cached.push_back(bounce[i]);
+    cached.push_back(c.bounce[i]);
   }
-  auto path = [&](int depth) {
-    auto pt = make("pathtrace", Value::Map{{"max_depth", depth}, {"samples", 512}, {"rr_depth", 100}});
-    run_to_completion(pt->setup(ctx, none));
-    std::vector<RGB> out(some.size());
-    run_to_completion(pt->shade(some, out, none));
-    return out;
-  };
-  auto two = path(2), one = path(1);
-  double sum = 0, reference = 0;
-  for (size_t i = 0; i < some.size(); ++i) {
-    sum += average(cached[i]);
-    reference += average(two[i]) - average(one[i]);
-  }
-  ASSERT_GT(reference, 0);
-  EXPECT_NEAR(sum / reference, 1.0, 0.05) << "one bounce over the image";
+  EXPECT_NEAR(cached_over_one_bounce(c.ctx, some, cached, 512), 1.0, 0.05) << "one bounce over the image";
 }
 
 // The same on a real interior (issue 13): Lost Empire with its torches emitting, from a camera inside the city at
@@ -227,33 +239,10 @@ TEST(Irradiance, RecordsWhereTheCameraLooksServeLostEmpire) {
   spec.materials.push_back(Value::Map{{"name", "Torch"}, {"emission", Value::Array{9.0, 9.0, 6.0}}});
   auto scene = Scene::load(spec);
   ASSERT_TRUE(scene) << scene.error().message;
-  RayTracer tracer(*scene);
   const int w = 160, h = 120;
-  const Camera camera(CameraSpec{{-8, 16, 20}, {6, 12, 0}, {0, 1, 0}, 70}, w, h);
-  ImageSpec image;
-  image.width = w;
-  image.height = h;
-  image.spp = 1;
-  TileWork work;
-  trace_tile(*scene, tracer, camera, image, TileRect{0, 0, w, h}, work);
-  const ShadingPoints& pts = work.points;
-  ASSERT_GT(pts.size(), static_cast<size_t>(w * h / 2));
-  SceneContext ctx{&*scene, &tracer};
-  ctx.camera = &camera;
-  ctx.width = w;
-  ctx.height = h;
-  LocalInputs none;
-  auto direct = make("direct", Value::Map{{"light_samples", 1}});
-  run_to_completion(direct->setup(ctx, none));
-  LocalInputs to_direct({{direct.get(), &none}});
-  auto irr = make("irradiance", Value::Map{{"theta", 4}, {"phi", 12}});
-  run_to_completion(irr->setup(ctx, to_direct));
-  std::vector<RGB> bounce(pts.size());
-  run_to_completion(irr->shade(pts, bounce, to_direct));
-  const Value st = irr->stats();
-  auto count = [&](const char* key) { return static_cast<double>(st.find(key)->as_int()); };
-  const double served = count("served_a") + count("served_2a") + count("served_4a");
-  EXPECT_GE(served / count("lookups"), 0.95) << "records " << count("records") << ", own values " << count("own_values");
+  CameraCache c(*scene, CameraSpec{{-8, 16, 20}, {6, 12, 0}, {0, 1, 0}, 70}, w, h, 1, {{"theta", 4}, {"phi", 12}});
+  ASSERT_GT(c.pts.size(), static_cast<size_t>(w * h / 2));
+  EXPECT_GE(c.served(), 0.95) << c.figures();
 }
 
 // Without the farm's camera, camera placement is a clear error.
