@@ -1,6 +1,7 @@
 -- Lost Empire (McGuire's archive, in ../shared/scenes; CC BY 3.0): a 225k-triangle underground city lit by its
 -- torches (818 small quads, 1636 triangles) and a pool of lava. Its MTL has the torches' Ke commented out, so the
--- script makes them emit. Alpha cut-outs and textures are not read yet: torches are whole quads, leaves opaque.
+-- script makes them emit. The texture atlas colours every block; the torches' alpha map cuts each quad down to its
+-- stick and flame, which alone emit, and cuts the leaves into sprites.
 -- Direct light only, lights chosen through the light tree (docs/lua-api.md, "Many lights"):
 --
 --   lightfarm run examples/lost_empire.lua                                  -> lost_empire.png

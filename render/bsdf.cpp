@@ -39,7 +39,7 @@ float fresnel_dielectric(float cos_i, float eta) {
 }
 
 float Bsdf::diffuse_probability() const {
-  const float d = average(m_.kd), g = average(m_.ks);
+  const float d = average(kd_), g = average(m_.ks);
   return d + g > 0 ? d / (d + g) : 1.0f;
 }
 
@@ -50,7 +50,7 @@ static float phong(float ns, float cos_alpha) {
 
 RGB Bsdf::eval(Vec3 n, Vec3 wo, Vec3 wi) const {
   if (is_delta() || dot(n, wi) <= 0 || dot(n, wo) <= 0) return {};
-  RGB f = m_.kd * (1.0f / kPi);
+  RGB f = kd_ * (1.0f / kPi);
   if (m_.type == Material::Type::glossy) f += m_.ks * phong(m_.ns, dot(reflect(wo, n), wi));
   return f;
 }

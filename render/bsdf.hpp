@@ -2,6 +2,7 @@
 // Scattering at a surface point: diffuse (Lambert), glossy (Lambert + a normalized Phong lobe), perfect mirror,
 // and dielectric glass with Fresnel. Directions point away from the surface; `n` is the unit normal on the side
 // of wo. eval() returns f(wo, wi) without the cosine; sample() returns wi with weight f * |cos| / pdf.
+#include <algorithm>
 #include <optional>
 
 #include "render/math.hpp"
@@ -11,7 +12,10 @@ namespace lf {
 
 class Bsdf {
  public:
-  explicit Bsdf(const Material& m) : m_(m) {}
+  explicit Bsdf(const Material& m) : m_(m), kd_(m.kd) {}
+  // With the diffuse reflectance at the point (a texture's), kept to at most 1 - ks per channel.
+  Bsdf(const Material& m, RGB albedo)
+      : m_(m), kd_{std::min(albedo.x, 1 - m.ks.x), std::min(albedo.y, 1 - m.ks.y), std::min(albedo.z, 1 - m.ks.z)} {}
 
   // Mirror and glass scatter into single directions: light sampling cannot reach them, only sample() can.
   bool is_delta() const { return m_.type == Material::Type::mirror || m_.type == Material::Type::glass; }
@@ -30,6 +34,7 @@ class Bsdf {
  private:
   float diffuse_probability() const;
   const Material& m_;
+  RGB kd_;
 };
 
 // Fresnel reflectance of a dielectric interface for unpolarized light; cos_i > 0, eta = n_transmitted / n_incident.

@@ -29,6 +29,7 @@ class Reader {
   bool u32(uint32_t& v) { return take(&v, 4); }
   bool f32(float& v) { return take(&v, 4); }
   bool u8(uint8_t& v) { return take(&v, 1); }
+  bool u64(uint64_t& v) { return take(&v, 8); }
   bool vec(Vec3& v) { return f32(v.x) && f32(v.y) && f32(v.z); }
   bool str(std::string& s, uint32_t n) {
     if (bytes_.size() - at_ < n) return false;
@@ -51,7 +52,8 @@ class Reader {
   size_t at_ = 0;
 };
 
-// A material as both binary forms store it: u32 name length, name, f32 kd[3] ke[3] ks[3], f32 ns, f32 ior, u8 type.
+// A material as both binary forms store it: u32 name length, name, f32 kd[3] ke[3] ks[3], f32 ns, f32 ior, u8 type,
+// i32 kd_map, i32 alpha_map (-1: none; the reader of the whole form checks them against its texture count).
 inline void put_material(std::string& out, const Material& m) {
   put(out, static_cast<uint32_t>(m.name.size()));
   out += m.name;
@@ -61,6 +63,8 @@ inline void put_material(std::string& out, const Material& m) {
   put(out, m.ns);
   put(out, m.ior);
   out.push_back(static_cast<char>(m.type));
+  put(out, m.kd_map);
+  put(out, m.alpha_map);
 }
 inline bool read_material(Reader& r, Material& m) {
   uint32_t len = 0;
@@ -69,7 +73,11 @@ inline bool read_material(Reader& r, Material& m) {
   if (!r.vec(m.kd) || !r.vec(m.ke) || !r.vec(m.ks) || !r.f32(m.ns) || !r.f32(m.ior) || !r.u8(type) || type > 3)
     return false;
   m.type = static_cast<Material::Type>(type);
-  return true;
+  uint32_t kd_map = 0, alpha_map = 0;
+  if (!r.u32(kd_map) || !r.u32(alpha_map)) return false;
+  m.kd_map = static_cast<int32_t>(kd_map);
+  m.alpha_map = static_cast<int32_t>(alpha_map);
+  return m.kd_map >= -1 && m.alpha_map >= -1;
 }
 
 }  // namespace lf::bytes

@@ -86,8 +86,10 @@ namespace {
 struct ImageModule {
   using WriteFn = int (*)(const char*, int, int, int, const float*, const unsigned char*, const char*, char*, size_t);
   using ReadFn = int (*)(const char*, float**, int*, int*, char*, size_t);
+  using ReadTexelsFn = int (*)(const char*, unsigned char**, int*, int*, int*, int*, char*, size_t);
   WriteFn write = nullptr;
   ReadFn read = nullptr;
+  ReadTexelsFn read_texels = nullptr;
   std::string error;
 };
 
@@ -113,7 +115,8 @@ const ImageModule& image_module() {
       }
       m.write = reinterpret_cast<ImageModule::WriteFn>(::dlsym(handle, "lightfarm_imageio_write"));
       m.read = reinterpret_cast<ImageModule::ReadFn>(::dlsym(handle, "lightfarm_imageio_read"));
-      if (m.write && m.read) return m;
+      m.read_texels = reinterpret_cast<ImageModule::ReadTexelsFn>(::dlsym(handle, "lightfarm_imageio_read_texels"));
+      if (m.write && m.read && m.read_texels) return m;
       tried += "\n  " + path + ": missing entry points";
     }
     m.error = std::string("cannot load the image module ") + LIGHTFARM_IMAGEIO_NAME + ":" + tried;
@@ -225,6 +228,24 @@ Result<Image> read_image(const std::string& path) {
     img.pixels[i] = {decode(data[3 * i]), decode(data[3 * i + 1]), decode(data[3 * i + 2])};
   std::free(data);
   return img;
+}
+
+Result<Texels> read_texels(const std::string& path) {
+  const auto& module = image_module();
+  if (!module.read_texels) return make_error(module.error);
+  unsigned char* data = nullptr;
+  int w = 0, h = 0, c = 0, is_float = 0;
+  char err[512] = {0};
+  if (module.read_texels(path.c_str(), &data, &w, &h, &c, &is_float, err, sizeof err) != 0)
+    return make_error("cannot read '" + path + "': " + err);
+  Texels t;
+  t.width = w;
+  t.height = h;
+  t.channels = c;
+  t.linear = is_float != 0;
+  t.bytes.assign(data, data + static_cast<size_t>(w) * h * c);
+  std::free(data);
+  return t;
 }
 
 }  // namespace lf

@@ -2,6 +2,7 @@
 // Images and how they reach disk. Format from the extension: .exr is linear float, .png/.tif 8-bit sRGB.
 // A file is written to a temporary name beside the target and renamed, so a failed or interrupted write never
 // leaves a half-written image under the requested name.
+#include <cstdint>
 #include <string>
 #include <vector>
 
@@ -34,6 +35,14 @@ float display_value(float linear, const Display& display);
 
 Status write_image(const Image& image, const std::string& path, const Display& display = {});
 Result<Image> read_image(const std::string& path);  // linear RGB (sRGB files are decoded)
+// An image file's pixels as 8-bit texels, every channel, top row first, for textures. `linear` when the file held
+// floats (EXR, HDR): their values are then linear, clamped to [0, 1], not sRGB-encoded.
+struct Texels {
+  int width = 0, height = 0, channels = 0;
+  bool linear = false;
+  std::vector<uint8_t> bytes;
+};
+Result<Texels> read_texels(const std::string& path);
 // Loads the image module (OpenImageIO and its ~250 libraries) now, on this thread. The director calls it on a
 // background thread while its actors start, so writing the image later costs only the write.
 void preload_image_io();

@@ -65,4 +65,33 @@ int lightfarm_imageio_read(const char* path, float** pixels, int* width, int* he
   *height = spec.height;
   return 0;
 }
+
+// Reads every channel as 8-bit (as stored, no colour conversion; float files are clamped to [0, 1]). The caller
+// frees *texels with free().
+int lightfarm_imageio_read_texels(const char* path, unsigned char** texels, int* width, int* height, int* channels,
+                                  int* is_float, char* err, size_t err_len) {
+  OIIO::ImageBuf buf(path);
+  if (!buf.read(0, 0, true, OIIO::TypeDesc::UINT8)) {
+    set_error(err, err_len, buf.geterror());
+    return 1;
+  }
+  const auto& spec = buf.spec();
+  if (spec.width <= 0 || spec.height <= 0 || spec.nchannels <= 0) {
+    set_error(err, err_len, "an empty image");
+    return 1;
+  }
+  const size_t n = static_cast<size_t>(spec.width) * spec.height * spec.nchannels;
+  auto* out = static_cast<unsigned char*>(std::malloc(n));
+  if (!out || !buf.get_pixels(OIIO::ROI::All(), OIIO::TypeDesc::UINT8, out)) {
+    std::free(out);
+    set_error(err, err_len, "cannot convert its pixels to 8 bits");
+    return 1;
+  }
+  *texels = out;
+  *width = spec.width;
+  *height = spec.height;
+  *channels = spec.nchannels;
+  *is_float = spec.format.is_floating_point() ? 1 : 0;
+  return 0;
+}
 }

@@ -27,8 +27,11 @@ inline LightSample light_sample_of(const Scene& scene, size_t e, float p_light, 
   const uint32_t tri = scene.emitters()[e];
   const float su = std::sqrt(rng.uniform());
   const float v = rng.uniform();
-  const Vec3 y = scene.vertex(tri, 0) * (1 - su) + scene.vertex(tri, 1) * (su * (1 - v)) + scene.vertex(tri, 2) * (su * v);
-  return LightSample{y, scene.normal(tri), tri, scene.material(scene.material_of(tri)).ke, p_light / scene.area(tri)};
+  const Vec3 b{1 - su, su * (1 - v), su * v};
+  const Vec3 y = scene.vertex(tri, 0) * b.x + scene.vertex(tri, 1) * b.y + scene.vertex(tri, 2) * b.z;
+  // A cut-out part of an emitter is not there: it sends nothing (the sample still counts, so no bias).
+  const RGB le = scene.opaque(tri, b) ? scene.material(scene.material_of(tri)).ke : RGB{};
+  return LightSample{y, scene.normal(tri), tri, le, p_light / scene.area(tri)};
 }
 
 // Picks a light by power and a uniform point on it.

@@ -48,7 +48,7 @@ LightTree::LightTree(const Scene& scene) {
   for (size_t i = 0; i < emitters.size(); ++i) {
     const uint32_t t = emitters[i];
     const Vec3 a = scene.vertex(t, 0), b = scene.vertex(t, 1), c = scene.vertex(t, 2);
-    const float power = scene.area(t) * average(scene.material(scene.material_of(t)).ke) * kPi;
+    const float power = scene.emitted_power(t);
     items.push_back({min3(a, min3(b, c)), max3(a, max3(b, c)), (a + b + c) / 3.0f, scene.normal(t), 1.0f, power,
                      static_cast<uint32_t>(i)});
   }

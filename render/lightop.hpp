@@ -30,7 +30,7 @@ namespace lf {
 // A batch of points to shade, as structure of arrays (it travels as one float blob per field).
 struct ShadingPoints {
   std::vector<Vec3> position;
-  std::vector<Vec3> normal;    // unit, on the side of wo
+  std::vector<Vec3> normal;    // unit, on the side of wo: the shading normal (interpolated vertex normals)
   std::vector<Vec3> wo;        // unit, pointing away from the surface (towards the viewer)
   std::vector<uint32_t> material;
   std::vector<uint64_t> key;   // sample_key(pixel, sample): seeds every random decision for this point
@@ -45,6 +45,18 @@ struct ShadingPoints {
   // True when point i is on the side its triangle's winding faces (or nothing says otherwise).
   bool outside(size_t i, const Scene& scene) const {
     return triangle.empty() || dot(scene.normal(triangle[i]), wo[i]) >= 0;
+  }
+  // The geometric normal at point i, on the side of its shading normal (that normal itself without a triangle).
+  Vec3 face_normal(size_t i, const Scene& scene) const {
+    if (triangle.empty()) return normal[i];
+    const Vec3 n = scene.normal(triangle[i]);
+    return dot(n, wo[i]) >= 0 ? n : -n;
+  }
+  // The diffuse reflectance at point i: its triangle's texture there, else its material's kd.
+  RGB albedo(size_t i, const Scene& scene) const {
+    const Material& m = scene.material(material[i]);
+    if (triangle.empty() || m.kd_map < 0 || !scene.has_uvs()) return m.kd;
+    return scene.albedo(triangle[i], scene.barycentrics(triangle[i], position[i]));
   }
   // Empty string when consistent; otherwise what is wrong (for validating what arrives from the wire).
   std::string check(size_t material_count, size_t triangle_count = SIZE_MAX) const;

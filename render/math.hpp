@@ -22,6 +22,12 @@ struct Vec3 {
 
 using RGB = Vec3;
 
+// Texture coordinates (OBJ `vt`): u to the right, v up.
+struct Vec2 {
+  float u = 0, v = 0;
+  constexpr bool operator==(const Vec2&) const = default;
+};
+
 constexpr Vec3 operator*(float s, Vec3 v) { return v * s; }
 constexpr float dot(Vec3 a, Vec3 b) { return a.x * b.x + a.y * b.y + a.z * b.z; }
 constexpr Vec3 cross(Vec3 a, Vec3 b) { return {a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x}; }

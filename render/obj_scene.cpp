@@ -9,6 +9,8 @@
 #include <sstream>
 #include <fstream>
 
+#include "core/log.hpp"
+#include "render/image.hpp"
 #include "render/scene.hpp"
 
 namespace lf {
@@ -71,9 +73,63 @@ Result<Scene> Scene::load_obj_unlit(const std::string& path) {
                                      {m.specular[0], m.specular[1], m.specular[2]},
                                      {m.emission[0], m.emission[1], m.emission[2]}, m.shininess, m.ior, m.illum));
   }
+  // Textures, each file read once per use (a colour map keeps RGB, an alpha map one channel). One that cannot be
+  // read leaves its material flat, with a warning.
+  const std::string where = "scene file '" + path + "'";
+  std::map<std::pair<std::string, bool>, int32_t> loaded;
+  auto texture = [&](const std::string& name, bool alpha, const std::string& material) -> int32_t {
+    if (name.empty()) return -1;
+    auto [it, fresh] = loaded.emplace(std::pair{name, alpha}, -1);
+    if (!fresh) return it->second;
+    const std::string file = (std::filesystem::path(config.mtl_search_path) / name).string();
+    auto texels = read_texels(file);
+    if (!texels) {
+      log_warn(where + ": material '" + material + "': " + (alpha ? "map_d" : "map_Kd") + " '" + name +
+               "' cannot be read (" + texels.error().message + "); the material stays " +
+               (alpha ? "uncut" : "flat (its Kd)"));
+      return -1;
+    }
+    Texture t;
+    t.path = name;
+    t.width = static_cast<uint32_t>(texels->width);
+    t.height = static_cast<uint32_t>(texels->height);
+    t.channels = alpha ? 1 : 3;
+    const size_t n = static_cast<size_t>(t.width) * t.height, from = static_cast<size_t>(texels->channels);
+    t.owned.resize(n * t.channels);
+    // Coverage is the alpha channel where it says something (varies), else the first channel: a grey image, as the
+    // MTL format means map_d (Lost Empire's alpha map is grey with a constant alpha).
+    size_t coverage = 0;
+    if (alpha && (from == 2 || from == 4))
+      for (size_t i = 0; i < n && coverage == 0; ++i)
+        if (texels->bytes[i * from + from - 1] != texels->bytes[from - 1]) coverage = from - 1;
+    for (size_t i = 0; i < n; ++i) {
+      const uint8_t* px = &texels->bytes[i * from];
+      if (alpha) {
+        t.owned[i] = px[coverage];
+        continue;
+      }
+      for (size_t c = 0; c < 3; ++c) {
+        uint8_t v = px[std::min(c, from == 2 ? 0 : from - 1)];
+        if (texels->linear) {  // stored sRGB-encoded, as 8-bit colour files are
+          const float l = static_cast<float>(v) / 255.0f;
+          const float e = l <= 0.0031308f ? 12.92f * l : 1.055f * std::pow(l, 1.0f / 2.4f) - 0.055f;
+          v = static_cast<uint8_t>(std::lround(std::clamp(e, 0.0f, 1.0f) * 255.0f));
+        }
+        t.owned[i * 3 + c] = v;
+      }
+    }
+    return it->second = static_cast<int32_t>(s.add_texture(std::move(t)));
+  };
+  for (size_t i = 0; i < materials.size(); ++i) {
+    Material& m = s.materials_[i];
+    if (m.type == Material::Type::diffuse || m.type == Material::Type::glossy)
+      m.kd_map = texture(materials[i].diffuse_texname, false, m.name);
+    m.alpha_map = texture(materials[i].alpha_texname, true, m.name);
+  }
   // Faces without a material get a neutral grey, as most renderers do.
   const auto fallback = s.add_material({"(default)", {0.5f, 0.5f, 0.5f}, {}});
   const size_t vertex_count = attrib.vertices.size() / 3;
+  const size_t normal_count = attrib.normals.size() / 3, uv_count = attrib.texcoords.size() / 2;
   for (const auto& shape : reader.GetShapes()) {
     const auto& mesh = shape.mesh;
     size_t index = 0;
@@ -83,22 +139,29 @@ Result<Scene> Scene::load_obj_unlit(const std::string& path) {
         index += corners;
         continue;
       }
-      Vec3 p[3];
-      bool valid = true;
+      Vec3 p[3], vn[3];
+      Vec2 vt[3];
+      bool valid = true, normals = true, uvs = true;
       for (size_t c = 0; c < 3; ++c) {
-        int vi = mesh.indices[index + c].vertex_index;
+        const auto& corner = mesh.indices[index + c];
+        const int vi = corner.vertex_index, ni = corner.normal_index, ti = corner.texcoord_index;
         if (vi < 0 || static_cast<size_t>(vi) >= vertex_count) {
           valid = false;
           break;
         }
         p[c] = {attrib.vertices[3 * vi], attrib.vertices[3 * vi + 1], attrib.vertices[3 * vi + 2]};
+        // A face uses vertex normals (or texture coordinates) only when all three corners have valid ones.
+        normals = normals && ni >= 0 && static_cast<size_t>(ni) < normal_count;
+        if (normals) vn[c] = {attrib.normals[3 * ni], attrib.normals[3 * ni + 1], attrib.normals[3 * ni + 2]};
+        uvs = uvs && ti >= 0 && static_cast<size_t>(ti) < uv_count;
+        if (uvs) vt[c] = {attrib.texcoords[2 * ti], attrib.texcoords[2 * ti + 1]};
       }
       index += 3;
       if (!valid) return make_error("scene file '" + path + "': a face refers to a vertex that does not exist");
       int mid = f < mesh.material_ids.size() ? mesh.material_ids[f] : -1;
       uint32_t material = (mid >= 0 && static_cast<size_t>(mid) < materials.size()) ? static_cast<uint32_t>(mid)
                                                                                       : fallback;
-      s.add_triangle(p[0], p[1], p[2], material);
+      s.add_triangle(p[0], p[1], p[2], material, {normals ? vn : nullptr, uvs ? vt : nullptr});
     }
   }
   return s;

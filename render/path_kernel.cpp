@@ -5,6 +5,7 @@
 #include "render/bsdf.hpp"
 #include "render/light_sampling.hpp"
 #include "render/sampler.hpp"
+#include "render/surface.hpp"
 
 namespace lf {
 
@@ -12,6 +13,8 @@ namespace {
 
 struct Path {
   Vec3 x, n, wo;
+  Vec3 ng;     // the face's normal on n's side (n is the shading normal)
+  RGB albedo;  // the diffuse reflectance here (a texture's, or the material's kd)
   uint32_t material;
   bool outside;
   RGB beta{1, 1, 1};  // throughput
@@ -40,8 +43,9 @@ void trace_paths(const SceneContext& ctx, const ShadingPoints& points, std::span
   paths.reserve(n * per);
   for (size_t i = 0; i < n; ++i)
     for (size_t s = 0; s < per; ++s)
-      paths.push_back(Path{points.position[i], points.normal[i], points.wo[i], points.material[i],
-                           points.outside(i, scene), {1, 1, 1}, {}, Rng(points.key[i], o.stream + (s << 32))});
+      paths.push_back(Path{points.position[i], points.normal[i], points.wo[i], points.face_normal(i, scene),
+                           points.albedo(i, scene), points.material[i], points.outside(i, scene), {1, 1, 1}, {},
+                           Rng(points.key[i], o.stream + (s << 32))});
 
   std::vector<Ray> rays;
   std::vector<uint8_t> blocked;
@@ -61,7 +65,7 @@ void trace_paths(const SceneContext& ctx, const ShadingPoints& points, std::span
       Path& path = paths[p];
       if (!path.alive) continue;
       const Material& m = scene.material(path.material);
-      const Bsdf bsdf(m);
+      const Bsdf bsdf(m, path.albedo);
       if (bsdf.is_delta()) continue;
       std::optional<LightSample> picked =
           o.light_tree ? sample_light_at(scene, path.x, path.n, path.rng) : sample_light(scene, path.rng);
@@ -73,7 +77,7 @@ void trace_paths(const SceneContext& ctx, const ShadingPoints& points, std::span
       const Vec3 wi = d / std::sqrt(dist2);
       const float cos_x = dot(path.n, wi);
       const float cos_y = ls.is_point ? 1.0f : -dot(ls.normal, wi);
-      if (cos_x <= 0 || cos_y <= 0) continue;
+      if (!above_both(wi, path.n, path.ng) || cos_y <= 0) continue;
       const RGB f = bsdf.eval(path.n, path.wo, wi);
       if (is_black(f)) continue;
       if (ls.is_point) {
@@ -85,7 +89,7 @@ void trace_paths(const SceneContext& ctx, const ShadingPoints& points, std::span
         const float w = light_only ? 1.0f : power_heuristic(light_pdf, bsdf.pdf(path.n, path.wo, wi));
         pending.push_back({p, path.beta * f * ls.radiance * (cos_x * w / light_pdf)});
       }
-      const Vec3 origin = path.x + path.n * eps;
+      const Vec3 origin = path.x + path.ng * eps;
       const Vec3 to_light = ls.point - origin;
       const float span = length(to_light);
       rays.push_back(Ray{origin, to_light / span, 0.0f, ls.is_point ? span : span - eps});
@@ -108,15 +112,16 @@ void trace_paths(const SceneContext& ctx, const ShadingPoints& points, std::span
         continue;
       }
       const float u0 = path.rng.uniform(), u1 = path.rng.uniform(), u2 = path.rng.uniform();
-      auto s = Bsdf(m).sample(path.n, path.wo, path.outside, u0, u1, u2);
-      if (!s || is_black(s->weight)) {
+      auto s = Bsdf(m, path.albedo).sample(path.n, path.wo, path.outside, u0, u1, u2);
+      // Only glass may send a path through the face; a reflection the shading normal allows below it ends here.
+      if (!s || is_black(s->weight) || (m.type != Material::Type::glass && dot(s->wi, path.ng) <= 0)) {
         path.alive = false;
         continue;
       }
       path.beta = path.beta * s->weight;
       path.bsdf_pdf = s->pdf;
       path.delta = s->delta;
-      const Vec3 side = dot(s->wi, path.n) > 0 ? path.n : -path.n;  // refraction leaves through the back
+      const Vec3 side = dot(s->wi, path.ng) > 0 ? path.ng : -path.ng;  // refraction leaves through the back
       rays.push_back(Ray{path.x + side * eps, s->wi});
       continuing.push_back(p);
       samples.push_back(*s);
@@ -157,9 +162,12 @@ void trace_paths(const SceneContext& ctx, const ShadingPoints& points, std::span
         path.beta *= 1.0f / q;
       }
       path.x = rays[r].origin + rays[r].direction * hits[r].t;
-      path.n = front ? ng : -ng;
+      const SurfacePoint sp = surface_at(scene, tri, path.x, wo);
+      path.n = sp.ns;
+      path.ng = sp.ng;
       path.wo = wo;
       path.material = scene.material_of(tri);
+      path.albedo = hit_material.kd_map < 0 ? hit_material.kd : scene.albedo(tri, scene.barycentrics(tri, path.x));
       path.outside = front;
     }
   }

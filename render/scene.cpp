@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <filesystem>
+#include <limits>
 #include <map>
 
 namespace lf {
@@ -23,17 +24,39 @@ uint32_t Scene::add_material(Material m) {
   return static_cast<uint32_t>(materials_.size() - 1);
 }
 
-void Scene::add_triangle(Vec3 a, Vec3 b, Vec3 c, uint32_t material) {
+void Scene::add_triangle(Vec3 a, Vec3 b, Vec3 c, uint32_t material, CornerAttributes extra) {
   Vec3 n = cross(b - a, c - a);
   float len = length(n);
   if (!(len > 0)) return;  // degenerate: nothing to hit, nothing to emit
+  n = n / len;
+  // Corner attributes are all-or-none per scene: the first triangle that has them gives the earlier ones theirs
+  // (the face normal; no uv, a NaN, which leaves the face untextured), and later triangles without them the same.
+  const size_t before = triangles_.size();
+  if (extra.normals || !corner_normals_.empty()) {
+    if (corner_normals_.empty()) {
+      corner_normals_.reserve(3 * (before + 1));
+      for (size_t t = 0; t < before; ++t) corner_normals_.insert(corner_normals_.end(), 3, normals_[t]);
+    }
+    for (int k = 0; k < 3; ++k) {
+      Vec3 vn = extra.normals ? extra.normals[k] : n;
+      const float l = length(vn);
+      // A zero or non-finite normal says nothing: use the face's.
+      vn = (l > 0 && std::isfinite(l)) ? vn / l : n;
+      corner_normals_.push_back(vn);
+    }
+  }
+  if (extra.uvs || !corner_uvs_.empty()) {
+    constexpr Vec2 kNoUv{std::numeric_limits<float>::quiet_NaN(), std::numeric_limits<float>::quiet_NaN()};
+    if (corner_uvs_.empty()) corner_uvs_.assign(3 * before, kNoUv);
+    for (int k = 0; k < 3; ++k) corner_uvs_.push_back(extra.uvs ? extra.uvs[k] : kNoUv);
+  }
   auto base = static_cast<uint32_t>(vertices_.size());
   vertices_.push_back(a);
   vertices_.push_back(b);
   vertices_.push_back(c);
   triangles_.push_back({base, base + 1, base + 2});
   material_of_.push_back(material);
-  normals_.push_back(n / len);
+  normals_.push_back(n);
   areas_.push_back(0.5f * len);
   view_owned_arrays();
 }
@@ -45,6 +68,20 @@ void Scene::view_owned_arrays() {
   normal_view_ = normals_;
   area_view_ = areas_;
   light_pdf_view_ = triangle_light_pdf_;
+  corner_normal_view_ = corner_normals_;
+  corner_uv_view_ = corner_uvs_;
+}
+
+void Scene::restore_corners(std::vector<Vec3> normals, std::vector<Vec2> uvs) {
+  corner_normals_ = std::move(normals);
+  corner_uvs_ = std::move(uvs);
+  view_owned_arrays();
+}
+
+uint32_t Scene::add_texture(Texture t) {
+  t.texels = t.owned;
+  textures_.push_back(std::move(t));
+  return static_cast<uint32_t>(textures_.size() - 1);
 }
 
 void Scene::add_sphere(Vec3 center, float radius, int subdivisions, uint32_t material) {
@@ -94,11 +131,12 @@ Status Scene::finalize(const std::string& what) {
   emitter_pdf_.clear();
   double total = 0;
   std::vector<double> power;  // emitted flux: pi * area * Le for triangles, 4 pi I for points
+  view_owned_arrays();
   for (uint32_t t = 0; t < triangles_.size(); ++t) {
     const Material& m = materials_[material_of_[t]];
     if (!m.emissive()) continue;
     emitters_.push_back(t);
-    power.push_back(static_cast<double>(areas_[t]) * average(m.ke) * kPi);
+    power.push_back(emitted_power(t));
     total += power.back();
   }
   for (const auto& p : point_lights_) {

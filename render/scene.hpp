@@ -24,6 +24,10 @@ struct Material {
   RGB ks;         // glossy: Phong lobe reflectance; mirror: reflectance
   float ns = 0;   // glossy: Phong exponent
   float ior = 1.5f;  // glass: index of refraction
+  // Textures (indices into Scene::textures(), -1 for none). kd_map replaces kd where the triangle has texture
+  // coordinates; alpha_map cuts the surface out where its coverage is below one half (docs/decisions.md).
+  int32_t kd_map = -1;
+  int32_t alpha_map = -1;
   bool emissive() const { return !is_black(ke); }
   bool specular() const { return type == Type::mirror || type == Type::glass; }
 };
@@ -39,6 +43,23 @@ struct Bounds {
 };
 // The box around `points` (not empty).
 Bounds bounds_of(std::span<const Vec3> points);
+
+// A texture as the scene keeps it: 8-bit texels, row-major, top row first (as image files store them). A map_Kd
+// keeps 3 channels (sRGB-encoded colour), a map_d 1 (linear coverage). Sampled bilinearly, repeating.
+struct Texture {
+  std::string path;  // as the MTL named it
+  uint32_t width = 0, height = 0, channels = 0;
+  std::span<const uint8_t> texels;  // width * height * channels
+  std::vector<uint8_t> owned;       // the texels, unless they live in a mapped scene image
+  // Channel c at texture coordinates uv; colour channels decoded from sRGB to linear.
+  float sample(Vec2 uv, uint32_t c) const;
+};
+
+// What a triangle may carry beyond its corners: OBJ vertex normals and texture coordinates, per corner.
+struct CornerAttributes {
+  const Vec3* normals = nullptr;  // 3, or none
+  const Vec2* uvs = nullptr;      // 3, or none
+};
 
 struct PointLight {
   Vec3 position;
@@ -67,7 +88,11 @@ class Scene {
   uint32_t add_material(Material m);
   // Adds a planar quad a-b-c-d as two triangles; its front (emitting) side is the one (b-a)x(c-a) points to.
   void add_quad(Vec3 a, Vec3 b, Vec3 c, Vec3 d, uint32_t material);
-  void add_triangle(Vec3 a, Vec3 b, Vec3 c, uint32_t material);
+  void add_triangle(Vec3 a, Vec3 b, Vec3 c, uint32_t material, CornerAttributes extra = {});
+  uint32_t add_texture(Texture t);
+  // For the binary forms: every triangle's corner normals and texture coordinates (3 each, or none) exactly as
+  // stored, after the triangles.
+  void restore_corners(std::vector<Vec3> normals, std::vector<Vec2> uvs);
   // A sphere as a subdivided icosahedron (20 * 4^subdivisions triangles), wound outwards.
   void add_sphere(Vec3 center, float radius, int subdivisions, uint32_t material);
   void add_point_light(Vec3 position, RGB intensity) { point_lights_.push_back({position, intensity}); }
@@ -88,6 +113,27 @@ class Scene {
   Vec3 vertex(uint32_t triangle, int corner) const { return vertex_view_[triangle_view_[triangle][corner]]; }
   Vec3 normal(uint32_t triangle) const { return normal_view_[triangle]; }  // unit, from the winding
   float area(uint32_t triangle) const { return area_view_[triangle]; }
+  // Surface detail at a point of a triangle, given by its barycentrics b (weights of corners 0, 1, 2; see
+  // barycentrics()). Without vertex normals the shading normal is the geometric one; without a texture (or
+  // texture coordinates) the albedo is the material's kd.
+  Vec3 barycentrics(uint32_t triangle, Vec3 p) const;
+  Vec3 shading_normal(uint32_t triangle, Vec3 b) const;  // unit, on the winding's side
+  Vec2 uv(uint32_t triangle, Vec3 b) const;
+  RGB albedo(uint32_t triangle, Vec3 b) const;
+  // Whether the surface is there at barycentrics b (false where an alpha map cuts it out).
+  bool opaque(uint32_t triangle, Vec3 b) const;
+  // Whether any material is cut out by an alpha map (the tracer then filters its hits).
+  bool has_cutouts() const;
+  // The share of a triangle's area that is not cut out (1 without an alpha map), from a fixed grid of points.
+  float opaque_fraction(uint32_t triangle) const;
+  // Emitted flux of emitter triangle t: pi * area * mean(Le) * opaque_fraction.
+  float emitted_power(uint32_t triangle) const;
+  bool has_shading_normals() const { return !corner_normal_view_.empty(); }
+  Vec3 corner_normal(uint32_t triangle, int corner) const { return corner_normal_view_[3 * size_t{triangle} + corner]; }
+  Vec2 corner_uv(uint32_t triangle, int corner) const { return corner_uv_view_[3 * size_t{triangle} + corner]; }
+  bool has_uvs() const { return !corner_uv_view_.empty(); }
+  const std::vector<Texture>& textures() const { return textures_; }
+
   // True when the per-triangle arrays live in a memory-mapped scene image that other processes on this host
   // share (render/scene_image.hpp); the vertex array is then padded for Embree's 16-byte loads.
   bool shares_storage() const { return storage_ != nullptr; }
@@ -131,6 +177,9 @@ class Scene {
   std::vector<uint32_t> material_of_;
   std::vector<Vec3> normals_;
   std::vector<float> areas_;
+  std::vector<Vec3> corner_normals_;  // 3 per triangle, or none
+  std::vector<Vec2> corner_uvs_;      // 3 per triangle, or none
+  std::vector<Texture> textures_;
   std::vector<Material> materials_;
   std::vector<uint32_t> emitters_;
   std::vector<PointLight> point_lights_;
@@ -143,6 +192,8 @@ class Scene {
   std::span<const Vec3> normal_view_;
   std::span<const float> area_view_;
   std::span<const float> light_pdf_view_;
+  std::span<const Vec3> corner_normal_view_;
+  std::span<const Vec2> corner_uv_view_;
   std::shared_ptr<const LightTree> light_tree_;
   std::shared_ptr<const void> storage_;  // the mapping the views point into, when mapped
   std::vector<std::string> ambient_only_;  // OBJ materials with Ka but no Ke: named if the scene ends up unlit

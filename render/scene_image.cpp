@@ -17,13 +17,13 @@ namespace lf {
 
 namespace {
 
-constexpr char kMagic[8] = {'L', 'F', 'I', 'M', 'A', 'G', 'E', '1'};
+constexpr char kMagic[8] = {'L', 'F', 'I', 'M', 'A', 'G', 'E', '2'};
 constexpr uint32_t kByteOrderMark = 0x01020304;
-constexpr uint32_t kVersion = 1;
+constexpr uint32_t kVersion = 2;
 constexpr size_t kAlign = 64;
 constexpr size_t kVertexSlack = 16;
 
-enum Array { kVertices, kTriangles, kMaterialIds, kNormals, kAreas, kLightPdf, kSmall, kArrays };
+enum Array { kVertices, kTriangles, kMaterialIds, kNormals, kAreas, kLightPdf, kCornerNormals, kCornerUvs, kTexels, kSmall, kArrays };
 
 struct Header {
   char magic[8];
@@ -35,6 +35,10 @@ struct Header {
   uint32_t materials;
   uint32_t point_lights;
   uint32_t emitters;
+  uint32_t textures;
+  uint32_t corner_normals;  // 1 when every triangle has 3 vertex normals, else 0
+  uint32_t corner_uvs;      // the same for texture coordinates
+  uint64_t texel_bytes;
   float lo[3], hi[3];
   float epsilon;
   uint64_t offset[kArrays];
@@ -87,6 +91,9 @@ std::string SceneImage::encode(const Scene& scene, const std::string& hash) {
   h.materials = static_cast<uint32_t>(scene.materials().size());
   h.point_lights = static_cast<uint32_t>(scene.point_lights().size());
   h.emitters = static_cast<uint32_t>(scene.emitters().size());
+  h.textures = static_cast<uint32_t>(scene.textures().size());
+  h.corner_normals = scene.has_shading_normals() ? 1 : 0;
+  h.corner_uvs = scene.has_uvs() ? 1 : 0;
   const Bounds& b = scene.bounds();
   const float lo[3] = {b.lo.x, b.lo.y, b.lo.z}, hi[3] = {b.hi.x, b.hi.y, b.hi.z};
   std::memcpy(h.lo, lo, sizeof lo);
@@ -106,7 +113,28 @@ std::string SceneImage::encode(const Scene& scene, const std::string& hash) {
   append_array(out, scene.area_view_);
   h.offset[kLightPdf] = out.size();
   append_array(out, scene.light_pdf_view_);
+  h.offset[kCornerNormals] = out.size();
+  append_array(out, scene.corner_normal_view_);
+  h.offset[kCornerUvs] = out.size();
+  append_array(out, scene.corner_uv_view_);
+  h.offset[kTexels] = out.size();
+  std::vector<uint64_t> texel_offsets;
+  for (const Texture& t : scene.textures()) {
+    texel_offsets.push_back(out.size() - h.offset[kTexels]);
+    out.append(reinterpret_cast<const char*>(t.texels.data()), t.texels.size());
+  }
+  h.texel_bytes = out.size() - h.offset[kTexels];
+  out.resize(aligned(out.size()), '\0');
   h.offset[kSmall] = out.size();
+  for (size_t i = 0; i < scene.textures().size(); ++i) {
+    const Texture& t = scene.textures()[i];
+    bytes::put(out, static_cast<uint32_t>(t.path.size()));
+    out += t.path;
+    bytes::put(out, t.width);
+    bytes::put(out, t.height);
+    bytes::put(out, t.channels);
+    bytes::put(out, texel_offsets[i]);
+  }
   for (const Material& m : scene.materials()) bytes::put_material(out, m);
   for (const PointLight& p : scene.point_lights()) {
     bytes::put_rgb(out, p.position);
@@ -143,8 +171,13 @@ Result<Scene> SceneImage::map(const std::string& path, const std::string& hash, 
                                      h.triangles * sizeof(Vec3),
                                      h.triangles * sizeof(float),
                                      h.triangles * sizeof(float),
+                                     h.corner_normals * 3 * h.triangles * sizeof(Vec3),
+                                     h.corner_uvs * 3 * h.triangles * sizeof(Vec2),
+                                     h.texel_bytes,
                                      h.small_size};
-  if (h.triangles == 0 || h.triangles > size || h.vertices > size) return bad("impossible counts");
+  if (h.triangles == 0 || h.triangles > size || h.vertices > size || h.corner_normals > 1 || h.corner_uvs > 1 ||
+      h.texel_bytes > size)
+    return bad("impossible counts");
   uint64_t end = kHeaderSize;
   for (int a = 0; a < kArrays; ++a) {
     if (h.offset[a] % kAlign != 0 || h.offset[a] < end || h.offset[a] > size || lengths[a] > size - h.offset[a])
@@ -159,12 +192,31 @@ Result<Scene> SceneImage::map(const std::string& path, const std::string& hash, 
   s.normal_view_ = {reinterpret_cast<const Vec3*>(base + h.offset[kNormals]), h.triangles};
   s.area_view_ = {reinterpret_cast<const float*>(base + h.offset[kAreas]), h.triangles};
   s.light_pdf_view_ = {reinterpret_cast<const float*>(base + h.offset[kLightPdf]), h.triangles};
+  s.corner_normal_view_ = {reinterpret_cast<const Vec3*>(base + h.offset[kCornerNormals]), h.corner_normals * 3 * h.triangles};
+  s.corner_uv_view_ = {reinterpret_cast<const Vec2*>(base + h.offset[kCornerUvs]), h.corner_uvs * 3 * h.triangles};
 
   bytes::Reader r(std::string_view(base + h.offset[kSmall], h.small_size));
+  if (!r.room(h.textures, 24)) return bad("texture count");
+  for (uint32_t i = 0; i < h.textures; ++i) {
+    Texture t;
+    uint32_t length = 0;
+    uint64_t at = 0;
+    if (!r.u32(length) || !r.str(t.path, length) || !r.u32(t.width) || !r.u32(t.height) || !r.u32(t.channels) ||
+        !r.u64(at))
+      return bad("textures");
+    const uint64_t bytes = uint64_t{t.width} * t.height * t.channels;
+    if ((t.channels != 1 && t.channels != 3) || t.width > 65536 || t.height > 65536 || at > h.texel_bytes ||
+        bytes > h.texel_bytes - at)
+      return bad("a texture out of place");
+    t.texels = {reinterpret_cast<const uint8_t*>(base + h.offset[kTexels] + at), bytes};
+    s.textures_.push_back(std::move(t));
+  }
   if (!r.room(h.materials, 50)) return bad("material count");
   for (uint32_t i = 0; i < h.materials; ++i) {
     Material m;
-    if (!bytes::read_material(r, m)) return bad("materials");
+    if (!bytes::read_material(r, m) || m.kd_map >= static_cast<int32_t>(h.textures) ||
+        m.alpha_map >= static_cast<int32_t>(h.textures))
+      return bad("materials");
     s.materials_.push_back(std::move(m));
   }
   if (!r.room(h.point_lights, 24)) return bad("point light count");

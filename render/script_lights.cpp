@@ -74,6 +74,7 @@ Status Scene::apply_material_overrides(const Value::Array& overrides) {
     if (const Value* v = o.find("kd")) {
       if (!vec3_of(v, c)) return make_error(which + ": kd must be {r, g, b}");
       m->kd = c;
+      m->kd_map = -1;  // a flat colour from the script replaces the texture too
     }
     if (const Value* v = o.find("ks")) {
       if (!vec3_of(v, c)) return make_error(which + ": ks must be {r, g, b}");

@@ -3,6 +3,7 @@
 #include <algorithm>
 
 #include "render/sampler.hpp"
+#include "render/surface.hpp"
 
 namespace lf {
 
@@ -45,12 +46,11 @@ void trace_tile(const Scene& scene, const RayTracer& tracer, const Camera& camer
     if (!hits[i].valid()) continue;
     const uint32_t tri = hits[i].triangle;
     const Vec3 wo = -rays[i].direction;
-    const Vec3 ng = scene.normal(tri);
-    const bool front = dot(ng, wo) > 0;
-    const Material& m = scene.material(scene.material_of(tri));
-    if (front && m.emissive()) work.emitted[i] = m.ke;
     const Vec3 p = rays[i].origin + rays[i].direction * hits[i].t;
-    work.points.push_back(p, front ? ng : -ng, wo, scene.material_of(tri), keys[i], tri);
+    const SurfacePoint sp = surface_at(scene, tri, p, wo);
+    const Material& m = scene.material(scene.material_of(tri));
+    if (sp.front && m.emissive()) work.emitted[i] = m.ke;
+    work.points.push_back(p, sp.ns, wo, scene.material_of(tri), keys[i], tri);
     work.sample_of_point.push_back(static_cast<uint32_t>(i));
   }
 }

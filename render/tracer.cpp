@@ -18,6 +18,19 @@ struct RayTracer::Impl {
   }
 };
 
+namespace {
+
+void skip_cut_out(const RTCFilterFunctionNArguments* args) {
+  const auto* scene = static_cast<const Scene*>(args->geometryUserPtr);
+  for (unsigned i = 0; i < args->N; ++i) {
+    if (args->valid[i] != -1) continue;
+    const float u = RTCHitN_u(args->hit, args->N, i), v = RTCHitN_v(args->hit, args->N, i);
+    if (!scene->opaque(RTCHitN_primID(args->hit, args->N, i), {1 - u - v, u, v})) args->valid[i] = 0;
+  }
+}
+
+}  // namespace
+
 RayTracer::RayTracer(const Scene& scene) : impl_(std::make_unique<Impl>()), scene_(scene) {
   // One thread per actor: parallelism comes from processes (and Embree's own pool would fight them for cores).
   impl_->device = rtcNewDevice("threads=1");
@@ -42,6 +55,12 @@ RayTracer::RayTracer(const Scene& scene) : impl_(std::make_unique<Impl>()), scen
                                                               3 * sizeof(unsigned), scene.triangles().size()));
     for (size_t i = 0; i < scene.triangles().size(); ++i)
       for (int c = 0; c < 3; ++c) ib[3 * i + c] = scene.triangles()[i][c];
+  }
+  if (scene.has_cutouts()) {
+    // Alpha cut-outs: a hit where the alpha map says the surface is not there is no hit, for every kind of ray.
+    rtcSetGeometryUserData(geom, const_cast<Scene*>(&scene));
+    rtcSetGeometryIntersectFilterFunction(geom, &skip_cut_out);
+    rtcSetGeometryOccludedFilterFunction(geom, &skip_cut_out);
   }
   rtcCommitGeometry(geom);
   rtcAttachGeometry(impl_->scene, geom);

@@ -15,6 +15,7 @@
 #include <algorithm>
 
 #include "render/bsdf.hpp"
+#include "render/surface.hpp"
 #include "render/irradiance_cache.hpp"
 #include "render/lightop_registry.hpp"
 #include "render/sampler.hpp"
@@ -106,10 +107,11 @@ class Irradiance final : public LightOp {
       if (bound >= 0) {
         ++served_[bound];
         records_used_ += records;
-        radiance[i] = m.kd * e * (1.0f / kPi);
+        radiance[i] = points.albedo(i, scene) * e * (1.0f / kPi);
       } else {
         ++own_values_;
-        misses.push_back(Candidate{points.position[i], points.normal[i], splitmix64(points.key[i] ^ 0x1e7)});
+        misses.push_back(Candidate{points.position[i], points.normal[i], points.face_normal(i, scene),
+                                   splitmix64(points.key[i] ^ 0x1e7)});
         miss_owner.push_back(i);
       }
     }
@@ -118,7 +120,7 @@ class Irradiance final : public LightOp {
     co_await compute(misses, inputs, own);  // used once, never inserted
     for (size_t j = 0; j < misses.size(); ++j) {
       const size_t i = miss_owner[j];
-      radiance[i] = scene.material(points.material[i]).kd * own[j].irradiance * (1.0f / kPi);
+      radiance[i] = points.albedo(i, scene) * own[j].irradiance * (1.0f / kPi);
     }
   }
 
@@ -126,7 +128,8 @@ class Irradiance final : public LightOp {
   uint64_t lookups_ = 0, own_values_ = 0, records_used_ = 0;
   uint64_t served_[3] = {0, 0, 0};
   struct Candidate {
-    Vec3 x, n;
+    Vec3 x, n;  // n: the shading normal, which the record's hemisphere is around
+    Vec3 ng;    // the face's normal on n's side
     uint64_t key;
   };
 
@@ -152,8 +155,9 @@ class Irradiance final : public LightOp {
           std::min(tris.size() - 1, static_cast<size_t>(std::lower_bound(cdf.begin(), cdf.end(), target) - cdf.begin()));
       const uint32_t t = tris[i];
       const float su = std::sqrt(rng.uniform()), v = rng.uniform();
-      const Vec3 x = scene.vertex(t, 0) * (1 - su) + scene.vertex(t, 1) * (su * (1 - v)) + scene.vertex(t, 2) * (su * v);
-      out.push_back(Candidate{x, scene.normal(t), splitmix64(c ^ 0x1c)});
+      const Vec3 b{1 - su, su * (1 - v), su * v};
+      const Vec3 x = scene.vertex(t, 0) * b.x + scene.vertex(t, 1) * b.y + scene.vertex(t, 2) * b.z;
+      out.push_back(Candidate{x, scene.shading_normal(t, b), scene.normal(t), splitmix64(c ^ 0x1c)});
     }
     return out;
   }
@@ -188,13 +192,14 @@ class Irradiance final : public LightOp {
       for (size_t i = 0; i < rays.size(); ++i) {
         if (!hits[i].valid()) continue;
         const uint32_t t = hits[i].triangle;
-        const Vec3 wo = -rays[i].direction, ng = scene.normal(t);
-        const bool front = dot(ng, wo) > 0;
-        const Vec3 n = front ? ng : -ng;
+        const Vec3 wo = -rays[i].direction;
         const Vec3 p = rays[i].origin + rays[i].direction * hits[i].t;
+        const SurfacePoint sp = surface_at(scene, t, p, wo);
+        const bool front = sp.front;
+        const Vec3 n = sp.ng;
         const Material& m = scene.material(scene.material_of(t));
         if (!m.specular()) {
-          if (!is_black(m.kd)) found.emplace_back(ids[i], Candidate{p, n, splitmix64(ids[i] ^ 0xca3e5a)});
+          if (!is_black(m.kd)) found.emplace_back(ids[i], Candidate{p, sp.ns, sp.ng, splitmix64(ids[i] ^ 0xca3e5a)});
           continue;
         }
         Vec3 dir = reflect(wo, n);
@@ -229,7 +234,7 @@ class Irradiance final : public LightOp {
         for (int k = 0; k < n_; ++k) {
           Rng rng(c.key, streams::irradiance ^ (seed_ << 8) ^ (static_cast<uint64_t>(j * n_ + k) << 20));
           const float a = rng.uniform(), b = rng.uniform();
-          rays.push_back(Ray{c.x + c.n * scene.epsilon(), stratum_direction(j, k, m_, n_, a, b, u, v, c.n)});
+          rays.push_back(Ray{c.x + c.ng * scene.epsilon(), stratum_direction(j, k, m_, n_, a, b, u, v, c.n)});
         }
     }
     std::vector<Hit> hits(rays.size());
@@ -237,13 +242,15 @@ class Irradiance final : public LightOp {
     ShadingPoints secondary;
     std::vector<int> slot(rays.size(), -1);
     for (size_t r = 0; r < rays.size(); ++r) {
+      // A direction of the shading hemisphere below the face sees the surface's inside: no light from there.
+      if (dot(rays[r].direction, candidates[r / per].ng) <= 0) hits[r] = Hit{};
       if (!hits[r].valid()) continue;
       const uint32_t tri = hits[r].triangle;
       const Vec3 wo = -rays[r].direction;
-      const Vec3 ng = scene.normal(tri);
+      const Vec3 x = rays[r].origin + rays[r].direction * hits[r].t;
       slot[r] = static_cast<int>(secondary.size());
-      secondary.push_back(rays[r].origin + rays[r].direction * hits[r].t, dot(ng, wo) > 0 ? ng : -ng, wo,
-                          scene.material_of(tri), splitmix64(candidates[r / per].key ^ (r % per + 1)), tri);
+      secondary.push_back(x, surface_at(scene, tri, x, wo).ns, wo, scene.material_of(tri),
+                          splitmix64(candidates[r / per].key ^ (r % per + 1)), tri);
     }
     std::vector<RGB> arriving;
     if (secondary.size() > 0) co_await inputs.shade(0, secondary, arriving);

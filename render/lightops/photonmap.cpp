@@ -17,6 +17,7 @@
 #include <cstring>
 
 #include "render/bsdf.hpp"
+#include "render/surface.hpp"
 #include "render/light_sampling.hpp"
 #include "render/lightop_registry.hpp"
 #include "render/sampler.hpp"
@@ -138,11 +139,11 @@ class PhotonMap final : public LightOp {
         const IrradiancePoint& e = irradiance_.points[nearest];
         if (dot(e.normal, points.normal[i]) > 0.9f) {
           ++served_precomputed_;
-          radiance[i] = m.kd * e.irradiance * (1.0f / kPi);
+          radiance[i] = points.albedo(i, scene) * e.irradiance * (1.0f / kPi);
           continue;
         }
       }
-      const Bsdf bsdf(m);
+      const Bsdf bsdf(m, points.albedo(i, scene));
       radiance[i] = estimate(points.position[i], points.normal[i],
                              [&](Vec3 wi) { return bsdf.eval(points.normal[i], points.wo[i], wi); });
     }
@@ -216,11 +217,7 @@ class PhotonMap final : public LightOp {
 
   std::vector<Photon> shoot(const Scene& scene, const RayTracer& tracer, uint64_t begin, uint64_t end,
                             const SceneContext& ctx) const {
-    // Total emitted flux: pi * area * Le summed over emitters; every photon carries 1 / photons of it.
-    RGB total{};
-    for (uint32_t t : scene.emitters()) total += scene.material(scene.material_of(t)).ke * (kPi * scene.area(t));
-    for (const auto& p : scene.point_lights()) total += p.intensity * (4.0f * kPi);
-    const float share = average(total) / static_cast<float>(photons_);
+    const float count = static_cast<float>(photons_);
     const float eps = scene.epsilon();
     std::vector<Photon> stored;
     struct Flight {
@@ -237,6 +234,7 @@ class PhotonMap final : public LightOp {
         Rng rng(splitmix64(j), streams::photons ^ (seed_ << 8));
         const LightSample ls = sample_light(scene, rng);
         const float u = rng.uniform(), v = rng.uniform();
+        if (is_black(ls.radiance)) continue;  // a cut-out part of an emitter
         Vec3 dir;
         if (ls.is_point) {  // uniform over the sphere
           const float z = 1.0f - 2.0f * u, r = std::sqrt(std::max(0.0f, 1.0f - z * z)), phi = 2.0f * kPi * v;
@@ -244,9 +242,10 @@ class PhotonMap final : public LightOp {
         } else {
           dir = cosine_hemisphere(ls.normal, u, v);
         }
-        // Emitters picked by power and cosine directions give every photon the same share of the total flux,
-        // coloured like its emitter.
-        const RGB flux = ls.radiance * (share / average(ls.radiance));
+        // Flux over the density of the photon's origin and direction: pi Le / p(point) on an area light (cosine
+        // directions), 4 pi I / P(light) for a point light. Lights picked by power make it the same share of the
+        // total for every photon.
+        const RGB flux = ls.radiance * ((ls.is_point ? 4.0f * kPi : kPi) / (ls.pdf_area * count));
         flights.push_back(Flight{Ray{ls.point + ls.normal * eps, dir}, flux, rng});  // normal is 0 for points
       }
       std::vector<Ray> rays;
@@ -270,8 +269,9 @@ class PhotonMap final : public LightOp {
             if (f.specular_bounces > 0) stored.push_back(Photon{x, wo, f.flux, front ? ng : -ng});
             continue;  // a caustic map keeps only L S+ D paths and stops at the first diffuse surface
           }
-          const Vec3 n = front ? ng : -ng;
-          auto s = Bsdf(m).sample(n, wo, front, f.rng.uniform(), 0.5f, 0.5f);
+          const Vec3 n = front ? ng : -ng;  // offsets; the smooth normal ns reflects and refracts
+          const Vec3 ns = surface_at(scene, tri, x, wo).ns;
+          auto s = Bsdf(m).sample(ns, wo, front, f.rng.uniform(), 0.5f, 0.5f);
           if (!s) continue;
           f.flux = f.flux * s->weight;
           const Vec3 side = dot(s->wi, n) > 0 ? n : -n;

@@ -5,6 +5,7 @@
 // input returns reflected light only). Points on non-specular surfaces get nothing: that is the other ops' job.
 // One input.
 #include "render/bsdf.hpp"
+#include "render/surface.hpp"
 #include "render/lightop_registry.hpp"
 #include "render/sampler.hpp"
 
@@ -29,6 +30,7 @@ class Specular final : public LightOp {
     struct Chain {
       size_t owner;
       Vec3 x, n, wo;
+      Vec3 ng;  // the face's normal on n's side (n is the shading normal)
       uint32_t material;
       bool outside;
       RGB weight{1, 1, 1};
@@ -41,7 +43,8 @@ class Specular final : public LightOp {
       radiance[i] = RGB{};
       if (!scene.material(points.material[i]).specular()) continue;
       for (int s = 0; s < samples_; ++s)
-        chains.push_back(Chain{i, points.position[i], points.normal[i], points.wo[i], points.material[i],
+        chains.push_back(Chain{i, points.position[i], points.normal[i], points.wo[i], points.face_normal(i, scene),
+                               points.material[i],
                                points.outside(i, scene), {1, 1, 1}, {}, -1,
                                Rng(points.key[i], streams::specular ^ (seed_ << 8) ^ (uint64_t(s) << 32))});
     }
@@ -59,7 +62,7 @@ class Specular final : public LightOp {
         auto s = Bsdf(scene.material(ch.material)).sample(ch.n, ch.wo, ch.outside, u0, 0.5f, 0.5f);
         if (!s) continue;
         ch.weight = ch.weight * s->weight;
-        const Vec3 side = dot(s->wi, ch.n) > 0 ? ch.n : -ch.n;
+        const Vec3 side = dot(s->wi, ch.ng) > 0 ? ch.ng : -ch.ng;
         rays.push_back(Ray{ch.x + side * eps, s->wi});
         moving.push_back(c);
       }
@@ -71,20 +74,20 @@ class Specular final : public LightOp {
         Chain& ch = chains[moving[r]];
         const uint32_t tri = hits[r].triangle;
         const Vec3 wo = -rays[r].direction;
-        const Vec3 ng = scene.normal(tri);
-        const bool front = dot(ng, wo) > 0;
+        const Vec3 x = rays[r].origin + rays[r].direction * hits[r].t;
+        const SurfacePoint sp = surface_at(scene, tri, x, wo);
+        const bool front = sp.front;
         const uint32_t m = scene.material_of(tri);
         const Material& hit = scene.material(m);
-        const Vec3 x = rays[r].origin + rays[r].direction * hits[r].t;
         if (hit.emissive() && front) ch.emitted += ch.weight * hit.ke;
         if (hit.specular()) {
-          ch = Chain{ch.owner, x, front ? ng : -ng, wo, m, front, ch.weight, ch.emitted, -1, ch.rng};
+          ch = Chain{ch.owner, x, sp.ns, wo, sp.ng, m, front, ch.weight, ch.emitted, -1, ch.rng};
           active.push_back(moving[r]);
           continue;
         }
         ch.landed = static_cast<int>(ends.size());
         const uint64_t key = splitmix64(points.key[ch.owner] ^ (0x5bec0000ull + static_cast<uint64_t>(moving[r])));
-        ends.push_back(x, front ? ng : -ng, wo, m, key, tri);
+        ends.push_back(x, sp.ns, wo, m, key, tri);
       }
     }
     std::vector<RGB> arriving;
