@@ -5,8 +5,9 @@
 // Records: M x N stratified cosine-weighted hemisphere samples ask the input for radiance at the secondary hits;
 // the record keeps E, the harmonic mean distance R and both gradients, and serves points where
 // |x - x_i| / R_i + sqrt(1 - n.n_i) < a, extrapolated with the gradients and weighted by 1 / that error.
-// Determinism (DESIGN §4): records are made only in setup, by a pre-pass over `prepass` points spread over the
-// scene's non-specular surfaces by area in a fixed order, in rounds: each round keeps the points the cache cannot
+// Determinism (DESIGN §4): records are made only in setup, by a pre-pass over candidate points in a fixed order —
+// where the camera looks, where a camera-placed cache's hemisphere rays land (the overture), or `prepass` points
+// spread over the scene's non-specular surfaces by area — in rounds: each round keeps the points the cache cannot
 // yet serve, replicas of a pool each compute a contiguous share of them, and the shares are merged in order
 // (all-gather), so every replica inserts the same records in the same order as a single op would. While
 // rendering, a point the cache cannot serve (even with the bound relaxed to 2a, then 4a) computes its own value
@@ -30,7 +31,8 @@ class Irradiance final : public LightOp {
         m_(static_cast<int>(p.get_int("theta", 8, 2, 256))),
         n_(static_cast<int>(p.get_int("phi", 24, 3, 1024))),
         prepass_(static_cast<uint32_t>(p.get_int("prepass", 20000, 0, 10000000))),
-        placement_(p.get_string("placement", "camera", {"camera", "area"}) == "camera" ? Placement::camera : Placement::area),
+        placement_(placement_of(p.get_string("placement", "camera", {"camera", "area", "overture"}))),
+        overture_rays_(static_cast<int>(p.get_int("overture_rays", 8, 1, 256))),
         stride_(static_cast<int>(p.get_int("stride", 8, 1, 64))),
         finest_(static_cast<int>(p.get_int("finest", 2, 1, 64))),
         min_spacing_(static_cast<float>(p.get_float("min_spacing", 0.002, 0, 1))),
@@ -46,7 +48,9 @@ class Irradiance final : public LightOp {
     SoloExchange solo;
     Exchange& exchange = ctx.exchange ? *ctx.exchange : solo;
 
-    const std::vector<Candidate> candidates = placement_ == Placement::camera ? camera_candidates(ctx) : area_candidates(scene);
+    const std::vector<Candidate> candidates = placement_ == Placement::camera     ? camera_candidates(ctx)
+                                              : placement_ == Placement::overture ? overture_candidates(ctx)
+                                                                                  : area_candidates(scene);
     const uint32_t round_size = 512;
     const uint64_t total_candidates = candidates.size();
     for (size_t first = 0; first < candidates.size(); first += round_size) {
@@ -169,7 +173,7 @@ class Irradiance final : public LightOp {
   // mirrors and glass (refraction, else reflection) for up to 4 bounces as the specular op's rays go, and the
   // point is on the side the ray came from. The same on every replica and layout.
   std::vector<Candidate> camera_candidates(const SceneContext& ctx) const {
-    if (!ctx.camera) throw LightOpError("irradiance: placement = \"camera\" needs the farm's camera (use \"area\")");
+    if (!ctx.camera) throw LightOpError("irradiance: placement = \"camera\" or \"overture\" needs the farm's camera (use \"area\")");
     const Scene& scene = *ctx.scene;
     std::vector<Ray> rays;
     for (int step = stride_, coarser = 0; step >= std::min(finest_, stride_); coarser = step, step /= 2) {
@@ -216,6 +220,44 @@ class Irradiance final : public LightOp {
     std::sort(found.begin(), found.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
     std::vector<Candidate> out;
     for (const auto& [id, c] : found) out.push_back(c);
+    return out;
+  }
+
+  // Ward's overture, for a cache that feeds another cache placed by the camera: where that cache's hemisphere rays
+  // land. From every camera candidate (in their coarse-to-fine order), `overture_rays` stratified cosine-weighted
+  // directions around its shading normal; their first diffuse hits, in that order, are the candidates. The same
+  // on every replica and layout.
+  std::vector<Candidate> overture_candidates(const SceneContext& ctx) const {
+    const Scene& scene = *ctx.scene;
+    const std::vector<Candidate> seen = camera_candidates(ctx);
+    const int per = overture_rays_;
+    const int rows = std::max(1, static_cast<int>(std::sqrt(static_cast<float>(per)) / 1.7f + 0.5f));
+    std::vector<Ray> rays;
+    rays.reserve(seen.size() * static_cast<size_t>(per));
+    for (const Candidate& c : seen) {
+      Vec3 u, v;
+      basis(c.n, u, v);
+      for (int q = 0; q < per; ++q) {
+        Rng rng(c.key, streams::irradiance ^ (seed_ << 8) ^ 0x0e7u ^ (static_cast<uint64_t>(q) << 24));
+        const float a = rng.uniform(), b = rng.uniform();
+        const int j = q % rows, k = q / rows, cols = (per + rows - 1) / rows;
+        Vec3 d = stratum_direction(j, k, rows, cols, a, b, u, v, c.n);
+        if (dot(d, c.ng) <= 0) d = d - c.ng * (2 * dot(d, c.ng));  // below the face: its mirror image above
+        rays.push_back(Ray{c.x + c.ng * scene.epsilon(), d});
+      }
+    }
+    std::vector<Hit> hits(rays.size());
+    if (!rays.empty()) ctx.tracer->intersect(rays, hits);
+    std::vector<Candidate> out;
+    for (size_t r = 0; r < rays.size(); ++r) {
+      if (!hits[r].valid()) continue;
+      const uint32_t t = hits[r].triangle;
+      const Material& m = scene.material(scene.material_of(t));
+      if (m.specular() || is_black(m.kd)) continue;
+      const Vec3 x = rays[r].origin + rays[r].direction * hits[r].t;
+      const SurfacePoint sp = surface_at(scene, t, x, -rays[r].direction);
+      out.push_back(Candidate{x, sp.ns, sp.ng, splitmix64(seen[r / static_cast<size_t>(per)].key ^ (0x0e70000ull + r))});
+    }
     return out;
   }
 
@@ -275,7 +317,12 @@ class Irradiance final : public LightOp {
   float a_;
   int m_, n_;
   uint32_t prepass_;
-  enum class Placement { camera, area } placement_;
+  enum class Placement { camera, area, overture };
+  static Placement placement_of(const std::string& name) {
+    return name == "camera" ? Placement::camera : name == "area" ? Placement::area : Placement::overture;
+  }
+  Placement placement_;
+  int overture_rays_;
   int stride_, finest_;
   float min_spacing_, max_spacing_;
   uint64_t seed_;
