@@ -164,6 +164,14 @@ Result<Scene> Scene::load_obj_unlit(const std::string& path) {
       s.add_triangle(p[0], p[1], p[2], material, {normals ? vn : nullptr, uvs ? vt : nullptr});
     }
   }
+  // Vertex normals that only repeat the faces' (Lost Empire's 18 axis normals) would cost 36 bytes a triangle in
+  // every shipped scene and a lookup at every point for nothing: a scene whose faces are all flat has none.
+  if (s.has_shading_normals()) {
+    bool flat = true;
+    for (uint32_t t = 0; t < s.triangle_count() && flat; ++t)
+      for (int c = 0; c < 3 && flat; ++c) flat = dot(s.corner_normal(t, c), s.normal(t)) > 1 - 1e-6f;
+    if (flat) s.restore_corners({}, std::move(s.corner_uvs_));
+  }
   return s;
 }
 

@@ -319,6 +319,20 @@ TEST_F(SurfaceFiles, SurfaceDetailTravelsInTheShippedSceneAndItsImage) {
   EXPECT_NE(s->albedo(static_cast<uint32_t>(s->triangle_count() - 1), {0.3f, 0.3f, 0.4f}), (RGB{0.5f, 0.5f, 0.5f}));
 }
 
+// Vertex normals that only repeat the faces' are dropped (they would cost memory and time for nothing); one bent
+// normal keeps them all.
+TEST_F(SurfaceFiles, VertexNormalsThatRepeatTheFacesAreDropped) {
+  write("quad.mtl", "newmtl textured\nKd 0.5 0.5 0.5\n");
+  const std::string quad = "mtllib quad.mtl\nv -1 0 -1\nv 1 0 -1\nv 1 0 1\nv -1 0 1\nvn 0 1 0\nvn 0.1 1 0\n"
+                           "usemtl textured\n";
+  auto flat = Scene::load_obj_unlit(write("flat.obj", quad + "f 1//1 4//1 3//1 2//1\n"));
+  ASSERT_TRUE(flat.ok()) << flat.error().message;
+  EXPECT_FALSE(flat->has_shading_normals());
+  auto bent = Scene::load_obj_unlit(write("bent.obj", quad + "f 1//1 4//1 3//2 2//1\n"));
+  ASSERT_TRUE(bent.ok()) << bent.error().message;
+  EXPECT_TRUE(bent->has_shading_normals());
+}
+
 TEST_F(SurfaceFiles, AnUnreadableTextureLeavesTheMaterialFlat) {
   write("quad.mtl", "newmtl textured\nKd 0.25 0.5 0.75\nmap_Kd missing.png\n");
   auto s = Scene::load_obj_unlit(write("quad.obj", kTexturedQuad));
