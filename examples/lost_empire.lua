@@ -1,10 +1,18 @@
 -- Lost Empire (McGuire's archive, in ../shared/scenes; CC BY 3.0): a 225k-triangle underground city lit by its
 -- torches (818 small quads, 1636 triangles) and a pool of lava. Its MTL has the torches' Ke commented out, so the
 -- script makes them emit. The texture atlas colours every block; the torches' alpha map cuts each quad down to its
--- stick and flame, which alone emit, and cuts the leaves into sprites.
--- Direct light only, lights chosen through the light tree (docs/lua-api.md, "Many lights"):
+-- stick and flame, which alone emit, and cuts the leaves into sprites. Three ways to light it (`lighting`):
+--
+--   "direct"     direct light only, lights chosen through the light tree (docs/lua-api.md, "Many lights")
+--   "network"    global illumination by a lighting network: direct light at every camera sample, plus an
+--                irradiance cache placed where the camera looks whose hemisphere rays are shaded by one path
+--                each (all further bounces). The cache's records interpolate the indirect light smoothly; the
+--                path tracer's noise is averaged inside each record's 8 x 24 hemisphere rays.
+--   "pathtrace"  the same light by path tracing alone (the reference bench/lost_empire_bench measures against)
+--   "emission"   the lights alone, as the camera sees them (the benchmark's mask of pixels that see a light)
 --
 --   lightfarm run examples/lost_empire.lua                                  -> lost_empire.png
+--   lightfarm run examples/lost_empire.lua --set lighting=network
 --   lightfarm run examples/lost_empire.lua --set light_sampling=power       (choose torches by power alone)
 
 scene    { file = "../../shared/scenes/lost_empire/lost_empire.obj" }
@@ -13,8 +21,27 @@ scene    { file = "../../shared/scenes/lost_empire/lost_empire.obj" }
 material "Torch" { emission = {9, 9, 6}, kd = {0, 0, 0} }
 camera   { eye = {-5, 18, -30}, at = {5, 12, 5}, fov = 70 }
 image    { width = param("width", 320), height = param("height", 240), spp = param("spp", 16),
-           exposure = param("exposure", 1), output = "lost_empire.png" }
+           exposure = param("exposure", 2), output = param("output", "lost_empire.png") }
 
-local direct = lightop "direct" { light_samples = param("light_samples", 2),
-                                  light_sampling = param("light_sampling", "tree") }
-renderers { count = param("renderers", 2), lighting = direct }
+local lighting = param("lighting", "direct")
+local light_sampling = param("light_sampling", "tree")
+local function direct()
+  return lightop "direct" { light_samples = param("light_samples", 2), light_sampling = light_sampling }
+end
+if lighting == "direct" then
+  renderers { count = param("renderers", 2), lighting = direct() }
+elseif lighting == "network" then
+  local paths = lightop "pathtrace" { max_depth = param("max_depth", 8), light_sampling = light_sampling,
+                                      name = "bounces" }
+  local indirect = lightop "irradiance" { input = paths, a = param("a", 0.2), stride = param("stride", 8),
+                                          finest = param("finest", 2), name = "indirect" }
+  renderers { count = param("renderers", 2), lighting = lightop "combine" { inputs = { direct(), indirect } } }
+elseif lighting == "pathtrace" then
+  local paths = multiplexer { lightop "pathtrace" { max_depth = param("max_depth", 8), light_sampling = light_sampling },
+                              replicas = param("replicas", 2) }
+  renderers { count = param("renderers", 2), lighting = paths }
+elseif lighting == "emission" then
+  renderers { count = param("renderers", 2), lighting = lightop "emission" {} }
+else
+  error("lighting must be \"direct\", \"network\", \"pathtrace\" or \"emission\", not \"" .. tostring(lighting) .. "\"")
+end

@@ -1,0 +1,194 @@
+// Quality per time on Lost Empire (issue 13): examples/lost_empire.lua at 320x240 (torches emitting, the camera
+// inside the city), relative RMSE against a high-sample `pathtrace` reference (kept between runs with --reference)
+// versus wall time of the whole farm run (start, scene load, pre-pass and render), for `pathtrace` at several
+// sample counts and for the lighting network (`lighting = "network"`: direct light plus a camera-placed
+// irradiance cache whose hemisphere rays are shaded by one path each). Goal: the network reaches the path tracer's
+// 256-spp RMSE in at most a third of its time. Each network point reports its cache's coverage.
+//
+// RMSE is over the average of the channels, relative to the reference's mean. A second figure leaves out the
+// pixels that see a light and their neighbours (from an emission-only render): their error is how much of a
+// torch each pixel's camera samples covered, which depends on the sample count, not on the lighting.
+//
+// The light tree against power sampling at equal time is bench/lights_bench; here both strategies are also run
+// through the network at its first setting, for their noise there.
+//
+//   build/bench/lost_empire_bench [--json FILE] [--runs N] [--reference FILE.exr] [--reference-spp N]
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <string>
+
+#include "bench/bench_util.hpp"
+#include "core/value.hpp"
+#include "render/image.hpp"
+
+namespace {
+
+double relative_rmse(const lf::Image& a, const lf::Image& ref, const std::vector<bool>* skip = nullptr) {
+  double se = 0, mean = 0;
+  size_t n = 0;
+  for (size_t i = 0; i < ref.pixels.size(); ++i) {
+    if (skip && (*skip)[i]) continue;
+    const double d = lf::average(a.pixels[i]) - lf::average(ref.pixels[i]);
+    se += d * d;
+    mean += lf::average(ref.pixels[i]);
+    ++n;
+  }
+  return std::sqrt(se / static_cast<double>(n)) / (mean / static_cast<double>(n));
+}
+
+struct Point {
+  std::string method;
+  std::vector<std::string> sets;
+  double seconds = 0;  // median wall time over the runs
+  double rmse = 0, rmse_unlit = 0;
+  lf::Value cache;  // the irradiance cache's counts (network points)
+};
+
+lf::Image render(const std::string& script, const std::vector<std::string>& sets, bench::FarmRun& run) {
+  const std::string out =
+      (bench::fs::temp_directory_path() / ("lightfarm-le-" + std::to_string(::getpid()) + ".exr")).string();
+  run = bench::run_farm(script, sets, out);
+  auto img = lf::read_image(out);
+  bench::fs::remove(out);
+  if (!img) {
+    std::fprintf(stderr, "%s\n", img.error().message.c_str());
+    std::exit(1);
+  }
+  return *img;
+}
+
+std::string joined(const std::vector<std::string>& sets) {
+  std::string s;
+  for (const auto& x : sets)
+    if (x.rfind("lighting=", 0) != 0) s += (s.empty() ? "" : " ") + x;
+  return s;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  std::string json_path = "bench-lost-empire.json", reference_file;
+  int runs = 1, reference_spp = 4096;
+  for (int i = 1; i + 1 < argc; i += 2) {
+    const std::string a = argv[i];
+    if (a == "--json") json_path = argv[i + 1];
+    else if (a == "--runs") runs = std::atoi(argv[i + 1]);
+    else if (a == "--reference") reference_file = argv[i + 1];
+    else if (a == "--reference-spp") reference_spp = std::atoi(argv[i + 1]);
+  }
+  const std::string script = std::string(LIGHTFARM_SOURCE_DIR) + "/examples/lost_empire.lua";
+  if (!bench::fs::exists(std::string(LIGHTFARM_SOURCE_DIR) + "/../shared/scenes/lost_empire/lost_empire.obj")) {
+    std::printf("Lost Empire is not in ../shared/scenes: nothing to measure\n");
+    return 0;
+  }
+  bench::FarmRun run;
+  lf::Image reference;
+  if (auto kept = reference_file.empty() ? lf::Result<lf::Image>(lf::make_error("none")) : lf::read_image(reference_file)) {
+    reference = *kept;
+    std::printf("reference: %s (kept from an earlier run)\n", reference_file.c_str());
+  } else {
+    reference = render(script, {"lighting=pathtrace", "spp=" + std::to_string(reference_spp)}, run);
+    if (!reference_file.empty()) (void)lf::write_image(reference, reference_file);
+    std::printf("reference: pathtrace, %d spp, %.0f s\n", reference_spp, run.wall_seconds);
+  }
+  // Pixels that see a light, and their neighbours.
+  const lf::Image lights = render(script, {"lighting=emission", "spp=16"}, run);
+  std::vector<bool> near_light(reference.pixels.size(), false);
+  size_t masked = 0;
+  for (int y = 0; y < reference.height; ++y)
+    for (int x = 0; x < reference.width; ++x) {
+      bool near = false;
+      for (int dy = -1; dy <= 1; ++dy)
+        for (int dx = -1; dx <= 1; ++dx) {
+          const int u = x + dx, v = y + dy;
+          if (u >= 0 && v >= 0 && u < reference.width && v < reference.height)
+            near = near || !lf::is_black(lights.pixels[static_cast<size_t>(v * reference.width + u)]);
+        }
+      near_light[static_cast<size_t>(y * reference.width + x)] = near;
+      masked += near ? 1 : 0;
+    }
+  std::printf("pixels seeing a light or next to one: %zu of %zu\n\n", masked, reference.pixels.size());
+
+  std::vector<Point> points;
+  for (int spp : {16, 64, 256}) points.push_back({"pathtrace", {"lighting=pathtrace", "spp=" + std::to_string(spp)}});
+  const std::vector<std::vector<std::string>> networks{
+      {"spp=8", "light_samples=4"}, {"spp=16", "light_samples=4"}, {"spp=16", "light_samples=8"},
+      {"spp=32", "light_samples=8"}};
+  for (const auto& sets : networks) {
+    std::vector<std::string> all{"lighting=network"};
+    all.insert(all.end(), sets.begin(), sets.end());
+    points.push_back({"network", all});
+  }
+  {
+    std::vector<std::string> power{"lighting=network", "light_sampling=power"};
+    power.insert(power.end(), networks[0].begin(), networks[0].end());
+    points.push_back({"network/power", power});
+  }
+  // Interleaved runs, so that a noisy stretch of the machine does not fall on one method.
+  std::vector<std::vector<double>> seconds(points.size());
+  for (int r = 0; r < runs; ++r)
+    for (size_t i = 0; i < points.size(); ++i) {
+      Point& p = points[i];
+      const lf::Image img = render(script, p.sets, run);
+      seconds[i].push_back(run.wall_seconds);
+      p.rmse = relative_rmse(img, reference);
+      p.rmse_unlit = relative_rmse(img, reference, &near_light);
+      if (p.method != "pathtrace")
+        p.cache = lf::Value::Map{{"records", run.number("records")},     {"lookups", run.number("lookups")},
+                                 {"served_a", run.number("served_a")},   {"served_2a", run.number("served_2a")},
+                                 {"served_4a", run.number("served_4a")}, {"own_values", run.number("own_values")}};
+    }
+  for (size_t i = 0; i < points.size(); ++i) points[i].seconds = bench::median(seconds[i]);
+
+  std::printf("%-14s %-28s %9s %10s %14s   %s\n", "method", "settings", "wall s", "rel. RMSE", "away from lights",
+              "cache: records, served at a / 2a / 4a, own values");
+  lf::Value::Array rows;
+  for (const Point& p : points) {
+    std::string cache;
+    if (const lf::Value* records = p.cache.find("records")) {
+      const double lookups = p.cache.find("lookups")->as_double();
+      auto share = [&](const char* k) { return 100.0 * p.cache.find(k)->as_double() / lookups; };
+      char buf[160];
+      std::snprintf(buf, sizeof buf, "%.0f, %.1f / %.1f / %.1f %%, %.2f %%", records->as_double(), share("served_a"),
+                    share("served_2a"), share("served_4a"), share("own_values"));
+      cache = buf;
+    }
+    std::printf("%-14s %-28s %9.1f %10.4f %14.4f   %s\n", p.method.c_str(), joined(p.sets).c_str(), p.seconds, p.rmse,
+                p.rmse_unlit, cache.c_str());
+    lf::Value::Array times;
+    for (double s : seconds[static_cast<size_t>(&p - points.data())]) times.push_back(s);
+    rows.push_back(lf::Value::Map{{"method", p.method}, {"settings", joined(p.sets)}, {"wall_seconds", p.seconds},
+                                  {"runs", std::move(times)}, {"rmse", p.rmse}, {"rmse_away_from_lights", p.rmse_unlit},
+                                  {"cache", p.cache}});
+  }
+
+  const Point& final_pt = points[2];  // pathtrace at 256 spp
+  lf::Value::Array reach;
+  for (bool unlit : {false, true}) {
+    const double target = unlit ? final_pt.rmse_unlit : final_pt.rmse;
+    const Point* first = nullptr;
+    for (const Point& p : points)
+      if (p.method == "network" && (unlit ? p.rmse_unlit : p.rmse) <= target && (!first || p.seconds < first->seconds))
+        first = &p;
+    const char* metric = unlit ? "RMSE away from lights" : "RMSE";
+    if (first)
+      std::printf("\nnetwork (%s) reaches pathtrace 256 spp's %s %.4f in %.1f s = %.2f of its %.1f s (goal <= 0.33)",
+                  joined(first->sets).c_str(), metric, target, first->seconds, first->seconds / final_pt.seconds,
+                  final_pt.seconds);
+    else
+      std::printf("\nno network setting reaches pathtrace 256 spp's %s %.4f", metric, target);
+    reach.push_back(lf::Value::Map{{"metric", metric},
+                                   {"target", target},
+                                   {"network", first ? joined(first->sets) : ""},
+                                   {"seconds", first ? first->seconds : -1.0},
+                                   {"fraction_of_pathtrace", first ? first->seconds / final_pt.seconds : -1.0}});
+  }
+  std::printf("\n");
+  lf::Value doc = lf::Value::Map{{"benchmark", "lost_empire_quality"}, {"size", "320x240"},
+                                 {"reference_spp", reference_spp},      {"runs", runs},
+                                 {"points", std::move(rows)},           {"reach", std::move(reach)}};
+  std::ofstream(json_path) << lf::to_json(doc, 2) << "\n";
+  std::printf("wrote %s\n", json_path.c_str());
+  return 0;
+}
