@@ -3,7 +3,6 @@
 // them in every actor process cost ~0.2 s of start-up each and nothing else needs them.
 //
 // A plain C interface, so the module and its loader agree without sharing C++ ABI details.
-#include <OpenImageIO/imagebuf.h>
 #include <OpenImageIO/imageio.h>
 
 #include <cstdio>
@@ -45,21 +44,26 @@ int lightfarm_imageio_write(const char* path, int width, int height, int as_floa
 
 // Reads the first three channels as floats (as stored: no colour conversion). The caller frees *pixels with free().
 int lightfarm_imageio_read(const char* path, float** pixels, int* width, int* height, char* err, size_t err_len) {
-  OIIO::ImageBuf buf(path);
-  if (!buf.read(0, 0, true, OIIO::TypeDesc::FLOAT)) {
-    set_error(err, err_len, buf.geterror());
+  // ImageInput, not ImageBuf: no image cache, so a file rewritten since an earlier read is read as it is now (the
+  // cache kept the old size of a file written again at another size, and the copy overran).
+  auto in = OIIO::ImageInput::open(path);
+  if (!in) {
+    set_error(err, err_len, OIIO::geterror());
     return 1;
   }
-  const auto& spec = buf.spec();
-  if (spec.nchannels < 3) {
-    set_error(err, err_len, "fewer than 3 channels");
+  const OIIO::ImageSpec spec = in->spec();
+  if (spec.nchannels < 3 || spec.width <= 0 || spec.height <= 0) {
+    set_error(err, err_len, spec.nchannels < 3 ? "fewer than 3 channels" : "an empty image");
     return 1;
   }
   const size_t n = static_cast<size_t>(spec.width) * spec.height;
-  std::vector<float> all(n * spec.nchannels);
-  buf.get_pixels(OIIO::ROI::All(), OIIO::TypeDesc::FLOAT, all.data());
   auto* rgb = static_cast<float*>(std::malloc(n * 3 * sizeof(float)));
-  for (size_t i = 0; i < n; ++i) std::memcpy(rgb + 3 * i, &all[i * spec.nchannels], 3 * sizeof(float));
+  if (!rgb || !in->read_image(0, 0, 0, 3, OIIO::TypeDesc::FLOAT, rgb)) {
+    std::free(rgb);
+    set_error(err, err_len, "cannot read its pixels: " + in->geterror());
+    return 1;
+  }
+  in->close();
   *pixels = rgb;
   *width = spec.width;
   *height = spec.height;
@@ -70,23 +74,25 @@ int lightfarm_imageio_read(const char* path, float** pixels, int* width, int* he
 // frees *texels with free().
 int lightfarm_imageio_read_texels(const char* path, unsigned char** texels, int* width, int* height, int* channels,
                                   int* is_float, char* err, size_t err_len) {
-  OIIO::ImageBuf buf(path);
-  if (!buf.read(0, 0, true, OIIO::TypeDesc::UINT8)) {
-    set_error(err, err_len, buf.geterror());
+  // ImageInput, not ImageBuf: no image cache, so a file rewritten since an earlier read is read as it is now.
+  auto in = OIIO::ImageInput::open(path);
+  if (!in) {
+    set_error(err, err_len, OIIO::geterror());
     return 1;
   }
-  const auto& spec = buf.spec();
+  const OIIO::ImageSpec spec = in->spec();
   if (spec.width <= 0 || spec.height <= 0 || spec.nchannels <= 0) {
     set_error(err, err_len, "an empty image");
     return 1;
   }
   const size_t n = static_cast<size_t>(spec.width) * spec.height * spec.nchannels;
   auto* out = static_cast<unsigned char*>(std::malloc(n));
-  if (!out || !buf.get_pixels(OIIO::ROI::All(), OIIO::TypeDesc::UINT8, out)) {
+  if (!out || !in->read_image(0, 0, 0, spec.nchannels, OIIO::TypeDesc::UINT8, out)) {
     std::free(out);
-    set_error(err, err_len, "cannot convert its pixels to 8 bits");
+    set_error(err, err_len, "cannot read its pixels: " + in->geterror());
     return 1;
   }
+  in->close();
   *texels = out;
   *width = spec.width;
   *height = spec.height;
