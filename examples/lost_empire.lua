@@ -6,7 +6,7 @@
 --   "direct"     direct light only, lights chosen through the light tree (docs/lua-api.md, "Many lights")
 --   "network"    global illumination by a lighting network: direct light at every camera sample, plus an
 --                irradiance cache placed where the camera looks whose hemisphere rays are shaded by one path
---                each (all further bounces). The cache's records interpolate the indirect light smoothly; the
+--                each (all further bounces), plus the chains through the water (specular). The cache's records interpolate the indirect light smoothly; the
 --                path tracer's noise is averaged inside each record's 8 x 24 hemisphere rays.
 --   "pathtrace"  the same light by path tracing alone (the reference bench/lost_empire_bench measures against)
 --   "emission"   the lights alone, as the camera sees them (the benchmark's mask of pixels that see a light)
@@ -26,7 +26,10 @@ image    { width = param("width", 320), height = param("height", 240), spp = par
 local lighting = param("lighting", "direct")
 local light_sampling = param("light_sampling", "tree")
 local function direct()
-  return lightop "direct" { light_samples = param("light_samples", 2), light_sampling = light_sampling }
+  -- mis: points a fraction of a block from a torch also get a BSDF sample (without it, their 1/d^2 light samples
+  -- are fireflies that dominate the error).
+  return lightop "direct" { light_samples = param("light_samples", 2), light_sampling = light_sampling,
+                            mis = param("mis", true) }
 end
 if lighting == "direct" then
   renderers { count = param("renderers", 2), lighting = direct() }
@@ -35,7 +38,10 @@ elseif lighting == "network" then
                                       name = "bounces" }
   local indirect = lightop "irradiance" { input = paths, a = param("a", 0.2), stride = param("stride", 8),
                                           finest = param("finest", 2), name = "indirect" }
-  renderers { count = param("renderers", 2), lighting = lightop "combine" { inputs = { direct(), indirect } } }
+  -- The water is glass: what its refraction and reflection chains land on is lit by the same two ops.
+  local lit = direct()
+  local specular = lightop "specular" { input = lightop "combine" { inputs = { lit, indirect }, name = "landing" } }
+  renderers { count = param("renderers", 2), lighting = lightop "combine" { inputs = { lit, indirect, specular } } }
 elseif lighting == "pathtrace" then
   local paths = multiplexer { lightop "pathtrace" { max_depth = param("max_depth", 8), light_sampling = light_sampling },
                               replicas = param("replicas", 2) }

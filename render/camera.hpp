@@ -11,6 +11,9 @@ class Camera {
   Camera(const CameraSpec& spec, int width, int height);
   // (px + jx, py + jy) in pixel units, (0,0) at the top-left corner of the image.
   Ray ray(float image_x, float image_y) const;
+  Vec3 eye() const { return eye_; }
+  // The angle one pixel spans (radians, near the centre): a pixel is about distance x this wide.
+  float pixel_angle() const { return 2.0f * half_height_ / static_cast<float>(height_); }
 
  private:
   Vec3 eye_, forward_, right_, up_;

@@ -52,11 +52,12 @@ struct ShadingPoints {
     const Vec3 n = scene.normal(triangle[i]);
     return dot(n, wo[i]) >= 0 ? n : -n;
   }
-  // The diffuse reflectance at point i: its triangle's texture there, else its material's kd.
-  RGB albedo(size_t i, const Scene& scene) const {
+  // The diffuse reflectance at point i: its triangle's texture there (filtered to `footprint`, the width of a
+  // pixel there: pixel_footprint()), else its material's kd.
+  RGB albedo(size_t i, const Scene& scene, float footprint = 0) const {
     const Material& m = scene.material(material[i]);
     if (triangle.empty() || m.kd_map < 0 || !scene.has_uvs()) return m.kd;
-    return scene.albedo(triangle[i], scene.barycentrics(triangle[i], position[i]));
+    return scene.albedo(triangle[i], scene.barycentrics(triangle[i], position[i]), footprint);
   }
   // Empty string when consistent; otherwise what is wrong (for validating what arrives from the wire).
   std::string check(size_t material_count, size_t triangle_count = SIZE_MAX) const;
@@ -194,6 +195,10 @@ struct SceneContext {
   void report(const char* what, uint64_t done, uint64_t total) const {
     if (progress) progress(what, done, total);
   }
+  // How wide a pixel of the farm's camera is at p, in scene units (0 without a camera): the footprint textures are
+  // filtered to. Measured from the eye, so for a point seen only by a secondary ray it is a guess, and a blurrier
+  // texture there keeps its mean colour.
+  float pixel_footprint(Vec3 p) const { return camera ? length(p - camera->eye()) * camera->pixel_angle() : 0.0f; }
 };
 
 class LightOp {

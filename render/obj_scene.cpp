@@ -118,6 +118,7 @@ Result<Scene> Scene::load_obj_unlit(const std::string& path) {
         t.owned[i * 3 + c] = v;
       }
     }
+    t.build_pyramid();
     return it->second = static_cast<int32_t>(s.add_texture(std::move(t)));
   };
   for (size_t i = 0; i < materials.size(); ++i) {

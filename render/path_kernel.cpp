@@ -44,7 +44,7 @@ void trace_paths(const SceneContext& ctx, const ShadingPoints& points, std::span
   for (size_t i = 0; i < n; ++i)
     for (size_t s = 0; s < per; ++s)
       paths.push_back(Path{points.position[i], points.normal[i], points.wo[i], points.face_normal(i, scene),
-                           points.albedo(i, scene), points.material[i], points.outside(i, scene), {1, 1, 1}, {},
+                           points.albedo(i, scene, ctx.pixel_footprint(points.position[i])), points.material[i], points.outside(i, scene), {1, 1, 1}, {},
                            Rng(points.key[i], o.stream + (s << 32))});
 
   std::vector<Ray> rays;
@@ -167,7 +167,7 @@ void trace_paths(const SceneContext& ctx, const ShadingPoints& points, std::span
       path.ng = sp.ng;
       path.wo = wo;
       path.material = scene.material_of(tri);
-      path.albedo = hit_material.kd_map < 0 ? hit_material.kd : scene.albedo(tri, scene.barycentrics(tri, path.x));
+      path.albedo = hit_material.kd_map < 0 ? hit_material.kd : scene.albedo(tri, scene.barycentrics(tri, path.x), ctx.pixel_footprint(path.x));
       path.outside = front;
     }
   }

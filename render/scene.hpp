@@ -44,15 +44,20 @@ struct Bounds {
 // The box around `points` (not empty).
 Bounds bounds_of(std::span<const Vec3> points);
 
-// A texture as the scene keeps it: 8-bit texels, row-major, top row first (as image files store them). A map_Kd
-// keeps 3 channels (sRGB-encoded colour), a map_d 1 (linear coverage). Sampled bilinearly, repeating.
+// A texture as the scene keeps it: 8-bit texels, row-major, top row first (as image files store them), as a mip
+// pyramid: the full image, then each level half the size of the one before (2x2 box filter, in linear values),
+// down to 1x1, one after another. A map_Kd keeps 3 channels (sRGB-encoded colour), a map_d 1 (linear coverage).
 struct Texture {
   std::string path;  // as the MTL named it
-  uint32_t width = 0, height = 0, channels = 0;
-  std::span<const uint8_t> texels;  // width * height * channels
+  uint32_t width = 0, height = 0, channels = 0;  // of the full image (level 0)
+  std::span<const uint8_t> texels;  // every level: pyramid_bytes(width, height, channels)
   std::vector<uint8_t> owned;       // the texels, unless they live in a mapped scene image
-  // Channel c at texture coordinates uv; colour channels decoded from sRGB to linear.
-  float sample(Vec2 uv, uint32_t c) const;
+  // Channel c at texture coordinates uv, bilinear and repeating, at level of detail `lod` (0: the full image;
+  // between levels, trilinear); colour channels decoded from sRGB to linear.
+  float sample(Vec2 uv, uint32_t c, float lod = 0) const;
+  static uint64_t pyramid_bytes(uint32_t width, uint32_t height, uint32_t channels);
+  // Fills `owned` beyond level 0 (which it must hold) with the smaller levels.
+  void build_pyramid();
 };
 
 // What a triangle may carry beyond its corners: OBJ vertex normals and texture coordinates, per corner.
@@ -119,7 +124,9 @@ class Scene {
   Vec3 barycentrics(uint32_t triangle, Vec3 p) const;
   Vec3 shading_normal(uint32_t triangle, Vec3 b) const;  // unit, on the winding's side
   Vec2 uv(uint32_t triangle, Vec3 b) const;
-  RGB albedo(uint32_t triangle, Vec3 b) const;
+  // `footprint`: how wide a pixel is at the point, in scene units (0: the texture's full resolution). The texture
+  // is filtered to that width (its mip level), so a pixel's few samples see the mean colour it covers.
+  RGB albedo(uint32_t triangle, Vec3 b, float footprint = 0) const;
   // Whether the surface is there at barycentrics b (false where an alpha map cuts it out).
   bool opaque(uint32_t triangle, Vec3 b) const;
   // Whether any material is cut out by an alpha map (the tracer then filters its hits).

@@ -87,8 +87,8 @@ Result<Scene> scene_from_bytes(std::string_view bytes, const std::string& what) 
     if (!r.u32(length) || !r.str(t.path, length) || !r.u32(t.width) || !r.u32(t.height) || !r.u32(t.channels) ||
         !r.u32(deflated) || !r.str(packed, deflated))
       return bad();
-    // At most 64k x 64k texels of 1 or 3 channels, and no more than deflate can make of the bytes there (1032:1).
-    const uint64_t size = uint64_t{t.width} * t.height * t.channels;
+    // At most 64k x 64k texels (with their mip levels) of 1 or 3 channels, and no more than deflate can make of the bytes there (1032:1).
+    const uint64_t size = Texture::pyramid_bytes(t.width, t.height, t.channels);
     if (t.width == 0 || t.height == 0 || t.width > 65536 || t.height > 65536 || (t.channels != 1 && t.channels != 3) ||
         size > uint64_t{deflated} * 1032)
       return bad();

@@ -204,8 +204,10 @@ Result<Scene> SceneImage::map(const std::string& path, const std::string& hash, 
     if (!r.u32(length) || !r.str(t.path, length) || !r.u32(t.width) || !r.u32(t.height) || !r.u32(t.channels) ||
         !r.u64(at))
       return bad("textures");
-    const uint64_t bytes = uint64_t{t.width} * t.height * t.channels;
-    if ((t.channels != 1 && t.channels != 3) || t.width > 65536 || t.height > 65536 || at > h.texel_bytes ||
+    if ((t.channels != 1 && t.channels != 3) || t.width == 0 || t.height == 0 || t.width > 65536 || t.height > 65536)
+      return bad("a texture's size");
+    const uint64_t bytes = Texture::pyramid_bytes(t.width, t.height, t.channels);
+    if (at > h.texel_bytes ||
         bytes > h.texel_bytes - at)
       return bad("a texture out of place");
     t.texels = {reinterpret_cast<const uint8_t*>(base + h.offset[kTexels] + at), bytes};

@@ -31,24 +31,94 @@ uint32_t wrap(int64_t i, uint32_t n) {
 
 }  // namespace
 
-float Texture::sample(Vec2 uv, uint32_t c) const {
-  if (width == 0 || height == 0 || c >= channels) return 1.0f;
+uint64_t Texture::pyramid_bytes(uint32_t w, uint32_t h, uint32_t c) {
+  uint64_t total = 0;
+  while (true) {
+    total += uint64_t{w} * h * c;
+    if (w == 1 && h == 1) return total;
+    w = std::max(1u, w / 2);
+    h = std::max(1u, h / 2);
+  }
+}
+
+void Texture::build_pyramid() {
+  const uint64_t base = uint64_t{width} * height * channels;
+  owned.resize(base);
+  owned.reserve(pyramid_bytes(width, height, channels));
+  const bool colour = channels == 3;
+  auto encode = [&](float l) {
+    const float v = colour ? (l <= 0.0031308f ? 12.92f * l : 1.055f * std::pow(l, 1.0f / 2.4f) - 0.055f) : l;
+    return static_cast<uint8_t>(std::lround(std::clamp(v, 0.0f, 1.0f) * 255.0f));
+  };
+  uint32_t w = width, h = height;
+  size_t at = 0;  // where the level being halved starts
+  while (w > 1 || h > 1) {
+    const uint32_t nw = std::max(1u, w / 2), nh = std::max(1u, h / 2);
+    const size_t next = owned.size();
+    owned.resize(next + size_t{nw} * nh * channels);
+    for (uint32_t y = 0; y < nh; ++y)
+      for (uint32_t x = 0; x < nw; ++x)
+        for (uint32_t c = 0; c < channels; ++c) {
+          // The 2x2 texels below (one row or column where the level above has an odd or unit size).
+          float sum = 0;
+          int n = 0;
+          for (uint32_t dy = 0; dy < 2 && 2 * y + dy < h; ++dy)
+            for (uint32_t dx = 0; dx < 2 && 2 * x + dx < w; ++dx) {
+              const uint8_t v = owned[at + (size_t{2 * y + dy} * w + 2 * x + dx) * channels + c];
+              sum += colour ? srgb_to_linear()[v] : static_cast<float>(v) / 255.0f;
+              ++n;
+            }
+          owned[next + (size_t{y} * nw + x) * channels + c] = encode(sum / static_cast<float>(n));
+        }
+    at = next;
+    w = nw;
+    h = nh;
+  }
+  texels = owned;
+}
+
+namespace {
+
+// Channel c of one level (w x h texels at `texels`), bilinear and repeating.
+float bilinear(const uint8_t* texels, uint32_t w, uint32_t h, uint32_t channels, Vec2 uv, uint32_t c) {
   // Texel centres sit at half-integers; v = 0 is the bottom row, and files store the top row first.
-  const float x = uv.u * static_cast<float>(width) - 0.5f;
-  const float y = (1.0f - uv.v) * static_cast<float>(height) - 0.5f;
+  const float x = uv.u * static_cast<float>(w) - 0.5f;
+  const float y = (1.0f - uv.v) * static_cast<float>(h) - 0.5f;
   if (!std::isfinite(x) || !std::isfinite(y)) return 0.0f;
   const float fx = std::floor(x), fy = std::floor(y);
   const float ax = x - fx, ay = y - fy;
   // Far-off coordinates are reduced first so that the integer conversion cannot overflow.
-  const auto ix = static_cast<int64_t>(std::fmod(fx, static_cast<float>(width) * 1024.0f));
-  const auto iy = static_cast<int64_t>(std::fmod(fy, static_cast<float>(height) * 1024.0f));
-  const uint32_t x0 = wrap(ix, width), x1 = wrap(ix + 1, width), y0 = wrap(iy, height), y1 = wrap(iy + 1, height);
+  const auto ix = static_cast<int64_t>(std::fmod(fx, static_cast<float>(w) * 1024.0f));
+  const auto iy = static_cast<int64_t>(std::fmod(fy, static_cast<float>(h) * 1024.0f));
+  const uint32_t x0 = wrap(ix, w), x1 = wrap(ix + 1, w), y0 = wrap(iy, h), y1 = wrap(iy + 1, h);
   const bool colour = channels == 3;
   auto texel = [&](uint32_t tx, uint32_t ty) {
-    const uint8_t v = texels[(static_cast<size_t>(ty) * width + tx) * channels + c];
+    const uint8_t v = texels[(static_cast<size_t>(ty) * w + tx) * channels + c];
     return colour ? srgb_to_linear()[v] : static_cast<float>(v) / 255.0f;
   };
   return (texel(x0, y0) * (1 - ax) + texel(x1, y0) * ax) * (1 - ay) + (texel(x0, y1) * (1 - ax) + texel(x1, y1) * ax) * ay;
+}
+
+}  // namespace
+
+float Texture::sample(Vec2 uv, uint32_t c, float lod) const {
+  if (width == 0 || height == 0 || c >= channels) return 1.0f;
+  if (!(lod > 0)) return bilinear(texels.data(), width, height, channels, uv, c);
+  // Walk down to the level below `lod`, then blend it with the next.
+  const int below = static_cast<int>(std::min(lod, 30.0f));
+  const float blend = std::min(lod, 30.0f) - static_cast<float>(below);
+  uint32_t w = width, h = height;
+  size_t at = 0;
+  for (int l = 0; l < below && (w > 1 || h > 1); ++l) {
+    at += size_t{w} * h * channels;
+    w = std::max(1u, w / 2);
+    h = std::max(1u, h / 2);
+  }
+  const float fine = bilinear(texels.data() + at, w, h, channels, uv, c);
+  if (blend <= 0 || (w == 1 && h == 1)) return fine;
+  const size_t next = at + size_t{w} * h * channels;
+  const float coarse = bilinear(texels.data() + next, std::max(1u, w / 2), std::max(1u, h / 2), channels, uv, c);
+  return fine * (1 - blend) + coarse * blend;
 }
 
 Vec3 Scene::barycentrics(uint32_t t, Vec3 p) const {
@@ -79,13 +149,22 @@ Vec2 Scene::uv(uint32_t t, Vec3 b) const {
   return {c[0].u * b.x + c[1].u * b.y + c[2].u * b.z, c[0].v * b.x + c[1].v * b.y + c[2].v * b.z};
 }
 
-RGB Scene::albedo(uint32_t t, Vec3 b) const {
+RGB Scene::albedo(uint32_t t, Vec3 b, float footprint) const {
   const Material& m = materials_[material_view_[t]];
   if (m.kd_map < 0 || corner_uv_view_.empty()) return m.kd;
   const Texture& tex = textures_[static_cast<size_t>(m.kd_map)];
   const Vec2 at = uv(t, b);
   if (!std::isfinite(at.u) || !std::isfinite(at.v)) return m.kd;  // a face without texture coordinates
-  return {tex.sample(at, 0), tex.sample(at, 1), tex.sample(at, 2)};
+  float lod = 0;
+  if (footprint > 0) {
+    // Texels per scene unit on this triangle: the square root of its texel area over its area.
+    const Vec2* c = &corner_uv_view_[3 * static_cast<size_t>(t)];
+    const float uv_area = 0.5f * std::abs((c[1].u - c[0].u) * (c[2].v - c[0].v) - (c[2].u - c[0].u) * (c[1].v - c[0].v));
+    const float density = std::sqrt(uv_area * static_cast<float>(tex.width) * static_cast<float>(tex.height) / area(t));
+    const float texels = footprint * density;
+    if (texels > 1 && std::isfinite(texels)) lod = std::log2(texels);
+  }
+  return {tex.sample(at, 0, lod), tex.sample(at, 1, lod), tex.sample(at, 2, lod)};
 }
 
 bool Scene::opaque(uint32_t t, Vec3 b) const {

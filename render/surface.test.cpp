@@ -133,9 +133,9 @@ TEST_F(SurfaceFiles, AFurnaceWithSmoothNormalsStillGivesEOverOneMinusRho) {
   EXPECT_NEAR((e + mean) / (e / (1 - rho)), 1.0, 0.02) << "reflected " << mean;
 }
 
-// An 8 x 8 texture of random colours, written as an 8-bit sRGB PNG; returns the mean albedo it decodes to.
-RGB write_random_texture(const std::string& path) {
-  Image img(8, 8);
+// A size x size texture of random colours, written as an 8-bit sRGB PNG; returns the mean albedo it decodes to.
+RGB write_random_texture(const std::string& path, int size = 8) {
+  Image img(size, size);
   std::mt19937 rng(3);
   std::uniform_real_distribution<float> u(0.05f, 0.95f);
   for (auto& p : img.pixels) p = {u(rng), u(rng), u(rng)};
@@ -164,7 +164,10 @@ Image render_direct(const Scene& s, const CameraSpec& cam, int size, int spp, in
   auto op = create_lightop(*find_lightop_kind("direct"),
                            ParamTable(Value::Map{{"light_samples", light_samples}}, "direct"));
   LocalInputs none;
-  run_to_completion(op->setup(SceneContext{&s, &tracer}, none));
+  SceneContext ctx{&s, &tracer};
+  ctx.camera = &camera;  // textures are filtered to the camera's pixels
+  ctx.width = ctx.height = size;
+  run_to_completion(op->setup(ctx, none));
   std::vector<RGB> radiance(work.points.size());
   run_to_completion(op->shade(work.points, radiance, none));
   std::vector<RGB> pixels;
@@ -200,6 +203,38 @@ TEST_F(SurfaceFiles, ATexturedQuadReflectsItsIrradianceTimesTheTexturesMeanAlbed
   float lo = 1e9f, hi = 0;
   for (const auto& p : img.pixels) lo = std::min(lo, p.y), hi = std::max(hi, p.y);
   EXPECT_GT(hi - lo, 0.1f / kPi);
+}
+
+// Far away, a texture is seen through its mip levels: 64 x 64 random texels on 8 x 8 pixels (8 texels a pixel,
+// level 3) keep the mean, and each pixel already holds about the mean of the texels it covers, where the full
+// resolution would give a few random texels (the noise a pixel's samples would have to average away).
+TEST_F(SurfaceFiles, ADistantTextureIsFilteredToThePixelAndKeepsItsMean) {
+  const RGB mean_albedo = write_random_texture((dir / "tex.png").string(), 64);
+  write("quad.mtl", "newmtl textured\nKd 0.5 0.5 0.5\nmap_Kd tex.png\n");
+  auto s = Scene::load_obj_unlit(write("quad.obj", kTexturedQuad));
+  ASSERT_TRUE(s.ok()) << s.error().message;
+  const float d = 1000, intensity = 1e6f;
+  s->add_point_light({0, d, 0}, {intensity, intensity, intensity});
+  ASSERT_TRUE(s->finalize("quad").ok());
+  // The pyramid: 64, 32, ..., 1; its last level is the texture's mean (in linear values, up to 8-bit steps).
+  const Texture& tex = s->textures()[0];
+  EXPECT_EQ(tex.texels.size(), Texture::pyramid_bytes(64, 64, 3));
+  EXPECT_EQ(Texture::pyramid_bytes(64, 64, 3), 3u * (4096 + 1024 + 256 + 64 + 16 + 4 + 1));
+  for (uint32_t c = 0; c < 3; ++c) EXPECT_NEAR(tex.sample({0.3f, 0.7f}, c, 6.0f) / mean_albedo[c], 1.0, 0.02);
+  CameraSpec cam;
+  cam.eye = {0, 1, 0};
+  cam.at = {0, 0, 0};
+  cam.up = {0, 0, -1};
+  cam.fov = 90;
+  const Image img = render_direct(*s, cam, 8, 4, 1);
+  RGB mean{};
+  double spread = 0;
+  for (const auto& p : img.pixels) mean += p * (1.0f / static_cast<float>(img.pixels.size()));
+  for (const auto& p : img.pixels) spread += std::pow((p.y - mean.y) / mean.y, 2) / static_cast<double>(img.pixels.size());
+  for (int c = 0; c < 3; ++c) EXPECT_NEAR(mean[c] / (mean_albedo[c] / kPi), 1.0, 0.02) << "channel " << c;
+  // Random texels in [0.05, 0.95] vary by about 50 % of their mean; the means of 8 x 8 of them by about a tenth
+  // of that. Unfiltered, 4 samples a pixel would leave about half.
+  EXPECT_LT(std::sqrt(spread), 0.15) << "pixels are filtered";
 }
 
 // A 16 x 16 coverage map: the left half of u cut out (0), the right half there (1).

@@ -4,7 +4,8 @@
 // the point: power, distance, orientation; render/light_tree.hpp), or with `light_sampling = "power"` by power
 // alone, and a uniform point on it, and casts a shadow ray; on glossy surfaces it also samples the BSDF, and the two are
 // combined by multiple importance sampling (render/path_kernel.cpp with one vertex). On diffuse surfaces light
-// sampling alone is used. Emitters emit on the side their winding faces. Mirrors and glass get nothing here:
+// sampling alone is used unless `mis = true`: then they get the BSDF sample too, which tames points close to a
+// light (a uniform point on a light seen under a wide angle has a 1/d^2 weight; a cosine direction does not). Emitters emit on the side their winding faces. Mirrors and glass get nothing here:
 // that is `specular`'s job.
 #include "render/lightop_registry.hpp"
 #include "render/path_kernel.hpp"
@@ -18,6 +19,7 @@ class DirectLight final : public LightOp {
   explicit DirectLight(const ParamTable& p)
       : light_samples_(static_cast<int>(p.get_int("light_samples", 1, 1, 1 << 20))),
         light_tree_(p.get_string("light_sampling", "tree", {"tree", "power"}) == "tree"),
+        mis_(p.get_bool("mis", false)),
         seed_(static_cast<uint64_t>(p.get_int("seed", 0, 0, INT32_MAX))) {}
 
   Task setup(SceneContext ctx, Inputs&) override {
@@ -30,7 +32,7 @@ class DirectLight final : public LightOp {
     o.max_depth = 1;
     o.samples = light_samples_;
     o.stream = streams::direct ^ (seed_ << 8);
-    o.light_only_on_diffuse = true;
+    o.light_only_on_diffuse = !mis_;
     o.light_tree = light_tree_;
     trace_paths(ctx_, points, radiance, o);
     co_return;
@@ -39,6 +41,7 @@ class DirectLight final : public LightOp {
  private:
   int light_samples_;
   bool light_tree_;
+  bool mis_;
   uint64_t seed_;
   SceneContext ctx_;
 };

@@ -111,7 +111,7 @@ class Irradiance final : public LightOp {
       if (bound >= 0) {
         ++served_[bound];
         records_used_ += records;
-        radiance[i] = points.albedo(i, scene) * e * (1.0f / kPi);
+        radiance[i] = points.albedo(i, scene, ctx_.pixel_footprint(points.position[i])) * e * (1.0f / kPi);
       } else {
         ++own_values_;
         misses.push_back(Candidate{points.position[i], points.normal[i], points.face_normal(i, scene),
@@ -124,7 +124,7 @@ class Irradiance final : public LightOp {
     co_await compute(misses, inputs, own);  // used once, never inserted
     for (size_t j = 0; j < misses.size(); ++j) {
       const size_t i = miss_owner[j];
-      radiance[i] = points.albedo(i, scene) * own[j].irradiance * (1.0f / kPi);
+      radiance[i] = points.albedo(i, scene, ctx_.pixel_footprint(points.position[i])) * own[j].irradiance * (1.0f / kPi);
     }
   }
 

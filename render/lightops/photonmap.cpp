@@ -139,11 +139,11 @@ class PhotonMap final : public LightOp {
         const IrradiancePoint& e = irradiance_.points[nearest];
         if (dot(e.normal, points.normal[i]) > 0.9f) {
           ++served_precomputed_;
-          radiance[i] = points.albedo(i, scene) * e.irradiance * (1.0f / kPi);
+          radiance[i] = points.albedo(i, scene, ctx_.pixel_footprint(points.position[i])) * e.irradiance * (1.0f / kPi);
           continue;
         }
       }
-      const Bsdf bsdf(m, points.albedo(i, scene));
+      const Bsdf bsdf(m, points.albedo(i, scene, ctx_.pixel_footprint(points.position[i])));
       radiance[i] = estimate(points.position[i], points.normal[i],
                              [&](Vec3 wi) { return bsdf.eval(points.normal[i], points.wo[i], wi); });
     }
