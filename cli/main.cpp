@@ -25,7 +25,7 @@ namespace {
 constexpr const char* kUsage = R"(lightfarm — a distributed lighting-simulation farm
 
 usage:
-  lightfarm run SCRIPT [--output FILE] [--set NAME=VALUE]... [--stats-json FILE] [--quiet]
+  lightfarm run SCRIPT [--output FILE] [--set NAME=VALUE]... [--stats-json FILE] [--quiet] [--monitor [ADDR:]PORT]
       Turn a farm script into processes and an image.
   lightfarm graph SCRIPT [--set NAME=VALUE]...
       Print the script's actor graph as Graphviz DOT; launches nothing.
@@ -42,6 +42,9 @@ options:
   --output FILE       write the image here instead of image { output = ... } (.exr, .png, .tif)
   --set NAME=VALUE    override param("NAME", default) in the script
   --stats-json FILE   also write phase timings and per-actor statistics as JSON
+  --monitor [ADDR:]PORT  serve a live monitor page there (default address 127.0.0.1; port 0 picks one; the URL
+                      is printed, with a token when not on loopback); docs/monitor.md
+  --monitor-hold SECONDS  keep the monitor up that long after the frame
   --quiet             print no tables, only errors
 
 exit status: 0 done; 1 the farm failed; 2 bad command line or script; 128+N stopped by signal N.
@@ -108,7 +111,7 @@ bool parse(int argc, char** argv, int first, const std::vector<std::string>& kno
 int cmd_run(int argc, char** argv, bool graph_only) {
   Args args;
   std::string error;
-  std::vector<std::string> known = graph_only ? std::vector<std::string>{} : std::vector<std::string>{"output", "stats-json"};
+  std::vector<std::string> known = graph_only ? std::vector<std::string>{} : std::vector<std::string>{"output", "stats-json", "monitor", "monitor-hold"};
   std::vector<std::string> flags = graph_only ? std::vector<std::string>{} : std::vector<std::string>{"quiet"};
   if (!parse(argc, argv, 2, known, flags, args, error)) return usage_error(error);
   if (args.positional.size() != 1) return usage_error(std::string(graph_only ? "graph" : "run") + " needs one SCRIPT");
@@ -128,6 +131,12 @@ int cmd_run(int argc, char** argv, bool graph_only) {
   ro.progress_on_terminal = ::isatty(STDERR_FILENO);
   ro.quiet = args.options.count("quiet") > 0;
   if (args.options.count("stats-json")) ro.stats_json = args.options["stats-json"];
+  ro.monitor = args.options.count("monitor") ? args.options["monitor"] : spec->monitor;
+  if (args.options.count("monitor-hold")) {
+    char* end = nullptr;
+    ro.monitor_hold = std::strtod(args.options["monitor-hold"].c_str(), &end);
+    if (*end != '\0' || !(ro.monitor_hold >= 0)) return usage_error("--monitor-hold needs seconds (0 or more)");
+  }
   return lf::run_farm(*spec, ro);
 }
 

@@ -9,9 +9,14 @@ static std::string g_name = "lightfarm";
 
 void set_log_name(std::string name) { g_name = std::move(name); }
 
+static LogObserver g_observer;
+
+void set_log_observer(LogObserver observer) { g_observer = std::move(observer); }
+
 static void emit(const char* level, const std::string& message) {
   // One fprintf per line so lines from several processes sharing a terminal do not interleave mid-line.
   std::fprintf(stderr, "%s: %s%s\n", g_name.c_str(), level, message.c_str());
+  if (g_observer) g_observer(level, message);
 }
 
 std::string seconds_text(double seconds) {

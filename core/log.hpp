@@ -13,6 +13,10 @@ void log_warn(const std::string& message);
 void log_error(const std::string& message);
 // Debug lines appear only when LIGHTFARM_DEBUG is set in the environment.
 void log_debug(const std::string& message);
+// Also hands every line to `observer` (level: "", "warning: ", "error: " or "debug: "), on the thread that logs
+// (the director's monitor keeps the log this way). Set it before other threads log; empty to stop.
+using LogObserver = std::function<void(const std::string& level, const std::string& message)>;
+void set_log_observer(LogObserver observer);
 
 // Warnings anyone outside the farm can cause (bad or stranger messages) go through one of these: at most one line
 // a second, and the next line says how many like it were held back, so nobody can flood the log.

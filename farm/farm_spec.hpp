@@ -56,6 +56,7 @@ struct FarmSpec {
   double request_timeout = 120.0;   // seconds a shading request may wait for its answer
   std::string director_address;     // where remote actors reach the director; empty: found from the routes
   std::string security = "curve";   // "curve": every link authenticated and encrypted; "none": to measure its cost
+  std::string monitor;              // farm { monitor = "[ADDR:]PORT" }: the live monitor's address (--monitor wins)
 
   int renderer_count() const;
   // Index of the multiplexer whose replica actor `i` is, or -1.

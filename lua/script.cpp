@@ -621,6 +621,7 @@ int l_farm(lua_State* L) {
     b.spec.request_timeout = p.get_float("request_timeout", b.spec.request_timeout, 0.1, 86400);
     b.spec.director_address = p.get_string("director_address", b.spec.director_address);
     b.spec.security = p.get_string("security", b.spec.security, {"curve", "none"});
+    b.spec.monitor = p.get_string("monitor", b.spec.monitor);
     p.report_unused();
   });
   return 0;

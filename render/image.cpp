@@ -80,6 +80,8 @@ static float to_srgb(float linear) {
   return linear <= 0.0031308f ? 12.92f * linear : 1.055f * std::pow(linear, 1.0f / 2.4f) - 0.055f;
 }
 
+float display_srgb(float linear, const Display& display) { return to_srgb(ToneCurve(display)(linear)); }
+
 namespace {
 
 // The image module (image_oiio.cpp), loaded on first use.

@@ -32,6 +32,8 @@ struct Display {
 const std::vector<std::string>& display_tonemaps();
 // One linear channel value as the display maps it, before sRGB encoding (in [0, 1]).
 float display_value(float linear, const Display& display);
+// The same, sRGB-encoded: what an 8-bit output stores, over 255.
+float display_srgb(float linear, const Display& display);
 
 Status write_image(const Image& image, const std::string& path, const Display& display = {});
 Result<Image> read_image(const std::string& path);  // linear RGB (sRGB files are decoded)

@@ -4,6 +4,8 @@
 #include <unistd.h>
 
 #include <array>
+#include <deque>
+#include <mutex>
 #include <cmath>
 #include <csignal>
 #include <chrono>
@@ -18,6 +20,7 @@
 #include "actors/director/exchange_service.hpp"
 #include "actors/director/launcher.hpp"
 #include "actors/director/local_launcher.hpp"
+#include "actors/director/monitor.hpp"
 #include "actors/director/report.hpp"
 #include "actors/director/ring_service.hpp"
 #include "render/light_checks.hpp"
@@ -93,6 +96,23 @@ class Director final : public ControlOut, public Outbox {
     ::prctl(PR_SET_CHILD_SUBREAPER, 1);
     start_ = Clock::now();
     int status = 0;
+    if (!options_.monitor.empty()) {
+      auto m = Monitor::start(options_.monitor);
+      if (!m) {
+        log_error(m.error().message);
+        return 2;
+      }
+      monitor_ = std::move(*m);
+      set_log_observer([this](const std::string& level, const std::string& text) { keep_log_line(level, text); });
+      log_info("monitor: " + monitor_->url());
+      publish_monitor(true);
+    }
+    struct StopObserving {
+      bool on;
+      ~StopObserving() {
+        if (on) set_log_observer({});
+      }
+    } stop_observing{monitor_ != nullptr};
     // Loading OpenImageIO takes ~0.2 s; it is done while the actors start instead of after the last tile, but only
     // once this process has made its own threads (ZeroMQ's, the ZAP handler, hosts connecting): dlopen holds the
     // loader's lock, which creating a thread needs, so starting it first made prepare wait 0.2-0.26 s. (On this
@@ -151,6 +171,7 @@ class Director final : public ControlOut, public Outbox {
     // An actor removes its IPC folder when it exits; one that was killed cannot. Every actor here is reaped by now.
     sweep_stale_private_dirs("actor");
     if (status == 0) status = report();
+    if (monitor_) hold_monitor(status);
     return status;
   }
 
@@ -314,6 +335,10 @@ class Director final : public ControlOut, public Outbox {
   // A long setup step (photons, a cache's pre-pass) as it goes: a line at each quarter, per actor and step, once
   // the step has taken a second (short ones say nothing).
   void show_progress(const ActorRecord& a, const std::string& what, uint64_t done, uint64_t total) {
+    if (monitor_)
+      monitor_progress_[a.name() + "\n" + what] =
+          Value::Map{{"actor", a.name()}, {"what", what}, {"done", static_cast<int64_t>(done)},
+                     {"total", static_cast<int64_t>(total)}};
     if (options_.quiet) return;
     const int quarter = static_cast<int>(4 * done / total);
     auto [step, fresh] = progress_shown_.try_emplace(a.name() + "\n" + what, StepShown{Clock::now(), 0});
@@ -469,6 +494,154 @@ class Director final : public ControlOut, public Outbox {
     }
     check(supervisor_.check_heartbeats(Clock::now()));
     supervisor_.send_heartbeats(Clock::now());
+    if (monitor_) publish_monitor(false);
+  }
+
+  // --- The live monitor: the state it shows, built here on the director's thread and handed over as a copy.
+
+  void keep_log_line(const std::string& level, const std::string& text) {
+    std::string kind = level.empty() ? "info" : level.substr(0, level.find(':'));
+    // Losses and recoveries, as the supervisor words them, stand out on the page.
+    auto says = [&](const char* words) { return text.find(words) != std::string::npos; };
+    if (says("restarting") || says("rejoined") || says("recovered")) kind = "recovery";
+    else if (says(" lost") || says("was killed") || says("sends its work to the others") || says("heartbeat")) kind = "loss";
+    std::lock_guard<std::mutex> lock(log_mutex_);
+    log_lines_.push_back(Value::Map{{"kind", kind}, {"text", text}, {"seconds", seconds_since(start_)}});
+    if (log_lines_.size() > 300) log_lines_.pop_front();
+  }
+
+  std::string actor_state(const ActorRecord& a) const {
+    if (a.lost) return "lost";
+    if (a.rejoining) return "restarting";
+    if (a.exited || a.said_bye) return "done";
+    if (!a.said_hello) return "launching";
+    const Stage st = supervisor_.stage();
+    if (st <= Stage::configure) return a.ready == Phase::configure ? "ready" : "configuring";
+    if (st == Stage::setup) return a.ready == Phase::setup ? "ready" : "setup";
+    if (st == Stage::render) return "rendering";
+    return "finishing";
+  }
+
+  Value monitor_state() {
+    const double now = seconds_since(start_);
+    Value::Array actors;
+    for (const ActorSpec& spec : spec_.actors) {
+      const ActorRecord& a = supervisor_.at(spec.name);
+      Value::Array inputs;
+      for (int i : spec.inputs) inputs.push_back(spec_.actors[static_cast<size_t>(i)].name);
+      if (spec.is_renderer() && spec.inputs.empty() && spec_.lighting >= 0)
+        inputs.push_back(spec_.actors[static_cast<size_t>(spec_.lighting)].name);
+      Value::Map m{{"name", spec.name}, {"kind", spec.kind}, {"host", spec.host}, {"state", actor_state(a)},
+                   {"inputs", std::move(inputs)}, {"restarts", static_cast<int64_t>(a.restarts)}};
+      if (a.pid > 0) m["pid"] = static_cast<int64_t>(a.pid);
+      if (!a.loss.empty()) m["loss"] = a.loss;
+      if (a.live.is_map()) {
+        m["live"] = a.live;
+        // Rates over the time since the figures before these (heartbeats come about once a second).
+        auto& [before, before_at, rates] = live_before_[spec.name];
+        if (a.live_at != before_at) {
+          if (before.is_map() && before_at != Clock::time_point{}) {
+            const double dt = std::chrono::duration<double>(a.live_at - before_at).count();
+            auto delta = [&](const char* k) {
+              const Value *x = a.live.find(k), *y = before.find(k);
+              const double xv = x && x->is_number() ? (x->is_int() ? static_cast<double>(x->as_int()) : x->as_double()) : 0;
+              const double yv = y && y->is_number() ? (y->is_int() ? static_cast<double>(y->as_int()) : y->as_double()) : 0;
+              return dt > 0 ? (xv - yv) / dt : 0.0;
+            };
+            rates = Value::Map{{"requests_per_second", delta("requests")},
+                               {"points_per_second", delta("points")},
+                               {"busy_share", std::min(1.0, delta("busy_seconds"))}};
+          }
+          before = a.live;
+          before_at = a.live_at;
+        }
+        if (rates.is_map() && !a.stats.is_map() && !a.lost) m["rates"] = rates;  // a finished actor does nothing
+      }
+      if (a.stats.is_map()) {
+        // Its final figures: the counters end at what the end-of-run table prints, not at the last heartbeat.
+        m["stats"] = a.stats;
+        Value::Map final_live;
+        for (const char* k : {"requests", "points", "tiles", "busy_seconds", "bytes_in", "bytes_out"})
+          if (const Value* v = a.stats.find(k)) final_live[k] = *v;
+        final_live["queue"] = int64_t{0};
+        m["live"] = std::move(final_live);
+      }
+      actors.push_back(std::move(m));
+    }
+    Value::Array stages;
+    for (const auto& [name, secs] : stage_seconds_) stages.push_back(Value::Map{{"name", name}, {"seconds", secs}});
+    if (!image_written_)
+      stages.push_back(Value::Map{{"name", std::string(stage_name(supervisor_.stage())) + " (now)"},
+                                  {"seconds", now - stage_started_seconds()}});
+    Value::Array progress;
+    for (const auto& [key, p] : monitor_progress_) progress.push_back(p);
+    Value::Array log;
+    {
+      std::lock_guard<std::mutex> lock(log_mutex_);
+      for (const Value& l : log_lines_) log.push_back(l);
+    }
+    Value::Map farm{{"script", spec_.script},
+                    {"output", spec_.image.output},
+                    {"width", static_cast<int64_t>(spec_.image.width)},
+                    {"height", static_cast<int64_t>(spec_.image.height)},
+                    {"stage", image_written_ ? std::string("done") : std::string(stage_name(supervisor_.stage()))},
+                    {"elapsed_seconds", now},
+                    {"tiles_done", static_cast<int64_t>(tiles_.tiles_done())},
+                    {"tiles_total", static_cast<int64_t>(tiles_.tiles_total())}};
+    return Value::Map{{"farm", std::move(farm)}, {"actors", std::move(actors)}, {"stages", std::move(stages)},
+                      {"progress", std::move(progress)}, {"log", std::move(log)}};
+  }
+
+  double stage_started_seconds() const {
+    double sum = 0;
+    for (const auto& [name, secs] : stage_seconds_) sum += secs;
+    return sum;
+  }
+
+  // At most 4 states a second (and every call with `now`); the preview when tiles have landed, at most 2 a second.
+  void publish_monitor(bool now) {
+    const auto t = Clock::now();
+    if (!now && t - monitor_published_ < std::chrono::milliseconds(250)) return;
+    monitor_published_ = t;
+    monitor_->publish_state(monitor_state());
+    const size_t done = tiles_.tiles_done();
+    if (done != preview_tiles_ && (now || t - preview_published_ >= std::chrono::milliseconds(500))) {
+      preview_tiles_ = done;
+      preview_published_ = t;
+      publish_preview();
+    }
+  }
+
+  // The film so far as the output will look (exposure, tone map, sRGB), at most 640 pixels wide.
+  void publish_preview() {
+    const Image& film = tiles_.film();
+    const int step = std::max(1, (film.width + 639) / 640);
+    const int w = std::max(1, film.width / step), h = std::max(1, film.height / step);
+    const Display display{static_cast<float>(spec_.image.exposure), spec_.image.tonemap};
+    std::string rgb(static_cast<size_t>(w) * h * 3, '\0');
+    for (int y = 0; y < h; ++y)
+      for (int x = 0; x < w; ++x) {
+        const RGB& p = film.at(x * step, y * step);
+        for (int c = 0; c < 3; ++c)
+          rgb[(static_cast<size_t>(y) * w + x) * 3 + c] = static_cast<char>(static_cast<unsigned char>(
+              std::lround(255.0f * display_srgb(p[c], display))));
+      }
+    monitor_->publish_preview(w, h, rgb, tiles_.tiles_done());
+  }
+
+  // After the frame: the final figures, kept up for `monitor_hold` seconds (Ctrl-C ends the wait).
+  void hold_monitor(int status) {
+    publish_monitor(true);
+    publish_preview();
+    if (options_.monitor_hold <= 0) return;
+    if (!options_.quiet)
+      log_info("monitor: holding " + monitor_->url() + " for " + seconds_text(options_.monitor_hold) +
+               (status == 0 ? "" : " (the farm failed)"));
+    const auto until = Clock::now() + std::chrono::duration<double>(options_.monitor_hold);
+    while (Clock::now() < until && !stop_requested()) {
+      std::this_thread::sleep_for(std::chrono::milliseconds(200));
+      monitor_->publish_state(monitor_state());
+    }
   }
 
   Status dispatch(ActorRecord& a, wire::Message& m) {
@@ -536,6 +709,14 @@ class Director final : public ControlOut, public Outbox {
   std::vector<std::pair<std::string, double>> stage_seconds_;
   Clock::time_point start_, render_start_;
   double render_seconds_ = 0;
+  // The live monitor, when asked for (declared last: it goes first, before what its state reads).
+  std::map<std::string, Value> monitor_progress_;  // actor + step -> {actor, what, done, total}
+  std::map<std::string, std::tuple<Value, Clock::time_point, Value>> live_before_;  // figures, when, rates
+  std::mutex log_mutex_;
+  std::deque<Value> log_lines_;
+  Clock::time_point monitor_published_{}, preview_published_{};
+  size_t preview_tiles_ = SIZE_MAX;
+  std::unique_ptr<Monitor> monitor_;
 };
 
 }  // namespace

@@ -103,7 +103,14 @@ Status Supervisor::on_message(const std::string& peer, Result<wire::Message>& me
   if (const auto beats_for = it == actors_.end() ? heartbeat_owner(peer) : std::nullopt) {
     auto owner = actors_.find(*beats_for);
     if (owner != actors_.end() && message && message->header.type == MsgType::heartbeat) {
-      if (!owner->second.lost) owner->second.last_seen = Clock::now();
+      ActorRecord& a = owner->second;
+      if (a.lost) return Ok{};
+      a.last_seen = Clock::now();
+      // Its running figures (the monitor's); a plug-in may send none.
+      if (message->body.is_map()) {
+        a.live = std::move(message->body);
+        a.live_at = a.last_seen;
+      }
       return Ok{};
     }
   }

@@ -52,6 +52,8 @@ struct ActorRecord {
   std::string loss;          // why it was lost
   Clock::time_point last_seen;
   Value stats;
+  Value live;                   // its last HEARTBEAT's figures (requests, points, busy_seconds, queue, ...), if any
+  Clock::time_point live_at{};  // when they came
   const std::string& name() const { return spec->name; }
 };
 

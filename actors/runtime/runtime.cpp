@@ -155,7 +155,12 @@ void Runtime::start_heartbeats() {
     if (args_.keys) beat.make_curve_client(args_.keys->own.public_key, args_.keys->own.secret_key, args_.keys->director);
     if (!beat.connect(args_.director)) return;
     while (!heartbeat_stop_) {
-      beat.send(wire::make(MsgType::heartbeat, args_.name));
+      Value live;
+      {
+        std::lock_guard<std::mutex> lock(live_mutex_);
+        live = live_;
+      }
+      beat.send(wire::make(MsgType::heartbeat, args_.name, std::move(live)));
       // Four beats per timeout, at least one a second, so one late beat is never taken for a death. The interval
       // is read again while waiting: CONFIG may shorten it (a 1 s timeout) in the middle of the first wait.
       const auto sent = Clock::now();
@@ -231,6 +236,31 @@ void Runtime::report_progress(const std::string& what, uint64_t done, uint64_t t
   last->second = now;
   send_control(wire::make(MsgType::progress, args_.name,
                           Value::Map{{"what", what}, {"done", static_cast<int64_t>(done)}, {"total", static_cast<int64_t>(total)}}));
+}
+
+void Runtime::refresh_live(size_t queue_length) {
+  const auto now = Clock::now();
+  if (now - live_refreshed_ < std::chrono::milliseconds(250)) return;
+  live_refreshed_ = now;
+  wire::SocketCounters total;
+  for (const wire::SocketCounters& c : {control_.counters(), data_.counters()}) {
+    total.bytes_in += c.bytes_in;
+    total.bytes_out += c.bytes_out;
+  }
+  if (local_) {
+    total.bytes_in += local_->counters().bytes_in;
+    total.bytes_out += local_->counters().bytes_out;
+  }
+  for (auto& c : inputs_) {
+    total.bytes_in += c->socket().counters().bytes_in;
+    total.bytes_out += c->socket().counters().bytes_out;
+  }
+  Value live = Value::Map{{"requests", stats_.requests},         {"points", stats_.points},
+                          {"tiles", stats_.tiles},               {"busy_seconds", stats_.busy_seconds},
+                          {"queue", static_cast<uint64_t>(queue_length)}, {"bytes_in", total.bytes_in},
+                          {"bytes_out", total.bytes_out}};
+  std::lock_guard<std::mutex> lock(live_mutex_);
+  live_ = std::move(live);
 }
 
 void Runtime::send_stats_and_bye() {
@@ -482,6 +512,7 @@ int Runtime::run(Actor& actor) {
       add_busy(started);
     }
     stats_.peak_queue = std::max<uint32_t>(stats_.peak_queue, static_cast<uint32_t>(actor.queue_length()));
+    refresh_live(actor.queue_length());
 
   }
   return exit_status_;

@@ -16,6 +16,7 @@
 #include <functional>
 #include <map>
 #include <memory>
+#include <mutex>
 #include <optional>
 #include <string>
 #include <thread>
@@ -151,6 +152,11 @@ class Runtime {
   void stop_heartbeats();
   std::thread heartbeat_thread_;
   std::atomic<bool> heartbeat_stop_{false};
+  // The running figures each HEARTBEAT carries (for the director's monitor), refreshed by the main loop.
+  void refresh_live(size_t queue_length);
+  std::mutex live_mutex_;
+  Value live_;
+  std::chrono::steady_clock::time_point live_refreshed_{};
   std::atomic<double> heartbeat_interval_{1.0};
   bool configured_ = false;
   bool stopping_ = false;

@@ -1,0 +1,72 @@
+#pragma once
+// The live monitor (`lightfarm run --monitor [ADDR:]PORT`): a web page served by the director while the farm runs
+// (NetWatch, seed 000). cpp-httplib serves, on threads of its own:
+//   /              the page (monitor_page.cpp: HTML, CSS and JS in the binary, nothing from elsewhere)
+//   /events        Server-Sent Events: `state` (the JSON of /api/state) at least once a second and whenever it
+//                  changes, `preview` ({width, height, tiles, version, rgb: the pixels
+//                  in base64}) as tiles land
+//   /api/state     the same state as one JSON document (docs/monitor.md)
+//   /api/preview   the image so far, tone-mapped as the output will be: width x height 8-bit RGB, top row first
+//   /metrics       per-actor counters in Prometheus' text format
+// The director's loop publishes; readers never touch the farm, so a slow, vanished or numerous client costs the
+// farm nothing but the copy of a string. Bound to 127.0.0.1 unless told otherwise; on any other address every
+// request must carry the token printed at start (?token=...).
+#include <condition_variable>
+#include <cstdint>
+#include <memory>
+#include <mutex>
+#include <string>
+#include <thread>
+
+#include "core/result.hpp"
+#include "core/value.hpp"
+
+namespace httplib {
+class Server;
+}
+
+namespace lf {
+
+class Monitor {
+ public:
+  // `address`: "PORT" or "ADDR:PORT"; port 0 picks a free one.
+  static Result<std::unique_ptr<Monitor>> start(const std::string& address);
+  ~Monitor();
+  Monitor(const Monitor&) = delete;
+  Monitor& operator=(const Monitor&) = delete;
+
+  // The page's address, with the token when there is one.
+  std::string url() const;
+  int port() const { return port_; }
+
+  // The farm's state (docs/monitor.md); wakes every /events stream.
+  void publish_state(const Value& state);
+  // The image so far: width x height 8-bit RGB, and how many tiles it holds.
+  void publish_preview(int width, int height, const std::string& rgb, uint64_t tiles);
+  // Clients connected to /events now, and ever.
+  int streams() const { return streams_; }
+
+ private:
+  Monitor() = default;
+  bool allowed(const std::string& token) const;
+  std::string metrics_text(const Value& state) const;
+
+  std::unique_ptr<httplib::Server> server_;
+  std::thread thread_;
+  std::string host_, token_;
+  int port_ = 0;
+
+  mutable std::mutex mutex_;
+  std::condition_variable changed_;
+  bool stopping_ = false;
+  std::string state_json_ = "{}", metrics_ = "";
+  uint64_t state_version_ = 0;
+  std::string preview_json_, preview_rgb_;
+  uint64_t preview_version_ = 0;
+  int streams_ = 0;
+};
+
+// The page itself (monitor_page.cpp).
+extern const char* const kMonitorPage;
+
+}  // namespace lf

@@ -1,0 +1,148 @@
+// The monitor's page: everything it needs is here (no scripts or styles from elsewhere, so it works offline).
+// It listens to /events, draws the lighting network (columns by depth from the renderers, each node naming its
+// host), the actors' figures, the image as tiles land, the phases, setup steps and the log.
+// Elements carry data-* attributes (actor, state, tiles) so that tests read the page as a browser shows it.
+#include "actors/director/monitor.hpp"
+
+namespace lf {
+
+const char* const kMonitorPage = R"PAGE(<!doctype html>
+<html lang="en">
+<head>
+<meta charset="utf-8">
+<title>lightfarm monitor</title>
+<style>
+body { font: 13px/1.4 system-ui, sans-serif; margin: 0; background: #14161a; color: #d8dce3; }
+header { padding: 8px 14px; background: #1d2026; display: flex; gap: 24px; align-items: baseline; flex-wrap: wrap; }
+header h1 { font-size: 15px; margin: 0; }
+main { display: grid; grid-template-columns: minmax(420px, 1fr) minmax(320px, 1fr); gap: 12px; padding: 12px; }
+section { background: #1d2026; border-radius: 6px; padding: 8px 10px; overflow: auto; }
+h2 { font-size: 13px; margin: 0 0 6px; color: #9aa3b2; font-weight: 600; }
+table { border-collapse: collapse; width: 100%; }
+td, th { padding: 2px 6px; text-align: right; white-space: nowrap; }
+td:first-child, th:first-child, td.l, th.l { text-align: left; }
+tr[data-state=lost] td { color: #ff6b6b; }
+.bar { height: 6px; background: #2c313a; border-radius: 3px; }
+.bar > div { height: 6px; background: #5fb3ff; border-radius: 3px; }
+#log { font-family: ui-monospace, monospace; font-size: 12px; max-height: 260px; }
+#log .warning { color: #f2c94c; } #log .error, #log .loss { color: #ff6b6b; } #log .recovery { color: #6fcf97; }
+canvas { image-rendering: pixelated; max-width: 100%; background: #000; }
+svg text { fill: #d8dce3; font-size: 11px; }
+.state-launching { fill: #4a4f5a; } .state-configuring, .state-setup { fill: #7a6a2a; }
+.state-ready { fill: #33546e; } .state-rendering { fill: #2f6b45; } .state-done { fill: #3b3f47; }
+.state-lost { fill: #8a2f2f; } .state-restarting { fill: #8a5a2f; }
+</style>
+</head>
+<body>
+<header><h1>lightfarm</h1><span id="script"></span><span>stage <b id="stage">-</b></span>
+<span id="elapsed"></span><span id="tiles"></span><span id="connection">connecting</span></header>
+<main>
+<section><h2>Network</h2><svg id="graph" width="100%" height="200"></svg></section>
+<section><h2>Image</h2><canvas id="preview" data-tiles="0" data-checksum="0" width="1" height="1"></canvas></section>
+<section style="grid-column: 1 / span 2"><h2>Actors</h2><table><thead><tr><th>actor</th><th class="l">kind</th><th class="l">host</th>
+<th class="l">state</th><th>busy</th><th>requests/s</th><th>points/s</th><th>queue</th><th>MiB in</th><th>MiB out</th><th>pid</th>
+</tr></thead><tbody id="actors"></tbody></table></section>
+<section><h2>Phases</h2><table id="stages"></table><h2 style="margin-top:10px">Setup</h2><table id="progress"></table></section>
+<section><h2>Log</h2><div id="log"></div></section>
+</main>
+<script>
+"use strict";
+const query = location.search;
+const $ = id => document.getElementById(id);
+const esc = s => String(s).replace(/[&<>"]/g, c => ({"&": "&amp;", "<": "&lt;", ">": "&gt;", '"': "&quot;"}[c]));
+const num = (v, d = 0) => (typeof v === "number" ? v.toFixed(d) : "-");
+
+function drawGraph(actors) {
+  const byName = new Map(actors.map(a => [a.name, a]));
+  const depth = new Map();
+  const visit = (a, d) => {
+    if ((depth.get(a.name) ?? -1) >= d) return;
+    depth.set(a.name, d);
+    for (const i of a.inputs) if (byName.has(i)) visit(byName.get(i), d + 1);
+  };
+  for (const a of actors) if (a.kind === "renderer") visit(a, 0);
+  for (const a of actors) if (!depth.has(a.name)) visit(a, 0);
+  const columns = [];
+  for (const a of actors) (columns[depth.get(a.name)] ??= []).push(a);
+  const w = 150, h = 34, gap = 14, at = new Map();
+  columns.forEach((col, c) => col.forEach((a, r) => at.set(a.name, {x: 10 + c * (w + 40), y: 10 + r * (h + gap)})));
+  let svg = "";
+  for (const a of actors)
+    for (const i of a.inputs) {
+      const p = at.get(a.name), q = at.get(i);
+      if (p && q) svg += `<line x1="${p.x + w}" y1="${p.y + h / 2}" x2="${q.x}" y2="${q.y + h / 2}" stroke="#566" />`;
+    }
+  for (const a of actors) {
+    const p = at.get(a.name);
+    svg += `<g class="node" data-actor="${esc(a.name)}" data-state="${esc(a.state)}">` +
+      `<rect x="${p.x}" y="${p.y}" width="${w}" height="${h}" rx="5" class="state-${esc(a.state)}" />` +
+      `<text x="${p.x + 6}" y="${p.y + 14}">${esc(a.name)}</text>` +
+      `<text x="${p.x + 6}" y="${p.y + 28}" opacity="0.7">${esc(a.kind)} @ ${esc(a.host)} · ${esc(a.state)}</text></g>`;
+  }
+  const rows = Math.max(1, ...columns.map(c => c.length));
+  $("graph").setAttribute("height", 20 + rows * (h + gap));
+  $("graph").innerHTML = svg;
+}
+
+function render(s) {
+  const f = s.farm || {};
+  $("script").textContent = f.script || "";
+  $("stage").textContent = f.stage || "-";
+  $("elapsed").textContent = num(f.elapsed_seconds, 1) + " s";
+  $("tiles").textContent = `tiles ${f.tiles_done ?? 0} / ${f.tiles_total ?? 0}`;
+  const actors = s.actors || [];
+  drawGraph(actors);
+  $("actors").innerHTML = actors.map(a => {
+    const live = a.live || {}, rate = a.rates || {};
+    return `<tr data-actor="${esc(a.name)}" data-state="${esc(a.state)}"><td>${esc(a.name)}</td><td class="l">${esc(a.kind)}</td>` +
+      `<td class="l">${esc(a.host)}</td><td class="l">${esc(a.state)}${a.loss ? " — " + esc(a.loss) : ""}</td>` +
+      `<td>${num(100 * (rate.busy_share ?? NaN))}%</td><td>${num(rate.requests_per_second, 1)}</td>` +
+      `<td>${num(rate.points_per_second)}</td><td>${live.queue ?? "-"}</td>` +
+      `<td>${num((live.bytes_in ?? NaN) / 1048576, 1)}</td><td>${num((live.bytes_out ?? NaN) / 1048576, 1)}</td>` +
+      `<td>${a.pid ?? ""}</td></tr>`;
+  }).join("");
+  $("stages").innerHTML = (s.stages || []).map(t => `<tr><td>${esc(t.name)}</td><td>${num(t.seconds, 3)} s</td></tr>`).join("");
+  $("progress").innerHTML = (s.progress || []).map(p => `<tr><td>${esc(p.actor)}</td><td class="l">${esc(p.what)}</td>` +
+    `<td style="width:40%"><div class="bar"><div style="width:${(100 * p.done / Math.max(1, p.total)).toFixed(1)}%"></div></div></td>` +
+    `<td>${p.done} / ${p.total}</td></tr>`).join("");
+  const log = $("log");
+  log.innerHTML = (s.log || []).map(l => `<div class="${esc(l.kind)}">${num(l.seconds, 1)} s  ${esc(l.text)}</div>`).join("");
+}
+
+let previewVersion = 0;
+function preview(p) {
+  if (p.version <= previewVersion) return;
+  previewVersion = p.version;
+  const bytes = atob(p.rgb), c = $("preview");
+  if (bytes.length !== p.width * p.height * 3) return;
+  c.width = p.width;
+  c.height = p.height;
+  const img = new ImageData(p.width, p.height);
+  let sum = 0;
+  for (let i = 0, j = 0; i < bytes.length; i += 3, j += 4) {
+    const r = bytes.charCodeAt(i), g = bytes.charCodeAt(i + 1), b = bytes.charCodeAt(i + 2);
+    img.data[j] = r; img.data[j + 1] = g; img.data[j + 2] = b; img.data[j + 3] = 255;
+    sum = (sum + r + g + b) % 1000000007;
+  }
+  c.getContext("2d").putImageData(img, 0, 0);
+  c.dataset.tiles = p.tiles;
+  c.dataset.checksum = sum;
+}
+
+if (new URLSearchParams(location.search).has("snapshot")) {
+  // One look, no stream: for tools that read the page once (a headless browser's --dump-dom).
+  const sep = query ? "&" : "?";
+  fetch("/api/state" + query).then(r => r.json()).then(s => { $("connection").textContent = "snapshot"; render(s); });
+  fetch("/api/preview" + query + sep + "format=json").then(r => r.json()).then(p => { if (p.rgb) preview(p); });
+} else {
+  const events = new EventSource("/events" + query);
+  events.addEventListener("state", e => { $("connection").textContent = "live"; render(JSON.parse(e.data)); });
+  events.addEventListener("preview", e => preview(JSON.parse(e.data)));
+  events.onerror = () => { $("connection").textContent = "disconnected (the farm has ended?)"; };
+}
+</script>
+</body>
+</html>
+)PAGE";
+
+}  // namespace lf

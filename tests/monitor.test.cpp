@@ -1,0 +1,234 @@
+// The live monitor (issue 15): the page as headless Chromium shows it while a farm runs (every actor, the image
+// filling in, a replica killed mid-frame shown as lost), /api/state and /metrics against the end-of-run figures,
+// many and vanishing clients, the token off loopback, and a port in use.
+#include <httplib.h>
+
+#include <atomic>
+#include <cstdio>
+#include <regex>
+#include <thread>
+
+#include "render/image.hpp"
+#include "tests/farm_harness.hpp"
+
+namespace lf::test {
+namespace {
+
+const std::string kSource = LIGHTFARM_SOURCE_DIR;
+const std::string kCornell = kSource + "/examples/cornell.lua";
+const std::string kSlowPool = kSource + "/tests/scripts/slow_pool.lua";
+
+// The monitor's address, from the line the director prints at start.
+std::string monitor_url(Farm& farm) {
+  std::string url;
+  Farm::eventually([&] {
+    std::smatch m;
+    const std::string err = farm.err_so_far();
+    if (std::regex_search(err, m, std::regex("monitor: (http://[^ \n]+)"))) url = m[1];
+    return !url.empty();
+  }, 20);
+  return url;
+}
+
+std::string run_command(const std::string& command) {
+  std::string out;
+  if (FILE* p = ::popen(command.c_str(), "r")) {
+    char buf[4096];
+    size_t n;
+    while ((n = std::fread(buf, 1, sizeof buf, p)) > 0) out.append(buf, n);
+    ::pclose(p);
+  }
+  return out;
+}
+
+bool have_chromium() { return ::system("command -v chromium > /dev/null 2>&1") == 0; }
+
+// The page's DOM once its scripts have run, as headless Chromium renders it (one look: ?snapshot).
+std::string page_dom(const std::string& url) {
+  return run_command("timeout 60 chromium --headless=new --no-sandbox --disable-gpu --no-first-run "
+                     "--user-data-dir=$(mktemp -d) --virtual-time-budget=2000 --dump-dom '" +
+                     url + (url.find('?') == std::string::npos ? "?" : "&") + "snapshot' 2>/dev/null");
+}
+
+std::string attribute(const std::string& dom, const std::string& element_id, const std::string& name) {
+  std::smatch m;
+  if (!std::regex_search(dom, m, std::regex("id=\"" + element_id + "\"[^>]*" + name + "=\"([^\"]*)\""))) return "";
+  return m[1];
+}
+
+std::string state_of(const std::string& dom, const std::string& actor) {
+  std::smatch m;
+  if (!std::regex_search(dom, m, std::regex("<tr data-actor=\"" + actor + "\" data-state=\"([a-z]+)\""))) return "";
+  return m[1];
+}
+
+std::pair<std::string, httplib::Client> client_for(const std::string& url) {
+  std::smatch m;
+  std::regex_search(url, m, std::regex("http://([^:/]+):([0-9]+)/(\\?token=[0-9a-f]+)?"));
+  return {m[3], httplib::Client(m[1].str(), std::stoi(m[2]))};
+}
+
+class MonitorTest : public FarmFixture {};
+
+TEST_F(MonitorTest, ThePageShowsTheNetworkTheImageFillingInAndALostReplica) {
+  if (!have_chromium()) GTEST_SKIP() << "no chromium (Debian's chromium package) for the page test";
+  Farm farm({"run", kSlowPool, "--set", "spp=64", "--set", "slowdown=6", "--set", "heartbeat_timeout=1.5",
+             "--monitor", "0", "--monitor-hold", "8", "--output", path("slow.exr")});
+  const std::string url = monitor_url(farm);
+  ASSERT_FALSE(url.empty()) << farm.err_so_far();
+  EXPECT_EQ(url.find("token"), std::string::npos) << "loopback needs no token";
+  ASSERT_TRUE(Farm::eventually([&] { return farm.err_so_far().find("render 10%") != std::string::npos; }, 60));
+
+  const std::string first = page_dom(url);
+  // Every actor of the farm, in the graph and in the table.
+  for (const char* actor : {"renderer-0", "renderer-1", "direct", "direct.0", "direct.1"}) {
+    EXPECT_NE(first.find(std::string("<g class=\"node\" data-actor=\"") + actor + "\""), std::string::npos) << actor;
+    EXPECT_EQ(state_of(first, actor), "rendering") << actor;
+  }
+  const int tiles_first = std::atoi(attribute(first, "preview", "data-tiles").c_str());
+  EXPECT_GT(tiles_first, 0) << "the preview shows the first tiles";
+  EXPECT_EQ(attribute(first, "preview", "width"), "128");
+
+  auto replica = actor_pids(farm.tag(), "direct.1");
+  ASSERT_EQ(replica.size(), 1u);
+  ::kill(replica[0], SIGKILL);
+  std::string later;
+  ASSERT_TRUE(Farm::eventually([&] {
+    later = page_dom(url);
+    return state_of(later, "direct.1") == "lost";
+  }, 30)) << later;
+  EXPECT_GT(std::atoi(attribute(later, "preview", "data-tiles").c_str()), tiles_first) << "tiles keep landing";
+  EXPECT_NE(attribute(later, "preview", "data-checksum"), attribute(first, "preview", "data-checksum"));
+  EXPECT_NE(later.find("class=\"loss\""), std::string::npos) << "the loss is marked in the log";
+
+  // The frame completes; the held page shows it done. One screenshot is kept beside the build as an artifact.
+  ASSERT_TRUE(Farm::eventually([&] { return farm.err_so_far().find("monitor: holding") != std::string::npos; }, 120));
+  const std::string done = page_dom(url);
+  EXPECT_EQ(state_of(done, "direct.1"), "lost");
+  EXPECT_EQ(state_of(done, "direct.0"), "done");
+  EXPECT_EQ(attribute(done, "preview", "data-tiles"), "64");
+  run_command("timeout 60 chromium --headless=new --no-sandbox --disable-gpu --no-first-run --user-data-dir=$(mktemp -d) "
+              "--virtual-time-budget=2000 --window-size=1280,1000 --screenshot=" LIGHTFARM_BUILD_DIR
+              "/monitor-screenshot.png '" + url + "?snapshot' > /dev/null 2>&1");
+  auto r = farm.wait(60);
+  EXPECT_EQ(r.status, 0) << r.err;
+  expect_no_leftovers(r);
+}
+
+// /api/state and /metrics, read while the page is held after the frame, hold what the end-of-run figures say.
+TEST_F(MonitorTest, StateAndMetricsHoldTheEndOfRunFigures) {
+  Farm farm({"run", kCornell, "--set", "width=64", "--set", "height=64", "--set", "spp=4", "--monitor", "0",
+             "--monitor-hold", "30", "--stats-json", path("stats.json"), "--output", path("c.exr")});
+  const std::string url = monitor_url(farm);
+  ASSERT_FALSE(url.empty()) << farm.err_so_far();
+  ASSERT_TRUE(Farm::eventually([&] { return farm.err_so_far().find("monitor: holding") != std::string::npos; }, 60));
+  auto [token, client] = client_for(url);
+  auto state = client.Get("/api/state");
+  auto metrics = client.Get("/metrics");
+  ASSERT_TRUE(state && metrics);
+  EXPECT_EQ(state->status, 200);
+  write("state.json", state->body);
+  // Parsed by Python's json (a parser we did not write), and held against --stats-json's figures.
+  const std::string check = run_command(
+      "python3 -c \"import json,sys; s=json.load(open('" + path("state.json") + "')); t=json.load(open('" +
+      path("stats.json") + "')); st={a['name']: a for a in t['actors']}; "
+      "print(s['farm']['stage'], s['farm']['tiles_done'], s['farm']['tiles_total'], "
+      "all(a['live']['points'] == st[a['name']]['points'] and a['live']['requests'] == st[a['name']]['requests'] "
+      "for a in s['actors']), sorted(a['name'] for a in s['actors']))\"");
+  EXPECT_EQ(check, "done 4 4 True ['direct', 'renderer-0', 'renderer-1']\n") << state->body;
+  // Metrics: Prometheus text, one series per actor, the same counts.
+  EXPECT_EQ(metrics->get_header_value("Content-Type").rfind("text/plain", 0), 0u);
+  const std::string points = run_command("python3 -c \"import json; t=json.load(open('" + path("stats.json") +
+                                         "')); print([a['points'] for a in t['actors'] if a['name']=='direct'][0])\"");
+  EXPECT_NE(metrics->body.find("lightfarm_actor_points_total{actor=\"direct\",kind=\"direct\"} " +
+                               points.substr(0, points.size() - 1) + ".000000\n"),
+            std::string::npos)
+      << metrics->body;
+  EXPECT_NE(metrics->body.find("lightfarm_tiles_done 4.000000\n"), std::string::npos);
+  EXPECT_NE(metrics->body.find("# TYPE lightfarm_actor_busy_seconds_total counter\n"), std::string::npos);
+  ::kill(farm.pid(), SIGINT);  // ends the hold
+  auto r = farm.wait(30);
+  EXPECT_EQ(r.status, 0) << r.err;
+  expect_no_leftovers(r);
+}
+
+// Fifty clients on /events at once, one of which drops its stream mid-way, do not break the farm or change its
+// image.
+TEST_F(MonitorTest, ManyClientsAndADroppedStreamLeaveTheFarmAndItsImageAlone) {
+  const std::vector<std::string> base{"run", kSlowPool, "--set", "spp=32", "--set", "slowdown=3"};
+  auto plain = base;
+  plain.insert(plain.end(), {"--output", path("plain.exr")});
+  auto r0 = run_lightfarm(plain);
+  ASSERT_EQ(r0.status, 0) << r0.err;
+
+  auto watched = base;
+  // Held 3 s after the frame, so that every client has connected before the server goes.
+  watched.insert(watched.end(), {"--monitor", "0", "--monitor-hold", "3", "--output", path("watched.exr")});
+  Farm farm(watched);
+  const std::string url = monitor_url(farm);
+  ASSERT_FALSE(url.empty()) << farm.err_so_far();
+  std::atomic<int> got_state{0}, got_preview{0};
+  std::vector<std::thread> clients;
+  for (int c = 0; c < 50; ++c)
+    clients.emplace_back([&, c] {
+      auto [token, client] = client_for(url);
+      client.set_read_timeout(60, 0);
+      size_t seen = 0;
+      bool counted_state = false, counted_preview = false;
+      client.Get("/events", [&](const char* data, size_t n) {
+        const std::string chunk(data, n);
+        if (!counted_state && chunk.find("event: state") != std::string::npos) counted_state = true, ++got_state;
+        if (!counted_preview && chunk.find("event: preview") != std::string::npos) counted_preview = true, ++got_preview;
+        seen += n;
+        return c != 0 || seen < 2000;  // client 0 hangs up after its first events
+      });
+    });
+  auto r = farm.wait(120);
+  for (auto& t : clients) t.join();
+  EXPECT_EQ(r.status, 0) << r.err;
+  EXPECT_EQ(got_state.load(), 50);
+  EXPECT_GE(got_preview.load(), 49);
+  auto a = read_image(path("plain.exr")), b = read_image(path("watched.exr"));
+  ASSERT_TRUE(a && b);
+  EXPECT_EQ(a->pixels, b->pixels) << "the monitor does not change the image";
+  expect_no_leftovers(r);
+}
+
+// Off loopback, a request without the token printed at start is refused.
+TEST_F(MonitorTest, AMonitorBeyondLoopbackWantsItsToken) {
+  Farm farm({"run", kCornell, "--set", "width=32", "--set", "height=32", "--set", "spp=1", "--monitor", "0.0.0.0:0",
+             "--monitor-hold", "30", "--output", path("c.exr")});
+  const std::string url = monitor_url(farm);
+  ASSERT_NE(url.find("?token="), std::string::npos) << farm.err_so_far();
+  std::smatch m;
+  ASSERT_TRUE(std::regex_search(url, m, std::regex(":([0-9]+)/\\?token=([0-9a-f]{16})$"))) << url;
+  httplib::Client client("127.0.0.1", std::stoi(m[1]));
+  auto refused = client.Get("/api/state");
+  ASSERT_TRUE(refused);
+  EXPECT_EQ(refused->status, 403);
+  auto let_in = client.Get("/api/state?token=" + m[2].str());
+  ASSERT_TRUE(let_in);
+  EXPECT_EQ(let_in->status, 200);
+  auto wrong = client.Get("/metrics?token=0000000000000000");
+  ASSERT_TRUE(wrong);
+  EXPECT_EQ(wrong->status, 403);
+  ::kill(farm.pid(), SIGINT);
+  auto r = farm.wait(30);
+  expect_no_leftovers(r);
+}
+
+// A port that is taken stops the farm before anything launches, saying so.
+TEST_F(MonitorTest, APortInUseIsAClearErrorBeforeAnythingStarts) {
+  httplib::Server holder;
+  const int port = holder.bind_to_any_port("127.0.0.1");
+  ASSERT_GT(port, 0);
+  auto r = run_lightfarm({"run", kCornell, "--monitor", std::to_string(port), "--output", path("c.exr")});
+  EXPECT_EQ(r.status, 2);
+  EXPECT_EQ(r.err, "lightfarm: error: --monitor: cannot listen on 127.0.0.1:" + std::to_string(port) +
+                       " (in use, or not an address of this machine)\n");
+  EXPECT_FALSE(fs::exists(path("c.exr")));
+  expect_no_leftovers(r);
+}
+
+}  // namespace
+}  // namespace lf::test
