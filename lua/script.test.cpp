@@ -191,8 +191,11 @@ TEST_F(ScriptTest, FarmSettingsAndHosts) {
   ASSERT_TRUE(r.ok()) << r.error().message;
   EXPECT_DOUBLE_EQ(r->heartbeat_timeout, 2.5);
   EXPECT_EQ(error_of("farm { heartbeat = 3 }\n"),
-            "farm.lua:1: farm: unknown parameter 'heartbeat' (known: director_address, heartbeat_timeout, request_timeout, "
-            "security)");
+            "farm.lua:1: farm: unknown parameter 'heartbeat' (known: director_address, heartbeat_timeout, monitor, "
+            "request_timeout, security)");
+  auto watched = evaluate_script(write("farm.lua", std::string(kCornell) + "farm { monitor = \"127.0.0.1:8080\" }\n"));
+  ASSERT_TRUE(watched.ok()) << watched.error().message;
+  EXPECT_EQ(watched->monitor, "127.0.0.1:8080");
   EXPECT_EQ(error_of("local h = host \"gpu1\" { launcher = \"ssh\" }\n"),
             "farm.lua:1: host 'gpu1': an ssh host needs address = \"...\" (where its actors listen and ssh reaches it)");
   EXPECT_EQ(error_of("local h = host \"gpu1\" { launcher = \"slurm\" }\n"),

@@ -494,7 +494,14 @@ class Director final : public ControlOut, public Outbox {
     }
     check(supervisor_.check_heartbeats(Clock::now()));
     supervisor_.send_heartbeats(Clock::now());
-    if (monitor_) publish_monitor(false);
+    if (monitor_) {
+      if (tiles_.tiles_done() != tiles_seen_) {  // when the latest tile landed, for the page's latency
+        tiles_seen_ = tiles_.tiles_done();
+        tile_landed_ms_ = std::chrono::duration_cast<std::chrono::milliseconds>(
+                              std::chrono::system_clock::now().time_since_epoch()).count();
+      }
+      publish_monitor(false);
+    }
   }
 
   // --- The live monitor: the state it shows, built here on the director's thread and handed over as a copy.
@@ -588,8 +595,19 @@ class Director final : public ControlOut, public Outbox {
                     {"elapsed_seconds", now},
                     {"tiles_done", static_cast<int64_t>(tiles_.tiles_done())},
                     {"tiles_total", static_cast<int64_t>(tiles_.tiles_total())}};
-    return Value::Map{{"farm", std::move(farm)}, {"actors", std::move(actors)}, {"stages", std::move(stages)},
-                      {"progress", std::move(progress)}, {"log", std::move(log)}};
+    Value::Map state{{"farm", std::move(farm)}, {"actors", std::move(actors)}, {"stages", std::move(stages)},
+                     {"progress", std::move(progress)}, {"log", std::move(log)}};
+    if (ring_.active()) {
+      // The last 200 iterations' unshot power (older ones thinned out): what a progressive solution shows.
+      const auto& unshot = ring_.unshot_fraction();
+      Value::Array tail;
+      const size_t step = std::max<size_t>(1, unshot.size() / 200);
+      for (size_t i = 0; i < unshot.size(); i += step) tail.push_back(unshot[i]);
+      if (!unshot.empty() && (unshot.size() - 1) % step != 0) tail.push_back(unshot.back());
+      state["radiosity"] = Value::Map{{"iterations", static_cast<int64_t>(unshot.size())},
+                                      {"unshot_fraction", std::move(tail)}};
+    }
+    return state;
   }
 
   double stage_started_seconds() const {
@@ -626,7 +644,7 @@ class Director final : public ControlOut, public Outbox {
           rgb[(static_cast<size_t>(y) * w + x) * 3 + c] = static_cast<char>(static_cast<unsigned char>(
               std::lround(255.0f * display_srgb(p[c], display))));
       }
-    monitor_->publish_preview(w, h, rgb, tiles_.tiles_done());
+    monitor_->publish_preview(w, h, rgb, tiles_.tiles_done(), tile_landed_ms_);
   }
 
   // After the frame: the final figures, kept up for `monitor_hold` seconds (Ctrl-C ends the wait).
@@ -715,7 +733,8 @@ class Director final : public ControlOut, public Outbox {
   std::mutex log_mutex_;
   std::deque<Value> log_lines_;
   Clock::time_point monitor_published_{}, preview_published_{};
-  size_t preview_tiles_ = SIZE_MAX;
+  size_t preview_tiles_ = SIZE_MAX, tiles_seen_ = 0;
+  int64_t tile_landed_ms_ = 0;  // Unix time of the latest tile's arrival
   std::unique_ptr<Monitor> monitor_;
 };
 

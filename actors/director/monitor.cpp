@@ -175,7 +175,7 @@ void Monitor::publish_state(const Value& state) {
   changed_.notify_all();
 }
 
-void Monitor::publish_preview(int width, int height, const std::string& rgb, uint64_t tiles) {
+void Monitor::publish_preview(int width, int height, const std::string& rgb, uint64_t tiles, int64_t landed_ms) {
   {
     std::lock_guard<std::mutex> lock(mutex_);
     ++preview_version_;
@@ -185,7 +185,8 @@ void Monitor::publish_preview(int width, int height, const std::string& rgb, uin
                                   reinterpret_cast<const unsigned char*>(rgb.data()), static_cast<int>(rgb.size()));
     base64.resize(static_cast<size_t>(std::max(0, n)));
     preview_json_ = "{\"width\":" + std::to_string(width) + ",\"height\":" + std::to_string(height) +
-                    ",\"tiles\":" + std::to_string(tiles) + ",\"version\":" + std::to_string(preview_version_) +
+                    ",\"tiles\":" + std::to_string(tiles) + ",\"landed_ms\":" + std::to_string(landed_ms) +
+                    ",\"version\":" + std::to_string(preview_version_) +
                     ",\"rgb\":\"" + base64 + "\"}";
     preview_rgb_ = rgb;
   }

@@ -3,8 +3,8 @@
 // (NetWatch, seed 000). cpp-httplib serves, on threads of its own:
 //   /              the page (monitor_page.cpp: HTML, CSS and JS in the binary, nothing from elsewhere)
 //   /events        Server-Sent Events: `state` (the JSON of /api/state) at least once a second and whenever it
-//                  changes, `preview` ({width, height, tiles, version, rgb: the pixels
-//                  in base64}) as tiles land
+//                  changes, `preview` ({width, height, tiles, landed_ms, version, rgb: the
+//                  pixels in base64}) as tiles land
 //   /api/state     the same state as one JSON document (docs/monitor.md)
 //   /api/preview   the image so far, tone-mapped as the output will be: width x height 8-bit RGB, top row first
 //   /metrics       per-actor counters in Prometheus' text format
@@ -41,8 +41,8 @@ class Monitor {
 
   // The farm's state (docs/monitor.md); wakes every /events stream.
   void publish_state(const Value& state);
-  // The image so far: width x height 8-bit RGB, and how many tiles it holds.
-  void publish_preview(int width, int height, const std::string& rgb, uint64_t tiles);
+  // The image so far: width x height 8-bit RGB, how many tiles it holds, and when the latest landed (Unix ms).
+  void publish_preview(int width, int height, const std::string& rgb, uint64_t tiles, int64_t landed_ms);
   // Clients connected to /events now, and ever.
   int streams() const { return streams_; }
 

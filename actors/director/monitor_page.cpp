@@ -40,9 +40,9 @@ svg text { fill: #d8dce3; font-size: 11px; }
 <section><h2>Network</h2><svg id="graph" width="100%" height="200"></svg></section>
 <section><h2>Image</h2><canvas id="preview" data-tiles="0" data-checksum="0" width="1" height="1"></canvas></section>
 <section style="grid-column: 1 / span 2"><h2>Actors</h2><table><thead><tr><th>actor</th><th class="l">kind</th><th class="l">host</th>
-<th class="l">state</th><th>busy</th><th>requests/s</th><th>points/s</th><th>queue</th><th>MiB in</th><th>MiB out</th><th>pid</th>
+<th class="l">state</th><th>busy</th><th>requests/s</th><th>points/s</th><th>queue</th><th>in flight</th><th>MiB in</th><th>MiB out</th><th>pid</th>
 </tr></thead><tbody id="actors"></tbody></table></section>
-<section><h2>Phases</h2><table id="stages"></table><h2 style="margin-top:10px">Setup</h2><table id="progress"></table></section>
+<section><h2>Phases</h2><table id="stages"></table><h2 style="margin-top:10px">Setup</h2><table id="progress"></table><div id="radiosity"></div></section>
 <section><h2>Log</h2><div id="log"></div></section>
 </main>
 <script>
@@ -97,7 +97,7 @@ function render(s) {
     return `<tr data-actor="${esc(a.name)}" data-state="${esc(a.state)}"><td>${esc(a.name)}</td><td class="l">${esc(a.kind)}</td>` +
       `<td class="l">${esc(a.host)}</td><td class="l">${esc(a.state)}${a.loss ? " — " + esc(a.loss) : ""}</td>` +
       `<td>${num(100 * (rate.busy_share ?? NaN))}%</td><td>${num(rate.requests_per_second, 1)}</td>` +
-      `<td>${num(rate.points_per_second)}</td><td>${live.queue ?? "-"}</td>` +
+      `<td>${num(rate.points_per_second)}</td><td>${live.queue ?? "-"}</td><td>${live.in_flight ?? "-"}</td>` +
       `<td>${num((live.bytes_in ?? NaN) / 1048576, 1)}</td><td>${num((live.bytes_out ?? NaN) / 1048576, 1)}</td>` +
       `<td>${a.pid ?? ""}</td></tr>`;
   }).join("");
@@ -105,6 +105,13 @@ function render(s) {
   $("progress").innerHTML = (s.progress || []).map(p => `<tr><td>${esc(p.actor)}</td><td class="l">${esc(p.what)}</td>` +
     `<td style="width:40%"><div class="bar"><div style="width:${(100 * p.done / Math.max(1, p.total)).toFixed(1)}%"></div></div></td>` +
     `<td>${p.done} / ${p.total}</td></tr>`).join("");
+  const rad = s.radiosity;
+  $("radiosity").innerHTML = rad && rad.unshot_fraction.length ? (() => {
+    const u = rad.unshot_fraction, w = 300, h = 60, top = Math.max(...u, 1e-9);
+    const pts = u.map((v, i) => `${(w * i / Math.max(1, u.length - 1)).toFixed(1)},${(h - h * v / top).toFixed(1)}`).join(" ");
+    return `radiosity: ${rad.iterations} iterations, unshot ${(100 * u[u.length - 1]).toFixed(2)} %<br>` +
+      `<svg width="${w}" height="${h}"><polyline fill="none" stroke="#5fb3ff" points="${pts}" /></svg>`;
+  })() : "";
   const log = $("log");
   log.innerHTML = (s.log || []).map(l => `<div class="${esc(l.kind)}">${num(l.seconds, 1)} s  ${esc(l.text)}</div>`).join("");
 }

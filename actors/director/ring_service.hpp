@@ -52,7 +52,9 @@ class RingService final : public Service {
   const std::string& ply_path() const { return config_.ply; }
   bool solved() const { return !solution_.empty(); }
   const std::string& solution() const { return solution_; }
-  Value report() const;  // iterations, seconds, unshot fraction, per-iteration figures, recoveries
+  Value report() const;
+  // The unshot share of the power after each iteration so far (the monitor draws it falling).
+  const std::vector<double>& unshot_fraction() const { return unshot_fraction_; }  // iterations, seconds, unshot fraction, per-iteration figures, recoveries
   uint32_t epoch() const { return epoch_; }
 
  private:

@@ -255,7 +255,10 @@ void Runtime::refresh_live(size_t queue_length) {
     total.bytes_in += c->socket().counters().bytes_in;
     total.bytes_out += c->socket().counters().bytes_out;
   }
-  Value live = Value::Map{{"requests", stats_.requests},         {"points", stats_.points},
+  uint64_t in_flight = 0;  // requests sent to inputs and not yet answered
+  for (auto& c : inputs_) in_flight += c->outstanding();
+  Value live = Value::Map{{"in_flight", in_flight},                {"requests", stats_.requests},
+                          {"points", stats_.points},
                           {"tiles", stats_.tiles},               {"busy_seconds", stats_.busy_seconds},
                           {"queue", static_cast<uint64_t>(queue_length)}, {"bytes_in", total.bytes_in},
                           {"bytes_out", total.bytes_out}};

@@ -1,0 +1,164 @@
+// The live monitor's cost (issue 15): render time of examples/cornell.lua with and without `--monitor`, with one
+// headless Chromium showing the live page and one SSE client on /events for the whole run; pairs interleaved,
+// `--runs` of them, the median ratio and its spread. And the update latency: from the moment a tile reached the
+// director (the preview event's landed_ms) to the event's arrival at the SSE client, over every preview event.
+//
+//   build/bench/monitor_bench [--json FILE] [--runs N]
+#include <httplib.h>
+#include <signal.h>
+#include <spawn.h>
+#include <sys/wait.h>
+
+#include <atomic>
+#include <cstdio>
+#include <fstream>
+#include <regex>
+#include <thread>
+
+#include "bench/bench_util.hpp"
+#include "core/value.hpp"
+
+extern char** environ;
+
+namespace {
+
+int64_t now_ms() {
+  return std::chrono::duration_cast<std::chrono::milliseconds>(std::chrono::system_clock::now().time_since_epoch())
+      .count();
+}
+
+pid_t spawn(std::vector<std::string> args, const std::string& err_file) {
+  std::vector<char*> argv;
+  for (auto& a : args) argv.push_back(a.data());
+  argv.push_back(nullptr);
+  posix_spawn_file_actions_t fa;
+  posix_spawn_file_actions_init(&fa);
+  posix_spawn_file_actions_addopen(&fa, 1, "/dev/null", O_WRONLY, 0);
+  posix_spawn_file_actions_addopen(&fa, 2, err_file.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+  pid_t pid = -1;
+  posix_spawnp(&pid, argv[0], &fa, nullptr, argv.data(), environ);
+  posix_spawn_file_actions_destroy(&fa);
+  return pid;
+}
+
+struct Watched {
+  double render_seconds = 0;
+  std::vector<double> latencies_ms;
+};
+
+// One farm run; with `watch`, a monitor, a browser on its page and an SSE client measuring latency.
+Watched run(const std::string& script, const std::vector<std::string>& sets, bool watch) {
+  const auto dir = bench::fs::temp_directory_path() / ("lightfarm-monitor-bench-" + std::to_string(::getpid()));
+  bench::fs::create_directories(dir);
+  std::vector<std::string> args{LIGHTFARM_BINARY, "run", script, "--quiet", "--output", (dir / "out.exr").string(),
+                                "--stats-json", (dir / "stats.json").string()};
+  for (const auto& s : sets) args.insert(args.end(), {"--set", s});
+  if (watch) args.insert(args.end(), {"--monitor", "0"});
+  const std::string err = (dir / "err").string();
+  const pid_t farm = spawn(args, err);
+  Watched w;
+  pid_t browser = -1;
+  std::thread client;
+  std::atomic<bool> done{false};
+  if (watch) {
+    std::string url;
+    for (int i = 0; i < 2000 && url.empty(); ++i) {
+      std::ifstream in(err);
+      std::string text((std::istreambuf_iterator<char>(in)), {});
+      std::smatch m;
+      if (std::regex_search(text, m, std::regex("monitor: (http://127.0.0.1:([0-9]+)/)"))) url = m[1];
+      else std::this_thread::sleep_for(std::chrono::milliseconds(5));
+    }
+    if (url.empty()) {
+      std::fprintf(stderr, "the farm printed no monitor address\n");
+      std::exit(1);
+    }
+    const int port = std::stoi(std::regex_replace(url, std::regex(".*:([0-9]+)/$"), "$1"));
+    browser = spawn({"chromium", "--headless=new", "--no-sandbox", "--disable-gpu", "--no-first-run",
+                     "--user-data-dir=" + (dir / "chromium").string(), "--timeout=600000", "--dump-dom", url},
+                    (dir / "chromium.err").string());
+    client = std::thread([&w, &done, port] {
+      httplib::Client c("127.0.0.1", port);
+      c.set_read_timeout(600, 0);
+      std::string buffer;
+      c.Get("/events", [&](const char* data, size_t n) {
+        const int64_t arrived = now_ms();
+        buffer.append(data, n);
+        size_t end;
+        while ((end = buffer.find("\n\n")) != std::string::npos) {
+          const std::string event = buffer.substr(0, end);
+          buffer.erase(0, end + 2);
+          if (event.rfind("event: preview", 0) != 0) continue;
+          const double landed = bench::json_number(event, "landed_ms");
+          if (landed > 0) w.latencies_ms.push_back(static_cast<double>(arrived) - landed);
+        }
+        return !done.load();
+      });
+    });
+  }
+  int status = 0;
+  waitpid(farm, &status, 0);
+  done = true;
+  if (client.joinable()) client.join();
+  if (browser > 0) {
+    ::kill(browser, SIGTERM);
+    waitpid(browser, nullptr, 0);
+  }
+  if (!WIFEXITED(status) || WEXITSTATUS(status) != 0) {
+    std::fprintf(stderr, "farm run failed: %s\n", script.c_str());
+    std::exit(1);
+  }
+  std::stringstream ss;
+  ss << std::ifstream(dir / "stats.json").rdbuf();
+  w.render_seconds = bench::json_number(ss.str(), "render");
+  bench::fs::remove_all(dir);
+  return w;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  std::string json_path = "bench-monitor.json";
+  int runs = 5;
+  for (int i = 1; i + 1 < argc; i += 2) {
+    const std::string a = argv[i];
+    if (a == "--json") json_path = argv[i + 1];
+    else if (a == "--runs") runs = std::atoi(argv[i + 1]);
+  }
+  if (std::system("command -v chromium > /dev/null 2>&1") != 0) {
+    std::printf("no chromium: nothing to measure\n");
+    return 0;
+  }
+  const std::string script = std::string(LIGHTFARM_SOURCE_DIR) + "/examples/cornell.lua";
+  const std::vector<std::string> sets{"width=384", "height=384", "spp=32"};
+  std::vector<double> plain, watched, ratios, latencies;
+  for (int r = 0; r < runs; ++r) {
+    const Watched a = run(script, sets, false), b = run(script, sets, true);
+    plain.push_back(a.render_seconds);
+    watched.push_back(b.render_seconds);
+    ratios.push_back(a.render_seconds / b.render_seconds);
+    latencies.insert(latencies.end(), b.latencies_ms.begin(), b.latencies_ms.end());
+    std::printf("run %d: render %.3f s without, %.3f s with the monitor watched (%zu preview events)\n", r + 1,
+                a.render_seconds, b.render_seconds, b.latencies_ms.size());
+  }
+  const auto ratio = bench::spread(ratios);
+  const auto latency = bench::spread(latencies);
+  std::printf("\nrender time without / with the monitor and a browser: median %.3f (min %.3f, max %.3f; goal >= 0.98)\n",
+              ratio.median, ratio.min, ratio.max);
+  std::printf("tile landed -> preview event at the client: median %.0f ms (min %.0f, max %.0f) over %zu events\n",
+              latency.median, latency.min, latency.max, latencies.size());
+  lf::Value::Array p, w;
+  for (double x : plain) p.push_back(x);
+  for (double x : watched) w.push_back(x);
+  lf::Value doc = lf::Value::Map{
+      {"benchmark", "monitor"},
+      {"scene", "cornell 384x384, 32 spp"},
+      {"render_seconds_plain", std::move(p)},
+      {"render_seconds_watched", std::move(w)},
+      {"ratio", lf::Value::Map{{"median", ratio.median}, {"min", ratio.min}, {"max", ratio.max}}},
+      {"latency_ms", lf::Value::Map{{"median", latency.median}, {"min", latency.min}, {"max", latency.max},
+                                    {"events", static_cast<int64_t>(latencies.size())}}}};
+  std::ofstream(json_path) << lf::to_json(doc, 2) << "\n";
+  std::printf("wrote %s\n", json_path.c_str());
+  return 0;
+}
