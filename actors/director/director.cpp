@@ -616,14 +616,15 @@ class Director final : public ControlOut, public Outbox {
     return sum;
   }
 
-  // At most 4 states a second (and every call with `now`); the preview when tiles have landed, at most 2 a second.
+  // The state twice a second (and at every call with `now`); the preview when tiles have landed, at most once a
+  // second. More often costs a watching browser's page more CPU than a person can see (bench/monitor_bench).
   void publish_monitor(bool now) {
     const auto t = Clock::now();
-    if (!now && t - monitor_published_ < std::chrono::milliseconds(250)) return;
+    if (!now && t - monitor_published_ < std::chrono::milliseconds(500)) return;
     monitor_published_ = t;
     monitor_->publish_state(monitor_state());
     const size_t done = tiles_.tiles_done();
-    if (done != preview_tiles_ && (now || t - preview_published_ >= std::chrono::milliseconds(500))) {
+    if (done != preview_tiles_ && (now || t - preview_published_ >= std::chrono::milliseconds(1000))) {
       preview_tiles_ = done;
       preview_published_ = t;
       publish_preview();
