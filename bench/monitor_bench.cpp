@@ -1,6 +1,7 @@
-// The live monitor's cost (issue 15): render time of examples/cornell.lua with and without `--monitor`, with one
-// headless Chromium showing the live page and one SSE client on /events for the whole run; pairs interleaved,
-// `--runs` of them, the median ratio and its spread. And the update latency: from the moment a tile reached the
+// The live monitor's cost (issue 15): render time of examples/cornell.lua without `--monitor`, with it and one
+// headless Chromium showing the live page (plus an SSE client on /events), and with it and the SSE client alone
+// (what the monitor costs apart from a browser on the same 2 cores); interleaved, `--runs` of each, the median
+// ratios and their spread. And the update latency: from the moment a tile reached the
 // director (the preview event's landed_ms) to the event's arrival at the SSE client, over every preview event.
 //
 //   build/bench/monitor_bench [--json FILE] [--runs N]
@@ -46,8 +47,9 @@ struct Watched {
   std::vector<double> latencies_ms;
 };
 
-// One farm run; with `watch`, a monitor, a browser on its page and an SSE client measuring latency.
-Watched run(const std::string& script, const std::vector<std::string>& sets, bool watch) {
+// One farm run; with `watch`, a monitor and an SSE client measuring latency, and with `browser` also a headless
+// Chromium on the live page.
+Watched run(const std::string& script, const std::vector<std::string>& sets, bool watch, bool with_browser) {
   const auto dir = bench::fs::temp_directory_path() / ("lightfarm-monitor-bench-" + std::to_string(::getpid()));
   bench::fs::create_directories(dir);
   std::vector<std::string> args{LIGHTFARM_BINARY, "run", script, "--quiet", "--output", (dir / "out.exr").string(),
@@ -74,7 +76,8 @@ Watched run(const std::string& script, const std::vector<std::string>& sets, boo
       std::exit(1);
     }
     const int port = std::stoi(std::regex_replace(url, std::regex(".*:([0-9]+)/$"), "$1"));
-    browser = spawn({"chromium", "--headless=new", "--no-sandbox", "--disable-gpu", "--no-first-run",
+    if (with_browser)
+      browser = spawn({"chromium", "--headless=new", "--no-sandbox", "--disable-gpu", "--no-first-run",
                      "--user-data-dir=" + (dir / "chromium").string(), "--timeout=600000", "--dump-dom", url},
                     (dir / "chromium.err").string());
     client = std::thread([&w, &done, port] {
@@ -132,20 +135,24 @@ int main(int argc, char** argv) {
   const std::string script = std::string(LIGHTFARM_SOURCE_DIR) + "/examples/cornell.lua";
   // A frame of about 10 s: long enough that the browser's own start-up is not what is measured.
   const std::vector<std::string> sets{"width=512", "height=512", "spp=160"};
-  std::vector<double> plain, watched, ratios, latencies;
+  std::vector<double> plain, watched, ratios, server_ratios, latencies;
   for (int r = 0; r < runs; ++r) {
-    const Watched a = run(script, sets, false), b = run(script, sets, true);
+    const Watched a = run(script, sets, false, false), b = run(script, sets, true, true),
+                  c = run(script, sets, true, false);
     plain.push_back(a.render_seconds);
     watched.push_back(b.render_seconds);
     ratios.push_back(a.render_seconds / b.render_seconds);
+    server_ratios.push_back(a.render_seconds / c.render_seconds);
     latencies.insert(latencies.end(), b.latencies_ms.begin(), b.latencies_ms.end());
-    std::printf("run %d: render %.3f s without, %.3f s with the monitor watched (%zu preview events)\n", r + 1,
-                a.render_seconds, b.render_seconds, b.latencies_ms.size());
+    std::printf("run %d: render %.3f s without, %.3f s with the monitor and a browser, %.3f s with the monitor and "
+                "an SSE client only\n", r + 1, a.render_seconds, b.render_seconds, c.render_seconds);
   }
-  const auto ratio = bench::spread(ratios);
+  const auto ratio = bench::spread(ratios), server = bench::spread(server_ratios);
   const auto latency = bench::spread(latencies);
   std::printf("\nrender time without / with the monitor and a browser: median %.3f (min %.3f, max %.3f; goal >= 0.98)\n",
               ratio.median, ratio.min, ratio.max);
+  std::printf("render time without / with the monitor and an SSE client (no browser): median %.3f (min %.3f, max %.3f)\n",
+              server.median, server.min, server.max);
   std::printf("tile landed -> preview event at the client: median %.0f ms (min %.0f, max %.0f) over %zu events\n",
               latency.median, latency.min, latency.max, latencies.size());
   lf::Value::Array p, w;
@@ -157,6 +164,7 @@ int main(int argc, char** argv) {
       {"render_seconds_plain", std::move(p)},
       {"render_seconds_watched", std::move(w)},
       {"ratio", lf::Value::Map{{"median", ratio.median}, {"min", ratio.min}, {"max", ratio.max}}},
+      {"ratio_without_browser", lf::Value::Map{{"median", server.median}, {"min", server.min}, {"max", server.max}}},
       {"latency_ms", lf::Value::Map{{"median", latency.median}, {"min", latency.min}, {"max", latency.max},
                                     {"events", static_cast<int64_t>(latencies.size())}}}};
   std::ofstream(json_path) << lf::to_json(doc, 2) << "\n";

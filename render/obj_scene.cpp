@@ -82,7 +82,10 @@ Result<Scene> Scene::load_obj_unlit(const std::string& path) {
     auto [it, fresh] = loaded.emplace(std::pair{name, alpha}, -1);
     if (!fresh) return it->second;
     const std::string file = (std::filesystem::path(config.mtl_search_path) / name).string();
-    auto texels = read_texels(file);
+    std::error_code ec;
+    // Only a regular file goes to the image reader (not a folder, a device or a pipe, which could block it).
+    auto texels = std::filesystem::is_regular_file(file, ec) ? read_texels(file)
+                                                             : Result<Texels>(make_error("no such file"));
     if (!texels) {
       log_warn(where + ": material '" + material + "': " + (alpha ? "map_d" : "map_Kd") + " '" + name +
                "' cannot be read (" + texels.error().message + "); the material stays " +

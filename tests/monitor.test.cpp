@@ -97,7 +97,11 @@ TEST_F(MonitorTest, ThePageShowsTheNetworkTheImageFillingInAndALostReplica) {
     later = page_dom(url);
     return state_of(later, "direct.1") == "lost";
   }, 30)) << later;
-  EXPECT_GT(std::atoi(attribute(later, "preview", "data-tiles").c_str()), tiles_first) << "tiles keep landing";
+  // Tiles keep landing, and the preview shows them (it is refreshed at most once a second).
+  EXPECT_TRUE(Farm::eventually([&] {
+    later = page_dom(url);
+    return std::atoi(attribute(later, "preview", "data-tiles").c_str()) > tiles_first;
+  }, 30)) << later;
   EXPECT_NE(attribute(later, "preview", "data-checksum"), attribute(first, "preview", "data-checksum"));
   EXPECT_NE(later.find("class=\"loss\""), std::string::npos) << "the loss is marked in the log";
 

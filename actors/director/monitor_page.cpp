@@ -91,7 +91,9 @@ function render(s) {
   $("elapsed").textContent = num(f.elapsed_seconds, 1) + " s";
   $("tiles").textContent = `tiles ${f.tiles_done ?? 0} / ${f.tiles_total ?? 0}`;
   const actors = s.actors || [];
-  drawGraph(actors);
+  // The graph and the log are redrawn only when they change (a page a browser keeps open costs its machine CPU).
+  const graphKey = actors.map(a => a.name + ":" + a.state + ":" + a.inputs.join(",")).join(";");
+  if (graphKey !== lastGraph) { lastGraph = graphKey; drawGraph(actors); }
   $("actors").innerHTML = actors.map(a => {
     const live = a.live || {}, rate = a.rates || {};
     return `<tr data-actor="${esc(a.name)}" data-state="${esc(a.state)}"><td>${esc(a.name)}</td><td class="l">${esc(a.kind)}</td>` +
@@ -112,9 +114,14 @@ function render(s) {
     return `radiosity: ${rad.iterations} iterations, unshot ${(100 * u[u.length - 1]).toFixed(2)} %<br>` +
       `<svg width="${w}" height="${h}"><polyline fill="none" stroke="#5fb3ff" points="${pts}" /></svg>`;
   })() : "";
-  const log = $("log");
-  log.innerHTML = (s.log || []).map(l => `<div class="${esc(l.kind)}">${num(l.seconds, 1)} s  ${esc(l.text)}</div>`).join("");
+  const lines = s.log || [];
+  const logKey = lines.length + ":" + (lines.length ? lines[lines.length - 1].seconds : 0);
+  if (logKey !== lastLog) {
+    lastLog = logKey;
+    $("log").innerHTML = lines.map(l => `<div class="${esc(l.kind)}">${num(l.seconds, 1)} s  ${esc(l.text)}</div>`).join("");
+  }
 }
+let lastGraph = "", lastLog = "";
 
 let previewVersion = 0;
 function preview(p) {
