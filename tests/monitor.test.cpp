@@ -85,6 +85,7 @@ TEST_F(MonitorTest, ThePageShowsTheNetworkTheImageFillingInAndALostReplica) {
     EXPECT_NE(first.find(std::string("<g class=\"node\" data-actor=\"") + actor + "\""), std::string::npos) << actor;
     EXPECT_EQ(state_of(first, actor), "rendering") << actor;
   }
+  EXPECT_NE(first.find("<g class=\"host\" data-host=\"local\">"), std::string::npos) << "the actors' host band";
   const int tiles_first = std::atoi(attribute(first, "preview", "data-tiles").c_str());
   EXPECT_GT(tiles_first, 0) << "the preview shows the first tiles";
   EXPECT_EQ(attribute(first, "preview", "width"), "128");

@@ -631,10 +631,11 @@ class Director final : public ControlOut, public Outbox {
     }
   }
 
-  // The film so far as the output will look (exposure, tone map, sRGB), at most 640 pixels wide.
+  // The film so far as the output will look (exposure, tone map, sRGB), at most 400 pixels wide (a page that
+  // decodes and draws it once a second costs its machine CPU by the pixel).
   void publish_preview() {
     const Image& film = tiles_.film();
-    const int step = std::max(1, (film.width + 639) / 640);
+    const int step = std::max(1, (film.width + 399) / 400);
     const int w = std::max(1, film.width / step), h = std::max(1, film.height / step);
     const Display display{static_cast<float>(spec_.image.exposure), spec_.image.tonemap};
     std::string rgb(static_cast<size_t>(w) * h * 3, '\0');

@@ -1,6 +1,6 @@
 // The monitor's page: everything it needs is here (no scripts or styles from elsewhere, so it works offline).
-// It listens to /events, draws the lighting network (columns by depth from the renderers, each node naming its
-// host), the actors' figures, the image as tiles land, the phases, setup steps and the log.
+// It listens to /events, draws the lighting network (a band per host, columns by depth from the renderers), the
+// actors' figures, the image as tiles land, the phases, setup steps and the log.
 // Elements carry data-* attributes (actor, state, tiles) so that tests read the page as a browser shows it.
 #include "actors/director/monitor.hpp"
 
@@ -50,7 +50,7 @@ svg text { fill: #d8dce3; font-size: 11px; }
 const query = location.search;
 const $ = id => document.getElementById(id);
 const esc = s => String(s).replace(/[&<>"]/g, c => ({"&": "&amp;", "<": "&lt;", ">": "&gt;", '"': "&quot;"}[c]));
-const num = (v, d = 0) => (typeof v === "number" ? v.toFixed(d) : "-");
+const num = (v, d = 0) => (typeof v === "number" && Number.isFinite(v) ? v.toFixed(d) : "-");
 
 function drawGraph(actors) {
   const byName = new Map(actors.map(a => [a.name, a]));
@@ -62,11 +62,23 @@ function drawGraph(actors) {
   };
   for (const a of actors) if (a.kind === "renderer") visit(a, 0);
   for (const a of actors) if (!depth.has(a.name)) visit(a, 0);
-  const columns = [];
-  for (const a of actors) (columns[depth.get(a.name)] ??= []).push(a);
-  const w = 150, h = 34, gap = 14, at = new Map();
-  columns.forEach((col, c) => col.forEach((a, r) => at.set(a.name, {x: 10 + c * (w + 40), y: 10 + r * (h + gap)})));
-  let svg = "";
+  // One band per host, top to bottom; in a band, columns by depth from the renderers.
+  const hosts = [...new Set(actors.map(a => a.host))];
+  const w = 130, h = 34, gap = 14, labelW = 60, at = new Map();
+  let top = 10, bands = "";
+  for (const host of hosts) {
+    const rows = [];
+    for (const a of actors.filter(a => a.host === host)) {
+      const d = depth.get(a.name);
+      rows[d] = (rows[d] ?? 0) + 1;
+      at.set(a.name, {x: labelW + 10 + d * (w + 30), y: top + 8 + (rows[d] - 1) * (h + gap)});
+    }
+    const height = 16 + Math.max(1, ...rows.filter(r => r)) * (h + gap) - gap;
+    bands += `<g class="host" data-host="${esc(host)}"><rect x="2" y="${top}" width="99.5%" height="${height}" rx="6" ` +
+      `fill="#23272e" /><text x="10" y="${top + 18}" opacity="0.8">${esc(host)}</text></g>`;
+    top += height + 8;
+  }
+  let svg = bands;
   for (const a of actors)
     for (const i of a.inputs) {
       const p = at.get(a.name), q = at.get(i);
@@ -77,10 +89,11 @@ function drawGraph(actors) {
     svg += `<g class="node" data-actor="${esc(a.name)}" data-state="${esc(a.state)}">` +
       `<rect x="${p.x}" y="${p.y}" width="${w}" height="${h}" rx="5" class="state-${esc(a.state)}" />` +
       `<text x="${p.x + 6}" y="${p.y + 14}">${esc(a.name)}</text>` +
-      `<text x="${p.x + 6}" y="${p.y + 28}" opacity="0.7">${esc(a.kind)} @ ${esc(a.host)} · ${esc(a.state)}</text></g>`;
+      `<text x="${p.x + 6}" y="${p.y + 28}" opacity="0.7">${esc(a.kind)} · ${esc(a.state)}</text></g>`;
   }
-  const rows = Math.max(1, ...columns.map(c => c.length));
-  $("graph").setAttribute("height", 20 + rows * (h + gap));
+  const right = Math.max(400, ...[...at.values()].map(p => p.x + w + 10));
+  $("graph").setAttribute("height", top);
+  $("graph").setAttribute("width", right);
   $("graph").innerHTML = svg;
 }
 
@@ -98,7 +111,7 @@ function render(s) {
     const live = a.live || {}, rate = a.rates || {};
     return `<tr data-actor="${esc(a.name)}" data-state="${esc(a.state)}"><td>${esc(a.name)}</td><td class="l">${esc(a.kind)}</td>` +
       `<td class="l">${esc(a.host)}</td><td class="l">${esc(a.state)}${a.loss ? " — " + esc(a.loss) : ""}</td>` +
-      `<td>${num(100 * (rate.busy_share ?? NaN))}%</td><td>${num(rate.requests_per_second, 1)}</td>` +
+      `<td>${rate.busy_share === undefined ? "-" : num(100 * rate.busy_share) + "%"}</td><td>${num(rate.requests_per_second, 1)}</td>` +
       `<td>${num(rate.points_per_second)}</td><td>${live.queue ?? "-"}</td><td>${live.in_flight ?? "-"}</td>` +
       `<td>${num((live.bytes_in ?? NaN) / 1048576, 1)}</td><td>${num((live.bytes_out ?? NaN) / 1048576, 1)}</td>` +
       `<td>${a.pid ?? ""}</td></tr>`;
