@@ -72,8 +72,9 @@ class MonitorTest : public FarmFixture {};
 
 TEST_F(MonitorTest, ThePageShowsTheNetworkTheImageFillingInAndALostReplica) {
   if (!have_chromium()) GTEST_SKIP() << "no chromium (Debian's chromium package) for the page test";
-  Farm farm({"run", kSlowPool, "--set", "spp=64", "--set", "slowdown=6", "--set", "heartbeat_timeout=1.5",
-             "--monitor", "0", "--monitor-hold", "8", "--output", path("slow.exr")});
+  // A frame of some 8 s: long enough to look at the page, then kill a replica, while it renders.
+  Farm farm({"run", kSlowPool, "--set", "spp=192", "--set", "slowdown=6", "--set", "heartbeat_timeout=1.5",
+             "--monitor", "0", "--monitor-hold", "5", "--output", path("slow.exr")});
   const std::string url = monitor_url(farm);
   ASSERT_FALSE(url.empty()) << farm.err_so_far();
   EXPECT_EQ(url.find("token"), std::string::npos) << "loopback needs no token";
