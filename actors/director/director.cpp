@@ -545,7 +545,11 @@ class Director final : public ControlOut, public Outbox {
       if (a.live.is_map()) {
         m["live"] = a.live;
         // Rates over the time since the figures before these (heartbeats come about once a second).
-        auto& [before, before_at, rates] = live_before_[spec.name];
+        // Plain references, not a structured binding: clang 14 cannot capture one in the lambda below.
+        auto& entry = live_before_[spec.name];
+        Value& before = std::get<0>(entry);
+        Clock::time_point& before_at = std::get<1>(entry);
+        Value& rates = std::get<2>(entry);
         if (a.live_at != before_at) {
           if (before.is_map() && before_at != Clock::time_point{}) {
             const double dt = std::chrono::duration<double>(a.live_at - before_at).count();
