@@ -747,9 +747,10 @@ int lua_panic(lua_State* L) {
 
 }  // namespace
 
-Result<FarmSpec> evaluate_script(const std::string& path, const ScriptOptions& options) {
-  std::error_code ec;
-  if (!fs::is_regular_file(path, ec)) return make_error("script '" + path + "' not found");
+namespace {
+
+// Runs a script's text (nullptr: the file at `path`) under the farm API and the budgets.
+Result<FarmSpec> evaluate(const std::string& path, const std::string* text, const ScriptOptions& options) {
   Builder b;
   b.options = options;
   b.spec.script = path;
@@ -789,7 +790,9 @@ Result<FarmSpec> evaluate_script(const std::string& path, const ScriptOptions& o
   lua_setglobal(L, "lightop");
 
   std::string failure;
-  if (luaL_loadfile(L, path.c_str()) != LUA_OK || lua_pcall(L, 0, 0, 0) != LUA_OK) {
+  const int loaded = text ? luaL_loadbuffer(L, text->data(), text->size(), ("@" + path).c_str())
+                          : luaL_loadfile(L, path.c_str());
+  if (loaded != LUA_OK || lua_pcall(L, 0, 0, 0) != LUA_OK) {
     failure = lua_isstring(L, -1) ? lua_tostring(L, -1) : "script failed with a non-string error";
     if (budget.out_of_memory)
       failure = (budget.where.empty() ? path : budget.where) + ": the script used more than " +
@@ -800,6 +803,19 @@ Result<FarmSpec> evaluate_script(const std::string& path, const ScriptOptions& o
   if (std::string e = finish(b); !e.empty()) return make_error(e.find(path) == 0 ? e : path + ": " + e);
   if (!options.output.empty()) b.spec.image.output = options.output;
   return std::move(b.spec);
+}
+
+}  // namespace
+
+Result<FarmSpec> evaluate_script(const std::string& path, const ScriptOptions& options) {
+  std::error_code ec;
+  if (!fs::is_regular_file(path, ec)) return make_error("script '" + path + "' not found");
+  return evaluate(path, nullptr, options);
+}
+
+Result<FarmSpec> evaluate_script_text(const std::string& label, const std::string& text,
+                                      const ScriptOptions& options) {
+  return evaluate(label, &text, options);
 }
 
 }  // namespace lf

@@ -21,5 +21,8 @@ struct ScriptOptions {
 };
 
 Result<FarmSpec> evaluate_script(const std::string& path, const ScriptOptions& options = {});
+// The same for a script's text; `label` stands for its path (messages, files named relative to it).
+Result<FarmSpec> evaluate_script_text(const std::string& label, const std::string& text,
+                                      const ScriptOptions& options = {});
 
 }  // namespace lf

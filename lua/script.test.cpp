@@ -87,6 +87,20 @@ TEST_F(ScriptTest, SyntaxErrorNamesFileAndLine) {
   EXPECT_EQ(error_of("scene { builtin = \"cornell\" }\nlocal x = = 3\n"), "farm.lua:2: unexpected symbol near '='");
 }
 
+TEST_F(ScriptTest, AScriptsTextEvaluatesAsItsFileWould) {
+  auto from_file = evaluate_script(write("farm.lua", kCornell));
+  auto from_text = evaluate_script_text((dir / "farm.lua").string(), kCornell);
+  ASSERT_TRUE(from_file.ok() && from_text.ok());
+  ASSERT_EQ(from_text->actors.size(), from_file->actors.size());
+  for (size_t i = 0; i < from_file->actors.size(); ++i) {
+    EXPECT_EQ(from_text->actors[i].name, from_file->actors[i].name);
+    EXPECT_EQ(from_text->actors[i].loc.line, from_file->actors[i].loc.line);
+  }
+  auto bad = evaluate_script_text("text.lua", "scene { builtin = \"cornell\" }\nlocal x = = 3\n");
+  ASSERT_FALSE(bad.ok());
+  EXPECT_EQ(bad.error().message, "text.lua:2: unexpected symbol near '='");
+}
+
 TEST_F(ScriptTest, UnknownKindNamesLineAndKnownKinds) {
   EXPECT_EQ(error_of("scene { builtin = \"cornell\" }\n\nlocal p = lightop \"photon\" { }\n"),
             "farm.lua:3: unknown LightOp kind 'photon' (known kinds: " + lightop_kind_list() + ")");

@@ -62,6 +62,25 @@ Result<Scene> Scene::load_obj_unlit(const std::string& path) {
     while (!why.empty() && (why.back() == '\n' || why.back() == '\r')) why.pop_back();
     return make_error("cannot read scene file '" + path + "': " + (why.empty() ? "parse error" : why));
   }
+  return from_obj_reader(reader, path, config.mtl_search_path);
+}
+
+Result<Scene> Scene::parse_obj_unlit(const std::string& obj_text, const std::string& mtl_text,
+                                     const std::string& label) {
+  tinyobj::ObjReaderConfig config;
+  config.triangulate = true;
+  config.vertex_color = false;
+  tinyobj::ObjReader reader;
+  if (!reader.ParseFromString(obj_text, mtl_text, config)) {
+    std::string why = reader.Error();
+    while (!why.empty() && (why.back() == '\n' || why.back() == '\r')) why.pop_back();
+    return make_error("cannot read scene file '" + label + "': " + (why.empty() ? "parse error" : why));
+  }
+  return from_obj_reader(reader, label, "");
+}
+
+Result<Scene> Scene::from_obj_reader(const tinyobj::ObjReader& reader, const std::string& path,
+                                     const std::string& texture_dir) {
   const auto& attrib = reader.GetAttrib();
   const auto& materials = reader.GetMaterials();
   Scene s;
@@ -81,10 +100,10 @@ Result<Scene> Scene::load_obj_unlit(const std::string& path) {
     if (name.empty()) return -1;
     auto [it, fresh] = loaded.emplace(std::pair{name, alpha}, -1);
     if (!fresh) return it->second;
-    const std::string file = (std::filesystem::path(config.mtl_search_path) / name).string();
+    const std::string file = (std::filesystem::path(texture_dir) / name).string();
     std::error_code ec;
     // Only a regular file goes to the image reader (not a folder, a device or a pipe, which could block it).
-    auto texels = std::filesystem::is_regular_file(file, ec) ? read_texels(file)
+    auto texels = !texture_dir.empty() && std::filesystem::is_regular_file(file, ec) ? read_texels(file)
                                                              : Result<Texels>(make_error("no such file"));
     if (!texels) {
       log_warn(where + ": material '" + material + "': " + (alpha ? "map_d" : "map_Kd") + " '" + name +

@@ -13,6 +13,10 @@
 #include "render/light_tree.hpp"
 #include "render/math.hpp"
 
+namespace tinyobj {
+class ObjReader;
+}  // namespace tinyobj
+
 namespace lf {
 
 struct Material {
@@ -167,6 +171,9 @@ class Scene {
   // Without finalize(), so that script lights can still be added.
   static Result<Scene> builtin_unlit(const std::string& name);
   static Result<Scene> load_obj_unlit(const std::string& path);
+  // The same from an OBJ's and its MTL's text, without textures; `label` names it in messages (the OBJ fuzzer).
+  static Result<Scene> parse_obj_unlit(const std::string& obj_text, const std::string& mtl_text,
+                                       const std::string& label);
   static Result<Scene> load(const SceneSpec& spec);
   // What an OBJ file's text says apart from its geometry: its libraries' material names (for script checks) and
   // warnings naming file and line (a missing library, a usemtl of an unknown material). Reads no geometry.
@@ -175,6 +182,10 @@ class Scene {
 
  private:
   friend class SceneImage;
+  // What tinyobjloader read, as one of our scenes; `path` names it in messages, textures are read from
+  // `texture_dir` (none when it is empty).
+  static Result<Scene> from_obj_reader(const tinyobj::ObjReader& reader, const std::string& path,
+                                       const std::string& texture_dir);
   // Points the per-triangle views at the vectors below (a scene being built, or loaded the ordinary way).
   void view_owned_arrays();
 

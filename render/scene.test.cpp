@@ -4,6 +4,7 @@
 
 #include <filesystem>
 #include <fstream>
+#include <sstream>
 #include <unistd.h>
 
 namespace lf {
@@ -69,6 +70,26 @@ TEST(Scene, McGuireOriginalLoadsDespiteTabsAndDuplicateFaces) {
     EXPECT_LT(s->normal(t).y, -0.99f);  // the light faces down into the box
     EXPECT_EQ(s->material(s->material_of(t)).ke, (RGB{17, 12, 4}));
   }
+}
+
+TEST(Scene, AnObjFromMemoryIsTheSameSceneAsFromItsFile) {
+  REQUIRE_SHARED_SCENES();
+  std::ifstream obj(kShared + "CornellBox-Original.obj"), mtl(kShared + "CornellBox-Original.mtl");
+  std::stringstream obj_text, mtl_text;
+  obj_text << obj.rdbuf();
+  mtl_text << mtl.rdbuf();
+  auto from_file = Scene::load_obj_unlit(kShared + "CornellBox-Original.obj");
+  auto from_text = Scene::parse_obj_unlit(obj_text.str(), mtl_text.str(), "box.obj");
+  ASSERT_TRUE(from_file.ok() && from_text.ok());
+  ASSERT_EQ(from_text->triangle_count(), from_file->triangle_count());
+  ASSERT_EQ(from_text->materials().size(), from_file->materials().size());
+  for (uint32_t t = 0; t < from_file->triangle_count(); ++t) {
+    EXPECT_EQ(from_text->material_of(t), from_file->material_of(t));
+    for (int c = 0; c < 3; ++c) EXPECT_EQ(from_text->vertex(t, c), from_file->vertex(t, c));
+  }
+  auto bad = Scene::parse_obj_unlit("f 1 2 3\n", "", "broken.obj");
+  ASSERT_FALSE(bad.ok());
+  EXPECT_EQ(bad.error().message, "scene file 'broken.obj': a face refers to a vertex that does not exist");
 }
 
 TEST(Scene, McGuireEmptyCOReadsTheIndentedMaterial) {

@@ -175,11 +175,11 @@ namespace {
 // A whole host lost mid-frame — its network cut, or everything on it SIGKILLed at once: the heartbeats (or the
 // exits) tell, its renderer's tiles and its replica's packets are redone elsewhere, and the image is the
 // fault-free one. The pool's multiplexer and the other actors live on h1 and here.
-// The frame is long enough (512 spp) that the cut lands well before its end even on a quiet machine (at 256 spp a
-// frame once finished before the veth went down, and the cut host's ssh exit then failed the finish).
+// The frame is long enough (2048 spp, some 10 s) that the cut lands well before its end even on a quiet, fast
+// machine: at 512 spp a 2.7 s frame once finished before the kill reached the host, and nothing was lost.
 TEST_F(HostsTest, AHostLostMidFrameChangesNoPixel) {
   const auto [local, spread] = pool_scripts("scene { builtin = \"cornell\" }\n"
-                                           "image { width = 96, height = 96, spp = 512, tile = 16 }\n"
+                                           "image { width = 96, height = 96, spp = 2048, tile = 16 }\n"
                                            "farm { heartbeat_timeout = 2 }\n",
                                            "{ h2, \"local\" }");
   const Image expected = render(local, {}, "local.exr");
