@@ -5,6 +5,9 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <atomic>
+#include <map>
+#include <thread>
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
@@ -48,12 +51,54 @@ struct FarmRun {
   std::string stats;              // the --stats-json text
   double wall_seconds = 0;
   double cpu_seconds = 0;         // every process of the farm
+  // The largest sum, over samples every 50 ms, of the proportional set sizes of every process the director
+  // started and their descendants (actors, host agents, their stand-ins, ssh clients): what the farm's actors
+  // hold on this machine, shared pages counted once.
+  double peak_actors_pss_bytes = 0;
   double number(const std::string& key) const { return json_number(stats, key); }
 };
 
+// The summed PSS of every descendant of `root` (not `root` itself), from /proc.
+inline double descendants_pss_bytes(pid_t root) {
+  std::map<pid_t, std::vector<pid_t>> children;
+  std::error_code ec;
+  for (const auto& e : fs::directory_iterator("/proc", ec)) {
+    const std::string name = e.path().filename().string();
+    if (name.find_first_not_of("0123456789") != std::string::npos) continue;
+    std::ifstream in(e.path() / "stat");
+    std::string stat((std::istreambuf_iterator<char>(in)), {});
+    const auto close = stat.rfind(')');
+    if (close == std::string::npos) continue;
+    std::istringstream fields(stat.substr(close + 2));
+    std::string state;
+    long ppid = 0;
+    if (fields >> state >> ppid) children[static_cast<pid_t>(ppid)].push_back(static_cast<pid_t>(std::stol(name)));
+  }
+  double total = 0;
+  std::vector<pid_t> todo = children[root];
+  while (!todo.empty()) {
+    const pid_t pid = todo.back();
+    todo.pop_back();
+    for (pid_t c : children[pid]) todo.push_back(c);
+    std::ifstream rollup("/proc/" + std::to_string(pid) + "/smaps_rollup");
+    std::string key;
+    double kb = 0;
+    while (rollup >> key) {
+      if (key == "Pss:" && rollup >> kb) {
+        total += kb * 1024;
+        break;
+      }
+      rollup.ignore(1 << 20, '\n');
+    }
+  }
+  return total;
+}
+
 // Runs `lightfarm run script --set ...`; exits the benchmark if the farm fails. The image goes to `output` if
 // given (the caller keeps it), else to a temporary file.
-inline FarmRun run_farm(const std::string& script, const std::vector<std::string>& sets, const std::string& output = {}) {
+// With `sample_memory`, also peak_actors_pss_bytes (a thread reads /proc every 50 ms while the farm runs).
+inline FarmRun run_farm(const std::string& script, const std::vector<std::string>& sets, const std::string& output = {},
+                        bool sample_memory = false) {
   const fs::path tmp = fs::temp_directory_path() / ("lightfarm-bench-" + std::to_string(::getpid()));
   fs::create_directories(tmp);
   const std::string image = output.empty() ? (tmp / "bench.exr").string() : output;
@@ -74,9 +119,20 @@ inline FarmRun run_farm(const std::string& script, const std::vector<std::string
     execv(argv[0], argv.data());
     _exit(127);
   }
+  std::atomic<bool> running{true};
+  double peak_pss = 0;
+  std::thread sampler([&] {
+    while (sample_memory && running) {
+      peak_pss = std::max(peak_pss, descendants_pss_bytes(pid));
+      std::this_thread::sleep_for(std::chrono::milliseconds(50));
+    }
+  });
   int status = 0;
   waitpid(pid, &status, 0);
+  running = false;
+  sampler.join();
   FarmRun r;
+  r.peak_actors_pss_bytes = peak_pss;
   r.wall_seconds = std::chrono::duration<double>(Clock::now() - t0).count();
   struct rusage after {};
   getrusage(RUSAGE_CHILDREN, &after);

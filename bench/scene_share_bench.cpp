@@ -2,9 +2,12 @@
 // over --runs and writes bench-scene-share.json:
 //   in one process: parsing the OBJ (what every actor did before scenes were shipped), reading the shipped file
 //     into a private copy, mapping the host's shared scene image (what an actor does now), building the BVH
-//   in a local farm of 1 renderer + a pool of N `direct` replicas: each scene-loading actor's start-up (exec to
-//     READY configure, from its STATS; with 6 replicas, 8 processes build BVHs at once on this machine's cores) and the farm's memory (the actors' proportional set sizes summed, so pages
-//     shared through the image count once); the growth per extra actor is (PSS at 6 replicas - at 2) / 4
+//   in a local farm of 1 renderer + a pool of N `direct` replicas, with its host agent (one BVH for the host,
+//     shared by the actors it forks) and without (every actor builds its own), interleaved: each `direct` actor's
+//     start-up (from its `lightfarm actor` process's start to READY configure, from its STATS) and the farm's
+//     memory: the peak, sampled every 50 ms, of the proportional set sizes of every process under the director
+//     (actors, the agent, the actors' stand-ins), so pages shared through the scene image or the agent's BVH count
+//     once; the growth per extra actor is (peak at 6 replicas - at 2) / 4
 // Usage: build/bench/scene_share_bench [--runs N] [--json FILE]
 #include <cstdio>
 #include <fstream>
@@ -80,6 +83,7 @@ int main(int argc, char** argv) {
                          "camera { eye = {-25, 28, 55}, at = {0, 8, 0}, fov = 60 }\n"
                          "light { point = {0, 40, 0}, intensity = {4000, 3600, 3000} }\n"
                          "image { width = 128, height = 128, spp = 4 }\n"
+                         "farm { host_agents = param(\"agents\", true) }\n"
                          "local d = multiplexer { lightop \"direct\" {}, replicas = param(\"n\", 2) }\n"
                          "renderers { count = 1, lighting = d }\n");
   bench::run_farm(farm, {});  // the first farm ships the scene into this machine's cache and makes its image
@@ -96,19 +100,23 @@ int main(int argc, char** argv) {
       v["build_bvh_seconds"].push_back(seconds([&] { lf::RayTracer tracer(*mapped); }));
     }
 
-    double pss[2] = {0, 0};
-    const int replicas[2] = {2, 6};
-    for (int k = 0; k < 2; ++k) {
-      const auto stats = bench::run_farm(farm, {"n=" + std::to_string(replicas[k])}).stats;
-      for (const auto& a : actors_of(stats)) {
-        pss[k] += a.pss_bytes;
-        if (a.kind == "direct")
-          v["actor_start_seconds_" + std::to_string(replicas[k]) + "_replicas"].push_back(a.start_seconds);
+    // Each farm with its host agent (the default) and without (every actor builds its own BVH), interleaved.
+    for (const bool agents : {true, false}) {
+      const std::string tag = agents ? "" : "_no_agent";
+      double pss[2] = {0, 0};
+      const int replicas[2] = {2, 6};
+      for (int k = 0; k < 2; ++k) {
+        const auto run = bench::run_farm(farm, {"n=" + std::to_string(replicas[k]), agents ? "agents=true" : "agents=false"},
+                                         {}, true);
+        pss[k] = run.peak_actors_pss_bytes;
+        for (const auto& a : actors_of(run.stats))
+          if (a.kind == "direct")
+            v["actor_start_seconds_" + std::to_string(replicas[k]) + "_replicas" + tag].push_back(a.start_seconds);
       }
+      v["farm_pss_mb_2_replicas" + tag].push_back(pss[0] / 1e6);
+      v["farm_pss_mb_6_replicas" + tag].push_back(pss[1] / 1e6);
+      v["growth_mb_per_extra_actor" + tag].push_back((pss[1] - pss[0]) / 4 / 1e6);
     }
-    v["farm_pss_mb_2_replicas"].push_back(pss[0] / 1e6);
-    v["farm_pss_mb_6_replicas"].push_back(pss[1] / 1e6);
-    v["growth_mb_per_extra_actor"].push_back((pss[1] - pss[0]) / 4 / 1e6);
     std::fprintf(stderr, "run %d/%d done\n", r + 1, runs);
   }
   bench::fs::remove_all(dir);
@@ -120,8 +128,11 @@ int main(int argc, char** argv) {
   std::printf("%-32s %9s %9s %9s\n", "figure", "min", "median", "max");
   lf::Value::Map doc{{"obj_mb", obj_mb}, {"shipped_mb", shipped_mb}};
   for (const char* key : {"parse_obj_seconds", "read_shipped_private_seconds", "make_shared_image_seconds",
-                          "map_shared_image_seconds", "build_bvh_seconds", "actor_start_seconds_2_replicas", "actor_start_seconds_6_replicas",
-                          "farm_pss_mb_2_replicas", "farm_pss_mb_6_replicas", "growth_mb_per_extra_actor"}) {
+                          "map_shared_image_seconds", "build_bvh_seconds", "actor_start_seconds_2_replicas",
+                          "actor_start_seconds_6_replicas", "actor_start_seconds_2_replicas_no_agent",
+                          "actor_start_seconds_6_replicas_no_agent", "farm_pss_mb_2_replicas", "farm_pss_mb_6_replicas",
+                          "farm_pss_mb_2_replicas_no_agent", "farm_pss_mb_6_replicas_no_agent",
+                          "growth_mb_per_extra_actor", "growth_mb_per_extra_actor_no_agent"}) {
     const bench::Spread s = bench::spread(v[key]);
     std::printf("%-32s %9.3f %9.3f %9.3f\n", key, s.min, s.median, s.max);
     doc[key] = s.to_value();

@@ -1,6 +1,9 @@
 // lightfarm: one executable for the user's commands (run, graph) and for the actor processes a farm launches.
 #include <malloc.h>
+#include <sys/wait.h>
 #include <unistd.h>
+
+#include <csignal>
 
 #include <cstdio>
 #include <cstdlib>
@@ -13,6 +16,7 @@
 #include "actors/kinds/actor_kinds.hpp"
 #include "actors/check/check_actor.hpp"
 #include "actors/director/director.hpp"
+#include "actors/runtime/host_agent.hpp"
 #include "actors/runtime/runtime.hpp"
 #include "core/log.hpp"
 #include "farm/builders.hpp"
@@ -29,8 +33,10 @@ usage:
       Turn a farm script into processes and an image.
   lightfarm graph SCRIPT [--set NAME=VALUE]...
       Print the script's actor graph as Graphviz DOT; launches nothing.
-  lightfarm actor --kind KIND --name NAME --director ENDPOINT [--bind ENDPOINT] [--curve]
+  lightfarm actor --kind KIND --name NAME --director ENDPOINT [--bind ENDPOINT] [--curve] [--agent NAME]
       Host one actor (the director runs this; see docs/PROTOCOL.md).
+  lightfarm host-agent --scene FILE --hash HASH --socket NAME
+      Load a shipped scene and its BVH once and fork this host's actors from it (the director runs this).
   lightfarm check-actor [--kind KIND] [--timeout SECONDS] [--inputs N] -- COMMAND [ARG]...
       Launch COMMAND as an actor and check it against the protocol; PASS/FAIL per check.
   lightfarm scene FILE.obj
@@ -143,9 +149,27 @@ int cmd_run(int argc, char** argv, bool graph_only) {
 int cmd_actor(int argc, char** argv) {
   Args args;
   std::string error;
-  if (!parse(argc, argv, 2, {"kind", "name", "director", "bind"}, {"curve"}, args, error)) return usage_error(error);
+  if (!parse(argc, argv, 2, {"kind", "name", "director", "bind", "agent"}, {"curve"}, args, error))
+    return usage_error(error);
   for (const char* required : {"kind", "name", "director"})
     if (!args.options.count(required)) return usage_error(std::string("actor needs --") + required);
+  if (args.options.count("agent")) {
+    // The host's agent forks this actor with the scene and BVH it already holds; this process stands in for it.
+    // Without an answer from the agent, the actor runs here as usual (nothing read from stdin yet).
+    std::vector<std::string> forwarded;
+    for (int i = 0; i < argc; ++i) {
+      const std::string a = argv[i];
+      if (a == "--agent") ++i;
+      else if (a.rfind("--agent=", 0) != 0) forwarded.push_back(a);
+    }
+    if (auto status = lf::run_through_agent(args.options["agent"], forwarded)) {
+      if (WIFEXITED(*status)) return WEXITSTATUS(*status);
+      const int sig = WIFSIGNALED(*status) ? WTERMSIG(*status) : SIGKILL;
+      std::signal(sig, SIG_DFL);
+      ::raise(sig);
+      return 128 + sig;
+    }
+  }
   lf::ActorArgs a;
   a.kind = args.options["kind"];
   a.name = args.options["name"];
@@ -174,6 +198,17 @@ int cmd_actor(int argc, char** argv) {
   lf::install_stop_signals();
   lf::Runtime runtime(a);
   return runtime.run(*actor);
+}
+
+// The host agent (internal, like `actor`): loads a shipped scene and its BVH once, forks this host's actors.
+int cmd_host_agent(int argc, char** argv) {
+  Args args;
+  std::string error;
+  if (!parse(argc, argv, 2, {"scene", "hash", "socket"}, {}, args, error)) return usage_error(error);
+  for (const char* required : {"scene", "hash", "socket"})
+    if (!args.options.count(required)) return usage_error(std::string("host-agent needs --") + required);
+  return lf::run_host_agent({args.options["scene"], args.options["hash"], args.options["socket"]},
+                            [](int c, char** v) { return cmd_actor(c, v); });
 }
 
 }  // namespace
@@ -220,6 +255,7 @@ int main(int argc, char** argv) {
     if (cmd == "run") return cmd_run(argc, argv, false);
     if (cmd == "graph") return cmd_run(argc, argv, true);
     if (cmd == "actor") return cmd_actor(argc, argv);
+    if (cmd == "host-agent") return cmd_host_agent(argc, argv);
     if (cmd == "check-actor") return cmd_check_actor(argc, argv);
     if (cmd == "scene") {
       if (argc != 3) return usage_error("scene needs one FILE.obj");

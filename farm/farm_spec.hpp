@@ -42,6 +42,9 @@ struct ActorSpec {
   bool is_renderer() const { return kind == kRendererKind; }
   bool is_multiplexer() const { return kind == kMultiplexerKind; }
   bool is_ring_node() const { return kind == kRingNodeKind; }
+  // Renderers and built-in LightOps load the farm's scene and build its BVH (multiplexers, ring nodes and exec
+  // actors do not, or not that way): what a host agent can share among them.
+  bool loads_scene() const { return !is_multiplexer() && !is_ring_node() && kind != kExecKind && !runtime.count("cmd"); }
 };
 
 struct FarmSpec {
@@ -57,6 +60,9 @@ struct FarmSpec {
   std::string director_address;     // where remote actors reach the director; empty: found from the routes
   std::string security = "curve";   // "curve": every link authenticated and encrypted; "none": to measure its cost
   std::string monitor;              // farm { monitor = "[ADDR:]PORT" }: the live monitor's address (--monitor wins)
+  // A host with two or more scene-loading actors of a shipped scene loads it and builds its BVH once, in a host
+  // agent that forks those actors (actors/runtime/host_agent.hpp); false: every actor loads its own.
+  bool host_agents = true;
 
   int renderer_count() const;
   // Index of the multiplexer whose replica actor `i` is, or -1.

@@ -611,8 +611,8 @@ int l_material_table(lua_State* L) {
 
 int l_material(lua_State* L) { return with_name(L, l_material_table); }
 
-// farm { heartbeat_timeout = 10, request_timeout = 120, director_address, security = "curve" }: settings of the
-// farm as a whole.
+// farm { heartbeat_timeout = 10, request_timeout = 120, director_address, security = "curve", monitor,
+// host_agents = true }: settings of the farm as a whole.
 int l_farm(lua_State* L) {
   Builder& b = builder(L);
   ParamTable p = table_params(L, 1, "farm");
@@ -622,6 +622,7 @@ int l_farm(lua_State* L) {
     b.spec.director_address = p.get_string("director_address", b.spec.director_address);
     b.spec.security = p.get_string("security", b.spec.security, {"curve", "none"});
     b.spec.monitor = p.get_string("monitor", b.spec.monitor);
+    b.spec.host_agents = p.get_bool("host_agents", b.spec.host_agents);
     p.report_unused();
   });
   return 0;

@@ -205,8 +205,12 @@ TEST_F(ScriptTest, FarmSettingsAndHosts) {
   ASSERT_TRUE(r.ok()) << r.error().message;
   EXPECT_DOUBLE_EQ(r->heartbeat_timeout, 2.5);
   EXPECT_EQ(error_of("farm { heartbeat = 3 }\n"),
-            "farm.lua:1: farm: unknown parameter 'heartbeat' (known: director_address, heartbeat_timeout, monitor, "
-            "request_timeout, security)");
+            "farm.lua:1: farm: unknown parameter 'heartbeat' (known: director_address, heartbeat_timeout, host_agents, "
+            "monitor, request_timeout, security)");
+  auto own = evaluate_script(write("farm.lua", std::string(kCornell) + "farm { host_agents = false }\n"));
+  ASSERT_TRUE(own.ok()) << own.error().message;
+  EXPECT_FALSE(own->host_agents);
+  EXPECT_TRUE(r->host_agents) << "host agents are the default";
   auto watched = evaluate_script(write("farm.lua", std::string(kCornell) + "farm { monitor = \"127.0.0.1:8080\" }\n"));
   ASSERT_TRUE(watched.ok()) << watched.error().message;
   EXPECT_EQ(watched->monitor, "127.0.0.1:8080");

@@ -288,9 +288,11 @@ TEST_F(HostsTest, TheSceneTravelsOncePerHostAndIsThenReusedFromItsCache) {
                            "camera { eye = {0, 1, 3.5}, at = {0, 1, 0}, fov = 45 }\n"
                            "image { width = 48, height = 48, spp = 4 }\n";
   auto local = write("local.lua", body + "renderers { count = 2, lighting = multiplexer { lightop \"direct\" {}, replicas = 3 } }\n");
+  // A renderer and a replica on each host: two scene-loading actors, so each host's agent (reached over ssh, like
+  // the actors) loads the scene once and forks both.
   auto spread = write("spread.lua", body + host_lines() +
                                         "local d = multiplexer { lightop \"direct\" {}, replicas = 3, host = { h1, h2, h3 } }\n"
-                                        "renderers { count = 2, lighting = d }\n");
+                                        "renderers { count = 3, lighting = d, host = { h1, h2, h3 } }\n");
   const Image expected = render(local, {}, "local.exr");
   int64_t size = 0;
   for (int run = 1; run <= 2; ++run) {
@@ -303,7 +305,14 @@ TEST_F(HostsTest, TheSceneTravelsOncePerHostAndIsThenReusedFromItsCache) {
     size = static_cast<int64_t>(json_number(stats, "bytes"));
     ASSERT_GT(size, 0) << stats;
     for (const char* h : {"h1", "h2", "h3"}) EXPECT_EQ(shipped_to(stats, h), run == 1 ? size : 0) << h << stats;
-    EXPECT_EQ(shipped_to(stats, "local"), 0) << stats;
+    EXPECT_EQ(shipped_to(stats, "local"), -1) << "no actor runs on this machine: nothing to ship here\n" << stats;
+    for (const char* actor : {"renderer-0", "renderer-1", "renderer-2", "direct.0", "direct.1", "direct.2"}) {
+      const size_t at = stats.find(std::string("\"name\": \"") + actor + "\"");
+      ASSERT_NE(at, std::string::npos) << actor;
+      const size_t next = stats.find("\"name\": \"", at + 1);
+      EXPECT_NE(stats.substr(at, next - at).find("\"scene_from_agent\": true"), std::string::npos)
+          << actor << " did not get its scene from its host's agent";
+    }
     auto img = read_image(path("spread.exr"));
     ASSERT_TRUE(img.ok());
     EXPECT_TRUE(same_pixels(expected, *img));

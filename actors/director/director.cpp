@@ -13,6 +13,7 @@
 #include <filesystem>
 #include <map>
 #include <memory>
+#include <random>
 #include <set>
 #include <thread>
 
@@ -129,6 +130,7 @@ class Director final : public ControlOut, public Outbox {
       stage(Stage::prepare, [&] { prepare(); });
       stage(Stage::launch, [&] {
         ship_scene();
+        start_host_agents();
         std::function<std::string(const ActorSpec&)> keys_of;
         if (!actor_keys_.empty()) keys_of = [&](const ActorSpec& a) { return farm_keys_for(a.name); };
         check(supervisor_.launch(control_endpoint_, local_address_, keys_of));
@@ -166,6 +168,8 @@ class Director final : public ControlOut, public Outbox {
     }
     // No actor outlives the farm, whatever happened above.
     supervisor_.send_bye_to_all();
+    // Host agents end now; the actors they forked end with their stand-ins (below), not with the agent.
+    for (pid_t agent : agent_pids_) launchers_.kill(agent, SIGTERM);
     launchers_.stop_all(std::chrono::milliseconds(status == 0 ? 3000 : 300));
     kill_orphans();
     // An actor removes its IPC folder when it exits; one that was killed cannot. Every actor here is reaped by now.
@@ -276,6 +280,35 @@ class Director final : public ControlOut, public Outbox {
       scene_paths_[h->name] = shipped->path;
       scene_sent_[h->name] = shipped->bytes_sent;
     }
+  }
+
+  // A host with two or more scene-loading actors gets a host agent: the scene's BVH is built once there and shared
+  // by the actors it forks (actors/runtime/host_agent.hpp). An agent that cannot start is only a warning: the
+  // actors then load the scene themselves.
+  void start_host_agents() {
+    if (scene_bytes_.empty() || !spec_.host_agents) return;
+    std::map<std::string, int> loaders;
+    for (const auto& a : spec_.actors)
+      if (const HostSpec* h = spec_.host_of(a); h && a.loads_scene()) ++loaders[h->name];
+    std::map<std::string, std::string> sockets;
+    std::random_device random;
+    for (const HostSpec* h : spec_.hosts_in_use()) {
+      if (loaders[h->name] < 2) continue;
+      char tag[17];
+      std::snprintf(tag, sizeof tag, "%08x%08x", random(), random());
+      const std::string socket = "lightfarm-agent-" + scene_hash_ + "-" + tag;
+      LaunchRequest how;
+      how.argv = {"lightfarm", "host-agent", "--scene", scene_paths_.at(h->name), "--hash", scene_hash_, "--socket", socket};
+      how.hold_stdin = true;
+      auto pid = launchers_.start(*h, how);
+      if (!pid) {
+        log_warn("host '" + h->name + "': no host agent (" + pid.error().message + "); its actors load the scene themselves");
+        continue;
+      }
+      agent_pids_.push_back(*pid);
+      sockets[h->name] = socket;
+    }
+    supervisor_.set_host_agents(std::move(sockets));
   }
 
   // CURVE: a keypair for the director and one for each actor; the director lets in only the actors' keys.
@@ -719,6 +752,7 @@ class Director final : public ControlOut, public Outbox {
   wire::CurveKeys director_keys_;
   std::map<std::string, wire::CurveKeys> actor_keys_;
   std::string scene_bytes_, scene_hash_;           // a scene from a file, as shipped
+  std::vector<pid_t> agent_pids_;                  // host agents (their launchers' pids)
   std::map<std::string, std::string> scene_paths_;  // host -> the scene's path in its cache
   std::map<std::string, uint64_t> scene_sent_;      // host -> bytes that crossed to it
   wire::Socket control_{wire::Socket::Kind::router};

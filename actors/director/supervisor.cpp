@@ -67,6 +67,8 @@ Result<pid_t> Supervisor::start(const ActorSpec& a) {
     if (!host) return make_error(a.loc.str() + ": actor '" + a.name + "' is placed on undeclared host '" + a.host + "'");
     if (!local_address_.empty())
       how.argv.insert(how.argv.end(), {"--bind", "tcp://" + (host->remote() ? host->address : local_address_) + ":*"});
+    if (auto agent = agent_sockets_.find(host->name); agent != agent_sockets_.end() && a.loads_scene())
+      how.argv.insert(how.argv.end(), {"--agent", agent->second});
     if (stdin_of_) {
       how.argv.push_back("--curve");
       how.stdin_text = stdin_of_(a) + "\n";

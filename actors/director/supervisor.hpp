@@ -90,6 +90,8 @@ class Supervisor {
                 const std::function<std::string(const ActorSpec&)>& stdin_of = {});
   void set_stage(Stage stage) { stage_ = stage; }
   Stage stage() const { return stage_; }
+  // Hosts whose scene-loading actors a host agent forks: host name -> the agent's socket (`--agent`).
+  void set_host_agents(std::map<std::string, std::string> sockets) { agent_sockets_ = std::move(sockets); }
 
   // One control message from `peer` (or why its bytes were refused).
   Status on_message(const std::string& peer, Result<wire::Message>& message);
@@ -129,6 +131,7 @@ class Supervisor {
   // How launch() started actors, for restarts.
   std::string director_endpoint_, local_address_;
   std::function<std::string(const ActorSpec&)> stdin_of_;
+  std::map<std::string, std::string> agent_sockets_;
   Stage stage_ = Stage::prepare;
   Clock::time_point last_heartbeat_ = Clock::now();
   RateLimitedLog strangers_;  // bad or foreign control messages: logged, never flooding

@@ -15,6 +15,7 @@
 #include "farm/kind_params.hpp"
 #include "core/log.hpp"
 #include "render/camera.hpp"
+#include "render/loaded_scene.hpp"
 #include "render/tile_kernel.hpp"
 
 namespace lf {
@@ -31,10 +32,10 @@ class RendererActor final : public Actor {
       return make_error(e.what());
     }
     if (rt.input_count() != 1) return make_error("a renderer needs exactly one input (its lighting)");
-    auto loaded = Scene::load(config.scene);
+    auto loaded = load_scene_for_actor(config.scene);
     if (!loaded) return loaded.error();
-    scene_ = std::make_unique<Scene>(std::move(*loaded));
-    tracer_ = std::make_unique<RayTracer>(*scene_);
+    scene_ = std::move(loaded->scene);
+    tracer_ = std::move(loaded->tracer);
     image_ = config.image;
     camera_ = std::make_unique<Camera>(config.camera, image_.width, image_.height);
     return Ok{};
@@ -140,8 +141,8 @@ class RendererActor final : public Actor {
     }
   }
 
-  std::unique_ptr<Scene> scene_;
-  std::unique_ptr<RayTracer> tracer_;
+  std::shared_ptr<const Scene> scene_;
+  std::shared_ptr<const RayTracer> tracer_;
   std::unique_ptr<Camera> camera_;
   ImageSpec image_;
   RendererParams params_;

@@ -16,6 +16,7 @@
 
 #include "actors/codecs/shade_codec.hpp"
 #include "core/log.hpp"
+#include "render/loaded_scene.hpp"
 #include "render/lightop_registry.hpp"
 
 namespace lf {
@@ -107,10 +108,10 @@ class LightOpActor final : public Actor {
     } catch (const ParamError& e) {
       return make_error(e.what());
     }
-    auto loaded = Scene::load(config.scene);
+    auto loaded = load_scene_for_actor(config.scene);
     if (!loaded) return loaded.error();
-    scene_ = std::make_unique<Scene>(std::move(*loaded));
-    tracer_ = std::make_unique<RayTracer>(*scene_);
+    scene_ = std::move(loaded->scene);
+    tracer_ = std::move(loaded->tracer);
     camera_ = std::make_unique<Camera>(config.camera, config.image.width, config.image.height);
     width_ = config.image.width;
     height_ = config.image.height;
@@ -214,8 +215,8 @@ class LightOpActor final : public Actor {
 
   const LightOpKind& kind_;
   std::unique_ptr<LightOp> op_;
-  std::unique_ptr<Scene> scene_;
-  std::unique_ptr<RayTracer> tracer_;
+  std::shared_ptr<const Scene> scene_;
+  std::shared_ptr<const RayTracer> tracer_;
   std::unique_ptr<Camera> camera_;
   int width_ = 0, height_ = 0;
   std::unique_ptr<RemoteInputs> inputs_;

@@ -1,4 +1,5 @@
 #include "actors/runtime/runtime.hpp"
+#include "render/loaded_scene.hpp"
 
 #include <time.h>
 #include <unistd.h>
@@ -67,9 +68,16 @@ Result<wire::FarmKeys> read_farm_keys_from_stdin() {
 int stop_signal() { return g_stop_signal; }
 
 namespace {
-// Seconds since this process was exec'd (its start time in /proc, 10 ms resolution); 0 where unknown.
+pid_t g_started_as = 0;  // 0: this process
+}  // namespace
+
+void count_start_from(pid_t pid) { g_started_as = pid; }
+
+namespace {
+// Seconds since this process (or the one count_start_from named) was started (its start time in /proc, 10 ms
+// resolution); 0 where unknown.
 double seconds_since_process_start() {
-  std::ifstream in("/proc/self/stat");
+  std::ifstream in(g_started_as > 0 ? "/proc/" + std::to_string(g_started_as) + "/stat" : std::string("/proc/self/stat"));
   std::string stat((std::istreambuf_iterator<char>(in)), {});
   const auto close = stat.rfind(')');  // the command name may hold spaces; fields resume after it
   if (close == std::string::npos) return 0;
@@ -104,6 +112,7 @@ Value ActorStats::to_value(const wire::SocketCounters& t) const {
                     {"start_seconds", start_seconds},
                     {"configure_seconds", configure_seconds},
                     {"memory_pss_bytes", proportional_set_bytes()},
+                    {"scene_from_agent", scene_was_preloaded()},
                     {"points", points},
                     {"tiles", tiles},
                     {"busy_seconds", busy_seconds},

@@ -11,6 +11,8 @@
 //         -> PHASE finish (or BYE) -> STATS -> BYE -> exit 0
 // It exits non-zero after fail(), and on its own when the director is silent for longer than the heartbeat
 // timeout or SIGINT/SIGTERM arrives: an actor never outlives its farm.
+#include <sys/types.h>
+
 #include <atomic>
 #include <chrono>
 #include <functional>
@@ -49,6 +51,10 @@ struct ActorStats {
   double configure_seconds = 0;  // CONFIG to READY configure: loading the scene, building the BVH
   Value to_value(const wire::SocketCounters& totals) const;
 };
+
+// An actor forked by a host agent counts its start-up from the `lightfarm actor` process that asked for it (its
+// stub), as if it had loaded everything itself.
+void count_start_from(pid_t pid);
 
 class Runtime;
 
