@@ -6,8 +6,8 @@
 //   starting 12 and 48 processes in that allocation as one job step each (SlurmLauncher's way) vs one step per node
 //   the same 12 actors on Lost Empire (225k triangles, shipped once, then cached), over ssh and local
 //   render throughput of the pool network (2 renderers + 3 direct replicas) across 3 ssh hosts vs all local
-//   render throughput with CURVE vs security = "none" across the 3 hosts (every link between hosts encrypted), and
-//   on one machine (same-host links are IPC either way)
+//   render throughput with CURVE vs security = "none" across the 3 hosts (every link between hosts encrypted), for
+//   the `direct` pool and for a `pathtrace` pool, and on one machine (same-host links are IPC either way)
 // Usage: build/bench/hosts_bench [--runs N] [--json FILE]
 #include <cstdio>
 #include <fstream>
@@ -99,6 +99,12 @@ int main(int argc, char** argv) {
   const auto launch_local = script("launch-local.lua", tiny, "", "", 8, 3, false);
   const auto pool_remote = script("pool-remote.lua", frame, ", host = { h1, h2, h3 }", ", host = { h2, h3 }", 3, 2, true);
   const auto pool_local = script("pool-local.lua", frame, "", "", 3, 2, false);
+  // The same pool across hosts serving a heavy op (path tracing, ~100x the work per point of `direct`): CURVE's cost
+  // per byte is the same, its share of the work is not.
+  const auto heavy_remote = bench::temp_script(
+      "heavy-remote.lua", head + hosts_lua + "image { width = 128, height = 128, spp = 8 }\n"
+                          "local d = multiplexer { lightop \"pathtrace\" {}, replicas = 3, host = { h1, h2, h3 } }\n"
+                          "renderers { count = 2, lighting = d, host = { h2, h3 } }\n");
   const auto launch_slurm = bench::temp_script(
       "launch-slurm.lua", head + tiny + "local nodes = slurm_hosts()\n"
                                         "local d = multiplexer { lightop \"direct\" {}, replicas = 8, host = nodes }\n"
@@ -151,6 +157,9 @@ int main(int argc, char** argv) {
     v["throughput_remote_over_local_none"].push_back(remote_plain / local_plain);
     // What CURVE costs where it is used: every link between hosts is encrypted.
     v["throughput_curve_over_none_across_hosts"].push_back(remote / remote_plain);
+    const double heavy_curve = bench::run_farm(heavy_remote, {"security=curve"}).number("render_samples_per_second");
+    const double heavy_none = bench::run_farm(heavy_remote, {"security=none"}).number("render_samples_per_second");
+    v["throughput_curve_over_none_across_hosts_pathtrace"].push_back(heavy_curve / heavy_none);
     const double curve = bench::run_farm(pool_local, {"security=curve"}).number("render_samples_per_second");
     const double none = bench::run_farm(pool_local, {"security=none"}).number("render_samples_per_second");
     v["throughput_curve_over_none"].push_back(curve / none);
@@ -166,7 +175,8 @@ int main(int argc, char** argv) {
                           "slurm_start_12_as_steps_per_actor", "slurm_start_12_as_one_step_per_node",
                           "slurm_start_48_as_steps_per_actor", "slurm_start_48_as_one_step_per_node", "big_first_tile_remote",
                           "big_first_tile_local", "throughput_remote_over_local", "throughput_remote_over_local_none",
-                          "throughput_curve_over_none_across_hosts", "throughput_curve_over_none", "samples_per_second_local_curve",
+                          "throughput_curve_over_none_across_hosts", "throughput_curve_over_none_across_hosts_pathtrace",
+                          "throughput_curve_over_none", "samples_per_second_local_curve",
                           "samples_per_second_local_none"}) {
     if (v[key].empty()) continue;
     const bench::Spread s = bench::spread(v[key]);
