@@ -35,8 +35,8 @@ usage:
       Print the script's actor graph as Graphviz DOT; launches nothing.
   lightfarm actor --kind KIND --name NAME --director ENDPOINT [--bind ENDPOINT] [--curve] [--agent NAME]
       Host one actor (the director runs this; see docs/PROTOCOL.md).
-  lightfarm host-agent --scene FILE --hash HASH --socket NAME
-      Load a shipped scene and its BVH once and fork this host's actors from it (the director runs this).
+  lightfarm host-agent --scene FILE --hash HASH --socket NAME [--actors N]
+      Load a shipped scene and its BVH once and fork this host's N actors from it (the director runs this).
   lightfarm check-actor [--kind KIND] [--timeout SECONDS] [--inputs N] -- COMMAND [ARG]...
       Launch COMMAND as an actor and check it against the protocol; PASS/FAIL per check.
   lightfarm scene FILE.obj
@@ -204,10 +204,11 @@ int cmd_actor(int argc, char** argv) {
 int cmd_host_agent(int argc, char** argv) {
   Args args;
   std::string error;
-  if (!parse(argc, argv, 2, {"scene", "hash", "socket"}, {}, args, error)) return usage_error(error);
+  if (!parse(argc, argv, 2, {"scene", "hash", "socket", "actors"}, {}, args, error)) return usage_error(error);
   for (const char* required : {"scene", "hash", "socket"})
     if (!args.options.count(required)) return usage_error(std::string("host-agent needs --") + required);
-  return lf::run_host_agent({args.options["scene"], args.options["hash"], args.options["socket"]},
+  const int actors = args.options.count("actors") ? std::atoi(args.options["actors"].c_str()) : 0;
+  return lf::run_host_agent({args.options["scene"], args.options["hash"], args.options["socket"], actors},
                             [](int c, char** v) { return cmd_actor(c, v); });
 }
 

@@ -393,5 +393,34 @@ TEST_F(SlurmTest, ThePoolNetworkAcrossAnAllocationGivesTheLocalPixels) {
       << outside.err;
 }
 
+// A scene from a file under Slurm: shipped to each node, where a host agent (a job step of its own) loads it once
+// and forks that node's renderer and replica; the image is the local one.
+TEST_F(SlurmTest, AShippedSceneIsLoadedOncePerNodeByItsAgent) {
+  write("room.obj", kRoomObj);
+  write("room.mtl", kRoomMtl);
+  const std::string body = "scene { file = \"room.obj\" }\ncamera { eye = {0, 1, 3.5}, at = {0, 1, 0}, fov = 45 }\n"
+                           "image { width = 48, height = 48, spp = 4 }\n";
+  auto local = write("local.lua", body + "renderers { count = 2, lighting = multiplexer { lightop \"direct\" {}, replicas = 3 } }\n");
+  auto slurm = write("slurm.lua", body + "local nodes = slurm_hosts()\n"
+                                       "local d = multiplexer { lightop \"direct\" {}, replicas = 3, host = nodes }\n"
+                                       "renderers { count = 3, lighting = d, host = nodes }\n");
+  const Image expected = render(local, {}, "local.exr");
+  auto r = run_in_allocation(3, {"run", slurm, "--quiet", "--output", path("slurm.exr"), "--stats-json", path("stats.json")});
+  ASSERT_EQ(r.status, 0) << r.err;
+  EXPECT_EQ(r.err, "") << "a clean farm says nothing with --quiet";
+  expect_nothing_left(r);
+  auto img = read_image(path("slurm.exr"));
+  ASSERT_TRUE(img.ok()) << r.err;
+  EXPECT_TRUE(same_pixels(expected, *img));
+  const std::string stats = read_file(path("stats.json"));
+  for (const char* actor : {"renderer-0", "renderer-1", "renderer-2", "direct.0", "direct.1", "direct.2"}) {
+    const size_t at = stats.find(std::string("\"name\": \"") + actor + "\"");
+    ASSERT_NE(at, std::string::npos) << actor;
+    const size_t next = stats.find("\"name\": \"", at + 1);
+    EXPECT_NE(stats.substr(at, next - at).find("\"scene_from_agent\": true"), std::string::npos)
+        << actor << " did not get its scene from its node's agent";
+  }
+}
+
 }  // namespace
 }  // namespace lf::test

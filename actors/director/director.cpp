@@ -168,8 +168,8 @@ class Director final : public ControlOut, public Outbox {
     }
     // No actor outlives the farm, whatever happened above.
     supervisor_.send_bye_to_all();
-    // Host agents end now; the actors they forked end with their stand-ins (below), not with the agent.
-    for (pid_t agent : agent_pids_) launchers_.kill(agent, SIGTERM);
+    // Host agents leave by themselves once their actors have exited (a Slurm step killed from outside would be
+    // cancelled with them); one still there after the grace is stopped like an actor.
     launchers_.stop_all(std::chrono::milliseconds(status == 0 ? 3000 : 300));
     kill_orphans();
     // An actor removes its IPC folder when it exits; one that was killed cannot. Every actor here is reaped by now.
@@ -298,14 +298,14 @@ class Director final : public ControlOut, public Outbox {
       std::snprintf(tag, sizeof tag, "%08x%08x", random(), random());
       const std::string socket = "lightfarm-agent-" + scene_hash_ + "-" + tag;
       LaunchRequest how;
-      how.argv = {"lightfarm", "host-agent", "--scene", scene_paths_.at(h->name), "--hash", scene_hash_, "--socket", socket};
+      how.argv = {"lightfarm", "host-agent", "--scene", scene_paths_.at(h->name), "--hash", scene_hash_, "--socket", socket,
+                  "--actors", std::to_string(loaders[h->name])};
       how.hold_stdin = true;
       auto pid = launchers_.start(*h, how);
       if (!pid) {
         log_warn("host '" + h->name + "': no host agent (" + pid.error().message + "); its actors load the scene themselves");
         continue;
       }
-      agent_pids_.push_back(*pid);
       sockets[h->name] = socket;
     }
     supervisor_.set_host_agents(std::move(sockets));
@@ -752,7 +752,6 @@ class Director final : public ControlOut, public Outbox {
   wire::CurveKeys director_keys_;
   std::map<std::string, wire::CurveKeys> actor_keys_;
   std::string scene_bytes_, scene_hash_;           // a scene from a file, as shipped
-  std::vector<pid_t> agent_pids_;                  // host agents (their launchers' pids)
   std::map<std::string, std::string> scene_paths_;  // host -> the scene's path in its cache
   std::map<std::string, uint64_t> scene_sent_;      // host -> bytes that crossed to it
   wire::Socket control_{wire::Socket::Kind::router};

@@ -214,14 +214,8 @@ int run_host_agent(const HostAgentOptions& options, const std::function<int(int,
   sigaddset(&child_exits, SIGCHLD);
   ::sigprocmask(SIG_BLOCK, &child_exits, nullptr);
   const int exits = ::signalfd(-1, &child_exits, SFD_CLOEXEC | SFD_NONBLOCK);
-  while (!stop_requested()) {
-    pollfd p[2] = {{listener, POLLIN, 0}, {exits, POLLIN, 0}};
-    const int n = ::poll(p, 2, 1000);
-    if (p[1].revents & POLLIN) {
-      signalfd_siginfo info;
-      while (::read(exits, &info, sizeof info) > 0) {
-      }
-    }
+  // Each actor that has exited: its wait status to its stub.
+  auto report_exits = [&] {
     for (int status = 0;;) {
       const pid_t done = ::waitpid(-1, &status, WNOHANG);
       if (done <= 0) break;
@@ -232,6 +226,17 @@ int run_host_agent(const HostAgentOptions& options, const std::function<int(int,
         waiting.erase(it);
       }
     }
+  };
+  int forked = 0;
+  while (!stop_requested() && !(options.actors > 0 && forked >= options.actors && waiting.empty())) {
+    pollfd p[2] = {{listener, POLLIN, 0}, {exits, POLLIN, 0}};
+    const int n = ::poll(p, 2, 1000);
+    if (p[1].revents & POLLIN) {
+      signalfd_siginfo info;
+      while (::read(exits, &info, sizeof info) > 0) {
+      }
+    }
+    report_exits();
     if (n <= 0 || !(p[0].revents & POLLIN)) continue;
     const int conn = ::accept4(listener, nullptr, nullptr, SOCK_CLOEXEC);
     if (conn < 0) continue;
@@ -265,10 +270,20 @@ int run_host_agent(const HostAgentOptions& options, const std::function<int(int,
     std::memcpy(reply + 1, &c32, 4);
     write_all(conn, reply, sizeof reply);
     waiting[child] = conn;
+    ++forked;
   }
-  // The actors are the stubs' now: they end with them, not with the agent.
-  for (const auto& [pid, fd] : waiting) ::close(fd);
+  // Done, or asked to end: no more actors, and the agent leaves after those it forked (under Slurm its job step
+  // ends with it and takes every process it started along).
   ::close(listener);
+  while (!waiting.empty()) {
+    pollfd p{exits, POLLIN, 0};
+    if (::poll(&p, 1, 1000) > 0) {
+      signalfd_siginfo info;
+      while (::read(exits, &info, sizeof info) > 0) {
+      }
+    }
+    report_exits();
+  }
   if (exits >= 0) ::close(exits);
   return 0;
 }

@@ -27,9 +27,13 @@ struct HostAgentOptions {
   std::string scene;   // the shipped scene's path on this host
   std::string hash;    // its content hash
   std::string socket;  // the abstract socket's name
+  int actors = 0;      // how many actors it will be asked for (0: unknown)
 };
 
-// Runs the agent until SIGTERM/SIGINT. `actor_main` runs in each forked actor with the stub's argv.
+// Runs the agent until it has forked `actors` actors and they have all exited, or until SIGTERM/SIGINT, after which
+// it takes no more actors and leaves once those it forked have exited. Ending by itself matters under Slurm: the
+// agent's job step ends with it, and a step killed from outside is cancelled with every process it started.
+// `actor_main` runs in each forked actor with the stub's argv.
 int run_host_agent(const HostAgentOptions& options, const std::function<int(int, char**)>& actor_main);
 
 // In the stub: has the agent named `socket` fork the actor `argv` describes and waits for it. Returns its wait
