@@ -3,14 +3,15 @@
 # executions, coverage (edges, features), speed and findings; writes bench-fuzz.json. Needs the fuzz build:
 #   CXX=clang++ cmake -S . -B build-fuzz -DLIGHTFARM_FUZZ=ON -DLIGHTFARM_TESTS=OFF -DLIGHTFARM_BENCH=OFF
 #   cmake --build build-fuzz -j2 --target fuzz_wire fuzz_scene_file fuzz_obj fuzz_script
-# Usage: bench/fuzz_bench.sh [RUNS] [TARGET...]
+# Usage: bench/fuzz_bench.sh [RUNS] [TARGET...]   (FUZZ_JSON=FILE: write the JSON there instead)
+# Do not SIGSTOP a run: libFuzzer times each input by the wall clock, so a stopped run reports a timeout.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 runs=${1:-10000000}
 shift || true
 targets=("$@")
 [ ${#targets[@]} -gt 0 ] || targets=(wire scene_file obj script)
-json="bench-fuzz.json"
+json="${FUZZ_JSON:-bench-fuzz.json}"
 echo "{" > "$json"
 printf "%-12s %12s %8s %8s %10s %9s %s\n" target executions edges features exec/s seconds findings
 first=1
