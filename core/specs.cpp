@@ -58,7 +58,7 @@ CameraSpec CameraSpec::from_value(const Value& v) {
 
 Value ImageSpec::to_value() const {
   return Value::Map{{"width", width}, {"height", height},   {"spp", spp},           {"tile", tile},
-                    {"output", output}, {"exposure", exposure}, {"tonemap", tonemap}};
+                    {"output", output}, {"exposure", exposure}, {"tonemap", tonemap}, {"sampler", sampler}};
 }
 
 ImageSpec ImageSpec::from_value(const Value& v) {
@@ -70,6 +70,7 @@ ImageSpec ImageSpec::from_value(const Value& v) {
   i.output = str(v, "output");
   i.exposure = num(v, "exposure", 0);
   if (const Value* t = v.find("tonemap"); t && t->is_string()) i.tonemap = t->as_string();
+  if (const Value* s = v.find("sampler"); s && s->is_string()) i.sampler = s->as_string();
   return i;
 }
 

@@ -50,6 +50,9 @@ struct ImageSpec {
   // EXR stays linear and untouched.
   double exposure = 0;
   std::string tonemap = "clamp";
+  // The numbers camera, direct light and path tracing draw: "independent" (PCG32) or "sobol" (Owen-scrambled
+  // Sobol points, render/sampler.hpp).
+  std::string sampler = "independent";
   Value to_value() const;
   static ImageSpec from_value(const Value& v);
 };

@@ -219,7 +219,8 @@ int l_camera(lua_State* L) {
   return 0;
 }
 
-// image { width = 512, height = 512, spp = 16, tile = 16, output = "cornell.png", exposure = 0, tonemap = "clamp" }
+// image { width = 512, height = 512, spp = 16, tile = 16, output = "cornell.png", exposure = 0, tonemap = "clamp",
+//         sampler = "independent" }
 int l_image(lua_State* L) {
   Builder& b = builder(L);
   if (b.have_image) luaL_error(L, "image is declared twice");
@@ -233,6 +234,7 @@ int l_image(lua_State* L) {
     i.output = p.get_string("output", i.output);
     i.exposure = p.get_float("exposure", i.exposure, -20, 20);
     i.tonemap = p.get_string("tonemap", i.tonemap, display_tonemaps());
+    i.sampler = p.get_string("sampler", i.sampler, {"independent", "sobol"});
     p.report_unused();
   });
   b.have_image = true;

@@ -18,15 +18,15 @@ struct LightSample {
 };
 
 // Light e (Scene's numbering: a triangle below emitters().size(), else a point light), chosen with probability
-// p_light, as a sample: a uniform point on a triangle.
-inline LightSample light_sample_of(const Scene& scene, size_t e, float p_light, Rng& rng) {
+// p_light, as a sample: the point of the triangle that `uv` names (uniform over it for uniform uv).
+inline LightSample light_sample_at(const Scene& scene, size_t e, float p_light, Uniform2 uv) {
   if (e >= scene.emitters().size()) {
     const PointLight& p = scene.point_lights()[e - scene.emitters().size()];
     return LightSample{p.position, {}, UINT32_MAX, p.intensity, p_light, true};
   }
   const uint32_t tri = scene.emitters()[e];
-  const float su = std::sqrt(rng.uniform());
-  const float v = rng.uniform();
+  const float su = std::sqrt(uv.u);
+  const float v = uv.v;
   const Vec3 b{1 - su, su * (1 - v), su * v};
   const Vec3 y = scene.vertex(tri, 0) * b.x + scene.vertex(tri, 1) * b.y + scene.vertex(tri, 2) * b.z;
   // A cut-out part of an emitter is not there: it sends nothing (the sample still counts, so no bias).
@@ -34,20 +34,41 @@ inline LightSample light_sample_of(const Scene& scene, size_t e, float p_light, 
   return LightSample{y, scene.normal(tri), tri, le, p_light / scene.area(tri)};
 }
 
-// Picks a light by power and a uniform point on it.
-inline LightSample sample_light(const Scene& scene, Rng& rng) {
+// A low-discrepancy Sampler draws the light and the point on it from one 2D point (the pick's remainder and v), so
+// that a pixel's samples stay stratified over the lights' area together; an Rng, or the independent sampler, draws
+// three numbers in turn, as always.
+template <class Draws>
+constexpr bool draws_jointly(const Draws& rng) {
+  if constexpr (requires { rng.low_discrepancy(); }) return rng.low_discrepancy();
+  return false;
+}
+
+// Picks a light by power and a uniform point on it. `Draws` is an Rng or a Sampler.
+template <class Draws>
+inline LightSample sample_light(const Scene& scene, Draws& rng) {
   float p_light = 0;
+  if (draws_jointly(rng)) {
+    Uniform2 uv = rng.uniform2();
+    const size_t e = scene.pick_emitter(uv.u, p_light, &uv.u);
+    return light_sample_at(scene, e, p_light, uv);
+  }
   const size_t e = scene.pick_emitter(rng.uniform(), p_light);
-  return light_sample_of(scene, e, p_light, rng);
+  return light_sample_at(scene, e, p_light, rng.uniform2());
 }
 
 // Picks a light by what it can give point x facing n (the scene's light tree), and a uniform point on it; nullopt
 // when no light can reach x's side.
-inline std::optional<LightSample> sample_light_at(const Scene& scene, Vec3 x, Vec3 n, Rng& rng) {
+template <class Draws>
+inline std::optional<LightSample> sample_light_at(const Scene& scene, Vec3 x, Vec3 n, Draws& rng) {
   size_t e = 0;
   float p_light = 0;
+  if (draws_jointly(rng)) {
+    Uniform2 uv = rng.uniform2();
+    if (!scene.light_tree().pick(x, n, uv.u, e, p_light, &uv.u)) return std::nullopt;
+    return light_sample_at(scene, e, p_light, uv);
+  }
   if (!scene.light_tree().pick(x, n, rng.uniform(), e, p_light)) return std::nullopt;
-  return light_sample_of(scene, e, p_light, rng);
+  return light_sample_at(scene, e, p_light, rng.uniform2());
 }
 
 // The area density with which sample_light_at(x, n) draws a point on emitter triangle `tri`.

@@ -144,7 +144,7 @@ float LightTree::importance(const Node& node, Vec3 x, Vec3 n) const {
   return falloff * cos_at_lights * cos_at_x;
 }
 
-bool LightTree::pick(Vec3 x, Vec3 n, float u, size_t& light, float& probability) const {
+bool LightTree::pick(Vec3 x, Vec3 n, float u, size_t& light, float& probability, float* remainder) const {
   if (nodes_.empty()) return false;
   uint32_t at = 0;
   float p = 1;
@@ -165,6 +165,7 @@ bool LightTree::pick(Vec3 x, Vec3 n, float u, size_t& light, float& probability)
   }
   light = nodes_[at].light;
   probability = p;
+  if (remainder) *remainder = u;
   return p > 0;
 }
 

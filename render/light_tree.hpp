@@ -26,7 +26,9 @@ class LightTree {
   // Picks a light for point x whose surface faces n (unit). Returns false when no light can reach x's side;
   // otherwise `light` is an index in Scene's numbering (below emitters().size() a triangle, above a point light)
   // and `probability` the chance this call picked it.
-  bool pick(Vec3 x, Vec3 n, float u, size_t& light, float& probability) const;
+  // With `remainder`, also where u fell within the picked light's share, rescaled to [0, 1): a number as uniform as
+  // u, for a sampler that draws the light and the point on it from one 2D point.
+  bool pick(Vec3 x, Vec3 n, float u, size_t& light, float& probability, float* remainder = nullptr) const;
   // The chance that pick() at (x, n) returns `light`.
   float probability(Vec3 x, Vec3 n, size_t light) const;
 

@@ -22,6 +22,7 @@
 #include "core/params.hpp"
 #include "render/camera.hpp"
 #include "render/math.hpp"
+#include "render/sampler.hpp"
 #include "render/scene.hpp"
 #include "render/tracer.hpp"
 
@@ -189,6 +190,9 @@ struct SceneContext {
   // The farm's camera and image size, for ops that place work where the camera looks (null in some tests).
   const Camera* camera = nullptr;
   int width = 0, height = 0;
+  // How camera samples and the ops that follow them draw their numbers (image { sampler }): a point's key is that
+  // sampler's (sampler.hpp).
+  SamplerKind sampler = SamplerKind::independent;
   // How far a long setup is ("shooting photons", done, total); the runtime tells the director, which shows it.
   // Call it as often as convenient: the runtime passes on a few a second. May be empty (tests).
   std::function<void(const char* what, uint64_t done, uint64_t total)> progress;

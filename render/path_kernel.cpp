@@ -19,7 +19,7 @@ struct Path {
   bool outside;
   RGB beta{1, 1, 1};  // throughput
   RGB L{};            // gathered radiance
-  Rng rng;
+  Sampler rng;
   bool alive = true;
   // The BSDF sample that led here, for MIS at an emitter hit.
   float bsdf_pdf = 0;
@@ -30,6 +30,10 @@ struct Pending {
   size_t path;
   RGB contribution;
 };
+
+// A vertex's draws, each a fixed dimension slot of the Sobol sampler: the light's pick, its point (2D), the BSDF's
+// lobe, its direction (2D), Russian roulette.
+constexpr uint32_t kSlotsPerVertex = 5;
 
 }  // namespace
 
@@ -45,7 +49,7 @@ void trace_paths(const SceneContext& ctx, const ShadingPoints& points, std::span
     for (size_t s = 0; s < per; ++s)
       paths.push_back(Path{points.position[i], points.normal[i], points.wo[i], points.face_normal(i, scene),
                            points.albedo(i, scene, ctx.pixel_footprint(points.position[i])), points.material[i], points.outside(i, scene), {1, 1, 1}, {},
-                           Rng(points.key[i], o.stream + (s << 32))});
+                           Sampler(ctx.sampler, points.key[i], o.stream, static_cast<uint32_t>(s), static_cast<uint32_t>(per))});
 
   std::vector<Ray> rays;
   std::vector<uint8_t> blocked;
@@ -67,6 +71,7 @@ void trace_paths(const SceneContext& ctx, const ShadingPoints& points, std::span
       const Material& m = scene.material(path.material);
       const Bsdf bsdf(m, path.albedo);
       if (bsdf.is_delta()) continue;
+      path.rng.at_dimension(kSlotsPerVertex * (depth - 1));
       std::optional<LightSample> picked =
           o.light_tree ? sample_light_at(scene, path.x, path.n, path.rng) : sample_light(scene, path.rng);
       if (!picked) continue;
@@ -111,8 +116,10 @@ void trace_paths(const SceneContext& ctx, const ShadingPoints& points, std::span
         path.alive = false;
         continue;
       }
-      const float u0 = path.rng.uniform(), u1 = path.rng.uniform(), u2 = path.rng.uniform();
-      auto s = Bsdf(m, path.albedo).sample(path.n, path.wo, path.outside, u0, u1, u2);
+      path.rng.at_dimension(kSlotsPerVertex * (depth - 1) + 2);
+      const float u0 = path.rng.uniform();
+      const Uniform2 direction = path.rng.uniform2();
+      auto s = Bsdf(m, path.albedo).sample(path.n, path.wo, path.outside, u0, direction.u, direction.v);
       // Only glass may send a path through the face; a reflection the shading normal allows below it ends here.
       if (!s || is_black(s->weight) || (m.type != Material::Type::glass && dot(s->wi, path.ng) <= 0)) {
         path.alive = false;
@@ -155,6 +162,7 @@ void trace_paths(const SceneContext& ctx, const ShadingPoints& points, std::span
       }
       if (depth >= o.rr_depth) {
         const float q = std::min(0.95f, std::max({path.beta.x, path.beta.y, path.beta.z}));
+        path.rng.at_dimension(kSlotsPerVertex * (depth - 1) + 4);
         if (path.rng.uniform() >= q) {
           path.alive = false;
           continue;

@@ -9,6 +9,7 @@
 #include <span>
 
 #include "render/lightop.hpp"
+#include "render/sampler.hpp"
 
 namespace lf {
 
@@ -16,7 +17,7 @@ struct PathOptions {
   int max_depth = 8;          // vertices that gather light; 1 is direct light only
   int rr_depth = 3;           // Russian roulette from this vertex on
   int samples = 1;            // paths per point, averaged
-  uint64_t stream = 0;        // random stream of the calling op (sampler.hpp)
+  uint64_t stream = 0;        // random stream of the calling op (sampler.hpp); the sampler is the farm's (ctx)
   // With max_depth 1: on diffuse surfaces use light sampling alone (a BSDF ray adds cost, not quality there).
   bool light_only_on_diffuse = false;
   // Choose lights through the scene's light tree (by what each can give the point), or else by power alone.

@@ -17,6 +17,10 @@ constexpr uint64_t sample_key(uint64_t pixel_index, uint64_t sample_index) {
   return splitmix64(pixel_index * 0x100000001b3ull ^ splitmix64(sample_index + 0x51ed27ull));
 }
 
+struct Uniform2 {
+  float u, v;
+};
+
 // A counter-based generator: PCG32 seeded from the key and a stream id. Consumers choose distinct streams
 // (the camera, each LightOp kind) so their numbers are independent.
 class Rng {
@@ -34,10 +38,111 @@ class Rng {
   }
   // Uniform in [0, 1).
   constexpr float uniform() { return static_cast<float>(next() >> 8) * 0x1p-24f; }
+  // Two in a row (the interface Sampler shares, where a pair is one 2D point).
+  constexpr Uniform2 uniform2() {
+    const float u = uniform();
+    const float v = uniform();
+    return {u, v};
+  }
 
  private:
   uint64_t state_;
   uint64_t inc_;
+};
+
+// Which numbers the camera, direct light and path tracing draw (image { sampler }): independent PCG32 numbers, or
+// Owen-scrambled Sobol points (Burley 2020, "Practical Hash-based Owen Scrambling"): per pixel and per dimension a
+// hash-seeded nested uniform scramble of Sobol's first two dimensions, with the sample index shuffled per dimension
+// (padding), so that every dimension and every 2D pair is stratified over a pixel's samples and dimensions do not
+// correlate. Both are pure functions of (pixel, sample index, stream, dimension): images stay layout-independent.
+enum class SamplerKind : uint8_t { independent, sobol };
+
+namespace sobol {
+
+constexpr uint32_t reverse_bits(uint32_t x) {
+  x = ((x >> 1) & 0x55555555u) | ((x & 0x55555555u) << 1);
+  x = ((x >> 2) & 0x33333333u) | ((x & 0x33333333u) << 2);
+  x = ((x >> 4) & 0x0f0f0f0fu) | ((x & 0x0f0f0f0fu) << 4);
+  x = ((x >> 8) & 0x00ff00ffu) | ((x & 0x00ff00ffu) << 8);
+  return (x >> 16) | (x << 16);
+}
+
+// A bijection of 32-bit words in which each bit depends only on the bits below it (Laine and Karras; the constants
+// of Burley's improved hash): applied to bit-reversed values it is a nested uniform (Owen) scramble.
+constexpr uint32_t laine_karras(uint32_t x, uint32_t seed) {
+  x ^= x * 0x3d20adeau;
+  x += seed;
+  x *= (seed >> 16) | 1u;
+  x ^= x * 0x05526c56u;
+  x ^= x * 0x53a22864u;
+  return x;
+}
+
+constexpr uint32_t owen_scramble(uint32_t x, uint32_t seed) { return reverse_bits(laine_karras(reverse_bits(x), seed)); }
+
+// Sobol's first two dimensions as 32-bit fractions: van der Corput, and the one whose direction numbers follow
+// v <- v ^ (v >> 1).
+constexpr uint32_t dimension0(uint32_t i) { return reverse_bits(i); }
+constexpr uint32_t dimension1(uint32_t i) {
+  uint32_t r = 0;
+  for (uint32_t v = 1u << 31; i; i >>= 1, v ^= v >> 1)
+    if (i & 1u) r ^= v;
+  return r;
+}
+
+constexpr uint32_t hash32(uint64_t x) { return static_cast<uint32_t>(splitmix64(x) >> 32); }
+constexpr float to_unit(uint32_t x) { return static_cast<float>(x >> 8) * 0x1p-24f; }
+
+// Point `index` of the scrambled sequence for `seed` (one per pixel and dimension): a 1D value, or a 2D point.
+constexpr float point1(uint32_t index, uint64_t seed) {
+  const uint32_t shuffled = owen_scramble(index, hash32(seed));
+  return to_unit(owen_scramble(dimension0(shuffled), hash32(seed ^ 0x5bd1e995u)));
+}
+constexpr Uniform2 point2(uint32_t index, uint64_t seed) {
+  const uint32_t shuffled = owen_scramble(index, hash32(seed));
+  return {to_unit(owen_scramble(dimension0(shuffled), hash32(seed ^ 0x5bd1e995u))),
+          to_unit(owen_scramble(dimension1(shuffled), hash32(seed ^ 0x68e31da4u)))};
+}
+
+}  // namespace sobol
+
+// The key of a pixel sample under the Sobol sampler: a hash of the pixel above, the sample index in the low 24 bits
+// (so a LightOp finds its place in the pixel's sequence; at most 16 M samples per pixel).
+constexpr uint64_t sobol_sample_key(uint64_t pixel_index, uint64_t sample_index) {
+  return (splitmix64(pixel_index * 0x100000001b3ull + 0x51ed27ull) & ~0xffffffull) | (sample_index & 0xffffffull);
+}
+constexpr uint64_t pixel_sample_key(SamplerKind kind, uint64_t pixel_index, uint64_t sample_index) {
+  return kind == SamplerKind::sobol ? sobol_sample_key(pixel_index, sample_index) : sample_key(pixel_index, sample_index);
+}
+
+// The numbers one consumer (a stream) draws for one pixel sample, dimension by dimension. Independent: the stream's
+// PCG32 numbers in order, exactly as Rng(key, stream + (sub << 32)) gives them. Sobol: `sub` of `subs` (several paths per camera
+// sample take consecutive points of the pixel's sequence), each draw the next dimension; at_dimension() starts a
+// fixed slot (a path's bounce), so that a skipped draw does not shift the dimensions of those after it.
+class Sampler {
+ public:
+  constexpr Sampler(SamplerKind kind, uint64_t key, uint64_t stream, uint32_t sub = 0, uint32_t subs = 1)
+      : rng_(key, stream + (static_cast<uint64_t>(sub) << 32)),
+        kind_(kind),
+        index_(static_cast<uint32_t>(key & 0xffffffu) * subs + sub),
+        seed_(splitmix64((key >> 24) ^ splitmix64(stream ^ 0x2545f4914f6cdd1dull))) {}
+  constexpr void at_dimension(uint32_t d) { dimension_ = d; }
+  constexpr bool low_discrepancy() const { return kind_ == SamplerKind::sobol; }
+  constexpr float uniform() {
+    if (kind_ == SamplerKind::independent) return rng_.uniform();
+    return sobol::point1(index_, seed_ + dimension_++);
+  }
+  constexpr Uniform2 uniform2() {
+    if (kind_ == SamplerKind::independent) return rng_.uniform2();
+    return sobol::point2(index_, seed_ + dimension_++);
+  }
+
+ private:
+  Rng rng_;
+  SamplerKind kind_;
+  uint32_t index_;
+  uint64_t seed_;
+  uint32_t dimension_ = 0;
 };
 
 // Streams in use; a new consumer takes a new number.

@@ -4,6 +4,7 @@
 
 #include <array>
 #include <set>
+#include <vector>
 
 namespace lf {
 
@@ -37,6 +38,80 @@ TEST(Sampler, UniformIsUniform) {
   double chi2 = 0;
   for (int b : bins) chi2 += (b - expected) * (b - expected) / expected;
   EXPECT_LT(chi2, 61.1);
+}
+
+TEST(Sampler, TheIndependentSamplerDrawsWhatRngDraws) {
+  // Images made before the Sobol sampler existed stay bit-identical: same numbers, same order.
+  for (uint32_t sub : {0u, 3u}) {
+    Rng r(sample_key(7, 2), streams::pathtrace + (static_cast<uint64_t>(sub) << 32));
+    Sampler s(SamplerKind::independent, sample_key(7, 2), streams::pathtrace, sub, 4);
+    for (int i = 0; i < 20; ++i) {
+      s.at_dimension(static_cast<uint32_t>(100 - i));  // dimensions are the Sobol sampler's business only
+      if (i % 3 == 0) {
+        const float a = r.uniform(), b = r.uniform();
+        const Uniform2 p = s.uniform2();
+        EXPECT_EQ(p.u, a);
+        EXPECT_EQ(p.v, b);
+      } else {
+        EXPECT_EQ(s.uniform(), r.uniform());
+      }
+    }
+  }
+}
+
+// Every elementary interval of area 1/256 (2^a x 2^(8-a) cells) holds exactly one of a pixel's first 256 points:
+// a (0, 8, 2)-net, in every dimension pair and after scrambling.
+TEST(Sampler, ThePixelsFirst256SobolPointsAreANetInEveryDimension) {
+  for (uint64_t pixel : {0ull, 12345ull}) {
+    for (uint32_t dimension : {0u, 1u, 7u}) {
+      std::vector<Uniform2> points;
+      for (uint32_t i = 0; i < 256; ++i) {
+        Sampler s(SamplerKind::sobol, sobol_sample_key(pixel, i), streams::camera);
+        s.at_dimension(dimension);
+        points.push_back(s.uniform2());
+      }
+      for (int a = 0; a <= 8; ++a) {
+        const int nx = 1 << a, ny = 1 << (8 - a);
+        std::vector<int> cells(256, 0);
+        for (const Uniform2& p : points) {
+          ASSERT_GE(p.u, 0.0f);
+          ASSERT_LT(p.u, 1.0f);
+          ++cells[static_cast<size_t>(static_cast<int>(p.u * nx) * ny + static_cast<int>(p.v * ny))];
+        }
+        for (int c : cells) ASSERT_EQ(c, 1) << "pixel " << pixel << " dimension " << dimension << " cells " << nx << "x" << ny;
+      }
+      // 1D draws: 256 points in 256 strata.
+      std::vector<int> strata(256, 0);
+      for (uint32_t i = 0; i < 256; ++i) {
+        Sampler s(SamplerKind::sobol, sobol_sample_key(pixel, i), streams::direct);
+        s.at_dimension(dimension);
+        ++strata[static_cast<size_t>(s.uniform() * 256)];
+      }
+      for (int c : strata) ASSERT_EQ(c, 1);
+    }
+  }
+}
+
+TEST(Sampler, SobolSequencesOfPixelsAndDimensionsAreScrambledApart) {
+  // The first point differs between pixels, streams and dimensions, and over many pixels it is uniform.
+  std::set<float> firsts;
+  std::array<int, 32> bins{};
+  for (uint64_t pixel = 0; pixel < 32000; ++pixel) {
+    Sampler s(SamplerKind::sobol, sobol_sample_key(pixel, 0), streams::camera);
+    const float u = s.uniform();
+    firsts.insert(u);
+    ++bins[static_cast<size_t>(u * 32)];
+  }
+  EXPECT_GT(firsts.size(), 31000u);
+  double chi2 = 0;
+  for (int b : bins) chi2 += (b - 1000.0) * (b - 1000.0) / 1000.0;
+  EXPECT_LT(chi2, 61.1);
+  Sampler a(SamplerKind::sobol, sobol_sample_key(5, 0), streams::camera), b(SamplerKind::sobol, sobol_sample_key(5, 0), streams::direct);
+  EXPECT_NE(a.uniform(), b.uniform());
+  EXPECT_NE(a.uniform(), a.uniform()) << "consecutive dimensions";
+  // Several paths per camera sample are consecutive points of the pixel's sequence.
+  EXPECT_EQ(Sampler(SamplerKind::sobol, sobol_sample_key(5, 1), streams::direct, 0, 4).uniform(),
+            Sampler(SamplerKind::sobol, sobol_sample_key(5, 0), streams::direct, 4, 1).uniform());
 }
 
 }  // namespace lf

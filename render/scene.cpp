@@ -168,10 +168,14 @@ size_t Scene::emitter_index_of(uint32_t t) const {
   return static_cast<size_t>(std::lower_bound(emitters_.begin(), emitters_.end(), t) - emitters_.begin());
 }
 
-size_t Scene::pick_emitter(float u, float& probability) const {
+size_t Scene::pick_emitter(float u, float& probability, float* remainder) const {
   auto it = std::upper_bound(emitter_cdf_.begin(), emitter_cdf_.end(), u);
   size_t i = std::min(static_cast<size_t>(it - emitter_cdf_.begin()), emitter_cdf_.size() - 1);
   probability = emitter_pdf_[i];
+  if (remainder) {
+    const float low = i > 0 ? emitter_cdf_[i - 1] : 0.0f, width = emitter_cdf_[i] - low;
+    *remainder = width > 0 ? std::clamp((u - low) / width, 0.0f, 0x1.fffffep-1f) : 0.0f;
+  }
   return i;
 }
 

@@ -153,7 +153,8 @@ class Scene {
   const std::vector<uint32_t>& emitters() const { return emitters_; }
   const std::vector<PointLight>& point_lights() const { return point_lights_; }
   // Picks a light for u in [0,1); an index below emitters().size() is a triangle, above it a point light.
-  size_t pick_emitter(float u, float& probability) const;
+  // With `remainder`: where u fell within that light's share of [0, 1), rescaled to [0, 1) (LightTree::pick).
+  size_t pick_emitter(float u, float& probability, float* remainder = nullptr) const;
   // Probability that pick_emitter chooses triangle t (0 for non-emitters).
   float emitter_probability_of_triangle(uint32_t t) const { return light_pdf_view_[t]; }
   // The lights by what each can give a point (render/light_tree.hpp), in the same numbering (after finalize()).

@@ -25,15 +25,15 @@ void trace_tile(const Scene& scene, const RayTracer& tracer, const Camera& camer
   rays.resize(samples);
   hits.resize(samples);
   std::vector<uint64_t> keys(samples);
+  const SamplerKind kind = image.sampler == "sobol" ? SamplerKind::sobol : SamplerKind::independent;
   size_t s = 0;
   for (int y = rect.y0; y < rect.y1; ++y)
     for (int x = rect.x0; x < rect.x1; ++x) {
       const uint64_t pixel = static_cast<uint64_t>(y) * image.width + x;
       for (int k = 0; k < image.spp; ++k, ++s) {
-        keys[s] = sample_key(pixel, static_cast<uint64_t>(k));
-        Rng rng(keys[s], streams::camera);
-        const float jx = rng.uniform(), jy = rng.uniform();
-        rays[s] = camera.ray(static_cast<float>(x) + jx, static_cast<float>(y) + jy);
+        keys[s] = pixel_sample_key(kind, pixel, static_cast<uint64_t>(k));
+        const Uniform2 jitter = Sampler(kind, keys[s], streams::camera).uniform2();
+        rays[s] = camera.ray(static_cast<float>(x) + jitter.u, static_cast<float>(y) + jitter.v);
       }
     }
   tracer.intersect(rays, hits, /*coherent=*/true);  // a tile's camera rays are the same batch on any layout

@@ -170,5 +170,26 @@ renderers { count = param("renderers", 1), lighting = lightop "combine" { inputs
   EXPECT_GT(sum, 0) << "a black image proves nothing";
 }
 
+// The Sobol sampler keeps images independent of the layout: a point's numbers come from its pixel, its sample and
+// the dimension, whichever renderer or replica draws them. A path-traced Cornell box (camera, light and BSDF
+// dimensions all Sobol) with one renderer and one pathtrace, against three renderers and a pool of two.
+TEST_F(NetworkTest, TheSobolSamplerGivesTheSamePixelsOnEveryLayout) {
+  const std::string script = write("sobol.lua", R"(scene { builtin = "cornell" }
+image { width = 48, height = 48, spp = 8, tile = 16, sampler = "sobol" }
+local paths = lightop "pathtrace" { max_depth = 6 }
+local lighting = param("replicas", 1) > 1 and multiplexer { paths, replicas = param("replicas", 1) } or paths
+renderers { count = param("renderers", 1), lighting = lighting }
+)");
+  const Image single = render({"run", script}, "single.exr");
+  const Image spread = render({"run", script, "--set", "renderers=3", "--set", "replicas=2"}, "spread.exr");
+  const Image again = render({"run", script, "--set", "replicas=1"}, "again.exr");
+  ASSERT_EQ(single.pixels.size(), spread.pixels.size());
+  EXPECT_TRUE(single.pixels == spread.pixels) << "images differ between layouts";
+  EXPECT_TRUE(single.pixels == again.pixels) << "the same farm twice";
+  double sum = 0;
+  for (const RGB& p : single.pixels) sum += average(p);
+  EXPECT_GT(sum, 0) << "a black image proves nothing";
+}
+
 }  // namespace
 }  // namespace lf::test

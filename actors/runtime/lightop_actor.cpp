@@ -115,6 +115,7 @@ class LightOpActor final : public Actor {
     camera_ = std::make_unique<Camera>(config.camera, config.image.width, config.image.height);
     width_ = config.image.width;
     height_ = config.image.height;
+    sampler_ = config.image.sampler == "sobol" ? SamplerKind::sobol : SamplerKind::independent;
     inputs_ = std::make_unique<RemoteInputs>(rt, 4096);
     if (config.pool) {
       replica_index_ = static_cast<int>(config.pool->index);
@@ -130,6 +131,7 @@ class LightOpActor final : public Actor {
       ctx.camera = camera_.get();
       ctx.width = width_;
       ctx.height = height_;
+      ctx.sampler = sampler_;
       ctx.progress = [&rt](const char* what, uint64_t done, uint64_t total) { rt.report_progress(what, done, total); };
       setup_ = op_->setup(std::move(ctx), *inputs_);
       setup_running_ = true;
@@ -217,6 +219,7 @@ class LightOpActor final : public Actor {
   std::unique_ptr<LightOp> op_;
   std::shared_ptr<const Scene> scene_;
   std::shared_ptr<const RayTracer> tracer_;
+  SamplerKind sampler_ = SamplerKind::independent;
   std::unique_ptr<Camera> camera_;
   int width_ = 0, height_ = 0;
   std::unique_ptr<RemoteInputs> inputs_;
