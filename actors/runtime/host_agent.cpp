@@ -227,17 +227,19 @@ int run_host_agent(const HostAgentOptions& options, const std::function<int(int,
       }
     }
   };
-  int forked = 0;
-  while (!stop_requested() && !(options.actors > 0 && forked >= options.actors && waiting.empty())) {
-    pollfd p[2] = {{listener, POLLIN, 0}, {exits, POLLIN, 0}};
-    const int n = ::poll(p, 2, 1000);
-    if (p[1].revents & POLLIN) {
-      signalfd_siginfo info;
-      while (::read(exits, &info, sizeof info) > 0) {
-      }
+  // Waits up to a second for the listener (if any) or an actor's exit; reports exits; true when a stub is waiting.
+  auto await_events = [&](int listening) {
+    pollfd p[2] = {{exits, POLLIN, 0}, {listening, POLLIN, 0}};
+    const int n = ::poll(p, listening >= 0 ? 2 : 1, 1000);
+    signalfd_siginfo info;
+    while (::read(exits, &info, sizeof info) > 0) {
     }
     report_exits();
-    if (n <= 0 || !(p[0].revents & POLLIN)) continue;
+    return n > 0 && listening >= 0 && (p[1].revents & POLLIN);
+  };
+  int answered = 0;  // actors forked, or told to run themselves
+  while (!stop_requested() && !(options.actors > 0 && answered >= options.actors && waiting.empty())) {
+    if (!await_events(listener)) continue;
     const int conn = ::accept4(listener, nullptr, nullptr, SOCK_CLOEXEC);
     if (conn < 0) continue;
     ucred peer{};
@@ -249,41 +251,37 @@ int run_host_agent(const HostAgentOptions& options, const std::function<int(int,
       ::close(conn);
       continue;
     }
-    if (!ready) {
+    // "n": the stand-in runs its actor itself; it still counts as one of those expected.
+    auto refuse = [&] {
       write_all(conn, "n", 1);
       r.close_fds();
       ::close(conn);
+      ++answered;
+    };
+    if (!ready) {
+      refuse();
       continue;
     }
     std::vector<int> agent_fds{listener, conn, exits};
     for (const auto& [pid, fd] : waiting) agent_fds.push_back(fd);
     const pid_t child = ::fork();
     if (child == 0) become_actor(r, agent_fds, actor_main);
-    r.close_fds();
     if (child < 0) {
-      write_all(conn, "n", 1);
-      ::close(conn);
+      refuse();
       continue;
     }
+    r.close_fds();
     char reply[5] = {'y'};
     const int32_t c32 = child;
     std::memcpy(reply + 1, &c32, 4);
     write_all(conn, reply, sizeof reply);
     waiting[child] = conn;
-    ++forked;
+    ++answered;
   }
   // Done, or asked to end: no more actors, and the agent leaves after those it forked (under Slurm its job step
   // ends with it and takes every process it started along).
   ::close(listener);
-  while (!waiting.empty()) {
-    pollfd p{exits, POLLIN, 0};
-    if (::poll(&p, 1, 1000) > 0) {
-      signalfd_siginfo info;
-      while (::read(exits, &info, sizeof info) > 0) {
-      }
-    }
-    report_exits();
-  }
+  while (!waiting.empty()) await_events(-1);
   if (exits >= 0) ::close(exits);
   return 0;
 }
