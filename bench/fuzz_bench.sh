@@ -3,7 +3,9 @@
 # executions, coverage (edges, features), speed and findings; writes bench-fuzz.json. Needs the fuzz build:
 #   CXX=clang++ cmake -S . -B build-fuzz -DLIGHTFARM_FUZZ=ON -DLIGHTFARM_TESTS=OFF -DLIGHTFARM_BENCH=OFF
 #   cmake --build build-fuzz -j2 --target fuzz_wire fuzz_scene_file fuzz_obj fuzz_script
-# Usage: bench/fuzz_bench.sh [RUNS] [TARGET...]   (FUZZ_JSON=FILE: write the JSON there instead)
+# Usage: bench/fuzz_bench.sh [RUNS] [TARGET...]   (FUZZ_JSON=FILE: write the JSON there instead; MAX_LEN=N: inputs
+# of at most N bytes — the OBJ and script targets slow from ~12 k to ~1-2 k executions a second as libFuzzer grows
+# inputs towards 4 KB, so 10 M executions of them at full length take hours)
 # Do not SIGSTOP a run: libFuzzer times each input by the wall clock, so a stopped run reports a timeout.
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -20,7 +22,7 @@ for t in "${targets[@]}"; do
   artifacts=$(mktemp -d)
   start=$(date +%s)
   set +e
-  "build-fuzz/fuzz/fuzz_$t" -runs="$runs" -timeout=10 -rss_limit_mb=2048 -print_final_stats=1 \
+  "build-fuzz/fuzz/fuzz_$t" -runs="$runs" -timeout=10 -rss_limit_mb=2048 -print_final_stats=1 ${MAX_LEN:+-max_len=$MAX_LEN} \
     -artifact_prefix="$artifacts/" "$work" "tests/fuzz/corpus/$t" > "$work.log" 2>&1
   rc=$?
   set -e
