@@ -55,6 +55,12 @@ Result<int> replicate(FarmSpec& spec, const PoolSpec& pool) {
 
   std::vector<int> nodes;
   subtree(spec, pool.op, nodes);
+  // Pools of pools multiply: three nested pools of 64 would be 262,144 processes, and building them alone took the
+  // director seconds (found by fuzzing scripts). A farm is capped well above any real one.
+  const size_t after = spec.actors.size() + nodes.size() * static_cast<size_t>(pool.replicas - 1) + 1;
+  if (after > kMaxActors)
+    return make_error("multiplexer: this pool would make the farm " + std::to_string(after) + " actors (at most " +
+                      std::to_string(kMaxActors) + ")");
   // "direct" -> "direct.1"; an inner replica "direct.0" -> "direct.1.0"; a node named otherwise keeps its name
   // under the replica's prefix.
   auto renamed = [&](const std::string& name, int replica) {

@@ -35,6 +35,9 @@ struct PoolSpec {
   SourceLoc loc;
   std::vector<double> slowdown;  // debug: one factor >= 1 per replica, or empty
 };
+// The most actors a farm may have (every one is a process).
+inline constexpr size_t kMaxActors = 4096;
+
 // Returns the multiplexer's index.
 Result<int> replicate(FarmSpec& spec, const PoolSpec& pool);
 

@@ -114,6 +114,15 @@ TEST_F(ScriptTest, TheSamplerIsIndependentOrSobol) {
             "farm.lua:1: image: parameter 'sampler' must be one of independent, sobol, got 'halton'");
 }
 
+TEST_F(ScriptTest, PoolsOfPoolsCannotMultiplyIntoAHugeFarm) {
+  // Found by fuzzing: three nested pools of 64 would be 262,144 actors, and building them took seconds.
+  EXPECT_EQ(error_of("scene { builtin = \"cornell\" }\n"
+                     "local d = multiplexer { lightop \"direct\" {}, replicas = 64 }\n"
+                     "d = multiplexer { d, replicas = 64 }\n"
+                     "d = multiplexer { d, replicas = 64 }\n"),
+            "farm.lua:3: multiplexer: this pool would make the farm 4161 actors (at most 4096)");
+}
+
 TEST_F(ScriptTest, UnknownKindNamesLineAndKnownKinds) {
   EXPECT_EQ(error_of("scene { builtin = \"cornell\" }\n\nlocal p = lightop \"photon\" { }\n"),
             "farm.lua:3: unknown LightOp kind 'photon' (known kinds: " + lightop_kind_list() + ")");
