@@ -15,7 +15,7 @@
 
 #include "bench/bench_util.hpp"
 #include "core/value.hpp"
-#include "render/image.hpp"
+#include "bench/image_error.hpp"
 
 namespace {
 
@@ -25,41 +25,12 @@ struct Point {
   double seconds, rmse, rmse_ring;
 };
 
-// `ring`: also leave out the pixels next to the light.
-double relative_rmse(const lf::Image& a, const lf::Image& ref, bool ring = false) {
-  double se = 0, mean = 0;
-  size_t n = 0;
-  const int w = ref.width, h = ref.height;
-  auto light = [&](int x, int y) {
-    return x >= 0 && y >= 0 && x < w && y < h && ref.pixels[static_cast<size_t>(y * w + x)].x > 1.0f;
-  };
-  for (int y = 0; y < h; ++y)
-    for (int x = 0; x < w; ++x) {
-      if (light(x, y)) continue;  // the light: the same emission in both
-      bool near = false;
-      for (int dy = -1; dy <= 1 && ring; ++dy)
-        for (int dx = -1; dx <= 1; ++dx) near = near || light(x + dx, y + dy);
-      if (near) continue;
-      const size_t i = static_cast<size_t>(y * w + x);
-      const double d = lf::average(a.pixels[i]) - lf::average(ref.pixels[i]);
-      se += d * d;
-      mean += lf::average(ref.pixels[i]);
-      ++n;
-    }
-  return std::sqrt(se / static_cast<double>(n)) / (mean / static_cast<double>(n));
-}
-
 lf::Image run(const std::string& script, const std::vector<std::string>& sets, double& seconds) {
   const std::string out =
       (bench::fs::temp_directory_path() / ("lightfarm-quality-" + std::to_string(::getpid()) + ".exr")).string();
-  seconds = bench::run_farm(script, sets, out).wall_seconds;
-  auto img = lf::read_image(out);
+  lf::Image img = bench::render_image(script, sets, out, seconds);
   bench::fs::remove(out);
-  if (!img) {
-    std::fprintf(stderr, "%s\n", img.error().message.c_str());
-    std::exit(1);
-  }
-  return *img;
+  return img;
 }
 
 }  // namespace
@@ -93,7 +64,7 @@ int main(int argc, char** argv) {
   std::vector<Point> path, networks;
   for (int spp : {16, 64, 256}) {
     lf::Image img = run(pt, {"size=" + s, "spp=" + std::to_string(spp)}, t);
-    path.push_back({"pathtrace", spp, t, relative_rmse(img, reference), relative_rmse(img, reference, true)});
+    path.push_back({"pathtrace", spp, t, bench::relative_rmse(img, reference), bench::relative_rmse(img, reference, true)});
   }
   const std::vector<std::pair<std::string, std::string>> nets{
       {"caches", src + "/examples/cornell_glass.lua"}, {"radiosity", src + "/examples/cornell_glass_radiosity.lua"}};
@@ -102,7 +73,7 @@ int main(int argc, char** argv) {
       std::vector<std::string> sets{"width=" + s, "height=" + s, "spp=" + std::to_string(spp), "photons=300000"};
       if (name == "caches") sets.push_back("prepass=4000");  // its area-placed first cache
       lf::Image img = run(script, sets, t);
-      networks.push_back({name, spp, t, relative_rmse(img, reference), relative_rmse(img, reference, true)});
+      networks.push_back({name, spp, t, bench::relative_rmse(img, reference), bench::relative_rmse(img, reference, true)});
     }
   std::printf("%-10s %6s %10s %10s %16s\n", "method", "spp", "seconds", "rel. RMSE", "without light rim");
   for (const auto* list : {&path, &networks})

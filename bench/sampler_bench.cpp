@@ -13,34 +13,7 @@
 
 #include "bench/bench_util.hpp"
 #include "core/value.hpp"
-#include "render/image.hpp"
-
-namespace {
-
-double relative_rmse(const lf::Image& a, const lf::Image& ref) {
-  double se = 0, mean = 0;
-  size_t n = 0;
-  for (size_t i = 0; i < ref.pixels.size(); ++i) {
-    if (ref.pixels[i].x > 1.0f) continue;  // the light: the same emission in both
-    const double d = lf::average(a.pixels[i]) - lf::average(ref.pixels[i]);
-    se += d * d;
-    mean += lf::average(ref.pixels[i]);
-    ++n;
-  }
-  return std::sqrt(se / static_cast<double>(n)) / (mean / static_cast<double>(n));
-}
-
-lf::Image render(const std::string& script, const std::vector<std::string>& sets, const std::string& out, double& seconds) {
-  seconds = bench::run_farm(script, sets, out).wall_seconds;
-  auto img = lf::read_image(out);
-  if (!img) {
-    std::fprintf(stderr, "%s\n", img.error().message.c_str());
-    std::exit(1);
-  }
-  return *img;
-}
-
-}  // namespace
+#include "bench/image_error.hpp"
 
 int main(int argc, char** argv) {
   int size = 128, reference_spp = 4096;
@@ -71,7 +44,7 @@ int main(int argc, char** argv) {
     std::printf("reference: %s (kept)\n", reference_path.c_str());
   } else {
     double t = 0;
-    reference = render(script, {"size=" + s, "spp=" + std::to_string(reference_spp), "seed=7"}, reference_path, t);
+    reference = bench::render_image(script, {"size=" + s, "spp=" + std::to_string(reference_spp), "seed=7"}, reference_path, t);
     std::printf("reference: independent, seed 7, %d spp, %.1f s\n", reference_spp, t);
   }
   const std::string out = (bench::fs::temp_directory_path() / ("lightfarm-sampler-" + std::to_string(::getpid()) + ".exr")).string();
@@ -84,7 +57,7 @@ int main(int argc, char** argv) {
   for (int spp : {4, 16, 64, 256}) {
     Row r{spp, {}, {}};
     for (int k = 0; k < 2; ++k)
-      r.error[k] = relative_rmse(render(script, {"size=" + s, "spp=" + std::to_string(spp), std::string("sampler=") + kinds[k]},
+      r.error[k] = bench::relative_rmse(bench::render_image(script, {"size=" + s, "spp=" + std::to_string(spp), std::string("sampler=") + kinds[k]},
                                         out, r.seconds[k]),
                                  reference);
     rows.push_back(r);

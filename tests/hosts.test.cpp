@@ -93,6 +93,17 @@ class HostsTest : public FarmFixture {
                                 "renderers { count = 2, lighting = direct, host = " + renderer_hosts + " }\n")};
   }
 
+  // Every renderer and replica of a three-host pool farm says (in --stats-json) it got its scene from its host's agent.
+  static void expect_scenes_from_agents(const std::string& stats) {
+    for (const char* actor : {"renderer-0", "renderer-1", "renderer-2", "direct.0", "direct.1", "direct.2"}) {
+      const size_t at = stats.find(std::string("\"name\": \"") + actor + "\"");
+      ASSERT_NE(at, std::string::npos) << actor;
+      const size_t next = stats.find("\"name\": \"", at + 1);
+      EXPECT_NE(stats.substr(at, next - at).find("\"scene_from_agent\": true"), std::string::npos)
+          << actor << " did not get its scene from its host's agent";
+    }
+  }
+
   Image render(const std::string& script, const std::vector<std::string>& sets, const std::string& out) {
     std::vector<std::string> args{"run", script, "--quiet", "--output", path(out)};
     for (const auto& s : sets) args.insert(args.end(), {"--set", s});
@@ -306,13 +317,7 @@ TEST_F(HostsTest, TheSceneTravelsOncePerHostAndIsThenReusedFromItsCache) {
     ASSERT_GT(size, 0) << stats;
     for (const char* h : {"h1", "h2", "h3"}) EXPECT_EQ(shipped_to(stats, h), run == 1 ? size : 0) << h << stats;
     EXPECT_EQ(shipped_to(stats, "local"), -1) << "no actor runs on this machine: nothing to ship here\n" << stats;
-    for (const char* actor : {"renderer-0", "renderer-1", "renderer-2", "direct.0", "direct.1", "direct.2"}) {
-      const size_t at = stats.find(std::string("\"name\": \"") + actor + "\"");
-      ASSERT_NE(at, std::string::npos) << actor;
-      const size_t next = stats.find("\"name\": \"", at + 1);
-      EXPECT_NE(stats.substr(at, next - at).find("\"scene_from_agent\": true"), std::string::npos)
-          << actor << " did not get its scene from its host's agent";
-    }
+    expect_scenes_from_agents(stats);
     auto img = read_image(path("spread.exr"));
     ASSERT_TRUE(img.ok());
     EXPECT_TRUE(same_pixels(expected, *img));
@@ -413,13 +418,7 @@ TEST_F(SlurmTest, AShippedSceneIsLoadedOncePerNodeByItsAgent) {
   ASSERT_TRUE(img.ok()) << r.err;
   EXPECT_TRUE(same_pixels(expected, *img));
   const std::string stats = read_file(path("stats.json"));
-  for (const char* actor : {"renderer-0", "renderer-1", "renderer-2", "direct.0", "direct.1", "direct.2"}) {
-    const size_t at = stats.find(std::string("\"name\": \"") + actor + "\"");
-    ASSERT_NE(at, std::string::npos) << actor;
-    const size_t next = stats.find("\"name\": \"", at + 1);
-    EXPECT_NE(stats.substr(at, next - at).find("\"scene_from_agent\": true"), std::string::npos)
-        << actor << " did not get its scene from its node's agent";
-  }
+  expect_scenes_from_agents(stats);
 }
 
 }  // namespace
