@@ -1,5 +1,7 @@
 #include "actors/director/report.hpp"
 
+#include <sys/resource.h>
+
 #include <cstdio>
 #include <fstream>
 
@@ -18,8 +20,8 @@ void print_report(const FarmSpec& spec, const Supervisor& supervisor, const RunF
   for (const auto& [name, secs] : f.stage_seconds)
     std::fprintf(stderr, "%-12s %9.3f %6.1f%%\n", name.c_str(), secs, 100.0 * secs / f.total_seconds);
   std::fprintf(stderr, "%-12s %9.3f %6.1f%%\n\n", "total", f.total_seconds, 100.0);
-  std::fprintf(stderr, "%-14s %-10s %8s %9s %11s %9s %9s %8s %6s\n", "actor", "kind", "pid", "requests", "points",
-               "MiB in", "MiB out", "busy s", "peakq");
+  std::fprintf(stderr, "%-14s %-10s %8s %9s %11s %9s %9s %8s %7s %6s\n", "actor", "kind", "pid", "requests", "points",
+               "MiB in", "MiB out", "busy s", "cpu s", "peakq");
   for (const auto& a : spec.actors) {
     const ActorRecord& s = supervisor.at(a.name);
     if (s.lost) {
@@ -27,10 +29,10 @@ void print_report(const FarmSpec& spec, const Supervisor& supervisor, const RunF
                    s.loss.c_str());
       continue;
     }
-    std::fprintf(stderr, "%-14s %-10s %8d %9.0f %11.0f %9.2f %9.2f %8.3f %6.0f\n", a.name.c_str(), a.kind.c_str(),
-                 static_cast<int>(s.pid), num(s.stats, "requests"), num(s.stats, "points"),
+    std::fprintf(stderr, "%-14s %-10s %8d %9.0f %11.0f %9.2f %9.2f %8.3f %7.3f %6.0f\n", a.name.c_str(),
+                 a.kind.c_str(), static_cast<int>(s.pid), num(s.stats, "requests"), num(s.stats, "points"),
                  num(s.stats, "bytes_in") / 1048576.0, num(s.stats, "bytes_out") / 1048576.0,
-                 num(s.stats, "busy_seconds"), num(s.stats, "peak_queue"));
+                 num(s.stats, "busy_seconds"), num(s.stats, "cpu_seconds"), num(s.stats, "peak_queue"));
   }
   // What each LightOp says about its own work (STATS detail): cache coverage, photons, ...
   bool header = false;
@@ -63,12 +65,17 @@ Status write_stats_json(const FarmSpec& spec, const Supervisor& supervisor, cons
   for (const auto& [name, secs] : f.stage_seconds) phases[name] = secs;
   phases["total"] = f.total_seconds;
   Value::Array actors;
-  double shading_requests = 0, messages = 0;
+  double shading_requests = 0, messages = 0, actors_cpu = 0;
   for (const auto& a : spec.actors) {
     const ActorRecord& st = supervisor.at(a.name);
     if (a.is_renderer()) shading_requests += num(st.stats, "requests");
     messages += num(st.stats, "messages_out");
+    actors_cpu += num(st.stats, "cpu_seconds");
   }
+  struct rusage director_usage {};
+  ::getrusage(RUSAGE_SELF, &director_usage);
+  auto secs = [](const timeval& t) { return static_cast<double>(t.tv_sec) + t.tv_usec * 1e-6; };
+  const double director_cpu = secs(director_usage.ru_utime) + secs(director_usage.ru_stime);
   for (const auto& a : spec.actors) {
     const ActorRecord& s = supervisor.at(a.name);
     Value entry = s.stats.is_map() ? s.stats : Value(Value::Map{});
@@ -85,7 +92,10 @@ Status write_stats_json(const FarmSpec& spec, const Supervisor& supervisor, cons
                          {"render_samples_per_second", samples / f.render_seconds},
                          {"first_tile_seconds", f.first_tile_seconds},
                          {"render_seconds", f.render_seconds},
-                         {"totals", Value::Map{{"renderer_shading_requests", shading_requests}, {"messages_sent", messages}}},
+                         {"totals", Value::Map{{"renderer_shading_requests", shading_requests},
+                                               {"messages_sent", messages},
+                                               {"actors_cpu_seconds", actors_cpu},
+                                               {"director_cpu_seconds", director_cpu}}},
                          {"actors", std::move(actors)}};
   if (!f.radiosity.is_nil()) doc.as_map()["radiosity"] = f.radiosity;
   if (!f.scene.is_nil()) doc.as_map()["scene"] = f.scene;
