@@ -50,6 +50,7 @@ class Value {
   double as_double() const { return is_int() ? static_cast<double>(std::get<int64_t>(data_)) : std::get<double>(data_); }
   const std::string& as_string() const { return std::get<std::string>(data_); }
   const Bytes& as_bytes() const { return std::get<Bytes>(data_); }
+  Bytes& as_bytes() { return std::get<Bytes>(data_); }
   const Array& as_array() const { return std::get<Array>(data_); }
   Array& as_array() { return std::get<Array>(data_); }
   const Map& as_map() const { return std::get<Map>(data_); }
@@ -68,6 +69,22 @@ class Value {
  private:
   Storage data_;
 };
+
+// A map built by moving its values in: map_of("n", 3, "p", std::move(bytes)). A braced Value::Map{{k, v}, ...}
+// copies every value (an initializer list's elements are const), which for bulk Bytes is one more copy of each
+// array in every message.
+inline void put_all(Value::Map&) {}
+template <class V, class... Rest>
+void put_all(Value::Map& m, std::string key, V&& value, Rest&&... rest) {
+  m.insert_or_assign(std::move(key), Value(std::forward<V>(value)));
+  put_all(m, std::forward<Rest>(rest)...);
+}
+template <class... KeysAndValues>
+Value map_of(KeysAndValues&&... kv) {
+  Value::Map m;
+  put_all(m, std::forward<KeysAndValues>(kv)...);
+  return Value(std::move(m));
+}
 
 // Floats as little-endian float32 bytes and back (the wire's bulk format, DESIGN §3).
 Bytes floats_to_bytes(std::span<const float> floats);

@@ -70,13 +70,25 @@ std::optional<Phase> phase_of(const Header& header) {
 
 namespace {
 
-using Packer = msgpack::packer<msgpack::sbuffer>;
+// msgpack's packer writes into any buffer with write(); this one is the std::string the frame is sent from, so an
+// encoded body is not copied out of an sbuffer (a copy per message, and a fresh allocation for a large one).
+struct StringBuffer {
+  std::string bytes;
+  void write(const char* data, size_t size) { bytes.append(data, size); }
+};
 
+template <class Buffer>
+using PackerInto = msgpack::packer<Buffer>;
+using Packer = PackerInto<msgpack::sbuffer>;
+using BodyPacker = PackerInto<StringBuffer>;
+
+template <class Packer>
 void pack_string(Packer& pk, std::string_view s) {
   pk.pack_str(static_cast<uint32_t>(s.size()));
   pk.pack_str_body(s.data(), static_cast<uint32_t>(s.size()));
 }
 
+template <class Packer>
 void pack_value(Packer& pk, const Value& v) {
   const auto& s = v.storage();
   switch (s.index()) {
@@ -213,10 +225,11 @@ static size_t encoded_size_bound(const Value& v) {
 }
 
 std::string encode_body(const Value& body) {
-  msgpack::sbuffer buf(encoded_size_bound(body));
-  Packer pk(&buf);
+  StringBuffer buf;
+  buf.bytes.reserve(encoded_size_bound(body));
+  BodyPacker pk(buf);
   pack_value(pk, body);
-  return std::string(buf.data(), buf.size());
+  return std::move(buf.bytes);
 }
 
 Result<Header> decode_header(std::string_view bytes) {

@@ -13,11 +13,10 @@ Value encode_packet(const SamplePacket& p, int home) {
       points.push_back(p.points[i][c]);
       normals.push_back(p.normals[i][c]);
     }
-  return Value::Map{{"o", static_cast<int64_t>(p.origin)}, {"s", static_cast<int64_t>(p.serial)},
-                    {"it", static_cast<int64_t>(p.iteration)}, {"e", static_cast<int64_t>(p.epoch)},
-                    {"r", static_cast<int64_t>(p.route)},
-                    {"home", static_cast<int64_t>(home)},     {"p", floats_to_bytes(points)},
-                    {"n", floats_to_bytes(normals)},          {"v", u64_to_bytes(p.visible)}};
+  return map_of("o", static_cast<int64_t>(p.origin), "s", static_cast<int64_t>(p.serial),
+                "it", static_cast<int64_t>(p.iteration), "e", static_cast<int64_t>(p.epoch),
+                "r", static_cast<int64_t>(p.route), "home", static_cast<int64_t>(home),
+                "p", floats_to_bytes(points), "n", floats_to_bytes(normals), "v", u64_to_bytes(p.visible));
 }
 
 namespace {
@@ -192,9 +191,8 @@ Value encode_elements(const std::vector<radiosity::Element>& elements) {
       unshot.push_back(e.unshot[c]);
     }
   }
-  return Value::Map{{"patch", u32_to_bytes(patch)}, {"corners", u32_to_bytes(corners)},
-                    {"points", floats_to_bytes(points)}, {"radiosity", floats_to_bytes(radiosity)},
-                    {"unshot", floats_to_bytes(unshot)}, {"depth", u32_to_bytes(depth)}};
+  return map_of("patch", u32_to_bytes(patch), "corners", u32_to_bytes(corners), "points", floats_to_bytes(points),
+                "radiosity", floats_to_bytes(radiosity), "unshot", floats_to_bytes(unshot), "depth", u32_to_bytes(depth));
 }
 
 Result<std::vector<radiosity::Element>> decode_elements(const Value& body, size_t patches) {

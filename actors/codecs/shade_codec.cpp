@@ -11,14 +11,12 @@ static Bytes vec3_bytes(const std::vector<Vec3>& v, size_t begin, size_t end) {
 }
 
 Value encode_shade_request(const ShadingPoints& pts, size_t begin, size_t end) {
-  Value body = Value::Map{
-      {"n", static_cast<int64_t>(end - begin)},
-      {"p", vec3_bytes(pts.position, begin, end)},
-      {"nrm", vec3_bytes(pts.normal, begin, end)},
-      {"wo", vec3_bytes(pts.wo, begin, end)},
-      {"m", u32_to_bytes(std::span<const uint32_t>(pts.material.data() + begin, end - begin))},
-      {"k", u64_to_bytes(std::span<const uint64_t>(pts.key.data() + begin, end - begin))},
-  };
+  Value body = map_of("n", static_cast<int64_t>(end - begin),                 //
+                       "p", vec3_bytes(pts.position, begin, end),              //
+                       "nrm", vec3_bytes(pts.normal, begin, end),              //
+                       "wo", vec3_bytes(pts.wo, begin, end),                   //
+                       "m", u32_to_bytes(std::span<const uint32_t>(pts.material.data() + begin, end - begin)),
+                       "k", u64_to_bytes(std::span<const uint64_t>(pts.key.data() + begin, end - begin)));
   if (!pts.triangle.empty())
     body.as_map()["tri"] = u32_to_bytes(std::span<const uint32_t>(pts.triangle.data() + begin, end - begin));
   return body;
@@ -62,9 +60,9 @@ Result<ShadingPoints> decode_shade_request(const Value& body, size_t material_co
 }
 
 Value encode_radiance(std::span<const RGB> radiance) {
-  return Value::Map{{"n", static_cast<int64_t>(radiance.size())},
-                    {"L", floats_to_bytes(std::span<const float>(reinterpret_cast<const float*>(radiance.data()),
-                                                                 3 * radiance.size()))}};
+  return map_of("n", static_cast<int64_t>(radiance.size()),
+                "L", floats_to_bytes(std::span<const float>(reinterpret_cast<const float*>(radiance.data()),
+                                                            3 * radiance.size())));
 }
 
 Result<std::vector<RGB>> decode_radiance(const Value& body, size_t expected) {

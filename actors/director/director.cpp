@@ -711,7 +711,7 @@ class Director final : public ControlOut, public Outbox {
              "unknown operation '" + m.header.op + "' (the director serves " + served + ")");
       return Ok{};
     }
-    return it->second->on_request(a.name(), op, m.header.id, m.body, *this);
+    return it->second->on_request(a.name(), op, m.header.id, std::move(m.body), *this);
   }
 
   Status lost(ActorRecord& a, const std::string& why) {

@@ -20,11 +20,11 @@ void ExchangeService::publish(const std::string& key, std::string blob, Outbox& 
   expected_.insert(key);
   const std::string& stored = published_[key] = std::move(blob);
   auto [first, last] = waiting_fetches_.equal_range(key);
-  for (auto it = first; it != last; ++it) out.reply(it->second.first, it->second.second, Value::Map{{"blob", Bytes{stored}}});
+  for (auto it = first; it != last; ++it) out.reply(it->second.first, it->second.second, map_of("blob", Bytes{stored}));
   waiting_fetches_.erase(first, last);
 }
 
-Status ExchangeService::on_request(const std::string& actor, wire::Op op, uint64_t id, const Value& body, Outbox& out) {
+Status ExchangeService::on_request(const std::string& actor, wire::Op op, uint64_t id, Value body, Outbox& out) {
   if (op == wire::Op::fetch) {
     const Value* key = body.find("key");
     const std::string name = key && key->is_string() ? key->as_string() : std::string("?");
@@ -34,21 +34,25 @@ Status ExchangeService::on_request(const std::string& actor, wire::Op op, uint64
       return Ok{};
     }
     if (auto it = published_.find(name); it != published_.end()) {
-      out.reply(actor, id, Value::Map{{"blob", Bytes{it->second}}});
+      out.reply(actor, id, map_of("blob", Bytes{it->second}));
     } else {
       waiting_fetches_.emplace(name, std::make_pair(actor, id));
     }
     return Ok{};
   }
-  const Value* part = body.find("part");
-  if (!part || !part->is_bytes()) {
+  auto part = body.is_map() ? body.as_map().find("part") : Value::Map::iterator{};
+  if (!body.is_map() || part == body.as_map().end() || !part->second.is_bytes()) {
     out.refuse(actor, id, ErrorCode::bad_request, "all_gather needs a part");
     return Ok{};
   }
+  // Shares can be tens of MB (a photon map): they are moved, never copied, on their way through here.
+  Value mine = std::move(part->second);
   size_t at = 0;
   const std::string* pool = pool_of(actor, &at);
   if (!pool) {  // not in a pool: its own part is everything
-    out.reply(actor, id, Value::Map{{"parts", Value::Array{*part}}});
+    Value::Array only;
+    only.push_back(std::move(mine));
+    out.reply(actor, id, map_of("parts", std::move(only)));
     return Ok{};
   }
   const auto& replicas = pools_.at(*pool);
@@ -59,13 +63,15 @@ Status ExchangeService::on_request(const std::string& actor, wire::Op op, uint64
   Gather& g = gathers_[*pool];
   g.parts.resize(replicas.size());
   g.askers.resize(replicas.size());
-  g.parts[at] = *part;
+  g.parts[at] = std::move(mine);
   g.askers[at] = id;
   for (const auto& p : g.parts)
     if (p.is_nil()) return Ok{};
-  Value::Array all(g.parts.begin(), g.parts.end());
-  for (size_t r = 0; r < replicas.size(); ++r) out.reply(replicas[r], g.askers[r], Value::Map{{"parts", all}});
+  Value all = Value::Array(std::make_move_iterator(g.parts.begin()), std::make_move_iterator(g.parts.end()));
+  const std::vector<uint64_t> askers = std::move(g.askers);
   gathers_.erase(*pool);
+  for (size_t r = 0; r < replicas.size(); ++r)
+    out.reply(replicas[r], askers[r], map_of("parts", r + 1 < replicas.size() ? all : std::move(all)));
   return Ok{};
 }
 

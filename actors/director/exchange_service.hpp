@@ -21,7 +21,7 @@ class ExchangeService final : public Service {
   using Pools = std::map<std::string, std::vector<std::string>>;
   explicit ExchangeService(Pools pools);
   std::vector<wire::Op> ops() const override { return {wire::Op::all_gather, wire::Op::fetch}; }
-  Status on_request(const std::string& actor, wire::Op op, uint64_t id, const Value& body, Outbox& out) override;
+  Status on_request(const std::string& actor, wire::Op op, uint64_t id, Value body, Outbox& out) override;
   Status on_lost(const std::string& actor, const std::string& why, Outbox& out) override;
 
   // `key` will be published: fetches of it wait instead of being refused.

@@ -50,7 +50,7 @@ int RingService::index_of(const std::string& node) const {
   return -1;
 }
 
-Status RingService::on_request(const std::string& actor, wire::Op op, uint64_t id, const Value& body, Outbox& out) {
+Status RingService::on_request(const std::string& actor, wire::Op op, uint64_t id, Value body, Outbox& out) {
   return op == wire::Op::ring_shooter ? on_shooter(actor, id, body, out) : on_result(actor, id, body, out);
 }
 

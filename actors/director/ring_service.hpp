@@ -43,7 +43,7 @@ class RingService final : public Service {
   Status prepare(const Scene& scene);
 
   std::vector<wire::Op> ops() const override { return {wire::Op::ring_shooter, wire::Op::ring_result}; }
-  Status on_request(const std::string& actor, wire::Op op, uint64_t id, const Value& body, Outbox& out) override;
+  Status on_request(const std::string& actor, wire::Op op, uint64_t id, Value body, Outbox& out) override;
   Status on_lost(const std::string& actor, const std::string& why, Outbox& out) override;
   bool needs_restart(const std::string& actor) const override { return index_of(actor) >= 0 && !solved(); }
   Status on_rejoined(const std::string& actor, Outbox& out) override;

@@ -30,7 +30,7 @@ class Service {
   virtual std::vector<wire::Op> ops() const = 0;
   // A request from `actor`, a live member of this farm. An error stops the farm with its message (a broken
   // invariant, not a bad request: those are refused through the Outbox and the farm goes on).
-  virtual Status on_request(const std::string& actor, wire::Op op, uint64_t id, const Value& body, Outbox& out) = 0;
+  virtual Status on_request(const std::string& actor, wire::Op op, uint64_t id, Value body, Outbox& out) = 0;
   // The director entered `phase` (its PHASE messages are on their way).
   virtual Status on_phase(wire::Phase, Outbox&) { return Ok{}; }
   // `actor` was lost (died or hung) in setup or render, and the farm goes on without it: its work goes elsewhere.

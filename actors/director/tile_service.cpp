@@ -27,7 +27,7 @@ Status TileService::on_phase(wire::Phase phase, Outbox& out) {
 
 void TileService::finish_progress() { progress_.update(master_.done(), render_seconds(), true); }
 
-Status TileService::on_request(const std::string& actor, wire::Op op, uint64_t id, const Value& body, Outbox& out) {
+Status TileService::on_request(const std::string& actor, wire::Op op, uint64_t id, Value body, Outbox& out) {
   if (op == wire::Op::tile) {
     waiting_.emplace_back(actor, id);
     serve_waiting(out);

@@ -21,7 +21,7 @@ class TileService final : public Service {
   // `renderers`: the actors that ask for tiles (a loss of any other actor is not this service's concern).
   TileService(const ImageSpec& image, std::vector<std::string> renderers, bool terminal, bool quiet);
   std::vector<wire::Op> ops() const override { return {wire::Op::tile, wire::Op::tile_done}; }
-  Status on_request(const std::string& actor, wire::Op op, uint64_t id, const Value& body, Outbox& out) override;
+  Status on_request(const std::string& actor, wire::Op op, uint64_t id, Value body, Outbox& out) override;
   Status on_phase(wire::Phase phase, Outbox& out) override;
   Status on_lost(const std::string& actor, const std::string& why, Outbox& out) override;
 

@@ -123,9 +123,9 @@ class RendererActor final : public Actor {
     ++done_acks_out_;
     std::erase(jobs_, job);
     rt.ask_director(wire::Op::tile_done,
-                    Value::Map{{"id", job->id},
-                               {"pixels", floats_to_bytes(std::span<const float>(
-                                              reinterpret_cast<const float*>(pixels.data()), 3 * pixels.size()))}},
+                    map_of("id", job->id,
+                           "pixels", floats_to_bytes(std::span<const float>(
+                                         reinterpret_cast<const float*>(pixels.data()), 3 * pixels.size()))),
                     [this, &rt](Result<wire::Message> r) {
                       --done_acks_out_;
                       if (!r) log_warn("the render master did not take a tile: " + r.error().message);

@@ -63,18 +63,22 @@ class RemoteInputs final : public Inputs {
 // All-gather among the replicas of a pool, through the director (which knows the pool).
 class DirectorExchange final : public Exchange {
  public:
-  explicit DirectorExchange(Runtime& rt) : rt_(rt) {}
+  // `alone`: not one of several replicas, so the gather is this op's own part (a pool of one, or no pool): a
+  // photon map's tens of MB need not go to the director and back.
+  DirectorExchange(Runtime& rt, bool alone) : rt_(rt), alone_(alone) {}
   Gather all_gather(std::string part, std::vector<std::string>* parts) override {
+    if (alone_) return SoloExchange().all_gather(std::move(part), parts);
     auto state = std::make_shared<GatherState>();
     state->remaining = 1;
-    rt_.ask_director(wire::Op::all_gather, Value::Map{{"part", Bytes{std::move(part)}}}, [state, parts](Result<wire::Message> r) {
+    rt_.ask_director(wire::Op::all_gather, map_of("part", Bytes{std::move(part)}), [state, parts](Result<wire::Message> r) {
       if (!r) return state->complete_one("all_gather: " + r.error().message);
-      const Value* all = r->body.find("parts");
-      if (!all || !all->is_array()) return state->complete_one("all_gather: the director sent no parts");
+      auto all = r->body.is_map() ? r->body.as_map().find("parts") : Value::Map::iterator{};
+      if (!r->body.is_map() || all == r->body.as_map().end() || !all->second.is_array())
+        return state->complete_one("all_gather: the director sent no parts");
       parts->clear();
-      for (const auto& p : all->as_array()) {
+      for (auto& p : all->second.as_array()) {
         if (!p.is_bytes()) return state->complete_one("all_gather: a part is not bytes");
-        parts->push_back(p.as_bytes().data);
+        parts->push_back(std::move(p.as_bytes().data));  // shares can be tens of MB: moved, not copied
       }
       state->complete_one();
     });
@@ -86,9 +90,10 @@ class DirectorExchange final : public Exchange {
     state->remaining = 1;
     rt_.ask_director(wire::Op::fetch, Value::Map{{"key", key}}, [state, blob, key](Result<wire::Message> r) {
       if (!r) return state->complete_one("fetch '" + key + "': " + r.error().message);
-      const Value* b = r->body.find("blob");
-      if (!b || !b->is_bytes()) return state->complete_one("fetch '" + key + "': the director sent no blob");
-      *blob = b->as_bytes().data;
+      auto b = r->body.is_map() ? r->body.as_map().find("blob") : Value::Map::iterator{};
+      if (!r->body.is_map() || b == r->body.as_map().end() || !b->second.is_bytes())
+        return state->complete_one("fetch '" + key + "': the director sent no blob");
+      *blob = std::move(b->second.as_bytes().data);
       state->complete_one();
     });
     return Gather(state);
@@ -96,6 +101,7 @@ class DirectorExchange final : public Exchange {
 
  private:
   Runtime& rt_;
+  bool alone_;
 };
 
 class LightOpActor final : public Actor {
@@ -121,7 +127,7 @@ class LightOpActor final : public Actor {
       replica_index_ = static_cast<int>(config.pool->index);
       replica_count_ = static_cast<int>(config.pool->count);
     }
-    exchange_ = std::make_unique<DirectorExchange>(rt);  // a lone op's all_gather comes straight back from it
+    exchange_ = std::make_unique<DirectorExchange>(rt, replica_count_ <= 1);
     return Ok{};
   }
 

@@ -14,6 +14,7 @@
 // k), other points and points with no such neighbour the full estimate.
 #include <nanoflann.hpp>
 
+#include <chrono>
 #include <cstring>
 
 #include "render/bsdf.hpp"
@@ -88,8 +89,13 @@ class PhotonMap final : public LightOp {
     if (max_radius_ <= 0) max_radius_ = 1000 * scene.epsilon();  // 10 % of the scene's diagonal
     const uint64_t begin = photons_ * static_cast<uint64_t>(ctx.replica_index) / static_cast<uint64_t>(ctx.replica_count);
     const uint64_t end = photons_ * static_cast<uint64_t>(ctx.replica_index + 1) / static_cast<uint64_t>(ctx.replica_count);
+    using Clock = std::chrono::steady_clock;
+    auto seconds_since = [](Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); };
+    auto phase_start = Clock::now();
     std::vector<Photon> mine = shoot(scene, *ctx.tracer, begin, end, ctx);
     ctx.report("shooting photons", end - begin, end - begin);
+    shoot_seconds_ = seconds_since(phase_start);
+    phase_start = Clock::now();
 
     std::string part(mine.size() * sizeof(Photon), '\0');
     if (!mine.empty()) std::memcpy(part.data(), mine.data(), part.size());
@@ -105,9 +111,12 @@ class PhotonMap final : public LightOp {
       cloud_.photons.resize(at + n);
       if (n) std::memcpy(cloud_.photons.data() + at, p.data(), p.size());
     }
+    exchange_seconds_ = seconds_since(phase_start);
+    phase_start = Clock::now();
     tree_ = std::make_unique<KdTree>(3, cloud_, nanoflann::KDTreeSingleIndexAdaptorParams(16));
     tree_->buildIndex();
     kd_depth_ = depth_of(tree_->root_node);
+    build_seconds_ = seconds_since(phase_start);
     if (precompute_ > 0) {
       irradiance_.points.clear();
       for (size_t j = 0; j < cloud_.photons.size(); j += precompute_) {
@@ -117,6 +126,7 @@ class PhotonMap final : public LightOp {
       irradiance_tree_ = std::make_unique<IrradianceTree>(3, irradiance_, nanoflann::KDTreeSingleIndexAdaptorParams(16));
       irradiance_tree_->buildIndex();
     }
+    precompute_seconds_ = seconds_since(phase_start) - build_seconds_;
   }
 
   Task shade(const ShadingPoints& points, std::span<RGB> radiance, Inputs&) override {
@@ -153,7 +163,8 @@ class PhotonMap final : public LightOp {
  public:
   // photons_shot: by the whole pool; photons_stored: in this map (caustic photons only); lookups: non-specular
   // points asked for; served_precomputed: answered by the nearest precomputed irradiance (`precompute`), the rest
-  // by a k-nearest estimate.
+  // by a k-nearest estimate. Setup's time: shooting this replica's share, the exchange of shares (waiting for the
+  // slowest replica included), the kd-tree over the whole map, the precomputed irradiance.
   Value stats() const override {
     return Value::Map{{"photons_shot", static_cast<int64_t>(photons_)},
                       {"photons_stored", static_cast<int64_t>(cloud_.photons.size())},
@@ -161,7 +172,11 @@ class PhotonMap final : public LightOp {
                       {"served_precomputed", static_cast<int64_t>(served_precomputed_)},
                       {"kd_depth", kd_depth_},
                       {"estimates", static_cast<int64_t>(estimates_)},
-                      {"mean_radius", estimates_ ? radius_sum_ / static_cast<double>(estimates_) : 0.0}};
+                      {"mean_radius", estimates_ ? radius_sum_ / static_cast<double>(estimates_) : 0.0},
+                      {"shoot_seconds", shoot_seconds_},
+                      {"exchange_seconds", exchange_seconds_},
+                      {"build_seconds", build_seconds_},
+                      {"precompute_seconds", precompute_seconds_}};
   }
 
  private:
@@ -172,6 +187,7 @@ class PhotonMap final : public LightOp {
     return 1 + std::max(depth_of(node->child1), depth_of(node->child2));
   }
   int kd_depth_ = 0;
+  double shoot_seconds_ = 0, exchange_seconds_ = 0, build_seconds_ = 0, precompute_seconds_ = 0;
   mutable uint64_t estimates_ = 0;  // density estimates made (lookups and precomputed ones) that found photons
   mutable double radius_sum_ = 0;   // and the sum of their gather radii
   uint64_t lookups_ = 0, served_precomputed_ = 0;
