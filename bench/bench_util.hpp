@@ -1,5 +1,6 @@
 #pragma once
 // Shared by the benchmarks: run the real lightfarm binary on a script and read back its --stats-json figures.
+#include <sched.h>
 #include <sys/resource.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -45,6 +46,15 @@ inline double json_number(const std::string& text, const std::string& key) {
   if (pos == std::string::npos) return -1;
   pos = text.find(':', pos);
   return std::strtod(text.c_str() + pos + 1, nullptr);
+}
+
+// Every number after "key": in a JSON text, in order (one per actor for per-actor figures).
+inline std::vector<double> json_numbers(const std::string& text, const std::string& key) {
+  std::vector<double> out;
+  const std::string quoted = "\"" + key + "\"";
+  for (size_t pos = text.find(quoted); pos != std::string::npos; pos = text.find(quoted, pos + 1))
+    out.push_back(std::strtod(text.c_str() + text.find(':', pos) + 1, nullptr));
+  return out;
 }
 
 struct FarmRun {
@@ -94,11 +104,24 @@ inline double descendants_pss_bytes(pid_t root) {
   return total;
 }
 
+// The CPUs this process may run on, as "0,1".
+inline std::string allowed_cpus() {
+  cpu_set_t set;
+  CPU_ZERO(&set);
+  std::string out;
+  if (sched_getaffinity(0, sizeof set, &set) != 0) return "0";
+  for (int c = 0; c < CPU_SETSIZE; ++c)
+    if (CPU_ISSET(c, &set)) out += (out.empty() ? "" : ",") + std::to_string(c);
+  return out;
+}
+
 // Runs `lightfarm run script --set ...`; exits the benchmark if the farm fails. The image goes to `output` if
 // given (the caller keeps it), else to a temporary file.
 // With `sample_memory`, also peak_actors_pss_bytes (a thread reads /proc every 50 ms while the farm runs).
+// With `cpus` ("0" or "0,1"), the farm and every process it starts run only on those CPUs (the affinity is
+// inherited).
 inline FarmRun run_farm(const std::string& script, const std::vector<std::string>& sets, const std::string& output = {},
-                        bool sample_memory = false) {
+                        bool sample_memory = false, const std::string& cpus = {}) {
   const fs::path tmp = fs::temp_directory_path() / ("lightfarm-bench-" + std::to_string(::getpid()));
   fs::create_directories(tmp);
   const std::string image = output.empty() ? (tmp / "bench.exr").string() : output;
@@ -116,6 +139,13 @@ inline FarmRun run_farm(const std::string& script, const std::vector<std::string
   auto t0 = Clock::now();
   pid_t pid = fork();
   if (pid == 0) {
+    if (!cpus.empty()) {
+      cpu_set_t set;
+      CPU_ZERO(&set);
+      std::stringstream list(cpus);
+      for (std::string c; std::getline(list, c, ',');) CPU_SET(std::stoi(c), &set);
+      if (sched_setaffinity(0, sizeof set, &set) != 0) _exit(126);
+    }
     execv(argv[0], argv.data());
     _exit(127);
   }
