@@ -36,4 +36,15 @@ TEST(Value, FindOnlyInMaps) {
   EXPECT_EQ(Value(5).find("k"), nullptr);
 }
 
+TEST(Value, MapOfBuildsTheBracedMapAndMovesBytesIn) {
+  std::string payload(1 << 16, 'x');
+  const char* before = payload.data();
+  Value built = map_of("n", 3, "name", "direct", "p", Bytes{std::move(payload)});
+  EXPECT_EQ(built, Value(Value::Map{{"n", 3}, {"name", "direct"}, {"p", Bytes{std::string(1 << 16, 'x')}}}));
+  // The bytes are the ones handed in, not a copy (a braced Value::Map would have copied them).
+  EXPECT_EQ(built.find("p")->as_bytes().data.data(), before);
+  // A later key replaces an earlier one, as insert_or_assign does.
+  EXPECT_EQ(map_of("k", 1, "k", 2), Value(Value::Map{{"k", 2}}));
+}
+
 }  // namespace lf
