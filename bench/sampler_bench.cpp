@@ -3,9 +3,11 @@
 // image { sampler = "independent" } and "sobol" at 4..256 spp; relative RMSE (per pixel, over the reference's mean,
 // the light's pixels left out) against a 4096-spp independent reference made with another seed and kept between
 // runs (bench-sampler-reference-SIZE.exr). Prints error and wall time per sample count, the error ratio, and how
-// many Sobol samples reach the independent sampler's 256-spp error (log-log interpolation). Writes bench-sampler.json.
+// many Sobol samples reach the independent sampler's 256-spp error (log-log interpolation). Then the cost of a
+// sample alone, without the farm's noise: the bare single-thread loop (trace, shade with pathtrace, resolve) with
+// each sampler, interleaved, --runs times; the median time ratio with its spread. Writes bench-sampler.json.
 //
-//   build/bench/sampler_bench [--size PIXELS] [--reference-spp N] [--json FILE]
+//   build/bench/sampler_bench [--size PIXELS] [--reference-spp N] [--runs N] [--json FILE]
 #include <cmath>
 #include <cstdio>
 #include <fstream>
@@ -14,15 +16,56 @@
 #include "bench/bench_util.hpp"
 #include "core/value.hpp"
 #include "bench/image_error.hpp"
+#include "render/camera.hpp"
+#include "render/lightop_registry.hpp"
+#include "render/tile_kernel.hpp"
+
+namespace {
+
+// Seconds for one frame of the bare loop: trace a tile, shade its points with pathtrace (depth 12), resolve.
+double bare_frame(const lf::Scene& scene, const lf::RayTracer& tracer, const char* sampler, int size, int spp) {
+  lf::ImageSpec image;
+  image.width = image.height = size;
+  image.spp = spp;
+  image.sampler = sampler;
+  lf::CameraSpec cam;
+  cam.eye = {0, 1, 3.4};
+  cam.at = {0, 1, 0};
+  cam.fov = 40;
+  lf::Camera camera(cam, size, size);
+  auto op = lf::create_lightop(*lf::find_lightop_kind("pathtrace"),
+                               lf::ParamTable(lf::Value::Map{{"max_depth", 12}}, "pathtrace"));
+  lf::LocalInputs none;
+  lf::SceneContext ctx{&scene, &tracer};
+  ctx.sampler = image.sampler == "sobol" ? lf::SamplerKind::sobol : lf::SamplerKind::independent;
+  lf::run_to_completion(op->setup(ctx, none));
+  lf::TileWork work;
+  std::vector<lf::RGB> radiance, pixels;
+  double checksum = 0;
+  const auto t0 = bench::Clock::now();
+  for (const auto& tile : lf::make_tiles(size, size, image.tile)) {
+    lf::trace_tile(scene, tracer, camera, image, tile, work);
+    radiance.assign(work.points.size(), {});
+    lf::run_to_completion(op->shade(work.points, radiance, none));
+    lf::resolve_tile(work, radiance, pixels);
+    checksum += pixels[0].x;
+  }
+  const double secs = std::chrono::duration<double>(bench::Clock::now() - t0).count();
+  if (checksum < 0) std::puts("");  // keep the work observable
+  return secs;
+}
+
+}  // namespace
 
 int main(int argc, char** argv) {
-  int size = 128, reference_spp = 4096;
+  int size = 128, reference_spp = 4096, runs = 5;
   std::string json_path = "bench-sampler.json";
   for (int i = 1; i + 1 < argc; i += 2) {
     const std::string a = argv[i];
     if (a == "--size") size = std::atoi(argv[i + 1]);
     else if (a == "--reference-spp") reference_spp = std::atoi(argv[i + 1]);
     else if (a == "--json") json_path = argv[i + 1];
+    else if (a == "--runs") runs = std::atoi(argv[i + 1]);
   }
   const std::string obj = std::string(LIGHTFARM_SOURCE_DIR) + "/../shared/scenes/cornell_box_mcguire/CornellBox-Empty-RG.obj";
   if (!bench::fs::exists(obj)) {
@@ -82,8 +125,30 @@ int main(int argc, char** argv) {
     }
   std::printf("\nSobol reaches the independent sampler's 256-spp error (%.4f) at about %.0f spp (%.2fx fewer samples)\n",
               target, needed, 256.0 / needed);
+
+  // The cost of a sample: one process, one thread, no messages; the two samplers interleaved.
+  auto scene = lf::Scene::load_obj(obj);
+  if (!scene) {
+    std::printf("cannot load %s: %s\n", obj.c_str(), scene.error().message.c_str());
+    return 1;
+  }
+  lf::RayTracer tracer(*scene);
+  std::vector<double> ratios, independent_s, sobol_s;
+  for (int r = 0; r < runs; ++r) {
+    independent_s.push_back(bare_frame(*scene, tracer, "independent", size, 64));
+    sobol_s.push_back(bare_frame(*scene, tracer, "sobol", size, 64));
+    ratios.push_back(sobol_s.back() / independent_s.back());
+  }
+  const auto cost = bench::spread(ratios);
+  std::printf("\ncost per sample, bare single-thread loop (%dx%d, 64 spp, %d runs): independent %.3f s, sobol %.3f s "
+              "(medians); sobol / independent time: median %.3f (min %.3f, max %.3f)\n",
+              size, size, runs, bench::median(independent_s), bench::median(sobol_s), cost.median, cost.min, cost.max);
+  const double equal_error_time = cost.median * needed / 256.0;
+  std::printf("time for the independent sampler's 256-spp error, sobol / independent: %.2f\n", equal_error_time);
   lf::Value doc = lf::Value::Map{{"benchmark", "sampler"}, {"size", size}, {"reference_spp", reference_spp},
-                                 {"rows", std::move(table)}, {"sobol_spp_for_independent_256", needed}};
+                                 {"rows", std::move(table)}, {"sobol_spp_for_independent_256", needed},
+                                 {"bare_loop_time_ratio", cost.to_value()},
+                                 {"time_for_equal_error_ratio", equal_error_time}};
   std::ofstream(json_path) << lf::to_json(doc, 2) << "\n";
   std::printf("wrote %s\n", json_path.c_str());
   return 0;

@@ -93,15 +93,31 @@ constexpr uint32_t dimension1(uint32_t i) {
 constexpr uint32_t hash32(uint64_t x) { return static_cast<uint32_t>(splitmix64(x) >> 32); }
 constexpr float to_unit(uint32_t x) { return static_cast<float>(x >> 8) * 0x1p-24f; }
 
+// reverse_bits(dimension1(i)), by bytes: dimension 1 is linear over GF(2) in the bits of i (each set bit XORs in its
+// direction number), so four 256-entry tables give it in four lookups instead of a loop over i's bits.
+struct ReversedDimension1 {
+  uint32_t byte[4][256] = {};
+  constexpr ReversedDimension1() {
+    for (int b = 0; b < 4; ++b)
+      for (uint32_t v = 0; v < 256; ++v) byte[b][v] = reverse_bits(dimension1(v << (8 * b)));
+  }
+  constexpr uint32_t operator()(uint32_t i) const {
+    return byte[0][i & 0xffu] ^ byte[1][(i >> 8) & 0xffu] ^ byte[2][(i >> 16) & 0xffu] ^ byte[3][i >> 24];
+  }
+};
+inline constexpr ReversedDimension1 reversed_dimension1{};
+
 // Point `index` of the scrambled sequence for `seed` (one per pixel and dimension): a 1D value, or a 2D point.
+// owen_scramble(dimension0(s)) is reverse_bits(laine_karras(s)) (reversal undoes itself), and dimension 1 comes
+// reversed from its tables: the same numbers as scrambling the plain dimensions, with three reversals fewer.
 constexpr float point1(uint32_t index, uint64_t seed) {
   const uint32_t shuffled = owen_scramble(index, hash32(seed));
-  return to_unit(owen_scramble(dimension0(shuffled), hash32(seed ^ 0x5bd1e995u)));
+  return to_unit(reverse_bits(laine_karras(shuffled, hash32(seed ^ 0x5bd1e995u))));
 }
 constexpr Uniform2 point2(uint32_t index, uint64_t seed) {
   const uint32_t shuffled = owen_scramble(index, hash32(seed));
-  return {to_unit(owen_scramble(dimension0(shuffled), hash32(seed ^ 0x5bd1e995u))),
-          to_unit(owen_scramble(dimension1(shuffled), hash32(seed ^ 0x68e31da4u)))};
+  return {to_unit(reverse_bits(laine_karras(shuffled, hash32(seed ^ 0x5bd1e995u)))),
+          to_unit(reverse_bits(laine_karras(reversed_dimension1(shuffled), hash32(seed ^ 0x68e31da4u))))};
 }
 
 }  // namespace sobol
