@@ -52,7 +52,7 @@ struct ImageSpec {
   std::string tonemap = "clamp";
   // The numbers camera, direct light and path tracing draw: "independent" (PCG32) or "sobol" (Owen-scrambled
   // Sobol points, render/sampler.hpp).
-  std::string sampler = "independent";
+  std::string sampler = "sobol";
   Value to_value() const;
   static ImageSpec from_value(const Value& v);
 };

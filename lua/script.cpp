@@ -220,7 +220,7 @@ int l_camera(lua_State* L) {
 }
 
 // image { width = 512, height = 512, spp = 16, tile = 16, output = "cornell.png", exposure = 0, tonemap = "clamp",
-//         sampler = "independent" }
+//         sampler = "sobol" }
 int l_image(lua_State* L) {
   Builder& b = builder(L);
   if (b.have_image) luaL_error(L, "image is declared twice");

@@ -104,12 +104,12 @@ TEST_F(ScriptTest, AScriptsTextEvaluatesAsItsFileWould) {
 TEST_F(ScriptTest, TheSamplerIsIndependentOrSobol) {
   auto plain = evaluate_script(write("farm.lua", kCornell));
   ASSERT_TRUE(plain.ok()) << plain.error().message;
-  EXPECT_EQ(plain->image.sampler, "independent") << "the default";
-  auto chosen = evaluate_script(write("farm.lua", "scene { builtin = \"cornell\" }\nimage { sampler = \"sobol\" }\n"
+  EXPECT_EQ(plain->image.sampler, "sobol") << "the default";
+  auto chosen = evaluate_script(write("farm.lua", "scene { builtin = \"cornell\" }\nimage { sampler = \"independent\" }\n"
                                                   "renderers { count = 1, lighting = lightop \"direct\" {} }\n"));
   ASSERT_TRUE(chosen.ok()) << chosen.error().message;
-  EXPECT_EQ(chosen->image.sampler, "sobol");
-  EXPECT_EQ(ImageSpec::from_value(chosen->image.to_value()).sampler, "sobol") << "it travels in CONFIG";
+  EXPECT_EQ(chosen->image.sampler, "independent");
+  EXPECT_EQ(ImageSpec::from_value(chosen->image.to_value()).sampler, "independent") << "it travels in CONFIG";
   EXPECT_EQ(error_of("image { sampler = \"halton\" }\n"),
             "farm.lua:1: image: parameter 'sampler' must be one of independent, sobol, got 'halton'");
 }

@@ -192,7 +192,7 @@ struct SceneContext {
   int width = 0, height = 0;
   // How camera samples and the ops that follow them draw their numbers (image { sampler }): a point's key is that
   // sampler's (sampler.hpp).
-  SamplerKind sampler = SamplerKind::independent;
+  SamplerKind sampler = SamplerKind::sobol;
   // How far a long setup is ("shooting photons", done, total); the runtime tells the director, which shows it.
   // Call it as often as convenient: the runtime passes on a few a second. May be empty (tests).
   std::function<void(const char* what, uint64_t done, uint64_t total)> progress;
