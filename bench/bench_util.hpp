@@ -68,6 +68,41 @@ struct FarmRun {
   double number(const std::string& key) const { return json_number(stats, key); }
 };
 
+// The user + system CPU-seconds of `root` and every live descendant, from /proc (a browser's process tree).
+inline double tree_cpu_seconds(pid_t root) {
+  std::map<pid_t, std::vector<pid_t>> children;
+  std::map<pid_t, double> cpu;
+  std::error_code ec;
+  const double tick = static_cast<double>(::sysconf(_SC_CLK_TCK));
+  for (const auto& e : fs::directory_iterator("/proc", ec)) {
+    const std::string name = e.path().filename().string();
+    if (name.find_first_not_of("0123456789") != std::string::npos) continue;
+    std::ifstream in(e.path() / "stat");
+    std::string stat((std::istreambuf_iterator<char>(in)), {});
+    const auto close = stat.rfind(')');
+    if (close == std::string::npos) continue;
+    std::istringstream fields(stat.substr(close + 2));
+    std::string field;
+    long ppid = 0;
+    fields >> field >> ppid;  // state, ppid
+    for (int i = 5; i <= 13; ++i) fields >> field;  // pgrp .. cmajflt
+    unsigned long long utime = 0, stime = 0;
+    fields >> utime >> stime;
+    const pid_t pid = static_cast<pid_t>(std::stol(name));
+    children[static_cast<pid_t>(ppid)].push_back(pid);
+    cpu[pid] = static_cast<double>(utime + stime) / tick;
+  }
+  double total = 0;
+  std::vector<pid_t> todo{root};
+  while (!todo.empty()) {
+    const pid_t pid = todo.back();
+    todo.pop_back();
+    total += cpu[pid];
+    for (pid_t c : children[pid]) todo.push_back(c);
+  }
+  return total;
+}
+
 // The summed PSS of every descendant of `root` (not `root` itself), from /proc.
 inline double descendants_pss_bytes(pid_t root) {
   std::map<pid_t, std::vector<pid_t>> children;

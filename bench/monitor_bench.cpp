@@ -1,8 +1,11 @@
 // The live monitor's cost (issue 15): render time of examples/cornell.lua without `--monitor`, with it and one
 // headless Chromium attached to the live page (started before the farm; plus an SSE client on /events), and with it and the SSE client alone
 // (what the monitor costs apart from a browser on the same 2 cores); interleaved, `--runs` of each, the median
-// ratios and their spread. And the update latency: from the moment a tile reached the
-// director (the preview event's landed_ms) to the event's arrival at the SSE client, over every preview event.
+// ratios and their spread. Beside wall time, CPU: the farm's own (director + actors, from their STATS) without and
+// with the monitor and browser, and the browser's process tree's while the frame ran, in cores. On a 2-core machine
+// the browser's cores come out of the render; the farm's CPU ratio is what the monitor itself costs. And the update
+// latency: from the moment a tile reached the director (the preview event's landed_ms) to the event's arrival at
+// the SSE client, over every preview event.
 //
 //   build/bench/monitor_bench [--json FILE] [--runs N]
 #include <httplib.h>
@@ -47,6 +50,8 @@ pid_t spawn(std::vector<std::string> args, const std::string& err_file) {
 
 struct Watched {
   double render_seconds = 0;
+  double farm_cpu_seconds = 0;     // the director and every actor (their STATS), the monitor's work included
+  double browser_cpu_seconds = 0;  // the browser's process tree while the farm ran
   std::vector<double> latencies_ms;
 };
 
@@ -90,8 +95,9 @@ Watched run(const std::string& script, const std::vector<std::string>& sets, boo
     args.insert(args.end(), {"--monitor", "0"});
   }
   const std::string err = (dir / "err").string();
-  const pid_t farm = spawn(args, err);
   Watched w;
+  const double browser_cpu_before = browser > 0 ? bench::tree_cpu_seconds(browser) : 0;
+  const pid_t farm = spawn(args, err);
   std::thread client;
   std::atomic<bool> done{false};
   if (watch) {
@@ -131,6 +137,7 @@ Watched run(const std::string& script, const std::vector<std::string>& sets, boo
   waitpid(farm, &status, 0);
   done = true;
   if (client.joinable()) client.join();
+  if (browser > 0) w.browser_cpu_seconds = bench::tree_cpu_seconds(browser) - browser_cpu_before;
   if (browser > 0) {
     ::kill(browser, SIGTERM);
     waitpid(browser, nullptr, 0);
@@ -142,6 +149,7 @@ Watched run(const std::string& script, const std::vector<std::string>& sets, boo
   std::stringstream ss;
   ss << std::ifstream(dir / "stats.json").rdbuf();
   w.render_seconds = bench::json_number(ss.str(), "render");
+  w.farm_cpu_seconds = bench::json_number(ss.str(), "actors_cpu_seconds") + bench::json_number(ss.str(), "director_cpu_seconds");
   bench::fs::remove_all(dir);
   return w;
 }
@@ -163,7 +171,7 @@ int main(int argc, char** argv) {
   const std::string script = std::string(LIGHTFARM_SOURCE_DIR) + "/examples/cornell.lua";
   // A frame of about 10 s: long enough that the browser's own start-up is not what is measured.
   const std::vector<std::string> sets{"width=512", "height=512", "spp=160"};
-  std::vector<double> plain, watched, ratios, server_ratios, latencies;
+  std::vector<double> plain, watched, ratios, server_ratios, latencies, cpu_ratios, browser_shares;
   for (int r = 0; r < runs; ++r) {
     const Watched a = run(script, sets, false, false), b = run(script, sets, true, true),
                   c = run(script, sets, true, false);
@@ -172,15 +180,22 @@ int main(int argc, char** argv) {
     ratios.push_back(a.render_seconds / b.render_seconds);
     server_ratios.push_back(a.render_seconds / c.render_seconds);
     latencies.insert(latencies.end(), b.latencies_ms.begin(), b.latencies_ms.end());
+    cpu_ratios.push_back(a.farm_cpu_seconds / b.farm_cpu_seconds);
+    browser_shares.push_back(b.browser_cpu_seconds / b.render_seconds);
     std::printf("run %d: render %.3f s without, %.3f s with the monitor and a browser, %.3f s with the monitor and "
                 "an SSE client only\n", r + 1, a.render_seconds, b.render_seconds, c.render_seconds);
   }
   const auto ratio = bench::spread(ratios), server = bench::spread(server_ratios);
   const auto latency = bench::spread(latencies);
+  const auto cpu = bench::spread(cpu_ratios), browser_share = bench::spread(browser_shares);
   std::printf("\nrender time without / with the monitor and a browser: median %.3f (min %.3f, max %.3f; goal >= 0.98)\n",
               ratio.median, ratio.min, ratio.max);
   std::printf("render time without / with the monitor and an SSE client (no browser): median %.3f (min %.3f, max %.3f)\n",
               server.median, server.min, server.max);
+  std::printf("farm CPU-seconds (director + actors) without / with the monitor and a browser: median %.3f (min %.3f, "
+              "max %.3f)\n", cpu.median, cpu.min, cpu.max);
+  std::printf("the browser's CPU while the farm ran, in cores (CPU-s per render second): median %.3f (min %.3f, max "
+              "%.3f) of the machine's 2\n", browser_share.median, browser_share.min, browser_share.max);
   std::printf("tile landed -> preview event at the client: median %.0f ms (min %.0f, max %.0f) over %zu events\n",
               latency.median, latency.min, latency.max, latencies.size());
   lf::Value::Array p, w;
@@ -193,6 +208,8 @@ int main(int argc, char** argv) {
       {"render_seconds_watched", std::move(w)},
       {"ratio", lf::Value::Map{{"median", ratio.median}, {"min", ratio.min}, {"max", ratio.max}}},
       {"ratio_without_browser", lf::Value::Map{{"median", server.median}, {"min", server.min}, {"max", server.max}}},
+      {"farm_cpu_ratio", cpu.to_value()},
+      {"browser_cores", browser_share.to_value()},
       {"latency_ms", lf::Value::Map{{"median", latency.median}, {"min", latency.min}, {"max", latency.max},
                                     {"events", static_cast<int64_t>(latencies.size())}}}};
   std::ofstream(json_path) << lf::to_json(doc, 2) << "\n";
