@@ -45,13 +45,16 @@ Status ExchangeService::on_request(const std::string& actor, wire::Op op, uint64
     out.refuse(actor, id, ErrorCode::bad_request, "all_gather needs a part");
     return Ok{};
   }
-  // Shares can be tens of MB (a photon map): they are moved, never copied, on their way through here.
+  // Shares can be tens of MB (a photon map): they are moved, never copied, on their way through here. A replica
+  // that says `keep` holds its own part already and gets nil in its place: for two replicas, half the bytes back.
   Value mine = std::move(part->second);
+  const Value* keep = body.find("keep");
+  const bool keeps = keep && keep->is_bool() && keep->as_bool();
   size_t at = 0;
   const std::string* pool = pool_of(actor, &at);
   if (!pool) {  // not in a pool: its own part is everything
     Value::Array only;
-    only.push_back(std::move(mine));
+    only.push_back(keeps ? Value() : std::move(mine));
     out.reply(actor, id, map_of("parts", std::move(only)));
     return Ok{};
   }
@@ -61,17 +64,30 @@ Status ExchangeService::on_request(const std::string& actor, wire::Op op, uint64
       return make_error("replica '" + r + "' of '" + *pool +
                         "' was lost before the pool shared its setup; its share cannot be redone");
   Gather& g = gathers_[*pool];
-  g.parts.resize(replicas.size());
-  g.askers.resize(replicas.size());
+  const size_t n = replicas.size();
+  g.parts.resize(n);
+  g.askers.resize(n);
+  g.keeps.resize(n);
   g.parts[at] = std::move(mine);
   g.askers[at] = id;
+  g.keeps[at] = keeps;
   for (const auto& p : g.parts)
     if (p.is_nil()) return Ok{};
-  Value all = Value::Array(std::make_move_iterator(g.parts.begin()), std::make_move_iterator(g.parts.end()));
-  const std::vector<uint64_t> askers = std::move(g.askers);
+  Gather done = std::move(g);
   gathers_.erase(*pool);
-  for (size_t r = 0; r < replicas.size(); ++r)
-    out.reply(replicas[r], askers[r], map_of("parts", r + 1 < replicas.size() ? all : std::move(all)));
+  // Part i goes to every replica but a keeping i; its last reader takes it, the others a copy.
+  std::vector<size_t> last_reader(n, 0);
+  for (size_t r = 0; r < n; ++r)
+    for (size_t i = 0; i < n; ++i)
+      if (i != r || !done.keeps[r]) last_reader[i] = r;
+  for (size_t r = 0; r < n; ++r) {
+    Value::Array parts(n);
+    for (size_t i = 0; i < n; ++i) {
+      if (i == r && done.keeps[r]) continue;  // nil: the asker's own
+      parts[i] = last_reader[i] == r ? std::move(done.parts[i]) : done.parts[i];
+    }
+    out.reply(replicas[r], done.askers[r], map_of("parts", std::move(parts)));
+  }
   return Ok{};
 }
 

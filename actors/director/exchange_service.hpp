@@ -33,6 +33,7 @@ class ExchangeService final : public Service {
   struct Gather {
     std::vector<Value> parts;      // nil until that replica sent its part
     std::vector<uint64_t> askers;  // request ids to answer
+    std::vector<bool> keeps;       // whether that replica holds its own part (nil in its answer)
   };
   const std::string* pool_of(const std::string& actor, size_t* index) const;
 

@@ -35,6 +35,24 @@ TEST(ExchangeService, AllGatherAnswersEveryReplicaInReplicaOrderOnceAllSent) {
   EXPECT_EQ(ids, (std::map<std::string, uint64_t>{{"photons.0", 8}, {"photons.1", 9}, {"photons.2", 7}}));
 }
 
+// A replica that keeps its own part gets nil in its place and every other part; one that does not gets all.
+TEST(ExchangeService, AReplicaThatKeepsItsPartGetsOnlyTheOthers) {
+  ExchangeService x({{"photons", {"photons.0", "photons.1", "photons.2"}}});
+  RecordingOutbox out;
+  auto keeping = [](const std::string& bytes) { return map_of("part", Bytes{bytes}, "keep", true); };
+  ASSERT_TRUE(x.on_request("photons.0", Op::all_gather, 1, keeping("a"), out).ok());
+  ASSERT_TRUE(x.on_request("photons.1", Op::all_gather, 2, part("b"), out).ok());
+  ASSERT_TRUE(x.on_request("photons.2", Op::all_gather, 3, keeping("c"), out).ok());
+  auto sent = out.take();
+  ASSERT_EQ(sent.size(), 3u);
+  std::map<std::string, std::vector<std::string>> got;
+  for (const auto& s : sent)
+    for (const auto& p : s.body.find("parts")->as_array()) got[s.actor].push_back(p.is_nil() ? "nil" : p.as_bytes().data);
+  EXPECT_EQ(got["photons.0"], (std::vector<std::string>{"nil", "b", "c"}));
+  EXPECT_EQ(got["photons.1"], (std::vector<std::string>{"a", "b", "c"}));
+  EXPECT_EQ(got["photons.2"], (std::vector<std::string>{"a", "b", "nil"}));
+}
+
 TEST(ExchangeService, ALoneActorGetsItsOwnPartAndABadOneIsRefused) {
   ExchangeService x({});
   RecordingOutbox out;

@@ -70,16 +70,25 @@ class DirectorExchange final : public Exchange {
     if (alone_) return SoloExchange().all_gather(std::move(part), parts);
     auto state = std::make_shared<GatherState>();
     state->remaining = 1;
-    rt_.ask_director(wire::Op::all_gather, map_of("part", Bytes{std::move(part)}), [state, parts](Result<wire::Message> r) {
+    // This replica keeps its own part and the director answers nil in its place: its bytes do not come back.
+    auto own = std::make_shared<std::string>(part);
+    rt_.ask_director(wire::Op::all_gather, map_of("part", Bytes{std::move(part)}, "keep", true),
+                     [state, parts, own](Result<wire::Message> r) {
       if (!r) return state->complete_one("all_gather: " + r.error().message);
       auto all = r->body.is_map() ? r->body.as_map().find("parts") : Value::Map::iterator{};
       if (!r->body.is_map() || all == r->body.as_map().end() || !all->second.is_array())
         return state->complete_one("all_gather: the director sent no parts");
       parts->clear();
+      size_t own_places = 0;
       for (auto& p : all->second.as_array()) {
+        if (p.is_nil() && own_places++ == 0) {
+          parts->push_back(std::move(*own));
+          continue;
+        }
         if (!p.is_bytes()) return state->complete_one("all_gather: a part is not bytes");
         parts->push_back(std::move(p.as_bytes().data));  // shares can be tens of MB: moved, not copied
       }
+      if (own_places != 1) return state->complete_one("all_gather: the director's answer has no place for this part");
       state->complete_one();
     });
     return Gather(state);
