@@ -6,6 +6,7 @@
 #include <span>
 #include <string>
 #include <string_view>
+#include <utility>
 #include <variant>
 #include <vector>
 
@@ -58,6 +59,8 @@ class Value {
 
   // Map lookup; nullptr when this is not a map or the key is absent.
   const Value* find(std::string_view key) const;
+  // The same, to take from (a received body's bulk bytes are moved out, not copied).
+  Value* find(std::string_view key) { return const_cast<Value*>(std::as_const(*this).find(key)); }
   // Human name of the held type, for error messages ("number", "string", ...).
   const char* type_name() const;
 

@@ -40,14 +40,14 @@ Status ExchangeService::on_request(const std::string& actor, wire::Op op, uint64
     }
     return Ok{};
   }
-  auto part = body.is_map() ? body.as_map().find("part") : Value::Map::iterator{};
-  if (!body.is_map() || part == body.as_map().end() || !part->second.is_bytes()) {
+  Value* part = body.find("part");
+  if (!part || !part->is_bytes()) {
     out.refuse(actor, id, ErrorCode::bad_request, "all_gather needs a part");
     return Ok{};
   }
   // Shares can be tens of MB (a photon map): they are moved, never copied, on their way through here. A replica
   // that says `keep` holds its own part already and gets nil in its place: for two replicas, half the bytes back.
-  Value mine = std::move(part->second);
+  Value mine = std::move(*part);
   const Value* keep = body.find("keep");
   const bool keeps = keep && keep->is_bool() && keep->as_bool();
   size_t at = 0;

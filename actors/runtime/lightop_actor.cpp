@@ -75,12 +75,11 @@ class DirectorExchange final : public Exchange {
     rt_.ask_director(wire::Op::all_gather, map_of("part", Bytes{std::move(part)}, "keep", true),
                      [state, parts, own](Result<wire::Message> r) {
       if (!r) return state->complete_one("all_gather: " + r.error().message);
-      auto all = r->body.is_map() ? r->body.as_map().find("parts") : Value::Map::iterator{};
-      if (!r->body.is_map() || all == r->body.as_map().end() || !all->second.is_array())
-        return state->complete_one("all_gather: the director sent no parts");
+      Value* all = r->body.find("parts");
+      if (!all || !all->is_array()) return state->complete_one("all_gather: the director sent no parts");
       parts->clear();
       size_t own_places = 0;
-      for (auto& p : all->second.as_array()) {
+      for (auto& p : all->as_array()) {
         if (p.is_nil() && own_places++ == 0) {
           parts->push_back(std::move(*own));
           continue;
@@ -99,10 +98,9 @@ class DirectorExchange final : public Exchange {
     state->remaining = 1;
     rt_.ask_director(wire::Op::fetch, Value::Map{{"key", key}}, [state, blob, key](Result<wire::Message> r) {
       if (!r) return state->complete_one("fetch '" + key + "': " + r.error().message);
-      auto b = r->body.is_map() ? r->body.as_map().find("blob") : Value::Map::iterator{};
-      if (!r->body.is_map() || b == r->body.as_map().end() || !b->second.is_bytes())
-        return state->complete_one("fetch '" + key + "': the director sent no blob");
-      *blob = std::move(b->second.as_bytes().data);
+      Value* b = r->body.find("blob");
+      if (!b || !b->is_bytes()) return state->complete_one("fetch '" + key + "': the director sent no blob");
+      *blob = std::move(b->as_bytes().data);
       state->complete_one();
     });
     return Gather(state);
