@@ -430,7 +430,28 @@ class Director final : public ControlOut, public Outbox {
     }
     // Rendering takes what it takes; once every renderer is done, the others have had PHASE render for the whole
     // frame and must have said READY render (docs/PROTOCOL.md). One that never does would hang the farm.
-    wait_all(0, [](const ActorRecord& a) { return !a.spec->is_renderer() || a.ready == Phase::render; });
+    // A frame that makes no progress for a long while says, every so often, what it is waiting on: who holds which
+    // tiles and what each actor has in flight (from its heartbeats). It changes nothing; a stall is then diagnosable.
+    auto last_report = Clock::now();
+    while (!supervisor_.all([](const ActorRecord& a) { return !a.spec->is_renderer() || a.ready == Phase::render; })) {
+      pump(100);
+      if (tiles_.seconds_since_progress() < kStallReportSeconds || seconds_since(last_report) < kStallReportSeconds)
+        continue;
+      last_report = Clock::now();
+      std::string in_flight;
+      for (const auto& [name, a] : supervisor_.actors()) {
+        auto figure = [&a = a](const char* key) {
+          const Value* v = a.live.find(key);
+          return v && v->is_number() ? v->as_int() : int64_t{0};
+        };
+        if (a.lost || (figure("in_flight") == 0 && figure("queue") == 0)) continue;
+        in_flight += (in_flight.empty() ? "" : ", ") + name + " " + std::to_string(figure("in_flight")) + " out / " +
+                     std::to_string(figure("queue")) + " queued";
+      }
+      log_warn("no tile has landed for " + seconds_text(std::round(tiles_.seconds_since_progress())) + " (" +
+               std::to_string(tiles_.tiles_done()) + " of " + std::to_string(tiles_.tiles_total()) + " done): " +
+               tiles_.holders() + "; requests " + (in_flight.empty() ? std::string("none in flight") : in_flight));
+    }
     const auto deadline = Clock::now() + std::chrono::seconds(kReadyRenderGraceSeconds);
     while (true) {
       std::string late;
@@ -442,6 +463,7 @@ class Director final : public ControlOut, public Outbox {
     }
   }
   static constexpr int kReadyRenderGraceSeconds = 5;
+  static constexpr double kStallReportSeconds = 30;
   Clock::time_point last_awake_ = Clock::now();  // the last time notice_outside_stop() ran
   bool image_written_ = false;
 
@@ -517,6 +539,9 @@ class Director final : public ControlOut, public Outbox {
     notice_outside_stop();  // the stop may have come during the wait: before reading what it left behind
     while (auto in = control_.receive()) check(supervisor_.on_message(in->peer, in->message));
     while (auto exit = launchers_.reap_one()) {
+      // A stop that landed after the check above (while messages were read) would otherwise make the actors that
+      // left during it look like the fault: judge this director's own absence first.
+      notice_outside_stop();
       // Its last words (an ERROR with the reason, or BYE) may still be in flight: read them before judging.
       wire::Poller last;
       last.add(control_);

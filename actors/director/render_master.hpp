@@ -32,6 +32,13 @@ class RenderMaster {
 
   size_t total() const { return tiles_.size(); }
   size_t done() const { return done_count_; }
+  // The tiles each worker holds and has not finished, by worker.
+  std::map<std::string, std::vector<uint64_t>> held() const {
+    std::map<std::string, std::vector<uint64_t>> out;
+    for (const auto& [id, worker] : holder_)
+      if (!done_[static_cast<size_t>(id)]) out[worker].push_back(id);
+    return out;
+  }
   bool finished() const { return done_count_ == tiles_.size(); }
   const Image& film() const { return film_; }
   static const char* describe(Outcome o);

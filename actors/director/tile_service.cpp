@@ -20,9 +20,24 @@ double TileService::render_seconds() const {
 Status TileService::on_phase(wire::Phase phase, Outbox& out) {
   if (phase != wire::Phase::render) return Ok{};
   rendering_ = true;
-  render_start_ = Clock::now();
+  render_start_ = last_progress_ = Clock::now();
   serve_waiting(out);
   return Ok{};
+}
+
+double TileService::seconds_since_progress() const {
+  return rendering_ ? std::chrono::duration<double>(Clock::now() - last_progress_).count() : 0.0;
+}
+
+std::string TileService::holders() const {
+  std::string text;
+  for (const auto& [worker, tiles] : master_.held()) {
+    text += (text.empty() ? "" : "; ") + worker + " holds tile" + (tiles.size() == 1 ? "" : "s");
+    for (size_t i = 0; i < tiles.size(); ++i) text += (i ? ", " : " ") + std::to_string(tiles[i]);
+  }
+  if (text.empty()) text = "no renderer holds a tile";
+  return text + "; " + std::to_string(waiting_.size()) + " tile request" + (waiting_.size() == 1 ? "" : "s") +
+         " waiting";
 }
 
 void TileService::finish_progress() { progress_.update(master_.done(), render_seconds(), true); }
@@ -47,6 +62,7 @@ Status TileService::on_request(const std::string& actor, wire::Op op, uint64_t i
     return Ok{};
   }
   out.reply(actor, id, Value::Map{});
+  last_progress_ = Clock::now();
   if (master_.done() == 1) first_tile_seconds_ = render_seconds();
   progress_.update(master_.done(), render_seconds());
   if (master_.finished()) serve_waiting(out);

@@ -32,6 +32,10 @@ class TileService final : public Service {
   // Seconds from the render phase's start to the first finished tile, and to now.
   double first_tile_seconds() const { return first_tile_seconds_; }
   double render_seconds() const;
+  // Seconds since the last tile landed (or the frame began), and who holds which unfinished tiles and how many
+  // tile requests wait: what a farm that makes no progress is waiting on.
+  double seconds_since_progress() const;
+  std::string holders() const;
   // Final progress line; the bar's end.
   void finish_progress();
   bool drawing_progress() const { return progress_.drawing(); }
@@ -45,6 +49,7 @@ class TileService final : public Service {
   bool rendering_ = false;
   std::chrono::steady_clock::time_point render_start_;
   double first_tile_seconds_ = 0;
+  std::chrono::steady_clock::time_point last_progress_;
   std::vector<std::pair<std::string, uint64_t>> waiting_;  // tile requests not yet answered, oldest first
 };
 
