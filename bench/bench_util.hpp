@@ -68,10 +68,24 @@ struct FarmRun {
   double number(const std::string& key) const { return json_number(stats, key); }
 };
 
-// The user + system CPU-seconds of `root` and every live descendant, from /proc (a browser's process tree).
-inline double tree_cpu_seconds(pid_t root) {
+// Every live process from /proc: its children and its user + system CPU-seconds.
+struct ProcessTable {
   std::map<pid_t, std::vector<pid_t>> children;
-  std::map<pid_t, double> cpu;
+  std::map<pid_t, double> cpu_seconds;
+  // `root`'s descendants, not `root` itself.
+  std::vector<pid_t> descendants(pid_t root) const {
+    std::vector<pid_t> out, todo{root};
+    while (!todo.empty()) {
+      const pid_t pid = todo.back();
+      todo.pop_back();
+      if (pid != root) out.push_back(pid);
+      if (auto it = children.find(pid); it != children.end()) todo.insert(todo.end(), it->second.begin(), it->second.end());
+    }
+    return out;
+  }
+};
+inline ProcessTable read_process_table() {
+  ProcessTable t;
   std::error_code ec;
   const double tick = static_cast<double>(::sysconf(_SC_CLK_TCK));
   for (const auto& e : fs::directory_iterator("/proc", ec)) {
@@ -79,52 +93,34 @@ inline double tree_cpu_seconds(pid_t root) {
     if (name.find_first_not_of("0123456789") != std::string::npos) continue;
     std::ifstream in(e.path() / "stat");
     std::string stat((std::istreambuf_iterator<char>(in)), {});
-    const auto close = stat.rfind(')');
+    const auto close = stat.rfind(')');  // the command name may hold spaces; fields resume after it
     if (close == std::string::npos) continue;
     std::istringstream fields(stat.substr(close + 2));
     std::string field;
     long ppid = 0;
-    fields >> field >> ppid;  // state, ppid
+    if (!(fields >> field >> ppid)) continue;  // state, ppid
     for (int i = 5; i <= 13; ++i) fields >> field;  // pgrp .. cmajflt
     unsigned long long utime = 0, stime = 0;
     fields >> utime >> stime;
     const pid_t pid = static_cast<pid_t>(std::stol(name));
-    children[static_cast<pid_t>(ppid)].push_back(pid);
-    cpu[pid] = static_cast<double>(utime + stime) / tick;
+    t.children[static_cast<pid_t>(ppid)].push_back(pid);
+    t.cpu_seconds[pid] = static_cast<double>(utime + stime) / tick;
   }
-  double total = 0;
-  std::vector<pid_t> todo{root};
-  while (!todo.empty()) {
-    const pid_t pid = todo.back();
-    todo.pop_back();
-    total += cpu[pid];
-    for (pid_t c : children[pid]) todo.push_back(c);
-  }
+  return t;
+}
+
+// The user + system CPU-seconds of `root` and every live descendant (a browser's process tree).
+inline double tree_cpu_seconds(pid_t root) {
+  const ProcessTable t = read_process_table();
+  double total = t.cpu_seconds.count(root) ? t.cpu_seconds.at(root) : 0.0;
+  for (pid_t pid : t.descendants(root)) total += t.cpu_seconds.at(pid);
   return total;
 }
 
 // The summed PSS of every descendant of `root` (not `root` itself), from /proc.
 inline double descendants_pss_bytes(pid_t root) {
-  std::map<pid_t, std::vector<pid_t>> children;
-  std::error_code ec;
-  for (const auto& e : fs::directory_iterator("/proc", ec)) {
-    const std::string name = e.path().filename().string();
-    if (name.find_first_not_of("0123456789") != std::string::npos) continue;
-    std::ifstream in(e.path() / "stat");
-    std::string stat((std::istreambuf_iterator<char>(in)), {});
-    const auto close = stat.rfind(')');
-    if (close == std::string::npos) continue;
-    std::istringstream fields(stat.substr(close + 2));
-    std::string state;
-    long ppid = 0;
-    if (fields >> state >> ppid) children[static_cast<pid_t>(ppid)].push_back(static_cast<pid_t>(std::stol(name)));
-  }
   double total = 0;
-  std::vector<pid_t> todo = children[root];
-  while (!todo.empty()) {
-    const pid_t pid = todo.back();
-    todo.pop_back();
-    for (pid_t c : children[pid]) todo.push_back(c);
+  for (pid_t pid : read_process_table().descendants(root)) {
     std::ifstream rollup("/proc/" + std::to_string(pid) + "/smaps_rollup");
     std::string key;
     double kb = 0;
