@@ -2,7 +2,11 @@
 
 #include <gtest/gtest.h>
 
+#include <signal.h>
+#include <sys/time.h>
+
 #include <algorithm>
+#include <atomic>
 #include <chrono>
 
 namespace lf::wire {
@@ -129,6 +133,83 @@ TEST_F(ClientTest, BindingAPortInUseIsAClearError) {
   auto eb = b.bind(*ea);
   ASSERT_FALSE(eb.ok());
   EXPECT_NE(eb.error().message.find("Address already in use"), std::string::npos) << eb.error().message;
+}
+
+// Actors take signals while they send and receive (SIGCONT after Ctrl-Z/fg, a host agent's SIGCHLD). A signal that
+// interrupts ZeroMQ mid-message must cost nothing: every message arrives whole, once, in order, both ways.
+namespace {
+std::atomic<int> g_ticks{0};
+void count_tick(int) { g_ticks.fetch_add(1, std::memory_order_relaxed); }
+
+// SIGALRM every 50 us while it lives, with a handler installed without SA_RESTART like the actors' own, so that
+// system calls return EINTR; the previous handler and a stopped timer come back however the test ends.
+class SignalStorm {
+ public:
+  SignalStorm() {
+    struct sigaction tick {};
+    tick.sa_handler = count_tick;
+    sigemptyset(&tick.sa_mask);
+    tick.sa_flags = 0;
+    ::sigaction(SIGALRM, &tick, &before_);
+    itimerval every{{0, 50}, {0, 50}};
+    ::setitimer(ITIMER_REAL, &every, nullptr);
+  }
+  ~SignalStorm() {
+    itimerval off{};
+    ::setitimer(ITIMER_REAL, &off, nullptr);
+    ::sigaction(SIGALRM, &before_, nullptr);
+  }
+
+ private:
+  struct sigaction before_ {};
+};
+}  // namespace
+
+TEST_F(ClientTest, MessagesSurviveASignalStorm) {
+  Socket router(Socket::Kind::router);
+  auto bound = router.bind("tcp://127.0.0.1:*");
+  ASSERT_TRUE(bound.ok()) << bound.error().message;
+  Socket dealer(Socket::Kind::dealer, "stormy");
+  ASSERT_TRUE(dealer.connect(*bound).ok());
+  const int ticks_before = g_ticks.load();
+  SignalStorm storm;
+
+  constexpr uint64_t kMessages = 10000;
+  const std::string payload(300, 'x');
+  uint64_t sent = 0, at_router = 0, at_dealer = 0, bad = 0, out_of_order = 0, failed_sends = 0;
+  Poller poll;
+  poll.add(router);
+  poll.add(dealer);
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(20);
+  while (at_dealer < kMessages && std::chrono::steady_clock::now() < deadline) {
+    for (int i = 0; i < 50 && sent < kMessages; ++i, ++sent)
+      if (!dealer.send(make_request("stormy", Op::shade, Value::Map{{"p", payload}}, sent))) ++failed_sends;
+    poll.wait(1);
+    while (auto in = router.receive()) {
+      if (!in->message || in->peer != "stormy") {
+        ++bad;
+        continue;
+      }
+      if (in->message->header.id != at_router) ++out_of_order;
+      ++at_router;
+      if (!router.send_to(in->peer, make_reply("server", in->message->header.id, Value::Map{{"L", payload}})))
+        ++failed_sends;
+    }
+    while (auto in = dealer.receive()) {
+      if (!in->message) {
+        ++bad;
+        continue;
+      }
+      if (in->message->header.id != at_dealer) ++out_of_order;
+      ++at_dealer;
+    }
+  }
+  EXPECT_GT(g_ticks.load() - ticks_before, 100);  // the storm happened
+  EXPECT_EQ(failed_sends, 0u);
+  EXPECT_EQ(bad, 0u);
+  EXPECT_EQ(out_of_order, 0u);
+  EXPECT_EQ(at_router, kMessages);
+  EXPECT_EQ(at_dealer, kMessages);
 }
 
 }  // namespace lf::wire

@@ -12,7 +12,6 @@
 #include <cstring>
 
 #include <zmq.hpp>
-#include <zmq_addon.hpp>
 
 #include <algorithm>
 
@@ -100,7 +99,18 @@ bool Socket::send_raw(std::vector<std::string> frames) {
     for (size_t i = 0; i < frames.size(); ++i) {
       auto flags = i + 1 < frames.size() ? zmq::send_flags::sndmore : zmq::send_flags::none;
       const size_t size = frames[i].size();
-      if (!impl_->socket.send(to_frame(std::move(frames[i])), flags)) return false;
+      zmq::message_t frame = to_frame(std::move(frames[i]));
+      // A signal (an actor's SIGCONT after Ctrl-Z/fg, a host agent's SIGCHLD) can interrupt a send before the frame
+      // is queued: EINTR, and the frame is still ours. Sent again, not dropped: a dropped middle frame would leave
+      // the socket mid-message and weld this message's head onto the next one.
+      while (true) {
+        try {
+          if (!impl_->socket.send(frame, flags)) return false;
+          break;
+        } catch (const zmq::error_t& e) {
+          if (e.num() != EINTR) throw;
+        }
+      }
       counters_.bytes_out += size;
     }
     ++counters_.messages_out;
@@ -119,10 +129,25 @@ bool Socket::send_to(const std::string& peer, const Message& m) {
 std::optional<Incoming> Socket::receive() {
   std::vector<zmq::message_t> frames;
   try {
-    auto n = zmq::recv_multipart(impl_->socket, std::back_inserter(frames), zmq::recv_flags::dontwait);
-    if (!n) return std::nullopt;
+    zmq::message_t first;
+    if (!impl_->socket.recv(first, zmq::recv_flags::dontwait)) return std::nullopt;
+    frames.push_back(std::move(first));
+    // The rest of a message is there once its first frame is (ZeroMQ delivers messages whole). A signal may still
+    // interrupt reading it: read on, or its tail would arrive as a message of its own and this one be lost.
+    while (frames.back().more()) {
+      zmq::message_t part;
+      for (int tries = 0;; ++tries) {
+        try {
+          if (impl_->socket.recv(part, zmq::recv_flags::dontwait)) break;
+          if (tries > 1000) return Incoming{{}, make_error("receive failed: a message ended before its last frame"), 0};
+        } catch (const zmq::error_t& e) {
+          if (e.num() != EINTR) throw;
+        }
+      }
+      frames.push_back(std::move(part));
+    }
   } catch (const zmq::error_t& e) {
-    if (e.num() == EAGAIN || e.num() == EINTR) return std::nullopt;
+    if (frames.empty() && (e.num() == EAGAIN || e.num() == EINTR)) return std::nullopt;
     return Incoming{{}, make_error(std::string("receive failed: ") + e.what()), 0};
   }
   size_t bytes = 0;
