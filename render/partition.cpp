@@ -1,0 +1,252 @@
+#include "render/partition.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <numeric>
+
+#include "render/sampler.hpp"
+
+namespace lf {
+
+namespace {
+
+Vec3 centroid(const Scene& scene, uint32_t t) {
+  return (scene.vertex(t, 0) + scene.vertex(t, 1) + scene.vertex(t, 2)) * (1.0f / 3.0f);
+}
+
+struct Splitter {
+  const Scene& scene;
+  std::vector<double> cost;
+  std::vector<Vec3> centre;
+  std::vector<ScenePart> out;
+
+  void split(std::vector<uint32_t>::iterator begin, std::vector<uint32_t>::iterator end, int parts) {
+    parts = static_cast<int>(std::min<ptrdiff_t>(parts, end - begin));
+    if (parts <= 1) {
+      ScenePart part;
+      part.triangles.assign(begin, end);
+      std::sort(part.triangles.begin(), part.triangles.end());
+      std::vector<Vec3> corners;
+      corners.reserve(3 * part.triangles.size());
+      for (uint32_t t : part.triangles) {
+        for (int c = 0; c < 3; ++c) corners.push_back(scene.vertex(t, c));
+        part.cost += cost[t];
+      }
+      part.bounds = bounds_of(corners);
+      out.push_back(std::move(part));
+      return;
+    }
+    Vec3 lo = centre[*begin], hi = lo;
+    for (auto it = begin; it != end; ++it) {
+      const Vec3 c = centre[*it];
+      lo = {std::min(lo.x, c.x), std::min(lo.y, c.y), std::min(lo.z, c.z)};
+      hi = {std::max(hi.x, c.x), std::max(hi.y, c.y), std::max(hi.z, c.z)};
+    }
+    const Vec3 extent = hi - lo;
+    const int axis = extent.x >= extent.y && extent.x >= extent.z ? 0 : (extent.y >= extent.z ? 1 : 2);
+    std::sort(begin, end, [&](uint32_t a, uint32_t b) {
+      const float ca = centre[a][axis], cb = centre[b][axis];
+      return ca < cb || (ca == cb && a < b);
+    });
+    const int left_parts = parts / 2;
+    double total = 0;
+    for (auto it = begin; it != end; ++it) total += cost[*it];
+    const double target = total * left_parts / parts;
+    // Each side keeps at least as many triangles as it must make parts.
+    auto cut = begin + left_parts;
+    double running = 0;
+    for (auto it = begin; it != end; ++it) {
+      running += cost[*it];
+      if (running >= target) {
+        cut = it + 1;
+        break;
+      }
+    }
+    cut = std::clamp(cut, begin + left_parts, end - (parts - left_parts));
+    split(begin, cut, left_parts);
+    split(cut, end, parts - left_parts);
+  }
+};
+
+}  // namespace
+
+std::vector<ScenePart> partition_scene(const Scene& scene, int parts, std::span<const double> weights) {
+  const size_t n = scene.triangle_count();
+  Splitter s{scene, std::vector<double>(n), std::vector<Vec3>(n), {}};
+  if (!weights.empty() && weights.size() == n) {
+    const double sum = std::accumulate(weights.begin(), weights.end(), 0.0);
+    for (size_t t = 0; t < n; ++t) s.cost[t] = sum > 0 ? weights[t] / sum : 1.0 / static_cast<double>(n);
+  } else {
+    double area = 0;
+    for (size_t t = 0; t < n; ++t) area += scene.area(static_cast<uint32_t>(t));
+    for (size_t t = 0; t < n; ++t)
+      s.cost[t] = 0.5 * (area > 0 ? scene.area(static_cast<uint32_t>(t)) / area : 0) + 0.5 / static_cast<double>(n);
+  }
+  for (size_t t = 0; t < n; ++t) s.centre[t] = centroid(scene, static_cast<uint32_t>(t));
+  std::vector<uint32_t> ids(n);
+  std::iota(ids.begin(), ids.end(), 0u);
+  if (n > 0) s.split(ids.begin(), ids.end(), std::max(1, parts));
+  return std::move(s.out);
+}
+
+std::vector<double> probe_weights(const Scene& scene, const RayTracer& tracer, const Camera& camera, int width,
+                                  int height) {
+  const size_t n = scene.triangle_count();
+  std::vector<Ray> rays;
+  for (int y = 0; y < height; ++y)
+    for (int x = 0; x < width; ++x) rays.push_back(camera.ray(x + 0.5f, y + 0.5f));
+  std::vector<Hit> hits(rays.size());
+  tracer.intersect(rays, hits);
+  std::vector<double> weight(n, 0.0);
+  std::vector<Ray> bounces;
+  Sampler rng(SamplerKind::independent, 0x9e3779b97f4a7c15ull, 0, 0, 1);
+  for (size_t i = 0; i < rays.size(); ++i) {
+    if (!hits[i].valid()) continue;
+    weight[hits[i].triangle] += 1;
+    Vec3 nrm = scene.normal(hits[i].triangle);
+    if (dot(nrm, rays[i].direction) > 0) nrm = -nrm;
+    const Vec3 a = std::fabs(nrm.x) > 0.5f ? Vec3{0, 1, 0} : Vec3{1, 0, 0};
+    const Vec3 t = normalize(cross(a, nrm)), b = cross(nrm, t);
+    const Uniform2 u = rng.uniform2();
+    const float r = std::sqrt(u.u), phi = 6.2831853f * u.v;
+    const Vec3 d = t * (r * std::cos(phi)) + b * (r * std::sin(phi)) + nrm * std::sqrt(std::max(0.0f, 1 - r * r));
+    bounces.push_back(Ray{rays[i].origin + rays[i].direction * hits[i].t + nrm * scene.epsilon(), normalize(d)});
+  }
+  hits.resize(bounces.size());
+  tracer.intersect(bounces, hits);
+  for (const Hit& h : hits)
+    if (h.valid()) weight[h.triangle] += 1;
+  const double probes = std::accumulate(weight.begin(), weight.end(), 0.0);
+  // The floor: a tenth of the probes' total, spread by the area-and-count estimate.
+  double area = 0;
+  for (size_t t = 0; t < n; ++t) area += scene.area(static_cast<uint32_t>(t));
+  for (size_t t = 0; t < n; ++t)
+    weight[t] += 0.1 * probes * (0.5 * (area > 0 ? scene.area(static_cast<uint32_t>(t)) / area : 0) + 0.5 / static_cast<double>(n));
+  return weight;
+}
+
+void parts_along(const Ray& ray, std::span<const Bounds> boxes, std::vector<PartCrossing>& out) {
+  out.clear();
+  for (size_t p = 0; p < boxes.size(); ++p) {
+    // Padded by a little of the box's own size and of its distance from the origin, well beyond float rounding.
+    const Bounds& b = boxes[p];
+    const float pad = 1e-5f * (b.diagonal() + std::fabs(b.lo.x) + std::fabs(b.lo.y) + std::fabs(b.lo.z) +
+                               std::fabs(b.hi.x) + std::fabs(b.hi.y) + std::fabs(b.hi.z)) +
+                      std::numeric_limits<float>::min();
+    float enter = ray.tnear, exit = ray.tfar;
+    bool missed = false;
+    for (int a = 0; a < 3 && !missed; ++a) {
+      const float o = ray.origin[a], d = ray.direction[a];
+      const float lo = b.lo[a] - pad, hi = b.hi[a] + pad;
+      if (d == 0) {
+        missed = o < lo || o > hi;
+        continue;
+      }
+      float t0 = (lo - o) / d, t1 = (hi - o) / d;
+      if (t0 > t1) std::swap(t0, t1);
+      enter = std::max(enter, t0);
+      exit = std::min(exit, t1);
+      missed = enter > exit;
+    }
+    if (!missed) out.push_back({static_cast<uint32_t>(p), enter, exit});
+  }
+  std::sort(out.begin(), out.end(), [](const PartCrossing& a, const PartCrossing& b) {
+    return a.enter < b.enter || (a.enter == b.enter && a.part < b.part);
+  });
+}
+
+PartitionedTracer::PartitionedTracer(const Scene& scene, std::vector<ScenePart> parts)
+    : parts_(std::move(parts)), ties_(scene), rays_per_part_(parts_.size(), 0) {
+  for (const ScenePart& p : parts_) {
+    boxes_.push_back(p.bounds);
+    tracers_.push_back(std::make_unique<RayTracer>(scene, p.triangles));
+  }
+}
+
+// Rounds: every ray still on its way goes to the next part along it; each part traces its rays as one stream.
+// `trace(part, indices)` traces those rays in that part and keeps what they found; `trace.goes_on(i, next)` says
+// whether ray i must still visit the next part along it.
+template <class Trace>
+void PartitionedTracer::route(std::span<const Ray> rays, Trace&& trace) const {
+  std::vector<std::vector<PartCrossing>> crossings(rays.size());
+  std::vector<uint32_t> active;
+  for (size_t i = 0; i < rays.size(); ++i) {
+    parts_along(rays[i], boxes_, crossings[i]);
+    if (!crossings[i].empty()) active.push_back(static_cast<uint32_t>(i));
+  }
+  std::vector<size_t> next(rays.size(), 0);
+  std::vector<std::vector<uint32_t>> by_part(parts_.size());
+  while (!active.empty()) {
+    for (auto& group : by_part) group.clear();
+    for (uint32_t i : active) by_part[crossings[i][next[i]].part].push_back(i);
+    std::vector<uint32_t> still;
+    for (size_t p = 0; p < by_part.size(); ++p) {
+      if (by_part[p].empty()) continue;
+      rays_per_part_[p] += by_part[p].size();
+      trace(p, by_part[p]);
+    }
+    for (uint32_t i : active) {
+      if (++next[i] < crossings[i].size() && trace.goes_on(i, crossings[i][next[i]])) still.push_back(i);
+    }
+    std::sort(still.begin(), still.end());
+    active.swap(still);
+  }
+}
+
+namespace {
+
+struct NearestHit {
+  std::span<const Ray> rays;
+  std::span<Hit> hits;
+  const std::vector<std::unique_ptr<RayTracer>>& tracers;
+  std::vector<Ray> batch;
+  std::vector<Hit> found;
+  void operator()(size_t part, const std::vector<uint32_t>& indices) {
+    batch.clear();
+    for (uint32_t i : indices) {
+      Ray r = rays[i];
+      if (hits[i].valid()) r.tfar = hits[i].t;  // only as near or nearer can replace it
+      batch.push_back(r);
+    }
+    found.resize(batch.size());
+    tracers[part]->intersect_unsettled(batch, found);
+    for (size_t k = 0; k < indices.size(); ++k)
+      if (found[k].valid()) hits[indices[k]] = found[k];
+  }
+  // On to the next part unless the hit so far is nearer than that part's box.
+  bool goes_on(uint32_t i, const PartCrossing& next) const { return !hits[i].valid() || next.enter <= hits[i].t; }
+};
+
+struct AnyHit {
+  std::span<const Ray> rays;
+  std::span<uint8_t> occluded;
+  const std::vector<std::unique_ptr<RayTracer>>& tracers;
+  std::vector<Ray> batch;
+  std::vector<uint8_t> found;
+  void operator()(size_t part, const std::vector<uint32_t>& indices) {
+    batch.clear();
+    for (uint32_t i : indices) batch.push_back(rays[i]);
+    found.resize(batch.size());
+    tracers[part]->occluded(batch, found);
+    for (size_t k = 0; k < indices.size(); ++k) occluded[indices[k]] |= found[k];
+  }
+  bool goes_on(uint32_t i, const PartCrossing&) const { return !occluded[i]; }
+};
+
+}  // namespace
+
+void PartitionedTracer::intersect(std::span<const Ray> rays, std::span<Hit> hits) const {
+  std::fill(hits.begin(), hits.end(), Hit{});
+  NearestHit trace{rays, hits, tracers_, {}, {}};
+  route(rays, trace);
+  for (size_t i = 0; i < rays.size(); ++i) hits[i] = ties_.settle(rays[i], hits[i]);
+}
+
+void PartitionedTracer::occluded(std::span<const Ray> rays, std::span<uint8_t> occluded) const {
+  std::fill(occluded.begin(), occluded.end(), uint8_t{0});
+  AnyHit trace{rays, occluded, tracers_, {}, {}};
+  route(rays, trace);
+}
+
+}  // namespace lf

@@ -1,0 +1,78 @@
+#pragma once
+// A scene split by space into parts of about equal estimated ray cost, for data-parallel tracing (issue 14; seed
+// 002_77771c1e37b78e8b.txt §2.1): each part is what one `geometry` actor holds, and a ray is traced part by part
+// along its way, nearest part first, until a hit is nearer than the next part's box.
+//
+// The split is a BSP by recursive bisection: a set of triangles that must become k parts is cut across the longest
+// axis of its centroids' box, at the centroid where the running cost reaches floor(k/2)/k of the set's cost, and
+// each side is split again. A triangle goes whole to the side of its centroid, so parts' boxes may overlap a little;
+// the routing below allows for that. Why bisection rather than the paper's octree with region growing: it gives
+// equal costs for any count of parts (not only where octree cells happen to fall) and keeps each part one compact
+// region, the coherence the paper wants; docs/decisions.md.
+//
+// Cost of a triangle (what a part's share of ray work is estimated from): half its share of the scene's surface
+// area (the chance that a ray ends on it), half its share of the triangle count (intersection tests grow with
+// the triangles a ray passes), unless the caller measured better weights (e.g. from probe rays, the paper's [26]).
+#include <cstdint>
+#include <memory>
+#include <span>
+#include <vector>
+
+#include "render/camera.hpp"
+#include "render/coplanar_ties.hpp"
+#include "render/scene.hpp"
+#include "render/tracer.hpp"
+
+namespace lf {
+
+struct ScenePart {
+  std::vector<uint32_t> triangles;  // scene triangle ids, ascending
+  Bounds bounds;                    // around its triangles' corners
+  double cost = 0;                  // its share of the estimated cost (the parts' costs sum to 1)
+};
+
+// `parts` >= 1 parts, none empty (fewer when the scene has fewer triangles). `weights`: a cost per triangle to use
+// instead of the area-and-count estimate (empty: the estimate).
+std::vector<ScenePart> partition_scene(const Scene& scene, int parts, std::span<const double> weights = {});
+
+// A cost per triangle measured the paper's other way (its [26]: from the rays the farm will trace): the camera's
+// rays at a coarse resolution and one diffuse bounce from each point they hit, traced through the whole scene; a
+// triangle's weight is the probe rays that end on it, plus a floor from the area-and-count estimate spread over the
+// scene, so that geometry no probe reached still counts a little. Same scene, camera and size: same weights.
+std::vector<double> probe_weights(const Scene& scene, const RayTracer& tracer, const Camera& camera, int width,
+                                  int height);
+
+// Where a ray passes a part's box: [enter, exit] along it, within the ray's [tnear, tfar].
+struct PartCrossing {
+  uint32_t part;
+  float enter, exit;
+};
+// The parts whose boxes the ray passes, nearest entry first (ties by part index). Boxes are padded by a small
+// margin, so rounding never skips a part a hit lies in (a needless visit costs only time).
+void parts_along(const Ray& ray, std::span<const Bounds> boxes, std::vector<PartCrossing>& out);
+
+// Tracing through every part in this process: what the geometry actors do together, used to check them and the
+// split. A ray visits parts in the order parts_along gives and stops once its hit is nearer than the next part's
+// entry, so it finds the whole scene's nearest hit; coplanar overlapping faces are settled by the same rule as the
+// whole scene's tracer (render/coplanar_ties.hpp), so the hit is the same.
+class PartitionedTracer {
+ public:
+  PartitionedTracer(const Scene& scene, std::vector<ScenePart> parts);
+  void intersect(std::span<const Ray> rays, std::span<Hit> hits) const;
+  void occluded(std::span<const Ray> rays, std::span<uint8_t> occluded) const;
+  const std::vector<ScenePart>& parts() const { return parts_; }
+  // Rays traced in each part, and how many part visits rays made in all (a ray in one part makes one).
+  const std::vector<uint64_t>& rays_per_part() const { return rays_per_part_; }
+
+ private:
+  template <class Trace>
+  void route(std::span<const Ray> rays, Trace&& trace) const;
+
+  std::vector<ScenePart> parts_;
+  std::vector<Bounds> boxes_;
+  std::vector<std::unique_ptr<RayTracer>> tracers_;
+  CoplanarTies ties_;
+  mutable std::vector<uint64_t> rays_per_part_;
+};
+
+}  // namespace lf

@@ -1,0 +1,197 @@
+#include "render/partition.hpp"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <filesystem>
+#include <random>
+
+#include "render/camera.hpp"
+
+namespace lf {
+namespace {
+
+const std::string kShared = std::string(LIGHTFARM_SOURCE_DIR) + "/../shared/scenes/";
+
+// Rays that start anywhere in the scene's box (and a little outside it), in every direction, some with a finite
+// tfar: the mix of camera, shadow and bounce rays a farm traces, without favouring any part.
+std::vector<Ray> random_rays(const Scene& scene, size_t n, uint32_t seed) {
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<float> u(0, 1);
+  const Bounds b = scene.bounds();
+  const Vec3 size = b.hi - b.lo;
+  std::vector<Ray> rays;
+  for (size_t i = 0; i < n; ++i) {
+    const Vec3 o = b.lo + Vec3{size.x * (1.2f * u(rng) - 0.1f), size.y * (1.2f * u(rng) - 0.1f),
+                               size.z * (1.2f * u(rng) - 0.1f)};
+    const float z = 2 * u(rng) - 1, phi = 6.2831853f * u(rng), r = std::sqrt(std::max(0.0f, 1 - z * z));
+    Ray ray{o, {r * std::cos(phi), r * std::sin(phi), z}};
+    if (i % 3 == 0) ray.tfar = u(rng) * b.diagonal() * 0.5f;
+    rays.push_back(ray);
+  }
+  return rays;
+}
+
+// The camera's rays through every pixel centre and a jittered point, at width x height.
+std::vector<Ray> camera_rays(const CameraSpec& spec, int width, int height) {
+  Camera camera(spec, width, height);
+  std::vector<Ray> rays;
+  for (int y = 0; y < height; ++y)
+    for (int x = 0; x < width; ++x) {
+      rays.push_back(camera.ray(x + 0.5f, y + 0.5f));
+      rays.push_back(camera.ray(x + 0.25f, y + 0.7f));
+    }
+  return rays;
+}
+
+// Every ray's hit (triangle and distance, exactly) and occlusion through the parts equal the whole scene's BVH.
+void expect_same_as_whole(const Scene& scene, const std::vector<Ray>& rays, int parts, const std::string& what) {
+  SCOPED_TRACE(what + ", " + std::to_string(parts) + " parts");
+  RayTracer whole(scene);
+  PartitionedTracer split(scene, partition_scene(scene, parts));
+  ASSERT_EQ(split.parts().size(), static_cast<size_t>(parts));
+  std::vector<Hit> expected(rays.size()), got(rays.size());
+  whole.intersect(rays, expected);
+  split.intersect(rays, got);
+  size_t differ = 0, hits = 0;
+  for (size_t i = 0; i < rays.size(); ++i) {
+    hits += expected[i].valid() ? 1 : 0;
+    if (expected[i].triangle != got[i].triangle || (expected[i].valid() && expected[i].t != got[i].t)) {
+      if (differ < 6 && getenv("SHOWDIFF"))
+        printf("ray %zu: whole tri %u t %.9g | parts tri %u t %.9g | normals %g %g %g / %g %g %g mats %u %u\n", i,
+               expected[i].triangle, expected[i].t, got[i].triangle, got[i].t,
+               expected[i].valid() ? scene.normal(expected[i].triangle).x : 0.f, expected[i].valid() ? scene.normal(expected[i].triangle).y : 0.f, expected[i].valid() ? scene.normal(expected[i].triangle).z : 0.f,
+               got[i].valid() ? scene.normal(got[i].triangle).x : 0.f, got[i].valid() ? scene.normal(got[i].triangle).y : 0.f, got[i].valid() ? scene.normal(got[i].triangle).z : 0.f,
+               expected[i].valid() ? scene.material_of(expected[i].triangle) : 0, got[i].valid() ? scene.material_of(got[i].triangle) : 0);
+      if (differ < 6 && getenv("SHOWDIFF") && expected[i].valid() && got[i].valid())
+        for (uint32_t tt : {expected[i].triangle, got[i].triangle})
+          printf("   tri %u: (%g %g %g) (%g %g %g) (%g %g %g)\n", tt, scene.vertex(tt,0).x, scene.vertex(tt,0).y, scene.vertex(tt,0).z, scene.vertex(tt,1).x, scene.vertex(tt,1).y, scene.vertex(tt,1).z, scene.vertex(tt,2).x, scene.vertex(tt,2).y, scene.vertex(tt,2).z);
+      ++differ;
+    }
+  }
+  EXPECT_EQ(differ, 0u) << "of " << rays.size() << " rays";
+  EXPECT_GT(hits, rays.size() / 4);  // the rays do meet the scene
+  std::vector<uint8_t> blocked_whole(rays.size()), blocked_split(rays.size());
+  whole.occluded(rays, blocked_whole);
+  split.occluded(rays, blocked_split);
+  EXPECT_TRUE(blocked_whole == blocked_split);
+  // Some rays needed more than one part (the routing is exercised).
+  uint64_t visits = 0;
+  for (uint64_t v : split.rays_per_part()) visits += v;
+  EXPECT_GT(visits, rays.size());
+}
+
+TEST(Partition, EveryTriangleIsInOnePartAndCostsAreEven) {
+  auto scene = Scene::builtin("room");
+  ASSERT_TRUE(scene);
+  for (int n : {1, 2, 3, 5, 8}) {
+    auto parts = partition_scene(*scene, n);
+    ASSERT_EQ(parts.size(), static_cast<size_t>(n));
+    std::vector<int> owner(scene->triangle_count(), 0);
+    double total = 0, most = 0;
+    for (const ScenePart& p : parts) {
+      EXPECT_FALSE(p.triangles.empty());
+      EXPECT_TRUE(std::is_sorted(p.triangles.begin(), p.triangles.end()));
+      for (uint32_t t : p.triangles) {
+        ++owner[t];
+        for (int c = 0; c < 3; ++c) {
+          const Vec3 v = scene->vertex(t, c);
+          EXPECT_TRUE(v.x >= p.bounds.lo.x && v.y >= p.bounds.lo.y && v.z >= p.bounds.lo.z && v.x <= p.bounds.hi.x &&
+                      v.y <= p.bounds.hi.y && v.z <= p.bounds.hi.z);
+        }
+      }
+      total += p.cost;
+      most = std::max(most, p.cost);
+    }
+    EXPECT_TRUE(std::all_of(owner.begin(), owner.end(), [](int o) { return o == 1; })) << n << " parts";
+    EXPECT_NEAR(total, 1.0, 1e-9);
+    // Bisection at the running cost: within a few triangles' cost of even (the room has few, large triangles).
+    EXPECT_LE(most * n, 1.35) << n << " parts";
+  }
+}
+
+TEST(Partition, AScanOfFewerTrianglesThanPartsMakesOnePartPerTriangle) {
+  Scene s;
+  const uint32_t m = s.add_material(Material{"white", {0.5f, 0.5f, 0.5f}, {1, 1, 1}});
+  s.add_quad({0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}, m);
+  ASSERT_TRUE(s.finalize("quad"));
+  auto parts = partition_scene(s, 5);
+  EXPECT_EQ(parts.size(), 2u);
+}
+
+TEST(Partition, HitsThroughPartsEqualTheWholeSceneOnTheBuiltins) {
+  for (const char* name : {"cornell", "room"}) {
+    auto scene = Scene::builtin(name);
+    ASSERT_TRUE(scene);
+    const auto rays = random_rays(*scene, 20000, 7);
+    for (int parts : {2, 3, 5}) expect_same_as_whole(*scene, rays, parts, name);
+  }
+}
+
+TEST(Partition, HitsThroughPartsEqualTheWholeSceneOnLostEmpire) {
+  const std::string obj = kShared + "lost_empire/lost_empire.obj";
+  if (!std::filesystem::exists(obj)) GTEST_SKIP() << "no " << obj;
+  SceneSpec spec;
+  spec.file = obj;
+  spec.materials.push_back(Value::Map{{"name", "Torch"}, {"emission", Value::Array{9.0, 9.0, 6.0}}});
+  auto scene = Scene::load(spec);
+  ASSERT_TRUE(scene) << scene.error().message;
+  auto rays = random_rays(*scene, 20000, 11);
+  const auto view = camera_rays(CameraSpec{{-8, 16, 20}, {6, 12, 0}, {0, 1, 0}, 70}, 80, 60);
+  rays.insert(rays.end(), view.begin(), view.end());
+  for (int parts : {2, 3, 5}) expect_same_as_whole(*scene, rays, parts, "lost_empire");
+  // The cost-based split evens the estimate out.
+  for (int parts : {2, 3, 5}) {
+    double most = 0;
+    for (const ScenePart& p : partition_scene(*scene, parts)) most = std::max(most, p.cost);
+    EXPECT_LE(most * parts, 1.01) << parts << " parts";
+  }
+}
+
+// Five clusters along x, one part each: four rings the ray passes through the middle of, then a wall. The ray
+// visits every part in turn and is answered by the last; a ray stopped short of the wall hits nothing and is not
+// occluded; one that hits a ring stops in the first part.
+TEST(Partition, ARayCrossingEveryPartIsAnsweredByTheLast) {
+  Scene s;
+  const uint32_t m = s.add_material(Material{"white", {0.5f, 0.5f, 0.5f}, {}});
+  const uint32_t lamp = s.add_material(Material{"lamp", {}, {1, 1, 1}});
+  for (int k = 0; k < 4; ++k) {
+    const float x = 10.0f * k;
+    // A square ring around the x axis (inner half-size 1, outer 2), as four quads.
+    s.add_quad({x, -2, -2}, {x, 2, -2}, {x, 2, -1}, {x, -2, -1}, m);
+    s.add_quad({x, -2, 1}, {x, 2, 1}, {x, 2, 2}, {x, -2, 2}, m);
+    s.add_quad({x, -2, -1}, {x, -1, -1}, {x, -1, 1}, {x, -2, 1}, m);
+    s.add_quad({x, 1, -1}, {x, 2, -1}, {x, 2, 1}, {x, 1, 1}, m);
+  }
+  s.add_quad({40, -2, -2}, {40, 2, -2}, {40, 2, 2}, {40, -2, 2}, lamp);
+  ASSERT_TRUE(s.finalize("rings"));
+  // One part per cluster (8 triangles per ring, then the wall's 2), made by hand: this is about the routing.
+  std::vector<ScenePart> parts(5);
+  for (uint32_t t = 0; t < s.triangle_count(); ++t) parts[std::min<uint32_t>(t / 8, 4)].triangles.push_back(t);
+  for (ScenePart& p : parts) {
+    std::vector<Vec3> corners;
+    for (uint32_t t : p.triangles)
+      for (int c = 0; c < 3; ++c) corners.push_back(s.vertex(t, c));
+    p.bounds = bounds_of(corners);
+  }
+  PartitionedTracer tracer(s, parts);
+  const uint32_t wall = static_cast<uint32_t>(s.triangle_count() - 2);
+  std::vector<Ray> rays{Ray{{-5, 0.1f, 0.2f}, {1, 0, 0}}, Ray{{-5, 0.1f, 0.2f}, {1, 0, 0}, 0, 30},
+                        Ray{{-5, 1.5f, 0.2f}, {1, 0, 0}}};
+  std::vector<Hit> hits(rays.size());
+  tracer.intersect(rays, hits);
+  ASSERT_TRUE(hits[0].valid());
+  EXPECT_GE(hits[0].triangle, wall);
+  EXPECT_FLOAT_EQ(hits[0].t, 45.0f);
+  EXPECT_FALSE(hits[1].valid());
+  ASSERT_TRUE(hits[2].valid());
+  EXPECT_FLOAT_EQ(hits[2].t, 5.0f);
+  // The first ray visits all five parts, the second the three before x = 30, the third only the first.
+  EXPECT_EQ(tracer.rays_per_part(), (std::vector<uint64_t>{3, 2, 2, 1, 1}));
+  std::vector<uint8_t> blocked(rays.size());
+  tracer.occluded(rays, blocked);
+  EXPECT_EQ(blocked, (std::vector<uint8_t>{1, 0, 1}));
+}
+
+}  // namespace
+}  // namespace lf
