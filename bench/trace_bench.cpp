@@ -59,6 +59,8 @@ int main(int argc, char** argv) {
   for (int y = 0; y < h; ++y)
     for (int x = 0; x < w; ++x) rays.push_back(camera.ray(x + 0.5f, y + 0.5f));
   lf::RayTracer whole(*scene);
+  const double ties_seconds = seconds_of([&] { (void)lf::CoplanarTies(*scene); });
+  const size_t tied = lf::CoplanarTies(*scene).tied_triangles();
   {
     // Bounce rays from what the camera sees: cosine-distributed about the face normal, off the surface by epsilon.
     std::vector<lf::Hit> hits(rays.size());
@@ -103,6 +105,8 @@ int main(int argc, char** argv) {
   const double n = static_cast<double>(rays.size());
   std::printf("Lost Empire (%zu triangles), %zu rays (camera %dx%d and one bounce each), %d runs, medians\n",
               scene->triangle_count(), rays.size(), w, h, runs);
+  std::printf("  faces with an overlapping coplanar face: %zu (finding them: %.3f s, once per tracer)\n", tied,
+              ties_seconds);
   std::printf("  whole BVH, ties unsettled      %7.3f M rays/s\n", n / bench::median(unsettled) / 1e6);
   std::printf("  whole BVH, ties settled        %7.3f M rays/s\n", n / bench::median(settled) / 1e6);
   const auto cost = bench::spread(settle_ratio);
@@ -139,6 +143,7 @@ int main(int argc, char** argv) {
                                         {"imbalance_split_by_area", area_imbalance}});
   }
   lf::Value doc = lf::Value::Map{{"benchmark", "trace"}, {"rays", n}, {"runs", runs},
+                                 {"tied_faces", static_cast<double>(tied)}, {"tie_search_seconds", ties_seconds},
                                  {"m_rays_per_second_unsettled", n / bench::median(unsettled) / 1e6},
                                  {"m_rays_per_second_settled", n / bench::median(settled) / 1e6},
                                  {"settle_time_ratio", cost.to_value()},
