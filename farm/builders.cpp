@@ -142,6 +142,23 @@ void add_renderers(FarmSpec& spec, int count, int lighting, const RendererParams
   }
 }
 
+Status add_partition(FarmSpec& spec, int parts, const std::vector<std::string>& hosts, const SourceLoc& loc) {
+  if (spec.partition_parts > 0) return make_error("partition is declared twice");
+  for (int i = 0; i < parts; ++i) {
+    ActorSpec g;
+    g.kind = kGeometryKind;
+    g.name = "geometry." + std::to_string(i);
+    if (spec.find(g.name) >= 0) return make_error("partition: name '" + g.name + "' is already taken");
+    g.params = Value::Map{{"part", static_cast<int64_t>(i)}, {"parts", static_cast<int64_t>(parts)}};
+    g.host = spread(hosts, static_cast<size_t>(i));
+    g.loc = loc;
+    spec.actors.push_back(std::move(g));
+  }
+  spec.partition_parts = parts;
+  spec.partition_loc = loc;
+  return Ok{};
+}
+
 Result<int> expand_ring(FarmSpec& spec, const radiosity::RingConfig& config, const Value::Map& params,
                         const std::string& name, const std::vector<std::string>& hosts, const SourceLoc& loc) {
   if (spec.find(name) >= 0) return make_error("radiosity: name '" + name + "' is already taken");
@@ -205,7 +222,7 @@ Status validate(const FarmSpec& s) {
     for (int in : s.actors[static_cast<size_t>(i)].inputs) stack.push_back(in);
   }
   for (size_t i = 0; i < s.actors.size(); ++i)
-    if (!s.actors[i].is_renderer() && !s.actors[i].is_ring_node() && !used[i])
+    if (!s.actors[i].is_renderer() && !s.actors[i].is_ring_node() && !s.actors[i].is_geometry() && !used[i])
       return make_error(s.actors[i].loc.str() + ": lightop '" + s.actors[i].name +
                         "' is not connected to the renderers' lighting (nothing would ask it for light)");
   return Ok{};
@@ -224,7 +241,7 @@ std::string to_dot(const FarmSpec& spec) {
       by_host[a.host].push_back("    " + id("renderers") + " [label=\"renderer × " + std::to_string(renderers) +
                                 "\", shape=box3d];");
     } else {
-      const char* shape = a.is_multiplexer() ? ", shape=trapezium" : "";
+      const char* shape = a.is_multiplexer() ? ", shape=trapezium" : (a.is_geometry() ? ", shape=cylinder" : "");
       by_host[a.host].push_back("    " + id(a.name) + " [label=\"" + a.name + "\\n(" + a.kind + ")\"" + shape + "];");
     }
   }

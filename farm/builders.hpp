@@ -48,6 +48,10 @@ void add_renderers(FarmSpec& spec, int count, int lighting, const RendererParams
 // A radiosity ring: rings x ring_length `radiosity_node` actors NAME.RING.POSITION, each with every other node as an
 // input and `params` plus its own `node` number, then the `radiosity` LightOp named NAME that shades with their
 // solution. Returns the LightOp's index.
+// partition { parts = N }: N `geometry` actors, "geometry.0" ... (spread over `hosts` as renderers are), each holding
+// one part of the scene (render/partition.hpp).
+Status add_partition(FarmSpec& spec, int parts, const std::vector<std::string>& hosts, const SourceLoc& loc);
+
 Result<int> expand_ring(FarmSpec& spec, const radiosity::RingConfig& config, const Value::Map& params,
                         const std::string& name, const std::vector<std::string>& hosts, const SourceLoc& loc);
 

@@ -28,6 +28,7 @@ inline constexpr const char* kRendererKind = "renderer";
 inline constexpr const char* kMultiplexerKind = "multiplexer";
 inline constexpr const char* kRingNodeKind = "radiosity_node";
 inline constexpr const char* kExecKind = "exec";
+inline constexpr const char* kGeometryKind = "geometry";
 
 // One actor process. Renderers are expanded from `renderers { count = N }` into N specs.
 struct ActorSpec {
@@ -42,9 +43,13 @@ struct ActorSpec {
   bool is_renderer() const { return kind == kRendererKind; }
   bool is_multiplexer() const { return kind == kMultiplexerKind; }
   bool is_ring_node() const { return kind == kRingNodeKind; }
+  bool is_geometry() const { return kind == kGeometryKind; }
   // Renderers and built-in LightOps load the farm's scene and build its BVH (multiplexers, ring nodes and exec
   // actors do not, or not that way): what a host agent can share among them.
-  bool loads_scene() const { return !is_multiplexer() && !is_ring_node() && kind != kExecKind && !runtime.count("cmd"); }
+  // (A geometry actor loads the scene but builds a BVH of its own part only.)
+  bool loads_scene() const {
+    return !is_multiplexer() && !is_ring_node() && !is_geometry() && kind != kExecKind && !runtime.count("cmd");
+  }
 };
 
 struct FarmSpec {
@@ -63,6 +68,9 @@ struct FarmSpec {
   // A host with two or more scene-loading actors of a shipped scene loads it and builds its BVH once, in a host
   // agent that forks those actors (actors/runtime/host_agent.hpp); false: every actor loads its own.
   bool host_agents = true;
+  // partition { parts = N }: the scene split by space into N parts, each held by a `geometry` actor (0: not split).
+  int partition_parts = 0;
+  SourceLoc partition_loc;
 
   int renderer_count() const;
   // Index of the multiplexer whose replica actor `i` is, or -1.

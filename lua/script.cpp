@@ -1,7 +1,7 @@
 // The farm-script library. Like Lua's own libraries: one registration table, every argument checked with
 // luaL_check*, so a mistake comes back as "farm.lua:12: what is wrong".
 //
-// Globals a script sees: scene, camera, image, light, lightop, multiplexer, radiosity, renderers, host, farm, param (and Lua's base, string, table,
+// Globals a script sees: scene, camera, image, light, material, lightop, multiplexer, radiosity, partition, renderers, host, farm, param (and Lua's base, string, table,
 // math and utf8 libraries; no io or os, so a script describes a farm and does nothing else).
 #include "lua/script.hpp"
 
@@ -630,6 +630,22 @@ int l_farm(lua_State* L) {
   return 0;
 }
 
+// partition { parts = N, host = h | {h1, h2, ...} }: the scene split by space into N parts, each held by a `geometry`
+// actor; `direct` and `pathtrace` then trace their rays through the parts (render/partition.hpp).
+int l_partition(lua_State* L) {
+  Builder& b = builder(L);
+  luaL_checktype(L, 1, LUA_TTABLE);
+  const auto hosts = take_hosts(L, 1, b);
+  ParamTable p = table_params(L, 1, "partition");
+  int parts = 1;
+  with_params(L, [&] {
+    parts = static_cast<int>(p.get_int("parts", 2, 1, 64));
+    p.report_unused();
+  });
+  if (auto st = add_partition(b.spec, parts, hosts, caller_loc(L)); !st) luaL_error(L, "%s", st.error().message.c_str());
+  return 0;
+}
+
 // param(name, default): the value of --set name=..., converted to default's type, or default.
 int l_param(lua_State* L) {
   Builder& b = builder(L);
@@ -671,6 +687,7 @@ const luaL_Reg kFarmLib[] = {{"scene", l_scene},   {"camera", l_camera},       {
                              {"renderers", l_renderers}, {"host", l_host}, {"slurm_hosts", l_slurm_hosts},
                              {"param", l_param},   {"farm", l_farm},       {"multiplexer", l_multiplexer},
                              {"light", l_light},   {"radiosity", l_radiosity}, {"material", l_material},
+                             {"partition", l_partition},
                              {nullptr, nullptr}};
 
 void open_libs(lua_State* L) {

@@ -180,6 +180,17 @@ class SoloExchange final : public Exchange {
   }
 };
 
+// Tracing the op may have to wait for: in a farm whose scene is split into parts (partition { parts = N }), rays
+// travel to the geometry actors that hold the parts. `co_await tracing.intersect(rays, hits)` answers exactly what
+// RayTracer::intersect would on the whole scene (render/partition.hpp); the op's coroutine waits meanwhile and the
+// runtime serves other requests.
+class Tracing {
+ public:
+  virtual ~Tracing() = default;
+  virtual Task intersect(std::span<const Ray> rays, std::span<Hit> hits) = 0;
+  virtual Task occluded(std::span<const Ray> rays, std::span<uint8_t> occluded) = 0;
+};
+
 // What a LightOp gets at setup: the scene, its ray tracer, and where it stands among replicas.
 struct SceneContext {
   const Scene* scene = nullptr;
@@ -196,6 +207,9 @@ struct SceneContext {
   // How far a long setup is ("shooting photons", done, total); the runtime tells the director, which shows it.
   // Call it as often as convenient: the runtime passes on a few a second. May be empty (tests).
   std::function<void(const char* what, uint64_t done, uint64_t total)> progress;
+  // Set in a partitioned farm: ops that trace through it (path_kernel: `direct`, `pathtrace`) do, and the others
+  // use `tracer`, the whole scene's BVH, as before.
+  Tracing* tracing = nullptr;
   void report(const char* what, uint64_t done, uint64_t total) const {
     if (progress) progress(what, done, total);
   }

@@ -16,7 +16,7 @@ bool g_served_from_preload = false;
 
 }  // namespace
 
-Result<LoadedScene> load_scene_for_actor(const SceneSpec& spec) {
+Result<LoadedScene> load_scene_for_actor(const SceneSpec& spec, bool with_tracer) {
   if (g_preloaded && !spec.cache.empty() && spec.hash == g_preloaded->hash) {
     g_served_from_preload = true;
     return g_preloaded->loaded;
@@ -24,6 +24,7 @@ Result<LoadedScene> load_scene_for_actor(const SceneSpec& spec) {
   auto scene = Scene::load(spec);
   if (!scene) return scene.error();
   auto owned = std::make_shared<const Scene>(std::move(*scene));
+  if (!with_tracer) return LoadedScene{std::move(owned), nullptr};
   auto tracer = std::make_shared<const RayTracer>(*owned);
   return LoadedScene{std::move(owned), std::move(tracer)};
 }

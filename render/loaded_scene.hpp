@@ -19,8 +19,8 @@ struct LoadedScene {
 };
 
 // The scene `spec` names, with its BVH: the preloaded one when `spec` is a shipped scene of the preloaded hash,
-// else loaded and built here.
-Result<LoadedScene> load_scene_for_actor(const SceneSpec& spec);
+// else loaded and built here (without `with_tracer`, no BVH is built: a geometry actor builds its part's own).
+Result<LoadedScene> load_scene_for_actor(const SceneSpec& spec, bool with_tracer = true);
 
 // Loads the shipped scene at `path` (content hash `hash`) and builds its BVH, for load_scene_for_actor to return
 // to this process and to every process forked from it.

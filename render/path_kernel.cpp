@@ -37,7 +37,7 @@ constexpr uint32_t kSlotsPerVertex = 5;
 
 }  // namespace
 
-void trace_paths(const SceneContext& ctx, const ShadingPoints& points, std::span<RGB> radiance, const PathOptions& o,
+Task trace_paths(const SceneContext& ctx, const ShadingPoints& points, std::span<RGB> radiance, const PathOptions& o,
                  PathTally* tally) {
   const Scene& scene = *ctx.scene;
   const float eps = scene.epsilon();
@@ -100,7 +100,10 @@ void trace_paths(const SceneContext& ctx, const ShadingPoints& points, std::span
       rays.push_back(Ray{origin, to_light / span, 0.0f, ls.is_point ? span : span - eps});
     }
     blocked.resize(rays.size());
-    if (!rays.empty()) ctx.tracer->occluded(rays, blocked);
+    if (!rays.empty()) {
+      if (ctx.tracing) co_await ctx.tracing->occluded(rays, blocked);
+      else ctx.tracer->occluded(rays, blocked);
+    }
     for (size_t r = 0; r < pending.size(); ++r)
       if (!blocked[r]) paths[pending[r].path].L += pending[r].contribution;
 
@@ -134,7 +137,10 @@ void trace_paths(const SceneContext& ctx, const ShadingPoints& points, std::span
       samples.push_back(*s);
     }
     hits.resize(rays.size());
-    if (!rays.empty()) ctx.tracer->intersect(rays, hits);
+    if (!rays.empty()) {
+      if (ctx.tracing) co_await ctx.tracing->intersect(rays, hits);
+      else ctx.tracer->intersect(rays, hits);
+    }
     for (size_t r = 0; r < continuing.size(); ++r) {
       Path& path = paths[continuing[r]];
       if (!hits[r].valid()) {

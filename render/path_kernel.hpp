@@ -30,7 +30,9 @@ struct PathTally {
   uint64_t vertices = 0;
 };
 
-void trace_paths(const SceneContext& ctx, const ShadingPoints& points, std::span<RGB> radiance, const PathOptions& o,
+// A coroutine: it waits where rays are traced through ctx.tracing (a partitioned scene); with the whole scene's BVH it
+// finishes before it returns. `ctx`, `points`, `radiance`, `o` and `tally` must outlive it.
+Task trace_paths(const SceneContext& ctx, const ShadingPoints& points, std::span<RGB> radiance, const PathOptions& o,
                  PathTally* tally = nullptr);
 
 }  // namespace lf

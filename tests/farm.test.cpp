@@ -348,7 +348,7 @@ TEST_F(FarmTest, CommandLineBasics) {
   EXPECT_NE(inline_set.out.find("renderer × 3"), std::string::npos);
   auto unknown_actor = run_lightfarm({"actor", "--kind", "teapot", "--name", "t", "--director", "tcp://127.0.0.1:9"});
   EXPECT_EQ(unknown_actor.status, 2);
-  EXPECT_NE(unknown_actor.err.find("unknown actor kind 'teapot' (known kinds: renderer, multiplexer, radiosity_node, " + lightop_kind_list() + ")"), std::string::npos);
+  EXPECT_NE(unknown_actor.err.find("unknown actor kind 'teapot' (known kinds: renderer, multiplexer, radiosity_node, geometry, " + lightop_kind_list() + ")"), std::string::npos);
 }
 
 }  // namespace

@@ -47,6 +47,7 @@ constexpr std::pair<Op, std::string_view> kOps[] = {
     {Op::ring_back, "ring.back"},
     {Op::ring_return, "ring.return"},
     {Op::ring_poll, "ring.poll"},
+    {Op::trace, "trace"},
 };
 constexpr std::pair<Phase, std::string_view> kPhases[] = {
     {Phase::configure, "configure"},

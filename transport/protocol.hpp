@@ -55,6 +55,7 @@ enum class Op : uint8_t {
   ring_back,     // ring node -> home node: the packet is round its ring
   ring_return,   // borrower -> origin node: a lent packet comes back
   ring_poll,     // idle ring node -> node at its position in another ring: lend me work
+  trace,         // LightOp -> geometry actor: trace a batch of rays through this part of a partitioned scene
 };
 std::string_view op_name(Op op);
 Op op_from_name(std::string_view name);

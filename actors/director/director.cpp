@@ -31,7 +31,9 @@
 #include "actors/runtime/runtime.hpp"
 #include "core/log.hpp"
 #include "core/private_dir.hpp"
+#include "render/camera.hpp"
 #include "render/image.hpp"
+#include "render/partition.hpp"
 #include "render/scene.hpp"
 #include "render/scene_file.hpp"
 #include "transport/security.hpp"
@@ -226,6 +228,7 @@ class Director final : public ControlOut, public Outbox {
     for (auto& e : escapes)
       if (e.light.rfind("material '", 0) == 0 && !spec_.scene.file.empty()) e.light = spec_.scene.file + ": " + e.light;
     for (const auto& warning : escaping_light_warnings(escapes)) log_warn(warning);
+    if (spec_.partition_parts > 0) split_scene(*scene);
     // A scene from a file travels to the hosts in its binary form; actors never parse the OBJ themselves.
     if (!spec_.scene.file.empty()) {
       scene_bytes_ = scene_to_bytes(*scene);
@@ -344,6 +347,28 @@ class Director final : public ControlOut, public Outbox {
     return {input.endpoint, actor_keys_.empty() ? "" : actor_keys_.at(input.name()).public_key};
   }
 
+  // partition { parts = N }: the split the geometry actors hold, weighted by probe rays from the farm's camera
+  // (render/partition.hpp), made once here so that every actor agrees on it.
+  void split_scene(const Scene& scene) {
+    const auto start = Clock::now();
+    RayTracer whole(scene);
+    const int width = std::min(spec_.image.width, 160);
+    const int height = std::max(1, spec_.image.height * width / std::max(1, spec_.image.width));
+    const Camera probe(spec_.camera, width, height);
+    parts_ = partition_scene(scene, spec_.partition_parts, probe_weights(scene, whole, probe, width, height));
+    if (static_cast<int>(parts_.size()) < spec_.partition_parts)
+      throw FarmFailure{spec_.partition_loc.str() + ": partition: the scene has " +
+                        std::to_string(scene.triangle_count()) + " triangles, fewer than the " +
+                        std::to_string(spec_.partition_parts) + " parts asked for"};
+    if (!options_.quiet) {
+      std::string shares;
+      for (const ScenePart& p : parts_)
+        shares += (shares.empty() ? "" : ", ") + std::to_string(p.triangles.size());
+      log_info("partition: " + std::to_string(parts_.size()) + " parts of " + shares + " triangles (split in " +
+               seconds_text(std::round(seconds_since(start) * 100) / 100) + ")");
+    }
+  }
+
   Status configure_actor(ActorRecord& a) {
     auto endpoint_of = [&](int i) { return supervisor_.at(spec_.actors[static_cast<size_t>(i)].name).endpoint; };
     std::function<std::string(int)> key_of;
@@ -354,6 +379,21 @@ class Director final : public ControlOut, public Outbox {
     if (!scene_bytes_.empty()) {
       config.scene.cache = scene_paths_.at(a.spec->host);
       config.scene.hash = scene_hash_;
+    }
+    if (!parts_.empty()) {
+      if (a.spec->is_geometry()) {
+        config.part_triangles = parts_.at(static_cast<size_t>(a.spec->params.at("part").as_int())).triangles;
+      } else if (a.spec->loads_scene() && !a.spec->is_renderer()) {
+        // A LightOp traces through the parts (those of its ops that can: direct, pathtrace).
+        for (const auto& g : spec_.actors) {
+          if (!g.is_geometry()) continue;
+          const auto [endpoint, key] = endpoint_for(a, supervisor_.at(g.name));
+          config.geometry.push_back({g.name, endpoint, 4, key});
+        }
+        for (const ScenePart& p : parts_)
+          config.part_boxes.insert(config.part_boxes.end(),
+                                   {p.bounds.lo.x, p.bounds.lo.y, p.bounds.lo.z, p.bounds.hi.x, p.bounds.hi.y, p.bounds.hi.z});
+      }
     }
     // A replica lost before its pool was configured is left out of the pool (it never said where it listens).
     std::vector<InputSpec> inputs;
@@ -777,6 +817,7 @@ class Director final : public ControlOut, public Outbox {
   wire::CurveKeys director_keys_;
   std::map<std::string, wire::CurveKeys> actor_keys_;
   std::string scene_bytes_, scene_hash_;           // a scene from a file, as shipped
+  std::vector<ScenePart> parts_;                   // partition { parts = N }: what each geometry actor holds
   std::map<std::string, std::string> scene_paths_;  // host -> the scene's path in its cache
   std::map<std::string, uint64_t> scene_sent_;      // host -> bytes that crossed to it
   wire::Socket control_{wire::Socket::Kind::router};

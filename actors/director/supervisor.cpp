@@ -198,7 +198,9 @@ Status Supervisor::on_exit(const ExitReport& r) {
     if (recoverable(a)) return lose(a, why);
     if (restartable(a)) return restart(a, why);
     const std::string when = starting_up(stage_) ? "during start-up" : "during " + std::string(stage_name(stage_));
-    return make_error("actor '" + name + "' (pid " + std::to_string(r.pid) + ") " + why + " " + when);
+    // A part of a partitioned scene is held nowhere else: rays that cross it cannot be answered.
+    const std::string held = a.spec->is_geometry() ? "; the part of the scene it held is not held anywhere else" : "";
+    return make_error("actor '" + name + "' (pid " + std::to_string(r.pid) + ") " + why + " " + when + held);
   }
   return Ok{};
 }

@@ -2,13 +2,48 @@
 
 namespace lf {
 
-Value ActorConfig::to_value() const {
+namespace {
+
+Value::Array inputs_value(const std::vector<InputSpec>& inputs) {
   Value::Array ins;
   for (const auto& in : inputs) {
     Value::Map entry{{"name", in.name}, {"endpoint", in.endpoint}, {"window", in.window}};
     if (!in.key.empty()) entry["key"] = in.key;
     ins.push_back(std::move(entry));
   }
+  return ins;
+}
+
+// A list of {name, endpoint, window?, key?} under `field` ("inputs", "geometry"); absent is empty.
+Status read_inputs(const Value& body, const char* field, std::vector<InputSpec>& out) {
+  const Value* ins = body.find(field);
+  if (!ins || ins->is_nil()) return Ok{};
+  if (!ins->is_array()) return make_error(std::string("CONFIG '") + field + "' must be a list", ErrorCode::bad_request);
+  for (const auto& in : ins->as_array()) {
+    const Value* name = in.find("name");
+    const Value* endpoint = in.find("endpoint");
+    const Value* window = in.find("window");
+    if (!name || !name->is_string() || !endpoint || !endpoint->is_string())
+      return make_error(std::string("CONFIG names ") + (std::string(field) == "inputs" ? "an input" : "a geometry actor") +
+                            " without name or endpoint",
+                        ErrorCode::bad_request);
+    if (window && (!window->is_int() || window->as_int() < 1 || window->as_int() > 1024))
+      return make_error("CONFIG input '" + name->as_string() + "': window must be an integer in [1, 1024]",
+                        ErrorCode::bad_request);
+    const Value* key = in.find("key");
+    if (key && (!key->is_string() || key->as_string().size() != 40))
+      return make_error("CONFIG input '" + name->as_string() + "': key must be a 40-character Z85 public key",
+                        ErrorCode::bad_request);
+    out.push_back({name->as_string(), endpoint->as_string(), window ? window->as_int() : 4,
+                   key ? key->as_string() : std::string()});
+  }
+  return Ok{};
+}
+
+}  // namespace
+
+Value ActorConfig::to_value() const {
+  Value::Array ins = inputs_value(inputs);
   Value::Map m{{"params", params},
                {"scene", scene.to_value()},
                {"camera", camera.to_value()},
@@ -19,6 +54,11 @@ Value ActorConfig::to_value() const {
                {"heartbeat_timeout", heartbeat_timeout},
                {"request_timeout", request_timeout}};
   if (pool) m["pool"] = Value::Map{{"name", pool->name}, {"index", pool->index}, {"count", pool->count}};
+  if (!geometry.empty()) {
+    m["geometry"] = inputs_value(geometry);
+    m["part_boxes"] = floats_to_bytes(part_boxes);
+  }
+  if (!part_triangles.empty()) m["part_triangles"] = u32_to_bytes(part_triangles);
   return m;
 }
 
@@ -59,24 +99,19 @@ Result<ActorConfig> ActorConfig::from_value(const Value& body) {
   c.image = ImageSpec::from_value(*image);
   c.runtime = std::move(*runtime);
   c.debug = std::move(*debug);
-  if (const Value* ins = body.find("inputs"); ins && !ins->is_nil()) {
-    if (!ins->is_array()) return make_error("CONFIG 'inputs' must be a list", ErrorCode::bad_request);
-    for (const auto& in : ins->as_array()) {
-      const Value* name = in.find("name");
-      const Value* endpoint = in.find("endpoint");
-      const Value* window = in.find("window");
-      if (!name || !name->is_string() || !endpoint || !endpoint->is_string())
-        return make_error("CONFIG names an input without name or endpoint", ErrorCode::bad_request);
-      if (window && (!window->is_int() || window->as_int() < 1 || window->as_int() > 1024))
-        return make_error("CONFIG input '" + name->as_string() + "': window must be an integer in [1, 1024]",
-                          ErrorCode::bad_request);
-      const Value* key = in.find("key");
-      if (key && (!key->is_string() || key->as_string().size() != 40))
-        return make_error("CONFIG input '" + name->as_string() + "': key must be a 40-character Z85 public key",
-                          ErrorCode::bad_request);
-      c.inputs.push_back({name->as_string(), endpoint->as_string(), window ? window->as_int() : 4,
-                          key ? key->as_string() : std::string()});
-    }
+  if (auto st = read_inputs(body, "inputs", c.inputs); !st) return st.error();
+  if (auto st = read_inputs(body, "geometry", c.geometry); !st) return st.error();
+  if (!c.geometry.empty()) {
+    const Value* boxes = body.find("part_boxes");
+    if (!boxes || !boxes->is_bytes() || !bytes_to_floats(boxes->as_bytes(), c.part_boxes) ||
+        c.part_boxes.size() != 6 * c.geometry.size())
+      return make_error("CONFIG 'part_boxes' must hold 6 floats for each of the " + std::to_string(c.geometry.size()) +
+                            " parts",
+                        ErrorCode::bad_request);
+  }
+  if (const Value* tris = body.find("part_triangles"); tris && !tris->is_nil()) {
+    if (!tris->is_bytes() || !bytes_to_u32(tris->as_bytes(), c.part_triangles))
+      return make_error("CONFIG 'part_triangles' must be u32 triangle ids", ErrorCode::bad_request);
   }
   if (const Value* pool = body.find("pool"); pool && !pool->is_nil()) {
     const Value* name = pool->find("name");

@@ -2,6 +2,7 @@
 // CONFIG's body (docs/PROTOCOL.md), typed: the director builds an ActorConfig and sends to_value(); the runtime
 // decodes it once with from_value(), which checks every field, and hands the actor this struct. Actors read their
 // algorithm parameters from `params` with their own ParamTable definitions.
+#include <cstdint>
 #include <optional>
 #include <string>
 #include <vector>
@@ -37,6 +38,11 @@ struct ActorConfig {
   std::optional<PoolPlace> pool;  // set for a pool's replica
   double heartbeat_timeout = 10.0;
   double request_timeout = 120.0;
+  // A partitioned scene (partition { parts = N }): an actor that traces through the parts gets their actors (part
+  // order) and boxes; a geometry actor gets its own part's triangles.
+  std::vector<InputSpec> geometry;
+  std::vector<float> part_boxes;         // 6 per part: lo x y z, hi x y z
+  std::vector<uint32_t> part_triangles;  // scene triangle ids, ascending
 
   Value to_value() const;
   // Every field checked; an error names the field.

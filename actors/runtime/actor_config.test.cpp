@@ -18,12 +18,18 @@ TEST(ActorConfig, RoundTripsEveryField) {
   c.pool = PoolPlace{"direct", 1, 3};
   c.heartbeat_timeout = 2.5;
   c.request_timeout = 30;
+  c.geometry = {{"geometry.0", "tcp://127.0.0.1:5002", 4}, {"geometry.1", "tcp://127.0.0.1:5003", 4}};
+  c.part_boxes = {0, 0, 0, 1, 1, 1, 1, 0, 0, 2, 1, 1};
+  c.part_triangles = {3, 5, 8};
   auto back = ActorConfig::from_value(c.to_value());
   ASSERT_TRUE(back.ok()) << back.error().message;
   EXPECT_EQ(back->to_value(), c.to_value());
   EXPECT_EQ(back->inputs[0].window, 8);
   EXPECT_EQ(back->pool->index, 1);
   EXPECT_EQ(back->camera.fov, 45);
+  EXPECT_EQ(back->geometry[1].name, "geometry.1");
+  EXPECT_EQ(back->part_boxes, c.part_boxes);
+  EXPECT_EQ(back->part_triangles, c.part_triangles);
 }
 
 TEST(ActorConfig, RefusesMalformedFieldsByName) {
@@ -38,6 +44,9 @@ TEST(ActorConfig, RefusesMalformedFieldsByName) {
             "CONFIG input 'x': window must be an integer in [1, 1024]");
   EXPECT_EQ(refused({{"pool", Value::Map{{"name", "p"}, {"index", 3}, {"count", 2}}}}),
             "CONFIG 'pool' must be {name, index, count} with 0 <= index < count");
+  EXPECT_EQ(refused({{"geometry", Value::Array{Value::Map{{"name", "g"}, {"endpoint", "e"}}}}}),
+            "CONFIG 'part_boxes' must hold 6 floats for each of the 1 parts");
+  EXPECT_EQ(refused({{"part_triangles", "abc"}}), "CONFIG 'part_triangles' must be u32 triangle ids");
   EXPECT_EQ(refused({{"heartbeat_timeout", "soon"}}), "CONFIG 'heartbeat_timeout' must be a positive number of seconds");
   EXPECT_FALSE(ActorConfig::from_value(Value(3)).ok());
   // The minimal CONFIG of an older director: everything optional has its default.

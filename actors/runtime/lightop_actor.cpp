@@ -15,6 +15,7 @@
 #include <deque>
 
 #include "actors/codecs/shade_codec.hpp"
+#include "actors/runtime/remote_tracing.hpp"
 #include "core/log.hpp"
 #include "render/loaded_scene.hpp"
 #include "render/lightop_registry.hpp"
@@ -135,6 +136,15 @@ class LightOpActor final : public Actor {
       replica_count_ = static_cast<int>(config.pool->count);
     }
     exchange_ = std::make_unique<DirectorExchange>(rt, replica_count_ <= 1);
+    if (!config.geometry.empty()) {
+      // A partitioned scene: rays go to the parts' geometry actors (ops that trace through ctx.tracing do).
+      std::vector<Bounds> boxes;
+      for (size_t p = 0; p < config.geometry.size(); ++p) {
+        const float* b = config.part_boxes.data() + 6 * p;
+        boxes.push_back(Bounds{{b[0], b[1], b[2]}, {b[3], b[4], b[5]}});
+      }
+      tracing_ = std::make_unique<RemoteTracing>(rt, *scene_, std::move(boxes), 4096);
+    }
     return Ok{};
   }
 
@@ -145,6 +155,7 @@ class LightOpActor final : public Actor {
       ctx.width = width_;
       ctx.height = height_;
       ctx.sampler = sampler_;
+      ctx.tracing = tracing_.get();
       ctx.progress = [&rt](const char* what, uint64_t done, uint64_t total) { rt.report_progress(what, done, total); };
       setup_ = op_->setup(std::move(ctx), *inputs_);
       setup_running_ = true;
@@ -216,7 +227,15 @@ class LightOpActor final : public Actor {
   size_t queue_length() const override { return waiting_.size(); }
   bool has_local_work() const override { return set_up_ && !waiting_.empty(); }
   // The op's own figures (cache hits, photons, ...) under STATS "detail".
-  Value extra_stats() const override { return op_ ? op_->stats() : Value(); }
+  Value extra_stats() const override {
+    Value stats = op_ ? op_->stats() : Value();
+    if (tracing_) {
+      if (!stats.is_map()) stats = Value::Map{};
+      Value tracing = tracing_->stats();  // held: a range-for over a temporary's map would dangle
+      for (auto& [key, value] : tracing.as_map()) stats.as_map()[key] = std::move(value);
+    }
+    return stats;
+  }
 
  private:
   struct Job {
@@ -237,6 +256,7 @@ class LightOpActor final : public Actor {
   int width_ = 0, height_ = 0;
   std::unique_ptr<RemoteInputs> inputs_;
   std::unique_ptr<Exchange> exchange_;
+  std::unique_ptr<RemoteTracing> tracing_;  // a partitioned scene's geometry actors, or none
   int replica_index_ = 0, replica_count_ = 1;
   Task setup_;
   bool setup_running_ = false;

@@ -318,13 +318,15 @@ void Runtime::handle_control(wire::Message& m, Actor& actor) {
       heartbeat_interval_ = std::min(1.0, heartbeat_timeout_ / 4);
       // Connect to every input before the actor configures, so that it may ask them during setup.
       request_timeout_ = config->request_timeout;
-      for (const auto& in : config->inputs) {
-        auto client = connect_input(in.name, in.endpoint, in.key, static_cast<size_t>(in.window));
-        if (!client) return fail(client.error().message);
-        inputs_.push_back(std::move(*client));
-        input_names_.push_back(in.name);
-        input_windows_.push_back(static_cast<size_t>(in.window));
-      }
+      for (const auto* list : {&config->inputs, &config->geometry})
+        for (const auto& in : *list) {
+          auto client = connect_input(in.name, in.endpoint, in.key, static_cast<size_t>(in.window));
+          if (!client) return fail(client.error().message);
+          inputs_.push_back(std::move(*client));
+          input_names_.push_back(in.name);
+          input_windows_.push_back(static_cast<size_t>(in.window));
+        }
+      lighting_inputs_ = config->inputs.size();
       inputs_changed_ = true;
       auto started = Clock::now();
       Status st = actor.configure(*config, *this);

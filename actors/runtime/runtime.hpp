@@ -105,9 +105,13 @@ class Runtime {
   // The standard answer to an operation this actor does not serve.
   void reply_unknown_op(const std::string& peer, const wire::Message& request, const std::string& served);
 
-  size_t input_count() const { return inputs_.size(); }
+  size_t input_count() const { return lighting_inputs_; }
   wire::RequestClient& input(size_t i) { return *inputs_[i]; }
   const std::string& input_name(size_t i) const { return input_names_[i]; }
+  // A partitioned scene's geometry actors (CONFIG 'geometry', part order), connected like inputs and polled with
+  // them, but not inputs of the lighting network.
+  size_t geometry_count() const { return inputs_.size() - lighting_inputs_; }
+  wire::RequestClient& geometry(size_t part) { return *inputs_[lighting_inputs_ + part]; }
 
   using DirectorCallback = std::function<void(Result<wire::Message>)>;
   // A request to the director (tiles, results), answered by a REPLY on the control channel.
@@ -146,6 +150,7 @@ class Runtime {
   RateLimitedLog bad_messages_;  // anyone can send garbage; it must not flood the log
   std::vector<std::unique_ptr<wire::RequestClient>> inputs_;
   std::vector<std::string> input_names_;
+  size_t lighting_inputs_ = 0;  // inputs_ holds the lighting inputs, then the geometry actors
   std::map<uint64_t, DirectorCallback> director_pending_;
   uint64_t next_director_id_ = 1;
   ActorStats stats_;

@@ -34,8 +34,7 @@ class DirectLight final : public LightOp {
     o.stream = streams::direct ^ (seed_ << 8);
     o.light_only_on_diffuse = !mis_;
     o.light_tree = light_tree_;
-    trace_paths(ctx_, points, radiance, o);
-    co_return;
+    co_await trace_paths(ctx_, points, radiance, o);
   }
 
  private:

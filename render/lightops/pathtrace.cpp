@@ -24,8 +24,7 @@ class PathTrace final : public LightOp {
   }
 
   Task shade(const ShadingPoints& points, std::span<RGB> radiance, Inputs&) override {
-    trace_paths(ctx_, points, radiance, options_, &tally_);
-    co_return;
+    co_await trace_paths(ctx_, points, radiance, options_, &tally_);
   }
 
   Value stats() const override {

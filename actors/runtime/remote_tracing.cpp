@@ -1,0 +1,122 @@
+#include "actors/runtime/remote_tracing.hpp"
+
+#include <algorithm>
+#include <memory>
+
+#include "actors/codecs/trace_codec.hpp"
+
+namespace lf {
+
+RemoteTracing::RemoteTracing(Runtime& rt, const Scene& scene, std::vector<Bounds> boxes, size_t batch)
+    : rt_(rt), scene_(scene), boxes_(std::move(boxes)), ties_(scene), batch_(std::max<size_t>(1, batch)) {}
+
+namespace {
+
+// One round's answers from one part: where each ray of the round stands in the caller's arrays, and what came back.
+struct PartRound {
+  std::vector<uint32_t> rays;  // indices into the caller's rays
+  std::vector<Hit> hits;
+  std::vector<uint8_t> blocked;
+};
+
+}  // namespace
+
+// The rounds of intersect and occluded, which differ only in what a part answers and when a ray is done.
+template <bool Any>
+static Task trace_rounds(Runtime& rt, const Scene& scene, const std::vector<Bounds>& boxes, size_t batch,
+                         std::span<const Ray> rays, std::span<Hit> hits, std::span<uint8_t> blocked,
+                         uint64_t& visits, uint64_t& requests) {
+  const size_t parts = boxes.size();
+  std::vector<std::vector<PartCrossing>> crossings(rays.size());
+  std::vector<uint32_t> active;
+  for (size_t i = 0; i < rays.size(); ++i) {
+    parts_along(rays[i], boxes, crossings[i]);
+    if (!crossings[i].empty()) active.push_back(static_cast<uint32_t>(i));
+  }
+  std::vector<size_t> next(rays.size(), 0);
+  while (!active.empty()) {
+    std::vector<std::shared_ptr<PartRound>> round(parts);
+    for (uint32_t i : active) {
+      auto& r = round[crossings[i][next[i]].part];
+      if (!r) r = std::make_shared<PartRound>();
+      r->rays.push_back(i);
+    }
+    auto state = std::make_shared<GatherState>();
+    for (size_t p = 0; p < parts; ++p) {
+      if (!round[p]) continue;
+      auto r = round[p];
+      r->hits.resize(r->rays.size());
+      r->blocked.resize(r->rays.size());
+      visits += r->rays.size();
+      for (size_t begin = 0; begin < r->rays.size(); begin += batch) {
+        const size_t end = std::min(begin + batch, r->rays.size());
+        std::vector<Ray> chunk;
+        chunk.reserve(end - begin);
+        for (size_t k = begin; k < end; ++k) {
+          Ray ray = rays[r->rays[k]];
+          if (!Any && hits[r->rays[k]].valid()) ray.tfar = hits[r->rays[k]].t;  // only as near or nearer can replace it
+          chunk.push_back(ray);
+        }
+        ++state->remaining;
+        ++requests;
+        const std::string part_name = rt.input_name(rt.input_count() + p);
+        const size_t triangles = scene.triangle_count();
+        rt.geometry(p).request(wire::Op::trace, encode_trace_request(chunk, Any),
+                               [state, r, begin, end, part_name, triangles](Result<wire::Message> reply) {
+                                 if (!reply) return state->complete_one(reply.error().message);
+                                 if constexpr (Any) {
+                                   auto got = decode_occlusion(reply->body, end - begin);
+                                   if (!got) return state->complete_one(part_name + ": " + got.error().message);
+                                   std::copy(got->begin(), got->end(), r->blocked.begin() + static_cast<ptrdiff_t>(begin));
+                                 } else {
+                                   auto got = decode_hits(reply->body, end - begin, triangles);
+                                   if (!got) return state->complete_one(part_name + ": " + got.error().message);
+                                   std::copy(got->begin(), got->end(), r->hits.begin() + static_cast<ptrdiff_t>(begin));
+                                 }
+                                 state->complete_one();
+                               });
+      }
+    }
+    co_await Gather(state);
+    for (size_t p = 0; p < parts; ++p) {
+      if (!round[p]) continue;
+      const PartRound& r = *round[p];
+      for (size_t k = 0; k < r.rays.size(); ++k) {
+        if constexpr (Any) {
+          blocked[r.rays[k]] |= r.blocked[k];
+        } else {
+          if (r.hits[k].valid()) hits[r.rays[k]] = r.hits[k];
+        }
+      }
+    }
+    std::vector<uint32_t> still;
+    for (uint32_t i : active) {
+      if (++next[i] >= crossings[i].size()) continue;
+      const PartCrossing& c = crossings[i][next[i]];
+      const bool done = Any ? blocked[i] != 0 : (hits[i].valid() && c.enter > hits[i].t);
+      if (!done) still.push_back(i);
+    }
+    active.swap(still);
+  }
+}
+
+Task RemoteTracing::intersect(std::span<const Ray> rays, std::span<Hit> hits) {
+  std::fill(hits.begin(), hits.end(), Hit{});
+  rays_ += rays.size();
+  co_await trace_rounds<false>(rt_, scene_, boxes_, batch_, rays, hits, {}, visits_, requests_);
+  for (size_t i = 0; i < rays.size(); ++i) hits[i] = ties_.settle(rays[i], hits[i]);
+}
+
+Task RemoteTracing::occluded(std::span<const Ray> rays, std::span<uint8_t> occluded) {
+  std::fill(occluded.begin(), occluded.end(), uint8_t{0});
+  rays_ += rays.size();
+  co_await trace_rounds<true>(rt_, scene_, boxes_, batch_, rays, {}, occluded, visits_, requests_);
+}
+
+Value RemoteTracing::stats() const {
+  return Value::Map{{"traced_rays", static_cast<int64_t>(rays_)},
+                    {"part_visits", static_cast<int64_t>(visits_)},
+                    {"trace_requests", static_cast<int64_t>(requests_)}};
+}
+
+}  // namespace lf

@@ -1,0 +1,36 @@
+#pragma once
+// Tracing through a partitioned scene's geometry actors (partition { parts = N }; render/partition.hpp): the
+// Tracing a LightOp co_awaits in a farm whose scene is split. Each ray visits the parts whose boxes its path
+// crosses, nearest first, in rounds: per round one batched `trace` request per part (actors/codecs/trace_codec.hpp),
+// until its hit is nearer than the next part's box. Then ties between coplanar faces are settled as the whole
+// scene's tracer settles them, so the answer is RayTracer::intersect's on the whole scene, bit for bit.
+#include <cstdint>
+#include <vector>
+
+#include "actors/runtime/runtime.hpp"
+#include "core/value.hpp"
+#include "render/coplanar_ties.hpp"
+#include "render/lightop.hpp"
+#include "render/partition.hpp"
+
+namespace lf {
+
+class RemoteTracing final : public Tracing {
+ public:
+  // `boxes`: each part's box, in the order of the runtime's geometry actors. `batch`: rays per request at most.
+  RemoteTracing(Runtime& rt, const Scene& scene, std::vector<Bounds> boxes, size_t batch);
+  Task intersect(std::span<const Ray> rays, std::span<Hit> hits) override;
+  Task occluded(std::span<const Ray> rays, std::span<uint8_t> occluded) override;
+  // What went to the parts: rays asked about, part visits (a ray in n parts' boxes makes up to n), requests.
+  Value stats() const;
+
+ private:
+  Runtime& rt_;
+  const Scene& scene_;
+  std::vector<Bounds> boxes_;
+  CoplanarTies ties_;
+  size_t batch_;
+  uint64_t rays_ = 0, visits_ = 0, requests_ = 0;
+};
+
+}  // namespace lf

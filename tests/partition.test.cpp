@@ -1,0 +1,145 @@
+// A partitioned scene (issue 14): partition { parts = N } puts the scene's parts in N geometry actors, and `direct`
+// and `pathtrace` trace their rays through them. The image is the unpartitioned farm's, bit for bit, on the Cornell
+// box and on Lost Empire; a geometry actor killed mid-frame is a clear error, and nothing is left running.
+#include <gtest/gtest.h>
+
+#include <csignal>
+
+#include "render/image.hpp"
+#include "tests/farm_harness.hpp"
+
+namespace lf::test {
+namespace {
+
+const std::string kSource = LIGHTFARM_SOURCE_DIR;
+
+class PartitionTest : public FarmFixture {
+ protected:
+  Image render(std::vector<std::string> args, const std::string& out, std::string* err = nullptr) {
+    args.insert(args.end(), {"--output", path(out)});
+    auto r = run_lightfarm(args);
+    EXPECT_EQ(r.status, 0) << r.err;
+    expect_no_leftovers(r);
+    if (err) *err = r.err;
+    auto img = read_image(path(out));
+    EXPECT_TRUE(img.ok()) << r.err;
+    return img.ok() ? *img : Image();
+  }
+  static double brightness(const Image& img) {
+    double sum = 0;
+    for (const RGB& p : img.pixels) sum += average(p);
+    return sum;
+  }
+};
+
+TEST_F(PartitionTest, TheCornellBoxIsTheSameWhetherItsSceneIsSplitOrNot) {
+  const std::string script = write("cornell.lua", R"(scene { builtin = "cornell" }
+image { width = 48, height = 48, spp = 4, tile = 16 }
+if param("parts", 0) > 0 then partition { parts = param("parts", 0) } end
+local op = param("op", "direct") == "direct" and lightop "direct" { light_samples = 2 }
+                                              or lightop "pathtrace" { max_depth = 5 }
+renderers { count = 2, lighting = op }
+)");
+  for (const char* op : {"direct", "pathtrace"}) {
+    SCOPED_TRACE(op);
+    const std::string set_op = std::string("op=") + op;
+    const Image whole = render({"run", script, "--set", set_op}, std::string(op) + "-whole.exr");
+    ASSERT_GT(brightness(whole), 0) << "a black image proves nothing";
+    for (int parts : {2, 3, 5}) {
+      std::string err;
+      const Image split = render({"run", script, "--set", set_op, "--set", "parts=" + std::to_string(parts)},
+                                 std::string(op) + "-" + std::to_string(parts) + ".exr", &err);
+      EXPECT_TRUE(split.pixels == whole.pixels) << parts << " parts";
+      // The rays did travel: every part answered trace requests, and the op says how many it sent.
+      for (int p = 0; p < parts; ++p)
+        EXPECT_NE(err.find("geometry." + std::to_string(p) + "     rays "), std::string::npos) << err;
+      EXPECT_NE(err.find("trace_requests "), std::string::npos) << err;
+    }
+  }
+}
+
+// A real interior with thin double-sided blocks (coplanar back-to-back faces, which the tie rule settles) and a
+// three-bounce path tracer: the split farm's pixels are the whole farm's.
+TEST_F(PartitionTest, LostEmpireIsTheSameWhetherItsSceneIsSplitOrNot) {
+  const std::string obj = kSource + "/../shared/scenes/lost_empire/lost_empire.obj";
+  if (!fs::exists(obj)) GTEST_SKIP() << "no " << obj;
+  const std::string script = write("empire.lua", "scene { file = \"" + obj + R"(" }
+material "Torch" { emission = {9, 9, 6} }
+camera { eye = {-8, 16, 20}, at = {6, 12, 0}, fov = 70 }
+image { width = 64, height = 48, spp = 2, tile = 16 }
+if param("parts", 0) > 0 then partition { parts = param("parts", 0) } end
+renderers { count = 2, lighting = lightop "pathtrace" { max_depth = 3 } }
+)");
+  const Image whole = render({"run", script}, "whole.exr");
+  ASSERT_GT(brightness(whole), 0);
+  for (int parts : {2, 3}) {
+    const Image split = render({"run", script, "--set", "parts=" + std::to_string(parts)},
+                               "split-" + std::to_string(parts) + ".exr");
+    EXPECT_TRUE(split.pixels == whole.pixels) << parts << " parts";
+  }
+}
+
+// A part is held by one process only: losing it mid-frame stops the farm with a message that says so, writes no
+// image, and leaves nothing running.
+TEST_F(PartitionTest, AGeometryActorKilledMidFrameIsAClearError) {
+  const std::string script = write("slow.lua", R"(scene { builtin = "cornell" }
+image { width = 128, height = 128, spp = 256, tile = 16 }
+partition { parts = 3 }
+renderers { count = 2, lighting = lightop "pathtrace" { max_depth = 8 } }
+)");
+  Farm farm({"run", script, "--output", path("killed.exr")});
+  ASSERT_TRUE(Farm::eventually([&] { return farm.err_so_far().find("render 10%") != std::string::npos; }, 60))
+      << farm.err_so_far();
+  const auto victims = actor_pids(farm.tag(), "geometry.1");
+  ASSERT_EQ(victims.size(), 1u);
+  ::kill(victims[0], SIGKILL);
+  auto r = farm.wait(60);
+  EXPECT_EQ(r.status, 1) << r.err;
+  EXPECT_NE(r.err.find("actor 'geometry.1' (pid " + std::to_string(victims[0]) + ") was killed by signal 9"),
+            std::string::npos)
+      << r.err;
+  EXPECT_NE(r.err.find("the part of the scene it held is not held anywhere else"), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(path("killed.exr")));
+  expect_no_leftovers(r);
+}
+
+// Bad scripts say what is wrong, with file and line.
+TEST_F(PartitionTest, ABadPartitionIsAScriptError) {
+  const std::string twice = write("twice.lua", R"(scene { builtin = "cornell" }
+partition { parts = 2 }
+partition { parts = 3 }
+renderers { lighting = lightop "direct" {} }
+)");
+  auto r = run_lightfarm({"graph", twice});
+  EXPECT_EQ(r.status, 2);
+  EXPECT_NE(r.err.find("twice.lua:3: partition is declared twice"), std::string::npos) << r.err;
+  const std::string zero = write("zero.lua", R"(scene { builtin = "cornell" }
+partition { parts = 0 }
+renderers { lighting = lightop "direct" {} }
+)");
+  r = run_lightfarm({"graph", zero});
+  EXPECT_EQ(r.status, 2);
+  EXPECT_NE(r.err.find("zero.lua:2:"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("parts"), std::string::npos) << r.err;
+  // More parts than triangles: found when the director splits the scene, before anything starts.
+  const std::string many = write("many.lua", R"(scene { builtin = "cornell" }
+image { width = 16, height = 16, spp = 1 }
+partition { parts = 64 }
+renderers { lighting = lightop "direct" {} }
+)");
+  r = run_lightfarm({"run", many, "--output", path("many.exr")});
+  EXPECT_EQ(r.status, 1) << r.err;
+  EXPECT_NE(r.err.find("many.lua:3: partition: the scene has "), std::string::npos) << r.err;
+  expect_no_leftovers(r);
+  // The graph shows the parts.
+  const std::string ok = write("ok.lua", R"(scene { builtin = "cornell" }
+partition { parts = 2 }
+renderers { lighting = lightop "direct" {} }
+)");
+  r = run_lightfarm({"graph", ok});
+  EXPECT_EQ(r.status, 0) << r.err;
+  EXPECT_NE(r.out.find("\"geometry.1\" [label=\"geometry.1\\n(geometry)\", shape=cylinder]"), std::string::npos) << r.out;
+}
+
+}  // namespace
+}  // namespace lf::test
