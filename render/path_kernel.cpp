@@ -1,6 +1,7 @@
 #include "render/path_kernel.hpp"
 
 #include <algorithm>
+#include <limits>
 
 #include "render/bsdf.hpp"
 #include "render/light_sampling.hpp"
@@ -58,6 +59,28 @@ Task trace_paths(const SceneContext& ctx, const ShadingPoints& points, std::span
   std::vector<size_t> continuing;
   std::vector<Bsdf::Sample> samples;
 
+  // The directional cache's view of a diffuse vertex's direction wi towards a light's point `distance` away: whether
+  // a ray that way leaves the local neighbourhood before reaching it, and the cache answers that direction.
+  DirectionalCache* cache = o.cache;
+  RGB cached{};
+  auto cache_answers = [&](const Path& path, const Material& m, Vec3 wi, float distance) {
+    if (!cache || m.type != Material::Type::diffuse) return false;
+    const uint32_t cell = cache->cell_of(path.x);
+    return distance > cache->local_reach(cell, path.x + path.ng * eps, wi) && cache->lookup(cell, wi, cached);
+  };
+  struct Recording {
+    size_t path;
+    uint32_t cell;
+    Vec3 direction;
+    RGB before, beta;  // the path's light and throughput right after the hit beyond the neighbourhood
+  };
+  std::vector<Recording> recordings;
+  std::vector<uint32_t> ray_cell;    // per continuation ray: its vertex's cell, or UINT32_MAX without the cache
+  std::vector<uint8_t> ray_global;   // per continuation ray: it left the neighbourhood and was traced on
+  std::vector<size_t> far_rays;
+  std::vector<Ray> far_batch;
+  std::vector<Hit> far_hits;
+
   if (tally) tally->paths += paths.size();
   for (int depth = 1; depth <= o.max_depth; ++depth) {
     if (tally)
@@ -90,7 +113,8 @@ Task trace_paths(const SceneContext& ctx, const ShadingPoints& points, std::span
         pending.push_back({p, path.beta * f * ls.radiance * (cos_x / (dist2 * ls.pdf_area))});
       } else {
         const float light_pdf = ls.pdf_area * dist2 / cos_y;  // per solid angle
-        const bool light_only = o.light_only_on_diffuse && m.type == Material::Type::diffuse;
+        const bool light_only = (o.light_only_on_diffuse && m.type == Material::Type::diffuse) ||
+                                cache_answers(path, m, wi, length(ls.point - (path.x + path.ng * eps)));
         const float w = light_only ? 1.0f : power_heuristic(light_pdf, bsdf.pdf(path.n, path.wo, wi));
         pending.push_back({p, path.beta * f * ls.radiance * (cos_x * w / light_pdf)});
       }
@@ -137,13 +161,62 @@ Task trace_paths(const SceneContext& ctx, const ShadingPoints& points, std::span
       samples.push_back(*s);
     }
     hits.resize(rays.size());
+    ray_cell.assign(rays.size(), UINT32_MAX);
+    ray_global.assign(rays.size(), 0);
+    if (cache) {
+      // Diffuse rays first look only as far as their neighbourhood reaches.
+      for (size_t r = 0; r < continuing.size(); ++r) {
+        const Path& path = paths[continuing[r]];
+        if (scene.material(path.material).type != Material::Type::diffuse) continue;
+        ray_cell[r] = cache->cell_of(path.x);
+        rays[r].tfar = cache->local_reach(ray_cell[r], path.x + path.ng * eps, rays[r].direction);
+      }
+    }
     if (!rays.empty()) {
       if (ctx.tracing) co_await ctx.tracing->intersect(rays, hits);
       else ctx.tracer->intersect(rays, hits);
     }
+    if (cache) {
+      // Those that met nothing there: the cache answers, or they are traced on through the scene.
+      far_rays.clear();
+      far_batch.clear();
+      for (size_t r = 0; r < continuing.size(); ++r) {
+        if (ray_cell[r] == UINT32_MAX) continue;
+        if (tally) ++tally->diffuse_rays;
+        if (hits[r].valid()) {
+          if (tally) ++tally->local_rays;
+          continue;
+        }
+        Path& path = paths[continuing[r]];
+        if (cache->lookup(ray_cell[r], rays[r].direction, cached)) {
+          if (tally) ++tally->cache_lookups;
+          path.L += path.beta * cached;
+          path.alive = false;
+          continue;
+        }
+        if (tally) ++tally->global_rays;
+        ray_global[r] = 1;
+        far_rays.push_back(r);
+        Ray on = rays[r];
+        on.tfar = std::numeric_limits<float>::infinity();
+        far_batch.push_back(on);
+      }
+      far_hits.resize(far_batch.size());
+      if (!far_batch.empty()) {
+        if (ctx.tracing) co_await ctx.tracing->intersect(far_batch, far_hits);
+        else ctx.tracer->intersect(far_batch, far_hits);
+      }
+      for (size_t k = 0; k < far_rays.size(); ++k) {
+        hits[far_rays[k]] = far_hits[k];
+        rays[far_rays[k]].tfar = std::numeric_limits<float>::infinity();
+      }
+    }
     for (size_t r = 0; r < continuing.size(); ++r) {
       Path& path = paths[continuing[r]];
+      if (!path.alive) continue;  // answered by the cache
       if (!hits[r].valid()) {
+        // Out of the scene: nothing comes from that direction, which the cache learns too.
+        if (ray_global[r] && !cache->frozen()) cache->record(ray_cell[r], rays[r].direction, RGB{});
         path.alive = false;
         continue;
       }
@@ -162,6 +235,8 @@ Task trace_paths(const SceneContext& ctx, const ShadingPoints& points, std::span
         }
         path.L += path.beta * hit_material.ke * w;
       }
+      if (ray_global[r] && !cache->frozen())
+        recordings.push_back({continuing[r], ray_cell[r], rays[r].direction, path.L, path.beta});
       if (depth == o.max_depth) {
         path.alive = false;
         continue;
@@ -184,6 +259,14 @@ Task trace_paths(const SceneContext& ctx, const ShadingPoints& points, std::span
       path.albedo = hit_material.kd_map < 0 ? hit_material.kd : scene.albedo(tri, scene.barycentrics(tri, path.x), ctx.pixel_footprint(path.x));
       path.outside = front;
     }
+  }
+
+  // What each global ray brought back beyond the hit it found (its reflected light, the emission there excluded):
+  // the light gathered after it, over the throughput it arrived with. Recorded in path order.
+  for (const Recording& rec : recordings) {
+    const RGB after = paths[rec.path].L - rec.before;
+    if (!(rec.beta.x > 0 && rec.beta.y > 0 && rec.beta.z > 0)) continue;  // a channel it cannot tell about
+    cache->record(rec.cell, rec.direction, {after.x / rec.beta.x, after.y / rec.beta.y, after.z / rec.beta.z});
   }
 
   // Average each point's paths in sample order: the result does not depend on the batch.

@@ -8,6 +8,7 @@
 // bias. Emission at the first vertex is not counted: the renderer adds what the camera sees.
 #include <span>
 
+#include "render/directional_cache.hpp"
 #include "render/lightop.hpp"
 #include "render/sampler.hpp"
 
@@ -22,12 +23,22 @@ struct PathOptions {
   bool light_only_on_diffuse = false;
   // Choose lights through the scene's light tree (by what each can give the point), or else by power alone.
   bool light_tree = true;
+  // The directional cache (render/directional_cache.hpp), for diffuse continuation rays: one that meets a surface
+  // inside its cell's neighbourhood goes on as usual; one that leaves it takes the cache's radiance for its direction
+  // where the cache answers, and is traced on through the scene where it does not. While the cache is not frozen,
+  // what such rays bring back is recorded in it (after the batch, in path order). Light sampling and a ray the cache
+  // answers split each direction's emitted light without overlap: a light sample towards a direction the cache
+  // answers counts fully, and the cache holds only light reflected beyond the neighbourhood.
+  DirectionalCache* cache = nullptr;
 };
 
 // Counted as paths go: each path, and each vertex at which one gathered light (the first included).
 struct PathTally {
   uint64_t paths = 0;
   uint64_t vertices = 0;
+  // With a directional cache: diffuse continuation rays, and how each ended (seed 002's Table 3): a hit inside the
+  // neighbourhood (local), traced beyond it (global), answered by the cache (lookup).
+  uint64_t diffuse_rays = 0, local_rays = 0, global_rays = 0, cache_lookups = 0;
 };
 
 // A coroutine: it waits where rays are traced through ctx.tracing (a partitioned scene); with the whole scene's BVH it

@@ -58,6 +58,27 @@ renderers { count = 2, lighting = op }
   }
 }
 
+// The directional cache (seed 002 §3) is filled in setup and frozen, so it does not depend on the layout either: a
+// split scene and one renderer or two give the same pixels, and the op reports how often the cache answered.
+TEST_F(PartitionTest, TheDirectionalCacheGivesTheSamePixelsOnEveryLayout) {
+  const std::string script = write("cache.lua", R"(scene { builtin = "cornell" }
+image { width = 48, height = 48, spp = 4, tile = 16 }
+if param("parts", 0) > 0 then partition { parts = param("parts", 0) } end
+renderers { count = param("renderers", 2), lighting = lightop "pathtrace" {
+  max_depth = 5, directional_cache = true, cache_cells = 4, cache_fill_spp = 64 } }
+)");
+  std::string err;
+  const Image whole = render({"run", script}, "whole.exr", &err);
+  ASSERT_GT(brightness(whole), 0);
+  const auto at = err.find("cache_hit_ratio ");
+  ASSERT_NE(at, std::string::npos) << err;
+  EXPECT_GT(std::stod(err.substr(at + 16)), 0.3) << err;
+  const Image split = render({"run", script, "--set", "parts=3"}, "split.exr");
+  const Image one = render({"run", script, "--set", "renderers=1"}, "one.exr");
+  EXPECT_TRUE(split.pixels == whole.pixels) << "split into 3 parts";
+  EXPECT_TRUE(one.pixels == whole.pixels) << "one renderer";
+}
+
 // A real interior with thin double-sided blocks (coplanar back-to-back faces, which the tie rule settles) and a
 // three-bounce path tracer: the split farm's pixels are the whole farm's.
 TEST_F(PartitionTest, LostEmpireIsTheSameWhetherItsSceneIsSplitOrNot) {

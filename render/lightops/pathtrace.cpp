@@ -4,6 +4,7 @@
 #include "render/lightop_registry.hpp"
 #include "render/path_kernel.hpp"
 #include "render/sampler.hpp"
+#include "render/surface.hpp"
 
 namespace lf {
 namespace {
@@ -16,11 +17,23 @@ class PathTrace final : public LightOp {
     options_.samples = static_cast<int>(p.get_int("samples", 1, 1, 1 << 16));
     options_.light_tree = p.get_string("light_sampling", "tree", {"tree", "power"}) == "tree";
     options_.stream = streams::pathtrace ^ (static_cast<uint64_t>(p.get_int("seed", 0, 0, INT32_MAX)) << 8);
+    use_cache_ = p.get_bool("directional_cache", false);
+    cache_options_.cells = static_cast<int>(p.get_int("cache_cells", cache_options_.cells, 1, 256));
+    cache_options_.radius = static_cast<float>(p.get_float("cache_radius", cache_options_.radius, 0, 1e9));
+    cache_options_.min_samples = static_cast<int>(p.get_int("cache_min_samples", cache_options_.min_samples, 2, 1 << 16));
+    cache_options_.uniform_depth = static_cast<int>(p.get_int("cache_uniform_depth", cache_options_.uniform_depth, 0, 12));
+    cache_options_.max_depth = static_cast<int>(p.get_int("cache_max_depth", cache_options_.max_depth, 0, 12));
+    cache_options_.max_relative_spread =
+        static_cast<float>(p.get_float("cache_spread", cache_options_.max_relative_spread, 0, 1e9));
+    fill_spp_ = static_cast<int>(p.get_int("cache_fill_spp", 4, 1, 1 << 16));
+    fill_stride_ = static_cast<int>(p.get_int("cache_fill_stride", 2, 1, 64));
+    if (cache_options_.max_depth < cache_options_.uniform_depth)
+      throw ParamError("pathtrace: cache_max_depth must be at least cache_uniform_depth");
   }
 
   Task setup(SceneContext ctx, Inputs&) override {
     ctx_ = ctx;
-    co_return;
+    if (use_cache_) co_await fill_cache();
   }
 
   Task shade(const ShadingPoints& points, std::span<RGB> radiance, Inputs&) override {
@@ -28,14 +41,76 @@ class PathTrace final : public LightOp {
   }
 
   Value stats() const override {
-    return Value::Map{{"paths", static_cast<int64_t>(tally_.paths)},
-                      {"mean_path_vertices", tally_.paths ? static_cast<double>(tally_.vertices) / tally_.paths : 0.0}};
+    Value::Map m{{"paths", static_cast<int64_t>(tally_.paths)},
+                 {"mean_path_vertices", tally_.paths ? static_cast<double>(tally_.vertices) / tally_.paths : 0.0}};
+    if (cache_) {
+      // Seed 002's Table 3, for the render (the fill pass's own rays apart).
+      const double far = static_cast<double>(tally_.global_rays + tally_.cache_lookups);
+      m["diffuse_rays"] = static_cast<int64_t>(tally_.diffuse_rays);
+      m["local_rays"] = static_cast<int64_t>(tally_.local_rays);
+      m["global_rays"] = static_cast<int64_t>(tally_.global_rays);
+      m["cache_lookups"] = static_cast<int64_t>(tally_.cache_lookups);
+      m["cache_hit_ratio"] = far > 0 ? static_cast<double>(tally_.cache_lookups) / far : 0.0;
+      m["cache_cells"] = static_cast<int64_t>(cache_->cells_used());
+      m["cache_nodes"] = static_cast<int64_t>(cache_->nodes());
+      m["fill_global_rays"] = static_cast<int64_t>(fill_tally_.global_rays);
+      m["fill_cache_lookups"] = static_cast<int64_t>(fill_tally_.cache_lookups);
+    }
+    return m;
   }
 
  private:
+  // The cache is filled before rendering, from paths started where the camera looks (the first hit through every
+  // `cache_fill_stride`-th pixel, `cache_fill_spp` paths each), batch after batch in pixel order, recording as it
+  // goes and answering where it already can (the paper's on-the-fly filling); then it is frozen, so that rendering
+  // only reads it and no pixel depends on another (DESIGN §4).
+  Task fill_cache() {
+    if (!ctx_.camera) throw LightOpError("pathtrace: directional_cache needs the farm's camera");
+    cache_ = std::make_unique<DirectionalCache>(*ctx_.scene, cache_options_);
+    PathOptions fill = options_;
+    fill.cache = cache_.get();
+    fill.samples = fill_spp_;
+    fill.stream = options_.stream ^ 0x6c0ffee5u;  // numbers of their own, apart from the render's
+    const Scene& scene = *ctx_.scene;
+    std::vector<Ray> rays;
+    std::vector<uint64_t> pixels;
+    for (int y = 0; y < ctx_.height; y += fill_stride_)
+      for (int x = 0; x < ctx_.width; x += fill_stride_) {
+        rays.push_back(ctx_.camera->ray(static_cast<float>(x) + 0.5f, static_cast<float>(y) + 0.5f));
+        pixels.push_back(static_cast<uint64_t>(y) * static_cast<uint64_t>(ctx_.width) + static_cast<uint64_t>(x));
+      }
+    std::vector<Hit> hits(rays.size());
+    if (ctx_.tracing) co_await ctx_.tracing->intersect(rays, hits);
+    else ctx_.tracer->intersect(rays, hits);
+    ShadingPoints batch;
+    std::vector<RGB> ignored;
+    constexpr size_t kBatch = 1024;
+    for (size_t i = 0; i <= rays.size(); ++i) {
+      if (i < rays.size() && hits[i].valid()) {
+        const uint32_t tri = hits[i].triangle;
+        const Vec3 wo = -rays[i].direction;
+        const Vec3 p = rays[i].origin + rays[i].direction * hits[i].t;
+        const SurfacePoint sp = surface_at(scene, tri, p, wo);
+        batch.push_back(p, sp.ns, wo, scene.material_of(tri), pixel_sample_key(ctx_.sampler, pixels[i], 0), tri);
+      }
+      if (batch.size() == kBatch || (i == rays.size() && batch.size() > 0)) {
+        ignored.assign(batch.size(), RGB{});
+        co_await trace_paths(ctx_, batch, ignored, fill, &fill_tally_);
+        batch.clear();
+      }
+      if (i % 4096 == 0) ctx_.report("filling the directional cache", i, rays.size());
+    }
+    cache_->freeze();
+    options_.cache = cache_.get();
+  }
+
   PathOptions options_;
-  PathTally tally_;
+  PathTally tally_, fill_tally_;
   SceneContext ctx_;
+  bool use_cache_ = false;
+  DirectionalCacheOptions cache_options_;
+  int fill_spp_ = 4, fill_stride_ = 2;
+  std::unique_ptr<DirectionalCache> cache_;
 };
 
 }  // namespace
