@@ -57,6 +57,27 @@ inline std::vector<double> json_numbers(const std::string& text, const std::stri
   return out;
 }
 
+// Every string after "key": in a JSON text, in order (one per actor for per-actor figures such as "kind").
+inline std::vector<std::string> json_strings(const std::string& text, const std::string& key) {
+  std::vector<std::string> out;
+  const std::string quoted = "\"" + key + "\"";
+  for (size_t pos = text.find(quoted); pos != std::string::npos; pos = text.find(quoted, pos + 1)) {
+    const size_t open = text.find('"', text.find(':', pos) + 1);
+    out.push_back(text.substr(open + 1, text.find('"', open + 1) - open - 1));
+  }
+  return out;
+}
+
+// The sum of per-actor figure `key` over the actors of kind `kind` (e.g. the bytes every geometry actor received).
+inline double sum_over_kind(const std::string& stats, const std::string& kind, const std::string& key) {
+  const auto kinds = json_strings(stats, "kind");
+  const auto values = json_numbers(stats, key);
+  double sum = 0;
+  for (size_t a = 0; a < kinds.size() && a < values.size(); ++a)
+    if (kinds[a] == kind) sum += values[a];
+  return sum;
+}
+
 struct FarmRun {
   std::string stats;              // the --stats-json text
   double wall_seconds = 0;

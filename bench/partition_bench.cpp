@@ -15,20 +15,6 @@
 #include "core/value.hpp"
 #include "render/image.hpp"
 
-namespace {
-
-// Every string after "key": in a JSON text, in order.
-std::vector<std::string> json_strings(const std::string& text, const std::string& key) {
-  std::vector<std::string> out;
-  const std::string quoted = "\"" + key + "\"";
-  for (size_t pos = text.find(quoted); pos != std::string::npos; pos = text.find(quoted, pos + 1)) {
-    const size_t open = text.find('"', text.find(':', pos) + 1);
-    out.push_back(text.substr(open + 1, text.find('"', open + 1) - open - 1));
-  }
-  return out;
-}
-
-}  // namespace
 
 int main(int argc, char** argv) {
   int runs = 3, width = 160, spp = 4;
@@ -86,14 +72,8 @@ int main(int argc, char** argv) {
       for (double v : rays) s.shares.push_back(v / total);
       s.visits_per_ray = split.number("part_visits") / split.number("traced_rays");
       s.requests = split.number("trace_requests");
-      const auto kinds = json_strings(split.stats, "kind");
-      const auto in = bench::json_numbers(split.stats, "bytes_in");
-      const auto out = bench::json_numbers(split.stats, "bytes_out");
-      for (size_t a = 0; a < kinds.size() && a < in.size() && a < out.size(); ++a)
-        if (kinds[a] == "geometry") {
-          s.mb_to_parts += in[a] / 1e6;
-          s.mb_from_parts += out[a] / 1e6;
-        }
+      s.mb_to_parts = bench::sum_over_kind(split.stats, "geometry", "bytes_in") / 1e6;
+      s.mb_from_parts = bench::sum_over_kind(split.stats, "geometry", "bytes_out") / 1e6;
     }
   }
   std::printf("Lost Empire, %dx%d, %d spp, pathtrace depth 3, 2 renderers; %d runs; whole farm's render phase: median "

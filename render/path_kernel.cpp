@@ -197,7 +197,10 @@ Task trace_paths(const SceneContext& ctx, const ShadingPoints& points, std::span
         if (tally) ++tally->global_rays;
         ray_global[r] = 1;
         far_rays.push_back(r);
+        // On from where the neighbourhood ended: the stretch before it is known to be empty, and in a partitioned
+        // farm the parts it crossed need not be asked again.
         Ray on = rays[r];
+        on.tnear = on.tfar;
         on.tfar = std::numeric_limits<float>::infinity();
         far_batch.push_back(on);
       }
