@@ -339,6 +339,30 @@ TEST_F(HostsTest, TheSceneTravelsOncePerHostAndIsThenReusedFromItsCache) {
   }
 }
 
+// A partitioned scene whose parts live on three ssh hosts (partition { host = ... }): the path tracer here sends its
+// rays to geometry actors on other hosts, over CURVE, and gets the unpartitioned farm's pixels.
+TEST_F(HostsTest, AScenesPartsOnThreeHostsGiveTheLocalPixels) {
+  write("room.obj", kRoomObj);
+  write("room.mtl", kRoomMtl);
+  const std::string body = "scene { file = \"room.obj\" }\n"
+                           "camera { eye = {0, 1, 3.5}, at = {0, 1, 0}, fov = 45 }\n"
+                           "image { width = 48, height = 48, spp = 2 }\n";
+  const std::string lighting = "renderers { count = 2, lighting = lightop \"pathtrace\" { max_depth = 4 } }\n";
+  auto local = write("whole.lua", body + lighting);
+  auto spread = write("parts.lua", body + host_lines() + "partition { parts = 3, host = { h1, h2, h3 } }\n" + lighting);
+  const Image a = render(local, {}, "whole.exr");
+  auto r = run_lightfarm({"run", spread, "--quiet", "--output", path("parts.exr"), "--stats-json", path("stats.json")});
+  ASSERT_EQ(r.status, 0) << r.err;
+  expect_nothing_left(r);
+  // Only the geometry actors run on the hosts: the scene went to each of them.
+  const std::string stats = read_file(path("stats.json"));
+  for (const char* h : {"h1", "h2", "h3"}) EXPECT_GT(shipped_to(stats, h), 0) << h << stats;
+  auto b = read_image(path("parts.exr"));
+  ASSERT_TRUE(b.ok());
+  EXPECT_TRUE(same_pixels(a, *b));
+}
+
+
 }  // namespace
 }  // namespace lf::test
 
