@@ -4,7 +4,8 @@
 // part by part; for each split, each part's share of the ray visits (imbalance = max / mean, the issue's <= 1.2
 // goal for the cost-based split) and visits per ray. The rays: the camera's at 320x240 from inside the city, and as
 // many diffuse bounce rays from the points it sees (cosine-distributed), the mix an indirect-lighting farm traces.
-// Parts are split by probe-ray weights (render/partition.hpp); the area-and-count split's imbalance is shown beside.
+// Parts are split by probe rays and rebalanced by their visits (render/partition.hpp: partition_by_probes); the
+// area-and-count split's imbalance is shown beside.
 // --runs times, interleaved; medians with min and max. Writes bench-trace.json.
 //
 //   build/bench/trace_bench [--runs N] [--json FILE]
@@ -81,11 +82,12 @@ int main(int argc, char** argv) {
     }
   }
   const int part_counts[3] = {2, 3, 5};
-  // Split by the probe rays' weights (80x60 camera rays and a bounce each), and by the area-and-count estimate.
-  const auto weights = lf::probe_weights(*scene, whole, lf::Camera(lf::CameraSpec{{-8, 16, 20}, {6, 12, 0}, {0, 1, 0}, 70}, 80, 60), 80, 60);
+  // Split by probe rays (80x60 camera rays and a bounce each), and by the area-and-count estimate.
+  const lf::Camera probe_camera(lf::CameraSpec{{-8, 16, 20}, {6, 12, 0}, {0, 1, 0}, 70}, 80, 60);
   std::vector<std::unique_ptr<lf::PartitionedTracer>> split, by_area;
   for (int parts : part_counts) {
-    split.push_back(std::make_unique<lf::PartitionedTracer>(*scene, lf::partition_scene(*scene, parts, weights)));
+    split.push_back(std::make_unique<lf::PartitionedTracer>(
+        *scene, lf::partition_by_probes(*scene, whole, probe_camera, 80, 60, parts)));
     by_area.push_back(std::make_unique<lf::PartitionedTracer>(*scene, lf::partition_scene(*scene, parts)));
   }
 
@@ -128,16 +130,18 @@ int main(int argc, char** argv) {
     }
     const double area_imbalance = area_most / (area_total / static_cast<double>(visits.size()));
     const auto ratio = bench::spread(parted_ratio[k]);
-    std::printf("  %d parts: %7.3f M rays/s, time / whole %.3f (min %.3f, max %.3f); %.2f part visits per ray; "
-                "ray work per part max / mean %.3f (goal <= 1.2; split by area and count instead: %.3f)\n",
+    std::printf("  %d parts: %7.3f M rays/s, time / whole %.3f (min %.3f, max %.3f); %.2f part visits per ray, the "
+                "busiest part %.2f; ray work per part max / mean %.3f (goal <= 1.2; split by area and count instead: "
+                "%.3f)\n",
                 part_counts[k], n / bench::median(parted[k]) / 1e6, ratio.median, ratio.min, ratio.max,
-                total / (n * runs), imbalance, area_imbalance);
+                total / (n * runs), most / (n * runs), imbalance, area_imbalance);
     lf::Value::Array shares;
     for (uint64_t v : visits) shares.push_back(static_cast<double>(v) / total);
     partitions.push_back(lf::Value::Map{{"parts", part_counts[k]},
                                         {"m_rays_per_second", n / bench::median(parted[k]) / 1e6},
                                         {"time_over_whole", ratio.to_value()},
                                         {"visits_per_ray", total / (n * runs)},
+                                        {"busiest_part_visits_per_ray", most / (n * runs)},
                                         {"work_share_per_part", std::move(shares)},
                                         {"imbalance_max_over_mean", imbalance},
                                         {"imbalance_split_by_area", area_imbalance}});

@@ -90,40 +90,100 @@ std::vector<ScenePart> partition_scene(const Scene& scene, int parts, std::span<
   return std::move(s.out);
 }
 
-std::vector<double> probe_weights(const Scene& scene, const RayTracer& tracer, const Camera& camera, int width,
-                                  int height) {
-  const size_t n = scene.triangle_count();
+namespace {
+
+// The probe rays: the camera's through every pixel centre at width x height, and one cosine-distributed bounce from
+// each point they hit, with the whole scene's hits.
+struct Probes {
   std::vector<Ray> rays;
+  std::vector<Hit> hits;
+};
+
+Probes probe_rays(const Scene& scene, const RayTracer& tracer, const Camera& camera, int width, int height) {
+  Probes p;
   for (int y = 0; y < height; ++y)
-    for (int x = 0; x < width; ++x) rays.push_back(camera.ray(x + 0.5f, y + 0.5f));
-  std::vector<Hit> hits(rays.size());
-  tracer.intersect(rays, hits);
-  std::vector<double> weight(n, 0.0);
-  std::vector<Ray> bounces;
+    for (int x = 0; x < width; ++x) p.rays.push_back(camera.ray(x + 0.5f, y + 0.5f));
+  p.hits.resize(p.rays.size());
+  tracer.intersect(p.rays, p.hits);
   Sampler rng(SamplerKind::independent, 0x9e3779b97f4a7c15ull, 0, 0, 1);
-  for (size_t i = 0; i < rays.size(); ++i) {
-    if (!hits[i].valid()) continue;
-    weight[hits[i].triangle] += 1;
-    Vec3 nrm = scene.normal(hits[i].triangle);
-    if (dot(nrm, rays[i].direction) > 0) nrm = -nrm;
+  const size_t camera_rays = p.rays.size();
+  for (size_t i = 0; i < camera_rays; ++i) {
+    if (!p.hits[i].valid()) continue;
+    Vec3 nrm = scene.normal(p.hits[i].triangle);
+    if (dot(nrm, p.rays[i].direction) > 0) nrm = -nrm;
     const Vec3 a = std::fabs(nrm.x) > 0.5f ? Vec3{0, 1, 0} : Vec3{1, 0, 0};
     const Vec3 t = normalize(cross(a, nrm)), b = cross(nrm, t);
     const Uniform2 u = rng.uniform2();
     const float r = std::sqrt(u.u), phi = 6.2831853f * u.v;
     const Vec3 d = t * (r * std::cos(phi)) + b * (r * std::sin(phi)) + nrm * std::sqrt(std::max(0.0f, 1 - r * r));
-    bounces.push_back(Ray{rays[i].origin + rays[i].direction * hits[i].t + nrm * scene.epsilon(), normalize(d)});
+    p.rays.push_back(Ray{p.rays[i].origin + p.rays[i].direction * p.hits[i].t + nrm * scene.epsilon(), normalize(d)});
   }
-  hits.resize(bounces.size());
-  tracer.intersect(bounces, hits);
-  for (const Hit& h : hits)
+  std::vector<Hit> bounce_hits(p.rays.size() - camera_rays);
+  tracer.intersect(std::span<const Ray>(p.rays).subspan(camera_rays), bounce_hits);
+  p.hits.insert(p.hits.end(), bounce_hits.begin(), bounce_hits.end());
+  return p;
+}
+
+std::vector<double> hit_weights(const Scene& scene, const Probes& probes) {
+  const size_t n = scene.triangle_count();
+  std::vector<double> weight(n, 0.0);
+  for (const Hit& h : probes.hits)
     if (h.valid()) weight[h.triangle] += 1;
-  const double probes = std::accumulate(weight.begin(), weight.end(), 0.0);
+  const double total = std::accumulate(weight.begin(), weight.end(), 0.0);
   // The floor: a tenth of the probes' total, spread by the area-and-count estimate.
   double area = 0;
   for (size_t t = 0; t < n; ++t) area += scene.area(static_cast<uint32_t>(t));
   for (size_t t = 0; t < n; ++t)
-    weight[t] += 0.1 * probes * (0.5 * (area > 0 ? scene.area(static_cast<uint32_t>(t)) / area : 0) + 0.5 / static_cast<double>(n));
+    weight[t] += 0.1 * total * (0.5 * (area > 0 ? scene.area(static_cast<uint32_t>(t)) / area : 0) + 0.5 / static_cast<double>(n));
   return weight;
+}
+
+}  // namespace
+
+std::vector<double> probe_weights(const Scene& scene, const RayTracer& tracer, const Camera& camera, int width,
+                                  int height) {
+  return hit_weights(scene, probe_rays(scene, tracer, camera, width, height));
+}
+
+std::vector<ScenePart> partition_by_probes(const Scene& scene, const RayTracer& tracer, const Camera& camera,
+                                           int width, int height, int parts, int rounds) {
+  const Probes probes = probe_rays(scene, tracer, camera, width, height);
+  std::vector<double> weights = hit_weights(scene, probes);
+  std::vector<ScenePart> best;
+  double best_busiest = 0, best_total = 0;
+  std::vector<PartCrossing> crossings;
+  for (int round = 0; round <= rounds; ++round) {
+    std::vector<ScenePart> split = partition_scene(scene, parts, weights);
+    std::vector<Bounds> boxes;
+    for (const ScenePart& p : split) boxes.push_back(p.bounds);
+    // A ray visits exactly the parts whose boxes it enters before its hit (render/partition.hpp's routing).
+    std::vector<double> visits(split.size(), 0.0);
+    for (size_t i = 0; i < probes.rays.size(); ++i) {
+      parts_along(probes.rays[i], boxes, crossings);
+      for (const PartCrossing& c : crossings) {
+        if (probes.hits[i].valid() && c.enter > probes.hits[i].t) break;
+        visits[c.part] += 1;
+      }
+    }
+    const double total = std::accumulate(visits.begin(), visits.end(), 0.0);
+    const double mean = total / static_cast<double>(visits.size());
+    const double busiest = *std::max_element(visits.begin(), visits.end());
+    // The busiest part bounds a frame's time; of two splits as busy, the one with less work in all.
+    if (best.empty() || busiest < best_busiest || (busiest == best_busiest && total < best_total)) {
+      best_busiest = busiest;
+      best_total = total;
+      best = split;
+    }
+    if (round == rounds || mean <= 0) break;
+    // Parts that see more visits than the mean get heavier weights next round, so the cut gives them less room:
+    // most visits are rays passing through a part's box, and a smaller box is passed by fewer (damped, since moving a
+    // cut also moves which rays cross it).
+    for (size_t p = 0; p < split.size(); ++p) {
+      const double scale = std::pow(std::max(visits[p], 1.0) / mean, 0.7);
+      for (uint32_t t : split[p].triangles) weights[t] *= scale;
+    }
+  }
+  return best;
 }
 
 void parts_along(const Ray& ray, std::span<const Bounds> boxes, std::vector<PartCrossing>& out) {

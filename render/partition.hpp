@@ -41,6 +41,13 @@ std::vector<ScenePart> partition_scene(const Scene& scene, int parts, std::span<
 // scene, so that geometry no probe reached still counts a little. Same scene, camera and size: same weights.
 std::vector<double> probe_weights(const Scene& scene, const RayTracer& tracer, const Camera& camera, int width,
                                   int height);
+// The split from probe weights, then `rounds` of rebalancing by what the probe rays would do in it: each ray visits
+// the parts whose boxes it enters before its hit, so a part's visits are its share of ray work; parts above the mean
+// get heavier weights (a smaller box) and the scene is split again. Returns the split whose busiest part has the
+// fewest visits (what bounds a frame's time), of equals the one with the fewest visits in all. Evening the parts out
+// further is possible but only by adding work to all of them (docs/decisions.md).
+std::vector<ScenePart> partition_by_probes(const Scene& scene, const RayTracer& tracer, const Camera& camera,
+                                           int width, int height, int parts, int rounds = 4);
 
 // Where a ray passes a part's box: [enter, exit] along it, within the ray's [tnear, tfar].
 struct PartCrossing {

@@ -355,7 +355,7 @@ class Director final : public ControlOut, public Outbox {
     const int width = std::min(spec_.image.width, 160);
     const int height = std::max(1, spec_.image.height * width / std::max(1, spec_.image.width));
     const Camera probe(spec_.camera, width, height);
-    parts_ = partition_scene(scene, spec_.partition_parts, probe_weights(scene, whole, probe, width, height));
+    parts_ = partition_by_probes(scene, whole, probe, width, height, spec_.partition_parts);
     if (static_cast<int>(parts_.size()) < spec_.partition_parts)
       throw FarmFailure{spec_.partition_loc.str() + ": partition: the scene has " +
                         std::to_string(scene.triangle_count()) + " triangles, fewer than the " +
