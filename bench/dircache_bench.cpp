@@ -35,7 +35,7 @@ int main(int argc, char** argv) {
   const std::string script = bench::temp_script(
       "dircache.lua",
       "scene { file = \"" + obj + "\" }\n"
-      "material \"Torch\" { emission = {9, 9, 6} }\n"
+      "material \"Torch\" { emission = {9, 9, 6}, kd = {0, 0, 0} }\n"  // as examples/lost_empire.lua: no fireflies
       "camera { eye = {-8, 16, 20}, at = {6, 12, 0}, fov = 70 }\n"
       "image { width = " + std::to_string(width) + ", height = " + std::to_string(height) +
       ", spp = param(\"spp\", 8) }\n"
@@ -44,7 +44,7 @@ int main(int argc, char** argv) {
       "  directional_cache = param(\"cache\", false), cache_cells = param(\"cells\", 8),\n"
       "  cache_radius = param(\"radius\", 1.5), cache_fill_spp = param(\"fill\", 4) } }\n");
   const std::string size = std::to_string(width) + "x" + std::to_string(height);
-  const std::string reference_path = "bench-dircache-reference-" + size + ".exr";
+  const std::string reference_path = "bench-dircache-reference-v2-" + size + ".exr";
   if (!bench::fs::exists(reference_path)) {
     std::printf("rendering the reference (%d spp, another seed, no cache, whole scene) ...\n", reference_spp);
     bench::run_farm(script, {"spp=" + std::to_string(reference_spp), "seed=7", "parts=0"}, reference_path);

@@ -14,6 +14,11 @@
 --   lightfarm run examples/lost_empire.lua                                  -> lost_empire.png
 --   lightfarm run examples/lost_empire.lua --set lighting=network
 --   lightfarm run examples/lost_empire.lua --set light_sampling=power       (choose torches by power alone)
+--
+-- Data locality (seed 002): `--set parts=3` splits the scene over 3 geometry actors that `direct` and `pathtrace`
+-- trace through (the same image), and with lighting=pathtrace `--set directional_cache=true` lets the directional
+-- cache answer most diffuse rays that leave their neighbourhood (the end-of-run figures show how many):
+--   lightfarm run examples/lost_empire.lua --set lighting=pathtrace --set parts=3 --set directional_cache=true
 
 scene    { file = "../../shared/scenes/lost_empire/lost_empire.obj" }
 -- kd = 0: a torch's crossed quads would otherwise light each other where they meet, at distances near 0 (an
@@ -22,6 +27,8 @@ material "Torch" { emission = {9, 9, 6}, kd = {0, 0, 0} }
 camera   { eye = {-5, 18, -30}, at = {5, 12, 5}, fov = 70 }
 image    { width = param("width", 320), height = param("height", 240), spp = param("spp", 16),
            exposure = param("exposure", 2), output = param("output", "lost_empire.png") }
+
+if param("parts", 0) > 0 then partition { parts = param("parts", 0) } end
 
 local lighting = param("lighting", "direct")
 local light_sampling = param("light_sampling", "tree")
@@ -43,7 +50,8 @@ elseif lighting == "network" then
   local specular = lightop "specular" { input = lightop "combine" { inputs = { lit, indirect }, name = "landing" } }
   renderers { count = param("renderers", 2), lighting = lightop "combine" { inputs = { lit, indirect, specular } } }
 elseif lighting == "pathtrace" then
-  local paths = multiplexer { lightop "pathtrace" { max_depth = param("max_depth", 8), light_sampling = light_sampling },
+  local paths = multiplexer { lightop "pathtrace" { max_depth = param("max_depth", 8), light_sampling = light_sampling,
+                                                    directional_cache = param("directional_cache", false) },
                               replicas = param("replicas", 2) }
   renderers { count = param("renderers", 2), lighting = paths }
 elseif lighting == "emission" then
