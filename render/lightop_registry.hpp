@@ -20,6 +20,9 @@ struct LightOpKind {
   std::unique_ptr<LightOp> (*create)(const ParamTable& params);
   // Replicas in a pool pool their setup (all_gather): one lost during setup takes a share nobody else has.
   bool shares_setup = false;
+  // Every ray it traces goes through SceneContext::tracing when that is set (render/lightop.hpp): in a partitioned
+  // farm such an op needs no BVH of its own, and its process builds none.
+  bool traces_through_context = false;
 };
 
 std::span<const LightOpKind* const> lightop_kinds();

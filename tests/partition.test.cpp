@@ -79,6 +79,31 @@ renderers { count = param("renderers", 2), lighting = lightop "pathtrace" {
   EXPECT_TRUE(one.pixels == whole.pixels) << "one renderer";
 }
 
+// Data locality: in a partitioned farm an op that traces only through the parts builds no BVH of the whole scene
+// (without a host agent sharing one), and says so in its figures; `irradiance`, which traces its own rays, keeps one.
+TEST_F(PartitionTest, AnOpThatTracesThroughThePartsHoldsNoBvhOfItsOwn) {
+  const std::string script = write("nobvh.lua", R"(scene { builtin = "cornell" }
+image { width = 32, height = 32, spp = 2, tile = 16 }
+farm { host_agents = false }
+partition { parts = 2 }
+local direct = lightop "direct" {}
+renderers { count = 1, lighting = lightop "combine" { inputs = { direct, lightop "irradiance" { input = direct } } } }
+)");
+  auto r = run_lightfarm({"run", script, "--quiet", "--output", path("nobvh.exr"), "--stats-json", path("stats.json")});
+  ASSERT_EQ(r.status, 0) << r.err;
+  expect_no_leftovers(r);
+  const std::string stats = read_file(path("stats.json"));
+  // An actor's figures: its object's keys are sorted, so its "detail" comes before its "name".
+  const auto at = [&](const std::string& name) {
+    const auto named = stats.find("\"name\": \"" + name + "\"");
+    if (named == std::string::npos) return std::string();
+    const auto from = stats.rfind("\"busy_seconds\"", named);
+    return stats.substr(from, named - from);
+  };
+  EXPECT_NE(at("direct").find("\"whole_scene_bvh\": false"), std::string::npos) << stats;
+  EXPECT_NE(at("irradiance").find("\"whole_scene_bvh\": true"), std::string::npos) << stats;
+}
+
 // A real interior with thin double-sided blocks (coplanar back-to-back faces, which the tie rule settles) and a
 // three-bounce path tracer: the split farm's pixels are the whole farm's.
 TEST_F(PartitionTest, LostEmpireIsTheSameWhetherItsSceneIsSplitOrNot) {

@@ -122,7 +122,10 @@ class LightOpActor final : public Actor {
     } catch (const ParamError& e) {
       return make_error(e.what());
     }
-    auto loaded = load_scene_for_actor(config.scene);
+    // In a partitioned farm an op that traces only through the parts builds no BVH of the whole scene (unless a host
+    // agent shares one anyway).
+    const bool parts_trace = !config.geometry.empty() && kind_.traces_through_context;
+    auto loaded = load_scene_for_actor(config.scene, /*with_tracer=*/!parts_trace);
     if (!loaded) return loaded.error();
     scene_ = std::move(loaded->scene);
     tracer_ = std::move(loaded->tracer);
@@ -233,6 +236,7 @@ class LightOpActor final : public Actor {
       if (!stats.is_map()) stats = Value::Map{};
       Value tracing = tracing_->stats();  // held: a range-for over a temporary's map would dangle
       for (auto& [key, value] : tracing.as_map()) stats.as_map()[key] = std::move(value);
+      stats.as_map()["whole_scene_bvh"] = tracer_ != nullptr;  // false: this process holds no BVH of the scene
     }
     return stats;
   }

@@ -49,6 +49,7 @@ class DirectLight final : public LightOp {
 
 extern const LightOpKind direct_kind{
     "direct", "direct light from area lights: light sampling, with MIS on glossy surfaces", 0, 0,
-    [](const ParamTable& p) -> std::unique_ptr<LightOp> { return std::make_unique<DirectLight>(p); }};
+    [](const ParamTable& p) -> std::unique_ptr<LightOp> { return std::make_unique<DirectLight>(p); },
+    /*shares_setup=*/false, /*traces_through_context=*/true};
 
 }  // namespace lf
