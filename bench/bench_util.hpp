@@ -231,6 +231,14 @@ inline FarmRun run_farm(const std::string& script, const std::vector<std::string
   return r;
 }
 
+// `relative` under ../shared/scenes, or empty (with a line saying there is nothing to measure) when it is not there.
+inline std::string shared_scene(const std::string& relative) {
+  const std::string path = std::string(LIGHTFARM_SOURCE_DIR) + "/../shared/scenes/" + relative;
+  if (fs::exists(path)) return path;
+  std::printf("no %s: nothing to measure\n", path.c_str());
+  return {};
+}
+
 // Writes a script to a temporary file and returns its path.
 inline std::string temp_script(const std::string& name, const std::string& text) {
   fs::path p = fs::temp_directory_path() / ("lightfarm-bench-" + std::to_string(::getpid()) + "-" + name);

@@ -26,11 +26,8 @@ int main(int argc, char** argv) {
     else if (a == "--reference-spp") reference_spp = std::atoi(argv[i + 1]);
     else if (a == "--json") json_path = argv[i + 1];
   }
-  const std::string obj = std::string(LIGHTFARM_SOURCE_DIR) + "/../shared/scenes/lost_empire/lost_empire.obj";
-  if (!bench::fs::exists(obj)) {
-    std::printf("no %s: nothing to measure\n", obj.c_str());
-    return 0;
-  }
+  const std::string obj = bench::shared_scene("lost_empire/lost_empire.obj");
+  if (obj.empty()) return 0;
   const int height = width * 3 / 4;
   const std::string script = bench::temp_script(
       "dircache.lua",

@@ -41,11 +41,8 @@ int main(int argc, char** argv) {
     if (a == "--runs") runs = std::atoi(argv[i + 1]);
     else if (a == "--json") json_path = argv[i + 1];
   }
-  const std::string obj = std::string(LIGHTFARM_SOURCE_DIR) + "/../shared/scenes/lost_empire/lost_empire.obj";
-  if (!bench::fs::exists(obj)) {
-    std::printf("no %s: nothing to measure\n", obj.c_str());
-    return 0;
-  }
+  const std::string obj = bench::shared_scene("lost_empire/lost_empire.obj");
+  if (obj.empty()) return 0;
   lf::SceneSpec spec;
   spec.file = obj;
   spec.materials.push_back(lf::Value::Map{{"name", "Torch"}, {"emission", lf::Value::Array{9.0, 9.0, 6.0}}});

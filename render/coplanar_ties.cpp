@@ -41,6 +41,12 @@ bool overlap(const Flat& a, const Flat& b, double touch) {
   return true;
 }
 
+// The axis along which a normal is largest: its plane is then seen best in the other two.
+int largest_axis(Vec3 n) {
+  const float x = std::fabs(n.x), y = std::fabs(n.y), z = std::fabs(n.z);
+  return x >= y && x >= z ? 0 : (y >= z ? 1 : 2);
+}
+
 }  // namespace
 
 CoplanarTies::CoplanarTies(const Scene& scene) : scene_(scene) {
@@ -53,10 +59,7 @@ CoplanarTies::CoplanarTies(const Scene& scene) : scene_(scene) {
     Vec3 nrm = scene.normal(t);
     if (!(std::fabs(nrm.x) + std::fabs(nrm.y) + std::fabs(nrm.z) > 0)) continue;
     // One orientation per plane: the largest component positive (twins facing away from each other meet here).
-    const int axis = std::fabs(nrm.x) >= std::fabs(nrm.y) && std::fabs(nrm.x) >= std::fabs(nrm.z)
-                         ? 0
-                         : (std::fabs(nrm.y) >= std::fabs(nrm.z) ? 1 : 2);
-    if (nrm[axis] < 0) nrm = -nrm;
+    if (nrm[largest_axis(nrm)] < 0) nrm = -nrm;
     const double d = dot(nrm, scene.vertex(t, 0));
     keyed.push_back({Key{std::llround(nrm.x * 1e4), std::llround(nrm.y * 1e4), std::llround(nrm.z * 1e4),
                          std::llround(d / offset_step)},
@@ -71,10 +74,7 @@ CoplanarTies::CoplanarTies(const Scene& scene) : scene_(scene) {
     while (end < keyed.size() && keyed[end].first == keyed[begin].first) ++end;
     if (end - begin >= 2) {
       // In the plane: drop the normal's largest axis, then sweep along the first remaining one.
-      const Vec3 nrm = scene.normal(keyed[begin].second);
-      const int drop = std::fabs(nrm.x) >= std::fabs(nrm.y) && std::fabs(nrm.x) >= std::fabs(nrm.z)
-                           ? 0
-                           : (std::fabs(nrm.y) >= std::fabs(nrm.z) ? 1 : 2);
+      const int drop = largest_axis(scene.normal(keyed[begin].second));
       const int u = drop == 0 ? 1 : 0, v = drop == 2 ? 1 : 2;
       flats.clear();
       for (size_t k = begin; k < end; ++k) {

@@ -65,6 +65,16 @@ void GatherState::complete_one(std::string failure) {
   }
 }
 
+Task trace_intersect(const SceneContext& ctx, std::span<const Ray> rays, std::span<Hit> hits) {
+  if (ctx.tracing) co_await ctx.tracing->intersect(rays, hits);
+  else ctx.tracer->intersect(rays, hits);
+}
+
+Task trace_occluded(const SceneContext& ctx, std::span<const Ray> rays, std::span<uint8_t> occluded) {
+  if (ctx.tracing) co_await ctx.tracing->occluded(rays, occluded);
+  else ctx.tracer->occluded(rays, occluded);
+}
+
 void run_to_completion(Task task) {
   if (!task.done()) throw LightOpError("an in-process LightOp waited for something that never came");
   task.rethrow_if_failed();

@@ -246,6 +246,11 @@ class LocalInputs : public Inputs {
   std::vector<std::pair<LightOp*, Inputs*>> ops_;
 };
 
+// Rays through ctx.tracing when the farm's scene is split into parts, else through ctx.tracer, the whole scene's BVH
+// (then finished before it returns). `ctx`, `rays` and the answers must outlive it.
+Task trace_intersect(const SceneContext& ctx, std::span<const Ray> rays, std::span<Hit> hits);
+Task trace_occluded(const SceneContext& ctx, std::span<const Ray> rays, std::span<uint8_t> occluded);
+
 // Runs a task that must complete synchronously (in-process use); throws what it threw.
 void run_to_completion(Task task);
 

@@ -11,6 +11,18 @@ namespace lf {
 
 namespace {
 
+// The estimate of a triangle's share of ray work without measurement: half its share of the surface area, half its
+// share of the triangle count. Sums to 1.
+std::vector<double> area_and_count_costs(const Scene& scene) {
+  const size_t n = scene.triangle_count();
+  double area = 0;
+  for (size_t t = 0; t < n; ++t) area += scene.area(static_cast<uint32_t>(t));
+  std::vector<double> cost(n);
+  for (size_t t = 0; t < n; ++t)
+    cost[t] = 0.5 * (area > 0 ? scene.area(static_cast<uint32_t>(t)) / area : 0) + 0.5 / static_cast<double>(n);
+  return cost;
+}
+
 Vec3 centroid(const Scene& scene, uint32_t t) {
   return (scene.vertex(t, 0) + scene.vertex(t, 1) + scene.vertex(t, 2)) * (1.0f / 3.0f);
 }
@@ -78,10 +90,7 @@ std::vector<ScenePart> partition_scene(const Scene& scene, int parts, std::span<
     const double sum = std::accumulate(weights.begin(), weights.end(), 0.0);
     for (size_t t = 0; t < n; ++t) s.cost[t] = sum > 0 ? weights[t] / sum : 1.0 / static_cast<double>(n);
   } else {
-    double area = 0;
-    for (size_t t = 0; t < n; ++t) area += scene.area(static_cast<uint32_t>(t));
-    for (size_t t = 0; t < n; ++t)
-      s.cost[t] = 0.5 * (area > 0 ? scene.area(static_cast<uint32_t>(t)) / area : 0) + 0.5 / static_cast<double>(n);
+    s.cost = area_and_count_costs(scene);
   }
   for (size_t t = 0; t < n; ++t) s.centre[t] = centroid(scene, static_cast<uint32_t>(t));
   std::vector<uint32_t> ids(n);
@@ -131,10 +140,8 @@ std::vector<double> hit_weights(const Scene& scene, const Probes& probes) {
     if (h.valid()) weight[h.triangle] += 1;
   const double total = std::accumulate(weight.begin(), weight.end(), 0.0);
   // The floor: a tenth of the probes' total, spread by the area-and-count estimate.
-  double area = 0;
-  for (size_t t = 0; t < n; ++t) area += scene.area(static_cast<uint32_t>(t));
-  for (size_t t = 0; t < n; ++t)
-    weight[t] += 0.1 * total * (0.5 * (area > 0 ? scene.area(static_cast<uint32_t>(t)) / area : 0) + 0.5 / static_cast<double>(n));
+  const std::vector<double> estimate = area_and_count_costs(scene);
+  for (size_t t = 0; t < n; ++t) weight[t] += 0.1 * total * estimate[t];
   return weight;
 }
 
@@ -154,8 +161,7 @@ std::vector<ScenePart> partition_by_probes(const Scene& scene, const RayTracer& 
   std::vector<PartCrossing> crossings;
   for (int round = 0; round <= rounds; ++round) {
     std::vector<ScenePart> split = partition_scene(scene, parts, weights);
-    std::vector<Bounds> boxes;
-    for (const ScenePart& p : split) boxes.push_back(p.bounds);
+    const std::vector<Bounds> boxes = padded_boxes(split);
     // A ray visits exactly the parts whose boxes it enters before its hit (render/partition.hpp's routing).
     std::vector<double> visits(split.size(), 0.0);
     for (size_t i = 0; i < probes.rays.size(); ++i) {
@@ -186,19 +192,32 @@ std::vector<ScenePart> partition_by_probes(const Scene& scene, const RayTracer& 
   return best;
 }
 
-void parts_along(const Ray& ray, std::span<const Bounds> boxes, std::vector<PartCrossing>& out) {
-  out.clear();
-  for (size_t p = 0; p < boxes.size(); ++p) {
-    // Padded by a little of the box's own size and of its distance from the origin, well beyond float rounding.
-    const Bounds& b = boxes[p];
+std::vector<Bounds> padded_boxes(std::vector<Bounds> boxes) {
+  for (Bounds& b : boxes) {
+    // A little of the box's own size and of its distance from the origin, well beyond float rounding.
     const float pad = 1e-5f * (b.diagonal() + std::fabs(b.lo.x) + std::fabs(b.lo.y) + std::fabs(b.lo.z) +
                                std::fabs(b.hi.x) + std::fabs(b.hi.y) + std::fabs(b.hi.z)) +
                       std::numeric_limits<float>::min();
+    b = Bounds{b.lo - Vec3{pad, pad, pad}, b.hi + Vec3{pad, pad, pad}};
+  }
+  return boxes;
+}
+
+std::vector<Bounds> padded_boxes(std::span<const ScenePart> parts) {
+  std::vector<Bounds> boxes;
+  for (const ScenePart& part : parts) boxes.push_back(part.bounds);
+  return padded_boxes(std::move(boxes));
+}
+
+void parts_along(const Ray& ray, std::span<const Bounds> boxes, std::vector<PartCrossing>& out) {
+  out.clear();
+  for (size_t p = 0; p < boxes.size(); ++p) {
+    const Bounds& b = boxes[p];
     float enter = ray.tnear, exit = ray.tfar;
     bool missed = false;
     for (int a = 0; a < 3 && !missed; ++a) {
       const float o = ray.origin[a], d = ray.direction[a];
-      const float lo = b.lo[a] - pad, hi = b.hi[a] + pad;
+      const float lo = b.lo[a], hi = b.hi[a];
       if (d == 0) {
         missed = o < lo || o > hi;
         continue;
@@ -217,11 +236,8 @@ void parts_along(const Ray& ray, std::span<const Bounds> boxes, std::vector<Part
 }
 
 PartitionedTracer::PartitionedTracer(const Scene& scene, std::vector<ScenePart> parts)
-    : parts_(std::move(parts)), ties_(scene), rays_per_part_(parts_.size(), 0) {
-  for (const ScenePart& p : parts_) {
-    boxes_.push_back(p.bounds);
-    tracers_.push_back(std::make_unique<RayTracer>(scene, p.triangles));
-  }
+    : parts_(std::move(parts)), boxes_(padded_boxes(parts_)), ties_(scene), rays_per_part_(parts_.size(), 0) {
+  for (const ScenePart& p : parts_) tracers_.push_back(std::make_unique<RayTracer>(scene, p.triangles));
 }
 
 // Rounds: every ray still on its way goes to the next part along it; each part traces its rays as one stream.
@@ -246,10 +262,8 @@ void PartitionedTracer::route(std::span<const Ray> rays, Trace&& trace) const {
       rays_per_part_[p] += by_part[p].size();
       trace(p, by_part[p]);
     }
-    for (uint32_t i : active) {
+    for (uint32_t i : active)
       if (++next[i] < crossings[i].size() && trace.goes_on(i, crossings[i][next[i]])) still.push_back(i);
-    }
-    std::sort(still.begin(), still.end());
     active.swap(still);
   }
 }

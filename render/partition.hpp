@@ -54,8 +54,11 @@ struct PartCrossing {
   uint32_t part;
   float enter, exit;
 };
-// The parts whose boxes the ray passes, nearest entry first (ties by part index). Boxes are padded by a small
-// margin, so rounding never skips a part a hit lies in (a needless visit costs only time).
+// The parts' boxes widened by a small margin, so that rounding never skips a part a hit lies in (a needless visit
+// costs only time). What parts_along takes, computed once per split rather than per ray.
+std::vector<Bounds> padded_boxes(std::span<const ScenePart> parts);
+std::vector<Bounds> padded_boxes(std::vector<Bounds> boxes);
+// The parts whose (padded) boxes the ray passes, nearest entry first (ties by part index).
 void parts_along(const Ray& ray, std::span<const Bounds> boxes, std::vector<PartCrossing>& out);
 
 // Tracing through every part in this process: what the geometry actors do together, used to check them and the
@@ -68,7 +71,7 @@ class PartitionedTracer {
   void intersect(std::span<const Ray> rays, std::span<Hit> hits) const;
   void occluded(std::span<const Ray> rays, std::span<uint8_t> occluded) const;
   const std::vector<ScenePart>& parts() const { return parts_; }
-  // Rays traced in each part, and how many part visits rays made in all (a ray in one part makes one).
+  // Rays traced in each part so far (a ray counts once in every part it visits).
   const std::vector<uint64_t>& rays_per_part() const { return rays_per_part_; }
 
  private:
@@ -76,7 +79,7 @@ class PartitionedTracer {
   void route(std::span<const Ray> rays, Trace&& trace) const;
 
   std::vector<ScenePart> parts_;
-  std::vector<Bounds> boxes_;
+  std::vector<Bounds> boxes_;  // padded
   std::vector<std::unique_ptr<RayTracer>> tracers_;
   CoplanarTies ties_;
   mutable std::vector<uint64_t> rays_per_part_;

@@ -3,15 +3,13 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
-#include <filesystem>
 #include <random>
 
 #include "render/camera.hpp"
+#include "render/test_support.hpp"
 
 namespace lf {
 namespace {
-
-const std::string kShared = std::string(LIGHTFARM_SOURCE_DIR) + "/../shared/scenes/";
 
 // Rays that start anywhere in the scene's box (and a little outside it), in every direction, some with a finite
 // tfar: the mix of camera, shadow and bounce rays a farm traces, without favouring any part.
@@ -118,12 +116,9 @@ TEST(Partition, HitsThroughPartsEqualTheWholeSceneOnTheBuiltins) {
 }
 
 TEST(Partition, HitsThroughPartsEqualTheWholeSceneOnLostEmpire) {
-  const std::string obj = kShared + "lost_empire/lost_empire.obj";
-  if (!std::filesystem::exists(obj)) GTEST_SKIP() << "no " << obj;
-  SceneSpec spec;
-  spec.file = obj;
-  spec.materials.push_back(Value::Map{{"name", "Torch"}, {"emission", Value::Array{9.0, 9.0, 6.0}}});
-  auto scene = Scene::load(spec);
+  auto loaded = test::lost_empire_with_torches();
+  if (!loaded) GTEST_SKIP() << "no " << test::kLostEmpireObj;
+  auto& scene = *loaded;
   ASSERT_TRUE(scene) << scene.error().message;
   auto rays = random_rays(*scene, 20000, 11);
   const auto view = camera_rays(CameraSpec{{-8, 16, 20}, {6, 12, 0}, {0, 1, 0}, 70}, 80, 60);

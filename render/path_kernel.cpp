@@ -124,10 +124,7 @@ Task trace_paths(const SceneContext& ctx, const ShadingPoints& points, std::span
       rays.push_back(Ray{origin, to_light / span, 0.0f, ls.is_point ? span : span - eps});
     }
     blocked.resize(rays.size());
-    if (!rays.empty()) {
-      if (ctx.tracing) co_await ctx.tracing->occluded(rays, blocked);
-      else ctx.tracer->occluded(rays, blocked);
-    }
+    if (!rays.empty()) co_await trace_occluded(ctx, rays, blocked);
     for (size_t r = 0; r < pending.size(); ++r)
       if (!blocked[r]) paths[pending[r].path].L += pending[r].contribution;
 
@@ -172,10 +169,7 @@ Task trace_paths(const SceneContext& ctx, const ShadingPoints& points, std::span
         rays[r].tfar = cache->local_reach(ray_cell[r], path.x + path.ng * eps, rays[r].direction);
       }
     }
-    if (!rays.empty()) {
-      if (ctx.tracing) co_await ctx.tracing->intersect(rays, hits);
-      else ctx.tracer->intersect(rays, hits);
-    }
+    if (!rays.empty()) co_await trace_intersect(ctx, rays, hits);
     if (cache) {
       // Those that met nothing there: the cache answers, or they are traced on through the scene.
       far_rays.clear();
@@ -205,14 +199,8 @@ Task trace_paths(const SceneContext& ctx, const ShadingPoints& points, std::span
         far_batch.push_back(on);
       }
       far_hits.resize(far_batch.size());
-      if (!far_batch.empty()) {
-        if (ctx.tracing) co_await ctx.tracing->intersect(far_batch, far_hits);
-        else ctx.tracer->intersect(far_batch, far_hits);
-      }
-      for (size_t k = 0; k < far_rays.size(); ++k) {
-        hits[far_rays[k]] = far_hits[k];
-        rays[far_rays[k]].tfar = std::numeric_limits<float>::infinity();
-      }
+      if (!far_batch.empty()) co_await trace_intersect(ctx, far_batch, far_hits);
+      for (size_t k = 0; k < far_rays.size(); ++k) hits[far_rays[k]] = far_hits[k];
     }
     for (size_t r = 0; r < continuing.size(); ++r) {
       Path& path = paths[continuing[r]];

@@ -26,7 +26,8 @@ struct PathOptions {
   // The directional cache (render/directional_cache.hpp), for diffuse continuation rays: one that meets a surface
   // inside its cell's neighbourhood goes on as usual; one that leaves it takes the cache's radiance for its direction
   // where the cache answers, and is traced on through the scene where it does not. While the cache is not frozen,
-  // what such rays bring back is recorded in it (after the batch, in path order). Light sampling and a ray the cache
+  // what such rays bring back is recorded in it: darkness at once for one that leaves the scene, the light its path
+  // gathered beyond the hit once the batch is done (in path order). Light sampling and a ray the cache
   // answers split each direction's emitted light without overlap: a light sample towards a direction the cache
   // answers counts fully, and the cache holds only light reflected beyond the neighbourhood.
   DirectionalCache* cache = nullptr;

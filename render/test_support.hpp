@@ -3,7 +3,9 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <filesystem>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -80,5 +82,17 @@ class BoardExchange final : public Exchange {
   Board& board_;
   size_t index_;
 };
+
+// Lost Empire from ../shared/scenes with its torches emitting (its MTL has their Ke commented out); empty when the
+// scenes are not there (the caller skips, naming kLostEmpireObj).
+inline const std::string kLostEmpireObj =
+    std::string(LIGHTFARM_SOURCE_DIR) + "/../shared/scenes/lost_empire/lost_empire.obj";
+inline std::optional<Result<Scene>> lost_empire_with_torches() {
+  if (!std::filesystem::exists(kLostEmpireObj)) return std::nullopt;
+  SceneSpec spec;
+  spec.file = kLostEmpireObj;
+  spec.materials.push_back(Value::Map{{"name", "Torch"}, {"emission", Value::Array{9.0, 9.0, 6.0}}});
+  return Scene::load(spec);
+}
 
 }  // namespace lf::test

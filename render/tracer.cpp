@@ -5,8 +5,6 @@
 #include <embree3/rtcore.h>
 #include <malloc.h>
 
-#include <algorithm>
-#include <cmath>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -111,9 +109,9 @@ RayTracer::RayTracer(const Scene& scene, std::vector<uint32_t> triangles)
   rtcReleaseGeometry(geom);
   rtcCommitScene(impl_->scene);
   if (rtcGetDeviceError(impl_->device) != RTC_ERROR_NONE) throw std::runtime_error("Embree: cannot build the scene");
+  if (whole) impl_->ties = std::make_unique<CoplanarTies>(scene);
   // The build's temporaries (half again the BVH's size) stay in the heap after they are freed; give them back,
   // since every actor of a host holds its own BVH.
-  if (whole) impl_->ties = std::make_unique<CoplanarTies>(scene);
   ::malloc_trim(0);
 }
 

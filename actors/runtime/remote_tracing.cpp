@@ -8,7 +8,7 @@
 namespace lf {
 
 RemoteTracing::RemoteTracing(Runtime& rt, const Scene& scene, std::vector<Bounds> boxes, size_t batch)
-    : rt_(rt), scene_(scene), boxes_(std::move(boxes)), ties_(scene), batch_(std::max<size_t>(1, batch)) {}
+    : rt_(rt), scene_(scene), boxes_(padded_boxes(std::move(boxes))), ties_(scene), batch_(std::max<size_t>(1, batch)) {}
 
 namespace {
 
@@ -45,8 +45,8 @@ static Task trace_rounds(Runtime& rt, const Scene& scene, const std::vector<Boun
     for (size_t p = 0; p < parts; ++p) {
       if (!round[p]) continue;
       auto r = round[p];
-      r->hits.resize(r->rays.size());
-      r->blocked.resize(r->rays.size());
+      if constexpr (Any) r->blocked.resize(r->rays.size());
+      else r->hits.resize(r->rays.size());
       visits += r->rays.size();
       for (size_t begin = 0; begin < r->rays.size(); begin += batch) {
         const size_t end = std::min(begin + batch, r->rays.size());

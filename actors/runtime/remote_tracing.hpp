@@ -17,7 +17,8 @@ namespace lf {
 
 class RemoteTracing final : public Tracing {
  public:
-  // `boxes`: each part's box, in the order of the runtime's geometry actors. `batch`: rays per request at most.
+  // `boxes`: each part's box as the director sent it, in the order of the runtime's geometry actors. `batch`: rays
+  // per request at most.
   RemoteTracing(Runtime& rt, const Scene& scene, std::vector<Bounds> boxes, size_t batch);
   Task intersect(std::span<const Ray> rays, std::span<Hit> hits) override;
   Task occluded(std::span<const Ray> rays, std::span<uint8_t> occluded) override;
@@ -27,7 +28,7 @@ class RemoteTracing final : public Tracing {
  private:
   Runtime& rt_;
   const Scene& scene_;
-  std::vector<Bounds> boxes_;
+  std::vector<Bounds> boxes_;  // padded (render/partition.hpp)
   CoplanarTies ties_;
   size_t batch_;
   uint64_t rays_ = 0, visits_ = 0, requests_ = 0;

@@ -1,7 +1,6 @@
 // irradiance caching against closed forms and against the path tracer.
 #include <gtest/gtest.h>
 
-#include <filesystem>
 
 #include "render/bsdf.hpp"
 #include "render/camera.hpp"
@@ -232,12 +231,9 @@ TEST(Irradiance, RecordsWhereTheCameraLooksServeTheImage) {
 // The same on a real interior (issue 13): Lost Empire with its torches emitting, from a camera inside the city at
 // 160 x 120. The camera pass finds the points the image needs, so records serve at least 95 % of them.
 TEST(Irradiance, RecordsWhereTheCameraLooksServeLostEmpire) {
-  const std::string obj = std::string(LIGHTFARM_SOURCE_DIR) + "/../shared/scenes/lost_empire/lost_empire.obj";
-  if (!std::filesystem::exists(obj)) GTEST_SKIP() << "no " << obj;
-  SceneSpec spec;
-  spec.file = obj;
-  spec.materials.push_back(Value::Map{{"name", "Torch"}, {"emission", Value::Array{9.0, 9.0, 6.0}}});
-  auto scene = Scene::load(spec);
+  auto loaded = test::lost_empire_with_torches();
+  if (!loaded) GTEST_SKIP() << "no " << test::kLostEmpireObj;
+  auto& scene = *loaded;
   ASSERT_TRUE(scene) << scene.error().message;
   const int w = 160, h = 120;
   CameraCache c(*scene, CameraSpec{{-8, 16, 20}, {6, 12, 0}, {0, 1, 0}, 70}, w, h, 1, {{"theta", 4}, {"phi", 12}});

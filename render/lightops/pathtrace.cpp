@@ -80,8 +80,7 @@ class PathTrace final : public LightOp {
         pixels.push_back(static_cast<uint64_t>(y) * static_cast<uint64_t>(ctx_.width) + static_cast<uint64_t>(x));
       }
     std::vector<Hit> hits(rays.size());
-    if (ctx_.tracing) co_await ctx_.tracing->intersect(rays, hits);
-    else ctx_.tracer->intersect(rays, hits);
+    co_await trace_intersect(ctx_, rays, hits);
     ShadingPoints batch;
     std::vector<RGB> ignored;
     constexpr size_t kBatch = 1024;
