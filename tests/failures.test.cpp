@@ -77,8 +77,9 @@ TEST_F(FailureTest, MultiplexedNetworksRenderThePlainNetworksPixels) {
   EXPECT_TRUE(sync.pixels == async.pixels) << "sync mode";
 }
 
-TEST_F(FailureTest, PooledPhotonMapsShareTheirSharesThroughTheDirector) {
-  // Each replica shoots a third of the photons; the director's all-gather hands every replica all three shares.
+TEST_F(FailureTest, PooledPhotonMapsShareTheirSharesReplicaToReplica) {
+  // Each replica shoots a third of the photons and sends its share to the other two (pool_part): every replica
+  // builds the map of all three shares, the one map a single replica would build.
   const std::string glass = kSource + "/examples/cornell_glass.lua";
   auto sets = [](const char* replicas) {
     return small(kSource + "/examples/cornell_glass.lua",

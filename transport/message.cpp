@@ -39,7 +39,6 @@ constexpr std::pair<Op, std::string_view> kOps[] = {
     {Op::shade, "shade"},
     {Op::tile, "tile"},
     {Op::tile_done, "tile_done"},
-    {Op::all_gather, "all_gather"},
     {Op::fetch, "fetch"},
     {Op::ring_shooter, "ring.shooter"},
     {Op::ring_result, "ring.result"},
@@ -48,6 +47,7 @@ constexpr std::pair<Op, std::string_view> kOps[] = {
     {Op::ring_return, "ring.return"},
     {Op::ring_poll, "ring.poll"},
     {Op::trace, "trace"},
+    {Op::pool_part, "pool_part"},
 };
 constexpr std::pair<Phase, std::string_view> kPhases[] = {
     {Phase::configure, "configure"},

@@ -132,7 +132,7 @@ TEST(Message, MutatedValidMessagesNeverCrash) {
 }
 
 TEST(Message, OperationsAndPhasesRoundTripThroughTheirOneTable) {
-  for (Op op : {Op::shade, Op::tile, Op::tile_done, Op::all_gather, Op::fetch, Op::ring_shooter, Op::ring_result,
+  for (Op op : {Op::shade, Op::tile, Op::tile_done, Op::fetch, Op::ring_shooter, Op::ring_result,
                 Op::ring_visit, Op::ring_back, Op::ring_return, Op::ring_poll, Op::trace}) {
     auto m = make_request("a", op, Value::Map{}, 1);
     auto back = decode(encode_header(m.header), encode_body(m.body));

@@ -47,7 +47,6 @@ enum class Op : uint8_t {
   shade,         // renderer/LightOp -> LightOp: shade a batch of points
   tile,          // renderer -> director: the next tile
   tile_done,     // renderer -> director: a finished tile's pixels
-  all_gather,    // pool replica -> director: share a part, receive every replica's
   fetch,         // actor -> director: a blob the farm publishes (the radiosity solution)
   ring_shooter,  // ring node -> director: this iteration is done here; the next shooter?
   ring_result,   // ring node -> director: the node's elements, after the last iteration
@@ -56,6 +55,7 @@ enum class Op : uint8_t {
   ring_return,   // borrower -> origin node: a lent packet comes back
   ring_poll,     // idle ring node -> node at its position in another ring: lend me work
   trace,         // LightOp -> geometry actor: trace a batch of rays through this part of a partitioned scene
+  pool_part,     // pool replica -> pool replica: its part of one round of the pool's setup exchange
 };
 std::string_view op_name(Op op);
 Op op_from_name(std::string_view name);

@@ -27,6 +27,7 @@
 #include "actors/director/report.hpp"
 #include "actors/director/ring_service.hpp"
 #include "render/light_checks.hpp"
+#include "render/lightop_registry.hpp"
 #include "actors/director/supervisor.hpp"
 #include "actors/director/tile_service.hpp"
 #include "actors/runtime/actor_config.hpp"
@@ -59,14 +60,6 @@ void check(const Status& st) {
   if (!st) throw FarmFailure{st.error().message};
 }
 
-ExchangeService::Pools pools_of(const FarmSpec& spec) {
-  ExchangeService::Pools pools;
-  for (const auto& a : spec.actors)
-    if (a.is_multiplexer())
-      for (int r : a.inputs) pools[a.name].push_back(spec.actors[static_cast<size_t>(r)].name);
-  return pools;
-}
-
 std::vector<std::string> renderers_of(const FarmSpec& spec) {
   std::vector<std::string> names;
   for (const auto& a : spec.actors)
@@ -88,7 +81,6 @@ class Director final : public ControlOut, public Outbox {
                                        [this](const ActorRecord& a, const std::string& what, uint64_t done,
                                               uint64_t total) { show_progress(a, what, done, total); }}),
         tiles_(spec.image, renderers_of(spec), options.progress_on_terminal, options.quiet),
-        exchange_(pools_of(spec)),
         ring_(spec, exchange_, options.quiet, options.progress_on_terminal) {
     for (Service* s : all_services_)
       for (wire::Op op : s->ops()) services_[op] = s;
@@ -403,6 +395,18 @@ class Director final : public ControlOut, public Outbox {
                                    {p.bounds.lo.x, p.bounds.lo.y, p.bounds.lo.z, p.bounds.hi.x, p.bounds.hi.y, p.bounds.hi.z});
       }
     }
+    // Replicas that share their setup send each other their parts directly: a photon map's tens of MB then cross
+    // one link (IPC on one host) once, instead of going to the director and out again, decoded and re-encoded.
+    if (config.pool && config.pool->count > 1)
+      if (const LightOpKind* kind = find_lightop_kind(a.spec->kind); kind && kind->shares_setup) {
+        const auto& replicas = spec_.actors[static_cast<size_t>(spec_.pool_of(a.index))].inputs;
+        for (int r : replicas) {
+          const ActorRecord& sibling = supervisor_.at(spec_.actors[static_cast<size_t>(r)].name);
+          if (sibling.name() == a.name()) continue;
+          const auto [endpoint, key] = endpoint_for(a, sibling);
+          config.pool->peers.push_back({sibling.name(), endpoint, 4, key});
+        }
+      }
     // A replica lost before its pool was configured is left out of the pool (it never said where it listens).
     std::vector<InputSpec> inputs;
     for (auto& in : config.inputs)

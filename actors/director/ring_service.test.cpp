@@ -20,7 +20,7 @@ using wire::Op;
 struct RingFixture : ::testing::Test {
   FarmSpec spec;
   radiosity::RingConfig config;
-  ExchangeService exchange{{}};
+  ExchangeService exchange;
   std::unique_ptr<RingService> ring;
   std::unique_ptr<Scene> scene;
   RecordingOutbox out;

@@ -14,7 +14,7 @@ Value::Array inputs_value(const std::vector<InputSpec>& inputs) {
   return ins;
 }
 
-// A list of {name, endpoint, window?, key?} under `field` ("inputs", "geometry"); absent is empty.
+// A list of {name, endpoint, window?, key?} under `field` ("inputs", "geometry", a pool's "peers"); absent is empty.
 Status read_inputs(const Value& body, const char* field, std::vector<InputSpec>& out) {
   const Value* ins = body.find(field);
   if (!ins || ins->is_nil()) return Ok{};
@@ -24,7 +24,10 @@ Status read_inputs(const Value& body, const char* field, std::vector<InputSpec>&
     const Value* endpoint = in.find("endpoint");
     const Value* window = in.find("window");
     if (!name || !name->is_string() || !endpoint || !endpoint->is_string())
-      return make_error(std::string("CONFIG names ") + (std::string(field) == "inputs" ? "an input" : "a geometry actor") +
+      return make_error(std::string("CONFIG names ") +
+                            (std::string(field) == "inputs"     ? "an input"
+                             : std::string(field) == "geometry" ? "a geometry actor"
+                                                                : "a pool peer") +
                             " without name or endpoint",
                         ErrorCode::bad_request);
     if (window && (!window->is_int() || window->as_int() < 1 || window->as_int() > 1024))
@@ -53,7 +56,11 @@ Value ActorConfig::to_value() const {
                {"debug", debug},
                {"heartbeat_timeout", heartbeat_timeout},
                {"request_timeout", request_timeout}};
-  if (pool) m["pool"] = Value::Map{{"name", pool->name}, {"index", pool->index}, {"count", pool->count}};
+  if (pool) {
+    Value::Map place{{"name", pool->name}, {"index", pool->index}, {"count", pool->count}};
+    if (!pool->peers.empty()) place["peers"] = inputs_value(pool->peers);
+    m["pool"] = std::move(place);
+  }
   if (!geometry.empty()) {
     m["geometry"] = inputs_value(geometry);
     m["part_boxes"] = floats_to_bytes(part_boxes);
@@ -120,7 +127,12 @@ Result<ActorConfig> ActorConfig::from_value(const Value& body) {
     if (!name || !name->is_string() || !index || !index->is_int() || !count || !count->is_int() || count->as_int() < 1 ||
         index->as_int() < 0 || index->as_int() >= count->as_int())
       return make_error("CONFIG 'pool' must be {name, index, count} with 0 <= index < count", ErrorCode::bad_request);
-    c.pool = PoolPlace{name->as_string(), index->as_int(), count->as_int()};
+    c.pool = PoolPlace{name->as_string(), index->as_int(), count->as_int(), {}};
+    if (auto st = read_inputs(*pool, "peers", c.pool->peers); !st) return st.error();
+    if (!c.pool->peers.empty() && static_cast<int64_t>(c.pool->peers.size()) != c.pool->count - 1)
+      return make_error("CONFIG 'pool' has " + std::to_string(c.pool->peers.size()) + " peers for a pool of " +
+                            std::to_string(c.pool->count) + " (every other replica, or none)",
+                        ErrorCode::bad_request);
   }
   auto heartbeat = seconds_field(body, "heartbeat_timeout", c.heartbeat_timeout);
   auto request = seconds_field(body, "request_timeout", c.request_timeout);

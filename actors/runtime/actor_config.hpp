@@ -25,6 +25,9 @@ struct PoolPlace {
   std::string name;  // the pool (its multiplexer's name)
   int64_t index = 0;
   int64_t count = 1;
+  // The other replicas (replica order, this one left out) of a pool whose op shares its setup: the replicas send
+  // each other their parts directly (op pool_part) instead of through the director. Empty: through the director.
+  std::vector<InputSpec> peers;
 };
 
 struct ActorConfig {

@@ -13,6 +13,7 @@
 
 #include <chrono>
 #include <deque>
+#include <map>
 
 #include "actors/codecs/shade_codec.hpp"
 #include "actors/runtime/remote_tracing.hpp"
@@ -61,37 +62,12 @@ class RemoteInputs final : public Inputs {
   size_t batch_;
 };
 
-// All-gather among the replicas of a pool, through the director (which knows the pool).
+// A LightOp alone (no pool, or a pool of one): its all_gather is its own part; fetch asks the director.
 class DirectorExchange final : public Exchange {
  public:
-  // `alone`: not one of several replicas, so the gather is this op's own part (a pool of one, or no pool): a
-  // photon map's tens of MB need not go to the director and back.
-  DirectorExchange(Runtime& rt, bool alone) : rt_(rt), alone_(alone) {}
+  explicit DirectorExchange(Runtime& rt) : rt_(rt) {}
   Gather all_gather(std::string part, std::vector<std::string>* parts) override {
-    if (alone_) return SoloExchange().all_gather(std::move(part), parts);
-    auto state = std::make_shared<GatherState>();
-    state->remaining = 1;
-    // This replica keeps its own part and the director answers nil in its place: its bytes do not come back.
-    auto own = std::make_shared<std::string>(part);
-    rt_.ask_director(wire::Op::all_gather, map_of("part", Bytes{std::move(part)}, "keep", true),
-                     [state, parts, own](Result<wire::Message> r) {
-      if (!r) return state->complete_one("all_gather: " + r.error().message);
-      Value* all = r->body.find("parts");
-      if (!all || !all->is_array()) return state->complete_one("all_gather: the director sent no parts");
-      parts->clear();
-      size_t own_places = 0;
-      for (auto& p : all->as_array()) {
-        if (p.is_nil() && own_places++ == 0) {
-          parts->push_back(std::move(*own));
-          continue;
-        }
-        if (!p.is_bytes()) return state->complete_one("all_gather: a part is not bytes");
-        parts->push_back(std::move(p.as_bytes().data));  // shares can be tens of MB: moved, not copied
-      }
-      if (own_places != 1) return state->complete_one("all_gather: the director's answer has no place for this part");
-      state->complete_one();
-    });
-    return Gather(state);
+    return SoloExchange().all_gather(std::move(part), parts);
   }
 
   Gather fetch(const std::string& key, std::string* blob) override {
@@ -109,7 +85,123 @@ class DirectorExchange final : public Exchange {
 
  private:
   Runtime& rt_;
-  bool alone_;
+};
+
+// All-gather straight between the replicas of a pool (CONFIG pool.peers): each round, a replica sends its part to
+// every other replica (REQUEST pool_part {round, index, part}, answered at once with an empty REPLY) and is done
+// when every other part of that round has arrived and every peer has taken its own. A peer can be at most one round
+// ahead (it cannot finish round r without this replica's part), so parts of the next round are kept until asked for.
+// A lost peer fails the farm in the director (its share exists nowhere else); fetch still goes to the director.
+class PeerExchange final : public Exchange {
+ public:
+  PeerExchange(Runtime& rt, size_t index, size_t count) : rt_(rt), index_(index), count_(count), director_(rt) {}
+
+  Gather all_gather(std::string part, std::vector<std::string>* parts) override {
+    const uint64_t round = next_round_++;
+    Round& r = round_(round);
+    r.state = std::make_shared<GatherState>();
+    r.state->remaining = 1;
+    r.out = parts;
+    r.acks_left = count_ - 1;
+    for (size_t k = 0; k + 1 < count_; ++k)
+      rt_.pool_peer(k).request(
+          wire::Op::pool_part,
+          map_of("round", static_cast<int64_t>(round), "index", static_cast<int64_t>(index_), "part", Bytes{part}),
+          [this, round](Result<wire::Message> reply) {
+            auto it = rounds_.find(round);
+            if (it == rounds_.end()) return;
+            if (!reply) return fail(it->second, "all_gather: " + reply.error().message);
+            --it->second.acks_left;
+            finish_if_complete(round);
+          });
+    r.parts[index_] = std::move(part);
+    Gather gather(r.state);
+    finish_if_complete(round);  // a pool of one, or every part already here and taken (never both sides at once)
+    return gather;
+  }
+
+  Gather fetch(const std::string& key, std::string* blob) override { return director_.fetch(key, blob); }
+
+  // REQUEST pool_part from `sender`: its part of a round. Empty REPLY once kept; ERROR for what no peer would send.
+  void on_part(const std::string& sender, wire::Message& m) {
+    const Value* round = m.body.find("round");
+    const Value* index = m.body.find("index");
+    Value* part = m.body.find("part");
+    const size_t peer_index = expected_index(sender);
+    if (!round || !round->is_int() || !index || !index->is_int() || !part || !part->is_bytes())
+      return rt_.reply_error(sender, m.header.id, ErrorCode::bad_request, "pool_part needs {round, index, part}");
+    if (peer_index == count_ || index->as_int() != static_cast<int64_t>(peer_index))
+      return rt_.reply_error(sender, m.header.id, ErrorCode::bad_request,
+                             "pool_part from '" + sender + "', which is not replica " + std::to_string(index->as_int()) +
+                                 " of this pool");
+    // A peer may run one round ahead of this replica's own all_gather calls, never further.
+    const int64_t r = round->as_int();
+    if (r < static_cast<int64_t>(completed_) || static_cast<uint64_t>(r) > next_round_)
+      return rt_.reply_error(sender, m.header.id, ErrorCode::bad_request,
+                             "pool_part for round " + std::to_string(r) + " while this replica is at round " +
+                                 std::to_string(next_round_));
+    Round& slot = round_(static_cast<uint64_t>(r));
+    if (slot.have[peer_index])
+      return rt_.reply_error(sender, m.header.id, ErrorCode::bad_request,
+                             "pool_part: replica " + std::to_string(peer_index) + " sent round " + std::to_string(r) + " twice");
+    slot.parts[peer_index] = std::move(part->as_bytes().data);
+    slot.have[peer_index] = true;
+    rt_.reply(sender, m.header.id, Value::Map{});
+    finish_if_complete(static_cast<uint64_t>(r));
+  }
+
+ private:
+  struct Round {
+    std::vector<std::string> parts;
+    std::vector<bool> have;
+    size_t acks_left = 0;
+    std::vector<std::string>* out = nullptr;  // set once this replica's all_gather asked for the round
+    std::shared_ptr<GatherState> state;
+  };
+
+  Round& round_(uint64_t round) {
+    auto [it, fresh] = rounds_.try_emplace(round);
+    if (fresh) {
+      it->second.parts.resize(count_);
+      it->second.have.assign(count_, false);
+      it->second.have[index_] = true;  // filled in when this replica asks
+    }
+    return it->second;
+  }
+
+  // The replica index `sender` has in the pool, or count_ for a name that is not a peer.
+  size_t expected_index(const std::string& sender) const {
+    for (size_t k = 0; k < count_ - 1; ++k)
+      if (rt_.input_name(rt_.input_count() + rt_.geometry_count() + k) == sender) return k < index_ ? k : k + 1;
+    return count_;
+  }
+
+  void fail(Round& r, const std::string& why) {
+    if (!r.state || r.state->remaining == 0) return;
+    r.state->complete_one(why);
+  }
+
+  void finish_if_complete(uint64_t round) {
+    auto it = rounds_.find(round);
+    if (it == rounds_.end()) return;
+    Round& r = it->second;
+    if (!r.state || r.acks_left > 0) return;
+    for (bool h : r.have)
+      if (!h) return;
+    r.out->clear();
+    for (size_t i = 0; i < count_; ++i) r.out->push_back(std::move(r.parts[i]));
+    auto state = std::move(r.state);
+    rounds_.erase(it);
+    completed_ = round + 1;  // rounds end in order: each all_gather waits for the one before
+    state->complete_one();
+  }
+
+  Runtime& rt_;
+  size_t index_, count_;
+  DirectorExchange director_;
+  uint64_t next_round_ = 0;
+  uint64_t completed_ = 0;  // every round below this one is over
+  std::map<uint64_t, Round> rounds_;
 };
 
 class LightOpActor final : public Actor {
@@ -138,7 +230,17 @@ class LightOpActor final : public Actor {
       replica_index_ = static_cast<int>(config.pool->index);
       replica_count_ = static_cast<int>(config.pool->count);
     }
-    exchange_ = std::make_unique<DirectorExchange>(rt, replica_count_ <= 1);
+    if (config.pool && !config.pool->peers.empty()) {
+      auto peers = std::make_unique<PeerExchange>(rt, static_cast<size_t>(replica_index_), static_cast<size_t>(replica_count_));
+      peer_exchange_ = peers.get();
+      exchange_ = std::move(peers);
+    } else if (replica_count_ > 1 && kind_.shares_setup) {
+      return make_error("CONFIG makes '" + rt.name() + "' replica " + std::to_string(replica_index_) + " of " +
+                        std::to_string(replica_count_) + " without naming the others (pool.peers), with whom " +
+                        std::string(kind_.name) + " shares its setup");
+    } else {
+      exchange_ = std::make_unique<DirectorExchange>(rt);
+    }
     if (!config.geometry.empty()) {
       // A partitioned scene: rays go to the parts' geometry actors (ops that trace through ctx.tracing do).
       std::vector<Bounds> boxes;
@@ -169,6 +271,7 @@ class LightOpActor final : public Actor {
   }
 
   void on_request(const std::string& peer, wire::Op op, wire::Message& m, Runtime& rt) override {
+    if (op == wire::Op::pool_part && peer_exchange_) return peer_exchange_->on_part(peer, m);
     if (op != wire::Op::shade) return rt.reply_unknown_op(peer, m, "this actor serves 'shade'");
     if (!op_) {
       rt.reply_error(peer, m.header.id, ErrorCode::not_ready, "'" + rt.name() + "' is not configured yet");
@@ -260,6 +363,7 @@ class LightOpActor final : public Actor {
   int width_ = 0, height_ = 0;
   std::unique_ptr<RemoteInputs> inputs_;
   std::unique_ptr<Exchange> exchange_;
+  PeerExchange* peer_exchange_ = nullptr;  // exchange_, when the pool's replicas share their setup peer to peer
   std::unique_ptr<RemoteTracing> tracing_;  // a partitioned scene's geometry actors, or none
   int replica_index_ = 0, replica_count_ = 1;
   Task setup_;

@@ -318,7 +318,8 @@ void Runtime::handle_control(wire::Message& m, Actor& actor) {
       heartbeat_interval_ = std::min(1.0, heartbeat_timeout_ / 4);
       // Connect to every input before the actor configures, so that it may ask them during setup.
       request_timeout_ = config->request_timeout;
-      for (const auto* list : {&config->inputs, &config->geometry})
+      std::vector<InputSpec> no_peers;
+      for (const auto* list : {&config->inputs, &config->geometry, config->pool ? &config->pool->peers : &no_peers})
         for (const auto& in : *list) {
           auto client = connect_input(in.name, in.endpoint, in.key, static_cast<size_t>(in.window));
           if (!client) return fail(client.error().message);
@@ -327,6 +328,7 @@ void Runtime::handle_control(wire::Message& m, Actor& actor) {
           input_windows_.push_back(static_cast<size_t>(in.window));
         }
       lighting_inputs_ = config->inputs.size();
+      geometry_inputs_ = config->geometry.size();
       inputs_changed_ = true;
       auto started = Clock::now();
       Status st = actor.configure(*config, *this);

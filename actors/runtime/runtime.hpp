@@ -110,8 +110,12 @@ class Runtime {
   const std::string& input_name(size_t i) const { return input_names_[i]; }
   // A partitioned scene's geometry actors (CONFIG 'geometry', part order), connected like inputs and polled with
   // them, but not inputs of the lighting network.
-  size_t geometry_count() const { return inputs_.size() - lighting_inputs_; }
+  size_t geometry_count() const { return geometry_inputs_; }
   wire::RequestClient& geometry(size_t part) { return *inputs_[lighting_inputs_ + part]; }
+  // The other replicas of this actor's pool when it shares its setup peer to peer (CONFIG pool.peers, replica
+  // order), connected like inputs; not inputs of the lighting network.
+  size_t pool_peer_count() const { return inputs_.size() - lighting_inputs_ - geometry_inputs_; }
+  wire::RequestClient& pool_peer(size_t k) { return *inputs_[lighting_inputs_ + geometry_inputs_ + k]; }
 
   using DirectorCallback = std::function<void(Result<wire::Message>)>;
   // A request to the director (tiles, results), answered by a REPLY on the control channel.
@@ -150,7 +154,8 @@ class Runtime {
   RateLimitedLog bad_messages_;  // anyone can send garbage; it must not flood the log
   std::vector<std::unique_ptr<wire::RequestClient>> inputs_;
   std::vector<std::string> input_names_;
-  size_t lighting_inputs_ = 0;  // inputs_ holds the lighting inputs, then the geometry actors
+  size_t lighting_inputs_ = 0;  // inputs_ holds the lighting inputs, then the geometry actors, then the pool peers
+  size_t geometry_inputs_ = 0;
   std::map<uint64_t, DirectorCallback> director_pending_;
   uint64_t next_director_id_ = 1;
   ActorStats stats_;
