@@ -6,6 +6,7 @@
 #include <csignal>
 
 #include <cstdio>
+#include <fstream>
 #include <cstdlib>
 #include <cstring>
 #include <string>
@@ -235,7 +236,26 @@ int cmd_check_actor(int argc, char** argv) {
   return lf::check_actor(o);
 }
 
+// A fresh page costs ~13 µs on the virtual machines this runs on (a 27 MB photon share: 80 ms of faults in each
+// buffer it passes through). glibc's malloc asks for transparent huge pages (a fault per 2 MB) when its tunable
+// says so, which it reads only at start: so a farm process sets it and runs itself again, once. Children inherit
+// it; where the kernel's THP mode is not "madvise" it would change nothing, and a user's own setting is kept.
+// Measured (Lost Empire, 12 local actors): launch to first tile 2.41 -> 2.00 s, the director's CPU 1.82 -> 1.46 s.
+static void prefer_huge_pages(char** argv) {
+  const char* tunables = std::getenv("GLIBC_TUNABLES");
+  if (tunables && std::strstr(tunables, "glibc.malloc.hugetlb")) return;
+  std::ifstream thp("/sys/kernel/mm/transparent_hugepage/enabled");
+  std::string mode;
+  if (!std::getline(thp, mode) || mode.find("[madvise]") == std::string::npos) return;
+  const std::string value = tunables && *tunables ? std::string(tunables) + ":glibc.malloc.hugetlb=1" : "glibc.malloc.hugetlb=1";
+  if (::setenv("GLIBC_TUNABLES", value.c_str(), 1) != 0) return;
+  ::execv("/proc/self/exe", argv);  // only returns if it failed: then go on as we are
+}
+
 int main(int argc, char** argv) {
+  if (argc >= 2 && (std::strcmp(argv[1], "run") == 0 || std::strcmp(argv[1], "actor") == 0 ||
+                    std::strcmp(argv[1], "host-agent") == 0))
+    prefer_huge_pages(argv);
   // Shading batches are a few hundred KB each. Keep such buffers in the heap rather than mmap/munmap-ing them per
   // message: that churn (page faults, zeroing) cost more than the copies themselves.
   mallopt(M_MMAP_THRESHOLD, 256 << 20);

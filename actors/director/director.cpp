@@ -13,6 +13,7 @@
 #include <chrono>
 #include <cstdio>
 #include <filesystem>
+#include <future>
 #include <map>
 #include <memory>
 #include <random>
@@ -125,6 +126,8 @@ class Director final : public ControlOut, public Outbox {
       // Timed: the director's own scene load (an OBJ's parse, its checks, a radiosity plan) shows in the table.
       stage(Stage::prepare, [&] { prepare(); });
       stage(Stage::launch, [&] {
+        if (hosts_connected_.valid())
+          if (auto st = hosts_connected_.get(); !st) throw FarmFailure{"cannot start the farm: " + st.error().message};
         ship_scene();
         start_host_agents();
         std::function<std::string(const ActorSpec&)> keys_of;
@@ -168,6 +171,7 @@ class Director final : public ControlOut, public Outbox {
                 std::to_string(spec_.image.height) + "); stopping the farm");
       status = 1;
     }
+    if (hosts_connected_.valid()) hosts_connected_.wait();  // a farm that failed before launch: hosts still connecting
     // No actor outlives the farm, whatever happened above.
     supervisor_.send_bye_to_all();
     // Host agents leave by themselves once their actors have exited (a Slurm step killed from outside would be
@@ -208,6 +212,10 @@ class Director final : public ControlOut, public Outbox {
   void prepare() {
     // An output that cannot be written is a bad command line or script (exit 2), found before anything starts.
     if (auto st = check_output_path(spec_.image.output); !st) throw FarmFailure{st.error().message, 2};
+    // Remote hosts are connected to (ssh's key exchange, the check for lightfarm there) while the scene loads here:
+    // on a real scene the two take similar time. Joined before launch, and before anything else touches launchers_.
+    if (spec_.has_remote_hosts())
+      hosts_connected_ = std::async(std::launch::async, [this] { return launchers_.prepare(spec_.hosts_in_use()); });
     // The director reads the scene once itself, so a broken scene stops the farm before anything launches.
     if (!spec_.scene.file.empty())
       if (auto catalogue = Scene::catalogue_obj(spec_.scene.file))
@@ -824,6 +832,7 @@ class Director final : public ControlOut, public Outbox {
   const FarmSpec& spec_;
   RunOptions options_;
   Launchers launchers_;
+  std::future<Status> hosts_connected_;  // remote hosts connecting during prepare
   // CURVE (farm { security = "curve" }): declared before the control socket, whose handshakes it serves.
   std::unique_ptr<wire::Authenticator> authenticator_;
   wire::CurveKeys director_keys_;
