@@ -182,6 +182,12 @@ bool Supervisor::recoverable(const ActorRecord& a) const {
   return a.spec->is_renderer() || spec_.pool_of(a.index) >= 0;
 }
 
+bool Supervisor::may_still_speak(pid_t pid) const {
+  for (const auto& [name, a] : actors_)
+    if (a.pid == pid) return !a.said_bye;
+  return false;
+}
+
 Status Supervisor::on_exit(const ExitReport& r) {
   for (auto& [name, a] : actors_) {
     if (a.pid != r.pid) continue;

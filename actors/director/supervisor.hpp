@@ -97,6 +97,9 @@ class Supervisor {
   Status on_message(const std::string& peer, Result<wire::Message>& message);
   // A process ended.
   Status on_exit(const ExitReport& exit);
+  // Whether the process `pid` could still have last words in flight on the control socket: an actor that has not
+  // said BYE. (A host agent never speaks to the director.)
+  bool may_still_speak(pid_t pid) const;
   // Actors silent for longer than the heartbeat timeout: recoverable ones are killed (their exit then counts as a
   // loss), any other stops the farm.
   Status check_heartbeats(Clock::time_point now);
