@@ -115,9 +115,7 @@ class PeerExchange final : public Exchange {
             finish_if_complete(round);
           });
     r.parts[index_] = std::move(part);
-    Gather gather(r.state);
-    finish_if_complete(round);  // a pool of one, or every part already here and taken (never both sides at once)
-    return gather;
+    return Gather(r.state);  // the acks of the sends above are yet to come, so the round cannot be over already
   }
 
   Gather fetch(const std::string& key, std::string* blob) override { return director_.fetch(key, blob); }
@@ -172,7 +170,7 @@ class PeerExchange final : public Exchange {
   // The replica index `sender` has in the pool, or count_ for a name that is not a peer.
   size_t expected_index(const std::string& sender) const {
     for (size_t k = 0; k < count_ - 1; ++k)
-      if (rt_.input_name(rt_.input_count() + rt_.geometry_count() + k) == sender) return k < index_ ? k : k + 1;
+      if (rt_.pool_peer_name(k) == sender) return k < index_ ? k : k + 1;
     return count_;
   }
 

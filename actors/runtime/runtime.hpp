@@ -116,6 +116,7 @@ class Runtime {
   // order), connected like inputs; not inputs of the lighting network.
   size_t pool_peer_count() const { return inputs_.size() - lighting_inputs_ - geometry_inputs_; }
   wire::RequestClient& pool_peer(size_t k) { return *inputs_[lighting_inputs_ + geometry_inputs_ + k]; }
+  const std::string& pool_peer_name(size_t k) const { return input_names_[lighting_inputs_ + geometry_inputs_ + k]; }
 
   using DirectorCallback = std::function<void(Result<wire::Message>)>;
   // A request to the director (tiles, results), answered by a REPLY on the control channel.
