@@ -1,7 +1,5 @@
 #include "actors/director/director.hpp"
 
-#include <pthread.h>
-#include <sched.h>
 #include <sys/prctl.h>
 #include <unistd.h>
 
@@ -111,17 +109,12 @@ class Director final : public ControlOut, public Outbox {
         if (on) set_log_observer({});
       }
     } stop_observing{monitor_ != nullptr};
-    // Loading OpenImageIO takes ~0.2 s; it is done while the actors start instead of after the last tile, but only
-    // once this process has made its own threads (ZeroMQ's, the ZAP handler, hosts connecting): dlopen holds the
-    // loader's lock, which creating a thread needs, so starting it first made prepare wait 0.2-0.26 s. Its 0.4-0.6
-    // CPU-seconds (154k symbol lookups in 261 libraries) would compete with the actors' start-up for the cores.
-    std::thread image_io;
     struct Join {
       std::thread& t;
       ~Join() {
         if (t.joinable()) t.join();
       }
-    } join_image_io{image_io};
+    } join_image_io{image_io_};
     try {
       // Timed: the director's own scene load (an OBJ's parse, its checks, a radiosity plan) shows in the table.
       stage(Stage::prepare, [&] { prepare(); });
@@ -133,13 +126,6 @@ class Director final : public ControlOut, public Outbox {
         std::function<std::string(const ActorSpec&)> keys_of;
         if (!actor_keys_.empty()) keys_of = [&](const ActorSpec& a) { return farm_keys_for(a.name); };
         check(supervisor_.launch(control_endpoint_, local_address_, keys_of));
-        image_io = std::thread([] {
-          // Only on cores nothing else wants: the actors starting up (the farm's first tile) come first, and by the
-          // time the image is written the farm is idle, so the load finishes then at full speed if not before.
-          const sched_param idle{};
-          ::pthread_setschedparam(::pthread_self(), SCHED_IDLE, &idle);
-          preload_image_io();
-        });
       });
       stage(Stage::hello, [&] { wait_all(30.0, [](const ActorRecord& a) { return a.said_hello; }); });
       stage(Stage::configure, [&] {
@@ -588,6 +574,16 @@ class Director final : public ControlOut, public Outbox {
   }
 
   void pump(long timeout_ms) {
+    // OpenImageIO's load (0.4-0.6 CPU-s: 154k symbol lookups in 261 libraries) runs beside the render, once the first
+    // tile is in: started with the actors it took a core from their start-up and from setup (photon shooting 1 -> 2
+    // replicas: 1.27x instead of 1.95x), and the first tile waited. Not at idle priority: on a host busy with other
+    // work it would never run, and the image would wait for it. Not after the last tile: that adds its time to every
+    // frame. Only once this process has made its own threads (ZeroMQ's, the ZAP handler, hosts connecting): dlopen
+    // holds the loader's lock, which creating a thread needs.
+    if (!image_io_started_ && tiles_.tiles_done() > 0) {
+      image_io_started_ = true;
+      image_io_ = std::thread(preload_image_io);
+    }
     if (stop_requested())
       throw FarmFailure{"interrupted by signal " + std::to_string(stop_signal()) + "; stopping the farm",
                         128 + stop_signal()};
@@ -833,6 +829,8 @@ class Director final : public ControlOut, public Outbox {
   const FarmSpec& spec_;
   RunOptions options_;
   Launchers launchers_;
+  std::thread image_io_;  // loads OpenImageIO beside the render (pump)
+  bool image_io_started_ = false;
   std::future<Status> hosts_connected_;  // remote hosts connecting during prepare
   // CURVE (farm { security = "curve" }): declared before the control socket, whose handshakes it serves.
   std::unique_ptr<wire::Authenticator> authenticator_;
