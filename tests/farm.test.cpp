@@ -2,6 +2,8 @@
 // of its farm is left running.
 #include <gtest/gtest.h>
 
+#include <signal.h>
+
 #include <algorithm>
 #include <cstring>
 #include <map>
@@ -153,6 +155,44 @@ TEST_F(FarmTest, StatsJsonCarriesPhasesAndActors) {
                           "\"direct\"", "\"busy_seconds\"", "\"peak_queue\"", "\"bytes_in\""})
     EXPECT_NE(json.find(key), std::string::npos) << key << " missing from " << json;
   expect_no_leftovers(r);
+}
+
+// Farm processes ask glibc's malloc for transparent huge pages (cli/main.cpp) where the kernel's THP mode is
+// "madvise": the director runs itself again with the tunable and its actors inherit it. A user's own choice about
+// huge pages is kept, and so are a user's other tunables. (glibc leaves only the first tunable of GLIBC_TUNABLES in
+// the environment a process shows and passes on, so with a tunable of the user's, that is what the processes show.)
+TEST_F(FarmTest, ActorsGetHugePagesAndKeepTheUsersTunables) {
+  const bool madvise = read_file("/sys/kernel/mm/transparent_hugepage/enabled").find("[madvise]") != std::string::npos;
+  auto tunables_of = [](pid_t pid) {
+    const std::string env = read_file("/proc/" + std::to_string(pid) + "/environ");
+    for (size_t at = 0; at < env.size();) {
+      const size_t end = std::min(env.find('\0', at), env.size());
+      if (env.compare(at, 15, "GLIBC_TUNABLES=") == 0) return env.substr(at + 15, end - at - 15);
+      at = end + 1;
+    }
+    return std::string("(unset)");
+  };
+  const std::pair<std::string, std::string> cases[] = {
+      {"", madvise ? "glibc.malloc.hugetlb=1" : "(unset)"},
+      {"glibc.malloc.hugetlb=0", "glibc.malloc.hugetlb=0"},
+      {"glibc.malloc.mmap_threshold=4194304", "glibc.malloc.mmap_threshold=4194304"}};
+  for (const auto& [given, expected] : cases) {
+    SCOPED_TRACE(given);
+    std::vector<std::string> env;
+    if (!given.empty()) env.push_back("GLIBC_TUNABLES=" + given);
+    Farm farm({"run", kCornellScript, "--output", path("thp.exr"), "--set", "spp=4096", "--set", "width=64", "--set",
+               "height=64"},
+              env);
+    std::vector<pid_t> direct;
+    ASSERT_TRUE(Farm::eventually([&] { return !(direct = actor_pids(farm.tag(), "direct")).empty(); }, 30))
+        << farm.err_so_far();
+    EXPECT_EQ(tunables_of(direct[0]), expected);
+    EXPECT_EQ(tunables_of(farm.pid()), expected);  // the director, after running itself again (same pid)
+    ::kill(farm.pid(), SIGINT);
+    auto r = farm.wait(30);
+    EXPECT_EQ(r.status, 128 + SIGINT) << r.err;
+    expect_no_leftovers(r);
+  }
 }
 
 // A long setup step says how far it is: a cache's pre-pass against a slowed `direct` takes seconds, and the log
