@@ -240,31 +240,49 @@ PartitionedTracer::PartitionedTracer(const Scene& scene, std::vector<ScenePart> 
   for (const ScenePart& p : parts_) tracers_.push_back(std::make_unique<RayTracer>(scene, p.triangles));
 }
 
-// Rounds: every ray still on its way goes to the next part along it; each part traces its rays as one stream.
-// `trace(part, indices)` traces those rays in that part and keeps what they found; `trace.goes_on(i, next)` says
-// whether ray i must still visit the next part along it.
-template <class Trace>
-void PartitionedTracer::route(std::span<const Ray> rays, Trace&& trace) const {
-  std::vector<std::vector<PartCrossing>> crossings(rays.size());
-  std::vector<uint32_t> active;
+RayRoutes::RayRoutes(std::span<const Ray> rays, std::span<const Bounds> boxes)
+    : crossings_(rays.size()), next_(rays.size(), 0), by_part_(boxes.size()) {
   for (size_t i = 0; i < rays.size(); ++i) {
-    parts_along(rays[i], boxes_, crossings[i]);
-    if (!crossings[i].empty()) active.push_back(static_cast<uint32_t>(i));
+    parts_along(rays[i], boxes, crossings_[i]);
+    if (!crossings_[i].empty()) active_.push_back(static_cast<uint32_t>(i));
   }
-  std::vector<size_t> next(rays.size(), 0);
-  std::vector<std::vector<uint32_t>> by_part(parts_.size());
-  while (!active.empty()) {
-    for (auto& group : by_part) group.clear();
-    for (uint32_t i : active) by_part[crossings[i][next[i]].part].push_back(i);
-    std::vector<uint32_t> still;
+}
+
+const std::vector<std::vector<uint32_t>>& RayRoutes::round() {
+  for (auto& group : by_part_) group.clear();
+  for (uint32_t i : active_) by_part_[crossings_[i][next_[i]].part].push_back(i);
+  return by_part_;
+}
+
+template <class Ends>
+void RayRoutes::advance_unless(Ends&& ends) {
+  std::vector<uint32_t> still;
+  for (uint32_t i : active_)
+    if (++next_[i] < crossings_[i].size() && !ends(i, crossings_[i][next_[i]])) still.push_back(i);
+  active_.swap(still);
+}
+
+void RayRoutes::advance(std::span<const Hit> hits) {
+  advance_unless([&](uint32_t i, const PartCrossing& next) { return hits[i].valid() && next.enter > hits[i].t; });
+}
+
+void RayRoutes::advance(std::span<const uint8_t> blocked) {
+  advance_unless([&](uint32_t i, const PartCrossing&) { return blocked[i] != 0; });
+}
+
+// Each part traces its rays of a round as one stream; `found` (the hits or the occlusion flags) says where each ray's
+// search stands.
+template <class Trace>
+void PartitionedTracer::route(std::span<const Ray> rays, Trace&& trace, auto found) const {
+  RayRoutes routes(rays, boxes_);
+  while (!routes.done()) {
+    const auto& by_part = routes.round();
     for (size_t p = 0; p < by_part.size(); ++p) {
       if (by_part[p].empty()) continue;
       rays_per_part_[p] += by_part[p].size();
       trace(p, by_part[p]);
     }
-    for (uint32_t i : active)
-      if (++next[i] < crossings[i].size() && trace.goes_on(i, crossings[i][next[i]])) still.push_back(i);
-    active.swap(still);
+    routes.advance(found);
   }
 }
 
@@ -288,8 +306,6 @@ struct NearestHit {
     for (size_t k = 0; k < indices.size(); ++k)
       if (found[k].valid()) hits[indices[k]] = found[k];
   }
-  // On to the next part unless the hit so far is nearer than that part's box.
-  bool goes_on(uint32_t i, const PartCrossing& next) const { return !hits[i].valid() || next.enter <= hits[i].t; }
 };
 
 struct AnyHit {
@@ -305,7 +321,6 @@ struct AnyHit {
     tracers[part]->occluded(batch, found);
     for (size_t k = 0; k < indices.size(); ++k) occluded[indices[k]] |= found[k];
   }
-  bool goes_on(uint32_t i, const PartCrossing&) const { return !occluded[i]; }
 };
 
 }  // namespace
@@ -313,14 +328,14 @@ struct AnyHit {
 void PartitionedTracer::intersect(std::span<const Ray> rays, std::span<Hit> hits) const {
   std::fill(hits.begin(), hits.end(), Hit{});
   NearestHit trace{rays, hits, tracers_, {}, {}};
-  route(rays, trace);
+  route(rays, trace, std::span<const Hit>(hits));
   for (size_t i = 0; i < rays.size(); ++i) hits[i] = ties_.settle(rays[i], hits[i]);
 }
 
 void PartitionedTracer::occluded(std::span<const Ray> rays, std::span<uint8_t> occluded) const {
   std::fill(occluded.begin(), occluded.end(), uint8_t{0});
   AnyHit trace{rays, occluded, tracers_, {}, {}};
-  route(rays, trace);
+  route(rays, trace, std::span<const uint8_t>(occluded));
 }
 
 }  // namespace lf

@@ -61,6 +61,29 @@ std::vector<Bounds> padded_boxes(std::vector<Bounds> boxes);
 // The parts whose (padded) boxes the ray passes, nearest entry first (ties by part index).
 void parts_along(const Ray& ray, std::span<const Bounds> boxes, std::vector<PartCrossing>& out);
 
+// A batch of rays on its way through a split's parts, round by round (PartitionedTracer here, RemoteTracing in a
+// farm): each round every ray still searching visits the next part along it, in parts_along's order, and goes on to
+// the part after unless what it found ends its search.
+class RayRoutes {
+ public:
+  RayRoutes(std::span<const Ray> rays, std::span<const Bounds> boxes);
+  bool done() const { return active_.empty(); }
+  // This round's rays (indices into the batch), grouped by the part each visits: one list per part, empty where none.
+  const std::vector<std::vector<uint32_t>>& round();
+  // After a round. A nearest hit ends the search once it is nearer than the next part's entry; an occlusion test once
+  // the ray is blocked.
+  void advance(std::span<const Hit> hits);
+  void advance(std::span<const uint8_t> blocked);
+
+ private:
+  template <class Ends>
+  void advance_unless(Ends&& ends);
+  std::vector<std::vector<PartCrossing>> crossings_;
+  std::vector<uint32_t> active_;
+  std::vector<size_t> next_;  // index into crossings_[i] of the part ray i visits this round
+  std::vector<std::vector<uint32_t>> by_part_;
+};
+
 // Tracing through every part in this process: what the geometry actors do together, used to check them and the
 // split. A ray visits parts in the order parts_along gives and stops once its hit is nearer than the next part's
 // entry, so it finds the whole scene's nearest hit; coplanar overlapping faces are settled by the same rule as the
@@ -75,8 +98,9 @@ class PartitionedTracer {
   const std::vector<uint64_t>& rays_per_part() const { return rays_per_part_; }
 
  private:
+  // Each round of RayRoutes, `trace(part, indices)` traces those rays in that part and keeps what they found.
   template <class Trace>
-  void route(std::span<const Ray> rays, Trace&& trace) const;
+  void route(std::span<const Ray> rays, Trace&& trace, auto found) const;
 
   std::vector<ScenePart> parts_;
   std::vector<Bounds> boxes_;  // padded

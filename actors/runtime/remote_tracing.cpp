@@ -27,20 +27,12 @@ static Task trace_rounds(Runtime& rt, const Scene& scene, const std::vector<Boun
                          std::span<const Ray> rays, std::span<Hit> hits, std::span<uint8_t> blocked,
                          uint64_t& visits, uint64_t& requests) {
   const size_t parts = boxes.size();
-  std::vector<std::vector<PartCrossing>> crossings(rays.size());
-  std::vector<uint32_t> active;
-  for (size_t i = 0; i < rays.size(); ++i) {
-    parts_along(rays[i], boxes, crossings[i]);
-    if (!crossings[i].empty()) active.push_back(static_cast<uint32_t>(i));
-  }
-  std::vector<size_t> next(rays.size(), 0);
-  while (!active.empty()) {
+  RayRoutes routes(rays, boxes);
+  while (!routes.done()) {
+    const auto& by_part = routes.round();
     std::vector<std::shared_ptr<PartRound>> round(parts);
-    for (uint32_t i : active) {
-      auto& r = round[crossings[i][next[i]].part];
-      if (!r) r = std::make_shared<PartRound>();
-      r->rays.push_back(i);
-    }
+    for (size_t p = 0; p < parts; ++p)
+      if (!by_part[p].empty()) round[p] = std::make_shared<PartRound>(PartRound{by_part[p], {}, {}});
     auto state = std::make_shared<GatherState>();
     for (size_t p = 0; p < parts; ++p) {
       if (!round[p]) continue;
@@ -89,14 +81,8 @@ static Task trace_rounds(Runtime& rt, const Scene& scene, const std::vector<Boun
         }
       }
     }
-    std::vector<uint32_t> still;
-    for (uint32_t i : active) {
-      if (++next[i] >= crossings[i].size()) continue;
-      const PartCrossing& c = crossings[i][next[i]];
-      const bool done = Any ? blocked[i] != 0 : (hits[i].valid() && c.enter > hits[i].t);
-      if (!done) still.push_back(i);
-    }
-    active.swap(still);
+    if constexpr (Any) routes.advance(std::span<const uint8_t>(blocked));
+    else routes.advance(std::span<const Hit>(hits));
   }
 }
 
