@@ -1,5 +1,6 @@
--- The Cornell box with its direct light served by a pool: a multiplexer in front of replicas of `direct`, which
--- to the renderers looks like one LightOp. Kill a replica or a renderer mid-frame and the image comes out the same.
+-- The Cornell box with its direct light served by a pool of `direct` replicas, which to the renderers looks like
+-- one LightOp: each renderer sends its batches to the replicas itself (or, with dispatch = "process", through one
+-- multiplexer process in front of them). Kill a replica or a renderer mid-frame and the image comes out the same.
 --
 --   lightfarm run examples/cornell_pool.lua --set replicas=3 --set strategy=round_robin
 
@@ -14,6 +15,7 @@ local direct = multiplexer {
   replicas = param("replicas", 2),
   strategy = param("strategy", "least_loaded"),   -- or "round_robin", "random"
   split = param("split", 0),                       -- split packets larger than this across replicas (0: never)
+  dispatch = param("dispatch", "clients"),         -- or "process"
 }
 
 renderers { count = param("renderers", 2), lighting = direct, mode = param("mode", "async") }

@@ -1,5 +1,6 @@
 #include "farm/builders.hpp"
 
+#include <algorithm>
 #include <functional>
 #include <map>
 #include <set>
@@ -184,6 +185,25 @@ Result<int> expand_ring(FarmSpec& spec, const radiosity::RingConfig& config, con
   op.loc = loc;
   spec.actors.push_back(std::move(op));
   return static_cast<int>(spec.actors.size() - 1);
+}
+
+void settle_pool_dispatch(FarmSpec& spec) {
+  const int n = static_cast<int>(spec.actors.size());
+  for (int m = 0; m < n; ++m) {
+    ActorSpec& pool = spec.actors[static_cast<size_t>(m)];
+    pool.dispatched_by_clients = false;
+    if (!pool.is_multiplexer()) continue;
+    if (MultiplexerParams::read(ParamTable(pool.params, pool.name)).dispatch != "clients") continue;
+    bool ok = !pool.inputs.empty();
+    for (int r : pool.inputs) ok = ok && !spec.actors[static_cast<size_t>(r)].is_multiplexer();
+    bool has_client = m == spec.lighting;
+    for (const auto& client : spec.actors) {
+      if (std::find(client.inputs.begin(), client.inputs.end(), m) == client.inputs.end()) continue;
+      has_client = true;
+      ok = ok && (client.is_renderer() || client.loads_scene());
+    }
+    pool.dispatched_by_clients = ok && has_client;
+  }
 }
 
 Status validate(const FarmSpec& s) {

@@ -55,6 +55,11 @@ Status add_partition(FarmSpec& spec, int parts, const std::vector<std::string>& 
 Result<int> expand_ring(FarmSpec& spec, const radiosity::RingConfig& config, const Value::Map& params,
                         const std::string& name, const std::vector<std::string>& hosts, const SourceLoc& loc);
 
+// Marks each pool whose clients can dispatch to its replicas themselves (ActorSpec::dispatched_by_clients): its
+// dispatch is "clients", its replicas are not pools, and every client runs the farm's runtime (renderers and
+// built-in LightOps; not exec plug-ins, which get the multiplexer process). Call once the graph is complete.
+void settle_pool_dispatch(FarmSpec& spec);
+
 // The checks a finished graph must pass: renderers and their lighting exist, names are unique, inputs are in
 // range and form no cycle, every host is declared, and every LightOp is reachable from the renderers' lighting
 // (a dangling one would run for nothing). Errors name the actor's script line.

@@ -34,13 +34,14 @@ const HostSpec* FarmSpec::host_of(const ActorSpec& actor) const {
 std::vector<const HostSpec*> FarmSpec::hosts_in_use() const {
   std::vector<const HostSpec*> used;
   for (const auto& a : actors)
-    if (const HostSpec* h = host_of(a); h && std::find(used.begin(), used.end(), h) == used.end()) used.push_back(h);
+    if (const HostSpec* h = host_of(a); h && a.has_process() && std::find(used.begin(), used.end(), h) == used.end())
+      used.push_back(h);
   return used;
 }
 
 bool FarmSpec::has_remote_hosts() const {
   for (const auto& a : actors)
-    if (const HostSpec* h = host_of(a); h && h->remote()) return true;
+    if (const HostSpec* h = host_of(a); h && a.has_process() && h->remote()) return true;
   return false;
 }
 

@@ -40,6 +40,10 @@ struct ActorSpec {
   std::vector<int> inputs;  // indices into FarmSpec::actors; a multiplexer's inputs are its replicas
   std::string host = "local";
   SourceLoc loc;
+  // A pool whose clients dispatch to its replicas themselves (actors/runtime/pool_client.hpp): it is a name in the
+  // graph, with no process of its own. Set by settle_pool_dispatch (farm/builders.hpp).
+  bool dispatched_by_clients = false;
+  bool has_process() const { return !dispatched_by_clients; }
   bool is_renderer() const { return kind == kRendererKind; }
   bool is_multiplexer() const { return kind == kMultiplexerKind; }
   bool is_ring_node() const { return kind == kRingNodeKind; }

@@ -22,12 +22,15 @@ struct RendererParams {
   Value::Map to_map() const;
 };
 
-// multiplexer { strategy = "least_loaded", split = 0, window = 4, seed = 0 }
+// multiplexer { strategy = "least_loaded", split = 0, window = 4, seed = 0, dispatch = "clients" }
 struct MultiplexerParams {
   std::string strategy = "least_loaded";  // round_robin | least_loaded | random
   int64_t split = 0;                      // split requests larger than this across replicas (0: never)
   int64_t window = 4;                     // requests in flight to each replica
   int64_t seed = 0;                       // for strategy = "random"
+  // "clients": built-in clients send to the replicas themselves and the pool has no process; "process": every
+  // request goes through a multiplexer process (plug-in clients and pools of pools always do).
+  std::string dispatch = "clients";
   static MultiplexerParams read(const ParamTable& p);
   Value::Map to_map() const;
 };

@@ -713,6 +713,7 @@ std::string finish(Builder& b) {
   for (const auto& [name, value] : b.options.set)
     if (!b.consumed_params.count(name)) return "--set " + name + "=" + value + ": the script has no param '" + name + "'";
   if (auto st = validate(b.spec); !st) return st.error().message;
+  settle_pool_dispatch(b.spec);
   return {};
 }
 

@@ -65,11 +65,26 @@ TEST_F(FailureTest, MultiplexedNetworksRenderThePlainNetworksPixels) {
     return extra;
   };
   Image plain = render(small(kCornell, sets({})), "plain.exr");
-  for (const char* strategy : {"least_loaded", "round_robin", "random"}) {
-    Image pooled = render(small(kPool, sets({std::string("strategy=") + strategy, "replicas=3", "split=300"})),
-                          std::string("pool-") + strategy + ".exr");
-    EXPECT_TRUE(pooled.pixels == plain.pixels) << strategy;
-  }
+  for (const char* dispatch : {"clients", "process"})
+    for (const char* strategy : {"least_loaded", "round_robin", "random"}) {
+      SCOPED_TRACE(std::string(dispatch) + " " + strategy);
+      const std::string stats = path(std::string("pool-") + dispatch + "-" + strategy + ".json");
+      auto args = small(kPool, sets({std::string("strategy=") + strategy, "replicas=3", "split=300",
+                                     std::string("dispatch=") + dispatch}));
+      args.insert(args.end(), {"--stats-json", stats});
+      Image pooled = render(args, std::string("pool-") + dispatch + "-" + strategy + ".exr");
+      EXPECT_TRUE(pooled.pixels == plain.pixels);
+      // Dispatched by its clients, the pool is no process; otherwise its multiplexer is one, with a pid.
+      // (Keys are written in order: the flag comes before the name, a pid after it.)
+      const std::string json = read_file(stats);
+      const size_t name = json.find("\"name\": \"direct\"");
+      ASSERT_NE(name, std::string::npos) << json;
+      const size_t open = json.rfind('{', name);
+      const std::string entry = json.substr(open, json.find('}', name) - open);
+      const bool clients = std::string(dispatch) == "clients";
+      EXPECT_EQ(entry.find("\"dispatched_by_clients\": true") != std::string::npos, clients) << entry;
+      EXPECT_EQ(entry.find("\"pid\"") == std::string::npos, clients) << entry;
+    }
   Image nested = render({"run", kNested}, "nested.exr");
   EXPECT_TRUE(nested.pixels == plain.pixels) << "pool of pools";
   Image sync = render(small(kCornell, {"width=16", "height=16", "spp=2", "tile=16", "mode=sync"}), "sync.exr");

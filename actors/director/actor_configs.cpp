@@ -15,9 +15,23 @@ ActorConfig config_for(const FarmSpec& spec, int actor, const std::function<std:
   config.camera = spec.camera;
   config.image = spec.image;
   const int64_t window = input_window(a);
-  for (int in : a.inputs)
-    config.inputs.push_back({spec.actors[static_cast<size_t>(in)].name, endpoint_of(in), window,
-                             key_of ? key_of(in) : std::string()});
+  for (int in : a.inputs) {
+    const ActorSpec& input = spec.actors[static_cast<size_t>(in)];
+    if (!input.dispatched_by_clients) {
+      config.inputs.push_back({input.name, endpoint_of(in), window, key_of ? key_of(in) : std::string()});
+      continue;
+    }
+    // A pool this actor dispatches to itself: its replicas, each with the pool's window.
+    const MultiplexerParams pool = MultiplexerParams::read(ParamTable(input.params, input.name));
+    InputSpec spec_in{input.name, "", window, ""};
+    spec_in.strategy = pool.strategy;
+    spec_in.split = pool.split;
+    spec_in.seed = pool.seed;
+    for (int r : input.inputs)
+      spec_in.replicas.push_back({spec.actors[static_cast<size_t>(r)].name, endpoint_of(r), pool.window,
+                                  key_of ? key_of(r) : std::string()});
+    config.inputs.push_back(std::move(spec_in));
+  }
   config.runtime = a.runtime;
   config.debug = a.debug;
   config.heartbeat_timeout = spec.heartbeat_timeout;

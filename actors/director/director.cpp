@@ -313,7 +313,8 @@ class Director final : public ControlOut, public Outbox {
     director_keys_ = wire::make_curve_keypair();
     if (director_keys_.public_key.empty()) throw FarmFailure{"cannot make CURVE keys (ZeroMQ built without CURVE?)"};
     std::set<std::string> allowed;
-    for (const auto& a : spec_.actors) allowed.insert((actor_keys_[a.name] = wire::make_curve_keypair()).public_key);
+    for (const auto& a : spec_.actors)
+      if (a.has_process()) allowed.insert((actor_keys_[a.name] = wire::make_curve_keypair()).public_key);
     authenticator_ = std::make_unique<wire::Authenticator>(allowed);
     control_.make_curve_server(director_keys_.secret_key);
     authenticator_->watch(control_);
@@ -329,7 +330,7 @@ class Director final : public ControlOut, public Outbox {
 
   void configure() {
     for (auto& [name, a] : supervisor_.actors())
-      if (!a.lost) check(configure_actor(a));
+      if (!a.lost && a.spec->has_process()) check(configure_actor(a));
   }
 
   // Where `receiver` reaches its input `input`: inputs on the same host over their IPC socket, without CURVE (the
@@ -369,7 +370,21 @@ class Director final : public ControlOut, public Outbox {
     if (!actor_keys_.empty())
       key_of = [&](int i) { return actor_keys_.at(spec_.actors[static_cast<size_t>(i)].name).public_key; };
     ActorConfig config = config_for(spec_, a.index, endpoint_of, key_of);
-    for (auto& in : config.inputs) std::tie(in.endpoint, in.key) = endpoint_for(a, supervisor_.at(in.name));
+    for (auto& in : config.inputs) {
+      if (!in.is_pool()) {
+        std::tie(in.endpoint, in.key) = endpoint_for(a, supervisor_.at(in.name));
+        continue;
+      }
+      // A replica lost before this client was configured is left out (it may never have said where it listens).
+      std::vector<InputSpec> live;
+      for (auto& r : in.replicas) {
+        const ActorRecord& replica = supervisor_.at(r.name);
+        if (replica.lost) continue;
+        std::tie(r.endpoint, r.key) = endpoint_for(a, replica);
+        live.push_back(std::move(r));
+      }
+      in.replicas = std::move(live);
+    }
     if (!scene_bytes_.empty()) {
       config.scene.cache = scene_paths_.at(a.spec->host);
       config.scene.hash = scene_hash_;
@@ -633,6 +648,7 @@ class Director final : public ControlOut, public Outbox {
   }
 
   std::string actor_state(const ActorRecord& a) const {
+    if (!a.spec->has_process()) return "pool";  // dispatched by its clients: nothing runs under its name
     if (a.lost) return "lost";
     if (a.rejoining) return "restarting";
     if (a.exited || a.said_bye) return "done";

@@ -30,7 +30,7 @@ canvas { image-rendering: pixelated; max-width: 100%; background: #000; }
 svg text { fill: #d8dce3; font-size: 11px; }
 .state-launching { fill: #4a4f5a; } .state-configuring, .state-setup { fill: #7a6a2a; }
 .state-ready { fill: #33546e; } .state-rendering { fill: #2f6b45; } .state-done { fill: #3b3f47; }
-.state-lost { fill: #8a2f2f; } .state-restarting { fill: #8a5a2f; }
+.state-lost { fill: #8a2f2f; } .state-restarting { fill: #8a5a2f; } .state-pool { fill: #2b3340; }
 </style>
 </head>
 <body>

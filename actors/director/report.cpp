@@ -24,6 +24,10 @@ void print_report(const FarmSpec& spec, const Supervisor& supervisor, const RunF
                "MiB in", "MiB out", "busy s", "cpu s", "peakq");
   for (const auto& a : spec.actors) {
     const ActorRecord& s = supervisor.at(a.name);
+    if (!a.has_process()) {
+      std::fprintf(stderr, "%-14s %-10s %8s  dispatched by its clients\n", a.name.c_str(), "pool", "-");
+      continue;
+    }
     if (s.lost) {
       std::fprintf(stderr, "%-14s %-10s %8d  lost: %s\n", a.name.c_str(), a.kind.c_str(), static_cast<int>(s.pid),
                    s.loss.c_str());
@@ -81,7 +85,8 @@ Status write_stats_json(const FarmSpec& spec, const Supervisor& supervisor, cons
     Value entry = s.stats.is_map() ? s.stats : Value(Value::Map{});
     entry.as_map()["name"] = a.name;
     entry.as_map()["kind"] = a.kind;
-    entry.as_map()["pid"] = static_cast<int64_t>(s.pid);
+    if (a.has_process()) entry.as_map()["pid"] = static_cast<int64_t>(s.pid);
+    else entry.as_map()["dispatched_by_clients"] = true;
     if (s.lost) entry.as_map()["lost"] = s.loss;
     actors.push_back(std::move(entry));
   }

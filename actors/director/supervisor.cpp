@@ -42,6 +42,7 @@ Status Supervisor::launch(const std::string& director_endpoint, const std::strin
   local_address_ = local_address;
   stdin_of_ = stdin_of;
   for (const auto& a : spec_.actors) {
+    if (!a.has_process()) continue;  // a pool its clients dispatch to
     auto pid = start(a);
     if (!pid) return pid.error();
     ActorRecord& r = actors_.at(a.name);
@@ -92,7 +93,7 @@ void Supervisor::send_bye_to_all() {
 bool Supervisor::all(const std::function<bool(const ActorRecord&)>& done, std::string* late) const {
   bool all = true;
   for (const auto& [name, a] : actors_) {
-    if (a.lost || done(a)) continue;
+    if (a.lost || !a.spec->has_process() || done(a)) continue;
     all = false;
     if (late) *late += (late->empty() ? "'" : ", '") + name + "'";
   }
@@ -283,8 +284,19 @@ Status Supervisor::lose(ActorRecord& a, const std::string& why) {
   }
   if (auto st = events_.lost(a, why); !st) return st;
   log_warn("replica '" + a.name() + "' " + why + "; '" + pool.name() + "' sends its work to the others");
-  // A pool not yet configured hears nothing: its CONFIG will leave the replica out.
-  if (pool.configured) send(pool.name(), wire::make(MsgType::peer_down, "director", Value::Map{{"name", a.name()}}));
+  // Whoever dispatches to the pool hears of it: its multiplexer, or each of its clients. One not yet configured
+  // hears nothing: its CONFIG will leave the replica out.
+  const wire::Message down = wire::make(MsgType::peer_down, "director", Value::Map{{"name", a.name()}});
+  if (pool.spec->has_process()) {
+    if (pool.configured) send(pool.name(), down);
+    return Ok{};
+  }
+  for (auto& [name, client] : actors_) {
+    const auto& inputs = client.spec->inputs;
+    if (client.configured && !client.lost && !client.exited &&
+        std::find(inputs.begin(), inputs.end(), pool.index) != inputs.end())
+      send(name, down);
+  }
   return Ok{};
 }
 
@@ -295,7 +307,7 @@ void Supervisor::forgive_silence(Clock::time_point now) {
 Status Supervisor::check_heartbeats(Clock::time_point now) {
   if (stage_ <= Stage::hello) return Ok{};  // the hello timeout covers start-up
   for (auto& [name, a] : actors_) {
-    if (a.exited || a.said_bye || a.lost || a.killed_hung) continue;
+    if (a.exited || a.said_bye || a.lost || a.killed_hung || !a.spec->has_process()) continue;
     if (seconds_between(a.last_seen, now) <= spec_.heartbeat_timeout) continue;
     if (recoverable(a) || restartable(a)) {
       // A hung process (e.g. SIGSTOPped) counts as dead; SIGKILL makes sure it can never answer late.

@@ -1,5 +1,7 @@
 #include "actors/runtime/actor_config.hpp"
 
+#include "actors/runtime/scheduler.hpp"
+
 namespace lf {
 
 namespace {
@@ -7,15 +9,43 @@ namespace {
 Value::Array inputs_value(const std::vector<InputSpec>& inputs) {
   Value::Array ins;
   for (const auto& in : inputs) {
-    Value::Map entry{{"name", in.name}, {"endpoint", in.endpoint}, {"window", in.window}};
+    Value::Map entry{{"name", in.name}, {"window", in.window}};
+    if (in.is_pool())
+      entry["pool"] = Value::Map{{"strategy", in.strategy}, {"split", in.split}, {"seed", in.seed},
+                                 {"replicas", inputs_value(in.replicas)}};
+    else
+      entry["endpoint"] = in.endpoint;
     if (!in.key.empty()) entry["key"] = in.key;
     ins.push_back(std::move(entry));
   }
   return ins;
 }
 
-// A list of {name, endpoint, window?, key?} under `field` ("inputs", "geometry", a pool's "peers"); absent is empty.
-Status read_inputs(const Value& body, const char* field, std::vector<InputSpec>& out) {
+Status read_inputs(const Value& body, const char* field, std::vector<InputSpec>& out, bool pools_allowed = false);
+
+// An input's `pool` {strategy, split, seed, replicas: [...]} (a pool this actor dispatches to itself).
+Status read_pool(const std::string& name, const Value& pool, InputSpec& in) {
+  const Value* strategy = pool.find("strategy");
+  const Value* split = pool.find("split");
+  const Value* seed = pool.find("seed");
+  const std::string where = "CONFIG input '" + name + "': pool ";
+  if (!strategy || !strategy->is_string() || !Scheduler::parse(strategy->as_string()))
+    return make_error(where + "strategy must be round_robin, least_loaded or random", ErrorCode::bad_request);
+  if (split && (!split->is_int() || split->as_int() < 0))
+    return make_error(where + "split must be a non-negative integer", ErrorCode::bad_request);
+  if (seed && (!seed->is_int() || seed->as_int() < 0))
+    return make_error(where + "seed must be a non-negative integer", ErrorCode::bad_request);
+  if (auto st = read_inputs(pool, "replicas", in.replicas); !st) return st;
+  if (in.replicas.empty()) return make_error(where + "has no replicas", ErrorCode::bad_request);
+  in.strategy = strategy->as_string();
+  in.split = split ? split->as_int() : 0;
+  in.seed = seed ? seed->as_int() : 0;
+  return Ok{};
+}
+
+// A list of {name, endpoint, window?, key?} under `field` ("inputs", "geometry", a pool's "peers" or "replicas");
+// absent is empty. Where pools are allowed (CONFIG inputs), an entry may hold `pool` instead of `endpoint`.
+Status read_inputs(const Value& body, const char* field, std::vector<InputSpec>& out, bool pools_allowed) {
   const Value* ins = body.find(field);
   if (!ins || ins->is_nil()) return Ok{};
   if (!ins->is_array()) return make_error(std::string("CONFIG '") + field + "' must be a list", ErrorCode::bad_request);
@@ -23,10 +53,22 @@ Status read_inputs(const Value& body, const char* field, std::vector<InputSpec>&
     const Value* name = in.find("name");
     const Value* endpoint = in.find("endpoint");
     const Value* window = in.find("window");
+    const Value* pool = pools_allowed ? in.find("pool") : nullptr;
+    if (name && name->is_string() && pool && pool->is_map() && !endpoint) {
+      InputSpec spec{name->as_string(), "", 4, ""};
+      if (window && (!window->is_int() || window->as_int() < 1 || window->as_int() > 1024))
+        return make_error("CONFIG input '" + name->as_string() + "': window must be an integer in [1, 1024]",
+                          ErrorCode::bad_request);
+      if (window) spec.window = window->as_int();
+      if (auto st = read_pool(spec.name, *pool, spec); !st) return st;
+      out.push_back(std::move(spec));
+      continue;
+    }
     if (!name || !name->is_string() || !endpoint || !endpoint->is_string())
       return make_error(std::string("CONFIG names ") +
                             (std::string(field) == "inputs"     ? "an input"
                              : std::string(field) == "geometry" ? "a geometry actor"
+                             : std::string(field) == "replicas" ? "a pool replica"
                                                                 : "a pool peer") +
                             " without name or endpoint",
                         ErrorCode::bad_request);
@@ -106,7 +148,7 @@ Result<ActorConfig> ActorConfig::from_value(const Value& body) {
   c.image = ImageSpec::from_value(*image);
   c.runtime = std::move(*runtime);
   c.debug = std::move(*debug);
-  if (auto st = read_inputs(body, "inputs", c.inputs); !st) return st.error();
+  if (auto st = read_inputs(body, "inputs", c.inputs, true); !st) return st.error();
   if (auto st = read_inputs(body, "geometry", c.geometry); !st) return st.error();
   if (!c.geometry.empty()) {
     const Value* boxes = body.find("part_boxes");

@@ -18,6 +18,14 @@ struct InputSpec {
   std::string endpoint;  // its data socket
   int64_t window = 4;    // requests this actor keeps in flight to it
   std::string key;       // its CURVE public key (Z85), when the farm speaks CURVE
+  // A pool this actor dispatches to itself (CONFIG inputs[i].pool, docs/PROTOCOL.md): its live replicas, each
+  // connected like an input with its own window, and how to choose among them. `endpoint` and `key` are then empty,
+  // and `window` bounds this actor's requests to the pool as a whole.
+  std::vector<InputSpec> replicas;
+  std::string strategy;  // round_robin | least_loaded | random; empty: a single actor, not a pool
+  int64_t split = 0;     // split shade requests larger than this across replicas (0: never)
+  int64_t seed = 0;      // for strategy random
+  bool is_pool() const { return !strategy.empty(); }
 };
 
 // A replica's place in its pool: all_gather answers in replica order.

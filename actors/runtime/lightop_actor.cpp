@@ -43,8 +43,8 @@ class RemoteInputs final : public Inputs {
         ++state->remaining;
         auto* out = q.radiance;
         const std::string input_name = rt_.input_name(q.input);
-        rt_.input(q.input).request(
-            wire::Op::shade, encode_shade_request(*q.points, begin, end),
+        rt_.ask_input(
+            q.input, wire::Op::shade, encode_shade_request(*q.points, begin, end),
             [state, out, begin, end, input_name](Result<wire::Message> r) {
               if (!r) return state->complete_one(r.error().message);
               auto radiance = decode_radiance(r->body, end - begin);

@@ -51,7 +51,7 @@ static Task trace_rounds(Runtime& rt, const Scene& scene, const std::vector<Boun
         }
         ++state->remaining;
         ++requests;
-        const std::string part_name = rt.input_name(rt.input_count() + p);
+        const std::string part_name = rt.geometry_name(p);
         const size_t triangles = scene.triangle_count();
         rt.geometry(p).request(wire::Op::trace, encode_trace_request(chunk, Any),
                                [state, r, begin, end, part_name, triangles](Result<wire::Message> reply) {

@@ -303,6 +303,10 @@ void Runtime::send_stats_and_bye() {
     Value detail = actor_->extra_stats();
     if (!detail.is_nil()) stats.as_map()["detail"] = std::move(detail);
   }
+  Value::Array pools;
+  for (const auto& in : lighting_)
+    if (in.pool) pools.push_back(in.pool->stats());
+  if (!pools.empty()) stats.as_map()["pools"] = std::move(pools);
   send_control(wire::make(MsgType::stats, args_.name, std::move(stats)));
   send_control(wire::make(MsgType::bye, args_.name));
 }
@@ -318,17 +322,48 @@ void Runtime::handle_control(wire::Message& m, Actor& actor) {
       heartbeat_interval_ = std::min(1.0, heartbeat_timeout_ / 4);
       // Connect to every input before the actor configures, so that it may ask them during setup.
       request_timeout_ = config->request_timeout;
-      std::vector<InputSpec> no_peers;
-      for (const auto* list : {&config->inputs, &config->geometry, config->pool ? &config->pool->peers : &no_peers})
-        for (const auto& in : *list) {
-          auto client = connect_input(in.name, in.endpoint, in.key, static_cast<size_t>(in.window));
-          if (!client) return fail(client.error().message);
-          inputs_.push_back(std::move(*client));
-          input_names_.push_back(in.name);
-          input_windows_.push_back(static_cast<size_t>(in.window));
+      auto connect = [&](const InputSpec& in) -> Status {
+        auto client = connect_input(in.name, in.endpoint, in.key, static_cast<size_t>(in.window));
+        if (!client) return client.error();
+        inputs_.push_back(std::move(*client));
+        input_names_.push_back(in.name);
+        input_windows_.push_back(static_cast<size_t>(in.window));
+        return Ok{};
+      };
+      for (const auto& in : config->inputs) {
+        LightingInput input;
+        input.name = in.name;
+        if (!in.is_pool()) {
+          input.connection = inputs_.size();
+          if (auto st = connect(in); !st) return fail(st.error().message);
+        } else {
+          std::vector<PoolClient::Replica> replicas;
+          for (const auto& replica : in.replicas) {
+            if (auto st = connect(replica); !st) return fail(st.error().message);
+            replicas.push_back({replica.name, nullptr});
+          }
+          PoolOptions options;
+          options.strategy = *Scheduler::parse(in.strategy);
+          options.split = static_cast<size_t>(in.split);
+          options.window = static_cast<size_t>(in.window);
+          // As a multiplexer process does: a stall limit, not a balancing rule (actors/kinds/multiplexer_actor.cpp).
+          options.stall_cap = 4 * static_cast<size_t>(in.replicas.front().window);
+          options.seed = static_cast<uint64_t>(in.seed);
+          for (size_t k = 0; k < replicas.size(); ++k)
+            replicas[k].connection = inputs_[inputs_.size() - replicas.size() + k].get();
+          input.pool = std::make_unique<PoolClient>(in.name, std::move(replicas), options);
         }
-      lighting_inputs_ = config->inputs.size();
+        lighting_.push_back(std::move(input));
+      }
+      first_geometry_ = inputs_.size();
       geometry_inputs_ = config->geometry.size();
+      for (const auto& in : config->geometry)
+        if (auto st = connect(in); !st) return fail(st.error().message);
+      first_pool_peer_ = inputs_.size();
+      pool_peers_ = config->pool ? config->pool->peers.size() : 0;
+      if (config->pool)
+        for (const auto& in : config->pool->peers)
+          if (auto st = connect(in); !st) return fail(st.error().message);
       inputs_changed_ = true;
       auto started = Clock::now();
       Status st = actor.configure(*config, *this);
@@ -375,7 +410,13 @@ void Runtime::handle_control(wire::Message& m, Actor& actor) {
     case MsgType::heartbeat: return;
     case MsgType::peer_down: {
       const Value* name = m.body.find("name");
-      if (name && name->is_string()) actor.on_peer_down(name->as_string(), *this);
+      if (!name || !name->is_string()) return;
+      for (auto& in : lighting_)
+        if (in.pool && in.pool->lost(name->as_string())) {
+          if (in.pool->live() == 0) fail("lost the last replica of '" + in.name + "'");
+          return;
+        }
+      actor.on_peer_down(name->as_string(), *this);
       return;
     }
     case MsgType::peer_moved: {
@@ -401,6 +442,12 @@ void Runtime::handle_control(wire::Message& m, Actor& actor) {
     }
     default: log_warn("ignored a " + std::string(wire::type_name(m.header.type)) + " from the director");
   }
+}
+
+void Runtime::ask_input(size_t i, wire::Op op, Value body, wire::RequestClient::Callback callback) {
+  LightingInput& in = lighting_[i];
+  if (in.pool) return in.pool->request(op, std::move(body), std::move(callback));
+  inputs_[in.connection]->request(op, std::move(body), std::move(callback));
 }
 
 Result<std::unique_ptr<wire::RequestClient>> Runtime::connect_input(const std::string& name, const std::string& endpoint,

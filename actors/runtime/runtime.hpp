@@ -25,6 +25,7 @@
 #include <vector>
 
 #include "actors/runtime/actor_config.hpp"
+#include "actors/runtime/pool_client.hpp"
 #include "core/log.hpp"
 #include "core/value.hpp"
 #include "transport/client.hpp"
@@ -105,18 +106,24 @@ class Runtime {
   // The standard answer to an operation this actor does not serve.
   void reply_unknown_op(const std::string& peer, const wire::Message& request, const std::string& served);
 
-  size_t input_count() const { return lighting_inputs_; }
-  wire::RequestClient& input(size_t i) { return *inputs_[i]; }
-  const std::string& input_name(size_t i) const { return input_names_[i]; }
+  // The lighting network's inputs, in script order. An input is one actor, or a pool whose replicas this actor
+  // dispatches to itself (CONFIG inputs[i].pool): ask_input() serves both; input(i) is the connection of a single
+  // actor (ring nodes, a multiplexer's replicas).
+  size_t input_count() const { return lighting_.size(); }
+  void ask_input(size_t i, wire::Op op, Value body, wire::RequestClient::Callback callback);
+  bool input_is_pool(size_t i) const { return lighting_[i].pool != nullptr; }
+  wire::RequestClient& input(size_t i) { return *inputs_[lighting_[i].connection]; }
+  const std::string& input_name(size_t i) const { return lighting_[i].name; }
   // A partitioned scene's geometry actors (CONFIG 'geometry', part order), connected like inputs and polled with
   // them, but not inputs of the lighting network.
   size_t geometry_count() const { return geometry_inputs_; }
-  wire::RequestClient& geometry(size_t part) { return *inputs_[lighting_inputs_ + part]; }
+  wire::RequestClient& geometry(size_t part) { return *inputs_[first_geometry_ + part]; }
+  const std::string& geometry_name(size_t part) const { return input_names_[first_geometry_ + part]; }
   // The other replicas of this actor's pool when it shares its setup peer to peer (CONFIG pool.peers, replica
   // order), connected like inputs; not inputs of the lighting network.
-  size_t pool_peer_count() const { return inputs_.size() - lighting_inputs_ - geometry_inputs_; }
-  wire::RequestClient& pool_peer(size_t k) { return *inputs_[lighting_inputs_ + geometry_inputs_ + k]; }
-  const std::string& pool_peer_name(size_t k) const { return input_names_[lighting_inputs_ + geometry_inputs_ + k]; }
+  size_t pool_peer_count() const { return pool_peers_; }
+  wire::RequestClient& pool_peer(size_t k) { return *inputs_[first_pool_peer_ + k]; }
+  const std::string& pool_peer_name(size_t k) const { return input_names_[first_pool_peer_ + k]; }
 
   using DirectorCallback = std::function<void(Result<wire::Message>)>;
   // A request to the director (tiles, results), answered by a REPLY on the control channel.
@@ -153,10 +160,17 @@ class Runtime {
   std::string local_dir_, local_endpoint_;
   std::map<std::string, wire::Socket*> reply_via_;
   RateLimitedLog bad_messages_;  // anyone can send garbage; it must not flood the log
+  // Every connection this actor asks on: single lighting inputs and pools' replicas, geometry actors, pool peers.
   std::vector<std::unique_ptr<wire::RequestClient>> inputs_;
   std::vector<std::string> input_names_;
-  size_t lighting_inputs_ = 0;  // inputs_ holds the lighting inputs, then the geometry actors, then the pool peers
-  size_t geometry_inputs_ = 0;
+  struct LightingInput {
+    std::string name;
+    size_t connection = 0;              // into inputs_, for a single actor
+    std::unique_ptr<PoolClient> pool;   // for a pool dispatched here
+  };
+  std::vector<LightingInput> lighting_;
+  size_t first_geometry_ = 0, geometry_inputs_ = 0;
+  size_t first_pool_peer_ = 0, pool_peers_ = 0;
   std::map<uint64_t, DirectorCallback> director_pending_;
   uint64_t next_director_id_ = 1;
   ActorStats stats_;

@@ -1,4 +1,4 @@
-#include "actors/kinds/scheduler.hpp"
+#include "actors/runtime/scheduler.hpp"
 
 #include "render/sampler.hpp"
 

@@ -1,5 +1,5 @@
 // Strategies against scripted fake replicas: no processes, no sockets.
-#include "actors/kinds/scheduler.hpp"
+#include "actors/runtime/scheduler.hpp"
 
 #include <gtest/gtest.h>
 

@@ -1,0 +1,132 @@
+#include "actors/runtime/pool_client.hpp"
+
+#include <algorithm>
+#include <limits>
+
+#include "actors/codecs/shade_codec.hpp"
+#include "core/log.hpp"
+
+namespace lf {
+
+PoolClient::PoolClient(std::string name, std::vector<Replica> replicas, const PoolOptions& options)
+    : name_(std::move(name)),
+      replicas_(std::move(replicas)),
+      options_(options),
+      scheduler_(options.strategy, replicas_.size(), options.stall_cap, options.seed) {}
+
+void PoolClient::request(wire::Op op, Value body, wire::RequestClient::Callback callback) {
+  const uint64_t rid = next_request_++;
+  Request& req = requests_[rid];
+  req.op = op;
+  req.callback = std::move(callback);
+  if (const Value* n = body.find("n"); n && n->is_int() && n->as_int() >= 0) req.points = static_cast<size_t>(n->as_int());
+  req.body = std::move(body);
+  waiting_.push_back(rid);
+  pump();
+}
+
+void PoolClient::pump() {
+  while (!waiting_.empty() && (options_.window == 0 || started_ < options_.window) && scheduler_.live() > 0) {
+    const uint64_t rid = waiting_.front();
+    waiting_.erase(waiting_.begin());
+    start(rid);
+  }
+}
+
+void PoolClient::start(uint64_t rid) {
+  Request& req = requests_.at(rid);
+  req.started = true;
+  ++started_;
+  const size_t count = req.points;
+  const size_t pieces = req.op == wire::Op::shade && options_.split > 0 && count > options_.split
+                            ? std::min(scheduler_.live(), (count + options_.split - 1) / options_.split)
+                            : 1;
+  if (pieces <= 1) {
+    pieces_.emplace(next_piece_, Piece{rid, 0, count, 0, std::move(req.body)});
+    dispatch(next_piece_++);
+    return;
+  }
+  // Splitting needs the points themselves; the replicas validate them against the scene.
+  auto points = decode_shade_request(req.body, std::numeric_limits<size_t>::max());
+  if (!points) return finish(rid, make_error(points.error().message, ErrorCode::bad_request));
+  req.body = Value();
+  req.pieces_left = pieces;
+  req.radiance.assign(count, RGB{});
+  for (size_t i = 0; i < pieces; ++i) {
+    const size_t begin = count * i / pieces, end = count * (i + 1) / pieces;
+    pieces_.emplace(next_piece_, Piece{rid, begin, end, 0, encode_shade_request(*points, begin, end)});
+    dispatch(next_piece_++);
+  }
+}
+
+void PoolClient::dispatch(uint64_t pid) {
+  Piece& piece = pieces_.at(pid);
+  const auto r = scheduler_.pick();
+  if (!r) return;  // nobody left: the owner stops (lost() said so)
+  piece.replica = *r;
+  scheduler_.sent(*r, piece.end - piece.begin);
+  const wire::Op op = requests_.at(piece.request).op;
+  replicas_[*r].connection->request(op, piece.body, [this, pid, replica = *r](Result<wire::Message> reply) {
+    on_answer(pid, replica, std::move(reply));
+  });
+}
+
+void PoolClient::on_answer(uint64_t pid, size_t replica, Result<wire::Message> reply) {
+  auto it = pieces_.find(pid);
+  if (it == pieces_.end() || it->second.replica != replica) return;  // answered already, or moved on
+  Piece piece = std::move(it->second);
+  pieces_.erase(it);
+  scheduler_.answered(replica, reply ? reply->header.queue : 0);
+  auto rq = requests_.find(piece.request);
+  if (rq == requests_.end()) return;  // the request already failed
+  Request& req = rq->second;
+  if (!reply || req.radiance.empty()) return finish(piece.request, std::move(reply));  // whole: passed on as it came
+  auto radiance = decode_radiance(reply->body, piece.end - piece.begin);
+  if (!radiance) return finish(piece.request, make_error(replicas_[replica].name + ": " + radiance.error().message, ErrorCode::shade_failed));
+  std::copy(radiance->begin(), radiance->end(), req.radiance.begin() + static_cast<ptrdiff_t>(piece.begin));
+  if (--req.pieces_left > 0) return;
+  wire::Message whole = std::move(*reply);
+  whole.body = encode_radiance(req.radiance);
+  finish(piece.request, std::move(whole));
+}
+
+void PoolClient::finish(uint64_t rid, Result<wire::Message> result) {
+  auto rq = requests_.find(rid);
+  auto callback = std::move(rq->second.callback);
+  if (rq->second.started) --started_;
+  requests_.erase(rq);
+  // A failed request's other pieces are dropped; their answers then find nothing.
+  for (auto it = pieces_.begin(); it != pieces_.end();) it = it->second.request == rid ? pieces_.erase(it) : std::next(it);
+  callback(std::move(result));
+  pump();
+}
+
+bool PoolClient::lost(const std::string& name) {
+  for (size_t r = 0; r < replicas_.size(); ++r) {
+    if (replicas_[r].name != name) continue;
+    if (!scheduler_.is_live(r)) return true;
+    scheduler_.lost(r);
+    replicas_[r].connection->abandon_all();
+    std::vector<uint64_t> again;
+    for (const auto& [pid, piece] : pieces_)
+      if (piece.replica == r) again.push_back(pid);
+    log_warn("replica '" + name + "' of '" + name_ + "' is gone; sending its " + std::to_string(again.size()) +
+             " packets to the others");
+    if (scheduler_.live() == 0) return true;
+    for (uint64_t pid : again) dispatch(pid);
+    return true;
+  }
+  return false;
+}
+
+Value PoolClient::stats() const {
+  Value::Array replicas;
+  for (size_t r = 0; r < replicas_.size(); ++r)
+    replicas.push_back(Value::Map{{"replica", replicas_[r].name},
+                                  {"packets", scheduler_.packets_sent(r)},
+                                  {"points", scheduler_.points_sent(r)},
+                                  {"lost", !scheduler_.is_live(r)}});
+  return Value::Map{{"pool", name_}, {"replicas", std::move(replicas)}};
+}
+
+}  // namespace lf

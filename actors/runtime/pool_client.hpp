@@ -1,0 +1,89 @@
+#pragma once
+// PoolClient: a pool of identical LightOps (its replicas) used as one input. Each request goes whole to the
+// replica the Scheduler picks, or, when it holds more than `split` points and several replicas live, in near-equal
+// pieces to several; the answer reaches the caller once, as if one LightOp had given it. A lost replica's pieces go
+// again to the live ones, and whatever it still answers is dropped, so each piece counts once.
+//
+// Two owners use it: the runtime of every built-in actor whose input is a pool (CONFIG gives it the replicas, and
+// it talks to them directly: no hop through a multiplexer process), and the multiplexer actor, which serves a pool
+// to clients that cannot dispatch themselves (plug-ins, a pool of pools).
+//
+// The connections (one RequestClient per replica, each with its own window) belong to the owner; the pool only
+// sends on them and is told when a replica is gone.
+#include <cstdint>
+#include <map>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "actors/runtime/scheduler.hpp"
+#include "core/value.hpp"
+#include "render/math.hpp"
+#include "transport/client.hpp"
+
+namespace lf {
+
+struct PoolOptions {
+  Scheduler::Strategy strategy = Scheduler::Strategy::least_loaded;
+  size_t split = 0;     // split shade requests larger than this across replicas (0: never)
+  size_t window = 0;    // requests of this client in progress at once, the rest wait in order (0: no limit)
+  size_t stall_cap = 16;  // a replica holding this many unanswered pieces gets no more while another has room
+  uint64_t seed = 0;    // for Strategy::random
+};
+
+class PoolClient {
+ public:
+  struct Replica {
+    std::string name;
+    wire::RequestClient* connection = nullptr;
+  };
+  PoolClient(std::string name, std::vector<Replica> replicas, const PoolOptions& options);
+
+  const std::string& name() const { return name_; }
+  // Same contract as RequestClient::request: the callback runs once, with the reply (body {L} for shade) or the
+  // error of the replica that failed it.
+  void request(wire::Op op, Value body, wire::RequestClient::Callback callback);
+  // Replica `name` is gone. Returns false if it is not one of this pool's; otherwise its pieces are sent again to
+  // the live replicas (none live: the waiting requests stay, and live() says 0).
+  bool lost(const std::string& replica);
+
+  size_t live() const { return scheduler_.live(); }
+  size_t in_progress() const { return requests_.size(); }
+  // Per replica: packets and points sent, whether it was lost.
+  Value stats() const;
+
+ private:
+  struct Request {
+    wire::Op op;
+    Value body;  // until started
+    wire::RequestClient::Callback callback;
+    size_t points = 0;
+    size_t pieces_left = 1;
+    bool started = false;
+    std::vector<RGB> radiance;  // split requests gather here
+  };
+  struct Piece {
+    uint64_t request;
+    size_t begin, end;
+    size_t replica = 0;
+    Value body;  // kept until answered, to send again if its replica is lost
+  };
+
+  void pump();
+  void start(uint64_t rid);
+  void dispatch(uint64_t pid);
+  void on_answer(uint64_t pid, size_t replica, Result<wire::Message> reply);
+  void finish(uint64_t rid, Result<wire::Message> result);
+
+  std::string name_;
+  std::vector<Replica> replicas_;
+  PoolOptions options_;
+  Scheduler scheduler_;
+  std::map<uint64_t, Request> requests_;
+  std::vector<uint64_t> waiting_;  // requests not started (over the window), in arrival order
+  size_t started_ = 0;
+  std::map<uint64_t, Piece> pieces_;
+  uint64_t next_request_ = 1, next_piece_ = 1;
+};
+
+}  // namespace lf

@@ -1,0 +1,255 @@
+// PoolClient over inproc:// without processes: the test plays the replicas (router sockets that hold what reaches
+// them) and answers by hand. Then a whole actor runtime whose input is a pool (CONFIG inputs[0].pool): its requests
+// reach the replicas directly, a PEER_DOWN moves a lost replica's work to the other, and STATS say who got what.
+#include "actors/runtime/pool_client.hpp"
+
+#include <gtest/gtest.h>
+
+#include "actors/codecs/shade_codec.hpp"
+#include "actors/runtime/inproc_actor.hpp"
+
+namespace lf {
+namespace {
+
+using wire::MsgType;
+
+struct Held {
+  std::string peer;
+  uint64_t id;
+  size_t n;
+  float first_k;  // the first point's k, to tell pieces apart
+};
+
+ShadingPoints points(size_t n, size_t first_k = 0) {
+  ShadingPoints pts;
+  for (size_t i = 0; i < n; ++i) pts.push_back({1, 1, 1}, {0, 1, 0}, {0, 1, 0}, 0, first_k + i);
+  return pts;
+}
+
+class Replicas {
+ public:
+  explicit Replicas(size_t count) {
+    static int n = 0;
+    ++n;
+    for (size_t r = 0; r < count; ++r) {
+      sockets.push_back(std::make_unique<wire::Socket>(wire::Socket::Kind::router));
+      endpoints.push_back(*sockets.back()->bind("inproc://pool-replica-" + std::to_string(n) + "-" + std::to_string(r)));
+    }
+  }
+  // Everything that reached replica r within `seconds`, while `poll` keeps the client reading.
+  std::vector<Held> drain(size_t r, const std::function<void()>& poll, double seconds = 0.2) {
+    std::vector<Held> got;
+    const auto until = std::chrono::steady_clock::now() + std::chrono::duration<double>(seconds);
+    while (std::chrono::steady_clock::now() < until) {
+      poll();
+      auto in = sockets[r]->receive();
+      if (!in) {
+        std::this_thread::sleep_for(std::chrono::milliseconds(2));
+        continue;
+      }
+      EXPECT_TRUE(in->message.ok());
+      auto decoded = decode_shade_request(in->message->body, 1);
+      EXPECT_TRUE(decoded.ok());
+      got.push_back({in->peer, in->message->header.id, decoded->size(), decoded->size() ? float(decoded->key[0]) : -1.f});
+    }
+    return got;
+  }
+  // Answers with L = (k, r, 0) for each point, so the caller can check every point came back in its place.
+  void answer(size_t r, const Held& h) {
+    std::vector<RGB> L;
+    for (size_t i = 0; i < h.n; ++i) L.push_back({h.first_k + float(i), float(r), 0});
+    sockets[r]->send_to(h.peer, wire::make_reply("replica-" + std::to_string(r), h.id, encode_radiance(L)));
+  }
+  std::vector<std::unique_ptr<wire::Socket>> sockets;
+  std::vector<std::string> endpoints;
+};
+
+class PoolClientTest : public ::testing::Test {
+ protected:
+  void make(size_t count, PoolOptions options, size_t replica_window = 4) {
+    replicas = std::make_unique<Replicas>(count);
+    std::vector<PoolClient::Replica> list;
+    for (size_t r = 0; r < count; ++r) {
+      connections.push_back(std::make_unique<wire::RequestClient>("client", "replica-" + std::to_string(r), replica_window));
+      ASSERT_TRUE(connections.back()->connect(replicas->endpoints[r]).ok());
+      list.push_back({"replica-" + std::to_string(r), connections.back().get()});
+    }
+    pool = std::make_unique<PoolClient>("pool", std::move(list), options);
+  }
+  void poll() {
+    for (auto& c : connections) c->on_readable();
+  }
+  std::vector<Held> drain(size_t r) { return replicas->drain(r, [this] { poll(); }); }
+  // Sends `count` requests of `n` points; answers land in results[i].
+  void send(size_t count, size_t n) {
+    for (size_t i = 0; i < count; ++i) {
+      const size_t slot = results.size();
+      results.emplace_back();
+      pool->request(wire::Op::shade, encode_shade_request(points(n, 1000 * slot), 0, n),
+                    [this, slot, n](Result<wire::Message> reply) {
+                      ASSERT_TRUE(reply.ok()) << reply.error().message;
+                      auto L = decode_radiance(reply->body, n);
+                      ASSERT_TRUE(L.ok());
+                      results[slot] = *L;
+                    });
+    }
+  }
+
+  std::unique_ptr<Replicas> replicas;
+  std::vector<std::unique_ptr<wire::RequestClient>> connections;
+  std::unique_ptr<PoolClient> pool;
+  std::vector<std::vector<RGB>> results;
+};
+
+TEST_F(PoolClientTest, TheClientsWindowBoundsItsRequestsAcrossThePool) {
+  PoolOptions o;
+  o.strategy = Scheduler::Strategy::round_robin;
+  o.window = 3;
+  make(2, o);
+  send(10, 5);
+  auto held0 = drain(0), held1 = drain(1);
+  EXPECT_EQ(held0.size() + held1.size(), 3u);  // the client's window, not 2 replicas x 4
+  EXPECT_EQ(pool->in_progress(), 10u);
+  // One answer lets exactly one more request start.
+  replicas->answer(0, held0[0]);
+  auto more = drain(0), more1 = drain(1);
+  EXPECT_EQ(more.size() + more1.size(), 1u);
+  EXPECT_EQ(results[0].size(), 5u);
+  EXPECT_EQ(results[0][2].x, 2.0f);
+}
+
+TEST_F(PoolClientTest, ASplitRequestComesBackWholeInItsOrder) {
+  PoolOptions o;
+  o.strategy = Scheduler::Strategy::round_robin;
+  o.split = 4;
+  make(3, o);
+  send(1, 10);  // 3 pieces: 3, 3, 4 points
+  std::vector<std::vector<Held>> held{drain(0), drain(1), drain(2)};
+  for (size_t r = 0; r < 3; ++r) ASSERT_EQ(held[r].size(), 1u) << "replica " << r;
+  EXPECT_EQ(held[0][0].n + held[1][0].n + held[2][0].n, 10u);
+  for (size_t r : {2u, 0u, 1u}) replicas->answer(r, held[r][0]);  // out of order
+  for (int i = 0; i < 50 && results[0].empty(); ++i) {
+    poll();
+    std::this_thread::sleep_for(std::chrono::milliseconds(2));
+  }
+  ASSERT_EQ(results[0].size(), 10u);
+  for (size_t i = 0; i < 10; ++i) EXPECT_EQ(results[0][i].x, float(i)) << "point " << i;
+}
+
+TEST_F(PoolClientTest, ALostReplicasWorkGoesToTheOthersAndItsLateAnswersAreDropped) {
+  PoolOptions o;
+  o.strategy = Scheduler::Strategy::round_robin;
+  make(2, o);
+  send(4, 3);
+  auto held0 = drain(0), held1 = drain(1);
+  ASSERT_EQ(held0.size(), 2u);
+  ASSERT_EQ(held1.size(), 2u);
+  EXPECT_TRUE(pool->lost("replica-1"));
+  EXPECT_FALSE(pool->lost("somebody-else"));
+  EXPECT_EQ(pool->live(), 1u);
+  auto again = drain(0);
+  EXPECT_EQ(again.size(), 2u);  // replica 1's two requests, sent again
+  replicas->answer(1, held1[0]);  // too late: must not count
+  for (const auto& h : held0) replicas->answer(0, h);
+  for (const auto& h : again) replicas->answer(0, h);
+  for (int i = 0; i < 50; ++i) poll();
+  std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  poll();
+  for (size_t i = 0; i < 4; ++i) {
+    ASSERT_EQ(results[i].size(), 3u) << "request " << i;
+    EXPECT_EQ(results[i][0].y, 0.0f) << "request " << i << " was answered by the lost replica";
+  }
+  const Value stats = pool->stats();
+  const auto& list = stats.find("replicas")->as_array();
+  EXPECT_TRUE(list[1].find("lost")->as_bool());
+  EXPECT_EQ(list[0].find("packets")->as_int(), 4);
+}
+
+TEST_F(PoolClientTest, AReplicasErrorReachesTheCallerOnce) {
+  PoolOptions o;
+  make(1, o);
+  int calls = 0;
+  std::string message;
+  pool->request(wire::Op::shade, encode_shade_request(points(2), 0, 2), [&](Result<wire::Message> reply) {
+    ++calls;
+    if (!reply) message = reply.error().message;
+  });
+  auto held = drain(0);
+  ASSERT_EQ(held.size(), 1u);
+  replicas->sockets[0]->send_to(held[0].peer, wire::make_error_reply("replica-0", held[0].id, ErrorCode::shade_failed, "bad batch"));
+  for (int i = 0; i < 50 && calls == 0; ++i) {
+    poll();
+    std::this_thread::sleep_for(std::chrono::milliseconds(2));
+  }
+  EXPECT_EQ(calls, 1);
+  EXPECT_NE(message.find("bad batch"), std::string::npos) << message;
+  EXPECT_EQ(pool->in_progress(), 0u);
+}
+
+// An actor that, once rendering, asks its one input for `requests` batches and then says READY render.
+class AskingActor final : public Actor {
+ public:
+  Status configure(const ActorConfig&, Runtime& rt) override {
+    pooled = rt.input_is_pool(0);
+    return Ok{};
+  }
+  void on_phase(wire::Phase phase, Runtime& rt) override {
+    if (phase != wire::Phase::render) return rt.phase_done(phase);
+    for (int i = 0; i < 6; ++i)
+      rt.ask_input(0, wire::Op::shade, encode_shade_request(points(2, 10 * i), 0, 2), [this, &rt](Result<wire::Message> r) {
+        if (!r) return rt.fail(r.error().message);
+        if (++answered == 6) rt.phase_done(wire::Phase::render);
+      });
+  }
+  void on_request(const std::string& peer, wire::Op, wire::Message& m, Runtime& rt) override {
+    rt.reply_unknown_op(peer, m, "nothing");
+  }
+  bool pooled = false;
+  int answered = 0;
+};
+
+TEST(PoolInputTest, AnActorAsksAPoolsReplicasDirectlyAndMovesOnWhenOneIsLost) {
+  Replicas replicas(2);
+  AskingActor* asking = nullptr;
+  test::InprocActor actor("direct", "client", [&] {
+    auto a = std::make_unique<AskingActor>();
+    asking = a.get();
+    return a;
+  });
+  actor.next(MsgType::hello);
+  ActorConfig config;
+  InputSpec pool{"lighting", "", 6, ""};
+  pool.strategy = "round_robin";
+  for (size_t r = 0; r < 2; ++r) pool.replicas.push_back({"lighting." + std::to_string(r), replicas.endpoints[r], 4, ""});
+  config.inputs.push_back(pool);
+  // The CONFIG travels as bytes and back, as from a real director.
+  auto round_trip = ActorConfig::from_value(config.to_value());
+  ASSERT_TRUE(round_trip.ok()) << round_trip.error().message;
+  ASSERT_TRUE(round_trip->inputs[0].is_pool());
+  actor.send(wire::make(MsgType::config, "director", round_trip->to_value()));
+  ASSERT_EQ(wire::phase_of(actor.next(MsgType::ready).header), wire::Phase::configure);
+  EXPECT_TRUE(asking->pooled);
+  actor.send(wire::make_phase("director", wire::Phase::render));
+  auto none = [] {};
+  auto held0 = replicas.drain(0, none), held1 = replicas.drain(1, none);
+  EXPECT_EQ(held0.size(), 3u);
+  EXPECT_EQ(held1.size(), 3u);
+  actor.send(wire::make(MsgType::peer_down, "director", Value::Map{{"name", "lighting.1"}}));
+  for (const auto& h : held0) replicas.answer(0, h);
+  auto again = replicas.drain(0, none, 0.5);
+  EXPECT_EQ(again.size(), 3u);
+  for (const auto& h : again) replicas.answer(0, h);
+  ASSERT_EQ(wire::phase_of(actor.next(MsgType::ready).header), wire::Phase::render);
+  actor.send(wire::make_phase("director", wire::Phase::finish));
+  const wire::Message stats = actor.next(MsgType::stats);
+  const Value* pools = stats.body.find("pools");
+  ASSERT_TRUE(pools && pools->is_array() && pools->as_array().size() == 1);
+  const auto& list = pools->as_array()[0].find("replicas")->as_array();
+  EXPECT_EQ(list[0].find("packets")->as_int(), 6);  // its 3 and the lost one's 3
+  EXPECT_TRUE(list[1].find("lost")->as_bool());
+  actor.next(MsgType::bye);
+  EXPECT_EQ(actor.join(), 0);
+}
+
+}  // namespace
+}  // namespace lf
