@@ -261,8 +261,13 @@ std::string to_dot(const FarmSpec& spec) {
       by_host[a.host].push_back("    " + id("renderers") + " [label=\"renderer × " + std::to_string(renderers) +
                                 "\", shape=box3d];");
     } else {
-      const char* shape = a.is_multiplexer() ? ", shape=trapezium" : (a.is_geometry() ? ", shape=cylinder" : "");
-      by_host[a.host].push_back("    " + id(a.name) + " [label=\"" + a.name + "\\n(" + a.kind + ")\"" + shape + "];");
+      // A pool its clients dispatch to is no process: drawn dashed, labelled "pool".
+      const std::string shape = a.dispatched_by_clients ? ", shape=trapezium, style=dashed"
+                                : a.is_multiplexer()    ? ", shape=trapezium"
+                                : a.is_geometry()       ? ", shape=cylinder"
+                                                        : "";
+      const std::string kind = a.dispatched_by_clients ? "pool" : a.kind;
+      by_host[a.host].push_back("    " + id(a.name) + " [label=\"" + a.name + "\\n(" + kind + ")\"" + shape + "];");
     }
   }
   for (const auto& [host, lines] : by_host) {
