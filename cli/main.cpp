@@ -17,6 +17,7 @@
 #include "actors/kinds/actor_kinds.hpp"
 #include "actors/check/check_actor.hpp"
 #include "actors/director/director.hpp"
+#include "actors/director/host_launcher.hpp"
 #include "actors/runtime/host_agent.hpp"
 #include "actors/runtime/runtime.hpp"
 #include "core/log.hpp"
@@ -38,6 +39,8 @@ usage:
       Host one actor (the director runs this; see docs/PROTOCOL.md).
   lightfarm host-agent --scene FILE --hash HASH --socket NAME [--actors N]
       Load a shipped scene and its BVH once and fork this host's N actors from it (the director runs this).
+  lightfarm host-launcher
+      Start this host's actors as the director asks on stdin; stop them all at EOF (the director runs this).
   lightfarm check-actor [--kind KIND] [--timeout SECONDS] [--inputs N] -- COMMAND [ARG]...
       Launch COMMAND as an actor and check it against the protocol; PASS/FAIL per check.
   lightfarm scene FILE.obj
@@ -256,7 +259,7 @@ static void prefer_huge_pages(char** argv) {
 
 int main(int argc, char** argv) {
   if (argc >= 2 && (std::strcmp(argv[1], "run") == 0 || std::strcmp(argv[1], "actor") == 0 ||
-                    std::strcmp(argv[1], "host-agent") == 0))
+                    std::strcmp(argv[1], "host-agent") == 0 || std::strcmp(argv[1], "host-launcher") == 0))
     prefer_huge_pages(argv);
   // Shading batches are a few hundred KB each. Keep such buffers in the heap rather than mmap/munmap-ing them per
   // message: that churn (page faults, zeroing) cost more than the copies themselves.
@@ -279,6 +282,10 @@ int main(int argc, char** argv) {
     if (cmd == "graph") return cmd_run(argc, argv, true);
     if (cmd == "actor") return cmd_actor(argc, argv);
     if (cmd == "host-agent") return cmd_host_agent(argc, argv);
+    if (cmd == "host-launcher") {
+      if (argc != 2) return usage_error("host-launcher takes no arguments");
+      return lf::run_host_launcher();
+    }
     if (cmd == "check-actor") return cmd_check_actor(argc, argv);
     if (cmd == "scene") {
       if (argc != 3) return usage_error("scene needs one FILE.obj");

@@ -14,12 +14,6 @@ namespace lf {
 
 using Clock = std::chrono::steady_clock;
 
-// (A background job of a non-interactive shell reads /dev/null unless told otherwise, hence fd 3.)
-const char* const kLifeline =
-    "cd \"$0\" || exit 127; exec 3<&0; IFS= read -r k <&3; printf '%s\\n' \"$k\" | \"$@\" 3<&- & p=$!; "
-    "(cat <&3 >/dev/null 2>&1; kill -TERM $p 2>/dev/null && { sleep 2; kill -KILL $p 2>/dev/null; }) "
-    ">/dev/null 2>&1 & exec 3<&-; wait $p";
-
 // Runs argv with stdout and stderr captured, `input` on its stdin (else /dev/null), for at most `seconds`.
 Captured run_captured(const std::vector<std::string>& argv, double seconds, const std::string* input) {
   Captured c;

@@ -1,17 +1,12 @@
 #pragma once
-// What the remote launchers (ssh, slurm) share: the shell lifeline an actor runs under on its host, running a
-// command with its output captured, and shipping a scene into a host's cache.
+// What the remote launchers (ssh, slurm) share: running a command with its output captured, and shipping a scene
+// into a host's cache. (Their actors start through a host launcher: actors/director/host_launcher.hpp.)
 #include <string>
 #include <vector>
 
 #include "actors/director/launcher.hpp"
 
 namespace lf {
-
-// `sh -c kLifeline CWD PROGRAM ARGS...`: hands the actor the first line of stdin (its keys, or an empty line),
-// starts it in the background and watches the rest of stdin: EOF — the farm ended, the director killed the client
-// that carries this, or the director died — sends the actor SIGTERM, then SIGKILL 2 s later.
-extern const char* const kLifeline;
 
 // The host's scene cache, by the same rule as this machine's (local_cache_dir), in the host's own environment.
 inline constexpr const char* kCacheDir = "d=\"${LIGHTFARM_CACHE:-${XDG_CACHE_HOME:-$HOME/.cache}/lightfarm}/scenes\"; ";

@@ -47,14 +47,18 @@ Result<Launcher::Shipped> SlurmLauncher::ship(const std::string& bytes, const st
 
 Result<pid_t> SlurmLauncher::start(const LaunchRequest& request) {
   if (auto st = prepare(); !st) return st.error();
-  LaunchRequest step;
-  step.argv = srun();
-  step.argv.insert(step.argv.end(), {"sh", "-c", kLifeline, request.cwd.empty() ? "." : request.cwd});
-  for (size_t i = 0; i < request.argv.size(); ++i) step.argv.push_back(i == 0 && request.self ? lightfarm_ : request.argv[i]);
-  step.self = false;
-  step.hold_stdin = true;
-  step.stdin_text = request.stdin_text.empty() ? "\n" : request.stdin_text;  // the lifeline reads one line first
-  return steps_.start(step);
+  if (!session_) {
+    // One job step per node carries all of its actors: 12 actors over 3 nodes started in 0.32 s this way against
+    // 0.99 s as a step each (bench/hosts_bench). The step inherits this environment, huge-page tunable included.
+    auto argv = srun();
+    argv.insert(argv.end(), {lightfarm_, "host-launcher"});
+    session_ = std::make_unique<HostSession>(host_.name, std::move(argv));
+  }
+  return session_->start(request);
+}
+
+void SlurmLauncher::stop_all(std::chrono::milliseconds grace) {
+  if (session_) session_->stop_all(grace);
 }
 
 }  // namespace lf

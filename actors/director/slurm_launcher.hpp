@@ -1,9 +1,13 @@
 #pragma once
-// SlurmLauncher: inside an allocation (salloc, sbatch), starts a host's actors as job steps with srun on that node
-// (--overlap: many actors share the node's CPUs; one task each), under the same lifeline as ssh actors, with the
-// actor's keys on the step's stdin. The first use checks the allocation and that lightfarm is on the node.
+// SlurmLauncher: inside an allocation (salloc, sbatch), starts a host's actors through one job step on that node,
+// `srun --overlap ... lightfarm host-launcher` (actors/director/host_launcher.hpp), which starts each actor as the
+// director asks on the step's stdin and stops them all when that stdin ends. The first use checks the allocation and
+// that lightfarm is on the node.
 #include <string>
 
+#include <memory>
+
+#include "actors/director/host_launcher.hpp"
 #include "actors/director/local_launcher.hpp"
 
 namespace lf {
@@ -17,9 +21,11 @@ class SlurmLauncher final : public Launcher {
   Status prepare() override;
   Result<Shipped> ship(const std::string& bytes, const std::string& hash) override;
   Result<pid_t> start(const LaunchRequest& request) override;
-  std::optional<ExitReport> reap_one() override { return steps_.reap_one(); }
-  void kill(pid_t pid, int signal) override { steps_.kill(pid, signal); }
-  void stop_all(std::chrono::milliseconds grace) override { steps_.stop_all(grace); }
+  std::optional<ExitReport> reap_one() override { return session_ ? session_->reap_one() : std::nullopt; }
+  void kill(pid_t pid, int signal) override {
+    if (session_) session_->kill(pid, signal);
+  }
+  void stop_all(std::chrono::milliseconds grace) override;
 
  private:
   std::vector<std::string> srun() const;
@@ -28,7 +34,7 @@ class SlurmLauncher final : public Launcher {
   std::string lightfarm_;
   std::string job_;
   bool prepared_ = false;
-  LocalLauncher steps_;  // the srun processes, one per actor
+  std::unique_ptr<HostSession> session_;  // the job step this node's actors are started through
 };
 
 }  // namespace lf

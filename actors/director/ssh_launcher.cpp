@@ -34,8 +34,11 @@ std::vector<std::string> SshLauncher::ssh_command() const {
   std::vector<std::string> argv{"ssh"};
   if (!host_.ssh_config.empty()) argv.insert(argv.end(), {"-F", host_.ssh_config});
   if (host_.port > 0) argv.insert(argv.end(), {"-p", std::to_string(host_.port)});
+  // KexAlgorithms: curve25519 first, ahead of OpenSSH 9's default sntrup761 hybrid, whose key exchange costs ~70 ms
+  // of CPU on each side per connection (a third of a farm's wait for its hosts); the others stay allowed. The link
+  // carries start commands and one farm's keys (docs/decisions.md).
   for (const char* option : {"BatchMode=yes", "ConnectTimeout=5", "ControlMaster=auto", "ControlPersist=5",
-                             "ServerAliveInterval=5", "ServerAliveCountMax=3"})
+                             "ServerAliveInterval=5", "ServerAliveCountMax=3", "KexAlgorithms=^curve25519-sha256"})
     argv.insert(argv.end(), {"-o", option});
   argv.insert(argv.end(), {"-o", "ControlPath=" + control_dir_ + "/%C", "-T", target()});
   return argv;
@@ -64,25 +67,19 @@ Status SshLauncher::connect(bool need_lightfarm) {
 }
 
 Result<pid_t> SshLauncher::start(const LaunchRequest& request) {
-  if (auto st = connect(request.self); !st) return st.error();
-  std::vector<std::string> remote = request.argv;
-  if (request.self) {
-    remote[0] = lightfarm_;
-    // The huge-page setting this director runs with (cli/main.cpp), given to the remote lightfarm so that it does
-    // not run itself a second time to set it: ssh passes no environment, and that second start cost a remote farm of
-    // 12 actors 0.2 s of launch to first tile. Harmless where the host's THP mode ignores it.
+  if (auto st = connect(true); !st) return st.error();
+  if (!session_) {
+    // The huge-page setting this director runs with (cli/main.cpp), given to the host launcher and so to every
+    // actor it starts, so that none runs itself a second time to set it: ssh passes no environment.
+    std::string command = "exec";
     if (const char* t = std::getenv("GLIBC_TUNABLES"); t && std::strstr(t, "glibc.malloc.hugetlb=1"))
-      remote.insert(remote.begin(), {"env", "GLIBC_TUNABLES=glibc.malloc.hugetlb=1"});
+      command += " env GLIBC_TUNABLES=glibc.malloc.hugetlb=1";
+    command += " " + shell_quote(lightfarm_) + " host-launcher";
+    auto argv = ssh_command();
+    argv.push_back(command);
+    session_ = std::make_unique<HostSession>(host_.name, std::move(argv));
   }
-  std::string command = "sh -c " + shell_quote(kLifeline) + " " + shell_quote(request.cwd.empty() ? "." : request.cwd);
-  for (const auto& a : remote) command += " " + shell_quote(a);
-  LaunchRequest client;
-  client.argv = ssh_command();
-  client.argv.push_back(command);
-  client.self = false;
-  client.hold_stdin = true;
-  client.stdin_text = request.stdin_text.empty() ? "\n" : request.stdin_text;  // the lifeline reads one line first
-  return clients_.start(client);
+  return session_->start(request);
 }
 
 Result<Launcher::Shipped> SshLauncher::ship(const std::string& bytes, const std::string& hash) {
@@ -91,7 +88,7 @@ Result<Launcher::Shipped> SshLauncher::ship(const std::string& bytes, const std:
 }
 
 void SshLauncher::stop_all(std::chrono::milliseconds grace) {
-  clients_.stop_all(grace);
+  if (session_) session_->stop_all(grace);
   // The master connection outlives its sessions by ControlPersist; end it now (also after a failed check, which
   // may have opened it), so that nothing of the farm stays on the host.
   std::error_code ec;

@@ -2,14 +2,17 @@
 // SshLauncher: starts a host's actors with the real OpenSSH client, in batch mode (never a password prompt), over
 // one multiplexed connection per host (ControlMaster), so that many actors on a host cost one handshake.
 //
-// The first start() connects and checks the host within a bounded time: an unreachable host, a refused key or a
-// missing remote binary is an error naming the host with ssh's own words. Each actor then runs as
-//   ssh HOST sh -c '<lifeline>' CWD PROGRAM ARGS...
-// where the lifeline starts the actor and, when the ssh channel's stdin reaches EOF (the director is gone, or
-// killed that ssh client), sends it SIGTERM and after 2 s SIGKILL: a remote actor never outlives its farm. The ssh
-// client's stdin is a pipe the director holds (LaunchRequest::hold_stdin).
+// prepare() connects and checks the host within a bounded time: an unreachable host, a refused key or a missing
+// remote binary is an error naming the host with ssh's own words. The first start() then opens one more session,
+//   ssh HOST exec LIGHTFARM host-launcher
+// and every actor of the host is started through it (actors/director/host_launcher.hpp): one session per host, not
+// one per actor. When the session's stdin reaches EOF (the director is gone, or the session was cut and ssh gave
+// up), the host launcher sends its actors SIGTERM and then SIGKILL: a remote actor never outlives its farm.
 #include <string>
 
+#include <memory>
+
+#include "actors/director/host_launcher.hpp"
 #include "actors/director/local_launcher.hpp"
 
 namespace lf {
@@ -23,8 +26,10 @@ class SshLauncher final : public Launcher {
   Status prepare() override { return connect(true); }
   Result<Shipped> ship(const std::string& bytes, const std::string& hash) override;
   Result<pid_t> start(const LaunchRequest& request) override;
-  std::optional<ExitReport> reap_one() override { return clients_.reap_one(); }
-  void kill(pid_t pid, int signal) override { clients_.kill(pid, signal); }
+  std::optional<ExitReport> reap_one() override { return session_ ? session_->reap_one() : std::nullopt; }
+  void kill(pid_t pid, int signal) override {
+    if (session_) session_->kill(pid, signal);
+  }
   void stop_all(std::chrono::milliseconds grace) override;
 
   // The ssh command line up to the remote command (for tests and messages).
@@ -37,7 +42,7 @@ class SshLauncher final : public Launcher {
   HostSpec host_;
   std::string lightfarm_;    // the binary to run on the host
   std::string control_dir_;  // holds the control socket
-  LocalLauncher clients_;    // the ssh client processes, one per actor
+  std::unique_ptr<HostSession> session_;  // the host launcher this host's actors are started through
   bool connected_ = false;
   bool checked_lightfarm_ = false;
 };

@@ -1,0 +1,77 @@
+#pragma once
+// One session per remote host: the director starts `lightfarm host-launcher` on the host once (over ssh, or as one
+// Slurm job step), and asks it to start each of that host's actors, instead of opening an ssh session or a job step
+// per actor (each cost ~30 ms of ssh client and server CPU plus a shell, a lifeline and `env` on the host; a job
+// step, ~80 ms of slurmctld round trips).
+//
+// The line protocol on the session's stdin and stdout (docs/PROTOCOL.md, "Host launcher"): one message per line,
+// fields separated by TAB, with \\, \t and \n escaped as two characters.
+//   director -> host:  start ID CWD STDIN_TEXT HOLD SELF ARGV...   (HOLD, SELF: 0 or 1)
+//                      kill ID SIGNAL
+//   host -> director:  started ID PID  |  failed ID MESSAGE  |  exited ID WAIT_STATUS
+// On the host the actors are started as LocalLauncher starts them here (own process group, killed with the host
+// launcher, SIGKILL on its death); their stdout goes to the host launcher's stderr. EOF on its stdin (the director
+// is gone, or the session was cut and ended) stops every actor: SIGTERM, then SIGKILL, as the per-actor lifeline did.
+//
+// On the director's side, HostSession gives each actor a handle that stands for a pid in the director (unique in
+// this process and above any real pid), so the Supervisor and Launchers treat remote actors as they treat local ones.
+#include <sys/types.h>
+
+#include <chrono>
+#include <deque>
+#include <map>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "actors/director/launcher.hpp"
+
+namespace lf {
+
+// The host side: runs until EOF on stdin (or SIGTERM/SIGINT/SIGHUP) and every actor it started is gone.
+int run_host_launcher();
+
+// The director side of one host's session.
+class HostSession {
+ public:
+  // `transport`: the command that runs `lightfarm host-launcher` on the host (ssh ... or srun ...); `host`: its name,
+  // for messages.
+  HostSession(std::string host, std::vector<std::string> transport);
+  ~HostSession();
+  HostSession(const HostSession&) = delete;
+  HostSession& operator=(const HostSession&) = delete;
+
+  // Starts the session on first use; then asks the host launcher to start the actor. The handle is returned at once:
+  // a start that fails on the host arrives as an exit (status 127) and a warning with the host's words.
+  Result<pid_t> start(const LaunchRequest& request);
+  std::optional<ExitReport> reap_one();
+  // SIGKILL counts the actor as gone at once: across a cut network the kill may never arrive, and a killed actor
+  // must never be waited on (its late answers are dropped anyway).
+  void kill(pid_t handle, int signal);
+  // Waits up to `grace` for the actors to exit, then ends the session (the host stops what is left) and waits for
+  // the transport to exit, killing it after a few seconds.
+  void stop_all(std::chrono::milliseconds grace);
+  bool running() const { return pid_ > 0; }
+
+ private:
+  Status open();
+  void send_line(const std::vector<std::string>& fields);
+  void read_events();
+  void transport_ended(int status);
+
+  std::string host_;
+  std::vector<std::string> transport_;
+  pid_t pid_ = 0;  // the transport process (ssh or srun)
+  int to_host_ = -1, from_host_ = -1;
+  std::string partial_;                 // an unfinished line from the host
+  std::map<pid_t, int64_t> live_;        // handle -> the host's id for it
+  std::map<int64_t, pid_t> handle_of_;   // the host's id -> handle
+  std::deque<ExitReport> exits_;
+  int64_t next_id_ = 1;
+};
+
+// Line protocol helpers (exposed for tests).
+std::string host_line(const std::vector<std::string>& fields);
+std::vector<std::string> split_host_line(const std::string& line);
+
+}  // namespace lf
