@@ -671,7 +671,7 @@ class Director final : public ControlOut, public Outbox {
         inputs.push_back(spec_.actors[static_cast<size_t>(spec_.lighting)].name);
       Value::Map m{{"name", spec.name}, {"kind", spec.kind}, {"host", spec.host}, {"state", actor_state(a)},
                    {"inputs", std::move(inputs)}, {"restarts", static_cast<int64_t>(a.restarts)}};
-      if (a.pid > 0) m["pid"] = static_cast<int64_t>(a.pid);
+      if (const pid_t pid = supervisor_.host_pid(a); pid > 0) m["pid"] = static_cast<int64_t>(pid);
       if (!a.loss.empty()) m["loss"] = a.loss;
       if (a.live.is_map()) {
         m["live"] = a.live;

@@ -236,7 +236,8 @@ void HostSession::read_events() {
       log_warn("host '" + host_ + "': " + f[2]);
       exits_.push_back({handle, W_EXITCODE(127, 0)});
     } else {
-      continue;  // started: nothing to do
+      if (f[0] == "started" && f.size() == 3 && number(f[2])) host_pids_[handle] = static_cast<pid_t>(*number(f[2]));
+      continue;
     }
     live_.erase(handle);
     handle_of_.erase(it);

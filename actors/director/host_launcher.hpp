@@ -52,6 +52,15 @@ class HostSession {
   // the transport to exit, killing it after a few seconds.
   void stop_all(std::chrono::milliseconds grace);
   bool running() const { return pid_ > 0; }
+  // The actor's pid on the host, once the host said it (0 before).
+  pid_t host_pid(pid_t handle) const {
+    auto it = host_pids_.find(handle);
+    return it == host_pids_.end() ? 0 : it->second;
+  }
+  std::string where(pid_t handle) const {
+    const pid_t pid = host_pid(handle);
+    return (pid ? "pid " + std::to_string(pid) + " " : std::string()) + "on " + host_;
+  }
 
  private:
   Status open();
@@ -67,6 +76,7 @@ class HostSession {
   std::map<pid_t, int64_t> live_;        // handle -> the host's id for it
   std::map<int64_t, pid_t> handle_of_;   // the host's id -> handle
   std::deque<ExitReport> exits_;
+  std::map<pid_t, pid_t> host_pids_;     // handle -> pid on the host (kept after the exit, for messages)
   int64_t next_id_ = 1;
 };
 

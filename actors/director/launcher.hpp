@@ -56,6 +56,11 @@ class Launcher {
   // An actor that has exited, if any (never blocks).
   virtual std::optional<ExitReport> reap_one() = 0;
   virtual void kill(pid_t pid, int signal) = 0;
+  // The actor's process as its host knows it ("pid 4711", "pid 4711 on h1"), for messages and tables: a remote
+  // launcher's pids here are handles (actors/director/host_launcher.hpp).
+  virtual std::string where(pid_t pid) const { return "pid " + std::to_string(pid); }
+  // Its pid on its host (0 while not yet known).
+  virtual pid_t host_pid(pid_t pid) const { return pid; }
   // Waits up to `grace` for actors to exit, then SIGTERM, then SIGKILL; reaps them all.
   virtual void stop_all(std::chrono::milliseconds grace) = 0;
   // Ctrl-Z: stops (`stop`) or continues every actor this launcher can pause. Remote actors cannot be (stopping
@@ -81,6 +86,9 @@ class Launchers {
   Result<pid_t> start(const HostSpec& host, const LaunchRequest& request);
   std::optional<ExitReport> reap_one();
   void kill(pid_t pid, int signal);
+  // As Launcher::where and host_pid, for any pid a launcher started (also after it exited).
+  std::string where(pid_t pid) const;
+  pid_t host_pid(pid_t pid) const;
   void stop_all(std::chrono::milliseconds grace);
   void pause_all(bool stop);
   // Whether any launcher is not this machine's (its actors keep running while the director is stopped).
@@ -89,6 +97,7 @@ class Launchers {
  private:
   std::map<std::string, std::unique_ptr<Launcher>> by_host_;
   std::map<pid_t, Launcher*> owner_;
+  std::map<pid_t, Launcher*> started_by_;  // every pid ever started, for where() after its exit
 };
 
 }  // namespace lf

@@ -254,8 +254,18 @@ Result<pid_t> Launchers::start(const HostSpec& host, const LaunchRequest& reques
   auto launcher = for_host(host);
   if (!launcher) return launcher.error();
   auto pid = (*launcher)->start(request);
-  if (pid) owner_[*pid] = *launcher;
+  if (pid) owner_[*pid] = started_by_[*pid] = *launcher;
   return pid;
+}
+
+std::string Launchers::where(pid_t pid) const {
+  auto it = started_by_.find(pid);
+  return it != started_by_.end() ? it->second->where(pid) : "pid " + std::to_string(pid);
+}
+
+pid_t Launchers::host_pid(pid_t pid) const {
+  auto it = started_by_.find(pid);
+  return it != started_by_.end() ? it->second->host_pid(pid) : pid;
 }
 
 std::optional<ExitReport> Launchers::reap_one() {

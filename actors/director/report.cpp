@@ -29,12 +29,12 @@ void print_report(const FarmSpec& spec, const Supervisor& supervisor, const RunF
       continue;
     }
     if (s.lost) {
-      std::fprintf(stderr, "%-14s %-10s %8d  lost: %s\n", a.name.c_str(), a.kind.c_str(), static_cast<int>(s.pid),
-                   s.loss.c_str());
+      std::fprintf(stderr, "%-14s %-10s %8d  lost: %s\n", a.name.c_str(), a.kind.c_str(),
+                   static_cast<int>(supervisor.host_pid(s)), s.loss.c_str());
       continue;
     }
     std::fprintf(stderr, "%-14s %-10s %8d %9.0f %11.0f %9.2f %9.2f %8.3f %7.3f %6.0f\n", a.name.c_str(),
-                 a.kind.c_str(), static_cast<int>(s.pid), num(s.stats, "requests"), num(s.stats, "points"),
+                 a.kind.c_str(), static_cast<int>(supervisor.host_pid(s)), num(s.stats, "requests"), num(s.stats, "points"),
                  num(s.stats, "bytes_in") / 1048576.0, num(s.stats, "bytes_out") / 1048576.0,
                  num(s.stats, "busy_seconds"), num(s.stats, "cpu_seconds"), num(s.stats, "peak_queue"));
   }
@@ -85,7 +85,7 @@ Status write_stats_json(const FarmSpec& spec, const Supervisor& supervisor, cons
     Value entry = s.stats.is_map() ? s.stats : Value(Value::Map{});
     entry.as_map()["name"] = a.name;
     entry.as_map()["kind"] = a.kind;
-    if (a.has_process()) entry.as_map()["pid"] = static_cast<int64_t>(s.pid);
+    if (a.has_process()) entry.as_map()["pid"] = static_cast<int64_t>(supervisor.host_pid(s));
     else entry.as_map()["dispatched_by_clients"] = true;
     if (s.lost) entry.as_map()["lost"] = s.loss;
     actors.push_back(std::move(entry));

@@ -25,6 +25,8 @@ class SlurmLauncher final : public Launcher {
   void kill(pid_t pid, int signal) override {
     if (session_) session_->kill(pid, signal);
   }
+  std::string where(pid_t pid) const override { return session_ ? session_->where(pid) : Launcher::where(pid); }
+  pid_t host_pid(pid_t pid) const override { return session_ ? session_->host_pid(pid) : 0; }
   void stop_all(std::chrono::milliseconds grace) override;
 
  private:

@@ -30,6 +30,8 @@ class SshLauncher final : public Launcher {
   void kill(pid_t pid, int signal) override {
     if (session_) session_->kill(pid, signal);
   }
+  std::string where(pid_t pid) const override { return session_ ? session_->where(pid) : Launcher::where(pid); }
+  pid_t host_pid(pid_t pid) const override { return session_ ? session_->host_pid(pid) : 0; }
   void stop_all(std::chrono::milliseconds grace) override;
 
   // The ssh command line up to the remote command (for tests and messages).

@@ -207,7 +207,7 @@ Status Supervisor::on_exit(const ExitReport& r) {
     const std::string when = starting_up(stage_) ? "during start-up" : "during " + std::string(stage_name(stage_));
     // A part of a partitioned scene is held nowhere else: rays that cross it cannot be answered.
     const std::string held = a.spec->is_geometry() ? "; the part of the scene it held is not held anywhere else" : "";
-    return make_error("actor '" + name + "' (pid " + std::to_string(r.pid) + ") " + why + " " + when + held);
+    return make_error("actor '" + name + "' (" + launchers_.where(r.pid) + ") " + why + " " + when + held);
   }
   return Ok{};
 }

@@ -117,6 +117,9 @@ class Supervisor {
   std::map<std::string, ActorRecord>& actors() { return actors_; }
   const std::map<std::string, ActorRecord>& actors() const { return actors_; }
   const ActorRecord& at(const std::string& name) const { return actors_.at(name); }
+  // The actor's pid on its host (remote actors' records hold handles), and "pid N[ on HOST]" for messages.
+  pid_t host_pid(const ActorRecord& a) const { return a.pid > 0 ? launchers_.host_pid(a.pid) : 0; }
+  std::string where(const ActorRecord& a) const { return launchers_.where(a.pid); }
 
  private:
   bool recoverable(const ActorRecord& a) const;
