@@ -211,9 +211,11 @@ int main(int argc, char** argv) {
     std::printf("  CPU-seconds of the last farm 1+1: %.2f in %.2f s wall (director %.2f, renderer %.2f, %s %.2f)\n",
                 f.cpu_seconds, f.wall, f.director_cpu, f.renderers_cpu, c.label.c_str(), f.lightops_cpu);
     const FarmFigures& g = s.last22;
-    std::printf("  CPU-seconds of the last farm 2+2: %.2f in %.2f s wall (director %.2f, renderers %.2f, "
-                "multiplexer %.2f, replicas %.2f)\n",
-                g.cpu_seconds, g.wall, g.director_cpu, g.renderers_cpu, g.multiplexer_cpu, g.lightops_cpu);
+    // The pool is dispatched by its renderers (no multiplexer process) unless a script asks for one.
+    char multiplexer[48] = "";
+    if (g.multiplexer_cpu > 0) std::snprintf(multiplexer, sizeof multiplexer, "multiplexer %.2f, ", g.multiplexer_cpu);
+    std::printf("  CPU-seconds of the last farm 2+2: %.2f in %.2f s wall (director %.2f, renderers %.2f, %sreplicas %.2f)\n",
+                g.cpu_seconds, g.wall, g.director_cpu, g.renderers_cpu, multiplexer, g.lightops_cpu);
     print_spread("farm 1+1 / bare 1 thread (render phase)", s.overhead, heavy ? "" : "   goal >= 0.85 (issue 2)");
     print_spread("CPU efficiency: farm 1+1 per CPU-s / bare", s.efficiency,
                  heavy ? "   goal >= 0.95" : "   goal >= 0.7 (whole run, all processes)");
