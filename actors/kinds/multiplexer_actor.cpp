@@ -48,7 +48,7 @@ class MultiplexerActor final : public Actor {
     }
     if (rt.input_count() == 0) return make_error("a multiplexer needs at least one replica");
     std::vector<PoolClient::Replica> replicas;
-    for (size_t r = 0; r < rt.input_count(); ++r) replicas.push_back({rt.input_name(r), &rt.input(r)});
+    for (size_t r = 0; r < rt.input_count(); ++r) replicas.push_back({rt.input_name(r), &rt.input(r), false});
     pool_ = std::make_unique<PoolClient>(rt.name(), std::move(replicas), pool_options(params));
     return Ok{};
   }

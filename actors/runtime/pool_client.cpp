@@ -12,7 +12,9 @@ PoolClient::PoolClient(std::string name, std::vector<Replica> replicas, const Po
     : name_(std::move(name)),
       replicas_(std::move(replicas)),
       options_(options),
-      scheduler_(options.strategy, replicas_.size(), options.stall_cap, options.seed) {}
+      scheduler_(options.strategy, replicas_.size(), options.stall_cap, options.seed) {
+  for (size_t r = 0; r < replicas_.size(); ++r) scheduler_.set_remote(r, replicas_[r].remote);
+}
 
 void PoolClient::request(wire::Op op, Value body, wire::RequestClient::Callback callback) {
   const uint64_t rid = next_request_++;

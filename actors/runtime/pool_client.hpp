@@ -36,6 +36,7 @@ class PoolClient {
   struct Replica {
     std::string name;
     wire::RequestClient* connection = nullptr;
+    bool remote = false;  // on another host than this client (least_loaded prefers the others on a tie)
   };
   PoolClient(std::string name, std::vector<Replica> replicas, const PoolOptions& options);
 

@@ -322,6 +322,15 @@ void Runtime::handle_control(wire::Message& m, Actor& actor) {
       heartbeat_interval_ = std::min(1.0, heartbeat_timeout_ / 4);
       // Connect to every input before the actor configures, so that it may ask them during setup.
       request_timeout_ = config->request_timeout;
+      // A replica is on this host when it is reached over IPC, or at the address this actor listens on itself.
+      auto host_of = [](const std::string& endpoint) {
+        const size_t start = endpoint.find("://"), colon = endpoint.rfind(':');
+        return start == std::string::npos || colon <= start ? endpoint : endpoint.substr(start + 3, colon - start - 3);
+      };
+      auto same_host = [&](const std::string& endpoint) {
+        return endpoint.rfind("ipc://", 0) == 0 || endpoint.rfind("inproc://", 0) == 0 ||
+               host_of(endpoint) == host_of(args_.bind);
+      };
       auto connect = [&](const InputSpec& in) -> Status {
         auto client = connect_input(in.name, in.endpoint, in.key, static_cast<size_t>(in.window));
         if (!client) return client.error();
@@ -340,7 +349,7 @@ void Runtime::handle_control(wire::Message& m, Actor& actor) {
           std::vector<PoolClient::Replica> replicas;
           for (const auto& replica : in.replicas) {
             if (auto st = connect(replica); !st) return fail(st.error().message);
-            replicas.push_back({replica.name, nullptr});
+            replicas.push_back({replica.name, nullptr, !same_host(replica.endpoint)});
           }
           PoolOptions options;
           options.strategy = *Scheduler::parse(in.strategy);

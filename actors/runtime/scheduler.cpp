@@ -45,8 +45,9 @@ std::optional<size_t> Scheduler::pick() {
       for (size_t k = 0; k < n; ++k) {
         size_t r = (next_ + k) % n;
         if (!replicas_[r].live) continue;
-        size_t load = replicas_[r].out + replicas_[r].queue;
-        if (!best || load < best_load) {
+        size_t load = replicas_[r].out + replicas_[r].queue + (replicas_[r].remote ? 1 : 0);
+        // Ties go by rotation, except that this host's replica beats another host's.
+        if (!best || load < best_load || (load == best_load && !replicas_[r].remote && replicas_[*best].remote)) {
           best = r;
           best_load = load;
         }

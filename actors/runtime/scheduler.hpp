@@ -4,7 +4,9 @@
 //
 //   round_robin   cycles through live replicas, skipping one that already holds `cap` packets
 //   least_loaded  the live replica with the smallest (packets out + queue length it last reported), as Kipfer &
-//                 Slusallek's wrappers do with the FIFO fill level piggybacked on replies
+//                 Slusallek's wrappers do with the FIFO fill level piggybacked on replies; a replica on another
+//                 host counts one packet more, so that on a tie the one on this host wins (no network, no
+//                 encryption) while a busier local replica still loses
 //   random        uniform over live replicas below the cap, from a seeded generator
 // A replica that stops answering accumulates packets out, so it stops getting work before it is declared dead.
 #include <cstdint>
@@ -26,6 +28,8 @@ class Scheduler {
   void sent(size_t replica, size_t points);
   void answered(size_t replica, uint32_t reported_queue);
   void lost(size_t replica);  // never picked again
+  // Replica r runs on another host than the one dispatching (least_loaded prefers the others on a tie).
+  void set_remote(size_t replica, bool remote) { replicas_[replica].remote = remote; }
 
   size_t live() const;
   bool is_live(size_t r) const { return replicas_[r].live; }
@@ -37,6 +41,7 @@ class Scheduler {
  private:
   struct Replica {
     bool live = true;
+    bool remote = false;      // on another host than the dispatcher
     size_t out = 0;           // packets sent and not answered
     uint32_t queue = 0;       // last reported queue length
     uint64_t packets = 0, points = 0;

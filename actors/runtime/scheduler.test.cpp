@@ -34,6 +34,28 @@ TEST(Scheduler, LeastLoadedSendsToTheShortestQueue) {
   EXPECT_EQ(*s.pick(), 2u);
 }
 
+TEST(Scheduler, LeastLoadedPrefersThisHostOnATieButNotWhenItIsBusier) {
+  Scheduler s(S::least_loaded, 3, 8);
+  s.set_remote(0, true);
+  s.set_remote(2, true);
+  // All idle: the replica on this host, whatever the rotation says.
+  EXPECT_EQ(*s.pick(), 1u);
+  s.sent(1, 1);
+  // One packet out at the local replica against none remotely: a tie once the remote penalty counts; still local.
+  EXPECT_EQ(*s.pick(), 1u);
+  s.sent(1, 1);
+  // Two out: a remote replica is now lighter.
+  const size_t r = *s.pick();
+  EXPECT_TRUE(r == 0 || r == 2) << r;
+  // Every replica remote (or none): plain least-loaded rotation, as before.
+  Scheduler all(S::least_loaded, 2, 8);
+  all.set_remote(0, true);
+  all.set_remote(1, true);
+  EXPECT_EQ(*all.pick(), 0u);
+  all.sent(0, 1);
+  EXPECT_EQ(*all.pick(), 1u);
+}
+
 // Replica 1 finishes a packet every tick, replica 0 every fourth; one packet arrives per tick. Returns how many
 // packets each replica got.
 // The cap is large, so what differs is the strategy, not the cap.
