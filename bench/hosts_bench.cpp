@@ -94,7 +94,8 @@ int main(int argc, char** argv) {
                   ", lighting = d" + renderer_hosts + " }\n");
   };
   const std::string tiny = "image { width = 64, height = 64, spp = 1, tile = 16 }\n";
-  const std::string frame = "image { width = 256, height = 256, spp = 32 }\n";
+  // About 2 s of rendering: long enough that the ratios below are not made of start-up noise.
+  const std::string frame = "image { width = 512, height = 512, spp = 32 }\n";
   const auto launch_remote = script("launch-remote.lua", tiny, ", host = { h1, h2, h3 }", ", host = { h1, h2, h3 }", 8, 3, true);
   const auto launch_local = script("launch-local.lua", tiny, "", "", 8, 3, false);
   const auto pool_remote = script("pool-remote.lua", frame, ", host = { h1, h2, h3 }", ", host = { h2, h3 }", 3, 2, true);
@@ -102,7 +103,7 @@ int main(int argc, char** argv) {
   // The same pool across hosts serving a heavy op (path tracing, ~100x the work per point of `direct`): CURVE's cost
   // per byte is the same, its share of the work is not.
   const auto heavy_remote = bench::temp_script(
-      "heavy-remote.lua", head + hosts_lua + "image { width = 128, height = 128, spp = 8 }\n"
+      "heavy-remote.lua", head + hosts_lua + "image { width = 256, height = 256, spp = 16 }\n"
                           "local d = multiplexer { lightop \"pathtrace\" {}, replicas = 3, host = { h1, h2, h3 } }\n"
                           "renderers { count = 2, lighting = d, host = { h2, h3 } }\n");
   const auto launch_slurm = bench::temp_script(
