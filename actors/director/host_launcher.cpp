@@ -199,8 +199,25 @@ Status HostSession::open() {
   return Ok{};
 }
 
+// write_all on a pipe whose reader may be gone (ssh exits when a host's network is cut) without the SIGPIPE that
+// would end the director: blocked in this thread while writing, and a pending one taken back before unblocking.
+bool write_without_sigpipe(int fd, const std::string& text) {
+  sigset_t pipe_only, old;
+  sigemptyset(&pipe_only);
+  sigaddset(&pipe_only, SIGPIPE);
+  ::pthread_sigmask(SIG_BLOCK, &pipe_only, &old);
+  const bool ok = write_all(fd, text);
+  if (!ok) {
+    const timespec none{0, 0};
+    while (::sigtimedwait(&pipe_only, nullptr, &none) == SIGPIPE) {
+    }
+  }
+  ::pthread_sigmask(SIG_SETMASK, &old, nullptr);
+  return ok;
+}
+
 void HostSession::send_line(const std::vector<std::string>& fields) {
-  if (to_host_ >= 0 && !write_all(to_host_, host_line(fields))) {
+  if (to_host_ >= 0 && !write_without_sigpipe(to_host_, host_line(fields))) {
     ::close(to_host_);
     to_host_ = -1;  // the session is ending; its end reports the actors
   }
@@ -257,7 +274,11 @@ void HostSession::transport_ended(int status) {
   from_host_ = -1;
   // Every actor still running there is gone with the session (the host launcher stops them on EOF): as ssh itself
   // would report for a lost connection.
-  if (!live_.empty())
+  if (!live_.empty() && host_pids_.empty())
+    // Nothing ever started there: most likely a lightfarm on the host that has no host launcher (another build).
+    log_error("host '" + host_ + "': its host launcher ended (" + ExitReport{0, status}.describe() +
+              ") before it started any actor; is the lightfarm there the same build as this one?");
+  else if (!live_.empty())
     log_debug("host '" + host_ + "': its session ended (" + ExitReport{0, status}.describe() + ") with " +
               std::to_string(live_.size()) + " actors on it");
   for (const auto& [handle, id] : live_) exits_.push_back({handle, W_EXITCODE(255, 0)});

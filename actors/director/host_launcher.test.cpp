@@ -74,6 +74,38 @@ TEST(HostSessionTest, ActorsStartThroughOneSessionAndTheirExitsComeBack) {
   EXPECT_TRUE(WIFSIGNALED(k->status) && WTERMSIG(k->status) == SIGKILL);
 }
 
+TEST(HostSessionTest, AHostLauncherThatIsNotThereEndsItsActorsAtOnce) {
+  // A host whose lightfarm has no host launcher (another build): the session ends at once, and each actor asked for
+  // comes back as an exit instead of hanging the farm's start-up.
+  HostSession session("old", {"sh", "-c", "echo 'lightfarm: error: unknown command host-launcher' >&2; exit 2"});
+  LaunchRequest r;
+  r.self = false;
+  r.argv = {"true"};
+  auto a = session.start(r);
+  ASSERT_TRUE(a.ok());
+  const ExitReport e = wait_exit(session);
+  EXPECT_EQ(e.pid, *a);
+  EXPECT_FALSE(WIFEXITED(e.status) && WEXITSTATUS(e.status) == 0) << e.describe();
+  EXPECT_FALSE(session.running());
+}
+
+TEST(HostSessionTest, AnEndedSessionIsNoSignalToTheDirector) {
+  // The transport is gone before the director writes to it (a cut host's ssh gives up): the write fails quietly
+  // instead of raising SIGPIPE, which would end the director.
+  HostSession session("cut", {"sh", "-c", "exec 0<&-; sleep 0.3"});
+  LaunchRequest r;
+  r.self = false;
+  r.argv = {"true"};
+  auto a = session.start(r);
+  ASSERT_TRUE(a.ok());
+  std::this_thread::sleep_for(std::chrono::milliseconds(100));  // its stdin is closed now; it still runs
+  session.kill(*a, SIGTERM);  // a write into a pipe nobody reads
+  auto b = session.start(r);  // and another
+  EXPECT_TRUE(session.running() || !b.ok());
+  const ExitReport e = wait_exit(session);  // the session's end reports the actor
+  EXPECT_EQ(e.pid, *a);
+}
+
 TEST(HostSessionTest, EndingTheSessionStopsWhatIsStillRunning) {
   const std::string marker = ::testing::TempDir() + "/host-session-" + std::to_string(::getpid());
   {
