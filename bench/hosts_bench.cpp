@@ -103,7 +103,7 @@ int main(int argc, char** argv) {
   // The same pool across hosts serving a heavy op (path tracing, ~100x the work per point of `direct`): CURVE's cost
   // per byte is the same, its share of the work is not.
   const auto heavy_remote = bench::temp_script(
-      "heavy-remote.lua", head + hosts_lua + "image { width = 256, height = 256, spp = 16 }\n"
+      "heavy-remote.lua", head + hosts_lua + "image { width = 384, height = 384, spp = 16 }\n"
                           "local d = multiplexer { lightop \"pathtrace\" {}, replicas = 3, host = { h1, h2, h3 } }\n"
                           "renderers { count = 2, lighting = d, host = { h2, h3 } }\n");
   const auto launch_slurm = bench::temp_script(
