@@ -1,10 +1,10 @@
 #pragma once
 // One session per remote host: the director starts `lightfarm host-launcher` on the host once (over ssh, or as one
 // Slurm job step), and asks it to start each of that host's actors, instead of opening an ssh session or a job step
-// per actor (each cost ~30 ms of ssh client and server CPU plus a shell, a lifeline and `env` on the host; a job
-// step, ~80 ms of slurmctld round trips).
+// per actor (here a multiplexed ssh session took ~30 ms, ten one after another 0.30 s, before the shell, lifeline
+// and `env` each actor also ran on its host; 48 actors started as job steps took 3.3 s, as one step per node 0.42 s).
 //
-// The line protocol on the session's stdin and stdout (docs/PROTOCOL.md, "Host launcher"): one message per line,
+// The line protocol on the session's stdin and stdout (docs/PROTOCOL.md, "On another host"): one message per line,
 // fields separated by TAB, with \\, \t and \n escaped as two characters.
 //   director -> host:  start ID CWD STDIN_TEXT HOLD SELF ARGV...   (HOLD, SELF: 0 or 1)
 //                      kill ID SIGNAL
@@ -19,6 +19,8 @@
 
 #include <chrono>
 #include <deque>
+#include <functional>
+#include <memory>
 #include <map>
 #include <optional>
 #include <string>
@@ -78,6 +80,33 @@ class HostSession {
   std::deque<ExitReport> exits_;
   std::map<pid_t, pid_t> host_pids_;     // handle -> pid on the host (kept after the exit, for messages)
   int64_t next_id_ = 1;
+};
+
+// A launcher whose actors start through one HostSession per host (ssh, slurm): the per-actor calls go to the
+// session; a subclass says how to reach the host.
+class SessionLauncher : public Launcher {
+ public:
+  std::optional<ExitReport> reap_one() override { return session_ ? session_->reap_one() : std::nullopt; }
+  void kill(pid_t pid, int signal) override {
+    if (session_) session_->kill(pid, signal);
+  }
+  std::string where(pid_t pid) const override { return session_ ? session_->where(pid) : Launcher::where(pid); }
+  pid_t host_pid(pid_t pid) const override { return session_ ? session_->host_pid(pid) : 0; }
+  void stop_all(std::chrono::milliseconds grace) override {
+    if (session_) session_->stop_all(grace);
+  }
+
+ protected:
+  // Starts the actor through the host's session, opened first (on `host`, with the command `transport()` gives)
+  // if it is not yet.
+  Result<pid_t> start_through(const std::string& host, const std::function<std::vector<std::string>()>& transport,
+                              const LaunchRequest& request) {
+    if (!session_) session_ = std::make_unique<HostSession>(host, transport());
+    return session_->start(request);
+  }
+
+ private:
+  std::unique_ptr<HostSession> session_;
 };
 
 // Line protocol helpers (exposed for tests).

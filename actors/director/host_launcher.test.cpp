@@ -33,12 +33,18 @@ ExitReport wait_exit(HostSession& s, double seconds = 10) {
 
 bool alive(pid_t pid) { return ::kill(pid, 0) == 0; }
 
+// A start request for a program of this machine (not lightfarm itself), with `stdin_text` on its stdin.
+LaunchRequest program(std::vector<std::string> argv, std::string stdin_text = "") {
+  LaunchRequest r;
+  r.self = false;
+  r.argv = std::move(argv);
+  r.stdin_text = std::move(stdin_text);
+  return r;
+}
+
 TEST(HostSessionTest, ActorsStartThroughOneSessionAndTheirExitsComeBack) {
   HostSession session("here", {LIGHTFARM_BINARY, "host-launcher"});
-  LaunchRequest quick;
-  quick.self = false;
-  quick.argv = {"sh", "-c", "read k; test \"$k\" = secret && exit 3"};
-  quick.stdin_text = "secret\n";
+  const LaunchRequest quick = program({"sh", "-c", "read k; test \"$k\" = secret && exit 3"}, "secret\n");
   auto a = session.start(quick);
   ASSERT_TRUE(a.ok()) << a.error().message;
   EXPECT_GE(*a, pid_t{1} << 30) << "a handle, not a pid of this machine";
@@ -47,19 +53,14 @@ TEST(HostSessionTest, ActorsStartThroughOneSessionAndTheirExitsComeBack) {
   ASSERT_TRUE(WIFEXITED(r.status));
   EXPECT_EQ(WEXITSTATUS(r.status), 3) << "its stdin text arrived and its status came back";
 
-  LaunchRequest missing;
-  missing.self = false;
-  missing.argv = {"/no/such/program"};
-  auto m = session.start(missing);
+  auto m = session.start(program({"/no/such/program"}));
   ASSERT_TRUE(m.ok());
   const ExitReport mr = wait_exit(session);
   EXPECT_EQ(mr.pid, *m);
   EXPECT_TRUE(WIFEXITED(mr.status) && WEXITSTATUS(mr.status) == 127);
 
   // A long one, killed: SIGTERM arrives as its exit; SIGKILL counts at once.
-  LaunchRequest sleeper;
-  sleeper.self = false;
-  sleeper.argv = {"sleep", "60"};
+  const LaunchRequest sleeper = program({"sleep", "60"});
   auto s1 = session.start(sleeper), s2 = session.start(sleeper);
   ASSERT_TRUE(s1.ok() && s2.ok());
   std::this_thread::sleep_for(std::chrono::milliseconds(200));
@@ -78,9 +79,7 @@ TEST(HostSessionTest, AHostLauncherThatIsNotThereEndsItsActorsAtOnce) {
   // A host whose lightfarm has no host launcher (another build): the session ends at once, and each actor asked for
   // comes back as an exit instead of hanging the farm's start-up.
   HostSession session("old", {"sh", "-c", "echo 'lightfarm: error: unknown command host-launcher' >&2; exit 2"});
-  LaunchRequest r;
-  r.self = false;
-  r.argv = {"true"};
+  const LaunchRequest r = program({"true"});
   auto a = session.start(r);
   ASSERT_TRUE(a.ok());
   const ExitReport e = wait_exit(session);
@@ -93,15 +92,13 @@ TEST(HostSessionTest, AnEndedSessionIsNoSignalToTheDirector) {
   // The transport is gone before the director writes to it (a cut host's ssh gives up): the write fails quietly
   // instead of raising SIGPIPE, which would end the director.
   HostSession session("cut", {"sh", "-c", "exec 0<&-; sleep 0.3"});
-  LaunchRequest r;
-  r.self = false;
-  r.argv = {"true"};
+  const LaunchRequest r = program({"true"});
   auto a = session.start(r);
   ASSERT_TRUE(a.ok());
   std::this_thread::sleep_for(std::chrono::milliseconds(100));  // its stdin is closed now; it still runs
   session.kill(*a, SIGTERM);  // a write into a pipe nobody reads
-  auto b = session.start(r);  // and another
-  EXPECT_TRUE(session.running() || !b.ok());
+  auto b = session.start(r);  // the failed write closed the session's side: no more starts on it
+  EXPECT_FALSE(b.ok()) << "a start on a session whose host end is gone";
   const ExitReport e = wait_exit(session);  // the session's end reports the actor
   EXPECT_EQ(e.pid, *a);
 }
@@ -110,9 +107,7 @@ TEST(HostSessionTest, EndingTheSessionStopsWhatIsStillRunning) {
   const std::string marker = ::testing::TempDir() + "/host-session-" + std::to_string(::getpid());
   {
     HostSession session("here", {LIGHTFARM_BINARY, "host-launcher"});
-    LaunchRequest sleeper;
-    sleeper.self = false;
-    sleeper.argv = {"sh", "-c", "echo $$ > " + marker + "; exec sleep 60"};
+    const LaunchRequest sleeper = program({"sh", "-c", "echo $$ > " + marker + "; exec sleep 60"});
     ASSERT_TRUE(session.start(sleeper).ok());
     for (int i = 0; i < 200 && !std::ifstream(marker).good(); ++i) std::this_thread::sleep_for(std::chrono::milliseconds(10));
     std::this_thread::sleep_for(std::chrono::milliseconds(50));

@@ -34,8 +34,8 @@ std::vector<std::string> SshLauncher::ssh_command() const {
   std::vector<std::string> argv{"ssh"};
   if (!host_.ssh_config.empty()) argv.insert(argv.end(), {"-F", host_.ssh_config});
   if (host_.port > 0) argv.insert(argv.end(), {"-p", std::to_string(host_.port)});
-  // KexAlgorithms: curve25519 first, ahead of OpenSSH 9's default sntrup761 hybrid, whose key exchange costs ~70 ms
-  // of CPU on each side per connection (a third of a farm's wait for its hosts); the others stay allowed. The link
+  // KexAlgorithms: curve25519 first, ahead of OpenSSH 9's default sntrup761 hybrid, whose key exchange cost the ssh
+  // client ~70 ms more CPU per connection here (~0.1 s of a 3-host launch); the others stay allowed. The link
   // carries start commands and one farm's keys (docs/decisions.md).
   for (const char* option : {"BatchMode=yes", "ConnectTimeout=5", "ControlMaster=auto", "ControlPersist=5",
                              "ServerAliveInterval=5", "ServerAliveCountMax=3", "KexAlgorithms=^curve25519-sha256"})
@@ -68,18 +68,17 @@ Status SshLauncher::connect(bool need_lightfarm) {
 
 Result<pid_t> SshLauncher::start(const LaunchRequest& request) {
   if (auto st = connect(true); !st) return st.error();
-  if (!session_) {
+  return start_through(host_.name, [&] {
     // The huge-page setting this director runs with (cli/main.cpp), given to the host launcher and so to every
     // actor it starts, so that none runs itself a second time to set it: ssh passes no environment.
     std::string command = "exec";
     if (const char* t = std::getenv("GLIBC_TUNABLES"); t && std::strstr(t, "glibc.malloc.hugetlb=1"))
       command += " env GLIBC_TUNABLES=glibc.malloc.hugetlb=1";
-    command += " " + shell_quote(lightfarm_) + " host-launcher";
+    command.append(" ").append(shell_quote(lightfarm_)).append(" host-launcher");
     auto argv = ssh_command();
     argv.push_back(command);
-    session_ = std::make_unique<HostSession>(host_.name, std::move(argv));
-  }
-  return session_->start(request);
+    return argv;
+  }, request);
 }
 
 Result<Launcher::Shipped> SshLauncher::ship(const std::string& bytes, const std::string& hash) {
@@ -88,7 +87,7 @@ Result<Launcher::Shipped> SshLauncher::ship(const std::string& bytes, const std:
 }
 
 void SshLauncher::stop_all(std::chrono::milliseconds grace) {
-  if (session_) session_->stop_all(grace);
+  SessionLauncher::stop_all(grace);
   // The master connection outlives its sessions by ControlPersist; end it now (also after a failed check, which
   // may have opened it), so that nothing of the farm stays on the host.
   std::error_code ec;

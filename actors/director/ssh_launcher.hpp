@@ -10,14 +10,12 @@
 // up), the host launcher sends its actors SIGTERM and then SIGKILL: a remote actor never outlives its farm.
 #include <string>
 
-#include <memory>
-
 #include "actors/director/host_launcher.hpp"
 #include "actors/director/local_launcher.hpp"
 
 namespace lf {
 
-class SshLauncher final : public Launcher {
+class SshLauncher final : public SessionLauncher {
  public:
   explicit SshLauncher(HostSpec host);
   ~SshLauncher() override;
@@ -26,12 +24,6 @@ class SshLauncher final : public Launcher {
   Status prepare() override { return connect(true); }
   Result<Shipped> ship(const std::string& bytes, const std::string& hash) override;
   Result<pid_t> start(const LaunchRequest& request) override;
-  std::optional<ExitReport> reap_one() override { return session_ ? session_->reap_one() : std::nullopt; }
-  void kill(pid_t pid, int signal) override {
-    if (session_) session_->kill(pid, signal);
-  }
-  std::string where(pid_t pid) const override { return session_ ? session_->where(pid) : Launcher::where(pid); }
-  pid_t host_pid(pid_t pid) const override { return session_ ? session_->host_pid(pid) : 0; }
   void stop_all(std::chrono::milliseconds grace) override;
 
   // The ssh command line up to the remote command (for tests and messages).
@@ -44,7 +36,6 @@ class SshLauncher final : public Launcher {
   HostSpec host_;
   std::string lightfarm_;    // the binary to run on the host
   std::string control_dir_;  // holds the control socket
-  std::unique_ptr<HostSession> session_;  // the host launcher this host's actors are started through
   bool connected_ = false;
   bool checked_lightfarm_ = false;
 };

@@ -23,18 +23,6 @@
 namespace lf {
 namespace {
 
-// Clients' requests arrive already limited by their own windows: none wait here beyond the replicas' windows.
-PoolOptions pool_options(const MultiplexerParams& params) {
-  PoolOptions o;
-  o.strategy = *Scheduler::parse(params.strategy);
-  o.split = static_cast<size_t>(params.split);
-  // A stall limit (a replica holding that many unanswered pieces gets no more), not a balancing rule: at one window
-  // it would make round robin as load-aware as least_loaded.
-  o.stall_cap = 4 * static_cast<size_t>(params.window);
-  o.seed = static_cast<uint64_t>(params.seed);
-  return o;
-}
-
 class MultiplexerActor final : public Actor {
  public:
   Status configure(const ActorConfig& config, Runtime& rt) override {
@@ -49,7 +37,9 @@ class MultiplexerActor final : public Actor {
     if (rt.input_count() == 0) return make_error("a multiplexer needs at least one replica");
     std::vector<PoolClient::Replica> replicas;
     for (size_t r = 0; r < rt.input_count(); ++r) replicas.push_back({rt.input_name(r), &rt.input(r), false});
-    pool_ = std::make_unique<PoolClient>(rt.name(), std::move(replicas), pool_options(params));
+    // Clients' requests arrive already limited by their own windows: none wait here beyond the replicas' windows.
+    pool_ = std::make_unique<PoolClient>(
+        rt.name(), std::move(replicas), pool_options(params.strategy, params.split, params.window, params.seed, 0));
     return Ok{};
   }
 

@@ -8,6 +8,17 @@
 
 namespace lf {
 
+PoolOptions pool_options(const std::string& strategy, int64_t split, int64_t replica_window, int64_t seed,
+                         size_t client_window) {
+  PoolOptions o;
+  o.strategy = Scheduler::parse(strategy).value_or(Scheduler::Strategy::least_loaded);
+  o.split = static_cast<size_t>(split);
+  o.window = client_window;
+  o.stall_cap = 4 * static_cast<size_t>(replica_window);
+  o.seed = static_cast<uint64_t>(seed);
+  return o;
+}
+
 PoolClient::PoolClient(std::string name, std::vector<Replica> replicas, const PoolOptions& options)
     : name_(std::move(name)),
       replicas_(std::move(replicas)),
@@ -30,7 +41,7 @@ void PoolClient::request(wire::Op op, Value body, wire::RequestClient::Callback 
 void PoolClient::pump() {
   while (!waiting_.empty() && (options_.window == 0 || started_ < options_.window) && scheduler_.live() > 0) {
     const uint64_t rid = waiting_.front();
-    waiting_.erase(waiting_.begin());
+    waiting_.pop_front();
     start(rid);
   }
 }

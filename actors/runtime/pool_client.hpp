@@ -11,6 +11,7 @@
 // The connections (one RequestClient per replica, each with its own window) belong to the owner; the pool only
 // sends on them and is told when a replica is gone.
 #include <cstdint>
+#include <deque>
 #include <map>
 #include <memory>
 #include <string>
@@ -27,9 +28,15 @@ struct PoolOptions {
   Scheduler::Strategy strategy = Scheduler::Strategy::least_loaded;
   size_t split = 0;     // split shade requests larger than this across replicas (0: never)
   size_t window = 0;    // requests of this client in progress at once, the rest wait in order (0: no limit)
-  size_t stall_cap = 16;  // a replica holding this many unanswered pieces gets no more while another has room
+  size_t stall_cap = 16;  // round robin and random skip a replica holding this many unanswered pieces
   uint64_t seed = 0;    // for Strategy::random
 };
+
+// What a pool's parameters (multiplexer { strategy, split, window, seed }) mean for a dispatcher that keeps at most
+// `client_window` of its requests going (0: no limit). The stall cap is four replica windows deep: a stall limit,
+// not a balancing rule (at one window it would make round robin as load-aware as least_loaded).
+PoolOptions pool_options(const std::string& strategy, int64_t split, int64_t replica_window, int64_t seed,
+                         size_t client_window);
 
 class PoolClient {
  public:
@@ -81,7 +88,7 @@ class PoolClient {
   PoolOptions options_;
   Scheduler scheduler_;
   std::map<uint64_t, Request> requests_;
-  std::vector<uint64_t> waiting_;  // requests not started (over the window), in arrival order
+  std::deque<uint64_t> waiting_;  // requests not started (over the window), in arrival order
   size_t started_ = 0;
   std::map<uint64_t, Piece> pieces_;
   uint64_t next_request_ = 1, next_piece_ = 1;

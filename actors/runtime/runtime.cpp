@@ -349,17 +349,10 @@ void Runtime::handle_control(wire::Message& m, Actor& actor) {
           std::vector<PoolClient::Replica> replicas;
           for (const auto& replica : in.replicas) {
             if (auto st = connect(replica); !st) return fail(st.error().message);
-            replicas.push_back({replica.name, nullptr, !same_host(replica.endpoint)});
+            replicas.push_back({replica.name, inputs_.back().get(), !same_host(replica.endpoint)});
           }
-          PoolOptions options;
-          options.strategy = *Scheduler::parse(in.strategy);
-          options.split = static_cast<size_t>(in.split);
-          options.window = static_cast<size_t>(in.window);
-          // As a multiplexer process does: a stall limit, not a balancing rule (actors/kinds/multiplexer_actor.cpp).
-          options.stall_cap = 4 * static_cast<size_t>(in.replicas.front().window);
-          options.seed = static_cast<uint64_t>(in.seed);
-          for (size_t k = 0; k < replicas.size(); ++k)
-            replicas[k].connection = inputs_[inputs_.size() - replicas.size() + k].get();
+          const PoolOptions options =
+              pool_options(in.strategy, in.split, in.replicas.front().window, in.seed, static_cast<size_t>(in.window));
           input.pool = std::make_unique<PoolClient>(in.name, std::move(replicas), options);
         }
         lighting_.push_back(std::move(input));

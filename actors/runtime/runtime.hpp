@@ -15,6 +15,7 @@
 
 #include <atomic>
 #include <chrono>
+#include <cstdint>
 #include <functional>
 #include <map>
 #include <memory>
@@ -112,7 +113,7 @@ class Runtime {
   size_t input_count() const { return lighting_.size(); }
   void ask_input(size_t i, wire::Op op, Value body, wire::RequestClient::Callback callback);
   bool input_is_pool(size_t i) const { return lighting_[i].pool != nullptr; }
-  wire::RequestClient& input(size_t i) { return *inputs_[lighting_[i].connection]; }
+  wire::RequestClient& input(size_t i) { return *inputs_.at(lighting_[i].connection); }  // throws for a pool
   const std::string& input_name(size_t i) const { return lighting_[i].name; }
   // A partitioned scene's geometry actors (CONFIG 'geometry', part order), connected like inputs and polled with
   // them, but not inputs of the lighting network.
@@ -165,7 +166,7 @@ class Runtime {
   std::vector<std::string> input_names_;
   struct LightingInput {
     std::string name;
-    size_t connection = 0;              // into inputs_, for a single actor
+    size_t connection = SIZE_MAX;       // into inputs_, for a single actor
     std::unique_ptr<PoolClient> pool;   // for a pool dispatched here
   };
   std::vector<LightingInput> lighting_;
