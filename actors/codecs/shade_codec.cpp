@@ -1,6 +1,9 @@
 #include "actors/codecs/shade_codec.hpp"
 
 #include <cstring>
+#include <map>
+
+#include "render/surface.hpp"
 
 namespace lf {
 
@@ -10,15 +13,35 @@ static Bytes vec3_bytes(const std::vector<Vec3>& v, size_t begin, size_t end) {
   return floats_to_bytes(std::span<const float>(reinterpret_cast<const float*>(v.data() + begin), 3 * (end - begin)));
 }
 
-Value encode_shade_request(const ShadingPoints& pts, size_t begin, size_t end) {
-  Value body = map_of("n", static_cast<int64_t>(end - begin),                 //
-                       "p", vec3_bytes(pts.position, begin, end),              //
-                       "nrm", vec3_bytes(pts.normal, begin, end),              //
-                       "wo", vec3_bytes(pts.wo, begin, end),                   //
-                       "m", u32_to_bytes(std::span<const uint32_t>(pts.material.data() + begin, end - begin)),
-                       "k", u64_to_bytes(std::span<const uint64_t>(pts.key.data() + begin, end - begin)));
-  if (!pts.triangle.empty())
-    body.as_map()["tri"] = u32_to_bytes(std::span<const uint32_t>(pts.triangle.data() + begin, end - begin));
+// True when every point of [begin, end) carries exactly (bit for bit) the normal and material its triangle gives:
+// what the receiver would derive. Bitwise, so that -0 and +0 are not taken for each other.
+static bool normals_derivable(const ShadingPoints& pts, size_t begin, size_t end, const Scene& scene) {
+  for (size_t i = begin; i < end; ++i) {
+    const Vec3 ns = surface_at(scene, pts.triangle[i], pts.position[i], pts.wo[i]).ns;
+    if (std::memcmp(&ns, &pts.normal[i], sizeof ns) != 0) return false;
+  }
+  return true;
+}
+
+static bool materials_derivable(const ShadingPoints& pts, size_t begin, size_t end, const Scene& scene) {
+  for (size_t i = begin; i < end; ++i)
+    if (pts.material[i] != scene.material_of(pts.triangle[i])) return false;
+  return true;
+}
+
+Value encode_shade_request(const ShadingPoints& pts, size_t begin, size_t end, const Scene* derive_from) {
+  Value body = map_of("n", static_cast<int64_t>(end - begin),    //
+                      "p", vec3_bytes(pts.position, begin, end),  //
+                      "wo", vec3_bytes(pts.wo, begin, end),       //
+                      "k", u64_to_bytes(std::span<const uint64_t>(pts.key.data() + begin, end - begin)));
+  Value::Map& map = body.as_map();
+  const bool lean = derive_from && !pts.triangle.empty();
+  if (lean) map["tri"] = u32_to_bytes(std::span<const uint32_t>(pts.triangle.data() + begin, end - begin));
+  if (!lean || !normals_derivable(pts, begin, end, *derive_from)) map["nrm"] = vec3_bytes(pts.normal, begin, end);
+  if (!lean || !materials_derivable(pts, begin, end, *derive_from))
+    map["m"] = u32_to_bytes(std::span<const uint32_t>(pts.material.data() + begin, end - begin));
+  if (!lean && !pts.triangle.empty())
+    map["tri"] = u32_to_bytes(std::span<const uint32_t>(pts.triangle.data() + begin, end - begin));
   return body;
 }
 
@@ -39,24 +62,69 @@ static Result<size_t> read_count(const Value& body) {
   return static_cast<size_t>(n->as_int());
 }
 
-Result<ShadingPoints> decode_shade_request(const Value& body, size_t material_count, size_t triangle_count) {
+Result<ShadingPoints> decode_shade_request(const Value& body, size_t material_count, size_t triangle_count,
+                                           const Scene* scene) {
   auto n = read_count(body);
   if (!n) return make_error("shade request: " + n.error().message);
   ShadingPoints pts;
-  for (auto [key, field] : {std::pair{"p", &pts.position}, {"nrm", &pts.normal}, {"wo", &pts.wo}})
-    if (auto st = read_vec3(body, key, *n, *field); !st) return st.error();
+  const Value* nrm = body.find("nrm");
   const Value* m = body.find("m");
-  if (!m || !m->is_bytes() || !bytes_to_u32(m->as_bytes(), pts.material) || pts.material.size() != *n)
-    return make_error("shade request 'm' must hold " + std::to_string(*n) + " u32 material ids");
+  const Value* t = body.find("tri");
+  // Without the scene (or the triangles), there is nothing to take a left-out normal or material from.
+  const bool derive = scene && t;
+  for (auto [key, field] : {std::pair{"p", &pts.position}, {"wo", &pts.wo}})
+    if (auto st = read_vec3(body, key, *n, *field); !st) return st.error();
+  if (nrm || !derive)
+    if (auto st = read_vec3(body, "nrm", *n, pts.normal); !st) return st.error();
+  if (m || !derive)
+    if (!m || !m->is_bytes() || !bytes_to_u32(m->as_bytes(), pts.material) || pts.material.size() != *n)
+      return make_error("shade request 'm' must hold " + std::to_string(*n) + " u32 material ids");
   const Value* k = body.find("k");
   if (!k || !k->is_bytes() || !bytes_to_u64(k->as_bytes(), pts.key) || pts.key.size() != *n)
     return make_error("shade request 'k' must hold " + std::to_string(*n) + " u64 sample keys");
-  if (const Value* t = body.find("tri")) {
+  if (t) {
     if (!t->is_bytes() || !bytes_to_u32(t->as_bytes(), pts.triangle) || pts.triangle.size() != *n)
       return make_error("shade request 'tri' must hold " + std::to_string(*n) + " u32 triangle ids");
   }
+  if (derive && (!nrm || !m)) {
+    const size_t triangles = std::min(triangle_count, scene->triangle_count());
+    for (size_t i = 0; i < *n; ++i)
+      if (pts.triangle[i] >= triangles)
+        return make_error("shade request: point " + std::to_string(i) + " is on triangle " +
+                          std::to_string(pts.triangle[i]) + " but the scene has " + std::to_string(triangles));
+    if (!m) {
+      pts.material.resize(*n);
+      for (size_t i = 0; i < *n; ++i) pts.material[i] = scene->material_of(pts.triangle[i]);
+    }
+    if (!nrm) {
+      pts.normal.resize(*n);
+      for (size_t i = 0; i < *n; ++i) pts.normal[i] = surface_at(*scene, pts.triangle[i], pts.position[i], pts.wo[i]).ns;
+    }
+  }
   if (std::string why = pts.check(material_count, triangle_count); !why.empty()) return make_error("shade request: " + why);
   return pts;
+}
+
+Result<Value> slice_shade_request(const Value& body, size_t begin, size_t end) {
+  auto n = read_count(body);
+  if (!n) return make_error("shade request: " + n.error().message);
+  if (begin > end || end > *n) return make_error("shade request: slice out of range");
+  Value::Map out{{"n", static_cast<int64_t>(end - begin)}};
+  static const std::map<std::string, size_t, std::less<>> kWidth{{"p", 12}, {"nrm", 12}, {"wo", 12},
+                                                                   {"m", 4},  {"k", 8},    {"tri", 4}};
+  for (const auto& [key, value] : body.as_map()) {
+    if (key == "n") continue;
+    const auto width = kWidth.find(key);
+    if (width == kWidth.end()) {
+      out[key] = value;  // not an array of the protocol's: the receiver ignores it, or knows what it means
+      continue;
+    }
+    if (!value.is_bytes() || value.as_bytes().data.size() != width->second * *n)
+      return make_error("shade request '" + key + "' must hold " + std::to_string(*n) + " entries of " +
+                        std::to_string(width->second) + " bytes");
+    out[key] = Bytes{value.as_bytes().data.substr(begin * width->second, (end - begin) * width->second)};
+  }
+  return Value(std::move(out));
 }
 
 Value encode_radiance(std::span<const RGB> radiance) {

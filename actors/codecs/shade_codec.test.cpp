@@ -2,6 +2,11 @@
 
 #include <gtest/gtest.h>
 
+#include <cstring>
+
+#include "render/surface.hpp"
+#include "transport/message.hpp"
+
 namespace lf {
 
 static ShadingPoints sample_points(size_t n) {
@@ -50,6 +55,113 @@ TEST(ShadeCodec, RadianceCountMustMatch) {
   EXPECT_EQ(refused.error().code, ErrorCode::bad_message);
   lying.as_map().erase("n");
   EXPECT_FALSE(decode_radiance(lying, 2).ok());
+}
+
+// A scene with flat faces of two materials and one smoothly shaded triangle (vertex normals), lit by a lamp.
+static Scene lean_scene() {
+  Scene s;
+  const uint32_t white = s.add_material(Material{"white", {0.5f, 0.5f, 0.5f}, {}});
+  const uint32_t red = s.add_material(Material{"red", {0.6f, 0.1f, 0.1f}, {}});
+  const uint32_t lamp = s.add_material(Material{"lamp", {}, {1, 1, 1}});
+  s.add_quad({0, 0, 0}, {1, 0, 0}, {1, 0, 1}, {0, 0, 1}, white);
+  s.add_quad({0, 0, 0}, {0, 1, 0}, {1, 1, 0}, {1, 0, 0}, red);
+  const Vec3 bent[3] = {normalize(Vec3{0.2f, 1, 0}), normalize(Vec3{-0.3f, 1, 0.1f}), normalize(Vec3{0, 1, -0.4f})};
+  s.add_triangle({0, 0.5f, 0}, {1, 0.5f, 0}, {0, 0.5f, 1}, white, CornerAttributes{bent, nullptr});
+  s.add_quad({0.4f, 0.99f, 0.4f}, {0.6f, 0.99f, 0.4f}, {0.6f, 0.99f, 0.6f}, {0.4f, 0.99f, 0.6f}, lamp);
+  EXPECT_TRUE(s.finalize("lean").ok());
+  return s;
+}
+
+// Points on every triangle, seen from both sides, with the normals and materials the renderer gives them.
+static ShadingPoints points_on(const Scene& s) {
+  ShadingPoints pts;
+  for (uint32_t t = 0; t < s.triangle_count(); ++t)
+    for (int k = 0; k < 4; ++k) {
+      const float u = 0.1f + 0.2f * k, v = 0.15f + 0.1f * k;
+      const Vec3 p = s.vertex(t, 0) * (1 - u - v) + s.vertex(t, 1) * u + s.vertex(t, 2) * v;
+      const Vec3 wo = normalize(Vec3{0.3f * k - 0.5f, k % 2 ? 1.0f : -1.0f, 0.2f});
+      pts.push_back(p, surface_at(s, t, p, wo).ns, wo, s.material_of(t), 77 + t * 4 + k, t);
+    }
+  return pts;
+}
+
+static bool same_bits(const ShadingPoints& a, const ShadingPoints& b) {
+  auto same = [](const auto& x, const auto& y) {
+    return x.size() == y.size() && (x.empty() || std::memcmp(x.data(), y.data(), x.size() * sizeof x[0]) == 0);
+  };
+  return same(a.position, b.position) && same(a.normal, b.normal) && same(a.wo, b.wo) && same(a.material, b.material) &&
+         same(a.key, b.key) && same(a.triangle, b.triangle);
+}
+
+TEST(ShadeCodec, ALeanRequestLeavesOutWhatTheSceneGivesAndTheReceiverRestoresItBitForBit) {
+  const Scene s = lean_scene();
+  ASSERT_TRUE(s.has_shading_normals());
+  const ShadingPoints pts = points_on(s);
+  const Value lean = encode_shade_request(pts, 0, pts.size(), &s);
+  EXPECT_EQ(lean.find("nrm"), nullptr);
+  EXPECT_EQ(lean.find("m"), nullptr);
+  ASSERT_NE(lean.find("tri"), nullptr);
+  const size_t full_bytes = wire::encode_body(encode_shade_request(pts, 0, pts.size())).size();
+  // 12 bytes of normal and 4 of material per point, and the two arrays' keys and lengths.
+  EXPECT_GE(full_bytes - wire::encode_body(lean).size(), 16 * pts.size());
+  EXPECT_LE(full_bytes - wire::encode_body(lean).size(), 16 * pts.size() + 16);
+  auto back = decode_shade_request(lean, s.materials().size(), s.triangle_count(), &s);
+  ASSERT_TRUE(back.ok()) << back.error().message;
+  EXPECT_TRUE(same_bits(*back, pts));
+  // Without the scene a lean request cannot be read, and says what it lacks.
+  EXPECT_EQ(decode_shade_request(lean, s.materials().size()).error().message, "shade request has no 'nrm' array");
+}
+
+TEST(ShadeCodec, PointsWhoseNormalOrMaterialTheSceneDoesNotGiveTravelWhole) {
+  const Scene s = lean_scene();
+  ShadingPoints pts = points_on(s);
+  pts.normal[5] = -pts.normal[5];  // not what its triangle gives: the batch keeps its normals
+  Value body = encode_shade_request(pts, 0, pts.size(), &s);
+  EXPECT_NE(body.find("nrm"), nullptr);
+  EXPECT_EQ(body.find("m"), nullptr);
+  auto back = decode_shade_request(body, s.materials().size(), s.triangle_count(), &s);
+  ASSERT_TRUE(back.ok()) << back.error().message;
+  EXPECT_TRUE(same_bits(*back, pts));
+  pts = points_on(s);
+  pts.material[2] = 1;  // an override the scene does not know
+  ASSERT_NE(s.material_of(pts.triangle[2]), 1u);
+  body = encode_shade_request(pts, 0, pts.size(), &s);
+  EXPECT_EQ(body.find("nrm"), nullptr);
+  EXPECT_NE(body.find("m"), nullptr);
+  back = decode_shade_request(body, s.materials().size(), s.triangle_count(), &s);
+  ASSERT_TRUE(back.ok()) << back.error().message;
+  EXPECT_TRUE(same_bits(*back, pts));
+  // Points without triangles have nothing to take a normal from.
+  body = encode_shade_request(sample_points(3), 0, 3, &s);
+  EXPECT_NE(body.find("nrm"), nullptr);
+  EXPECT_NE(body.find("m"), nullptr);
+}
+
+TEST(ShadeCodec, ALeanRequestOnATriangleTheSceneLacksIsRefused) {
+  const Scene s = lean_scene();
+  ShadingPoints pts = points_on(s);
+  Value body = encode_shade_request(pts, 0, 2, &s);
+  std::vector<uint32_t> tri{0, static_cast<uint32_t>(s.triangle_count())};
+  body.as_map()["tri"] = u32_to_bytes(tri);
+  EXPECT_EQ(decode_shade_request(body, s.materials().size(), s.triangle_count(), &s).error().message,
+            "shade request: point 1 is on triangle " + std::to_string(s.triangle_count()) + " but the scene has " +
+                std::to_string(s.triangle_count()));
+}
+
+TEST(ShadeCodec, ASliceCutsEveryArrayAndDecodesAsThosePoints) {
+  const Scene s = lean_scene();
+  const ShadingPoints pts = points_on(s);
+  for (const Scene* derive : {static_cast<const Scene*>(nullptr), &s}) {
+    const Value body = encode_shade_request(pts, 0, pts.size(), derive);
+    auto slice = slice_shade_request(body, 3, 11);
+    ASSERT_TRUE(slice.ok()) << slice.error().message;
+    EXPECT_EQ(*slice, encode_shade_request(pts, 3, 11, derive));
+  }
+  Value body = encode_shade_request(pts, 0, pts.size());
+  EXPECT_EQ(slice_shade_request(body, 3, pts.size() + 1).error().message, "shade request: slice out of range");
+  body.as_map()["k"] = Bytes{"short"};
+  EXPECT_EQ(slice_shade_request(body, 0, 2).error().message,
+            "shade request 'k' must hold " + std::to_string(pts.size()) + " entries of 8 bytes");
 }
 
 }  // namespace lf

@@ -43,5 +43,39 @@ TEST(ActorConfigs, EachAskerUsesItsOwnWindowForItsInputs) {
   EXPECT_FALSE(config_for(spec, 0, endpoint).pool);  // direct is not a replica
 }
 
+// Built-in LightOps hold the scene and take normals and materials from it (CONFIG inputs[i].lean); a plug-in gets
+// whole requests. The flag survives CONFIG's encoding.
+TEST(ActorConfigs, OnlyBuiltInLightOpsAreAskedWithLeanRequests) {
+  FarmSpec spec;
+  const int direct = add_actor(spec, ActorSpec{.name = "direct", .kind = "direct"});
+  const int plugin = add_actor(spec, ActorSpec{.name = "mine", .kind = "exec", .runtime = {{"cmd", "./mine"}}});
+  PoolSpec pool;
+  pool.op = add_actor(spec, ActorSpec{.name = "sum", .kind = "combine", .inputs = {direct, plugin}});
+  pool.replicas = 2;
+  auto mux = replicate(spec, pool);
+  ASSERT_TRUE(mux.ok());
+  add_renderers(spec, 1, *mux, RendererParams{}, {}, {});
+  settle_pool_dispatch(spec);
+  auto endpoint = [](int i) { return "tcp://host:" + std::to_string(6000 + i); };
+
+  const ActorConfig r = config_for(spec, spec.find("renderer-0"), endpoint);
+  ASSERT_EQ(r.inputs.size(), 1u);
+  ASSERT_TRUE(r.inputs[0].is_pool());
+  ASSERT_EQ(r.inputs[0].replicas.size(), 2u);
+  for (const auto& replica : r.inputs[0].replicas) EXPECT_TRUE(replica.lean) << replica.name;
+  auto decoded = ActorConfig::from_value(r.to_value());
+  ASSERT_TRUE(decoded.ok()) << decoded.error().message;
+  EXPECT_TRUE(decoded->inputs[0].replicas[1].lean);
+
+  const ActorConfig sum = config_for(spec, spec.find("sum.0"), endpoint);
+  ASSERT_EQ(sum.inputs.size(), 2u);
+  EXPECT_TRUE(sum.inputs[0].lean);   // direct
+  EXPECT_FALSE(sum.inputs[1].lean);  // the plug-in
+  decoded = ActorConfig::from_value(sum.to_value());
+  ASSERT_TRUE(decoded.ok()) << decoded.error().message;
+  EXPECT_TRUE(decoded->inputs[0].lean);
+  EXPECT_FALSE(decoded->inputs[1].lean);
+}
+
 }  // namespace
 }  // namespace lf

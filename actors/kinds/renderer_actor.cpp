@@ -103,7 +103,8 @@ class RendererActor final : public Actor {
       const size_t end = std::min(begin + batch, n);
       ++job->batches_left;
       ++rt.stats().requests;
-      rt.ask_input(0, wire::Op::shade, encode_shade_request(job->work.points, begin, end),
+      rt.ask_input(0, wire::Op::shade,
+                   encode_shade_request(job->work.points, begin, end, rt.input_is_lean(0) ? scene_.get() : nullptr),
                           [this, job, begin, end, &rt](Result<wire::Message> r) {
                             if (!r) return rt.fail("lighting failed: " + r.error().message);
                             auto radiance = decode_radiance(r->body, end - begin);

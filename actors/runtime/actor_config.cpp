@@ -16,6 +16,7 @@ Value::Array inputs_value(const std::vector<InputSpec>& inputs) {
     else
       entry["endpoint"] = in.endpoint;
     if (!in.key.empty()) entry["key"] = in.key;
+    if (in.lean) entry["lean"] = true;
     ins.push_back(std::move(entry));
   }
   return ins;
@@ -79,8 +80,12 @@ Status read_inputs(const Value& body, const char* field, std::vector<InputSpec>&
     if (key && (!key->is_string() || key->as_string().size() != 40))
       return make_error("CONFIG input '" + name->as_string() + "': key must be a 40-character Z85 public key",
                         ErrorCode::bad_request);
+    const Value* lean = in.find("lean");
+    if (lean && !lean->is_bool())
+      return make_error("CONFIG input '" + name->as_string() + "': lean must be true or false", ErrorCode::bad_request);
     out.push_back({name->as_string(), endpoint->as_string(), window ? window->as_int() : 4,
                    key ? key->as_string() : std::string()});
+    out.back().lean = lean && lean->as_bool();
   }
   return Ok{};
 }

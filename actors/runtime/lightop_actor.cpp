@@ -27,7 +27,7 @@ namespace {
 // Predecessors reached over the wire: each query becomes one or more batched, asynchronous requests.
 class RemoteInputs final : public Inputs {
  public:
-  RemoteInputs(Runtime& rt, size_t batch) : rt_(rt), batch_(batch) {}
+  RemoteInputs(Runtime& rt, size_t batch, const Scene& scene) : rt_(rt), batch_(batch), scene_(scene) {}
   size_t count() const override { return rt_.input_count(); }
 
   Gather gather(std::vector<InputQuery> queries) override {
@@ -44,7 +44,8 @@ class RemoteInputs final : public Inputs {
         auto* out = q.radiance;
         const std::string input_name = rt_.input_name(q.input);
         rt_.ask_input(
-            q.input, wire::Op::shade, encode_shade_request(*q.points, begin, end),
+            q.input, wire::Op::shade,
+            encode_shade_request(*q.points, begin, end, rt_.input_is_lean(q.input) ? &scene_ : nullptr),
             [state, out, begin, end, input_name](Result<wire::Message> r) {
               if (!r) return state->complete_one(r.error().message);
               auto radiance = decode_radiance(r->body, end - begin);
@@ -60,6 +61,7 @@ class RemoteInputs final : public Inputs {
  private:
   Runtime& rt_;
   size_t batch_;
+  const Scene& scene_;
 };
 
 // A LightOp alone (no pool, or a pool of one): its all_gather is its own part; fetch asks the director.
@@ -223,7 +225,7 @@ class LightOpActor final : public Actor {
     width_ = config.image.width;
     height_ = config.image.height;
     sampler_ = config.image.sampler == "sobol" ? SamplerKind::sobol : SamplerKind::independent;
-    inputs_ = std::make_unique<RemoteInputs>(rt, 4096);
+    inputs_ = std::make_unique<RemoteInputs>(rt, 4096, *scene_);
     if (config.pool) {
       replica_index_ = static_cast<int>(config.pool->index);
       replica_count_ = static_cast<int>(config.pool->count);
@@ -277,7 +279,7 @@ class LightOpActor final : public Actor {
     }
     // Requests that arrive before this op's setup finished (another op's setup may ask it, e.g. an irradiance
     // pre-pass) wait in the queue until it has.
-    auto points = decode_shade_request(m.body, scene_->materials().size(), scene_->triangle_count());
+    auto points = decode_shade_request(m.body, scene_->materials().size(), scene_->triangle_count(), scene_.get());
     if (!points) {
       rt.reply_error(peer, m.header.id, ErrorCode::bad_request, points.error().message);
       return;

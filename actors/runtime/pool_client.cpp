@@ -59,15 +59,18 @@ void PoolClient::start(uint64_t rid) {
     dispatch(next_piece_++);
     return;
   }
-  // Splitting needs the points themselves; the replicas validate them against the scene.
-  auto points = decode_shade_request(req.body, std::numeric_limits<size_t>::max());
-  if (!points) return finish(rid, make_error(points.error().message, ErrorCode::bad_request));
+  // The pieces are cut from the request's arrays as bytes; the replicas validate the points against the scene.
+  std::vector<Value> bodies;
+  for (size_t i = 0; i < pieces; ++i) {
+    auto piece = slice_shade_request(req.body, count * i / pieces, count * (i + 1) / pieces);
+    if (!piece) return finish(rid, make_error(piece.error().message, ErrorCode::bad_request));
+    bodies.push_back(std::move(*piece));
+  }
   req.body = Value();
   req.pieces_left = pieces;
   req.radiance.assign(count, RGB{});
   for (size_t i = 0; i < pieces; ++i) {
-    const size_t begin = count * i / pieces, end = count * (i + 1) / pieces;
-    pieces_.emplace(next_piece_, Piece{rid, begin, end, 0, encode_shade_request(*points, begin, end)});
+    pieces_.emplace(next_piece_, Piece{rid, count * i / pieces, count * (i + 1) / pieces, 0, std::move(bodies[i])});
     dispatch(next_piece_++);
   }
 }

@@ -344,8 +344,10 @@ void Runtime::handle_control(wire::Message& m, Actor& actor) {
         input.name = in.name;
         if (!in.is_pool()) {
           input.connection = inputs_.size();
+          input.lean = in.lean;
           if (auto st = connect(in); !st) return fail(st.error().message);
         } else {
+          input.lean = std::all_of(in.replicas.begin(), in.replicas.end(), [](const InputSpec& r) { return r.lean; });
           std::vector<PoolClient::Replica> replicas;
           for (const auto& replica : in.replicas) {
             if (auto st = connect(replica); !st) return fail(st.error().message);

@@ -113,6 +113,8 @@ class Runtime {
   size_t input_count() const { return lighting_.size(); }
   void ask_input(size_t i, wire::Op op, Value body, wire::RequestClient::Callback callback);
   bool input_is_pool(size_t i) const { return lighting_[i].pool != nullptr; }
+  // Input i takes normals and materials from the scene (CONFIG inputs[i].lean; a pool: every replica does).
+  bool input_is_lean(size_t i) const { return lighting_[i].lean; }
   wire::RequestClient& input(size_t i) { return *inputs_.at(lighting_[i].connection); }  // throws for a pool
   const std::string& input_name(size_t i) const { return lighting_[i].name; }
   // A partitioned scene's geometry actors (CONFIG 'geometry', part order), connected like inputs and polled with
@@ -168,6 +170,7 @@ class Runtime {
     std::string name;
     size_t connection = SIZE_MAX;       // into inputs_, for a single actor
     std::unique_ptr<PoolClient> pool;   // for a pool dispatched here
+    bool lean = false;
   };
   std::vector<LightingInput> lighting_;
   size_t first_geometry_ = 0, geometry_inputs_ = 0;
