@@ -45,6 +45,10 @@ int main(int argc, char** argv) {
   for (uint32_t i = 0; i < 3; ++i)
     pts.push_back({0.1f * i, 1, 0}, {0, 1, 0}, {0, 0, 1}, i % 2, 1000 + i, i);
   wire_seed("shade_request", wire::make_request("renderer-0", wire::Op::shade, encode_shade_request(pts, 0, 3), 7));
+  Value lean = encode_shade_request(pts, 0, 3);  // as a lean input gets it: normals and materials from the scene
+  lean.as_map().erase("nrm");
+  lean.as_map().erase("m");
+  wire_seed("shade_request_lean", wire::make_request("renderer-0", wire::Op::shade, lean, 8));
   const std::vector<RGB> light{{1, 2, 3}, {4, 5, 6}};
   wire_seed("shade_reply", wire::make_reply("direct", 7, encode_radiance(light), 2));
   wire_seed("hello", wire::make(wire::MsgType::hello, "direct", my_hello("direct", "tcp://127.0.0.1:5000").to_value()));
