@@ -625,10 +625,11 @@ class Director final : public ControlOut, public Outbox {
     check(supervisor_.check_heartbeats(Clock::now()));
     supervisor_.send_heartbeats(Clock::now());
     if (monitor_) {
-      if (tiles_.tiles_done() != tiles_seen_) {  // when the latest tile landed, for the page's latency
+      if (tiles_.tiles_done() != tiles_seen_) {  // when tiles landed, for the page's latency
         tiles_seen_ = tiles_.tiles_done();
         tile_landed_ms_ = std::chrono::duration_cast<std::chrono::milliseconds>(
                               std::chrono::system_clock::now().time_since_epoch()).count();
+        if (oldest_unshown_ms_ == 0) oldest_unshown_ms_ = tile_landed_ms_;
       }
       publish_monitor(false);
     }
@@ -751,24 +752,24 @@ class Director final : public ControlOut, public Outbox {
     return sum;
   }
 
-  // The state twice a second (and at every call with `now`); the preview when tiles have landed, at most once a
-  // second. More often costs a watching browser's page more CPU than a person can see (bench/monitor_bench).
+  // Once a second (and at every call with `now`): the state, and the preview when tiles have landed, as one update,
+  // so that a watching page wakes, lays out and paints once a second. Each update costs a headless Chromium on the
+  // farm's machine ~20-30 ms of CPU whatever it holds (bench/monitor_bench): at 2 a second that was 4 % of 2 cores.
   void publish_monitor(bool now) {
     const auto t = Clock::now();
-    if (!now && t - monitor_published_ < std::chrono::milliseconds(500)) return;
+    if (!now && t - monitor_published_ < std::chrono::milliseconds(1000)) return;
     monitor_published_ = t;
-    monitor_->publish_state(monitor_state());
     const size_t done = tiles_.tiles_done();
-    if (done != preview_tiles_ && (now || t - preview_published_ >= std::chrono::milliseconds(1000))) {
+    if (done != preview_tiles_) {
       preview_tiles_ = done;
-      preview_published_ = t;
-      publish_preview();
+      publish_preview(/*notify=*/false);  // the state below tells the readers about both
     }
+    monitor_->publish_state(monitor_state());
   }
 
   // The film so far as the output will look (exposure, tone map, sRGB), at most 400 pixels wide (a page that
   // decodes and draws it once a second costs its machine CPU by the pixel).
-  void publish_preview() {
+  void publish_preview(bool notify = true) {
     const Image& film = tiles_.film();
     const int step = std::max(1, (film.width + 399) / 400);
     const int w = std::max(1, film.width / step), h = std::max(1, film.height / step);
@@ -781,7 +782,9 @@ class Director final : public ControlOut, public Outbox {
           rgb[(static_cast<size_t>(y) * w + x) * 3 + c] = static_cast<char>(static_cast<unsigned char>(
               std::lround(255.0f * display_srgb(p[c], display))));
       }
-    monitor_->publish_preview(w, h, rgb, tiles_.tiles_done(), tile_landed_ms_);
+    monitor_->publish_preview(w, h, rgb, tiles_.tiles_done(), oldest_unshown_ms_ ? oldest_unshown_ms_ : tile_landed_ms_,
+                              tile_landed_ms_, notify);
+    oldest_unshown_ms_ = 0;
   }
 
   // After the frame: the final figures, kept up for `monitor_hold` seconds (Ctrl-C ends the wait).
@@ -873,9 +876,10 @@ class Director final : public ControlOut, public Outbox {
   std::map<std::string, std::tuple<Value, Clock::time_point, Value>> live_before_;  // figures, when, rates
   std::mutex log_mutex_;
   std::deque<Value> log_lines_;
-  Clock::time_point monitor_published_{}, preview_published_{};
+  Clock::time_point monitor_published_{};
   size_t preview_tiles_ = SIZE_MAX, tiles_seen_ = 0;
-  int64_t tile_landed_ms_ = 0;  // Unix time of the latest tile's arrival
+  int64_t tile_landed_ms_ = 0;     // Unix time of the latest tile's arrival
+  int64_t oldest_unshown_ms_ = 0;  // of the first tile that landed since the last preview (0: none)
   std::unique_ptr<Monitor> monitor_;
 };
 

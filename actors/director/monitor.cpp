@@ -175,7 +175,8 @@ void Monitor::publish_state(const Value& state) {
   changed_.notify_all();
 }
 
-void Monitor::publish_preview(int width, int height, const std::string& rgb, uint64_t tiles, int64_t landed_ms) {
+void Monitor::publish_preview(int width, int height, const std::string& rgb, uint64_t tiles, int64_t first_landed_ms,
+                              int64_t landed_ms, bool notify) {
   {
     std::lock_guard<std::mutex> lock(mutex_);
     ++preview_version_;
@@ -185,12 +186,13 @@ void Monitor::publish_preview(int width, int height, const std::string& rgb, uin
                                   reinterpret_cast<const unsigned char*>(rgb.data()), static_cast<int>(rgb.size()));
     base64.resize(static_cast<size_t>(std::max(0, n)));
     preview_json_ = "{\"width\":" + std::to_string(width) + ",\"height\":" + std::to_string(height) +
-                    ",\"tiles\":" + std::to_string(tiles) + ",\"landed_ms\":" + std::to_string(landed_ms) +
+                    ",\"tiles\":" + std::to_string(tiles) + ",\"first_landed_ms\":" + std::to_string(first_landed_ms) +
+                    ",\"landed_ms\":" + std::to_string(landed_ms) +
                     ",\"version\":" + std::to_string(preview_version_) +
                     ",\"rgb\":\"" + base64 + "\"}";
     preview_rgb_ = rgb;
   }
-  changed_.notify_all();
+  if (notify) changed_.notify_all();
 }
 
 std::string Monitor::metrics_text(const Value& state) const {

@@ -41,8 +41,10 @@ class Monitor {
 
   // The farm's state (docs/monitor.md); wakes every /events stream.
   void publish_state(const Value& state);
-  // The image so far: width x height 8-bit RGB, how many tiles it holds, and when the latest landed (Unix ms).
-  void publish_preview(int width, int height, const std::string& rgb, uint64_t tiles, int64_t landed_ms);
+  // The image so far: width x height 8-bit RGB, how many tiles it holds, when the first and the last of the tiles
+  // new in it landed (Unix ms). Without `notify` the streams learn of it with the next publish_state().
+  void publish_preview(int width, int height, const std::string& rgb, uint64_t tiles, int64_t first_landed_ms,
+                       int64_t landed_ms, bool notify = true);
   // Clients connected to /events now, and ever.
   int streams() const { return streams_; }
 

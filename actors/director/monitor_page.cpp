@@ -97,36 +97,57 @@ function drawGraph(actors) {
   $("graph").innerHTML = svg;
 }
 
+// Sets what changed only: a page a browser keeps open costs its machine CPU for every node it restyles and repaints.
+function setText(el, text) { if (el.textContent !== text) el.textContent = text; }
+const shown = new WeakMap();  // element -> the markup it was last given
+function setHtml(el, html) { if (shown.get(el) !== html) { shown.set(el, html); el.innerHTML = html; } }
+
+// The actors' table, a row per actor updated cell by cell; rebuilt only when the actors themselves change.
+function renderActors(actors) {
+  const body = $("actors");
+  const names = actors.map(a => a.name).join("\n");
+  if (shown.get(body) !== names) {
+    shown.set(body, names);
+    body.textContent = "";
+    for (const a of actors) {
+      const tr = body.insertRow();
+      tr.dataset.actor = a.name;
+      tr.dataset.state = a.state;
+      for (let c = 0; c < 12; ++c) tr.insertCell().className = c >= 1 && c <= 3 ? "l" : "";
+    }
+  }
+  actors.forEach((a, i) => {
+    const tr = body.rows[i], live = a.live || {}, rate = a.rates || {};
+    if (tr.dataset.state !== a.state) tr.dataset.state = a.state;
+    const cells = [a.name, a.kind, a.host, a.state + (a.loss ? " — " + a.loss : ""),
+      rate.busy_share === undefined ? "-" : num(100 * rate.busy_share) + "%", num(rate.requests_per_second, 1),
+      num(rate.points_per_second), String(live.queue ?? "-"), String(live.in_flight ?? "-"),
+      num((live.bytes_in ?? NaN) / 1048576, 1), num((live.bytes_out ?? NaN) / 1048576, 1), String(a.pid ?? "")];
+    cells.forEach((text, c) => setText(tr.cells[c], text));
+  });
+}
+
 function render(s) {
   const f = s.farm || {};
-  $("script").textContent = f.script || "";
-  $("stage").textContent = f.stage || "-";
-  $("elapsed").textContent = num(f.elapsed_seconds, 1) + " s";
-  $("tiles").textContent = `tiles ${f.tiles_done ?? 0} / ${f.tiles_total ?? 0}`;
+  setText($("script"), f.script || "");
+  setText($("stage"), f.stage || "-");
+  setText($("elapsed"), num(f.elapsed_seconds, 1) + " s");
+  setText($("tiles"), `tiles ${f.tiles_done ?? 0} / ${f.tiles_total ?? 0}`);
   const actors = s.actors || [];
-  // The graph and the log are redrawn only when they change (a page a browser keeps open costs its machine CPU).
   const graphKey = actors.map(a => a.name + ":" + a.state + ":" + a.inputs.join(",")).join(";");
   if (graphKey !== lastGraph) { lastGraph = graphKey; drawGraph(actors); }
-  $("actors").innerHTML = actors.map(a => {
-    const live = a.live || {}, rate = a.rates || {};
-    return `<tr data-actor="${esc(a.name)}" data-state="${esc(a.state)}"><td>${esc(a.name)}</td><td class="l">${esc(a.kind)}</td>` +
-      `<td class="l">${esc(a.host)}</td><td class="l">${esc(a.state)}${a.loss ? " — " + esc(a.loss) : ""}</td>` +
-      `<td>${rate.busy_share === undefined ? "-" : num(100 * rate.busy_share) + "%"}</td><td>${num(rate.requests_per_second, 1)}</td>` +
-      `<td>${num(rate.points_per_second)}</td><td>${live.queue ?? "-"}</td><td>${live.in_flight ?? "-"}</td>` +
-      `<td>${num((live.bytes_in ?? NaN) / 1048576, 1)}</td><td>${num((live.bytes_out ?? NaN) / 1048576, 1)}</td>` +
-      `<td>${a.pid ?? ""}</td></tr>`;
-  }).join("");
-  $("stages").innerHTML = (s.stages || []).map(t => `<tr><td>${esc(t.name)}</td><td>${num(t.seconds, 3)} s</td></tr>`).join("");
-  $("progress").innerHTML = (s.progress || []).map(p => `<tr><td>${esc(p.actor)}</td><td class="l">${esc(p.what)}</td>` +
+  renderActors(actors);
+  setHtml($("stages"), (s.stages || []).map(t => `<tr><td>${esc(t.name)}</td><td>${num(t.seconds, 3)} s</td></tr>`).join(""));
+  setHtml($("progress"), (s.progress || []).map(p => `<tr><td>${esc(p.actor)}</td><td class="l">${esc(p.what)}</td>` +
     `<td style="width:40%"><div class="bar"><div style="width:${(100 * p.done / Math.max(1, p.total)).toFixed(1)}%"></div></div></td>` +
-    `<td>${p.done} / ${p.total}</td></tr>`).join("");
+    `<td>${p.done} / ${p.total}</td></tr>`).join(""));
   const rad = s.radiosity;
-  $("radiosity").innerHTML = rad && rad.unshot_fraction.length ? (() => {
+  setHtml($("radiosity"), rad && rad.unshot_fraction.length ? (() => {
     const u = rad.unshot_fraction, w = 300, h = 60, top = Math.max(...u, 1e-9);
     const pts = u.map((v, i) => `${(w * i / Math.max(1, u.length - 1)).toFixed(1)},${(h - h * v / top).toFixed(1)}`).join(" ");
     return `radiosity: ${rad.iterations} iterations, unshot ${(100 * u[u.length - 1]).toFixed(2)} %<br>` +
       `<svg width="${w}" height="${h}"><polyline fill="none" stroke="#5fb3ff" points="${pts}" /></svg>`;
-  })() : "";
+  })() : "");
   const lines = s.log || [];
   const logKey = lines.length + ":" + (lines.length ? lines[lines.length - 1].seconds : 0);
   if (logKey !== lastLog) {
@@ -163,7 +184,7 @@ if (new URLSearchParams(location.search).has("snapshot")) {
   fetch("/api/preview" + query + sep + "format=json").then(r => r.json()).then(p => { if (p.rgb) preview(p); });
 } else {
   const events = new EventSource("/events" + query);
-  events.addEventListener("state", e => { $("connection").textContent = "live"; render(JSON.parse(e.data)); });
+  events.addEventListener("state", e => { setText($("connection"), "live"); render(JSON.parse(e.data)); });
   events.addEventListener("preview", e => preview(JSON.parse(e.data)));
   events.onerror = () => { $("connection").textContent = "disconnected (the farm has ended?)"; };
 }
