@@ -94,16 +94,16 @@ int main(int argc, char** argv) {
                   ", lighting = d" + renderer_hosts + " }\n");
   };
   const std::string tiny = "image { width = 64, height = 64, spp = 1, tile = 16 }\n";
-  // About 2 s of rendering: long enough that the ratios below are not made of start-up noise.
-  const std::string frame = "image { width = 512, height = 512, spp = 32 }\n";
+  // About 6 s of rendering: at 2 s (32 spp) the ratios below ranged over 0.81-0.93 in 5 runs on this noisy machine.
+  const std::string frame = "image { width = 512, height = 512, spp = 96 }\n";
   const auto launch_remote = script("launch-remote.lua", tiny, ", host = { h1, h2, h3 }", ", host = { h1, h2, h3 }", 8, 3, true);
   const auto launch_local = script("launch-local.lua", tiny, "", "", 8, 3, false);
   const auto pool_remote = script("pool-remote.lua", frame, ", host = { h1, h2, h3 }", ", host = { h2, h3 }", 3, 2, true);
   const auto pool_local = script("pool-local.lua", frame, "", "", 3, 2, false);
-  // The same pool across hosts serving a heavy op (path tracing, ~100x the work per point of `direct`): CURVE's cost
-  // per byte is the same, its share of the work is not.
+  // The same pool across hosts serving a heavier op (path tracing: at depth 12 ~3x the work per sample of `direct`
+  // on the Cornell box, 1.0 vs 2.8 M samples/s in farm_bench): CURVE's cost per byte is the same, its share is not.
   const auto heavy_remote = bench::temp_script(
-      "heavy-remote.lua", head + hosts_lua + "image { width = 384, height = 384, spp = 16 }\n"
+      "heavy-remote.lua", head + hosts_lua + "image { width = 384, height = 384, spp = 48 }\n"
                           "local d = multiplexer { lightop \"pathtrace\" {}, replicas = 3, host = { h1, h2, h3 } }\n"
                           "renderers { count = 2, lighting = d, host = { h2, h3 } }\n");
   const auto launch_slurm = bench::temp_script(

@@ -41,18 +41,30 @@ void trace_tile(const Scene& scene, const RayTracer& tracer, const Camera& camer
   work.points.clear();
   work.points.reserve(samples);
   work.sample_of_point.clear();
+  work.distance.clear();
+  work.eye = camera.eye();
   work.emitted.assign(samples, RGB{});
   for (size_t i = 0; i < samples; ++i) {
     if (!hits[i].valid()) continue;
     const uint32_t tri = hits[i].triangle;
     const Vec3 wo = -rays[i].direction;
-    const Vec3 p = rays[i].origin + rays[i].direction * hits[i].t;
+    const Vec3 p = point_on_ray(rays[i].origin, wo, hits[i].t);
     const SurfacePoint sp = surface_at(scene, tri, p, wo);
     const Material& m = scene.material(scene.material_of(tri));
     if (sp.front && m.emissive()) work.emitted[i] = m.ke;
     work.points.push_back(p, sp.ns, wo, scene.material_of(tri), keys[i], tri);
     work.sample_of_point.push_back(static_cast<uint32_t>(i));
+    work.distance.push_back(hits[i].t);
   }
+}
+
+Vec3 point_on_ray(Vec3 origin, Vec3 wo, float t) { return origin + (-wo) * t; }
+
+uint64_t tile_sample_key(SamplerKind kind, int64_t image_width, const TileRect& rect, int spp, uint32_t sample) {
+  const uint64_t per_pixel = static_cast<uint64_t>(spp), local = sample / per_pixel;
+  const uint64_t w = static_cast<uint64_t>(rect.width());
+  const uint64_t x = static_cast<uint64_t>(rect.x0) + local % w, y = static_cast<uint64_t>(rect.y0) + local / w;
+  return pixel_sample_key(kind, y * static_cast<uint64_t>(image_width) + x, sample % per_pixel);
 }
 
 void resolve_tile(const TileWork& work, std::span<const RGB> radiance, std::vector<RGB>& pixels) {

@@ -26,8 +26,17 @@ struct TileWork {
   int spp = 1;
   ShadingPoints points;                 // one per camera sample that hit a surface
   std::vector<uint32_t> sample_of_point;  // which sample (pixel-major, then sample index) each point is
+  std::vector<float> distance;          // per point: how far along its camera ray from `eye` it lies
+  Vec3 eye{};                           // where every camera ray starts
   std::vector<RGB> emitted;             // per sample: emission the camera sees directly
 };
+
+// A camera ray's hit: the point `t` along the ray from `origin` whose direction is -wo. Out of line, so that the
+// renderer and a LightOp rebuilding its points from a lean request (actors/codecs/shade_codec.hpp) compute it with
+// the same instructions, bit for bit.
+Vec3 point_on_ray(Vec3 origin, Vec3 wo, float t);
+// The sample key of a tile's `sample`-th camera sample (pixel-major, then sample index), as trace_tile gives it.
+uint64_t tile_sample_key(SamplerKind kind, int64_t image_width, const TileRect& rect, int spp, uint32_t sample);
 
 void trace_tile(const Scene& scene, const RayTracer& tracer, const Camera& camera, const ImageSpec& image,
                 const TileRect& rect, TileWork& work);

@@ -45,6 +45,33 @@ Value encode_shade_request(const ShadingPoints& pts, size_t begin, size_t end, c
   return body;
 }
 
+Value encode_camera_request(const TileWork& work, size_t begin, size_t end, const Scene& scene, SamplerKind sampler,
+                            int64_t image_width) {
+  const ShadingPoints& pts = work.points;
+  Value body = encode_shade_request(pts, begin, end, &scene);
+  Value::Map& map = body.as_map();
+  bool along_rays = work.distance.size() == pts.size();
+  for (size_t i = begin; along_rays && i < end; ++i) {
+    const Vec3 p = point_on_ray(work.eye, pts.wo[i], work.distance[i]);
+    along_rays = std::memcmp(&p, &pts.position[i], sizeof p) == 0;
+  }
+  if (along_rays) {
+    map.erase("p");
+    map["o"] = floats_to_bytes(std::span<const float>(&work.eye.x, 3));
+    map["t"] = floats_to_bytes(std::span<const float>(work.distance.data() + begin, end - begin));
+  }
+  bool tile_keys = work.sample_of_point.size() == pts.size() && work.rect.width() > 0 && work.spp > 0;
+  for (size_t i = begin; tile_keys && i < end; ++i)
+    tile_keys = tile_sample_key(sampler, image_width, work.rect, work.spp, work.sample_of_point[i]) == pts.key[i];
+  if (tile_keys) {
+    map.erase("k");
+    map["tile"] = Value::Array{int64_t{work.rect.x0}, int64_t{work.rect.y0}, int64_t{work.rect.x1},
+                               int64_t{work.rect.y1}, int64_t{work.spp}};
+    map["s"] = u32_to_bytes(std::span<const uint32_t>(work.sample_of_point.data() + begin, end - begin));
+  }
+  return body;
+}
+
 static Status read_vec3(const Value& body, const char* key, size_t n, std::vector<Vec3>& out) {
   const Value* v = body.find(key);
   if (!v || !v->is_bytes()) return make_error(std::string("shade request has no '") + key + "' array");
@@ -62,8 +89,53 @@ static Result<size_t> read_count(const Value& body) {
   return static_cast<size_t>(n->as_int());
 }
 
+// Positions given as distances along camera rays: p = o - wo t (point_on_ray, as the renderer computed them).
+static Status read_positions_along_rays(const Value& body, size_t n, ShadingPoints& pts) {
+  const Value* o = body.find("o");
+  const Value* t = body.find("t");
+  std::vector<float> origin, distance;
+  if (!o || !o->is_bytes() || !bytes_to_floats(o->as_bytes(), origin) || origin.size() != 3)
+    return make_error("shade request has neither 'p' nor a ray origin 'o' of 3 floats");
+  if (!t || !t->is_bytes() || !bytes_to_floats(t->as_bytes(), distance) || distance.size() != n)
+    return make_error("shade request 't' must hold " + std::to_string(n) + " f32 distances");
+  const Vec3 eye{origin[0], origin[1], origin[2]};
+  pts.position.resize(n);
+  for (size_t i = 0; i < n; ++i) pts.position[i] = point_on_ray(eye, pts.wo[i], distance[i]);
+  return Ok{};
+}
+
+// Sample keys given as a tile's sample indices: tile [x0, y0, x1, y1, spp], s[i] < its samples.
+static Status read_tile_keys(const Value& body, size_t n, const PixelKeys& keys, ShadingPoints& pts) {
+  const Value* tile = body.find("tile");
+  const Value* s = body.find("s");
+  int64_t v[5] = {};
+  bool ok = tile && tile->is_array() && tile->as_array().size() == 5;
+  for (size_t i = 0; ok && i < 5; ++i) {
+    ok = tile->as_array()[i].is_int();
+    if (ok) v[i] = tile->as_array()[i].as_int();
+  }
+  constexpr int64_t kMax = int64_t{1} << 24;  // beyond any image's pixels per side or samples per pixel
+  if (!ok || v[0] < 0 || v[1] < 0 || v[0] >= v[2] || v[1] >= v[3] || v[2] > keys.image_width || v[3] > kMax ||
+      v[4] < 1 || v[4] > kMax)
+    return make_error("shade request has neither 'k' nor a tile [x0, y0, x1, y1, spp] inside an image " +
+                      std::to_string(keys.image_width) + " pixels wide");
+  std::vector<uint32_t> samples;
+  if (!s || !s->is_bytes() || !bytes_to_u32(s->as_bytes(), samples) || samples.size() != n)
+    return make_error("shade request 's' must hold " + std::to_string(n) + " u32 sample indices");
+  const TileRect rect{static_cast<int>(v[0]), static_cast<int>(v[1]), static_cast<int>(v[2]), static_cast<int>(v[3])};
+  const uint64_t count = static_cast<uint64_t>(rect.pixel_count()) * static_cast<uint64_t>(v[4]);
+  pts.key.resize(n);
+  for (size_t i = 0; i < n; ++i) {
+    if (samples[i] >= count)
+      return make_error("shade request: point " + std::to_string(i) + " is sample " + std::to_string(samples[i]) +
+                        " of a tile of " + std::to_string(count));
+    pts.key[i] = tile_sample_key(keys.sampler, keys.image_width, rect, static_cast<int>(v[4]), samples[i]);
+  }
+  return Ok{};
+}
+
 Result<ShadingPoints> decode_shade_request(const Value& body, size_t material_count, size_t triangle_count,
-                                           const Scene* scene) {
+                                           const Scene* scene, const PixelKeys* keys) {
   auto n = read_count(body);
   if (!n) return make_error("shade request: " + n.error().message);
   ShadingPoints pts;
@@ -72,16 +144,23 @@ Result<ShadingPoints> decode_shade_request(const Value& body, size_t material_co
   const Value* t = body.find("tri");
   // Without the scene (or the triangles), there is nothing to take a left-out normal or material from.
   const bool derive = scene && t;
-  for (auto [key, field] : {std::pair{"p", &pts.position}, {"wo", &pts.wo}})
-    if (auto st = read_vec3(body, key, *n, *field); !st) return st.error();
+  if (auto st = read_vec3(body, "wo", *n, pts.wo); !st) return st.error();
+  if (body.find("p") || !body.find("o")) {
+    if (auto st = read_vec3(body, "p", *n, pts.position); !st) return st.error();
+  } else if (auto st = read_positions_along_rays(body, *n, pts); !st) {
+    return st.error();
+  }
   if (nrm || !derive)
     if (auto st = read_vec3(body, "nrm", *n, pts.normal); !st) return st.error();
   if (m || !derive)
     if (!m || !m->is_bytes() || !bytes_to_u32(m->as_bytes(), pts.material) || pts.material.size() != *n)
       return make_error("shade request 'm' must hold " + std::to_string(*n) + " u32 material ids");
   const Value* k = body.find("k");
-  if (!k || !k->is_bytes() || !bytes_to_u64(k->as_bytes(), pts.key) || pts.key.size() != *n)
+  if (!k && keys && body.find("s")) {
+    if (auto st = read_tile_keys(body, *n, *keys, pts); !st) return st.error();
+  } else if (!k || !k->is_bytes() || !bytes_to_u64(k->as_bytes(), pts.key) || pts.key.size() != *n) {
     return make_error("shade request 'k' must hold " + std::to_string(*n) + " u64 sample keys");
+  }
   if (t) {
     if (!t->is_bytes() || !bytes_to_u32(t->as_bytes(), pts.triangle) || pts.triangle.size() != *n)
       return make_error("shade request 'tri' must hold " + std::to_string(*n) + " u32 triangle ids");
@@ -110,13 +189,13 @@ Result<Value> slice_shade_request(const Value& body, size_t begin, size_t end) {
   if (!n) return make_error("shade request: " + n.error().message);
   if (begin > end || end > *n) return make_error("shade request: slice out of range");
   Value::Map out{{"n", static_cast<int64_t>(end - begin)}};
-  static const std::map<std::string, size_t, std::less<>> kWidth{{"p", 12}, {"nrm", 12}, {"wo", 12},
-                                                                   {"m", 4},  {"k", 8},    {"tri", 4}};
+  static const std::map<std::string, size_t, std::less<>> kWidth{{"p", 12}, {"nrm", 12}, {"wo", 12}, {"m", 4},
+                                                                   {"k", 8},  {"tri", 4},  {"t", 4},   {"s", 4}};
   for (const auto& [key, value] : body.as_map()) {
     if (key == "n") continue;
     const auto width = kWidth.find(key);
     if (width == kWidth.end()) {
-      out[key] = value;  // not an array of the protocol's: the receiver ignores it, or knows what it means
+      out[key] = value;  // not per point (o, tile), or not the protocol's: the same for every piece
       continue;
     }
     if (!value.is_bytes() || value.as_bytes().data.size() != width->second * *n)

@@ -31,7 +31,7 @@ TEST(ShadeCodec, RequestRoundTripsASlice) {
 TEST(ShadeCodec, InconsistentRequestsAreRefusedWithAReason) {
   auto body = encode_shade_request(sample_points(4), 0, 4);
   body.as_map()["n"] = 5;
-  EXPECT_EQ(decode_shade_request(body, 3).error().message, "shade request 'p' holds 48 bytes, expected 60");
+  EXPECT_EQ(decode_shade_request(body, 3).error().message, "shade request 'wo' holds 48 bytes, expected 60");
   body = encode_shade_request(sample_points(4), 0, 4);
   EXPECT_EQ(decode_shade_request(body, 2).error().message, "shade request: point 2 has material 2 but the scene has 2");
   body.as_map().erase("k");
@@ -162,6 +162,71 @@ TEST(ShadeCodec, ASliceCutsEveryArrayAndDecodesAsThosePoints) {
   body.as_map()["k"] = Bytes{"short"};
   EXPECT_EQ(slice_shade_request(body, 0, 2).error().message,
             "shade request 'k' must hold " + std::to_string(pts.size()) + " entries of 8 bytes");
+}
+
+// A renderer's tile as a lean input gets it: no positions, normals, materials or keys on the wire, and the points the
+// LightOp rebuilds are the renderer's, bit for bit, for either sampler; a slice of it rebuilds as those points.
+TEST(ShadeCodec, ACameraRequestCarriesDistancesAndSampleIndicesAndRebuildsTheRenderersPoints) {
+  auto scene = Scene::builtin("cornell");
+  ASSERT_TRUE(scene.ok());
+  RayTracer tracer(*scene);
+  for (const char* sampler : {"independent", "sobol"}) {
+    ImageSpec image;
+    image.width = 64;
+    image.height = 48;
+    image.spp = 3;
+    image.sampler = sampler;
+    const SamplerKind kind = image.sampler == "sobol" ? SamplerKind::sobol : SamplerKind::independent;
+    Camera camera(CameraSpec{}, image.width, image.height);
+    TileWork work;
+    trace_tile(*scene, tracer, camera, image, TileRect{16, 8, 32, 24}, work);
+    ASSERT_GT(work.points.size(), 100u);
+    const Value body = encode_camera_request(work, 0, work.points.size(), *scene, kind, image.width);
+    for (const char* gone : {"p", "nrm", "m", "k"}) EXPECT_EQ(body.find(gone), nullptr) << gone;
+    const size_t n = work.points.size();
+    const size_t full = wire::encode_body(encode_shade_request(work.points, 0, n)).size();
+    EXPECT_LT(wire::encode_body(body).size(), full * 37 / 52) << "36 bytes a point instead of 52";
+    const PixelKeys keys{image.width, kind};
+    auto back = decode_shade_request(body, scene->materials().size(), scene->triangle_count(), &*scene, &keys);
+    ASSERT_TRUE(back.ok()) << back.error().message;
+    EXPECT_TRUE(same_bits(*back, work.points)) << sampler;
+    auto slice = slice_shade_request(body, 7, n - 5);
+    ASSERT_TRUE(slice.ok()) << slice.error().message;
+    auto part = decode_shade_request(*slice, scene->materials().size(), scene->triangle_count(), &*scene, &keys);
+    ASSERT_TRUE(part.ok()) << part.error().message;
+    EXPECT_EQ(part->key[0], work.points.key[7]);
+    EXPECT_EQ(std::memcmp(&part->position.back(), &work.points.position[n - 6], sizeof(Vec3)), 0);
+    // Without the image's width and sampler the keys cannot be rebuilt, and the request says what it lacks.
+    EXPECT_EQ(decode_shade_request(body, scene->materials().size(), scene->triangle_count(), &*scene).error().message,
+              "shade request 'k' must hold " + std::to_string(n) + " u64 sample keys");
+  }
+}
+
+TEST(ShadeCodec, ACameraRequestWithABadTileOrSampleIsRefused) {
+  auto scene = Scene::builtin("cornell");
+  ASSERT_TRUE(scene.ok());
+  RayTracer tracer(*scene);
+  ImageSpec image;
+  image.width = image.height = 32;
+  image.spp = 2;
+  image.sampler = "independent";
+  Camera camera(CameraSpec{}, image.width, image.height);
+  TileWork work;
+  trace_tile(*scene, tracer, camera, image, TileRect{0, 0, 16, 16}, work);
+  const PixelKeys keys{image.width, SamplerKind::independent};
+  auto decode = [&](const Value& body) {
+    auto r = decode_shade_request(body, scene->materials().size(), scene->triangle_count(), &*scene, &keys);
+    return r.ok() ? std::string("ok") : r.error().message;
+  };
+  Value body = encode_camera_request(work, 0, 4, *scene, SamplerKind::independent, image.width);
+  EXPECT_EQ(decode(body), "ok");
+  body.as_map()["tile"] = Value::Array{int64_t{0}, int64_t{0}, int64_t{64}, int64_t{16}, int64_t{2}};
+  EXPECT_EQ(decode(body), "shade request has neither 'k' nor a tile [x0, y0, x1, y1, spp] inside an image 32 pixels wide");
+  body.as_map()["tile"] = Value::Array{int64_t{0}, int64_t{0}, int64_t{1}, int64_t{1}, int64_t{1}};
+  EXPECT_EQ(decode(body).rfind("shade request: point ", 0), 0u) << "a sample beyond the tile's one";
+  body = encode_camera_request(work, 0, 4, *scene, SamplerKind::independent, image.width);
+  body.as_map()["t"] = Bytes{"abc"};
+  EXPECT_EQ(decode(body), "shade request 't' must hold 4 f32 distances");
 }
 
 }  // namespace lf

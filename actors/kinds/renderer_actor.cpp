@@ -37,6 +37,7 @@ class RendererActor final : public Actor {
     scene_ = std::move(loaded->scene);
     tracer_ = std::move(loaded->tracer);
     image_ = config.image;
+    sampler_ = image_.sampler == "sobol" ? SamplerKind::sobol : SamplerKind::independent;
     camera_ = std::make_unique<Camera>(config.camera, image_.width, image_.height);
     return Ok{};
   }
@@ -104,7 +105,8 @@ class RendererActor final : public Actor {
       ++job->batches_left;
       ++rt.stats().requests;
       rt.ask_input(0, wire::Op::shade,
-                   encode_shade_request(job->work.points, begin, end, rt.input_is_lean(0) ? scene_.get() : nullptr),
+                   rt.input_is_lean(0) ? encode_camera_request(job->work, begin, end, *scene_, sampler_, image_.width)
+                                       : encode_shade_request(job->work.points, begin, end),
                           [this, job, begin, end, &rt](Result<wire::Message> r) {
                             if (!r) return rt.fail("lighting failed: " + r.error().message);
                             auto radiance = decode_radiance(r->body, end - begin);
@@ -146,6 +148,7 @@ class RendererActor final : public Actor {
   std::shared_ptr<const RayTracer> tracer_;
   std::unique_ptr<Camera> camera_;
   ImageSpec image_;
+  SamplerKind sampler_ = SamplerKind::independent;
   RendererParams params_;
   bool rendering_ = false;
   bool no_more_tiles_ = false;

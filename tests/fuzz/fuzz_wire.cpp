@@ -21,9 +21,11 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   if (!body) return 0;
   const lf::Value& v = *body;
   (void)lf::decode_shade_request(v, 8, 64);
-  // A lean request (no nrm or m) is completed from the scene's triangles: hostile triangle ids must be refused.
+  // A lean request (no nrm or m; o and t for p, tile and s for k) is completed from the scene's triangles and the
+  // image: hostile triangle ids, tiles and sample indices must be refused.
   static const lf::Scene cornell = std::move(lf::Scene::builtin("cornell").value());
-  (void)lf::decode_shade_request(v, cornell.materials().size(), cornell.triangle_count(), &cornell);
+  static const lf::PixelKeys keys{64, lf::SamplerKind::sobol};
+  (void)lf::decode_shade_request(v, cornell.materials().size(), cornell.triangle_count(), &cornell, &keys);
   (void)lf::slice_shade_request(v, 1, 3);
   (void)lf::decode_radiance(v, 4);
   (void)lf::ActorConfig::from_value(v);
