@@ -20,7 +20,7 @@ namespace lf {
 Value encode_shade_request(const ShadingPoints& points, size_t begin, size_t end, const Scene* derive_from = nullptr);
 // A renderer's points [begin, end) of a tile to a lean input: as encode_shade_request with the scene, and where
 // they are exactly that, positions as distances along the camera rays (o, t) and sample keys as the tile's sample
-// indices (tile, s), which the receiver turns back into the same bits. 36 bytes a point instead of 52.
+// indices (tile, s), which the receiver turns back into the same bits. 24 bytes a point instead of 52.
 Value encode_camera_request(const TileWork& work, size_t begin, size_t end, const Scene& scene, SamplerKind sampler,
                             int64_t image_width);
 // How a lean input rebuilds sample keys from a tile's sample indices: the image's width and sampler.
