@@ -11,6 +11,7 @@
 // Usage: build/bench/hosts_bench [--runs N] [--json FILE]
 #include <cstdio>
 #include <fstream>
+#include <functional>
 #include <map>
 #include <sstream>
 
@@ -149,20 +150,34 @@ int main(int argc, char** argv) {
       v["big_first_tile_remote"].push_back(bench::run_farm(big_remote, {}).number("first_tile_seconds"));
       v["big_first_tile_local"].push_back(bench::run_farm(big_local, {}).number("first_tile_seconds"));
     }
-    const double remote = bench::run_farm(pool_remote, {}).number("render_samples_per_second");
-    const double local = bench::run_farm(pool_local, {}).number("render_samples_per_second");
+    // Each group of farms runs in one order in even runs and in the reverse order in odd ones, so that a drift of
+    // this machine's speed within a group (it has one: a ratio of two identical setups read 0.89-0.97) does not
+    // lean every ratio the same way.
+    auto throughput = [](const std::string& script, const std::string& security) {
+      return [script, security] { return bench::run_farm(script, {"security=" + security}).number("render_samples_per_second"); };
+    };
+    auto in_turn = [r](std::vector<std::function<double()>> farms) {
+      std::vector<double> out(farms.size());
+      for (size_t k = 0; k < farms.size(); ++k) {
+        const size_t i = r % 2 ? farms.size() - 1 - k : k;
+        out[i] = farms[i]();
+      }
+      return out;
+    };
+    const auto four = in_turn({throughput(pool_remote, "curve"), throughput(pool_local, "curve"),
+                               throughput(pool_remote, "none"), throughput(pool_local, "none")});
+    const double remote = four[0], local = four[1], remote_plain = four[2], local_plain = four[3];
     v["throughput_remote_over_local"].push_back(remote / local);
     // The same without CURVE on either side: what spreading over hosts costs apart from encryption.
-    const double remote_plain = bench::run_farm(pool_remote, {"security=none"}).number("render_samples_per_second");
-    const double local_plain = bench::run_farm(pool_local, {"security=none"}).number("render_samples_per_second");
     v["throughput_remote_over_local_none"].push_back(remote_plain / local_plain);
     // What CURVE costs where it is used: every link between hosts is encrypted.
     v["throughput_curve_over_none_across_hosts"].push_back(remote / remote_plain);
-    const double heavy_curve = bench::run_farm(heavy_remote, {"security=curve"}).number("render_samples_per_second");
-    const double heavy_none = bench::run_farm(heavy_remote, {"security=none"}).number("render_samples_per_second");
-    v["throughput_curve_over_none_across_hosts_pathtrace"].push_back(heavy_curve / heavy_none);
-    const double curve = bench::run_farm(pool_local, {"security=curve"}).number("render_samples_per_second");
-    const double none = bench::run_farm(pool_local, {"security=none"}).number("render_samples_per_second");
+    const auto heavy = in_turn({throughput(heavy_remote, "curve"), throughput(heavy_remote, "none")});
+    v["throughput_curve_over_none_across_hosts_pathtrace"].push_back(heavy[0] / heavy[1]);
+    // On one host CURVE guards only the links to the director (actors talk over IPC): this ratio should read 1, and
+    // how far it strays is this machine's noise.
+    const auto on_one_host = in_turn({throughput(pool_local, "curve"), throughput(pool_local, "none")});
+    const double curve = on_one_host[0], none = on_one_host[1];
     v["throughput_curve_over_none"].push_back(curve / none);
     v["samples_per_second_local_curve"].push_back(curve);
     v["samples_per_second_local_none"].push_back(none);
