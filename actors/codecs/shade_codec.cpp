@@ -123,7 +123,9 @@ static Status read_tile_keys(const Value& body, size_t n, const PixelKeys& keys,
   if (!s || !s->is_bytes() || !bytes_to_u32(s->as_bytes(), samples) || samples.size() != n)
     return make_error("shade request 's' must hold " + std::to_string(n) + " u32 sample indices");
   const TileRect rect{static_cast<int>(v[0]), static_cast<int>(v[1]), static_cast<int>(v[2]), static_cast<int>(v[3])};
-  const uint64_t count = static_cast<uint64_t>(rect.pixel_count()) * static_cast<uint64_t>(v[4]);
+  // The tile's samples, in 64 bits (a hostile tile's pixels times its spp may not fit; s is 32 bits anyway).
+  const uint64_t pixels = static_cast<uint64_t>(v[2] - v[0]) * static_cast<uint64_t>(v[3] - v[1]);
+  const uint64_t count = pixels > UINT32_MAX ? UINT64_MAX : pixels * static_cast<uint64_t>(v[4]);
   pts.key.resize(n);
   for (size_t i = 0; i < n; ++i) {
     if (samples[i] >= count)
@@ -141,9 +143,9 @@ Result<ShadingPoints> decode_shade_request(const Value& body, size_t material_co
   ShadingPoints pts;
   const Value* nrm = body.find("nrm");
   const Value* m = body.find("m");
-  const Value* t = body.find("tri");
+  const Value* tri = body.find("tri");
   // Without the scene (or the triangles), there is nothing to take a left-out normal or material from.
-  const bool derive = scene && t;
+  const bool derive = scene && tri;
   if (auto st = read_vec3(body, "wo", *n, pts.wo); !st) return st.error();
   if (body.find("p") || !body.find("o")) {
     if (auto st = read_vec3(body, "p", *n, pts.position); !st) return st.error();
@@ -161,8 +163,8 @@ Result<ShadingPoints> decode_shade_request(const Value& body, size_t material_co
   } else if (!k || !k->is_bytes() || !bytes_to_u64(k->as_bytes(), pts.key) || pts.key.size() != *n) {
     return make_error("shade request 'k' must hold " + std::to_string(*n) + " u64 sample keys");
   }
-  if (t) {
-    if (!t->is_bytes() || !bytes_to_u32(t->as_bytes(), pts.triangle) || pts.triangle.size() != *n)
+  if (tri) {
+    if (!tri->is_bytes() || !bytes_to_u32(tri->as_bytes(), pts.triangle) || pts.triangle.size() != *n)
       return make_error("shade request 'tri' must hold " + std::to_string(*n) + " u32 triangle ids");
   }
   if (derive && (!nrm || !m)) {

@@ -226,6 +226,9 @@ TEST(ShadeCodec, ACameraRequestWithABadTileOrSampleIsRefused) {
   EXPECT_EQ(decode(body), "shade request has neither 'k' nor a tile [x0, y0, x1, y1, spp] inside an image 32 pixels wide");
   body.as_map()["tile"] = Value::Array{int64_t{0}, int64_t{0}, int64_t{1}, int64_t{1}, int64_t{1}};
   EXPECT_EQ(decode(body).rfind("shade request: point ", 0), 0u) << "a sample beyond the tile's one";
+  // A tile whose samples do not fit 64 bits (pixels x spp) is counted without overflowing: any 32-bit s is in it.
+  body.as_map()["tile"] = Value::Array{int64_t{0}, int64_t{0}, int64_t{32}, int64_t{1} << 24, int64_t{1} << 24};
+  EXPECT_EQ(decode(body), "ok");
   body = encode_camera_request(work, 0, 4, *scene, SamplerKind::independent, image.width);
   body.as_map()["t"] = Bytes{"abc"};
   EXPECT_EQ(decode(body), "shade request 't' must hold 4 f32 distances");
