@@ -104,18 +104,16 @@ class RendererActor final : public Actor {
       const size_t end = std::min(begin + batch, n);
       ++job->batches_left;
       ++rt.stats().requests;
-      rt.ask_input(0, wire::Op::shade,
-                   rt.input_is_lean(0) ? encode_camera_request(job->work, begin, end, *scene_, sampler_, image_.width)
-                                       : encode_shade_request(job->work.points, begin, end),
-                          [this, job, begin, end, &rt](Result<wire::Message> r) {
-                            if (!r) return rt.fail("lighting failed: " + r.error().message);
-                            auto radiance = decode_radiance(r->body, end - begin);
-                            if (!radiance)
-                              return rt.fail("lighting '" + rt.input_name(0) + "': " + radiance.error().message);
-                            std::copy(radiance->begin(), radiance->end(),
-                                      job->radiance.begin() + static_cast<ptrdiff_t>(begin));
-                            if (--job->batches_left == 0) finish_tile(job, rt);
-                          });
+      // A built-in LightOp rebuilds positions, normals, materials and keys from the scene and the tile.
+      Value body = rt.input_is_lean(0) ? encode_camera_request(job->work, begin, end, *scene_, sampler_, image_.width)
+                                       : encode_shade_request(job->work.points, begin, end);
+      rt.ask_input(0, wire::Op::shade, std::move(body), [this, job, begin, end, &rt](Result<wire::Message> r) {
+        if (!r) return rt.fail("lighting failed: " + r.error().message);
+        auto radiance = decode_radiance(r->body, end - begin);
+        if (!radiance) return rt.fail("lighting '" + rt.input_name(0) + "': " + radiance.error().message);
+        std::copy(radiance->begin(), radiance->end(), job->radiance.begin() + static_cast<ptrdiff_t>(begin));
+        if (--job->batches_left == 0) finish_tile(job, rt);
+      });
     }
   }
 
