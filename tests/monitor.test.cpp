@@ -80,7 +80,15 @@ TEST_F(MonitorTest, ThePageShowsTheNetworkTheImageFillingInAndALostReplica) {
   EXPECT_EQ(url.find("token"), std::string::npos) << "loopback needs no token";
   ASSERT_TRUE(Farm::eventually([&] { return farm.err_so_far().find("render 10%") != std::string::npos; }, 60));
 
-  const std::string first = page_dom(url);
+  // The page is refreshed once a second: the first look that shows the render under way (every actor rendering,
+  // tiles in the preview). A state published just before the actors started counts as not yet.
+  std::string first;
+  Farm::eventually([&] {
+    first = page_dom(url);
+    for (const char* actor : {"renderer-0", "renderer-1", "direct.0", "direct.1"})
+      if (state_of(first, actor) != "rendering") return false;
+    return std::atoi(attribute(first, "preview", "data-tiles").c_str()) > 0;
+  }, 30);
   // Every actor of the farm, in the graph and in the table.
   for (const char* actor : {"renderer-0", "renderer-1", "direct", "direct.0", "direct.1"}) {
     EXPECT_NE(first.find(std::string("<g class=\"node\" data-actor=\"") + actor + "\""), std::string::npos) << actor;
