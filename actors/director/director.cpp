@@ -191,6 +191,7 @@ class Director final : public ControlOut, public Outbox {
   void stage(Stage s, Fn&& fn, bool timed = true) {
     const auto t = Clock::now();
     supervisor_.set_stage(s);
+    if (monitor_) publish_monitor(true);  // a watching page sees each stage as it begins
     fn();
     if (timed) stage_seconds_.emplace_back(std::string(stage_name(s)), seconds_since(t));
   }
