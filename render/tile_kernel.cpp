@@ -32,7 +32,8 @@ void trace_tile(const Scene& scene, const RayTracer& tracer, const Camera& camer
       const uint64_t pixel = static_cast<uint64_t>(y) * image.width + x;
       for (int k = 0; k < image.spp; ++k, ++s) {
         keys[s] = pixel_sample_key(kind, pixel, static_cast<uint64_t>(k));
-        rays[s] = sample_ray(camera, kind, keys[s], x, y);
+        const Uniform2 jitter = Sampler(kind, keys[s], streams::camera).uniform2();
+        rays[s] = camera.ray(static_cast<float>(x) + jitter.u, static_cast<float>(y) + jitter.v);
       }
     }
   tracer.intersect(rays, hits, /*coherent=*/true);  // a tile's camera rays are the same batch on any layout
@@ -58,11 +59,6 @@ void trace_tile(const Scene& scene, const RayTracer& tracer, const Camera& camer
 }
 
 Vec3 point_on_ray(Vec3 origin, Vec3 wo, float t) { return origin + (-wo) * t; }
-
-Ray sample_ray(const Camera& camera, SamplerKind kind, uint64_t key, int x, int y) {
-  const Uniform2 jitter = Sampler(kind, key, streams::camera).uniform2();
-  return camera.ray(static_cast<float>(x) + jitter.u, static_cast<float>(y) + jitter.v);
-}
 
 uint64_t tile_sample_key(SamplerKind kind, int64_t image_width, const TileRect& rect, int spp, uint32_t sample) {
   const uint64_t per_pixel = static_cast<uint64_t>(spp), local = sample / per_pixel;

@@ -35,8 +35,6 @@ struct TileWork {
 // renderer and a LightOp rebuilding its points from a lean request (actors/codecs/shade_codec.hpp) compute it with
 // the same instructions, bit for bit.
 Vec3 point_on_ray(Vec3 origin, Vec3 wo, float t);
-// The camera ray of the sample with `key` in pixel (x, y), jittered within the pixel as trace_tile traces it.
-Ray sample_ray(const Camera& camera, SamplerKind kind, uint64_t key, int x, int y);
 // The sample key of a tile's `sample`-th camera sample (pixel-major, then sample index), as trace_tile gives it.
 uint64_t tile_sample_key(SamplerKind kind, int64_t image_width, const TileRect& rect, int spp, uint32_t sample);
 

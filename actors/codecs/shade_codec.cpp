@@ -45,14 +45,8 @@ Value encode_shade_request(const ShadingPoints& pts, size_t begin, size_t end, c
   return body;
 }
 
-// The pixel of a tile's `sample`-th sample (pixel-major, then sample index).
-static std::pair<int, int> pixel_of(const TileRect& rect, int spp, uint32_t sample) {
-  const uint32_t local = sample / static_cast<uint32_t>(spp), w = static_cast<uint32_t>(rect.width());
-  return {rect.x0 + static_cast<int>(local % w), rect.y0 + static_cast<int>(local / w)};
-}
-
 Value encode_camera_request(const TileWork& work, size_t begin, size_t end, const Scene& scene, SamplerKind sampler,
-                            int64_t image_width, const Camera* camera) {
+                            int64_t image_width) {
   const ShadingPoints& pts = work.points;
   Value body = encode_shade_request(pts, begin, end, &scene);
   Value::Map& map = body.as_map();
@@ -74,14 +68,6 @@ Value encode_camera_request(const TileWork& work, size_t begin, size_t end, cons
     map["tile"] = Value::Array{int64_t{work.rect.x0}, int64_t{work.rect.y0}, int64_t{work.rect.x1},
                                int64_t{work.rect.y1}, int64_t{work.spp}};
     map["s"] = u32_to_bytes(std::span<const uint32_t>(work.sample_of_point.data() + begin, end - begin));
-    // And each wo is its camera ray's, reversed: the receiver traces nothing to know it, it asks the camera.
-    bool camera_rays = camera != nullptr;
-    for (size_t i = begin; camera_rays && i < end; ++i) {
-      const auto [x, y] = pixel_of(work.rect, work.spp, work.sample_of_point[i]);
-      const Vec3 wo = -sample_ray(*camera, sampler, pts.key[i], x, y).direction;
-      camera_rays = std::memcmp(&wo, &pts.wo[i], sizeof wo) == 0;
-    }
-    if (camera_rays) map.erase("wo");
   }
   return body;
 }
@@ -147,13 +133,6 @@ static Status read_tile_keys(const Value& body, size_t n, const PixelKeys& keys,
                         " of a tile of " + std::to_string(count));
     pts.key[i] = tile_sample_key(keys.sampler, keys.image_width, rect, static_cast<int>(v[4]), samples[i]);
   }
-  if (body.find("wo") || !keys.camera) return Ok{};
-  // Without wo: each point's camera ray, reversed.
-  pts.wo.resize(n);
-  for (size_t i = 0; i < n; ++i) {
-    const auto [x, y] = pixel_of(rect, static_cast<int>(v[4]), samples[i]);
-    pts.wo[i] = -sample_ray(*keys.camera, keys.sampler, pts.key[i], x, y).direction;
-  }
   return Ok{};
 }
 
@@ -167,15 +146,7 @@ Result<ShadingPoints> decode_shade_request(const Value& body, size_t material_co
   const Value* tri = body.find("tri");
   // Without the scene (or the triangles), there is nothing to take a left-out normal or material from.
   const bool derive = scene && tri;
-  // Keys first: a renderer's points may leave wo to be rebuilt from their camera samples.
-  const Value* k = body.find("k");
-  if (!k && keys && body.find("s")) {
-    if (auto st = read_tile_keys(body, *n, *keys, pts); !st) return st.error();
-  } else if (!k || !k->is_bytes() || !bytes_to_u64(k->as_bytes(), pts.key) || pts.key.size() != *n) {
-    return make_error("shade request 'k' must hold " + std::to_string(*n) + " u64 sample keys");
-  }
-  if (pts.wo.size() != *n || body.find("wo"))
-    if (auto st = read_vec3(body, "wo", *n, pts.wo); !st) return st.error();
+  if (auto st = read_vec3(body, "wo", *n, pts.wo); !st) return st.error();
   if (body.find("p") || !body.find("o")) {
     if (auto st = read_vec3(body, "p", *n, pts.position); !st) return st.error();
   } else if (auto st = read_positions_along_rays(body, *n, pts); !st) {
@@ -186,6 +157,12 @@ Result<ShadingPoints> decode_shade_request(const Value& body, size_t material_co
   if (m || !derive)
     if (!m || !m->is_bytes() || !bytes_to_u32(m->as_bytes(), pts.material) || pts.material.size() != *n)
       return make_error("shade request 'm' must hold " + std::to_string(*n) + " u32 material ids");
+  const Value* k = body.find("k");
+  if (!k && keys && body.find("s")) {
+    if (auto st = read_tile_keys(body, *n, *keys, pts); !st) return st.error();
+  } else if (!k || !k->is_bytes() || !bytes_to_u64(k->as_bytes(), pts.key) || pts.key.size() != *n) {
+    return make_error("shade request 'k' must hold " + std::to_string(*n) + " u64 sample keys");
+  }
   if (tri) {
     if (!tri->is_bytes() || !bytes_to_u32(tri->as_bytes(), pts.triangle) || pts.triangle.size() != *n)
       return make_error("shade request 'tri' must hold " + std::to_string(*n) + " u32 triangle ids");

@@ -21,16 +21,12 @@ Value encode_shade_request(const ShadingPoints& points, size_t begin, size_t end
 // A renderer's points [begin, end) of a tile to a lean input: as encode_shade_request with the scene, and where
 // they are exactly that, positions as distances along the camera rays (o, t) and sample keys as the tile's sample
 // indices (tile, s), which the receiver turns back into the same bits. 24 bytes a point instead of 52.
-// With `camera` (the farm's, which the receiver has too), wo is left out as well where every point's is exactly its
-// camera ray's, reversed: 12 bytes a point.
 Value encode_camera_request(const TileWork& work, size_t begin, size_t end, const Scene& scene, SamplerKind sampler,
-                            int64_t image_width, const Camera* camera = nullptr);
-// How a lean input rebuilds sample keys from a tile's sample indices, and with the camera wo from them: the image's
-// width and sampler, and the farm's camera.
+                            int64_t image_width);
+// How a lean input rebuilds sample keys from a tile's sample indices: the image's width and sampler.
 struct PixelKeys {
   int64_t image_width = 0;
   SamplerKind sampler = SamplerKind::independent;
-  const Camera* camera = nullptr;
 };
 // With `scene`, a request without nrm or m gets them from its triangles; without, both must be there. With
 // `keys`, one may carry tile and s instead of k; o and t instead of p need nothing more.

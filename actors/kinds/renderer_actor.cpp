@@ -104,11 +104,9 @@ class RendererActor final : public Actor {
       const size_t end = std::min(begin + batch, n);
       ++job->batches_left;
       ++rt.stats().requests;
-      // A built-in LightOp rebuilds positions, directions, normals, materials and keys from the scene, the camera
-      // and the tile.
-      Value body = rt.input_is_lean(0)
-                       ? encode_camera_request(job->work, begin, end, *scene_, sampler_, image_.width, camera_.get())
-                       : encode_shade_request(job->work.points, begin, end);
+      // A built-in LightOp rebuilds positions, normals, materials and keys from the scene and the tile.
+      Value body = rt.input_is_lean(0) ? encode_camera_request(job->work, begin, end, *scene_, sampler_, image_.width)
+                                       : encode_shade_request(job->work.points, begin, end);
       rt.ask_input(0, wire::Op::shade, std::move(body), [this, job, begin, end, &rt](Result<wire::Message> r) {
         if (!r) return rt.fail("lighting failed: " + r.error().message);
         auto radiance = decode_radiance(r->body, end - begin);

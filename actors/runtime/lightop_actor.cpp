@@ -279,7 +279,7 @@ class LightOpActor final : public Actor {
     }
     // Requests that arrive before this op's setup finished (another op's setup may ask it, e.g. an irradiance
     // pre-pass) wait in the queue until it has.
-    const PixelKeys keys{width_, sampler_, camera_.get()};
+    const PixelKeys keys{width_, sampler_};
     auto points = decode_shade_request(m.body, scene_->materials().size(), scene_->triangle_count(), scene_.get(), &keys);
     if (!points) {
       rt.reply_error(peer, m.header.id, ErrorCode::bad_request, points.error().message);

@@ -24,8 +24,7 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   // A lean request (no nrm or m; o and t for p, tile and s for k) is completed from the scene's triangles and the
   // image: hostile triangle ids, tiles and sample indices must be refused.
   static const lf::Scene cornell = std::move(lf::Scene::builtin("cornell").value());
-  static const lf::Camera camera(lf::CameraSpec{}, 64, 64);
-  static const lf::PixelKeys keys{64, lf::SamplerKind::sobol, &camera};
+  static const lf::PixelKeys keys{64, lf::SamplerKind::sobol};
   (void)lf::decode_shade_request(v, cornell.materials().size(), cornell.triangle_count(), &cornell, &keys);
   (void)lf::slice_shade_request(v, 1, 3);
   (void)lf::decode_radiance(v, 4);
