@@ -37,7 +37,7 @@ double bare_frame(const lf::Scene& scene, const lf::RayTracer& tracer, const cha
                                lf::ParamTable(lf::Value::Map{{"max_depth", 12}}, "pathtrace"));
   lf::LocalInputs none;
   lf::SceneContext ctx{&scene, &tracer};
-  ctx.sampler = image.sampler == "sobol" ? lf::SamplerKind::sobol : lf::SamplerKind::independent;
+  ctx.sampler = lf::sampler_of(image);
   lf::run_to_completion(op->setup(ctx, none));
   lf::TileWork work;
   std::vector<lf::RGB> radiance, pixels;

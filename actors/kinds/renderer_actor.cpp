@@ -37,7 +37,7 @@ class RendererActor final : public Actor {
     scene_ = std::move(loaded->scene);
     tracer_ = std::move(loaded->tracer);
     image_ = config.image;
-    sampler_ = image_.sampler == "sobol" ? SamplerKind::sobol : SamplerKind::independent;
+    sampler_ = sampler_of(image_);
     camera_ = std::make_unique<Camera>(config.camera, image_.width, image_.height);
     return Ok{};
   }

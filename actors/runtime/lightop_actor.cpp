@@ -20,6 +20,7 @@
 #include "core/log.hpp"
 #include "render/loaded_scene.hpp"
 #include "render/lightop_registry.hpp"
+#include "render/tile_kernel.hpp"
 
 namespace lf {
 namespace {
@@ -224,7 +225,7 @@ class LightOpActor final : public Actor {
     camera_ = std::make_unique<Camera>(config.camera, config.image.width, config.image.height);
     width_ = config.image.width;
     height_ = config.image.height;
-    sampler_ = config.image.sampler == "sobol" ? SamplerKind::sobol : SamplerKind::independent;
+    sampler_ = sampler_of(config.image);
     inputs_ = std::make_unique<RemoteInputs>(rt, 4096, *scene_);
     if (config.pool) {
       replica_index_ = static_cast<int>(config.pool->index);
