@@ -66,18 +66,43 @@ uint64_t tile_sample_key(SamplerKind kind, int64_t image_width, const TileRect& 
   return pixel_sample_key(kind, y * static_cast<uint64_t>(image_width) + x, sample % per_pixel);
 }
 
-void resolve_tile(const TileWork& work, std::span<const RGB> radiance, std::vector<RGB>& pixels) {
-  const size_t samples = work.emitted.size();
-  std::vector<RGB> per_sample(work.emitted);
-  for (size_t j = 0; j < work.sample_of_point.size(); ++j) per_sample[work.sample_of_point[j]] += radiance[j];
+void fold_by_pixel(std::span<const RGB> radiance, std::span<const uint32_t> samples, int spp, std::vector<RGB>& sums) {
+  const uint32_t per_pixel = static_cast<uint32_t>(spp);
+  for (size_t j = 0; j < samples.size();) {
+    const uint32_t pixel = samples[j] / per_pixel;
+    RGB sum{};
+    for (; j < samples.size() && samples[j] / per_pixel == pixel; ++j) sum += radiance[j];
+    sums.push_back(sum);
+  }
+}
+
+size_t pixel_runs(std::span<const uint32_t> samples, int spp) {
+  const uint32_t per_pixel = static_cast<uint32_t>(spp);
+  size_t runs = 0;
+  for (size_t j = 0; j < samples.size(); ++j) runs += j == 0 || samples[j] / per_pixel != samples[j - 1] / per_pixel;
+  return runs;
+}
+
+void resolve_pixels(const TileWork& work, std::span<const RGB> pixel_radiance, std::vector<RGB>& pixels) {
   const size_t spp = static_cast<size_t>(work.spp);
-  pixels.assign(samples / spp, RGB{});
+  pixels.assign(work.emitted.size() / spp, RGB{});
   const float inv = 1.0f / static_cast<float>(spp);
   for (size_t p = 0; p < pixels.size(); ++p) {
-    RGB sum{};
-    for (size_t k = 0; k < spp; ++k) sum += per_sample[p * spp + k];
-    pixels[p] = sum * inv;
+    RGB emitted{};
+    for (size_t k = 0; k < spp; ++k) emitted += work.emitted[p * spp + k];
+    pixels[p] = (emitted + pixel_radiance[p]) * inv;
   }
+}
+
+void resolve_tile(const TileWork& work, std::span<const RGB> radiance, std::vector<RGB>& pixels) {
+  std::vector<RGB> sums;
+  fold_by_pixel(radiance, work.sample_of_point, work.spp, sums);
+  std::vector<RGB> pixel_radiance(work.emitted.size() / static_cast<size_t>(work.spp), RGB{});
+  const uint32_t per_pixel = static_cast<uint32_t>(work.spp);
+  for (size_t j = 0, run = 0; j < work.sample_of_point.size(); ++j)
+    if (j == 0 || work.sample_of_point[j] / per_pixel != work.sample_of_point[j - 1] / per_pixel)
+      pixel_radiance[work.sample_of_point[j] / per_pixel] = sums[run++];
+  resolve_pixels(work, pixel_radiance, pixels);
 }
 
 }  // namespace lf

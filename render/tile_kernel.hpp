@@ -46,7 +46,18 @@ uint64_t tile_sample_key(SamplerKind kind, int64_t image_width, const TileRect& 
 void trace_tile(const Scene& scene, const RayTracer& tracer, const Camera& camera, const ImageSpec& image,
                 const TileRect& rect, TileWork& work);
 
-// pixels[p] = mean over samples of (emitted + radiance of its point); sums run in sample order.
+// The radiance of points in one pixel, summed: one sum per run of consecutive points whose samples (pixel-major
+// sample indices of a tile with `spp` samples per pixel) lie in one pixel, added in point order from zero. The
+// renderer folds a tile's radiance this way, and a LightOp asked for a folded reply (docs/PROTOCOL.md) folds its
+// points the same way, so the two give the same bits. Appends to `sums`.
+void fold_by_pixel(std::span<const RGB> radiance, std::span<const uint32_t> samples, int spp, std::vector<RGB>& sums);
+// How many sums fold_by_pixel gives for these samples.
+size_t pixel_runs(std::span<const uint32_t> samples, int spp);
+
+// pixels[p] = (emitted over p's samples + radiance over p's points) / spp, each summed in sample order;
+// `pixel_radiance[p]` is p's radiance summed by fold_by_pixel (zero where no sample hit a surface).
+void resolve_pixels(const TileWork& work, std::span<const RGB> pixel_radiance, std::vector<RGB>& pixels);
+// The same from each point's radiance.
 void resolve_tile(const TileWork& work, std::span<const RGB> radiance, std::vector<RGB>& pixels);
 
 }  // namespace lf

@@ -51,7 +51,7 @@ Value encode_shade_request(const ShadingPoints& pts, size_t begin, size_t end, c
 }
 
 Value encode_camera_request(const TileWork& work, size_t begin, size_t end, const Scene& scene, SamplerKind sampler,
-                            int64_t image_width) {
+                            int64_t image_width, bool fold) {
   const ShadingPoints& pts = work.points;
   bool along_rays = work.distance.size() == pts.size();
   for (size_t i = begin; along_rays && i < end; ++i) {
@@ -71,6 +71,7 @@ Value encode_camera_request(const TileWork& work, size_t begin, size_t end, cons
     map["tile"] = Value::Array{int64_t{work.rect.x0}, int64_t{work.rect.y0}, int64_t{work.rect.x1},
                                int64_t{work.rect.y1}, int64_t{work.spp}};
     map["s"] = u32_to_bytes(std::span<const uint32_t>(work.sample_of_point.data() + begin, end - begin));
+    if (fold) map["fold"] = true;
   }
   return body;
 }
@@ -107,19 +108,41 @@ static Status read_positions_along_rays(const Value& body, size_t n, ShadingPoin
   return Ok{};
 }
 
-// Sample keys given as a tile's sample indices: tile [x0, y0, x1, y1, spp], s[i] < its samples.
-static Status read_tile_keys(const Value& body, size_t n, const PixelKeys& keys, ShadingPoints& pts) {
+// The tile [x0, y0, x1, y1, spp] a request's sample indices refer to; spp within [1, kMaxTileSide].
+constexpr int64_t kMaxTileSide = int64_t{1} << 24;  // beyond any image's pixels per side or samples per pixel
+
+static bool read_tile(const Value& body, int64_t (&v)[5]) {
   const Value* tile = body.find("tile");
-  const Value* s = body.find("s");
-  int64_t v[5] = {};
   bool ok = tile && tile->is_array() && tile->as_array().size() == 5;
   for (size_t i = 0; ok && i < 5; ++i) {
     ok = tile->as_array()[i].is_int();
     if (ok) v[i] = tile->as_array()[i].as_int();
   }
-  constexpr int64_t kMax = int64_t{1} << 24;  // beyond any image's pixels per side or samples per pixel
-  if (!ok || v[0] < 0 || v[1] < 0 || v[0] >= v[2] || v[1] >= v[3] || v[2] > keys.image_width || v[3] > kMax ||
-      v[4] < 1 || v[4] > kMax)
+  return ok && v[4] >= 1 && v[4] <= kMaxTileSide;
+}
+
+Result<std::optional<PixelFold>> decode_pixel_fold(const Value& body) {
+  const Value* fold = body.find("fold");
+  if (!fold || (fold->is_bool() && !fold->as_bool())) return std::optional<PixelFold>();
+  if (!fold->is_bool()) return make_error("shade request 'fold' must be true or false");
+  auto n = read_count(body);
+  if (!n) return make_error("shade request: " + n.error().message);
+  int64_t v[5] = {};
+  if (!read_tile(body, v)) return make_error("shade request: 'fold' needs a tile [x0, y0, x1, y1, spp]");
+  PixelFold out;
+  out.spp = static_cast<int>(v[4]);
+  const Value* s = body.find("s");
+  if (!s || !s->is_bytes() || !bytes_to_u32(s->as_bytes(), out.samples) || out.samples.size() != *n)
+    return make_error("shade request: 'fold' needs 's' with " + std::to_string(*n) + " u32 sample indices");
+  return std::optional<PixelFold>(std::move(out));
+}
+
+// Sample keys given as a tile's sample indices: tile [x0, y0, x1, y1, spp], s[i] < its samples.
+static Status read_tile_keys(const Value& body, size_t n, const PixelKeys& keys, ShadingPoints& pts) {
+  const Value* s = body.find("s");
+  int64_t v[5] = {};
+  if (!read_tile(body, v) || v[0] < 0 || v[1] < 0 || v[0] >= v[2] || v[1] >= v[3] || v[2] > keys.image_width ||
+      v[3] > kMaxTileSide)
     return make_error("shade request has neither 'k' nor a tile [x0, y0, x1, y1, spp] inside an image " +
                       std::to_string(keys.image_width) + " pixels wide");
   std::vector<uint32_t> samples;

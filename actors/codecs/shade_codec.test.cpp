@@ -234,4 +234,74 @@ TEST(ShadeCodec, ACameraRequestWithABadTileOrSampleIsRefused) {
   EXPECT_EQ(decode(body), "shade request 't' must hold 4 f32 distances");
 }
 
+// A renderer's request that asks for its reply folded by pixel: the LightOp's sums over each pixel's points are the
+// renderer's own fold of the same values, bit for bit, and the tile resolves to the same pixels either way.
+TEST(ShadeCodec, AFoldedReplyHoldsEachPixelsRadianceSummedAsTheRendererWouldSumIt) {
+  auto scene = Scene::builtin("cornell");
+  ASSERT_TRUE(scene.ok());
+  RayTracer tracer(*scene);
+  ImageSpec image;
+  image.width = image.height = 64;
+  image.spp = 5;
+  Camera camera(CameraSpec{}, image.width, image.height);
+  TileWork work;
+  // The tile's corner looks past the box's open side: some pixels have fewer points than samples.
+  trace_tile(*scene, tracer, camera, image, TileRect{0, 0, 16, 16}, work);
+  const size_t n = work.points.size();
+  ASSERT_LT(n, static_cast<size_t>(16 * 16 * image.spp));
+  std::vector<RGB> radiance(n);
+  for (size_t j = 0; j < n; ++j) radiance[j] = {0.1f * float(j % 7), 1.0f / float(j + 1), float(j) * 1e-3f};
+  // Cut into requests between pixels, each folded as a LightOp folds it.
+  std::vector<RGB> pixel_radiance(static_cast<size_t>(work.rect.pixel_count()), RGB{});
+  const uint32_t spp = static_cast<uint32_t>(image.spp);
+  for (size_t begin = 0, end = 0; begin < n; begin = end) {
+    end = std::min(begin + 37, n);
+    while (end < n && work.sample_of_point[end] / spp == work.sample_of_point[end - 1] / spp) ++end;
+    const Value body = encode_camera_request(work, begin, end, *scene, sampler_of(image), image.width, true);
+    ASSERT_NE(body.find("fold"), nullptr);
+    auto fold = decode_pixel_fold(body);
+    ASSERT_TRUE(fold.ok()) << fold.error().message;
+    ASSERT_TRUE(fold->has_value());
+    std::vector<RGB> sums;
+    fold_by_pixel(std::span(radiance).subspan(begin, end - begin), (*fold)->samples, (*fold)->spp, sums);
+    ASSERT_EQ(sums.size(), (*fold)->runs());
+    auto back = decode_radiance(encode_radiance(sums), (*fold)->runs());
+    ASSERT_TRUE(back.ok());
+    for (size_t j = begin, run = 0; j < end; ++j)
+      if (j == begin || work.sample_of_point[j] / spp != work.sample_of_point[j - 1] / spp)
+        pixel_radiance[work.sample_of_point[j] / spp] = (*back)[run++];
+  }
+  std::vector<RGB> folded, per_point;
+  resolve_pixels(work, pixel_radiance, folded);
+  resolve_tile(work, radiance, per_point);
+  ASSERT_EQ(folded.size(), per_point.size());
+  EXPECT_EQ(std::memcmp(folded.data(), per_point.data(), folded.size() * sizeof(RGB)), 0);
+  // A request that does not ask is answered one value a point.
+  auto plain = decode_pixel_fold(encode_camera_request(work, 0, n, *scene, sampler_of(image), image.width));
+  ASSERT_TRUE(plain.ok());
+  EXPECT_FALSE(plain->has_value());
+}
+
+TEST(ShadeCodec, AFoldWithoutItsTileOrSamplesIsRefused) {
+  auto pts = sample_points(4);
+  Value body = encode_shade_request(pts, 0, 4);
+  auto why = [&] {
+    auto r = decode_pixel_fold(body);
+    return r.ok() ? std::string("ok") : r.error().message;
+  };
+  body.as_map()["fold"] = int64_t{1};
+  EXPECT_EQ(why(), "shade request 'fold' must be true or false");
+  body.as_map()["fold"] = true;
+  EXPECT_EQ(why(), "shade request: 'fold' needs a tile [x0, y0, x1, y1, spp]");
+  body.as_map()["tile"] = Value::Array{int64_t{0}, int64_t{0}, int64_t{2}, int64_t{2}, int64_t{0}};
+  EXPECT_EQ(why(), "shade request: 'fold' needs a tile [x0, y0, x1, y1, spp]") << "spp 0";
+  body.as_map()["tile"] = Value::Array{int64_t{0}, int64_t{0}, int64_t{2}, int64_t{2}, int64_t{2}};
+  EXPECT_EQ(why(), "shade request: 'fold' needs 's' with 4 u32 sample indices");
+  const uint32_t s[] = {0, 1, 3, 6};
+  body.as_map()["s"] = u32_to_bytes(std::span<const uint32_t>(s));
+  auto fold = decode_pixel_fold(body);
+  ASSERT_TRUE(fold.ok()) << fold.error().message;
+  EXPECT_EQ((*fold)->runs(), 3u);  // pixels 0, 1, 3
+}
+
 }  // namespace lf

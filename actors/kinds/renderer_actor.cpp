@@ -59,7 +59,8 @@ class RendererActor final : public Actor {
   struct TileJob {
     uint64_t id = 0;
     TileWork work;
-    std::vector<RGB> radiance;
+    std::vector<RGB> radiance;        // one value a point, when replies come that way
+    std::vector<RGB> pixel_radiance;  // each pixel's radiance summed (fold_by_pixel), when replies come folded
     size_t batches_left = 0;
   };
 
@@ -95,31 +96,64 @@ class RendererActor final : public Actor {
     job->id = static_cast<uint64_t>(get("id"));
     trace_tile(*scene_, *tracer_, *camera_, image_, rect, job->work);
     rt.stats().points += job->work.points.size();
-    job->radiance.assign(job->work.points.size(), RGB{});
     jobs_.push_back(job);
-    const size_t n = job->work.points.size();
+    const TileWork& work = job->work;
+    const size_t n = work.points.size();
+    // A built-in LightOp rebuilds positions, normals, materials and keys from the scene and the tile, and sums a
+    // pixel's radiance itself: a reply then holds a value a pixel, not a point. Batches then end between pixels.
+    const bool lean = rt.input_is_lean(0), fold = lean && params_.batch > 1;
+    job->pixel_radiance.assign(fold ? static_cast<size_t>(work.rect.pixel_count()) : 0, RGB{});
+    job->radiance.assign(fold ? 0 : n, RGB{});
     if (n == 0) return finish_tile(job, rt);
-    const size_t batch = static_cast<size_t>(params_.batch);
-    for (size_t begin = 0; begin < n; begin += batch) {
-      const size_t end = std::min(begin + batch, n);
+    const uint32_t spp = static_cast<uint32_t>(work.spp);
+    auto pixel_of = [&work, spp](size_t j) { return work.sample_of_point[j] / spp; };
+    for (size_t begin = 0, end = 0; begin < n; begin = end) {
+      end = std::min(begin + static_cast<size_t>(params_.batch), n);
+      while (fold && end < n && pixel_of(end) == pixel_of(end - 1)) ++end;
       ++job->batches_left;
       ++rt.stats().requests;
-      // A built-in LightOp rebuilds positions, normals, materials and keys from the scene and the tile.
-      Value body = rt.input_is_lean(0) ? encode_camera_request(job->work, begin, end, *scene_, sampler_, image_.width)
-                                       : encode_shade_request(job->work.points, begin, end);
-      rt.ask_input(0, wire::Op::shade, std::move(body), [this, job, begin, end, &rt](Result<wire::Message> r) {
-        if (!r) return rt.fail("lighting failed: " + r.error().message);
-        auto radiance = decode_radiance(r->body, end - begin);
-        if (!radiance) return rt.fail("lighting '" + rt.input_name(0) + "': " + radiance.error().message);
-        std::copy(radiance->begin(), radiance->end(), job->radiance.begin() + static_cast<ptrdiff_t>(begin));
-        if (--job->batches_left == 0) finish_tile(job, rt);
-      });
+      Value body = lean ? encode_camera_request(work, begin, end, *scene_, sampler_, image_.width, fold)
+                        : encode_shade_request(work.points, begin, end);
+      const bool folded = body.find("fold") != nullptr;
+      const size_t values = folded ? pixel_runs(std::span(work.sample_of_point).subspan(begin, end - begin), work.spp)
+                                   : end - begin;
+      rt.ask_input(0, wire::Op::shade, std::move(body),
+                   [this, job, begin, end, folded, values, &rt](Result<wire::Message> r) {
+                     if (!r) return rt.fail("lighting failed: " + r.error().message);
+                     auto radiance = decode_radiance(r->body, values);
+                     if (!radiance) return rt.fail("lighting '" + rt.input_name(0) + "': " + radiance.error().message);
+                     take_radiance(*job, begin, end, folded, std::move(*radiance));
+                     if (--job->batches_left == 0) finish_tile(job, rt);
+                   });
     }
+  }
+
+  // A batch's reply into its tile. Batches of a folding tile hold whole pixels, so a reply that came one value a
+  // point is folded here into the same sums the LightOp would have sent.
+  static void take_radiance(TileJob& job, size_t begin, size_t end, bool folded, std::vector<RGB> radiance) {
+    if (job.pixel_radiance.empty()) {
+      std::copy(radiance.begin(), radiance.end(), job.radiance.begin() + static_cast<ptrdiff_t>(begin));
+      return;
+    }
+    const auto samples = std::span(job.work.sample_of_point).subspan(begin, end - begin);
+    const uint32_t spp = static_cast<uint32_t>(job.work.spp);
+    std::vector<RGB> sums;
+    if (folded) {
+      sums = std::move(radiance);
+    } else {
+      fold_by_pixel(radiance, samples, job.work.spp, sums);
+    }
+    for (size_t j = 0, run = 0; j < samples.size(); ++j)
+      if (j == 0 || samples[j] / spp != samples[j - 1] / spp) job.pixel_radiance[samples[j] / spp] = sums[run++];
   }
 
   void finish_tile(const std::shared_ptr<TileJob>& job, Runtime& rt) {
     std::vector<RGB> pixels;
-    resolve_tile(job->work, job->radiance, pixels);
+    if (!job->pixel_radiance.empty()) {
+      resolve_pixels(job->work, job->pixel_radiance, pixels);
+    } else {
+      resolve_tile(job->work, job->radiance, pixels);
+    }
     ++rt.stats().tiles;
     ++done_acks_out_;
     std::erase(jobs_, job);

@@ -2,6 +2,7 @@
 //
 // Accepts on the data socket:
 //   REQUEST op="shade" { n, p, nrm, wo, m, k }  ->  REPLY { n, L }   (header q = requests waiting here)
+//   (L one value a point, or one a pixel when the request says fold: actors/codecs/shade_codec.hpp)
 //   anything else / malformed                  ->  ERROR { code, message }; the actor carries on
 // Control: CONFIG builds the op from its parameters and loads the scene; PHASE setup runs op.setup() and answers
 // READY setup when it finishes; PHASE render is answered READY render at once; PHASE finish / BYE stop it.
@@ -286,10 +287,16 @@ class LightOpActor final : public Actor {
       rt.reply_error(peer, m.header.id, ErrorCode::bad_request, points.error().message);
       return;
     }
+    auto fold = decode_pixel_fold(m.body);
+    if (!fold) {
+      rt.reply_error(peer, m.header.id, ErrorCode::bad_request, fold.error().message);
+      return;
+    }
     auto job = std::make_unique<Job>();
     job->peer = peer;
     job->id = m.header.id;
     job->points = std::move(*points);
+    job->fold = std::move(*fold);
     waiting_.push_back(std::move(job));
   }
 
@@ -324,7 +331,14 @@ class LightOpActor final : public Actor {
         job.task.rethrow_if_failed();
         rt.stats().requests += 1;
         rt.stats().points += job.points.size();
-        rt.reply(job.peer, job.id, encode_radiance(job.radiance));
+        if (job.fold) {
+          // The runtime folds, not the op: a LightOp returns one value a point whoever asks.
+          std::vector<RGB> sums;
+          fold_by_pixel(job.radiance, job.fold->samples, job.fold->spp, sums);
+          rt.reply(job.peer, job.id, encode_radiance(sums));
+        } else {
+          rt.reply(job.peer, job.id, encode_radiance(job.radiance));
+        }
       } catch (const std::exception& e) {
         rt.reply_error(job.peer, job.id, ErrorCode::shade_failed, e.what());
       }
@@ -352,6 +366,7 @@ class LightOpActor final : public Actor {
     uint64_t id = 0;
     ShadingPoints points;
     std::vector<RGB> radiance;
+    std::optional<PixelFold> fold;  // the asker wants the radiance summed by pixel
     Task task;
   };
   static constexpr size_t kMaxRunning = 16;

@@ -55,22 +55,39 @@ void PoolClient::start(uint64_t rid) {
                             ? std::min(scheduler_.live(), (count + options_.split - 1) / options_.split)
                             : 1;
   if (pieces <= 1) {
-    pieces_.emplace(next_piece_, Piece{rid, 0, count, 0, std::move(req.body)});
+    pieces_.emplace(next_piece_, Piece{rid, 0, count, 0, count, 0, std::move(req.body)});
     dispatch(next_piece_++);
     return;
   }
+  // A request whose reply is folded by pixel is cut between pixels only, and each piece's reply holds its runs.
+  auto fold = decode_pixel_fold(req.body);
+  if (!fold) return finish(rid, make_error(fold.error().message, ErrorCode::bad_request));
+  const uint32_t spp = *fold ? static_cast<uint32_t>((*fold)->spp) : 1;
+  auto pixel_at = [&](size_t j) { return (*fold)->samples[j] / spp; };
+  std::vector<size_t> cuts{0};
+  for (size_t i = 1; i < pieces; ++i) {
+    size_t cut = std::max(count * i / pieces, cuts.back());
+    while (*fold && cut > 0 && cut < count && pixel_at(cut) == pixel_at(cut - 1)) ++cut;
+    if (cut > cuts.back() && cut < count) cuts.push_back(cut);
+  }
+  cuts.push_back(count);
   // The pieces are cut from the request's arrays as bytes; the replicas validate the points against the scene.
-  std::vector<Value> bodies;
-  for (size_t i = 0; i < pieces; ++i) {
-    auto piece = slice_shade_request(req.body, count * i / pieces, count * (i + 1) / pieces);
-    if (!piece) return finish(rid, make_error(piece.error().message, ErrorCode::bad_request));
-    bodies.push_back(std::move(*piece));
+  std::vector<Piece> split;
+  size_t out = 0;
+  for (size_t i = 0; i + 1 < cuts.size(); ++i) {
+    auto body = slice_shade_request(req.body, cuts[i], cuts[i + 1]);
+    if (!body) return finish(rid, make_error(body.error().message, ErrorCode::bad_request));
+    const size_t values = *fold ? pixel_runs(std::span<const uint32_t>((*fold)->samples).subspan(cuts[i], cuts[i + 1] - cuts[i]),
+                                             (*fold)->spp)
+                                : cuts[i + 1] - cuts[i];
+    split.push_back(Piece{rid, cuts[i], cuts[i + 1], out, out + values, 0, std::move(*body)});
+    out += values;
   }
   req.body = Value();
-  req.pieces_left = pieces;
-  req.radiance.assign(count, RGB{});
-  for (size_t i = 0; i < pieces; ++i) {
-    pieces_.emplace(next_piece_, Piece{rid, count * i / pieces, count * (i + 1) / pieces, 0, std::move(bodies[i])});
+  req.pieces_left = split.size();
+  req.radiance.assign(out, RGB{});
+  for (Piece& piece : split) {
+    pieces_.emplace(next_piece_, std::move(piece));
     dispatch(next_piece_++);
   }
 }
@@ -97,9 +114,9 @@ void PoolClient::on_answer(uint64_t pid, size_t replica, Result<wire::Message> r
   if (rq == requests_.end()) return;  // the request already failed
   Request& req = rq->second;
   if (!reply || req.radiance.empty()) return finish(piece.request, std::move(reply));  // whole: passed on as it came
-  auto radiance = decode_radiance(reply->body, piece.end - piece.begin);
+  auto radiance = decode_radiance(reply->body, piece.out_end - piece.out_begin);
   if (!radiance) return finish(piece.request, make_error(replicas_[replica].name + ": " + radiance.error().message, ErrorCode::shade_failed));
-  std::copy(radiance->begin(), radiance->end(), req.radiance.begin() + static_cast<ptrdiff_t>(piece.begin));
+  std::copy(radiance->begin(), radiance->end(), req.radiance.begin() + static_cast<ptrdiff_t>(piece.out_begin));
   if (--req.pieces_left > 0) return;
   wire::Message whole = std::move(*reply);
   whole.body = encode_radiance(req.radiance);

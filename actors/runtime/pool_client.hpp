@@ -68,11 +68,12 @@ class PoolClient {
     size_t points = 0;
     size_t pieces_left = 1;
     bool started = false;
-    std::vector<RGB> radiance;  // split requests gather here
+    std::vector<RGB> radiance;  // split requests gather here (one value a point, or a pixel's run)
   };
   struct Piece {
     uint64_t request;
-    size_t begin, end;
+    size_t begin, end;          // its points in the request
+    size_t out_begin, out_end;  // its values in the reply: the same, or its pixels' when the reply is folded
     size_t replica = 0;
     Value body;  // kept until answered, to send again if its replica is lost
   };

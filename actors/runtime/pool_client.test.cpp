@@ -136,6 +136,56 @@ TEST_F(PoolClientTest, ASplitRequestComesBackWholeInItsOrder) {
   for (size_t i = 0; i < 10; ++i) EXPECT_EQ(results[0][i].x, float(i)) << "point " << i;
 }
 
+// A request whose reply is folded by pixel is cut only between pixels, and its pieces' sums come back in order.
+TEST_F(PoolClientTest, ASplitFoldedRequestIsCutBetweenPixelsAndGathersOneValueAPixel) {
+  PoolOptions o;
+  o.strategy = Scheduler::Strategy::round_robin;
+  o.split = 4;
+  make(3, o);
+  // 4 samples a pixel; pixel 1 lost a sample (it missed). Even cuts (3, 6) would split pixels 0 and 1.
+  const std::vector<uint32_t> samples{0, 1, 2, 3, 4, 5, 6, 8, 9, 10};
+  Value body = encode_shade_request(points(samples.size()), 0, samples.size());
+  body.as_map()["tile"] = Value::Array{int64_t{0}, int64_t{0}, int64_t{3}, int64_t{1}, int64_t{4}};
+  body.as_map()["s"] = u32_to_bytes(std::span<const uint32_t>(samples));
+  body.as_map()["fold"] = true;
+  std::vector<RGB> result;
+  pool->request(wire::Op::shade, std::move(body), [&](Result<wire::Message> reply) {
+    ASSERT_TRUE(reply.ok()) << reply.error().message;
+    auto L = decode_radiance(reply->body, 3);
+    ASSERT_TRUE(L.ok()) << L.error().message;
+    result = *L;
+  });
+  // Each replica answers its piece folded: one value a pixel, (first sample of the pixel, replica, points).
+  std::vector<size_t> first_sample_of_piece;
+  for (int i = 0; i < 100 && first_sample_of_piece.size() < 3; ++i) {
+    poll();
+    for (size_t r = 0; r < 3; ++r) {
+      auto in = replicas->sockets[r]->receive();
+      if (!in) continue;
+      ASSERT_TRUE(in->message.ok());
+      auto fold = decode_pixel_fold(in->message->body);
+      ASSERT_TRUE(fold.ok() && fold->has_value());
+      const auto& s = (*fold)->samples;
+      ASSERT_EQ((*fold)->runs(), 1u) << "a piece of one whole pixel, from sample " << s[0];
+      first_sample_of_piece.push_back(s[0]);
+      const std::vector<RGB> L{{float(s[0]), float(r), float(s.size())}};
+      replicas->sockets[r]->send_to(in->peer, wire::make_reply("replica", in->message->header.id, encode_radiance(L)));
+    }
+    std::this_thread::sleep_for(std::chrono::milliseconds(2));
+  }
+  for (int i = 0; i < 50 && result.empty(); ++i) {
+    poll();
+    std::this_thread::sleep_for(std::chrono::milliseconds(2));
+  }
+  ASSERT_EQ(result.size(), 3u);
+  EXPECT_EQ(result[0].x, 0.0f);
+  EXPECT_EQ(result[0].z, 4.0f);
+  EXPECT_EQ(result[1].x, 4.0f);
+  EXPECT_EQ(result[1].z, 3.0f);
+  EXPECT_EQ(result[2].x, 8.0f);
+  EXPECT_EQ(result[2].z, 3.0f);
+}
+
 TEST_F(PoolClientTest, ALostReplicasWorkGoesToTheOthersAndItsLateAnswersAreDropped) {
   PoolOptions o;
   o.strategy = Scheduler::Strategy::round_robin;

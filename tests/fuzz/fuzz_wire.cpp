@@ -27,6 +27,7 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   static const lf::PixelKeys keys{64, lf::SamplerKind::sobol};
   (void)lf::decode_shade_request(v, cornell.materials().size(), cornell.triangle_count(), &cornell, &keys);
   (void)lf::slice_shade_request(v, 1, 3);
+  if (auto fold = lf::decode_pixel_fold(v); fold && *fold) (void)(*fold)->runs();
   (void)lf::decode_radiance(v, 4);
   (void)lf::ActorConfig::from_value(v);
   (void)lf::Hello::check(v, "direct", "direct");

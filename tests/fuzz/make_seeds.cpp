@@ -57,6 +57,8 @@ int main(int argc, char** argv) {
   lean.as_map()["tile"] = Value::Array{int64_t{0}, int64_t{0}, int64_t{16}, int64_t{16}, int64_t{4}};
   lean.as_map()["s"] = u32_to_bytes(std::vector<uint32_t>{0, 5, 1023});
   wire_seed("shade_request_camera", wire::make_request("renderer-0", wire::Op::shade, lean, 9));
+  lean.as_map()["fold"] = true;  // answered one value a pixel
+  wire_seed("shade_request_folded", wire::make_request("renderer-0", wire::Op::shade, lean, 10));
   const std::vector<RGB> light{{1, 2, 3}, {4, 5, 6}};
   wire_seed("shade_reply", wire::make_reply("direct", 7, encode_radiance(light), 2));
   wire_seed("hello", wire::make(wire::MsgType::hello, "direct", my_hello("direct", "tcp://127.0.0.1:5000").to_value()));
