@@ -83,26 +83,36 @@ size_t pixel_runs(std::span<const uint32_t> samples, int spp) {
   return runs;
 }
 
-void resolve_pixels(const TileWork& work, std::span<const RGB> pixel_radiance, std::vector<RGB>& pixels) {
-  const size_t spp = static_cast<size_t>(work.spp);
-  pixels.assign(work.emitted.size() / spp, RGB{});
-  const float inv = 1.0f / static_cast<float>(spp);
-  for (size_t p = 0; p < pixels.size(); ++p) {
-    RGB emitted{};
-    for (size_t k = 0; k < spp; ++k) emitted += work.emitted[p * spp + k];
-    pixels[p] = (emitted + pixel_radiance[p]) * inv;
-  }
+void resolve_tile(const TileWork& work, std::span<const RGB> radiance, std::vector<RGB>& pixels) {
+  resolve_tile(work, radiance, {}, {}, pixels);
 }
 
-void resolve_tile(const TileWork& work, std::span<const RGB> radiance, std::vector<RGB>& pixels) {
-  std::vector<RGB> sums;
-  fold_by_pixel(radiance, work.sample_of_point, work.spp, sums);
-  std::vector<RGB> pixel_radiance(work.emitted.size() / static_cast<size_t>(work.spp), RGB{});
-  const uint32_t per_pixel = static_cast<uint32_t>(work.spp);
-  for (size_t j = 0, run = 0; j < work.sample_of_point.size(); ++j)
-    if (j == 0 || work.sample_of_point[j] / per_pixel != work.sample_of_point[j - 1] / per_pixel)
-      pixel_radiance[work.sample_of_point[j] / per_pixel] = sums[run++];
-  resolve_pixels(work, pixel_radiance, pixels);
+bool pixel_sees_emitter(const TileWork& work, size_t pixel) {
+  const size_t spp = static_cast<size_t>(work.spp);
+  for (size_t k = pixel * spp; k < (pixel + 1) * spp; ++k)
+    if (work.emitted[k].x != 0 || work.emitted[k].y != 0 || work.emitted[k].z != 0) return true;
+  return false;
+}
+
+void resolve_tile(const TileWork& work, std::span<const RGB> radiance, std::span<const RGB> pixel_radiance,
+                  std::span<const uint8_t> folded, std::vector<RGB>& pixels) {
+  const size_t samples = work.emitted.size();
+  std::vector<RGB> per_sample(work.emitted);
+  for (size_t j = 0; j < work.sample_of_point.size(); ++j)
+    if (folded.empty() || !folded[work.sample_of_point[j] / static_cast<uint32_t>(work.spp)])
+      per_sample[work.sample_of_point[j]] += radiance[j];
+  const size_t spp = static_cast<size_t>(work.spp);
+  pixels.assign(samples / spp, RGB{});
+  const float inv = 1.0f / static_cast<float>(spp);
+  for (size_t p = 0; p < pixels.size(); ++p) {
+    if (!folded.empty() && folded[p]) {
+      pixels[p] = pixel_radiance[p] * inv;
+      continue;
+    }
+    RGB sum{};
+    for (size_t k = 0; k < spp; ++k) sum += per_sample[p * spp + k];
+    pixels[p] = sum * inv;
+  }
 }
 
 }  // namespace lf

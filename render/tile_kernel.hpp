@@ -54,10 +54,14 @@ void fold_by_pixel(std::span<const RGB> radiance, std::span<const uint32_t> samp
 // How many sums fold_by_pixel gives for these samples.
 size_t pixel_runs(std::span<const uint32_t> samples, int spp);
 
-// pixels[p] = (emitted over p's samples + radiance over p's points) / spp, each summed in sample order;
-// `pixel_radiance[p]` is p's radiance summed by fold_by_pixel (zero where no sample hit a surface).
-void resolve_pixels(const TileWork& work, std::span<const RGB> pixel_radiance, std::vector<RGB>& pixels);
-// The same from each point's radiance.
+// pixels[p] = mean over samples of (emitted + radiance of its point); sums run in sample order.
 void resolve_tile(const TileWork& work, std::span<const RGB> radiance, std::vector<RGB>& pixels);
+// Whether any sample of the tile's pixel p sees an emitter (work.emitted non-zero).
+bool pixel_sees_emitter(const TileWork& work, size_t pixel);
+// As resolve_tile, where a pixel marked in `folded` takes its points' radiance as their sum (`pixel_radiance[p]`,
+// from fold_by_pixel) and `radiance` is read for the other pixels only. The same bits as resolve_tile for a pixel
+// whose samples see no emitter (0 + r is r): fold only those.
+void resolve_tile(const TileWork& work, std::span<const RGB> radiance, std::span<const RGB> pixel_radiance,
+                  std::span<const uint8_t> folded, std::vector<RGB>& pixels);
 
 }  // namespace lf

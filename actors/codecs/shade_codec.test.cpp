@@ -234,48 +234,61 @@ TEST(ShadeCodec, ACameraRequestWithABadTileOrSampleIsRefused) {
   EXPECT_EQ(decode(body), "shade request 't' must hold 4 f32 distances");
 }
 
-// A renderer's request that asks for its reply folded by pixel: the LightOp's sums over each pixel's points are the
-// renderer's own fold of the same values, bit for bit, and the tile resolves to the same pixels either way.
-TEST(ShadeCodec, AFoldedReplyHoldsEachPixelsRadianceSummedAsTheRendererWouldSumIt) {
+// A renderer's request that asks for its reply folded by pixel: the LightOp's sums over each pixel's points give
+// the renderer's pixels bit for bit, for pixels whose samples see no emitter (those go one value a point).
+TEST(ShadeCodec, AFoldedReplyHoldsEachPixelsRadianceSummedAndResolvesToTheSamePixels) {
   auto scene = Scene::builtin("cornell");
   ASSERT_TRUE(scene.ok());
   RayTracer tracer(*scene);
   ImageSpec image;
-  image.width = image.height = 64;
+  image.width = image.height = 48;
   image.spp = 5;
   Camera camera(CameraSpec{}, image.width, image.height);
   TileWork work;
-  // The tile's corner looks past the box's open side: some pixels have fewer points than samples.
-  trace_tile(*scene, tracer, camera, image, TileRect{0, 0, 16, 16}, work);
-  const size_t n = work.points.size();
-  ASSERT_LT(n, static_cast<size_t>(16 * 16 * image.spp));
+  // The whole image as one tile: it sees the light, and its corners look past the box's open side (some pixels
+  // have fewer points than samples).
+  trace_tile(*scene, tracer, camera, image, TileRect{0, 0, 48, 48}, work);
+  const size_t n = work.points.size(), pixels = static_cast<size_t>(work.rect.pixel_count());
+  ASSERT_LT(n, pixels * image.spp);
   std::vector<RGB> radiance(n);
   for (size_t j = 0; j < n; ++j) radiance[j] = {0.1f * float(j % 7), 1.0f / float(j + 1), float(j) * 1e-3f};
-  // Cut into requests between pixels, each folded as a LightOp folds it.
-  std::vector<RGB> pixel_radiance(static_cast<size_t>(work.rect.pixel_count()), RGB{});
+  // Cut into requests between pixels; those without an emitter in sight folded as a LightOp folds them.
+  std::vector<RGB> pixel_radiance(pixels, RGB{});
+  std::vector<uint8_t> folded(pixels, 0);
   const uint32_t spp = static_cast<uint32_t>(image.spp);
+  size_t folded_requests = 0, whole_requests = 0;
   for (size_t begin = 0, end = 0; begin < n; begin = end) {
     end = std::min(begin + 37, n);
     while (end < n && work.sample_of_point[end] / spp == work.sample_of_point[end - 1] / spp) ++end;
-    const Value body = encode_camera_request(work, begin, end, *scene, sampler_of(image), image.width, true);
-    ASSERT_NE(body.find("fold"), nullptr);
+    bool foldable = true;
+    for (size_t j = begin; j < end; ++j) foldable = foldable && !pixel_sees_emitter(work, work.sample_of_point[j] / spp);
+    const Value body = encode_camera_request(work, begin, end, *scene, sampler_of(image), image.width, foldable);
     auto fold = decode_pixel_fold(body);
     ASSERT_TRUE(fold.ok()) << fold.error().message;
-    ASSERT_TRUE(fold->has_value());
+    ASSERT_EQ(fold->has_value(), foldable);
+    if (!foldable) {
+      ++whole_requests;
+      continue;
+    }
+    ++folded_requests;
     std::vector<RGB> sums;
     fold_by_pixel(std::span(radiance).subspan(begin, end - begin), (*fold)->samples, (*fold)->spp, sums);
     ASSERT_EQ(sums.size(), (*fold)->runs());
     auto back = decode_radiance(encode_radiance(sums), (*fold)->runs());
     ASSERT_TRUE(back.ok());
     for (size_t j = begin, run = 0; j < end; ++j)
-      if (j == begin || work.sample_of_point[j] / spp != work.sample_of_point[j - 1] / spp)
+      if (j == begin || work.sample_of_point[j] / spp != work.sample_of_point[j - 1] / spp) {
         pixel_radiance[work.sample_of_point[j] / spp] = (*back)[run++];
+        folded[work.sample_of_point[j] / spp] = 1;
+      }
   }
-  std::vector<RGB> folded, per_point;
-  resolve_pixels(work, pixel_radiance, folded);
+  EXPECT_GT(whole_requests, 0u) << "the light is in view";
+  EXPECT_GT(folded_requests, whole_requests);
+  std::vector<RGB> mixed, per_point;
+  resolve_tile(work, radiance, pixel_radiance, folded, mixed);
   resolve_tile(work, radiance, per_point);
-  ASSERT_EQ(folded.size(), per_point.size());
-  EXPECT_EQ(std::memcmp(folded.data(), per_point.data(), folded.size() * sizeof(RGB)), 0);
+  ASSERT_EQ(mixed.size(), per_point.size());
+  EXPECT_EQ(std::memcmp(mixed.data(), per_point.data(), mixed.size() * sizeof(RGB)), 0);
   // A request that does not ask is answered one value a point.
   auto plain = decode_pixel_fold(encode_camera_request(work, 0, n, *scene, sampler_of(image), image.width));
   ASSERT_TRUE(plain.ok());

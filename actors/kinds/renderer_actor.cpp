@@ -59,8 +59,9 @@ class RendererActor final : public Actor {
   struct TileJob {
     uint64_t id = 0;
     TileWork work;
-    std::vector<RGB> radiance;        // one value a point, when replies come that way
-    std::vector<RGB> pixel_radiance;  // each pixel's radiance summed (fold_by_pixel), when replies come folded
+    std::vector<RGB> radiance;        // one value a point, from replies that came that way
+    std::vector<RGB> pixel_radiance;  // a pixel's points' radiance summed (fold_by_pixel), from folded replies
+    std::vector<uint8_t> folded;      // which pixels came folded
     size_t batches_left = 0;
   };
 
@@ -99,20 +100,27 @@ class RendererActor final : public Actor {
     jobs_.push_back(job);
     const TileWork& work = job->work;
     const size_t n = work.points.size();
-    // A built-in LightOp rebuilds positions, normals, materials and keys from the scene and the tile, and sums a
-    // pixel's radiance itself: a reply then holds a value a pixel, not a point. Batches then end between pixels.
+    // A built-in LightOp rebuilds positions, normals, materials and keys from the scene and the tile, and can sum a
+    // pixel's radiance itself: a reply then holds a value a pixel, not a point. Batches then end between pixels, and
+    // one with a pixel that sees an emitter is not folded: that pixel's samples are summed with their emission.
     const bool lean = rt.input_is_lean(0), fold = lean && params_.batch > 1;
-    job->pixel_radiance.assign(fold ? static_cast<size_t>(work.rect.pixel_count()) : 0, RGB{});
-    job->radiance.assign(fold ? 0 : n, RGB{});
+    const size_t pixels = static_cast<size_t>(work.rect.pixel_count());
+    job->radiance.assign(n, RGB{});
+    job->pixel_radiance.assign(fold ? pixels : 0, RGB{});
+    job->folded.assign(fold ? pixels : 0, 0);
+    std::vector<uint8_t> sees_emitter(fold ? pixels : 0);
+    for (size_t p = 0; p < sees_emitter.size(); ++p) sees_emitter[p] = pixel_sees_emitter(work, p);
     if (n == 0) return finish_tile(job, rt);
     const uint32_t spp = static_cast<uint32_t>(work.spp);
     auto pixel_of = [&work, spp](size_t j) { return work.sample_of_point[j] / spp; };
     for (size_t begin = 0, end = 0; begin < n; begin = end) {
       end = std::min(begin + static_cast<size_t>(params_.batch), n);
+      bool foldable = fold;
       while (fold && end < n && pixel_of(end) == pixel_of(end - 1)) ++end;
+      for (size_t j = begin; foldable && j < end; ++j) foldable = !sees_emitter[pixel_of(j)];
       ++job->batches_left;
       ++rt.stats().requests;
-      Value body = lean ? encode_camera_request(work, begin, end, *scene_, sampler_, image_.width, fold)
+      Value body = lean ? encode_camera_request(work, begin, end, *scene_, sampler_, image_.width, foldable)
                         : encode_shade_request(work.points, begin, end);
       const bool folded = body.find("fold") != nullptr;
       const size_t values = folded ? pixel_runs(std::span(work.sample_of_point).subspan(begin, end - begin), work.spp)
@@ -122,38 +130,29 @@ class RendererActor final : public Actor {
                      if (!r) return rt.fail("lighting failed: " + r.error().message);
                      auto radiance = decode_radiance(r->body, values);
                      if (!radiance) return rt.fail("lighting '" + rt.input_name(0) + "': " + radiance.error().message);
-                     take_radiance(*job, begin, end, folded, std::move(*radiance));
+                     take_radiance(*job, begin, end, folded, *radiance);
                      if (--job->batches_left == 0) finish_tile(job, rt);
                    });
     }
   }
 
-  // A batch's reply into its tile. Batches of a folding tile hold whole pixels, so a reply that came one value a
-  // point is folded here into the same sums the LightOp would have sent.
-  static void take_radiance(TileJob& job, size_t begin, size_t end, bool folded, std::vector<RGB> radiance) {
-    if (job.pixel_radiance.empty()) {
+  static void take_radiance(TileJob& job, size_t begin, size_t end, bool folded, const std::vector<RGB>& radiance) {
+    if (!folded) {
       std::copy(radiance.begin(), radiance.end(), job.radiance.begin() + static_cast<ptrdiff_t>(begin));
       return;
     }
-    const auto samples = std::span(job.work.sample_of_point).subspan(begin, end - begin);
     const uint32_t spp = static_cast<uint32_t>(job.work.spp);
-    std::vector<RGB> sums;
-    if (folded) {
-      sums = std::move(radiance);
-    } else {
-      fold_by_pixel(radiance, samples, job.work.spp, sums);
-    }
-    for (size_t j = 0, run = 0; j < samples.size(); ++j)
-      if (j == 0 || samples[j] / spp != samples[j - 1] / spp) job.pixel_radiance[samples[j] / spp] = sums[run++];
+    const auto& samples = job.work.sample_of_point;
+    for (size_t j = begin, run = 0; j < end; ++j)
+      if (j == begin || samples[j] / spp != samples[j - 1] / spp) {
+        job.pixel_radiance[samples[j] / spp] = radiance[run++];
+        job.folded[samples[j] / spp] = 1;
+      }
   }
 
   void finish_tile(const std::shared_ptr<TileJob>& job, Runtime& rt) {
     std::vector<RGB> pixels;
-    if (!job->pixel_radiance.empty()) {
-      resolve_pixels(job->work, job->pixel_radiance, pixels);
-    } else {
-      resolve_tile(job->work, job->radiance, pixels);
-    }
+    resolve_tile(job->work, job->radiance, job->pixel_radiance, job->folded, pixels);
     ++rt.stats().tiles;
     ++done_acks_out_;
     std::erase(jobs_, job);
