@@ -83,8 +83,28 @@ static float to_srgb(float linear) {
 float display_srgb(float linear, const Display& display) { return to_srgb(ToneCurve(display)(linear)); }
 
 namespace {
+// Opens the first of a module's usual places that loads: $`env`, beside the executable (an install, or build/ for
+// the lightfarm binary), ../lib from it, where this build put it. `what` lists every failure otherwise.
+void* open_module(const char* env, const char* name, const char* build_path, std::string& what) {
+  std::vector<std::string> candidates;
+  if (const char* set = std::getenv(env)) candidates.push_back(set);
+  std::error_code ec;
+  auto exe = fs::read_symlink("/proc/self/exe", ec);
+  if (!ec) {
+    candidates.push_back((exe.parent_path() / name).string());
+    candidates.push_back((exe.parent_path() / ".." / "lib" / name).string());
+  }
+  candidates.push_back(build_path);
+  std::string tried;
+  for (const auto& path : candidates) {
+    if (void* handle = ::dlopen(path.c_str(), RTLD_NOW | RTLD_LOCAL)) return handle;
+    tried += std::string("\n  ") + ::dlerror();
+  }
+  what = std::string("cannot load the image module ") + name + ":" + tried;
+  return nullptr;
+}
 
-// The image module (image_oiio.cpp), loaded on first use.
+// The OpenImageIO module (image_oiio.cpp), loaded on first use.
 struct ImageModule {
   using WriteFn = int (*)(const char*, int, int, int, const float*, const unsigned char*, const char*, char*, size_t);
   using ReadFn = int (*)(const char*, float**, int*, int*, char*, size_t);
@@ -98,38 +118,49 @@ struct ImageModule {
 const ImageModule& image_module() {
   static const ImageModule module = [] {
     ImageModule m;
-    // Beside the executable (an install, or build/ for the lightfarm binary), else where this build put it.
-    std::vector<std::string> candidates;
-    if (const char* env = std::getenv("LIGHTFARM_IMAGEIO_MODULE")) candidates.push_back(env);
-    std::error_code ec;
-    auto exe = fs::read_symlink("/proc/self/exe", ec);
-    if (!ec) {
-      candidates.push_back((exe.parent_path() / LIGHTFARM_IMAGEIO_NAME).string());
-      candidates.push_back((exe.parent_path() / ".." / "lib" / LIGHTFARM_IMAGEIO_NAME).string());
+    void* handle = open_module("LIGHTFARM_IMAGEIO_MODULE", LIGHTFARM_IMAGEIO_NAME, LIGHTFARM_IMAGEIO_BUILD_PATH, m.error);
+    if (!handle) return m;
+    m.write = reinterpret_cast<ImageModule::WriteFn>(::dlsym(handle, "lightfarm_imageio_write"));
+    m.read = reinterpret_cast<ImageModule::ReadFn>(::dlsym(handle, "lightfarm_imageio_read"));
+    m.read_texels = reinterpret_cast<ImageModule::ReadTexelsFn>(::dlsym(handle, "lightfarm_imageio_read_texels"));
+    if (!m.write || !m.read || !m.read_texels) {
+      m = ImageModule{};
+      m.error = std::string("the image module ") + LIGHTFARM_IMAGEIO_NAME + " lacks its entry points";
     }
-    candidates.push_back(LIGHTFARM_IMAGEIO_BUILD_PATH);
-    std::string tried;
-    for (const auto& path : candidates) {
-      void* handle = ::dlopen(path.c_str(), RTLD_NOW | RTLD_LOCAL);
-      if (!handle) {
-        tried += std::string("\n  ") + ::dlerror();
-        continue;
-      }
-      m.write = reinterpret_cast<ImageModule::WriteFn>(::dlsym(handle, "lightfarm_imageio_write"));
-      m.read = reinterpret_cast<ImageModule::ReadFn>(::dlsym(handle, "lightfarm_imageio_read"));
-      m.read_texels = reinterpret_cast<ImageModule::ReadTexelsFn>(::dlsym(handle, "lightfarm_imageio_read_texels"));
-      if (m.write && m.read && m.read_texels) return m;
-      tried += "\n  " + path + ": missing entry points";
-    }
-    m.error = std::string("cannot load the image module ") + LIGHTFARM_IMAGEIO_NAME + ":" + tried;
     return m;
   }();
   return module;
 }
 
+// The EXR and PNG writer (image_exr_png.cpp): what a farm's image needs, without OpenImageIO's load.
+struct ExrPngModule {
+  using WriteFn = int (*)(const char*, int, int, int, const float*, const unsigned char*, char*, size_t);
+  WriteFn write = nullptr;
+  std::string error;
+};
+
+const ExrPngModule& exr_png_module() {
+  static const ExrPngModule module = [] {
+    ExrPngModule m;
+    void* handle = open_module("LIGHTFARM_EXR_PNG_MODULE", LIGHTFARM_EXR_PNG_NAME, LIGHTFARM_EXR_PNG_BUILD_PATH, m.error);
+    if (!handle) return m;
+    m.write = reinterpret_cast<ExrPngModule::WriteFn>(::dlsym(handle, "lightfarm_exr_png_write"));
+    if (!m.write) m.error = std::string("the image module ") + LIGHTFARM_EXR_PNG_NAME + " lacks its entry point";
+    return m;
+  }();
+  return module;
+}
+
+bool written_without_oiio(const std::string& ext) { return ext == ".exr" || ext == ".png"; }
 }  // namespace
 
-void preload_image_io() { (void)image_module(); }
+void preload_image_writer(const std::string& path) {
+  if (written_without_oiio(extension_of(path))) {
+    (void)exr_png_module();
+  } else {
+    (void)image_module();
+  }
+}
 
 namespace {
 
@@ -170,9 +201,10 @@ void sweep_stale_partials(const fs::path& target) {
 
 Status write_image(const Image& image, const std::string& path, const Display& display) {
   if (auto st = check_output_path(path); !st) return st;
-  const auto& module = image_module();
-  if (!module.write) return make_error(module.error);
   const std::string ext = extension_of(path);
+  const bool light = written_without_oiio(ext);
+  if (light ? !exr_png_module().write : !image_module().write)
+    return make_error(light ? exr_png_module().error : image_module().error);
   fs::path target(path);
   sweep_stale_partials(target);
   fs::path temp = target.parent_path() /
@@ -189,9 +221,11 @@ Status write_image(const Image& image, const std::string& path, const Display& d
     }
   }
   char err[512] = {0};
-  int rc = module.write(temp.c_str(), image.width, image.height, linear ? 1 : 0,
-                        reinterpret_cast<const float*>(image.pixels.data()), bytes.data(), linear ? "Linear" : "sRGB",
-                        err, sizeof err);
+  const auto* floats = reinterpret_cast<const float*>(image.pixels.data());
+  const int rc = light ? exr_png_module().write(temp.c_str(), image.width, image.height, linear ? 1 : 0, floats,
+                                                bytes.data(), err, sizeof err)
+                       : image_module().write(temp.c_str(), image.width, image.height, linear ? 1 : 0, floats,
+                                              bytes.data(), linear ? "Linear" : "sRGB", err, sizeof err);
   std::error_code ec;
   if (rc != 0) {
     fs::remove(temp, ec);

@@ -45,8 +45,9 @@ struct Texels {
   std::vector<uint8_t> bytes;
 };
 Result<Texels> read_texels(const std::string& path);
-// Loads the image module (OpenImageIO and its ~250 libraries) now, on this thread. The director calls it on a
-// background thread while its actors start, so writing the image later costs only the write.
-void preload_image_io();
+// Loads the module write_image will use for `path` now, on this thread: for .exr and .png OpenEXR and libpng
+// (image_exr_png.cpp), else OpenImageIO and its ~250 libraries. The director calls it on a background thread while
+// its actors render, so writing the image later costs only the write.
+void preload_image_writer(const std::string& path);
 
 }  // namespace lf

@@ -235,8 +235,9 @@ TEST_F(FarmTest, UnwritableStatsJsonFailsTheRun) {
   expect_no_leftovers(r);
 }
 
-// A PNG that does not fit (a full disk: a 48 KiB tmpfs this test mounts) is an error, exit 1, and the previous
-// image stays whole; the writer's own success is not believed (libpng reports none of it).
+// A PNG that does not fit (a full disk: a 48 KiB tmpfs this test mounts) is an error that says why, exit 1, and the
+// previous image stays whole (and the writer's own success is not believed: the file is checked before it replaces
+// anything).
 TEST_F(FarmTest, APngOntoAFullDiskFailsAndKeepsTheOldImage) {
   const std::string disk = path("disk");
   fs::create_directories(disk);
@@ -254,7 +255,7 @@ TEST_F(FarmTest, APngOntoAFullDiskFailsAndKeepsTheOldImage) {
   auto big = run_lightfarm({"run", kCornellScript, "--quiet", "--output", out, "--set", "width=256", "--set",
                             "height=256", "--set", "spp=1"});
   EXPECT_EQ(big.status, 1) << big.err;
-  EXPECT_NE(big.err.find("lightfarm: error: cannot write '" + out + "': the PNG came out incomplete"), std::string::npos)
+  EXPECT_NE(big.err.find("lightfarm: error: cannot write '" + out + "': No space left on device"), std::string::npos)
       << big.err;
   EXPECT_EQ(read_file(out), before);
   EXPECT_EQ(std::distance(fs::directory_iterator(disk), fs::directory_iterator{}), 1);  // no partial file left

@@ -593,15 +593,16 @@ class Director final : public ControlOut, public Outbox {
   }
 
   void pump(long timeout_ms) {
-    // OpenImageIO's load (0.4-0.6 CPU-s: 154k symbol lookups in 261 libraries) runs beside the render, once the first
-    // tile is in: started with the actors it took a core from their start-up and from setup (photon shooting 1 -> 2
-    // replicas: 1.27x instead of 1.95x), and the first tile waited. Not at idle priority: on a host busy with other
-    // work it would never run, and the image would wait for it. Not after the last tile: that adds its time to every
-    // frame. Only once this process has made its own threads (ZeroMQ's, the ZAP handler, hosts connecting): dlopen
-    // holds the loader's lock, which creating a thread needs.
+    // The image writer's load runs beside the render, once the first tile is in. For .exr and .png it is a few
+    // milliseconds (OpenEXR, libpng); for other formats it is OpenImageIO's (0.4-0.6 CPU-s: 154k symbol lookups in
+    // 261 libraries), which, started with the actors, took a core from their start-up and from setup (photon
+    // shooting 1 -> 2 replicas: 1.27x instead of 1.95x), and the first tile waited. Not at idle priority: on a host
+    // busy with other work it would never run, and the image would wait for it. Not after the last tile: that adds
+    // its time to every frame. Only once this process has made its own threads (ZeroMQ's, the ZAP handler, hosts
+    // connecting): dlopen holds the loader's lock, which creating a thread needs.
     if (!image_io_started_ && tiles_.tiles_done() > 0) {
       image_io_started_ = true;
-      image_io_ = std::thread(preload_image_io);
+      image_io_ = std::thread(preload_image_writer, spec_.image.output);
     }
     if (stop_requested())
       throw FarmFailure{"interrupted by signal " + std::to_string(stop_signal()) + "; stopping the farm",
@@ -852,7 +853,7 @@ class Director final : public ControlOut, public Outbox {
   const FarmSpec& spec_;
   RunOptions options_;
   Launchers launchers_;
-  std::thread image_io_;  // loads OpenImageIO beside the render (pump)
+  std::thread image_io_;  // loads the image writer beside the render (pump)
   bool image_io_started_ = false;
   std::future<Status> hosts_connected_;  // remote hosts connecting during prepare
   // CURVE (farm { security = "curve" }): declared before the control socket, whose handshakes it serves.
