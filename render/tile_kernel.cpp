@@ -43,6 +43,9 @@ void trace_tile(const Scene& scene, const RayTracer& tracer, const Camera& camer
   work.distance.clear();
   work.eye = camera.eye();
   work.emitted.assign(samples, RGB{});
+  work.rebuildable = true;  // every point below is pushed as surface_at, point_on_ray and tile_sample_key give it
+  work.sampler = kind;
+  work.image_width = image.width;
   for (size_t i = 0; i < samples; ++i) {
     if (!hits[i].valid()) continue;
     const uint32_t tri = hits[i].triangle;

@@ -34,6 +34,13 @@ struct TileWork {
   std::vector<float> distance;          // per point: how far along its camera ray from `eye` it lies
   Vec3 eye{};                           // where every camera ray starts
   std::vector<RGB> emitted;             // per sample: emission the camera sees directly
+  // Set by trace_tile: every point is exactly what a lean input rebuilds from the scene and the tile (position by
+  // point_on_ray from eye and distance, key by tile_sample_key, normal by surface_at, material by material_of), so
+  // a request need not check it point by point (actors/codecs/shade_codec.hpp). Keys are rebuildable only with the
+  // sampler and image width trace_tile used, kept here. Whoever changes a point clears it.
+  bool rebuildable = false;
+  SamplerKind sampler = SamplerKind::independent;
+  int64_t image_width = 0;
 };
 
 // A camera ray's hit: the point `t` along the ray from `origin` whose direction is -wo. Out of line, so that the

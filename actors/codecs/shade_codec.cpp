@@ -30,16 +30,17 @@ static bool materials_derivable(const ShadingPoints& pts, size_t begin, size_t e
 }
 
 // The request's arrays for points [begin, end): p and k unless the caller sends them another way; nrm and m unless
-// `derive_from` (the receiver's scene) gives each point's exactly.
+// `derive_from` (the receiver's scene) gives each point's exactly (`known_derivable`: the caller knows it does).
 static Value encode_points(const ShadingPoints& pts, size_t begin, size_t end, const Scene* derive_from,
-                           bool with_positions, bool with_keys) {
+                           bool with_positions, bool with_keys, bool known_derivable = false) {
   Value body = map_of("n", static_cast<int64_t>(end - begin), "wo", vec3_bytes(pts.wo, begin, end));
   Value::Map& map = body.as_map();
   if (with_positions) map["p"] = vec3_bytes(pts.position, begin, end);
   if (with_keys) map["k"] = u64_to_bytes(std::span<const uint64_t>(pts.key.data() + begin, end - begin));
   const bool lean = derive_from && !pts.triangle.empty();
-  if (!lean || !normals_derivable(pts, begin, end, *derive_from)) map["nrm"] = vec3_bytes(pts.normal, begin, end);
-  if (!lean || !materials_derivable(pts, begin, end, *derive_from))
+  if (!lean || (!known_derivable && !normals_derivable(pts, begin, end, *derive_from)))
+    map["nrm"] = vec3_bytes(pts.normal, begin, end);
+  if (!lean || (!known_derivable && !materials_derivable(pts, begin, end, *derive_from)))
     map["m"] = u32_to_bytes(std::span<const uint32_t>(pts.material.data() + begin, end - begin));
   if (!pts.triangle.empty())
     map["tri"] = u32_to_bytes(std::span<const uint32_t>(pts.triangle.data() + begin, end - begin));
@@ -53,15 +54,17 @@ Value encode_shade_request(const ShadingPoints& pts, size_t begin, size_t end, c
 Value encode_camera_request(const TileWork& work, size_t begin, size_t end, const Scene& scene, SamplerKind sampler,
                             int64_t image_width, bool fold) {
   const ShadingPoints& pts = work.points;
+  // trace_tile's points are rebuildable by construction; others are checked point by point.
+  const bool trusted = work.rebuildable && work.sampler == sampler && work.image_width == image_width;
   bool along_rays = work.distance.size() == pts.size();
-  for (size_t i = begin; along_rays && i < end; ++i) {
+  for (size_t i = begin; !trusted && along_rays && i < end; ++i) {
     const Vec3 p = point_on_ray(work.eye, pts.wo[i], work.distance[i]);
     along_rays = std::memcmp(&p, &pts.position[i], sizeof p) == 0;
   }
   bool tile_keys = work.sample_of_point.size() == pts.size() && work.rect.width() > 0 && work.spp > 0;
-  for (size_t i = begin; tile_keys && i < end; ++i)
+  for (size_t i = begin; !trusted && tile_keys && i < end; ++i)
     tile_keys = tile_sample_key(sampler, image_width, work.rect, work.spp, work.sample_of_point[i]) == pts.key[i];
-  Value body = encode_points(pts, begin, end, &scene, !along_rays, !tile_keys);
+  Value body = encode_points(pts, begin, end, &scene, !along_rays, !tile_keys, trusted && along_rays && tile_keys);
   Value::Map& map = body.as_map();
   if (along_rays) {
     map["o"] = floats_to_bytes(std::span<const float>(&work.eye.x, 3));

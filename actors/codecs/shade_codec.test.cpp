@@ -204,6 +204,37 @@ TEST(ShadeCodec, ACameraRequestCarriesDistancesAndSampleIndicesAndRebuildsTheRen
   }
 }
 
+// trace_tile marks its points rebuildable, and the renderer then skips checking them point by point: the request is
+// the one the checks would have made, byte for byte. A point changed afterwards (the mark cleared) travels whole.
+TEST(ShadeCodec, ATrustedTileEncodesAsTheCheckedOneAndAChangedPointTravelsWhole) {
+  auto scene = Scene::builtin("cornell");
+  ASSERT_TRUE(scene.ok());
+  RayTracer tracer(*scene);
+  ImageSpec image;
+  image.width = image.height = 32;
+  image.spp = 2;
+  Camera camera(CameraSpec{}, image.width, image.height);
+  TileWork work;
+  trace_tile(*scene, tracer, camera, image, TileRect{8, 8, 24, 24}, work);
+  ASSERT_TRUE(work.rebuildable);
+  const size_t n = work.points.size();
+  const SamplerKind kind = sampler_of(image);
+  const std::string trusted = wire::encode_body(encode_camera_request(work, 3, n - 2, *scene, kind, image.width, true));
+  TileWork checked = work;
+  checked.rebuildable = false;
+  EXPECT_EQ(wire::encode_body(encode_camera_request(checked, 3, n - 2, *scene, kind, image.width, true)), trusted);
+  // Another sampler than trace_tile used: the mark does not hold, and the keys travel as keys.
+  const SamplerKind other = kind == SamplerKind::sobol ? SamplerKind::independent : SamplerKind::sobol;
+  const Value keyed = encode_camera_request(work, 0, n, *scene, other, image.width);
+  EXPECT_NE(keyed.find("k"), nullptr);
+  EXPECT_EQ(keyed.find("s"), nullptr);
+  checked.points.normal[4] = -checked.points.normal[4];
+  checked.points.position[5].x += 1;
+  const Value whole = encode_camera_request(checked, 0, n, *scene, kind, image.width);
+  EXPECT_NE(whole.find("nrm"), nullptr);
+  EXPECT_NE(whole.find("p"), nullptr);
+}
+
 TEST(ShadeCodec, ACameraRequestWithABadTileOrSampleIsRefused) {
   auto scene = Scene::builtin("cornell");
   ASSERT_TRUE(scene.ok());

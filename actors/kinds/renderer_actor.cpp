@@ -62,6 +62,7 @@ class RendererActor final : public Actor {
     std::vector<RGB> radiance;        // one value a point, from replies that came that way
     std::vector<RGB> pixel_radiance;  // a pixel's points' radiance summed (fold_by_pixel), from folded replies
     std::vector<uint8_t> folded;      // which pixels came folded
+    std::vector<uint32_t> pixel;      // when folding: each point's pixel in the tile
     size_t batches_left = 0;
   };
 
@@ -111,20 +112,29 @@ class RendererActor final : public Actor {
     std::vector<uint8_t> sees_emitter(fold ? pixels : 0);
     for (size_t p = 0; p < sees_emitter.size(); ++p) sees_emitter[p] = pixel_sees_emitter(work, p);
     if (n == 0) return finish_tile(job, rt);
-    const uint32_t spp = static_cast<uint32_t>(work.spp);
-    auto pixel_of = [&work, spp](size_t j) { return work.sample_of_point[j] / spp; };
+    if (fold) {
+      const uint32_t spp = static_cast<uint32_t>(work.spp);
+      job->pixel.resize(n);
+      for (size_t j = 0; j < n; ++j) job->pixel[j] = work.sample_of_point[j] / spp;
+    }
+    const std::vector<uint32_t>& pixel = job->pixel;
     for (size_t begin = 0, end = 0; begin < n; begin = end) {
       end = std::min(begin + static_cast<size_t>(params_.batch), n);
+      while (fold && end < n && pixel[end] == pixel[end - 1]) ++end;
+      // The batch's pixels (runs of points), and whether any of them sees an emitter.
+      size_t runs = 0;
       bool foldable = fold;
-      while (fold && end < n && pixel_of(end) == pixel_of(end - 1)) ++end;
-      for (size_t j = begin; foldable && j < end; ++j) foldable = !sees_emitter[pixel_of(j)];
+      for (size_t j = begin; fold && j < end; ++j)
+        if (j == begin || pixel[j] != pixel[j - 1]) {
+          ++runs;
+          foldable = foldable && !sees_emitter[pixel[j]];
+        }
       ++job->batches_left;
       ++rt.stats().requests;
       Value body = lean ? encode_camera_request(work, begin, end, *scene_, sampler_, image_.width, foldable)
                         : encode_shade_request(work.points, begin, end);
       const bool folded = body.find("fold") != nullptr;
-      const size_t values = folded ? pixel_runs(std::span(work.sample_of_point).subspan(begin, end - begin), work.spp)
-                                   : end - begin;
+      const size_t values = folded ? runs : end - begin;
       rt.ask_input(0, wire::Op::shade, std::move(body),
                    [this, job, begin, end, folded, values, &rt](Result<wire::Message> r) {
                      if (!r) return rt.fail("lighting failed: " + r.error().message);
@@ -141,12 +151,11 @@ class RendererActor final : public Actor {
       std::copy(radiance.begin(), radiance.end(), job.radiance.begin() + static_cast<ptrdiff_t>(begin));
       return;
     }
-    const uint32_t spp = static_cast<uint32_t>(job.work.spp);
-    const auto& samples = job.work.sample_of_point;
+    const auto& pixel = job.pixel;
     for (size_t j = begin, run = 0; j < end; ++j)
-      if (j == begin || samples[j] / spp != samples[j - 1] / spp) {
-        job.pixel_radiance[samples[j] / spp] = radiance[run++];
-        job.folded[samples[j] / spp] = 1;
+      if (j == begin || pixel[j] != pixel[j - 1]) {
+        job.pixel_radiance[pixel[j]] = radiance[run++];
+        job.folded[pixel[j]] = 1;
       }
   }
 
