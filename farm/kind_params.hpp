@@ -11,9 +11,9 @@
 
 namespace lf {
 
-// renderers { batch = 4096, window = 4, tiles_in_flight = 3, mode = "async" }
+// renderers { batch = 16384, window = 4, tiles_in_flight = 3, mode = "async" }
 struct RendererParams {
-  int64_t batch = 4096;         // shading points per request
+  int64_t batch = 16384;        // shading points per request
   int64_t window = 4;           // requests in flight to the lighting
   int64_t tiles_in_flight = 3;  // tiles traced ahead while earlier ones are shaded
   // Throws ParamError. mode = "sync" (one point per request, one request and one tile at a time: what packets buy)
