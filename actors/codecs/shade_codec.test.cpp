@@ -93,6 +93,20 @@ static bool same_bits(const ShadingPoints& a, const ShadingPoints& b) {
          same(a.key, b.key) && same(a.triangle, b.triangle);
 }
 
+// The Cornell box and its BVH, and a tile of it as a renderer traces it (with the scripts' default camera).
+class CornellTiles {
+ public:
+  const Scene scene = std::move(Scene::builtin("cornell").value());
+  TileWork trace(const ImageSpec& image, TileRect rect) const {
+    TileWork work;
+    trace_tile(scene, tracer_, Camera(CameraSpec{}, image.width, image.height), image, rect, work);
+    return work;
+  }
+
+ private:
+  const RayTracer tracer_{scene};
+};
+
 TEST(ShadeCodec, ALeanRequestLeavesOutWhatTheSceneGivesAndTheReceiverRestoresItBitForBit) {
   const Scene s = lean_scene();
   ASSERT_TRUE(s.has_shading_normals());
@@ -167,21 +181,18 @@ TEST(ShadeCodec, ASliceCutsEveryArrayAndDecodesAsThosePoints) {
 // A renderer's tile as a lean input gets it: no positions, normals, materials or keys on the wire, and the points the
 // LightOp rebuilds are the renderer's, bit for bit, for either sampler; a slice of it rebuilds as those points.
 TEST(ShadeCodec, ACameraRequestCarriesDistancesAndSampleIndicesAndRebuildsTheRenderersPoints) {
-  auto scene = Scene::builtin("cornell");
-  ASSERT_TRUE(scene.ok());
-  RayTracer tracer(*scene);
+  const CornellTiles cornell;
+  const Scene& scene = cornell.scene;
   for (const char* sampler : {"independent", "sobol"}) {
     ImageSpec image;
     image.width = 64;
     image.height = 48;
     image.spp = 3;
     image.sampler = sampler;
-    const SamplerKind kind = image.sampler == "sobol" ? SamplerKind::sobol : SamplerKind::independent;
-    Camera camera(CameraSpec{}, image.width, image.height);
-    TileWork work;
-    trace_tile(*scene, tracer, camera, image, TileRect{16, 8, 32, 24}, work);
+    const SamplerKind kind = sampler_of(image);
+    const TileWork work = cornell.trace(image, TileRect{16, 8, 32, 24});
     ASSERT_GT(work.points.size(), 100u);
-    const Value body = encode_camera_request(work, 0, work.points.size(), *scene, kind, image.width);
+    const Value body = encode_camera_request(work, 0, work.points.size(), scene, kind, image.width);
     for (const char* gone : {"p", "nrm", "m", "k"}) EXPECT_EQ(body.find(gone), nullptr) << gone;
     const size_t n = work.points.size();
     const size_t full = wire::encode_body(encode_shade_request(work.points, 0, n)).size();
@@ -189,17 +200,17 @@ TEST(ShadeCodec, ACameraRequestCarriesDistancesAndSampleIndicesAndRebuildsTheRen
     EXPECT_LE(wire::encode_body(body).size(), 24 * n + 100);
     EXPECT_GE(full, 52 * n);
     const PixelKeys keys{image.width, kind};
-    auto back = decode_shade_request(body, scene->materials().size(), scene->triangle_count(), &*scene, &keys);
+    auto back = decode_shade_request(body, scene.materials().size(), scene.triangle_count(), &scene, &keys);
     ASSERT_TRUE(back.ok()) << back.error().message;
     EXPECT_TRUE(same_bits(*back, work.points)) << sampler;
     auto slice = slice_shade_request(body, 7, n - 5);
     ASSERT_TRUE(slice.ok()) << slice.error().message;
-    auto part = decode_shade_request(*slice, scene->materials().size(), scene->triangle_count(), &*scene, &keys);
+    auto part = decode_shade_request(*slice, scene.materials().size(), scene.triangle_count(), &scene, &keys);
     ASSERT_TRUE(part.ok()) << part.error().message;
     EXPECT_EQ(part->key[0], work.points.key[7]);
     EXPECT_EQ(std::memcmp(&part->position.back(), &work.points.position[n - 6], sizeof(Vec3)), 0);
     // Without the image's width and sampler the keys cannot be rebuilt, and the request says what it lacks.
-    EXPECT_EQ(decode_shade_request(body, scene->materials().size(), scene->triangle_count(), &*scene).error().message,
+    EXPECT_EQ(decode_shade_request(body, scene.materials().size(), scene.triangle_count(), &scene).error().message,
               "shade request 'k' must hold " + std::to_string(n) + " u64 sample keys");
   }
 }
@@ -207,51 +218,45 @@ TEST(ShadeCodec, ACameraRequestCarriesDistancesAndSampleIndicesAndRebuildsTheRen
 // trace_tile marks its points rebuildable, and the renderer then skips checking them point by point: the request is
 // the one the checks would have made, byte for byte. A point changed afterwards (the mark cleared) travels whole.
 TEST(ShadeCodec, ATrustedTileEncodesAsTheCheckedOneAndAChangedPointTravelsWhole) {
-  auto scene = Scene::builtin("cornell");
-  ASSERT_TRUE(scene.ok());
-  RayTracer tracer(*scene);
+  const CornellTiles cornell;
+  const Scene& scene = cornell.scene;
   ImageSpec image;
   image.width = image.height = 32;
   image.spp = 2;
-  Camera camera(CameraSpec{}, image.width, image.height);
-  TileWork work;
-  trace_tile(*scene, tracer, camera, image, TileRect{8, 8, 24, 24}, work);
+  const TileWork work = cornell.trace(image, TileRect{8, 8, 24, 24});
   ASSERT_TRUE(work.rebuildable);
   const size_t n = work.points.size();
   const SamplerKind kind = sampler_of(image);
-  const std::string trusted = wire::encode_body(encode_camera_request(work, 3, n - 2, *scene, kind, image.width, true));
+  const std::string trusted = wire::encode_body(encode_camera_request(work, 3, n - 2, scene, kind, image.width, true));
   TileWork checked = work;
   checked.rebuildable = false;
-  EXPECT_EQ(wire::encode_body(encode_camera_request(checked, 3, n - 2, *scene, kind, image.width, true)), trusted);
+  EXPECT_EQ(wire::encode_body(encode_camera_request(checked, 3, n - 2, scene, kind, image.width, true)), trusted);
   // Another sampler than trace_tile used: the mark does not hold, and the keys travel as keys.
   const SamplerKind other = kind == SamplerKind::sobol ? SamplerKind::independent : SamplerKind::sobol;
-  const Value keyed = encode_camera_request(work, 0, n, *scene, other, image.width);
+  const Value keyed = encode_camera_request(work, 0, n, scene, other, image.width);
   EXPECT_NE(keyed.find("k"), nullptr);
   EXPECT_EQ(keyed.find("s"), nullptr);
   checked.points.normal[4] = -checked.points.normal[4];
   checked.points.position[5].x += 1;
-  const Value whole = encode_camera_request(checked, 0, n, *scene, kind, image.width);
+  const Value whole = encode_camera_request(checked, 0, n, scene, kind, image.width);
   EXPECT_NE(whole.find("nrm"), nullptr);
   EXPECT_NE(whole.find("p"), nullptr);
 }
 
 TEST(ShadeCodec, ACameraRequestWithABadTileOrSampleIsRefused) {
-  auto scene = Scene::builtin("cornell");
-  ASSERT_TRUE(scene.ok());
-  RayTracer tracer(*scene);
+  const CornellTiles cornell;
+  const Scene& scene = cornell.scene;
   ImageSpec image;
   image.width = image.height = 32;
   image.spp = 2;
   image.sampler = "independent";
-  Camera camera(CameraSpec{}, image.width, image.height);
-  TileWork work;
-  trace_tile(*scene, tracer, camera, image, TileRect{0, 0, 16, 16}, work);
+  const TileWork work = cornell.trace(image, TileRect{0, 0, 16, 16});
   const PixelKeys keys{image.width, SamplerKind::independent};
   auto decode = [&](const Value& body) {
-    auto r = decode_shade_request(body, scene->materials().size(), scene->triangle_count(), &*scene, &keys);
+    auto r = decode_shade_request(body, scene.materials().size(), scene.triangle_count(), &scene, &keys);
     return r.ok() ? std::string("ok") : r.error().message;
   };
-  Value body = encode_camera_request(work, 0, 4, *scene, SamplerKind::independent, image.width);
+  Value body = encode_camera_request(work, 0, 4, scene, SamplerKind::independent, image.width);
   EXPECT_EQ(decode(body), "ok");
   body.as_map()["tile"] = Value::Array{int64_t{0}, int64_t{0}, int64_t{64}, int64_t{16}, int64_t{2}};
   EXPECT_EQ(decode(body), "shade request has neither 'k' nor a tile [x0, y0, x1, y1, spp] inside an image 32 pixels wide");
@@ -260,7 +265,7 @@ TEST(ShadeCodec, ACameraRequestWithABadTileOrSampleIsRefused) {
   // A tile whose samples do not fit 64 bits (pixels x spp) is counted without overflowing: any 32-bit s is in it.
   body.as_map()["tile"] = Value::Array{int64_t{0}, int64_t{0}, int64_t{32}, int64_t{1} << 24, int64_t{1} << 24};
   EXPECT_EQ(decode(body), "ok");
-  body = encode_camera_request(work, 0, 4, *scene, SamplerKind::independent, image.width);
+  body = encode_camera_request(work, 0, 4, scene, SamplerKind::independent, image.width);
   body.as_map()["t"] = Bytes{"abc"};
   EXPECT_EQ(decode(body), "shade request 't' must hold 4 f32 distances");
 }
@@ -268,17 +273,14 @@ TEST(ShadeCodec, ACameraRequestWithABadTileOrSampleIsRefused) {
 // A renderer's request that asks for its reply folded by pixel: the LightOp's sums over each pixel's points give
 // the renderer's pixels bit for bit, for pixels whose samples see no emitter (those go one value a point).
 TEST(ShadeCodec, AFoldedReplyHoldsEachPixelsRadianceSummedAndResolvesToTheSamePixels) {
-  auto scene = Scene::builtin("cornell");
-  ASSERT_TRUE(scene.ok());
-  RayTracer tracer(*scene);
+  const CornellTiles cornell;
+  const Scene& scene = cornell.scene;
   ImageSpec image;
   image.width = image.height = 48;
   image.spp = 5;
-  Camera camera(CameraSpec{}, image.width, image.height);
-  TileWork work;
   // The whole image as one tile: it sees the light, and its corners look past the box's open side (some pixels
   // have fewer points than samples).
-  trace_tile(*scene, tracer, camera, image, TileRect{0, 0, 48, 48}, work);
+  const TileWork work = cornell.trace(image, TileRect{0, 0, 48, 48});
   const size_t n = work.points.size(), pixels = static_cast<size_t>(work.rect.pixel_count());
   ASSERT_LT(n, pixels * image.spp);
   std::vector<RGB> radiance(n);
@@ -293,7 +295,7 @@ TEST(ShadeCodec, AFoldedReplyHoldsEachPixelsRadianceSummedAndResolvesToTheSamePi
     while (end < n && work.sample_of_point[end] / spp == work.sample_of_point[end - 1] / spp) ++end;
     bool foldable = true;
     for (size_t j = begin; j < end; ++j) foldable = foldable && !pixel_sees_emitter(work, work.sample_of_point[j] / spp);
-    const Value body = encode_camera_request(work, begin, end, *scene, sampler_of(image), image.width, foldable);
+    const Value body = encode_camera_request(work, begin, end, scene, sampler_of(image), image.width, foldable);
     auto fold = decode_pixel_fold(body);
     ASSERT_TRUE(fold.ok()) << fold.error().message;
     ASSERT_EQ(fold->has_value(), foldable);
@@ -321,7 +323,7 @@ TEST(ShadeCodec, AFoldedReplyHoldsEachPixelsRadianceSummedAndResolvesToTheSamePi
   ASSERT_EQ(mixed.size(), per_point.size());
   EXPECT_EQ(std::memcmp(mixed.data(), per_point.data(), mixed.size() * sizeof(RGB)), 0);
   // A request that does not ask is answered one value a point.
-  auto plain = decode_pixel_fold(encode_camera_request(work, 0, n, *scene, sampler_of(image), image.width));
+  auto plain = decode_pixel_fold(encode_camera_request(work, 0, n, scene, sampler_of(image), image.width));
   ASSERT_TRUE(plain.ok());
   EXPECT_FALSE(plain->has_value());
 }
