@@ -81,6 +81,16 @@ std::optional<Bsdf::Sample> Bsdf::sample(Vec3 n, Vec3 wo, bool entering, float u
     default: break;
   }
   if (dot(n, wo) <= 0) return std::nullopt;
+  if (m_.type == Material::Type::diffuse) {
+    // Lambert alone, the commonest case: pdf() and eval() below, with the checks they would repeat left out and the
+    // same arithmetic in the same order, so the same bits.
+    const Vec3 wi = cosine_hemisphere(n, u1, u2);
+    const float cos_i = dot(n, wi);
+    if (cos_i <= 0) return std::nullopt;
+    const float p = cos_i / kPi;
+    if (!(p > 0)) return std::nullopt;
+    return Sample{wi, (kd_ * (1.0f / kPi)) * (cos_i / p), p, false};
+  }
   Vec3 wi;
   const float pd = m_.type == Material::Type::glossy ? diffuse_probability() : 1.0f;
   if (u0 < pd) {

@@ -81,16 +81,19 @@ Task trace_paths(const SceneContext& ctx, const ShadingPoints& points, std::span
   std::vector<Ray> far_batch;
   std::vector<Hit> far_hits;
 
+  // The paths still alive, in path order: each bounce visits only these (most paths end after a few bounces, and a
+  // pass over every path at every depth cost more than the dead ones' share of the work).
+  std::vector<uint32_t> active(paths.size());
+  for (size_t p = 0; p < paths.size(); ++p) active[p] = static_cast<uint32_t>(p);
+
   if (tally) tally->paths += paths.size();
-  for (int depth = 1; depth <= o.max_depth; ++depth) {
-    if (tally)
-      for (const Path& path : paths) tally->vertices += path.alive ? 1 : 0;
+  for (int depth = 1; depth <= o.max_depth && !active.empty(); ++depth) {
+    if (tally) tally->vertices += active.size();
     // Next-event estimation.
     rays.clear();
     pending.clear();
-    for (size_t p = 0; p < paths.size(); ++p) {
+    for (const uint32_t p : active) {
       Path& path = paths[p];
-      if (!path.alive) continue;
       const Material& m = scene.material(path.material);
       const Bsdf bsdf(m, path.albedo);
       if (bsdf.is_delta()) continue;
@@ -132,9 +135,8 @@ Task trace_paths(const SceneContext& ctx, const ShadingPoints& points, std::span
     rays.clear();
     continuing.clear();
     samples.clear();
-    for (size_t p = 0; p < paths.size(); ++p) {
+    for (const uint32_t p : active) {
       Path& path = paths[p];
-      if (!path.alive) continue;
       const Material& m = scene.material(path.material);
       if (o.light_only_on_diffuse && o.max_depth == 1 && m.type == Material::Type::diffuse) {
         path.alive = false;
@@ -250,6 +252,10 @@ Task trace_paths(const SceneContext& ctx, const ShadingPoints& points, std::span
       path.albedo = hit_material.kd_map < 0 ? hit_material.kd : scene.albedo(tri, scene.barycentrics(tri, path.x), ctx.pixel_footprint(path.x));
       path.outside = front;
     }
+    // Those that go on are among those that continued, in the same order.
+    active.clear();
+    for (const size_t p : continuing)
+      if (paths[p].alive) active.push_back(static_cast<uint32_t>(p));
   }
 
   // What each global ray brought back beyond the hit it found (its reflected light, the emission there excluded):
