@@ -1,10 +1,12 @@
 # Blender 3.4 (Debian) Cycles on McGuire's CornellBox-Empty-RG, set up like lightfarm's sampler_bench scene:
 # Lambert walls (Kd), the light one-sided (Ke, front faces only) and also diffuse (Kd), 12 bounces, no clamping,
 # no denoising, no adaptive sampling, a box-like pixel filter. Usage:
-#   blender -b -P cycles_cornell.py -- OUT.exr SPP SIZE SEED
+#   blender -b -P cycles_cornell.py -- OUT.exr SPP SIZE SEED [MIN_LIGHT_BOUNCES]
+# MIN_LIGHT_BOUNCES (default 0, Cycles' own) is the bounce from which Russian roulette may end a path.
 import bpy, sys, time, math
 argv = sys.argv[sys.argv.index("--") + 1:]
 out, spp, size, seed = argv[0], int(argv[1]), int(argv[2]), int(argv[3])
+min_light_bounces = int(argv[4]) if len(argv) > 4 else 0
 bpy.ops.wm.read_factory_settings(use_empty=True)
 import os
 bpy.ops.wm.obj_import(filepath=os.path.join(os.path.dirname(os.path.abspath(__file__)), "../../../shared/scenes/cornell_box_mcguire/CornellBox-Empty-RG.obj"))
@@ -58,7 +60,7 @@ c.diffuse_bounces = 12
 c.glossy_bounces = 12
 c.transmission_bounces = 12
 c.transparent_max_bounces = 12
-c.min_light_bounces = 0
+c.min_light_bounces = min_light_bounces
 c.sample_clamp_direct = 0
 c.sample_clamp_indirect = 0
 c.filter_width = 0.01

@@ -117,6 +117,45 @@ ShadingPoints camera_points(const Scene& scene, const CameraSpec& cam, int size)
   return work.points;
 }
 
+// Roulette by the square root of the throughput ends fewer paths; it must stay unbiased, and end them as its rule
+// says: after the third vertex a path goes on with probability min(1, sqrt(beta)), then carries beta / q.
+TEST(PathTrace, SqrtRouletteIsUnbiasedInTheFurnace) {
+  for (float rho : {0.5f, 0.8f}) {
+    Scene s;
+    const float e = 1.0f;
+    auto m = s.add_material({"furnace", {rho, rho, rho}, {e, e, e}});
+    test::add_closed_box(s, m);
+    ASSERT_TRUE(s.finalize("furnace").ok());
+    RayTracer tracer(s);
+    ShadingPoints pts;
+    for (int i = 0; i < 8; ++i) {
+      const float u = 0.1f + 0.1f * i;
+      pts.push_back({u, 0.0f, 1 - u}, {0, 1, 0}, normalize(Vec3{0.3f, 1, 0.2f}), m, sample_key(i, 0));
+      pts.push_back({0.0f, u, 0.5f}, {1, 0, 0}, {1, 0, 0}, m, sample_key(i, 1));
+    }
+    auto op = create_lightop(*find_lightop_kind("pathtrace"),
+                             ParamTable(Value::Map{{"samples", 4096}, {"max_depth", 1000}, {"roulette", "sqrt"}}, "pathtrace"));
+    LocalInputs none;
+    run_to_completion(op->setup(SceneContext{&s, &tracer}, none));
+    std::vector<RGB> out(pts.size());
+    run_to_completion(op->shade(pts, out, none));
+    double mean = 0;
+    for (const RGB& l : out) mean += l.y;
+    mean /= static_cast<double>(out.size());
+    EXPECT_NEAR(mean / (rho * e / (1 - rho)), 1.0, 0.02) << "rho " << rho;
+    // Every path's throughput is the same function of its length here, so the mean length follows from the rule.
+    double expected_vertices = 3, reach = 1, beta = static_cast<double>(rho) * rho * rho;
+    for (int k = 0; k < 2000; ++k) {
+      const double q = std::min(1.0, std::sqrt(beta));
+      reach *= q;
+      expected_vertices += reach;
+      beta = beta / q * rho;
+    }
+    EXPECT_NEAR(op->stats().find("mean_path_vertices")->as_double() / expected_vertices, 1.0, 0.02) << "rho " << rho;
+    EXPECT_GT(expected_vertices, 3 + rho * rho * rho / (1 - rho)) << "longer paths than roulette by the throughput";
+  }
+}
+
 // The Sobol sampler on the furnace: every path's first vertices are stratified over a pixel's samples, so the error
 // over 256 points (pixels) falls faster with samples than with independent numbers, and the mean stays E/(1 - rho).
 TEST(PathTrace, SobolPathsConvergeFasterInTheFurnace) {
