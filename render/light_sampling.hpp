@@ -17,21 +17,37 @@ struct LightSample {
   bool is_point = false;
 };
 
+// The area over which emitter e (triangle tri) gets its light samples: the triangle's, or for an emitter an alpha
+// map cuts out, that of the parts that may be there (render/emitter_cutouts.hpp).
+inline float emitter_sampled_area(const Scene& scene, uint32_t tri, size_t e) {
+  const EmitterCutouts& cut = scene.emitter_cutouts();
+  return cut.restricted(e) ? cut.sampled_area(e) : scene.area(tri);
+}
+
 // Light e (Scene's numbering: a triangle below emitters().size(), else a point light), chosen with probability
-// p_light, as a sample: the point of the triangle that `uv` names (uniform over it for uniform uv).
+// p_light, as a sample: the point of the triangle that `uv` names (uniform over its sampled area for uniform uv).
 inline LightSample light_sample_at(const Scene& scene, size_t e, float p_light, Uniform2 uv) {
   if (e >= scene.emitters().size()) {
     const PointLight& p = scene.point_lights()[e - scene.emitters().size()];
     return LightSample{p.position, {}, UINT32_MAX, p.intensity, p_light, true};
   }
   const uint32_t tri = scene.emitters()[e];
-  const float su = std::sqrt(uv.u);
-  const float v = uv.v;
-  const Vec3 b{1 - su, su * (1 - v), su * v};
+  const EmitterCutouts& cut = scene.emitter_cutouts();
+  Vec3 b;
+  float area;
+  if (cut.restricted(e)) {
+    b = cut.barycentrics(e, uv);
+    area = cut.sampled_area(e);
+  } else {
+    const float su = std::sqrt(uv.u);
+    const float v = uv.v;
+    b = Vec3{1 - su, su * (1 - v), su * v};
+    area = scene.area(tri);
+  }
   const Vec3 y = scene.vertex(tri, 0) * b.x + scene.vertex(tri, 1) * b.y + scene.vertex(tri, 2) * b.z;
   // A cut-out part of an emitter is not there: it sends nothing (the sample still counts, so no bias).
   const RGB le = scene.opaque(tri, b) ? scene.material(scene.material_of(tri)).ke : RGB{};
-  return LightSample{y, scene.normal(tri), tri, le, p_light / scene.area(tri)};
+  return LightSample{y, scene.normal(tri), tri, le, p_light / area};
 }
 
 // A low-discrepancy Sampler draws the light and the point on it from one 2D point (the pick's remainder and v), so
@@ -73,13 +89,15 @@ inline std::optional<LightSample> sample_light_at(const Scene& scene, Vec3 x, Ve
 
 // The area density with which sample_light_at(x, n) draws a point on emitter triangle `tri`.
 inline float light_pdf_area_at(const Scene& scene, uint32_t tri, Vec3 x, Vec3 n) {
-  return scene.light_tree().probability(x, n, scene.emitter_index_of(tri)) / scene.area(tri);
+  const size_t e = scene.emitter_index_of(tri);
+  return scene.light_tree().probability(x, n, e) / emitter_sampled_area(scene, tri, e);
 }
 
 // The area density with which sample_light draws a point on triangle `tri` (for MIS when a BSDF-sampled ray hits
 // a light).
 inline float light_pdf_area(const Scene& scene, uint32_t tri) {
-  return scene.emitter_probability_of_triangle(tri) / scene.area(tri);
+  const float area = scene.emitter_cutouts().any() ? emitter_sampled_area(scene, tri, scene.emitter_index_of(tri)) : scene.area(tri);
+  return scene.emitter_probability_of_triangle(tri) / area;
 }
 
 // Power heuristic (beta = 2) weight of a sample drawn with density `a` when `b` could also have drawn it.

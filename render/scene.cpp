@@ -160,6 +160,7 @@ Status Scene::finalize(const std::string& what) {
   for (size_t i = 0; i < emitters_.size(); ++i) triangle_light_pdf_[emitters_[i]] = emitter_pdf_[i];
   view_owned_arrays();
   light_tree_ = std::make_shared<const LightTree>(*this);
+  emitter_cutouts_ = std::make_shared<const EmitterCutouts>(*this);
   return Ok{};
 }
 

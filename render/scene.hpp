@@ -10,6 +10,7 @@
 
 #include "core/specs.hpp"
 #include "core/result.hpp"
+#include "render/emitter_cutouts.hpp"
 #include "render/light_tree.hpp"
 #include "render/math.hpp"
 
@@ -59,6 +60,8 @@ struct Texture {
   // Channel c at texture coordinates uv, bilinear and repeating, at level of detail `lod` (0: the full image;
   // between levels, trilinear); colour channels decoded from sRGB to linear.
   float sample(Vec2 uv, uint32_t c, float lod = 0) const;
+  // Channel c of the full image's texel (x, y), repeating, decoded as sample() decodes it; y = 0 is the top row.
+  float texel(int64_t x, int64_t y, uint32_t c) const;
   static uint64_t pyramid_bytes(uint32_t width, uint32_t height, uint32_t channels);
   // Fills `owned` beyond level 0 (which it must hold) with the smaller levels.
   void build_pyramid();
@@ -159,6 +162,8 @@ class Scene {
   float emitter_probability_of_triangle(uint32_t t) const { return light_pdf_view_[t]; }
   // The lights by what each can give a point (render/light_tree.hpp), in the same numbering (after finalize()).
   const LightTree& light_tree() const { return *light_tree_; }
+  // Where light samples on cut-out emitters are drawn (render/emitter_cutouts.hpp).
+  const EmitterCutouts& emitter_cutouts() const { return *emitter_cutouts_; }
   // The index of emitter triangle t in emitters() (t must be an emitter).
   size_t emitter_index_of(uint32_t t) const;
 
@@ -214,6 +219,7 @@ class Scene {
   std::span<const Vec3> corner_normal_view_;
   std::span<const Vec2> corner_uv_view_;
   std::shared_ptr<const LightTree> light_tree_;
+  std::shared_ptr<const EmitterCutouts> emitter_cutouts_;
   std::shared_ptr<const void> storage_;  // the mapping the views point into, when mapped
   std::vector<std::string> ambient_only_;  // OBJ materials with Ka but no Ke: named if the scene ends up unlit
   Bounds bounds_;

@@ -249,6 +249,7 @@ Result<Scene> SceneImage::map(const std::string& path, const std::string& hash, 
   s.epsilon_ = h.epsilon;
   s.storage_ = std::move(mapping);
   s.light_tree_ = std::make_shared<const LightTree>(s);
+  s.emitter_cutouts_ = std::make_shared<const EmitterCutouts>(s);
   return s;
 }
 

@@ -101,6 +101,12 @@ float bilinear(const uint8_t* texels, uint32_t w, uint32_t h, uint32_t channels,
 
 }  // namespace
 
+float Texture::texel(int64_t x, int64_t y, uint32_t c) const {
+  if (width == 0 || height == 0 || c >= channels) return 1.0f;
+  const uint8_t v = texels[(static_cast<size_t>(wrap(y, height)) * width + wrap(x, width)) * channels + c];
+  return channels == 3 ? srgb_to_linear()[v] : static_cast<float>(v) / 255.0f;
+}
+
 float Texture::sample(Vec2 uv, uint32_t c, float lod) const {
   if (width == 0 || height == 0 || c >= channels) return 1.0f;
   if (!(lod > 0)) return bilinear(texels.data(), width, height, channels, uv, c);

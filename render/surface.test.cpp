@@ -11,6 +11,7 @@
 
 #include "render/camera.hpp"
 #include "render/image.hpp"
+#include "render/light_sampling.hpp"
 #include "render/lightop_registry.hpp"
 #include "render/sampler.hpp"
 #include "render/scene_file.hpp"
@@ -316,6 +317,45 @@ TEST_F(SurfaceFiles, ACutOutEmitterLightsLikeItsOpaquePart) {
     const double expected = 0.5 / M_PI * (M_PI * 3 * test::form_factor(pts.position[i], {0, 1, 0}, right_half));
     EXPECT_NEAR(out[i].y / expected, 1.0, 0.02) << "x " << pts.position[i].x;
   }
+}
+
+// Light samples on that emitter land where it may be there, and weighted by their density they still add up to
+// exactly the part that is there. The quad's diagonal splits the cut unevenly: uniform samples brought light in a
+// quarter of one triangle and three quarters of the other; restricted, in more than 70 % of each.
+TEST_F(SurfaceFiles, LightSamplesOnACutOutEmitterAvoidItsCutPart) {
+  write_half_alpha((dir / "alpha.png").string());
+  write("cut.mtl", "newmtl floor\nKd 0.5 0.5 0.5\nnewmtl leaf\nKd 0 0 0\nKe 3 3 3\nmap_d alpha.png\n");
+  const std::string obj =
+      "mtllib cut.mtl\nv -4 0 -4\nv 4 0 -4\nv 4 0 4\nv -4 0 4\nusemtl floor\nf 1 4 3 2\n"
+      "v -1 1 -1\nv 1 1 -1\nv 1 1 1\nv -1 1 1\nvt 0 0\nvt 1 0\nvt 1 1\nvt 0 1\nusemtl leaf\nf 5/1 6/2 7/3 8/4\n";
+  auto s = Scene::load_obj(write("cut.obj", obj));
+  ASSERT_TRUE(s.ok()) << s.error().message;
+  ASSERT_EQ(s->emitters().size(), 2u);
+  const EmitterCutouts& cut = s->emitter_cutouts();
+  double sampled = 0, emitting = 0;  // over the quad (area 4)
+  for (size_t e = 0; e < 2; ++e) {
+    ASSERT_TRUE(cut.restricted(e)) << e;
+    const uint32_t tri = s->emitters()[e];
+    sampled += cut.sampled_area(e);
+    Rng rng(sample_key(e, 0), 99);
+    const int n = 1 << 16;
+    int lit = 0;
+    double power = 0;
+    for (int i = 0; i < n; ++i) {
+      const LightSample ls = light_sample_at(*s, e, 1.0f, rng.uniform2());
+      const Vec3 b = s->barycentrics(tri, ls.point);
+      EXPECT_NEAR(b.x + b.y + b.z, 1.0f, 1e-5f);
+      EXPECT_EQ(ls.radiance.y > 0, s->opaque(tri, b));
+      lit += ls.radiance.y > 0 ? 1 : 0;
+      power += ls.radiance.y > 0 ? 1.0 / ls.pdf_area : 0.0;
+    }
+    EXPECT_GT(lit, n * 70 / 100) << "triangle " << e;
+    emitting += power / n;
+  }
+  // The cells from texel centre 7 to the edge at 15.5 (the opaque half and the blend into it), and the half-texel
+  // strip at u = 0 that wraps round to texel 15: 9 of the 16 texels' width.
+  EXPECT_NEAR(sampled / 4, 9.0 / 16.0, 1e-3);
+  EXPECT_NEAR(emitting / 2, 1.0, 0.01) << "half the quad emits";
 }
 
 // Vertex normals, texture coordinates and texels survive the trip to a host: the shipped bytes, and the mapped
