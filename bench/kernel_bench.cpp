@@ -11,6 +11,7 @@
 #include <fstream>
 #include <string>
 
+#include "bench/bare_frame.hpp"
 #include "bench/bench_util.hpp"
 #include "core/value.hpp"
 #include "render/camera.hpp"
@@ -18,46 +19,6 @@
 #include "render/tile_kernel.hpp"
 
 namespace {
-
-struct Frame {
-  double seconds = 0;
-  uint64_t hash = 0;
-};
-
-uint64_t fnv1a(uint64_t h, const void* data, size_t size) {
-  const auto* p = static_cast<const unsigned char*>(data);
-  for (size_t i = 0; i < size; ++i) h = (h ^ p[i]) * 0x100000001b3ull;
-  return h;
-}
-
-Frame bare_frame(const lf::Scene& scene, const lf::RayTracer& tracer, const lf::CameraSpec& cam, const char* sampler,
-                 int size, int spp) {
-  lf::ImageSpec image;
-  image.width = image.height = size;
-  image.spp = spp;
-  image.sampler = sampler;
-  lf::Camera camera(cam, size, size);
-  auto op = lf::create_lightop(*lf::find_lightop_kind("pathtrace"),
-                               lf::ParamTable(lf::Value::Map{{"max_depth", 12}}, "pathtrace"));
-  lf::LocalInputs none;
-  lf::SceneContext ctx{&scene, &tracer};
-  ctx.sampler = lf::sampler_of(image);
-  lf::run_to_completion(op->setup(ctx, none));
-  lf::TileWork work;
-  std::vector<lf::RGB> radiance, pixels;
-  Frame f;
-  f.hash = 0xcbf29ce484222325ull;
-  const auto t0 = bench::Clock::now();
-  for (const auto& tile : lf::make_tiles(size, size, image.tile)) {
-    lf::trace_tile(scene, tracer, camera, image, tile, work);
-    radiance.assign(work.points.size(), {});
-    lf::run_to_completion(op->shade(work.points, radiance, none));
-    lf::resolve_tile(work, radiance, pixels);
-    f.hash = fnv1a(f.hash, pixels.data(), pixels.size() * sizeof(lf::RGB));
-  }
-  f.seconds = std::chrono::duration<double>(bench::Clock::now() - t0).count();
-  return f;
-}
 
 struct Case {
   std::string label;
@@ -86,11 +47,8 @@ int main(int argc, char** argv) {
       std::printf("cannot load %s: %s\n", obj.c_str(), scene.error().message.c_str());
       return 1;
     }
-    lf::CameraSpec cam;
-    cam.eye = {0, 1, 3.4};
-    cam.at = {0, 1, 0};
-    cam.fov = 40;
-    cases.push_back({"empty Cornell box (sobol)", std::make_unique<lf::Scene>(std::move(*scene)), cam, "sobol"});
+    cases.push_back({"empty Cornell box (sobol)", std::make_unique<lf::Scene>(std::move(*scene)), bench::empty_cornell_camera(),
+                     "sobol"});
   }
   {
     lf::CameraSpec cam;  // the Cornell box's default camera, as farm_bench's scripts
@@ -107,7 +65,8 @@ int main(int argc, char** argv) {
   std::vector<bool> stable(cases.size(), true);
   for (int r = 0; r < runs; ++r)
     for (size_t i = 0; i < cases.size(); ++i) {
-      const Frame f = bare_frame(*cases[i].scene, *tracers[i], cases[i].camera, cases[i].sampler, size, spp);
+      const bench::BareFrame f =
+          bench::bare_pathtrace_frame(*cases[i].scene, *tracers[i], cases[i].camera, cases[i].sampler, size, spp);
       rates[i].push_back(static_cast<double>(size) * size * spp / f.seconds);
       if (r > 0 && f.hash != hashes[i]) stable[i] = false;
       hashes[i] = f.hash;

@@ -13,6 +13,7 @@
 #include <fstream>
 #include <string>
 
+#include "bench/bare_frame.hpp"
 #include "bench/bench_util.hpp"
 #include "core/value.hpp"
 #include "bench/image_error.hpp"
@@ -22,37 +23,9 @@
 
 namespace {
 
-// Seconds for one frame of the bare loop: trace a tile, shade its points with pathtrace (depth 12), resolve.
+// Seconds for one frame of the bare loop (bench/bare_frame.hpp) with this sampler.
 double bare_frame(const lf::Scene& scene, const lf::RayTracer& tracer, const char* sampler, int size, int spp) {
-  lf::ImageSpec image;
-  image.width = image.height = size;
-  image.spp = spp;
-  image.sampler = sampler;
-  lf::CameraSpec cam;
-  cam.eye = {0, 1, 3.4};
-  cam.at = {0, 1, 0};
-  cam.fov = 40;
-  lf::Camera camera(cam, size, size);
-  auto op = lf::create_lightop(*lf::find_lightop_kind("pathtrace"),
-                               lf::ParamTable(lf::Value::Map{{"max_depth", 12}}, "pathtrace"));
-  lf::LocalInputs none;
-  lf::SceneContext ctx{&scene, &tracer};
-  ctx.sampler = lf::sampler_of(image);
-  lf::run_to_completion(op->setup(ctx, none));
-  lf::TileWork work;
-  std::vector<lf::RGB> radiance, pixels;
-  double checksum = 0;
-  const auto t0 = bench::Clock::now();
-  for (const auto& tile : lf::make_tiles(size, size, image.tile)) {
-    lf::trace_tile(scene, tracer, camera, image, tile, work);
-    radiance.assign(work.points.size(), {});
-    lf::run_to_completion(op->shade(work.points, radiance, none));
-    lf::resolve_tile(work, radiance, pixels);
-    checksum += pixels[0].x;
-  }
-  const double secs = std::chrono::duration<double>(bench::Clock::now() - t0).count();
-  if (checksum < 0) std::puts("");  // keep the work observable
-  return secs;
+  return bench::bare_pathtrace_frame(scene, tracer, bench::empty_cornell_camera(), sampler, size, spp).seconds;
 }
 
 }  // namespace

@@ -33,8 +33,6 @@ class EmitterCutouts {
   Vec3 barycentrics(size_t e, Uniform2 uv) const;
   // Whether any emitter is restricted (when none, nothing changes for any sample).
   bool any() const { return !emitters_.empty(); }
-  // The cells kept, over all restricted emitters (for statistics and tests).
-  size_t cells() const { return cells_.size(); }
 
  private:
   struct Emitter {

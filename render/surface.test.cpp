@@ -288,16 +288,21 @@ TEST_F(SurfaceFiles, AlphaCutGeometryIsNotThereForCameraOrShadowRays) {
   }
 }
 
+// A floor at y = 0 and, at y = 1 facing down onto it, an emitting quad over x in [-1, 1] whose left half its alpha
+// map cuts out.
+Result<Scene> load_cut_out_emitter(const fs::path& dir) {
+  write_half_alpha((dir / "alpha.png").string());
+  std::ofstream(dir / "cut.mtl") << "newmtl floor\nKd 0.5 0.5 0.5\nnewmtl leaf\nKd 0 0 0\nKe 3 3 3\nmap_d alpha.png\n";
+  std::ofstream(dir / "cut.obj")
+      << "mtllib cut.mtl\nv -4 0 -4\nv 4 0 -4\nv 4 0 4\nv -4 0 4\nusemtl floor\nf 1 4 3 2\n"
+         "v -1 1 -1\nv 1 1 -1\nv 1 1 1\nv -1 1 1\nvt 0 0\nvt 1 0\nvt 1 1\nvt 0 1\nusemtl leaf\nf 5/1 6/2 7/3 8/4\n";
+  return Scene::load_obj((dir / "cut.obj").string());
+}
+
 // An emitting quad whose alpha map cuts its left half sends exactly what its right half would: its power counts
 // only the part that is there, and light samples on the cut part bring nothing.
 TEST_F(SurfaceFiles, ACutOutEmitterLightsLikeItsOpaquePart) {
-  write_half_alpha((dir / "alpha.png").string());
-  write("cut.mtl", "newmtl floor\nKd 0.5 0.5 0.5\nnewmtl leaf\nKd 0 0 0\nKe 3 3 3\nmap_d alpha.png\n");
-  // The emitting quad faces down (towards the floor).
-  const std::string obj =
-      "mtllib cut.mtl\nv -4 0 -4\nv 4 0 -4\nv 4 0 4\nv -4 0 4\nusemtl floor\nf 1 4 3 2\n"
-      "v -1 1 -1\nv 1 1 -1\nv 1 1 1\nv -1 1 1\nvt 0 0\nvt 1 0\nvt 1 1\nvt 0 1\nusemtl leaf\nf 5/1 6/2 7/3 8/4\n";
-  auto s = Scene::load_obj(write("cut.obj", obj));
+  auto s = load_cut_out_emitter(dir);
   ASSERT_TRUE(s.ok()) << s.error().message;
   double power = 0;
   for (uint32_t t : s->emitters()) power += s->emitted_power(t);
@@ -323,12 +328,7 @@ TEST_F(SurfaceFiles, ACutOutEmitterLightsLikeItsOpaquePart) {
 // exactly the part that is there. The quad's diagonal splits the cut unevenly: uniform samples brought light in a
 // quarter of one triangle and three quarters of the other; restricted, in more than 70 % of each.
 TEST_F(SurfaceFiles, LightSamplesOnACutOutEmitterAvoidItsCutPart) {
-  write_half_alpha((dir / "alpha.png").string());
-  write("cut.mtl", "newmtl floor\nKd 0.5 0.5 0.5\nnewmtl leaf\nKd 0 0 0\nKe 3 3 3\nmap_d alpha.png\n");
-  const std::string obj =
-      "mtllib cut.mtl\nv -4 0 -4\nv 4 0 -4\nv 4 0 4\nv -4 0 4\nusemtl floor\nf 1 4 3 2\n"
-      "v -1 1 -1\nv 1 1 -1\nv 1 1 1\nv -1 1 1\nvt 0 0\nvt 1 0\nvt 1 1\nvt 0 1\nusemtl leaf\nf 5/1 6/2 7/3 8/4\n";
-  auto s = Scene::load_obj(write("cut.obj", obj));
+  auto s = load_cut_out_emitter(dir);
   ASSERT_TRUE(s.ok()) << s.error().message;
   ASSERT_EQ(s->emitters().size(), 2u);
   const EmitterCutouts& cut = s->emitter_cutouts();
