@@ -7,16 +7,12 @@
 //
 //   build/bench/kernel_bench [--runs N] [--size PIXELS] [--spp N] [--json FILE]
 #include <cstdio>
-#include <cstring>
 #include <fstream>
 #include <string>
 
 #include "bench/bare_frame.hpp"
 #include "bench/bench_util.hpp"
 #include "core/value.hpp"
-#include "render/camera.hpp"
-#include "render/lightop_registry.hpp"
-#include "render/tile_kernel.hpp"
 
 namespace {
 
@@ -24,7 +20,6 @@ struct Case {
   std::string label;
   std::unique_ptr<lf::Scene> scene;
   lf::CameraSpec camera;
-  const char* sampler;
 };
 
 }  // namespace
@@ -47,13 +42,11 @@ int main(int argc, char** argv) {
       std::printf("cannot load %s: %s\n", obj.c_str(), scene.error().message.c_str());
       return 1;
     }
-    cases.push_back({"empty Cornell box (sobol)", std::make_unique<lf::Scene>(std::move(*scene)), bench::empty_cornell_camera(),
-                     "sobol"});
+    cases.push_back({"empty Cornell box (sobol)", std::make_unique<lf::Scene>(std::move(*scene)), bench::empty_cornell_camera()});
   }
   {
     lf::CameraSpec cam;  // the Cornell box's default camera, as farm_bench's scripts
-    cases.push_back({"built-in Cornell box (sobol)", std::make_unique<lf::Scene>(std::move(*lf::Scene::builtin("cornell"))), cam,
-                     "sobol"});
+    cases.push_back({"built-in Cornell box (sobol)", std::make_unique<lf::Scene>(std::move(*lf::Scene::builtin("cornell"))), cam});
   }
   std::printf("the path kernel alone: pathtrace depth 12, %dx%d, %d spp, 1 thread, %d runs interleaved\n", size, size,
               spp, runs);
@@ -66,7 +59,7 @@ int main(int argc, char** argv) {
   for (int r = 0; r < runs; ++r)
     for (size_t i = 0; i < cases.size(); ++i) {
       const bench::BareFrame f =
-          bench::bare_pathtrace_frame(*cases[i].scene, *tracers[i], cases[i].camera, cases[i].sampler, size, spp);
+          bench::bare_pathtrace_frame(*cases[i].scene, *tracers[i], cases[i].camera, "sobol", size, spp);
       rates[i].push_back(static_cast<double>(size) * size * spp / f.seconds);
       if (r > 0 && f.hash != hashes[i]) stable[i] = false;
       hashes[i] = f.hash;

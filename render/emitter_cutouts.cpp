@@ -11,18 +11,20 @@ namespace lf {
 namespace {
 
 struct Polygon {
-  std::array<double, 16> x{}, y{};
+  std::array<double, 8> x, y;  // a triangle cut by four half-planes has at most 7 corners
   int n = 0;
 };
 
 // The triangle (x, y) clipped to the square [i, i + 1] x [j, j + 1] (Sutherland and Hodgman): a convex polygon.
 Polygon clip_to_cell(const double* x, const double* y, int64_t i, int64_t j) {
-  Polygon p;
+  Polygon buffers[2];
+  Polygon* p = &buffers[0];
+  Polygon* out = &buffers[1];
   for (int k = 0; k < 3; ++k) {
-    p.x[k] = x[k];
-    p.y[k] = y[k];
+    p->x[k] = x[k];
+    p->y[k] = y[k];
   }
-  p.n = 3;
+  p->n = 3;
   // Each edge of the square as "inside when sign * (coordinate - bound) >= 0".
   const struct {
     bool along_x;
@@ -32,27 +34,30 @@ Polygon clip_to_cell(const double* x, const double* y, int64_t i, int64_t j) {
                 {false, static_cast<double>(j), 1},
                 {false, static_cast<double>(j + 1), -1}};
   for (const auto& e : edges) {
-    Polygon out;
-    auto side = [&](int k) { return e.sign * ((e.along_x ? p.x[k] : p.y[k]) - e.bound); };
-    for (int k = 0; k < p.n; ++k) {
-      const int next = (k + 1) % p.n;
+    auto side = [&](int k) { return e.sign * ((e.along_x ? p->x[k] : p->y[k]) - e.bound); };
+    bool all_inside = true;
+    for (int k = 0; k < p->n && all_inside; ++k) all_inside = side(k) >= 0;
+    if (all_inside) continue;  // the polygon as it is
+    out->n = 0;
+    for (int k = 0; k < p->n; ++k) {
+      const int next = (k + 1) % p->n;
       const double a = side(k), b = side(next);
       if (a >= 0) {
-        out.x[out.n] = p.x[k];
-        out.y[out.n] = p.y[k];
-        ++out.n;
+        out->x[out->n] = p->x[k];
+        out->y[out->n] = p->y[k];
+        ++out->n;
       }
       if ((a >= 0) != (b >= 0)) {
         const double t = a / (a - b);
-        out.x[out.n] = p.x[k] + (p.x[next] - p.x[k]) * t;
-        out.y[out.n] = p.y[k] + (p.y[next] - p.y[k]) * t;
-        ++out.n;
+        out->x[out->n] = p->x[k] + (p->x[next] - p->x[k]) * t;
+        out->y[out->n] = p->y[k] + (p->y[next] - p->y[k]) * t;
+        ++out->n;
       }
     }
-    p = out;
-    if (p.n < 3) return Polygon{};
+    std::swap(p, out);
+    if (p->n < 3) return Polygon{};
   }
-  return p;
+  return *p;
 }
 
 double area_of(const Polygon& p) {
@@ -104,31 +109,33 @@ EmitterCutouts::EmitterCutouts(const Scene& scene) {
     std::vector<uint8_t> there(static_cast<size_t>(columns * rows));
     for (int64_t r = 0; r < rows; ++r)
       for (int64_t c = 0; c < columns; ++c) there[static_cast<size_t>(r * columns + c)] = tex.texel(ix0 + c, iy0 + r, 0) >= 0.5f;
-    // The triangle's edges as functions positive inside (whatever its winding in texel space).
+    // The same grid's points against the triangle's edges (functions positive inside, whatever its winding in texel
+    // space): bit k set where the point is on the inner side of edge k. A cell reads its four corners.
     const double orient = det > 0 ? 1.0 : -1.0;
-    auto edge = [&](int k, double px, double py) {
-      const int n = (k + 1) % 3;
-      return orient * ((em.x[n] - em.x[k]) * (py - em.y[k]) - (em.y[n] - em.y[k]) * (px - em.x[k]));
-    };
+    std::vector<uint8_t> sides(there.size());
+    for (int64_t r = 0; r < rows; ++r)
+      for (int64_t c = 0; c < columns; ++c) {
+        const double px = static_cast<double>(ix0 + c), py = static_cast<double>(iy0 + r);
+        uint8_t bits = 0;
+        for (int k = 0; k < 3; ++k) {
+          const int n = (k + 1) % 3;
+          if (orient * ((em.x[n] - em.x[k]) * (py - em.y[k]) - (em.y[n] - em.y[k]) * (px - em.x[k])) >= 0) bits |= 1u << k;
+        }
+        sides[static_cast<size_t>(r * columns + c)] = bits;
+      }
     std::vector<std::pair<Cell, double>> kept;
     double total = 0;
     for (int64_t r = 0; r + 1 < rows; ++r)
       for (int64_t c = 0; c + 1 < columns; ++c) {
-        const size_t at = static_cast<size_t>(r * columns + c);
-        if (!(there[at] || there[at + 1] || there[at + static_cast<size_t>(columns)] || there[at + static_cast<size_t>(columns) + 1]))
-          continue;
+        const size_t at = static_cast<size_t>(r * columns + c), below = at + static_cast<size_t>(columns);
+        if (!(there[at] || there[at + 1] || there[below] || there[below + 1])) continue;
         const int64_t i = ix0 + c, j = iy0 + r;
         // A cell wholly inside the triangle is all there to sample; one wholly outside an edge is not; the rest are
         // clipped.
-        bool inside = true, outside = false;
-        for (int k = 0; k < 3 && !outside; ++k) {
-          int in = 0;
-          for (int corner = 0; corner < 4; ++corner)
-            in += edge(k, static_cast<double>(i + (corner & 1)), static_cast<double>(j + (corner >> 1))) >= 0 ? 1 : 0;
-          inside = inside && in == 4;
-          outside = in == 0;
-        }
-        if (outside) continue;
+        const uint8_t all = sides[at] & sides[at + 1] & sides[below] & sides[below + 1];
+        const uint8_t any = sides[at] | sides[at + 1] | sides[below] | sides[below + 1];
+        if (any != 7) continue;  // every corner outside one edge
+        const bool inside = all == 7;
         const double cell_area = inside ? 1.0 : area_of(clip_to_cell(em.x, em.y, i, j));
         if (!(cell_area > 0)) continue;
         kept.push_back({Cell{static_cast<int32_t>(i), static_cast<int32_t>(j), 0, inside}, cell_area});
@@ -170,7 +177,7 @@ Vec3 EmitterCutouts::barycentrics(size_t e, Uniform2 uv) const {
     qy = cell->j + static_cast<double>(uv.v);
   } else if (p.n >= 3) {
     double fan_total = 0;
-    std::array<double, 16> fan{};
+    std::array<double, 8> fan{};
     for (int k = 1; k + 1 < p.n; ++k) {
       fan[static_cast<size_t>(k)] = std::abs((p.x[k] - p.x[0]) * (p.y[k + 1] - p.y[0]) - (p.x[k + 1] - p.x[0]) * (p.y[k] - p.y[0]));
       fan_total += fan[static_cast<size_t>(k)];

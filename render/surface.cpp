@@ -103,7 +103,10 @@ float bilinear(const uint8_t* texels, uint32_t w, uint32_t h, uint32_t channels,
 
 float Texture::texel(int64_t x, int64_t y, uint32_t c) const {
   if (width == 0 || height == 0 || c >= channels) return 1.0f;
-  const uint8_t v = texels[(static_cast<size_t>(wrap(y, height)) * width + wrap(x, width)) * channels + c];
+  // Most lookups are inside the image: the wrap's division only for those that are not.
+  const uint32_t tx = x >= 0 && x < width ? static_cast<uint32_t>(x) : wrap(x, width);
+  const uint32_t ty = y >= 0 && y < height ? static_cast<uint32_t>(y) : wrap(y, height);
+  const uint8_t v = texels[(static_cast<size_t>(ty) * width + tx) * channels + c];
   return channels == 3 ? srgb_to_linear()[v] : static_cast<float>(v) / 255.0f;
 }
 
