@@ -78,6 +78,23 @@ TEST_F(MonitorTest, ThePageShowsTheNetworkTheImageFillingInAndALostReplica) {
   const std::string url = monitor_url(farm);
   ASSERT_FALSE(url.empty()) << farm.err_so_far();
   EXPECT_EQ(url.find("token"), std::string::npos) << "loopback needs no token";
+  // A browser that watches the live page from the start to the end of the farm (?watch: it hangs up only when
+  // the farm has gone, then its page is dumped): it is sent the whole image, then only the blocks that change.
+  std::string watched;
+  std::thread watcher([&] {
+    watched = run_command("timeout 300 chromium --headless=new --no-sandbox --disable-gpu --no-first-run "
+                          "--user-data-dir=$(mktemp -d) --virtual-time-budget=600000 --dump-dom '" + url +
+                          "?watch=600000' 2>/dev/null");
+  });
+  struct StopFirst {  // an assertion that fails below must not leave the watcher's thread joinable
+    std::thread& watcher;
+    pid_t farm;
+    ~StopFirst() {
+      if (!watcher.joinable()) return;
+      ::kill(farm, SIGINT);
+      watcher.join();
+    }
+  } stop_first{watcher, farm.pid()};
   ASSERT_TRUE(Farm::eventually([&] { return farm.err_so_far().find("render 10%") != std::string::npos; }, 60));
 
   // The page is refreshed once a second: the first look that shows the render under way (every actor rendering,
@@ -125,11 +142,22 @@ TEST_F(MonitorTest, ThePageShowsTheNetworkTheImageFillingInAndALostReplica) {
   run_command("timeout 60 chromium --headless=new --no-sandbox --disable-gpu --no-first-run --user-data-dir=$(mktemp -d) "
               "--virtual-time-budget=2000 --window-size=1280,1000 --screenshot=" LIGHTFARM_BUILD_DIR
               "/monitor-screenshot.png '" + url + "?snapshot' > /dev/null 2>&1");
+  auto [token, client] = client_for(url);
+  auto final_preview = client.Get("/api/preview");
+  ASSERT_TRUE(final_preview);
+  long long final_sum = 0;  // the page's checksum: byte k weighted by (k mod 251) + 1
+  for (size_t k = 0; k < final_preview->body.size(); ++k)
+    final_sum += static_cast<unsigned char>(final_preview->body[k]) * static_cast<long long>(k % 251 + 1);
   // The hold is long (a browser on a loaded machine took over 5 s to fetch the held page); Ctrl-C ends it, and a
   // signal once the image is written is still a clean exit.
   ::kill(farm.pid(), SIGINT);
   auto r = farm.wait(60);
+  watcher.join();
   EXPECT_EQ(r.status, 0) << r.err;
+  // The watching page built the final image from a whole one and the changes that followed.
+  EXPECT_EQ(attribute(watched, "preview", "data-tiles"), "64") << watched;
+  EXPECT_GT(std::atoi(attribute(watched, "preview", "data-updates").c_str()), 2) << watched;
+  EXPECT_EQ(attribute(watched, "preview", "data-checksum"), std::to_string(final_sum));
   expect_no_leftovers(r);
 }
 

@@ -787,7 +787,7 @@ class Director final : public ControlOut, public Outbox {
           rgb[(static_cast<size_t>(y) * w + x) * 3 + c] = static_cast<char>(static_cast<unsigned char>(
               std::lround(255.0f * display_srgb(p[c], display))));
       }
-    monitor_->publish_preview(w, h, rgb, tiles_.tiles_done(), oldest_unshown_ms_ ? oldest_unshown_ms_ : tile_landed_ms_,
+    monitor_->publish_preview(w, h, std::move(rgb), tiles_.tiles_done(), oldest_unshown_ms_ ? oldest_unshown_ms_ : tile_landed_ms_,
                               tile_landed_ms_, notify);
     oldest_unshown_ms_ = 0;
   }

@@ -3,7 +3,9 @@
 #include <httplib.h>
 #include <openssl/evp.h>
 
+#include <algorithm>
 #include <chrono>
+#include <cstring>
 #include <cstdio>
 #include <fstream>
 
@@ -40,6 +42,52 @@ std::string label(const std::string& s) {
     out += c;
   }
   return out;
+}
+
+std::string base64(const char* data, size_t n) {
+  std::string out(4 * ((n + 2) / 3), '\0');
+  const int written = EVP_EncodeBlock(reinterpret_cast<unsigned char*>(out.data()),
+                                      reinterpret_cast<const unsigned char*>(data), static_cast<int>(n));
+  out.resize(static_cast<size_t>(std::max(0, written)));
+  return out;
+}
+
+struct Rect {
+  int x, y, w, h;
+};
+
+// The 16x16 blocks in which two images of the same size differ, as rectangles: the changed blocks of each row of
+// blocks, neighbours merged. Tiles land a few at a time, so a watching page is sent a small part of the image.
+constexpr int kPreviewBlock = 16;
+
+std::vector<Rect> changed_blocks(const std::string& before, const std::string& after, int width, int height) {
+  std::vector<Rect> rects;
+  const size_t row_bytes = static_cast<size_t>(width) * 3;
+  for (int by = 0; by < height; by += kPreviewBlock) {
+    const int bh = std::min(kPreviewBlock, height - by);
+    for (int bx = 0; bx < width; bx += kPreviewBlock) {
+      const int bw = std::min(kPreviewBlock, width - bx);
+      bool changed = false;
+      for (int y = by; y < by + bh && !changed; ++y) {
+        const size_t at = y * row_bytes + static_cast<size_t>(bx) * 3;
+        changed = std::memcmp(before.data() + at, after.data() + at, static_cast<size_t>(bw) * 3) != 0;
+      }
+      if (!changed) continue;
+      if (!rects.empty() && rects.back().y == by && rects.back().x + rects.back().w == bx) rects.back().w += bw;
+      else rects.push_back({bx, by, bw, bh});
+    }
+  }
+  return rects;
+}
+
+// One rectangle of an image as the preview event carries it: {x, y, w, h, rgb (its rows, top first, in base64)}.
+std::string patch_json(const std::string& rgb, int width, const Rect& r) {
+  std::string pixels;
+  pixels.reserve(static_cast<size_t>(r.w) * r.h * 3);
+  for (int y = r.y; y < r.y + r.h; ++y)
+    pixels.append(rgb, (static_cast<size_t>(y) * width + r.x) * 3, static_cast<size_t>(r.w) * 3);
+  return "{\"x\":" + std::to_string(r.x) + ",\"y\":" + std::to_string(r.y) + ",\"w\":" + std::to_string(r.w) +
+         ",\"h\":" + std::to_string(r.h) + ",\"rgb\":\"" + base64(pixels.data(), pixels.size()) + "\"}";
 }
 
 }  // namespace
@@ -89,8 +137,8 @@ Result<std::unique_ptr<Monitor>> Monitor::start(const std::string& address) {
   s.Get("/api/preview", guarded([self](const httplib::Request& req, httplib::Response& res) {
     std::lock_guard<std::mutex> lock(self->mutex_);
     res.set_header("Cache-Control", "no-cache");
-    if (req.get_param_value("format") == "json")  // what the preview event carries
-      res.set_content(self->preview_json_.empty() ? "{}" : self->preview_json_, "application/json");
+    if (req.get_param_value("format") == "json")  // the preview event of a stream that has nothing yet
+      res.set_content(self->preview_version_ ? self->preview_event_after(0) : "{}", "application/json");
     else
       res.set_content(self->preview_rgb_, "application/octet-stream");
   }));
@@ -119,8 +167,8 @@ Result<std::unique_ptr<Monitor>> Monitor::start(const std::string& address) {
             // A state event at least once a second (the page's clock), the preview only when it changed.
             out = "event: state\ndata: " + self->state_json_ + "\n\n";
             sent->first = self->state_version_;
-            if (self->preview_version_ != sent->second && !self->preview_json_.empty()) {
-              out += "event: preview\ndata: " + self->preview_json_ + "\n\n";
+            if (self->preview_version_ != sent->second) {
+              out += "event: preview\ndata: " + self->preview_event_after(sent->second) + "\n\n";
               sent->second = self->preview_version_;
             }
           }
@@ -175,24 +223,44 @@ void Monitor::publish_state(const Value& state) {
   changed_.notify_all();
 }
 
-void Monitor::publish_preview(int width, int height, const std::string& rgb, uint64_t tiles, int64_t first_landed_ms,
+void Monitor::publish_preview(int width, int height, std::string rgb, uint64_t tiles, int64_t first_landed_ms,
                               int64_t landed_ms, bool notify) {
+  // Only this thread writes the pixels, so it may read them without the lock while it builds the next event.
+  const uint64_t version = preview_version_ + 1;
+  std::string head = "{\"width\":" + std::to_string(width) + ",\"height\":" + std::to_string(height) +
+                     ",\"tiles\":" + std::to_string(tiles) + ",\"first_landed_ms\":" + std::to_string(first_landed_ms) +
+                     ",\"landed_ms\":" + std::to_string(landed_ms) + ",\"version\":" + std::to_string(version);
+  std::string delta;
+  if (preview_version_ && width == preview_width_ && height == preview_height_ && rgb.size() == preview_rgb_.size()) {
+    delta = head + ",\"base\":" + std::to_string(preview_version_) + ",\"patches\":[";
+    bool first = true;
+    for (const Rect& r : changed_blocks(preview_rgb_, rgb, width, height)) {
+      if (!first) delta += ',';
+      first = false;
+      delta += patch_json(rgb, width, r);
+    }
+    delta += "]}";
+  }
   {
     std::lock_guard<std::mutex> lock(mutex_);
-    ++preview_version_;
-    // The pixels travel inside the event (base64, OpenSSL's encoder), so a page draws them as the event arrives.
-    std::string base64(4 * ((rgb.size() + 2) / 3), '\0');
-    const int n = EVP_EncodeBlock(reinterpret_cast<unsigned char*>(base64.data()),
-                                  reinterpret_cast<const unsigned char*>(rgb.data()), static_cast<int>(rgb.size()));
-    base64.resize(static_cast<size_t>(std::max(0, n)));
-    preview_json_ = "{\"width\":" + std::to_string(width) + ",\"height\":" + std::to_string(height) +
-                    ",\"tiles\":" + std::to_string(tiles) + ",\"first_landed_ms\":" + std::to_string(first_landed_ms) +
-                    ",\"landed_ms\":" + std::to_string(landed_ms) +
-                    ",\"version\":" + std::to_string(preview_version_) +
-                    ",\"rgb\":\"" + base64 + "\"}";
-    preview_rgb_ = rgb;
+    preview_version_ = version;
+    preview_width_ = width;
+    preview_height_ = height;
+    preview_rgb_ = std::move(rgb);
+    preview_head_ = std::move(head);
+    preview_delta_json_ = std::move(delta);
   }
   if (notify) changed_.notify_all();
+}
+
+const std::string& Monitor::preview_event_after(uint64_t version) {
+  if (version && version + 1 == preview_version_ && !preview_delta_json_.empty()) return preview_delta_json_;
+  if (preview_full_version_ != preview_version_) {
+    preview_full_version_ = preview_version_;
+    preview_full_json_ = preview_head_ + ",\"base\":0,\"patches\":[" +
+                         patch_json(preview_rgb_, preview_width_, Rect{0, 0, preview_width_, preview_height_}) + "]}";
+  }
+  return preview_full_json_;
 }
 
 std::string Monitor::metrics_text(const Value& state) const {

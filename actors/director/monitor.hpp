@@ -3,8 +3,8 @@
 // (NetWatch, seed 000). cpp-httplib serves, on threads of its own:
 //   /              the page (monitor_page.cpp: HTML, CSS and JS in the binary, nothing from elsewhere)
 //   /events        Server-Sent Events: `state` (the JSON of /api/state) at least once a second and whenever it
-//                  changes, `preview` ({width, height, tiles, landed_ms, version, rgb: the
-//                  pixels in base64}) as tiles land
+//                  changes, `preview` as tiles land: the whole image once, then to each stream only the
+//                  blocks that changed since the version it has (docs/monitor.md)
 //   /api/state     the same state as one JSON document (docs/monitor.md)
 //   /api/preview   the image so far, tone-mapped as the output will be: width x height 8-bit RGB, top row first
 //   /metrics       per-actor counters in Prometheus' text format
@@ -43,7 +43,8 @@ class Monitor {
   void publish_state(const Value& state);
   // The image so far: width x height 8-bit RGB, how many tiles it holds, when the first and the last of the tiles
   // new in it landed (Unix ms). Without `notify` the streams learn of it with the next publish_state().
-  void publish_preview(int width, int height, const std::string& rgb, uint64_t tiles, int64_t first_landed_ms,
+  // Called from one thread (the director's loop).
+  void publish_preview(int width, int height, std::string rgb, uint64_t tiles, int64_t first_landed_ms,
                        int64_t landed_ms, bool notify = true);
   // Clients connected to /events now, and ever.
   int streams() const { return streams_; }
@@ -52,6 +53,9 @@ class Monitor {
   Monitor() = default;
   bool allowed(const std::string& token) const;
   std::string metrics_text(const Value& state) const;
+  // The preview event for a stream that holds `version` (0: none): the blocks changed since, or the whole image.
+  // Called with mutex_ held.
+  const std::string& preview_event_after(uint64_t version);
 
   std::unique_ptr<httplib::Server> server_;
   std::thread thread_;
@@ -63,8 +67,11 @@ class Monitor {
   bool stopping_ = false;
   std::string state_json_ = "{}", metrics_ = "";
   uint64_t state_version_ = 0;
-  std::string preview_json_, preview_rgb_;
-  uint64_t preview_version_ = 0;
+  // The preview: its pixels; the event's fields other than the pixels; the blocks changed from the version before
+  // (empty when there was none of the same size); the whole image as an event, built when first asked for.
+  int preview_width_ = 0, preview_height_ = 0;
+  std::string preview_rgb_, preview_head_, preview_delta_json_, preview_full_json_;
+  uint64_t preview_version_ = 0, preview_full_version_ = 0;
   int streams_ = 0;
 };
 

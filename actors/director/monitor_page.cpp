@@ -38,7 +38,7 @@ svg text { fill: #d8dce3; font-size: 11px; }
 <span id="elapsed"></span><span id="tiles"></span><span id="connection">connecting</span></header>
 <main>
 <section><h2>Network</h2><svg id="graph" width="100%" height="200"></svg></section>
-<section><h2>Image</h2><canvas id="preview" data-tiles="0" data-checksum="0" width="1" height="1"></canvas></section>
+<section><h2>Image</h2><canvas id="preview" data-tiles="0" data-checksum="0" data-updates="0" width="1" height="1"></canvas></section>
 <section style="grid-column: 1 / span 2"><h2>Actors</h2><table><thead><tr><th>actor</th><th class="l">kind</th><th class="l">host</th>
 <th class="l">state</th><th>busy</th><th>requests/s</th><th>points/s</th><th>queue</th><th>in flight</th><th>MiB in</th><th>MiB out</th><th>pid</th>
 </tr></thead><tbody id="actors"></tbody></table></section>
@@ -157,36 +157,58 @@ function render(s) {
 }
 let lastGraph = "", lastLog = "";
 
-let previewVersion = 0;
+// The image: a whole one first, then the blocks that changed (each event says which version it builds on).
+// data-checksum is the sum over the shown pixels' bytes (in /api/preview's order) of byte k times (k mod 251) + 1,
+// so that a misplaced block shows; data-updates the count of partial updates applied, for
+// tests that look at the page.
+let previewVersion = 0, previewImage = null, previewSum = 0, previewUpdates = 0;
 function preview(p) {
   if (p.version <= previewVersion) return;
-  previewVersion = p.version;
-  const bytes = atob(p.rgb), c = $("preview");
-  if (bytes.length !== p.width * p.height * 3) return;
-  c.width = p.width;
-  c.height = p.height;
-  const img = new ImageData(p.width, p.height);
-  let sum = 0;
-  for (let i = 0, j = 0; i < bytes.length; i += 3, j += 4) {
-    const r = bytes.charCodeAt(i), g = bytes.charCodeAt(i + 1), b = bytes.charCodeAt(i + 2);
-    img.data[j] = r; img.data[j + 1] = g; img.data[j + 2] = b; img.data[j + 3] = 255;
-    sum = (sum + r + g + b) % 1000000007;
+  const c = $("preview");
+  if (p.base === 0) {
+    if (c.width !== p.width || c.height !== p.height) { c.width = p.width; c.height = p.height; }
+    previewImage = new ImageData(p.width, p.height);
+    for (let j = 3; j < previewImage.data.length; j += 4) previewImage.data[j] = 255;
+    previewSum = 0;
+  } else if (p.base !== previewVersion || !previewImage) {
+    // Changes to an image this page does not hold (cannot happen on one stream): take the whole image instead.
+    fetch("/api/preview" + query + (query ? "&" : "?") + "format=json").then(r => r.json()).then(q => { if (q.patches) preview(q); });
+    return;
   }
-  c.getContext("2d").putImageData(img, 0, 0);
+  const ctx = c.getContext("2d"), data = previewImage.data, width = p.width;
+  for (const q of p.patches) {
+    const bytes = atob(q.rgb);
+    if (bytes.length !== q.w * q.h * 3 || q.x < 0 || q.y < 0 || q.x + q.w > p.width || q.y + q.h > p.height) continue;
+    for (let y = q.y, i = 0; y < q.y + q.h; ++y)
+      for (let j = (y * width + q.x) * 4, end = j + q.w * 4; j < end; j += 4, i += 3) {
+        const r = bytes.charCodeAt(i), g = bytes.charCodeAt(i + 1), b = bytes.charCodeAt(i + 2);
+        const k = (j >> 2) * 3;  // the byte's place in /api/preview
+        previewSum += (r - data[j]) * (k % 251 + 1) + (g - data[j + 1]) * ((k + 1) % 251 + 1) +
+                      (b - data[j + 2]) * ((k + 2) % 251 + 1);
+        data[j] = r; data[j + 1] = g; data[j + 2] = b;
+      }
+    ctx.putImageData(previewImage, 0, 0, q.x, q.y, q.w, q.h);
+  }
+  previewVersion = p.version;
+  if (p.base !== 0) c.dataset.updates = ++previewUpdates;
   c.dataset.tiles = p.tiles;
-  c.dataset.checksum = sum;
+  c.dataset.checksum = previewSum;
 }
 
 if (new URLSearchParams(location.search).has("snapshot")) {
   // One look, no stream: for tools that read the page once (a headless browser's --dump-dom).
   const sep = query ? "&" : "?";
   fetch("/api/state" + query).then(r => r.json()).then(s => { $("connection").textContent = "snapshot"; render(s); });
-  fetch("/api/preview" + query + sep + "format=json").then(r => r.json()).then(p => { if (p.rgb) preview(p); });
+  fetch("/api/preview" + query + sep + "format=json").then(r => r.json()).then(p => { if (p.patches) preview(p); });
 } else {
   const events = new EventSource("/events" + query);
   events.addEventListener("state", e => { setText($("connection"), "live"); render(JSON.parse(e.data)); });
   events.addEventListener("preview", e => preview(JSON.parse(e.data)));
   events.onerror = () => { $("connection").textContent = "disconnected (the farm has ended?)"; };
+  // ?watch=MS: listen for MS milliseconds, then hang up (a headless browser's --dump-dom returns once the
+  // network is quiet, so tests can look at the live page after watching it).
+  const watch = Number(new URLSearchParams(location.search).get("watch"));
+  if (watch > 0) setTimeout(() => { events.close(); $("connection").textContent = "watched"; }, watch);
 }
 </script>
 </body>
