@@ -6,6 +6,7 @@
 #include <random>
 
 #include "render/camera.hpp"
+#include "render/tile_kernel.hpp"
 #include "render/test_support.hpp"
 
 namespace lf {
@@ -130,6 +131,46 @@ TEST(Partition, HitsThroughPartsEqualTheWholeSceneOnLostEmpire) {
     for (const ScenePart& p : partition_scene(*scene, parts)) most = std::max(most, p.cost);
     EXPECT_LE(most * parts, 1.01) << parts << " parts";
   }
+}
+
+// A renderer traces a tile's camera rays as one coherent stream (Embree's SIMD packets); through parts they are
+// traced ray by ray. Both must give the same hits, or a partitioned farm's camera would see another image.
+void expect_tiles_coherent_as_single(const Scene& scene, const CameraSpec& spec, int width, int height, int spp,
+                                     const std::string& what) {
+  SCOPED_TRACE(what);
+  RayTracer tracer(scene);
+  const Camera camera(spec, width, height);
+  ImageSpec image;
+  image.width = width;
+  image.height = height;
+  image.spp = spp;
+  image.sampler = "sobol";
+  size_t points = 0, differ = 0;
+  for (const TileRect& rect : make_tiles(width, height, 16)) {
+    TileWork work;
+    trace_tile(scene, tracer, camera, image, rect, work);  // coherent, as the renderer traces
+    std::vector<Ray> rays;
+    for (size_t j = 0; j < work.points.size(); ++j) rays.push_back(Ray{work.eye, -work.points.wo[j]});
+    std::vector<Hit> single(rays.size());
+    tracer.intersect(rays, single);  // one by one, as a part traces
+    for (size_t j = 0; j < rays.size(); ++j)
+      if (single[j].triangle != work.points.triangle[j] || single[j].t != work.distance[j]) ++differ;
+    points += rays.size();
+  }
+  EXPECT_EQ(differ, 0u) << "of " << points << " camera hits";
+  EXPECT_GT(points, static_cast<size_t>(width) * height * spp / 2);
+}
+
+TEST(Partition, CameraRaysInPacketsHitWhatTheyHitOneByOne) {
+  auto cornell = Scene::builtin("cornell");
+  ASSERT_TRUE(cornell);
+  expect_tiles_coherent_as_single(*cornell, CameraSpec{{278, 273, -800}, {278, 273, 0}, {0, 1, 0}, 39.3f}, 96, 96, 4,
+                                  "cornell");
+  auto loaded = test::lost_empire_with_torches();
+  if (!loaded) GTEST_SKIP() << "no " << test::kLostEmpireObj;
+  ASSERT_TRUE(*loaded) << loaded->error().message;
+  expect_tiles_coherent_as_single(**loaded, CameraSpec{{-8, 16, 20}, {6, 12, 0}, {0, 1, 0}, 70}, 160, 120, 4,
+                                  "lost_empire");
 }
 
 // Five clusters along x, one part each: four rings the ray passes through the middle of, then a wall. The ray

@@ -15,16 +15,11 @@ std::vector<TileRect> make_tiles(int width, int height, int tile_size) {
   return tiles;
 }
 
-void trace_tile(const Scene& scene, const RayTracer& tracer, const Camera& camera, const ImageSpec& image,
-                const TileRect& rect, TileWork& work) {
-  work.rect = rect;
-  work.spp = image.spp;
+void tile_camera_rays(const Camera& camera, const ImageSpec& image, const TileRect& rect, std::vector<Ray>& rays,
+                      std::vector<uint64_t>& keys) {
   const size_t samples = static_cast<size_t>(rect.pixel_count()) * image.spp;
-  thread_local std::vector<Ray> rays;
-  thread_local std::vector<Hit> hits;
   rays.resize(samples);
-  hits.resize(samples);
-  std::vector<uint64_t> keys(samples);
+  keys.resize(samples);
   const SamplerKind kind = sampler_of(image);
   size_t s = 0;
   for (int y = rect.y0; y < rect.y1; ++y)
@@ -35,8 +30,13 @@ void trace_tile(const Scene& scene, const RayTracer& tracer, const Camera& camer
         rays[s] = camera.ray(static_cast<float>(x) + jitter.u, static_cast<float>(y) + jitter.v);
       }
     }
-  tracer.intersect(rays, hits, /*coherent=*/true);  // a tile's camera rays are the same batch on any layout
+}
 
+void tile_points(const Scene& scene, const Camera& camera, const ImageSpec& image, const TileRect& rect,
+                 std::span<const Ray> rays, std::span<const Hit> hits, std::span<const uint64_t> keys, TileWork& work) {
+  const size_t samples = rays.size();
+  work.rect = rect;
+  work.spp = image.spp;
   work.points.clear();
   work.points.reserve(samples);
   work.sample_of_point.clear();
@@ -44,7 +44,7 @@ void trace_tile(const Scene& scene, const RayTracer& tracer, const Camera& camer
   work.eye = camera.eye();
   work.emitted.assign(samples, RGB{});
   work.rebuildable = true;  // every point below is pushed as surface_at, point_on_ray and tile_sample_key give it
-  work.sampler = kind;
+  work.sampler = sampler_of(image);
   work.image_width = image.width;
   for (size_t i = 0; i < samples; ++i) {
     if (!hits[i].valid()) continue;
@@ -58,6 +58,19 @@ void trace_tile(const Scene& scene, const RayTracer& tracer, const Camera& camer
     work.sample_of_point.push_back(static_cast<uint32_t>(i));
     work.distance.push_back(hits[i].t);
   }
+}
+
+void trace_tile(const Scene& scene, const RayTracer& tracer, const Camera& camera, const ImageSpec& image,
+                const TileRect& rect, TileWork& work) {
+  thread_local std::vector<Ray> rays;
+  thread_local std::vector<Hit> hits;
+  thread_local std::vector<uint64_t> keys;
+  tile_camera_rays(camera, image, rect, rays, keys);
+  hits.resize(rays.size());
+  // One coherent stream (SIMD packets), the same batch on any layout; a ray's hit is the same as traced alone
+  // (partition.test: CameraRaysInPacketsHitWhatTheyHitOneByOne), which camera rays through a partitioned scene are.
+  tracer.intersect(rays, hits, /*coherent=*/true);
+  tile_points(scene, camera, image, rect, rays, hits, keys, work);
 }
 
 Vec3 point_on_ray(Vec3 origin, Vec3 wo, float t) { return origin + (-wo) * t; }

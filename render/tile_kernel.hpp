@@ -50,6 +50,13 @@ Vec3 point_on_ray(Vec3 origin, Vec3 wo, float t);
 // The sample key of a tile's `sample`-th camera sample (pixel-major, then sample index), as trace_tile gives it.
 uint64_t tile_sample_key(SamplerKind kind, int64_t image_width, const TileRect& rect, int spp, uint32_t sample);
 
+// A tile's camera rays, one per sample (pixel-major, then sample index), and their sample keys.
+void tile_camera_rays(const Camera& camera, const ImageSpec& image, const TileRect& rect, std::vector<Ray>& rays,
+                      std::vector<uint64_t>& keys);
+// The tile's shading points from its camera rays' hits (rays, hits and keys as tile_camera_rays gave them).
+void tile_points(const Scene& scene, const Camera& camera, const ImageSpec& image, const TileRect& rect,
+                 std::span<const Ray> rays, std::span<const Hit> hits, std::span<const uint64_t> keys, TileWork& work);
+// Both, with the rays traced by `tracer`.
 void trace_tile(const Scene& scene, const RayTracer& tracer, const Camera& camera, const ImageSpec& image,
                 const TileRect& rect, TileWork& work);
 

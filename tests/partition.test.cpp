@@ -79,8 +79,9 @@ renderers { count = param("renderers", 2), lighting = lightop "pathtrace" {
   EXPECT_TRUE(one.pixels == whole.pixels) << "one renderer";
 }
 
-// Data locality: in a partitioned farm an op that traces only through the parts builds no BVH of the whole scene
-// (without a host agent sharing one), and says so in its figures; `irradiance`, which traces its own rays, keeps one.
+// Data locality: in a partitioned farm a renderer, and an op that traces only through the parts, build no BVH of the
+// whole scene (without a host agent sharing one), and say so in their figures; `irradiance`, which traces its own
+// rays, keeps one.
 TEST_F(PartitionTest, AnOpThatTracesThroughThePartsHoldsNoBvhOfItsOwn) {
   const std::string script = write("nobvh.lua", R"(scene { builtin = "cornell" }
 image { width = 32, height = 32, spp = 2, tile = 16 }
@@ -102,6 +103,10 @@ renderers { count = 1, lighting = lightop "combine" { inputs = { direct, lightop
   };
   EXPECT_NE(at("direct").find("\"whole_scene_bvh\": false"), std::string::npos) << stats;
   EXPECT_NE(at("irradiance").find("\"whole_scene_bvh\": true"), std::string::npos) << stats;
+  // The renderer's camera rays went to the parts too: 32 x 32 pixels x 2 samples.
+  const std::string renderer = at("renderer-0");
+  EXPECT_NE(renderer.find("\"whole_scene_bvh\": false"), std::string::npos) << stats;
+  EXPECT_NE(renderer.find("\"traced_rays\": 2048,"), std::string::npos) << stats;
 }
 
 // A real interior with thin double-sided blocks (coplanar back-to-back faces, which the tie rule settles) and a

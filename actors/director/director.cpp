@@ -396,8 +396,9 @@ class Director final : public ControlOut, public Outbox {
     if (!parts_.empty()) {
       if (a.spec->is_geometry()) {
         config.part_triangles = parts_.at(static_cast<size_t>(a.spec->params.at("part").as_int())).triangles;
-      } else if (a.spec->loads_scene() && !a.spec->is_renderer()) {
-        // A LightOp traces through the parts (those of its ops that can: direct, pathtrace).
+      } else if (a.spec->loads_scene()) {
+        // A renderer traces its camera rays through the parts, and a LightOp its rays (those of its ops that can:
+        // direct, pathtrace).
         for (const auto& g : spec_.actors) {
           if (!g.is_geometry()) continue;
           const auto [endpoint, key] = endpoint_for(a, supervisor_.at(g.name));

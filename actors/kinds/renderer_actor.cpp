@@ -4,7 +4,8 @@
 //   REQUEST op="tile"       {}                        -> REPLY { tile: {id, x0, y0, x1, y1} } or {} when none remain
 //   REQUEST op="tile_done"  { id, pixels: f32[3wh] }  -> REPLY {}
 // Sends to its one input (the MasterLightOp): REQUEST op="shade" batches, several in flight (the input's window).
-// Ready for "render" once configured (scene loaded, BVH built); answers READY render when the master has no tiles
+// Ready for "render" once configured (scene loaded, BVH built); in a partitioned farm (partition { parts = N }) its
+// camera rays go to the geometry actors instead, through RemoteTracing. Answers READY render when the master has no tiles
 // left and every finished tile was acknowledged. Keeps up to `tiles_in_flight` tiles going, so it traces the next
 // tile while the lighting network shades the last.
 #include "actors/kinds/renderer_actor.hpp"
@@ -12,6 +13,7 @@
 #include <deque>
 
 #include "actors/codecs/shade_codec.hpp"
+#include "actors/runtime/remote_tracing.hpp"
 #include "farm/kind_params.hpp"
 #include "core/log.hpp"
 #include "render/camera.hpp"
@@ -32,14 +34,31 @@ class RendererActor final : public Actor {
       return make_error(e.what());
     }
     if (rt.input_count() != 1) return make_error("a renderer needs exactly one input (its lighting)");
-    auto loaded = load_scene_for_actor(config.scene);
+    // In a partitioned farm camera rays go to the parts' geometry actors, and this process builds no BVH of the
+    // whole scene (unless a host agent shares one anyway).
+    auto loaded = load_scene_for_actor(config.scene, /*with_tracer=*/config.geometry.empty());
     if (!loaded) return loaded.error();
     scene_ = std::move(loaded->scene);
     tracer_ = std::move(loaded->tracer);
     image_ = config.image;
     sampler_ = sampler_of(image_);
     camera_ = std::make_unique<Camera>(config.camera, image_.width, image_.height);
+    if (!config.geometry.empty()) {
+      std::vector<Bounds> boxes;
+      for (size_t p = 0; p < config.geometry.size(); ++p) {
+        const float* b = config.part_boxes.data() + 6 * p;
+        boxes.push_back(Bounds{{b[0], b[1], b[2]}, {b[3], b[4], b[5]}});
+      }
+      tracing_ = std::make_unique<RemoteTracing>(rt, *scene_, std::move(boxes), 4096);
+    }
     return Ok{};
+  }
+
+  Value extra_stats() const override {
+    if (!tracing_) return Value();
+    Value stats = tracing_->stats();
+    stats.as_map()["whole_scene_bvh"] = tracer_ != nullptr;  // false: this process holds no BVH of the scene
+    return stats;
   }
 
   void on_phase(wire::Phase phase, Runtime& rt) override {
@@ -96,9 +115,34 @@ class RendererActor final : public Actor {
       return rt.fail("the render master sent a tile outside the image");
     auto job = std::make_shared<TileJob>();
     job->id = static_cast<uint64_t>(get("id"));
-    trace_tile(*scene_, *tracer_, *camera_, image_, rect, job->work);
-    rt.stats().points += job->work.points.size();
     jobs_.push_back(job);
+    if (tracing_) {
+      std::erase_if(tracing_tasks_, [](const Task& t) { return t.done(); });
+      tracing_tasks_.push_back(trace_through_parts(job, rect, rt));
+      return;
+    }
+    trace_tile(*scene_, *tracer_, *camera_, image_, rect, job->work);
+    shade_tile(job, rt);
+  }
+
+  // A partitioned scene's camera rays, answered by its geometry actors; the tile is shaded once they are.
+  Task trace_through_parts(std::shared_ptr<TileJob> job, TileRect rect, Runtime& rt) {
+    std::vector<Ray> rays;
+    std::vector<uint64_t> keys;
+    tile_camera_rays(*camera_, image_, rect, rays, keys);
+    std::vector<Hit> hits(rays.size());
+    try {
+      co_await tracing_->intersect(rays, hits);
+    } catch (const std::exception& e) {
+      rt.fail(std::string("tracing camera rays through the scene's parts failed: ") + e.what());
+      co_return;
+    }
+    tile_points(*scene_, *camera_, image_, rect, rays, hits, keys, job->work);
+    shade_tile(job, rt);
+  }
+
+  void shade_tile(const std::shared_ptr<TileJob>& job, Runtime& rt) {
+    rt.stats().points += job->work.points.size();
     const TileWork& work = job->work;
     const size_t n = work.points.size();
     // A built-in LightOp rebuilds positions, normals, materials and keys from the scene and the tile, and can sum a
@@ -185,7 +229,9 @@ class RendererActor final : public Actor {
   }
 
   std::shared_ptr<const Scene> scene_;
-  std::shared_ptr<const RayTracer> tracer_;
+  std::shared_ptr<const RayTracer> tracer_;       // none in a partitioned farm
+  std::unique_ptr<RemoteTracing> tracing_;        // a partitioned scene's geometry actors, or none
+  std::vector<Task> tracing_tasks_;               // tiles whose camera rays are out at the parts (finished ones kept until the next tile)
   std::unique_ptr<Camera> camera_;
   ImageSpec image_;
   SamplerKind sampler_ = SamplerKind::independent;
