@@ -6,8 +6,9 @@
 // the browser's cores come out of the render; the farm's CPU ratio is what the monitor itself costs. And the update
 // latency: from the moment a tile reached the director to the preview event's arrival at the SSE client, for the
 // newest tile of each event (landed_ms) and the oldest (first_landed_ms: up to the one-second update period longer).
+// At two frame lengths: ~10 s (a browser attaching inside each frame) and ~1 min (watching, per second).
 //
-//   build/bench/monitor_bench [--json FILE] [--runs N] [--spp N]
+//   build/bench/monitor_bench [--json FILE] [--runs N] [--spp N] [--long-runs N] [--long-spp N]
 #include <httplib.h>
 #include <signal.h>
 #include <arpa/inet.h>
@@ -157,72 +158,101 @@ Watched run(const std::string& script, const std::vector<std::string>& sets, boo
   return w;
 }
 
+// Without and with the monitor and a browser, interleaved, at one frame length: render-time and farm-CPU ratios and
+// the browser's cores, one per run.
+struct Paired {
+  std::vector<double> ratios, cpu_ratios, browser_cores;
+};
+
+void add(Paired& p, const Watched& plain, const Watched& watched) {
+  p.ratios.push_back(plain.render_seconds / watched.render_seconds);
+  p.cpu_ratios.push_back(plain.farm_cpu_seconds / watched.farm_cpu_seconds);
+  p.browser_cores.push_back(watched.browser_cpu_seconds / watched.render_seconds);
+}
+
+lf::Value paired_value(const Paired& p) {
+  return lf::Value::Map{{"ratio", bench::spread(p.ratios).to_value()},
+                        {"farm_cpu_ratio", bench::spread(p.cpu_ratios).to_value()},
+                        {"browser_cores", bench::spread(p.browser_cores).to_value()}};
+}
+
+void print_paired(const char* label, const Paired& p) {
+  const auto ratio = bench::spread(p.ratios), cpu = bench::spread(p.cpu_ratios),
+             cores = bench::spread(p.browser_cores);
+  std::printf("%s, render time without / with the monitor and a browser: median %.3f (min %.3f, max %.3f; goal >= "
+              "0.98)\n", label, ratio.median, ratio.min, ratio.max);
+  std::printf("%s, farm CPU-seconds (director + actors) without / with: median %.3f (min %.3f, max %.3f)\n", label,
+              cpu.median, cpu.min, cpu.max);
+  std::printf("%s, the browser's CPU while the farm ran, in cores: median %.3f (min %.3f, max %.3f) of the machine's "
+              "2\n", label, cores.median, cores.min, cores.max);
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
   std::string json_path = "bench-monitor.json";
-  int runs = 5, spp = 160;
+  int runs = 5, spp = 160, long_runs = 3, long_spp = 800;
   for (int i = 1; i + 1 < argc; i += 2) {
     const std::string a = argv[i];
     if (a == "--json") json_path = argv[i + 1];
     else if (a == "--runs") runs = std::atoi(argv[i + 1]);
     else if (a == "--spp") spp = std::atoi(argv[i + 1]);
+    else if (a == "--long-runs") long_runs = std::atoi(argv[i + 1]);
+    else if (a == "--long-spp") long_spp = std::atoi(argv[i + 1]);
   }
   if (std::system("command -v chromium > /dev/null 2>&1") != 0) {
     std::printf("no chromium: nothing to measure\n");
     return 0;
   }
   const std::string script = std::string(LIGHTFARM_SOURCE_DIR) + "/examples/cornell.lua";
-  // By default a frame of about 10 s. A browser attaches once per frame here, and attaching (its page load and a new
-  // renderer process) costs ~0.3 CPU-s: 0.054 cores over a 12-s frame against 0.028 once loaded. A longer frame
-  // (--spp 800: about a minute, what the monitor is for) shows what watching costs per second of rendering, the
-  // default what it costs a short frame.
-  const std::vector<std::string> sets{"width=512", "height=512", "spp=" + std::to_string(spp)};
-  std::vector<double> plain, watched, ratios, server_ratios, latencies, first_latencies, cpu_ratios, browser_shares;
+  // Two frame lengths. About 10 s: a browser attaches once per frame here, and attaching (its page load and a new
+  // renderer process) costs ~0.3 CPU-s, so this is what watching a short frame costs. About a minute (--long-spp;
+  // what the monitor is for: frames of minutes to hours): what watching costs per second of rendering. The
+  // monitor with an SSE client and no browser is measured at the short length only.
+  auto sets_for = [](int n) { return std::vector<std::string>{"width=512", "height=512", "spp=" + std::to_string(n)}; };
+  Paired short_frames, long_frames;
+  std::vector<double> server_ratios, latencies, first_latencies;
   for (int r = 0; r < runs; ++r) {
-    const Watched a = run(script, sets, false, false), b = run(script, sets, true, true),
-                  c = run(script, sets, true, false);
-    plain.push_back(a.render_seconds);
-    watched.push_back(b.render_seconds);
-    ratios.push_back(a.render_seconds / b.render_seconds);
+    const Watched a = run(script, sets_for(spp), false, false), b = run(script, sets_for(spp), true, true),
+                  c = run(script, sets_for(spp), true, false);
+    add(short_frames, a, b);
     server_ratios.push_back(a.render_seconds / c.render_seconds);
     latencies.insert(latencies.end(), b.latencies_ms.begin(), b.latencies_ms.end());
     first_latencies.insert(first_latencies.end(), b.first_latencies_ms.begin(), b.first_latencies_ms.end());
-    cpu_ratios.push_back(a.farm_cpu_seconds / b.farm_cpu_seconds);
-    browser_shares.push_back(b.browser_cpu_seconds / b.render_seconds);
-    std::printf("run %d: render %.3f s without, %.3f s with the monitor and a browser, %.3f s with the monitor and "
-                "an SSE client only\n", r + 1, a.render_seconds, b.render_seconds, c.render_seconds);
+    std::printf("short run %d: render %.3f s without, %.3f s with the monitor and a browser, %.3f s with the monitor "
+                "and an SSE client only\n", r + 1, a.render_seconds, b.render_seconds, c.render_seconds);
   }
-  const auto ratio = bench::spread(ratios), server = bench::spread(server_ratios);
+  for (int r = 0; r < long_runs; ++r) {
+    const Watched a = run(script, sets_for(long_spp), false, false), b = run(script, sets_for(long_spp), true, true);
+    add(long_frames, a, b);
+    std::printf("long run %d: render %.3f s without, %.3f s with the monitor and a browser\n", r + 1,
+                a.render_seconds, b.render_seconds);
+  }
+  const auto server = bench::spread(server_ratios);
   const auto latency = bench::spread(latencies), first_latency = bench::spread(first_latencies);
-  const auto cpu = bench::spread(cpu_ratios), browser_share = bench::spread(browser_shares);
-  std::printf("\nrender time without / with the monitor and a browser: median %.3f (min %.3f, max %.3f; goal >= 0.98)\n",
-              ratio.median, ratio.min, ratio.max);
-  std::printf("render time without / with the monitor and an SSE client (no browser): median %.3f (min %.3f, max %.3f)\n",
-              server.median, server.min, server.max);
-  std::printf("farm CPU-seconds (director + actors) without / with the monitor and a browser: median %.3f (min %.3f, "
-              "max %.3f)\n", cpu.median, cpu.min, cpu.max);
-  std::printf("the browser's CPU while the farm ran, in cores (CPU-s per render second): median %.3f (min %.3f, max "
-              "%.3f) of the machine's 2\n", browser_share.median, browser_share.min, browser_share.max);
-  std::printf("tile landed -> preview event at the client, newest tile of each event: median %.0f ms (min %.0f, max "
-              "%.0f) over %zu events\n", latency.median, latency.min, latency.max, latencies.size());
-  std::printf("tile landed -> preview event at the client, oldest tile of each event: median %.0f ms (min %.0f, max "
-              "%.0f) over %zu events\n", first_latency.median, first_latency.min, first_latency.max,
-              first_latencies.size());
-  lf::Value::Array p, w;
-  for (double x : plain) p.push_back(x);
-  for (double x : watched) w.push_back(x);
+  std::printf("\n");
+  if (runs > 0) {
+    print_paired(("short frames (" + std::to_string(spp) + " spp, the browser attaching in each)").c_str(),
+                 short_frames);
+    std::printf("short frames, render time without / with the monitor and an SSE client (no browser): median %.3f "
+                "(min %.3f, max %.3f)\n", server.median, server.min, server.max);
+    std::printf("tile landed -> preview event at the client, newest tile of each event: median %.0f ms (min %.0f, "
+                "max %.0f) over %zu events\n", latency.median, latency.min, latency.max, latencies.size());
+    std::printf("tile landed -> preview event at the client, oldest tile of each event: median %.0f ms (min %.0f, "
+                "max %.0f) over %zu events\n", first_latency.median, first_latency.min, first_latency.max,
+                first_latencies.size());
+  }
+  if (long_runs > 0)
+    print_paired(("long frames (" + std::to_string(long_spp) + " spp)").c_str(), long_frames);
   lf::Value doc = lf::Value::Map{
       {"benchmark", "monitor"},
-      {"scene", "cornell 512x512, " + std::to_string(spp) + " spp"},
-      {"render_seconds_plain", std::move(p)},
-      {"render_seconds_watched", std::move(w)},
-      {"ratio", lf::Value::Map{{"median", ratio.median}, {"min", ratio.min}, {"max", ratio.max}}},
-      {"ratio_without_browser", lf::Value::Map{{"median", server.median}, {"min", server.min}, {"max", server.max}}},
-      {"farm_cpu_ratio", cpu.to_value()},
-      {"browser_cores", browser_share.to_value()},
-      {"latency_ms", lf::Value::Map{{"median", latency.median}, {"min", latency.min}, {"max", latency.max},
-                                    {"events", static_cast<int64_t>(latencies.size())}}},
+      {"scene", "cornell 512x512"},
+      {"short_frames", lf::Value::Map{{"spp", static_cast<int64_t>(spp)}, {"runs", static_cast<int64_t>(runs)},
+                                      {"with_browser", paired_value(short_frames)},
+                                      {"ratio_without_browser", server.to_value()}}},
+      {"long_frames", lf::Value::Map{{"spp", static_cast<int64_t>(long_spp)}, {"runs", static_cast<int64_t>(long_runs)},
+                                     {"with_browser", paired_value(long_frames)}}},
+      {"latency_ms", latency.to_value()},
       {"latency_oldest_tile_ms", first_latency.to_value()}};
   std::ofstream(json_path) << lf::to_json(doc, 2) << "\n";
   std::printf("wrote %s\n", json_path.c_str());
