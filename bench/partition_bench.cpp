@@ -2,7 +2,8 @@
 // camera inside the city, 2 renderers and one `pathtrace` (depth 3), its scene whole or split into 2, 3 and 5
 // geometry actors (partition { parts = N }). Per split: render time over the whole farm's (median, min, max over
 // --runs, interleaved), each part's share of the rays it traced (imbalance = max / mean; goal <= 1.2 with the
-// cost-based split), part visits per traced ray, trace requests, and the bytes between the op and the parts. The
+// cost-based split), part visits per traced ray, trace requests (the op's and the renderers' camera rays), and the
+// bytes between the askers and the parts. The
 // images are compared too: every split must give the whole farm's pixels. Writes bench-partition.json.
 //
 //   build/bench/partition_bench [--runs N] [--size WIDTH] [--spp N] [--json FILE]
@@ -67,8 +68,15 @@ int main(int argc, char** argv) {
       }
       s.imbalance = rays.empty() ? 0 : most / (total / static_cast<double>(rays.size()));
       for (double v : rays) s.shares.push_back(v / total);
-      s.visits_per_ray = split.number("part_visits") / split.number("traced_rays");
-      s.requests = split.number("trace_requests");
+      // Summed over the askers: the op's rays and, since the renderers trace their camera rays through the parts
+      // too, theirs.
+      auto sum = [&](const char* key) {
+        double total = 0;
+        for (double v : bench::json_numbers(split.stats, key)) total += v;
+        return total;
+      };
+      s.visits_per_ray = sum("part_visits") / sum("traced_rays");
+      s.requests = sum("trace_requests");
       s.mb_to_parts = bench::sum_over_kind(split.stats, "geometry", "bytes_in") / 1e6;
       s.mb_from_parts = bench::sum_over_kind(split.stats, "geometry", "bytes_out") / 1e6;
     }
