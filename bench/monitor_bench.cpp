@@ -154,7 +154,10 @@ Watched run(const std::string& script, const std::vector<std::string>& sets, boo
   ss << std::ifstream(dir / "stats.json").rdbuf();
   w.render_seconds = bench::json_number(ss.str(), "render");
   w.farm_cpu_seconds = bench::json_number(ss.str(), "actors_cpu_seconds") + bench::json_number(ss.str(), "director_cpu_seconds");
-  bench::fs::remove_all(dir);
+  // The browser's helper processes may still be writing its profile for a moment after it exited.
+  std::error_code ec;
+  for (int i = 0; i < 50; ++i, std::this_thread::sleep_for(std::chrono::milliseconds(100)))
+    if (bench::fs::remove_all(dir, ec), !ec) break;
   return w;
 }
 
