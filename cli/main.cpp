@@ -151,7 +151,6 @@ int cmd_run(int argc, char** argv, bool graph_only) {
 }
 
 int cmd_actor(int argc, char** argv) {
-  lf::schedule_as_batch_work();  // before any thread starts (runtime.hpp)
   Args args;
   std::string error;
   if (!parse(argc, argv, 2, {"kind", "name", "director", "bind", "agent"}, {"curve"}, args, error))
@@ -207,7 +206,6 @@ int cmd_actor(int argc, char** argv) {
 
 // The host agent (internal, like `actor`): loads a shipped scene and its BVH once, forks this host's actors.
 int cmd_host_agent(int argc, char** argv) {
-  lf::schedule_as_batch_work();  // the actors it forks inherit it
   Args args;
   std::string error;
   if (!parse(argc, argv, 2, {"scene", "hash", "socket", "actors"}, {}, args, error)) return usage_error(error);

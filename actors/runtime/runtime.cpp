@@ -1,7 +1,6 @@
 #include "actors/runtime/runtime.hpp"
 #include "render/loaded_scene.hpp"
 
-#include <sched.h>
 #include <sys/resource.h>
 #include <time.h>
 #include <unistd.h>
@@ -68,14 +67,6 @@ Result<wire::FarmKeys> read_farm_keys_from_stdin() {
   return wire::FarmKeys::from_line(line);
 }
 int stop_signal() { return g_stop_signal; }
-
-void schedule_as_batch_work() {
-  const char* policy = std::getenv("LIGHTFARM_ACTOR_SCHED");
-  if (policy && std::string_view(policy) == "normal") return;
-  sched_param param{};
-  param.sched_priority = 0;
-  ::sched_setscheduler(0, SCHED_BATCH, &param);
-}
 
 namespace {
 pid_t g_started_as = 0;  // 0: this process

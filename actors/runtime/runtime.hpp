@@ -219,12 +219,4 @@ bool take_suspend_request();
 bool stop_requested();
 int stop_signal();
 
-// Call first thing in an actor process (before it starts threads, which inherit it): the process runs under
-// SCHED_BATCH. Actors are CPU-bound and keep several requests in flight, so an actor woken by a message need not
-// preempt another one mid-slice (that churn cost 2+2 farms on 2 cores 1.5-5 % of their speed), while the director,
-// a browser on the monitor or a user's shell, which stay SCHED_OTHER, still preempt actors at once.
-// LIGHTFARM_ACTOR_SCHED=normal in the environment keeps the default policy (to measure the difference). Failure
-// leaves the default policy; nothing depends on it.
-void schedule_as_batch_work();
-
 }  // namespace lf

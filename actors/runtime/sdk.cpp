@@ -12,7 +12,6 @@
 namespace lf {
 
 int serve_lightop(const LightOpKind& kind, int argc, char** argv) {
-  schedule_as_batch_work();
   mallopt(M_MMAP_THRESHOLD, 256 << 20);  // see cli/main.cpp
   mallopt(M_TRIM_THRESHOLD, 512 << 20);
   ActorArgs args;
