@@ -43,14 +43,7 @@ class RendererActor final : public Actor {
     image_ = config.image;
     sampler_ = sampler_of(image_);
     camera_ = std::make_unique<Camera>(config.camera, image_.width, image_.height);
-    if (!config.geometry.empty()) {
-      std::vector<Bounds> boxes;
-      for (size_t p = 0; p < config.geometry.size(); ++p) {
-        const float* b = config.part_boxes.data() + 6 * p;
-        boxes.push_back(Bounds{{b[0], b[1], b[2]}, {b[3], b[4], b[5]}});
-      }
-      tracing_ = std::make_unique<RemoteTracing>(rt, *scene_, std::move(boxes), 4096);
-    }
+    tracing_ = RemoteTracing::for_config(config, rt, *scene_);
     return Ok{};
   }
 

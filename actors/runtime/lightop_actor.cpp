@@ -243,15 +243,8 @@ class LightOpActor final : public Actor {
     } else {
       exchange_ = std::make_unique<DirectorExchange>(rt);
     }
-    if (!config.geometry.empty()) {
-      // A partitioned scene: rays go to the parts' geometry actors (ops that trace through ctx.tracing do).
-      std::vector<Bounds> boxes;
-      for (size_t p = 0; p < config.geometry.size(); ++p) {
-        const float* b = config.part_boxes.data() + 6 * p;
-        boxes.push_back(Bounds{{b[0], b[1], b[2]}, {b[3], b[4], b[5]}});
-      }
-      tracing_ = std::make_unique<RemoteTracing>(rt, *scene_, std::move(boxes), 4096);
-    }
+    // A partitioned scene: rays go to the parts' geometry actors (ops that trace through ctx.tracing do).
+    tracing_ = RemoteTracing::for_config(config, rt, *scene_);
     return Ok{};
   }
 

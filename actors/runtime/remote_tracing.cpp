@@ -10,6 +10,16 @@ namespace lf {
 RemoteTracing::RemoteTracing(Runtime& rt, const Scene& scene, std::vector<Bounds> boxes, size_t batch)
     : rt_(rt), scene_(scene), boxes_(padded_boxes(std::move(boxes))), ties_(scene), batch_(std::max<size_t>(1, batch)) {}
 
+std::unique_ptr<RemoteTracing> RemoteTracing::for_config(const ActorConfig& config, Runtime& rt, const Scene& scene) {
+  if (config.geometry.empty()) return nullptr;
+  std::vector<Bounds> boxes;
+  for (size_t p = 0; p < config.geometry.size(); ++p) {
+    const float* b = config.part_boxes.data() + 6 * p;
+    boxes.push_back(Bounds{{b[0], b[1], b[2]}, {b[3], b[4], b[5]}});
+  }
+  return std::make_unique<RemoteTracing>(rt, scene, std::move(boxes), 4096);
+}
+
 namespace {
 
 // One round's answers from one part: where each ray of the round stands in the caller's arrays, and what came back.

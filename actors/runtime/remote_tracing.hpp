@@ -5,8 +5,10 @@
 // until its hit is nearer than the next part's box. Then ties between coplanar faces are settled as the whole
 // scene's tracer settles them, so the answer is RayTracer::intersect's on the whole scene, bit for bit.
 #include <cstdint>
+#include <memory>
 #include <vector>
 
+#include "actors/runtime/actor_config.hpp"
 #include "actors/runtime/runtime.hpp"
 #include "core/value.hpp"
 #include "render/coplanar_ties.hpp"
@@ -20,6 +22,8 @@ class RemoteTracing final : public Tracing {
   // `boxes`: each part's box as the director sent it, in the order of the runtime's geometry actors. `batch`: rays
   // per request at most.
   RemoteTracing(Runtime& rt, const Scene& scene, std::vector<Bounds> boxes, size_t batch);
+  // The tracing a CONFIG's `geometry` and `part_boxes` describe (4096 rays a request), or null without them.
+  static std::unique_ptr<RemoteTracing> for_config(const ActorConfig& config, Runtime& rt, const Scene& scene);
   Task intersect(std::span<const Ray> rays, std::span<Hit> hits) override;
   Task occluded(std::span<const Ray> rays, std::span<uint8_t> occluded) override;
   // What went to the parts: rays asked about, part visits (a ray in n parts' boxes makes up to n), requests.
