@@ -535,8 +535,11 @@ class Director final : public ControlOut, public Outbox {
 
   // Stopped from outside (SIGSTOP, a debugger) and continued: for longer than the heartbeat timeout, the actors took
   // this director for dead and are going; say so rather than blame the first of them whose exit arrives.
-  void notice_outside_stop() {
-    if (take_resumed()) {
+  // `slept_through`: a wait just returned far later than its timeout. The SIGCONT handler may run on any of this
+  // process's threads, and on another one it can set its flag a moment after this thread has looked; a wait that
+  // overran by more than the heartbeat timeout says the same without that race.
+  void notice_outside_stop(bool slept_through = false) {
+    if (take_resumed() || slept_through) {
       const double away = seconds_since(last_awake_);
       if (away > spec_.heartbeat_timeout)
         throw FarmFailure{"this director was stopped for " + seconds_text(std::round(away)) +
@@ -612,8 +615,11 @@ class Director final : public ControlOut, public Outbox {
     notice_outside_stop();
     wire::Poller poller;
     poller.add(control_);
-    poller.wait(std::min<long>(timeout_ms, static_cast<long>(spec_.heartbeat_timeout * 250)));
-    notice_outside_stop();  // the stop may have come during the wait: before reading what it left behind
+    const long wait_ms = std::min<long>(timeout_ms, static_cast<long>(spec_.heartbeat_timeout * 250));
+    const auto waiting_since = Clock::now();
+    poller.wait(wait_ms);
+    // The stop may have come during the wait: before reading what it left behind.
+    notice_outside_stop(seconds_since(waiting_since) > wait_ms / 1000.0 + spec_.heartbeat_timeout);
     while (auto in = control_.receive()) check(supervisor_.on_message(in->peer, in->message));
     while (auto exit = launchers_.reap_one()) {
       // A stop that landed after the check above (while messages were read) would otherwise make the actors that
