@@ -6,6 +6,8 @@
 #include <set>
 #include <string_view>
 
+#include "render/lightop_registry.hpp"
+
 namespace lf {
 
 std::string unique_name(const FarmSpec& spec, const std::string& wanted) {
@@ -291,6 +293,16 @@ std::string to_dot(const FarmSpec& spec) {
     if (a.kind == "radiosity") ring_op = a.name;
     for (int in : a.inputs) out += "  " + id(spec.actors[static_cast<size_t>(in)].name) + " -> " + id(a.name) + ";\n";
   }
+  // A partitioned scene: the parts answer the rays of the renderers and of the ops that trace through them
+  // (dotted: rays, not light).
+  std::vector<std::string> tracers;
+  if (renderers > 0) tracers.push_back("renderers");
+  for (const auto& a : spec.actors)
+    if (const LightOpKind* kind = find_lightop_kind(a.kind); kind && kind->traces_through_context && !a.is_multiplexer())
+      tracers.push_back(a.name);
+  for (const auto& g : spec.actors)
+    if (g.is_geometry())
+      for (const auto& t : tracers) out += "  " + id(g.name) + " -> " + id(t) + " [style=dotted, label=\"rays\"];\n";
   // A radiosity ring: packets go round each ring (solid), idle nodes borrow from the same position of another
   // ring (dashed), and the solution goes to the radiosity op (dotted).
   auto node_name = [&](int64_t r, int64_t p) {

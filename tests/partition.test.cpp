@@ -190,6 +190,9 @@ renderers { lighting = lightop "direct" {} }
   r = run_lightfarm({"graph", ok});
   EXPECT_EQ(r.status, 0) << r.err;
   EXPECT_NE(r.out.find("\"geometry.1\" [label=\"geometry.1\\n(geometry)\", shape=cylinder]"), std::string::npos) << r.out;
+  // And whose rays they answer: the renderers' and the op's.
+  EXPECT_NE(r.out.find("\"geometry.1\" -> \"renderers\" [style=dotted, label=\"rays\"];"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("\"geometry.0\" -> \"direct\" [style=dotted, label=\"rays\"];"), std::string::npos) << r.out;
 }
 
 }  // namespace
