@@ -242,6 +242,32 @@ TEST_F(MonitorTest, ManyClientsAndADroppedStreamLeaveTheFarmAndItsImageAlone) {
   expect_no_leftovers(r);
 }
 
+// A partitioned scene's parts appear in the state with whose rays they answer (the page draws them dotted).
+TEST_F(MonitorTest, APartitionedFarmsStateSaysWhoseRaysThePartsAnswer) {
+  const std::string script = write("parts.lua", R"(scene { builtin = "cornell" }
+image { width = 32, height = 32, spp = 1 }
+partition { parts = 2 }
+renderers { count = 1, lighting = lightop "direct" {} }
+)");
+  Farm farm({"run", script, "--monitor", "0", "--monitor-hold", "30", "--output", path("parts.exr")});
+  const std::string url = monitor_url(farm);
+  ASSERT_FALSE(url.empty()) << farm.err_so_far();
+  ASSERT_TRUE(Farm::eventually([&] { return farm.err_so_far().find("monitor: holding") != std::string::npos; }, 60));
+  auto [token, client] = client_for(url);
+  auto state = client.Get("/api/state");
+  ASSERT_TRUE(state);
+  write("parts-state.json", state->body);
+  const std::string check = run_command("python3 -c \"import json; s=json.load(open('" + path("parts-state.json") +
+                                        "')); print(sorted((a['name'], a.get('rays_from')) for a in s['actors'] "
+                                        "if a['kind'] != 'geometry'))\"");
+  EXPECT_EQ(check, "[('direct', ['geometry.0', 'geometry.1']), ('renderer-0', ['geometry.0', 'geometry.1'])]\n")
+      << state->body;
+  ::kill(farm.pid(), SIGINT);  // ends the hold
+  auto r = farm.wait(30);
+  EXPECT_EQ(r.status, 0) << r.err;
+  expect_no_leftovers(r);
+}
+
 // Off loopback, a request without the token printed at start is refused.
 TEST_F(MonitorTest, AMonitorBeyondLoopbackWantsItsToken) {
   Farm farm({"run", kCornell, "--set", "width=32", "--set", "height=32", "--set", "spp=1", "--monitor", "0.0.0.0:0",

@@ -684,6 +684,14 @@ class Director final : public ControlOut, public Outbox {
         inputs.push_back(spec_.actors[static_cast<size_t>(spec_.lighting)].name);
       Value::Map m{{"name", spec.name}, {"kind", spec.kind}, {"host", spec.host}, {"state", actor_state(a)},
                    {"inputs", std::move(inputs)}, {"restarts", static_cast<int64_t>(a.restarts)}};
+      // A partitioned scene's parts answer the rays of the renderers and of the ops that trace through them.
+      const LightOpKind* op = find_lightop_kind(spec.kind);
+      if (!parts_.empty() && (spec.is_renderer() || (op && op->traces_through_context && !spec.is_multiplexer()))) {
+        Value::Array parts;
+        for (const ActorSpec& g : spec_.actors)
+          if (g.is_geometry()) parts.push_back(g.name);
+        m["rays_from"] = std::move(parts);
+      }
       if (const pid_t pid = supervisor_.host_pid(a); pid > 0) m["pid"] = static_cast<int64_t>(pid);
       if (!a.loss.empty()) m["loss"] = a.loss;
       if (a.live.is_map()) {

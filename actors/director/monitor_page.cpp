@@ -58,7 +58,7 @@ function drawGraph(actors) {
   const visit = (a, d) => {
     if ((depth.get(a.name) ?? -1) >= d) return;
     depth.set(a.name, d);
-    for (const i of a.inputs) if (byName.has(i)) visit(byName.get(i), d + 1);
+    for (const i of [...a.inputs, ...(a.rays_from || [])]) if (byName.has(i)) visit(byName.get(i), d + 1);
   };
   for (const a of actors) if (a.kind === "renderer") visit(a, 0);
   for (const a of actors) if (!depth.has(a.name)) visit(a, 0);
@@ -83,6 +83,12 @@ function drawGraph(actors) {
     for (const i of a.inputs) {
       const p = at.get(a.name), q = at.get(i);
       if (p && q) svg += `<line x1="${p.x + w}" y1="${p.y + h / 2}" x2="${q.x}" y2="${q.y + h / 2}" stroke="#566" />`;
+    }
+  for (const a of actors)  // a partitioned scene's parts, answering rays (dotted, as lightfarm graph draws them)
+    for (const g of a.rays_from || []) {
+      const p = at.get(a.name), q = at.get(g);
+      if (p && q) svg += `<line class="rays" x1="${p.x + w}" y1="${p.y + h / 2}" x2="${q.x}" y2="${q.y + h / 2}" ` +
+        `stroke="#566" stroke-dasharray="2 3" />`;
     }
   for (const a of actors) {
     const p = at.get(a.name);
@@ -134,7 +140,7 @@ function render(s) {
   setText($("elapsed"), num(f.elapsed_seconds, 1) + " s");
   setText($("tiles"), `tiles ${f.tiles_done ?? 0} / ${f.tiles_total ?? 0}`);
   const actors = s.actors || [];
-  const graphKey = actors.map(a => a.name + ":" + a.state + ":" + a.inputs.join(",")).join(";");
+  const graphKey = actors.map(a => a.name + ":" + a.state + ":" + a.inputs.join(",") + ":" + (a.rays_from || []).join(",")).join(";");
   if (graphKey !== lastGraph) { lastGraph = graphKey; drawGraph(actors); }
   renderActors(actors);
   setHtml($("stages"), (s.stages || []).map(t => `<tr><td>${esc(t.name)}</td><td>${num(t.seconds, 3)} s</td></tr>`).join(""));
