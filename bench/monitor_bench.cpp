@@ -256,6 +256,7 @@ int main(int argc, char** argv) {
       {"long_frames", lf::Value::Map{{"spp", static_cast<int64_t>(long_spp)}, {"runs", static_cast<int64_t>(long_runs)},
                                      {"with_browser", paired_value(long_frames)}}},
       {"latency_ms", latency.to_value()},
+      {"latency_events", static_cast<int64_t>(latencies.size())},
       {"latency_oldest_tile_ms", first_latency.to_value()}};
   std::ofstream(json_path) << lf::to_json(doc, 2) << "\n";
   std::printf("wrote %s\n", json_path.c_str());

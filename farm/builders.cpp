@@ -250,6 +250,12 @@ Status validate(const FarmSpec& s) {
   return Ok{};
 }
 
+bool traces_through_parts(const ActorSpec& a) {
+  if (a.is_renderer()) return true;
+  const LightOpKind* kind = find_lightop_kind(a.kind);
+  return kind && kind->traces_through_context && !a.is_multiplexer();
+}
+
 std::string to_dot(const FarmSpec& spec) {
   std::string out = "digraph farm {\n  rankdir=LR;\n  node [shape=box, style=rounded];\n";
   auto id = [](const std::string& name) { return "\"" + name + "\""; };
@@ -298,8 +304,7 @@ std::string to_dot(const FarmSpec& spec) {
   std::vector<std::string> tracers;
   if (renderers > 0) tracers.push_back("renderers");
   for (const auto& a : spec.actors)
-    if (const LightOpKind* kind = find_lightop_kind(a.kind); kind && kind->traces_through_context && !a.is_multiplexer())
-      tracers.push_back(a.name);
+    if (!a.is_renderer() && traces_through_parts(a)) tracers.push_back(a.name);
   for (const auto& g : spec.actors)
     if (g.is_geometry())
       for (const auto& t : tracers) out += "  " + id(g.name) + " -> " + id(t) + " [style=dotted, label=\"rays\"];\n";

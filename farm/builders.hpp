@@ -65,6 +65,10 @@ void settle_pool_dispatch(FarmSpec& spec);
 // (a dangling one would run for nothing). Errors name the actor's script line.
 Status validate(const FarmSpec& spec);
 
+// In a partitioned farm, whether actor `a` sends rays to the geometry actors: renderers (their camera rays) and the
+// LightOps whose kind traces through the parts (direct, pathtrace), not pools.
+bool traces_through_parts(const ActorSpec& a);
+
 // The actor graph as Graphviz DOT: one node per actor (renderers folded into one), edges in the direction light
 // flows, one cluster per host; a radiosity ring drawn as rings.
 std::string to_dot(const FarmSpec& spec);

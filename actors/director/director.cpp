@@ -31,6 +31,7 @@
 #include "actors/director/tile_service.hpp"
 #include "actors/runtime/actor_config.hpp"
 #include "actors/runtime/runtime.hpp"
+#include "farm/builders.hpp"
 #include "core/log.hpp"
 #include "core/private_dir.hpp"
 #include "render/camera.hpp"
@@ -675,7 +676,9 @@ class Director final : public ControlOut, public Outbox {
 
   Value monitor_state() {
     const double now = seconds_since(start_);
-    Value::Array actors;
+    Value::Array actors, parts;  // parts: a partitioned scene's geometry actors
+    for (const ActorSpec& g : spec_.actors)
+      if (g.is_geometry()) parts.push_back(g.name);
     for (const ActorSpec& spec : spec_.actors) {
       const ActorRecord& a = supervisor_.at(spec.name);
       Value::Array inputs;
@@ -684,14 +687,7 @@ class Director final : public ControlOut, public Outbox {
         inputs.push_back(spec_.actors[static_cast<size_t>(spec_.lighting)].name);
       Value::Map m{{"name", spec.name}, {"kind", spec.kind}, {"host", spec.host}, {"state", actor_state(a)},
                    {"inputs", std::move(inputs)}, {"restarts", static_cast<int64_t>(a.restarts)}};
-      // A partitioned scene's parts answer the rays of the renderers and of the ops that trace through them.
-      const LightOpKind* op = find_lightop_kind(spec.kind);
-      if (!parts_.empty() && (spec.is_renderer() || (op && op->traces_through_context && !spec.is_multiplexer()))) {
-        Value::Array parts;
-        for (const ActorSpec& g : spec_.actors)
-          if (g.is_geometry()) parts.push_back(g.name);
-        m["rays_from"] = std::move(parts);
-      }
+      if (!parts.empty() && traces_through_parts(spec)) m["rays_from"] = parts;
       if (const pid_t pid = supervisor_.host_pid(a); pid > 0) m["pid"] = static_cast<int64_t>(pid);
       if (!a.loss.empty()) m["loss"] = a.loss;
       if (a.live.is_map()) {

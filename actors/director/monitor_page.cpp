@@ -47,7 +47,9 @@ svg text { fill: #d8dce3; font-size: 11px; }
 </main>
 <script>
 "use strict";
-const query = location.search;
+const query = location.search, params = new URLSearchParams(query);
+// The whole image as a preview event (a page that has none yet).
+const wholePreviewUrl = "/api/preview" + query + (query ? "&" : "?") + "format=json";
 const $ = id => document.getElementById(id);
 const esc = s => String(s).replace(/[&<>"]/g, c => ({"&": "&amp;", "<": "&lt;", ">": "&gt;", '"': "&quot;"}[c]));
 const num = (v, d = 0) => (typeof v === "number" && Number.isFinite(v) ? v.toFixed(d) : "-");
@@ -178,7 +180,7 @@ function preview(p) {
     previewSum = 0;
   } else if (p.base !== previewVersion || !previewImage) {
     // Changes to an image this page does not hold (cannot happen on one stream): take the whole image instead.
-    fetch("/api/preview" + query + (query ? "&" : "?") + "format=json").then(r => r.json()).then(q => { if (q.patches) preview(q); });
+    fetch(wholePreviewUrl).then(r => r.json()).then(q => { if (q.patches) preview(q); });
     return;
   }
   const ctx = c.getContext("2d"), data = previewImage.data, width = p.width;
@@ -201,11 +203,10 @@ function preview(p) {
   c.dataset.checksum = previewSum;
 }
 
-if (new URLSearchParams(location.search).has("snapshot")) {
+if (params.has("snapshot")) {
   // One look, no stream: for tools that read the page once (a headless browser's --dump-dom).
-  const sep = query ? "&" : "?";
   fetch("/api/state" + query).then(r => r.json()).then(s => { $("connection").textContent = "snapshot"; render(s); });
-  fetch("/api/preview" + query + sep + "format=json").then(r => r.json()).then(p => { if (p.patches) preview(p); });
+  fetch(wholePreviewUrl).then(r => r.json()).then(p => { if (p.patches) preview(p); });
 } else {
   const events = new EventSource("/events" + query);
   events.addEventListener("state", e => { setText($("connection"), "live"); render(JSON.parse(e.data)); });
@@ -213,7 +214,7 @@ if (new URLSearchParams(location.search).has("snapshot")) {
   events.onerror = () => { $("connection").textContent = "disconnected (the farm has ended?)"; };
   // ?watch=MS: listen for MS milliseconds, then hang up (a headless browser's --dump-dom returns once the
   // network is quiet, so tests can look at the live page after watching it).
-  const watch = Number(new URLSearchParams(location.search).get("watch"));
+  const watch = Number(params.get("watch"));
   if (watch > 0) setTimeout(() => { events.close(); $("connection").textContent = "watched"; }, watch);
 }
 </script>

@@ -48,10 +48,7 @@ class RendererActor final : public Actor {
   }
 
   Value extra_stats() const override {
-    if (!tracing_) return Value();
-    Value stats = tracing_->stats();
-    stats.as_map()["whole_scene_bvh"] = tracer_ != nullptr;  // false: this process holds no BVH of the scene
-    return stats;
+    return tracing_ ? tracing_->stats(tracer_ != nullptr) : Value();
   }
 
   void on_phase(wire::Phase phase, Runtime& rt) override {

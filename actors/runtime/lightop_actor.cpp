@@ -346,9 +346,8 @@ class LightOpActor final : public Actor {
     Value stats = op_ ? op_->stats() : Value();
     if (tracing_) {
       if (!stats.is_map()) stats = Value::Map{};
-      Value tracing = tracing_->stats();  // held: a range-for over a temporary's map would dangle
+      Value tracing = tracing_->stats(tracer_ != nullptr);  // held: a range-for over a temporary's map would dangle
       for (auto& [key, value] : tracing.as_map()) stats.as_map()[key] = std::move(value);
-      stats.as_map()["whole_scene_bvh"] = tracer_ != nullptr;  // false: this process holds no BVH of the scene
     }
     return stats;
   }

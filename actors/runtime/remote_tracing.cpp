@@ -109,10 +109,11 @@ Task RemoteTracing::occluded(std::span<const Ray> rays, std::span<uint8_t> occlu
   co_await trace_rounds<true>(rt_, scene_, boxes_, batch_, rays, {}, occluded, visits_, requests_);
 }
 
-Value RemoteTracing::stats() const {
+Value RemoteTracing::stats(bool whole_scene_bvh) const {
   return Value::Map{{"traced_rays", static_cast<int64_t>(rays_)},
                     {"part_visits", static_cast<int64_t>(visits_)},
-                    {"trace_requests", static_cast<int64_t>(requests_)}};
+                    {"trace_requests", static_cast<int64_t>(requests_)},
+                    {"whole_scene_bvh", whole_scene_bvh}};
 }
 
 }  // namespace lf

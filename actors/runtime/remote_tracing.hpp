@@ -26,8 +26,9 @@ class RemoteTracing final : public Tracing {
   static std::unique_ptr<RemoteTracing> for_config(const ActorConfig& config, Runtime& rt, const Scene& scene);
   Task intersect(std::span<const Ray> rays, std::span<Hit> hits) override;
   Task occluded(std::span<const Ray> rays, std::span<uint8_t> occluded) override;
-  // What went to the parts: rays asked about, part visits (a ray in n parts' boxes makes up to n), requests.
-  Value stats() const;
+  // What went to the parts: rays asked about, part visits (a ray in n parts' boxes makes up to n), requests; and
+  // whether the asking process holds a BVH of the whole scene anyway (a host agent's).
+  Value stats(bool whole_scene_bvh) const;
 
  private:
   Runtime& rt_;
