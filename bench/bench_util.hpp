@@ -68,6 +68,22 @@ inline std::vector<std::string> json_strings(const std::string& text, const std:
   return out;
 }
 
+// The sum of a figure in the details of the actors of kind `kind` (e.g. every pathtrace replica's "traced_rays"),
+// 0 where an actor has none. An actor's keys are sorted, so its "detail" lies between the previous actor's "kind"
+// and its own.
+inline double sum_detail_over_kind(const std::string& stats, const std::string& kind, const std::string& key) {
+  double sum = 0;
+  const std::string quoted_kind = "\"kind\"", quoted = "\"" + key + "\"";
+  size_t from = 0;
+  for (size_t at = stats.find(quoted_kind); at != std::string::npos; from = at, at = stats.find(quoted_kind, at + 1)) {
+    const size_t open = stats.find('"', stats.find(':', at) + 1);
+    if (stats.substr(open + 1, stats.find('"', open + 1) - open - 1) != kind) continue;
+    const size_t k = stats.find(quoted, from);
+    if (k != std::string::npos && k < at) sum += std::strtod(stats.c_str() + stats.find(':', k) + 1, nullptr);
+  }
+  return sum;
+}
+
 // The sum of per-actor figure `key` over the actors of kind `kind` (e.g. the bytes every geometry actor received).
 inline double sum_over_kind(const std::string& stats, const std::string& kind, const std::string& key) {
   const auto kinds = json_strings(stats, "kind");

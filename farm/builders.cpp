@@ -145,7 +145,8 @@ void add_renderers(FarmSpec& spec, int count, int lighting, const RendererParams
   }
 }
 
-Status add_partition(FarmSpec& spec, int parts, const std::vector<std::string>& hosts, const SourceLoc& loc) {
+Status add_partition(FarmSpec& spec, int parts, bool colocate, const std::vector<std::string>& hosts,
+                     const SourceLoc& loc) {
   if (spec.partition_parts > 0) return make_error("partition is declared twice");
   for (int i = 0; i < parts; ++i) {
     ActorSpec g;
@@ -158,6 +159,7 @@ Status add_partition(FarmSpec& spec, int parts, const std::vector<std::string>& 
     spec.actors.push_back(std::move(g));
   }
   spec.partition_parts = parts;
+  spec.partition_colocate = colocate;
   spec.partition_loc = loc;
   return Ok{};
 }

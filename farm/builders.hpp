@@ -50,7 +50,8 @@ void add_renderers(FarmSpec& spec, int count, int lighting, const RendererParams
 // solution. Returns the LightOp's index.
 // partition { parts = N }: N `geometry` actors, "geometry.0" ... (spread over `hosts` as renderers are), each holding
 // one part of the scene (render/partition.hpp).
-Status add_partition(FarmSpec& spec, int parts, const std::vector<std::string>& hosts, const SourceLoc& loc);
+Status add_partition(FarmSpec& spec, int parts, bool colocate, const std::vector<std::string>& hosts,
+                     const SourceLoc& loc);
 
 Result<int> expand_ring(FarmSpec& spec, const radiosity::RingConfig& config, const Value::Map& params,
                         const std::string& name, const std::vector<std::string>& hosts, const SourceLoc& loc);

@@ -74,6 +74,9 @@ struct FarmSpec {
   bool host_agents = true;
   // partition { parts = N }: the scene split by space into N parts, each held by a `geometry` actor (0: not split).
   int partition_parts = 0;
+  // partition { colocate = true }: replica j of a pool whose op traces through the parts also holds part j mod N
+  // itself, and renderers send it the points that lie there, so that the rays that stay in a part stay in its process.
+  bool partition_colocate = false;
   SourceLoc partition_loc;
 
   int renderer_count() const;

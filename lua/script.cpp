@@ -630,19 +630,22 @@ int l_farm(lua_State* L) {
   return 0;
 }
 
-// partition { parts = N, host = h | {h1, h2, ...} }: the scene split by space into N parts, each held by a `geometry`
-// actor; `direct` and `pathtrace` then trace their rays through the parts (render/partition.hpp).
+// partition { parts = N, colocate = false, host = h | {h1, h2, ...} }: the scene split by space into N parts, each held
+// by a `geometry` actor; `direct` and `pathtrace` then trace their rays through the parts (render/partition.hpp).
+// colocate: a pool's replica j of such an op holds part j mod N too and is sent the points that lie there.
 int l_partition(lua_State* L) {
   Builder& b = builder(L);
   luaL_checktype(L, 1, LUA_TTABLE);
   const auto hosts = take_hosts(L, 1, b);
   ParamTable p = table_params(L, 1, "partition");
   int parts = 1;
+  bool colocate = false;
   with_params(L, [&] {
     parts = static_cast<int>(p.get_int("parts", 2, 1, 64));
+    colocate = p.get_bool("colocate", false);
     p.report_unused();
   });
-  if (auto st = add_partition(b.spec, parts, hosts, caller_loc(L)); !st) luaL_error(L, "%s", st.error().message.c_str());
+  if (auto st = add_partition(b.spec, parts, colocate, hosts, caller_loc(L)); !st) luaL_error(L, "%s", st.error().message.c_str());
   return 0;
 }
 

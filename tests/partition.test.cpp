@@ -58,6 +58,80 @@ renderers { count = 2, lighting = op }
   }
 }
 
+// partition { colocate = true }: each replica of a `pathtrace` pool holds a part itself and is sent the points that
+// lie in it, so its rays that stay in the part are traced in its own process. The pixels are the whole farm's (a
+// pixel whose samples lie in two parts is answered in two replies and still summed in sample order), the replicas
+// say they traced part visits at home, and the geometry actors are asked about fewer rays than without.
+TEST_F(PartitionTest, ReplicasThatHoldTheirPartGiveTheSamePixelsAndSendFewerRays) {
+  const std::string script = write("colocate.lua", R"(scene { builtin = "cornell" }
+image { width = 48, height = 48, spp = 4, tile = 16 }
+if param("parts", 0) > 0 then partition { parts = param("parts", 0), colocate = param("colocate", false) } end
+local op = lightop "pathtrace" { max_depth = 5 }
+renderers { count = 2, lighting = multiplexer { op, replicas = param("replicas", 3) } }
+)");
+  const Image whole = render({"run", script}, "whole.exr");
+  ASSERT_GT(brightness(whole), 0);
+  // Rays the geometry actors traced, summed from the run's figures ("geometry.N  rays R").
+  const auto rays_at_parts = [&](const std::string& stats, int parts) {
+    int64_t sum = 0;
+    for (int p = 0; p < parts; ++p) {
+      const std::string key = "\"name\": \"geometry." + std::to_string(p) + "\"";
+      const auto named = stats.find(key);
+      const auto from = stats.rfind("\"rays\": ", named);
+      if (named == std::string::npos || from == std::string::npos) return int64_t{-1};
+      sum += std::stoll(stats.substr(from + 8));
+    }
+    return sum;
+  };
+  for (int parts : {2, 3}) {
+    SCOPED_TRACE(std::to_string(parts) + " parts");
+    const std::string set_parts = "parts=" + std::to_string(parts);
+    auto apart = run_lightfarm({"run", script, "--set", set_parts, "--quiet", "--output", path("apart.exr"),
+                                "--stats-json", path("apart.json")});
+    ASSERT_EQ(apart.status, 0) << apart.err;
+    auto home = run_lightfarm({"run", script, "--set", set_parts, "--set", "colocate=true", "--quiet", "--output",
+                               path("home.exr"), "--stats-json", path("home.json")});
+    ASSERT_EQ(home.status, 0) << home.err;
+    expect_no_leftovers(home);
+    const auto home_image = read_image(path("home.exr"));
+    ASSERT_TRUE(home_image.ok());
+    EXPECT_TRUE(home_image->pixels == whole.pixels);
+    const std::string home_stats = read_file(path("home.json")), apart_stats = read_file(path("apart.json"));
+    EXPECT_EQ(apart_stats.find("\"local_part_visits\": 0,") != std::string::npos, true) << apart_stats;
+    const auto local = home_stats.find("\"local_part_visits\": ");
+    ASSERT_NE(local, std::string::npos) << home_stats;
+    EXPECT_GT(std::stoll(home_stats.substr(local + 21)), 1000) << home_stats;
+    const int64_t sent_apart = rays_at_parts(apart_stats, parts), sent_home = rays_at_parts(home_stats, parts);
+    ASSERT_GT(sent_home, 0) << home_stats;
+    EXPECT_LT(sent_home, sent_apart) << home_stats;
+  }
+}
+
+// A replica that holds a part is a replica like any other: killed mid-frame, its packets go to the others, which
+// trace its part through the geometry actor, and the pixels are still the whole farm's.
+TEST_F(PartitionTest, AReplicaThatHoldsAPartKilledMidFrameLosesNothing) {
+  const std::string script = write("home-kill.lua", R"(scene { builtin = "cornell" }
+image { width = 64, height = 64, spp = 96, tile = 16 }
+if param("parts", 0) > 0 then partition { parts = param("parts", 0), colocate = true } end
+renderers { count = 2, lighting = multiplexer { lightop "pathtrace" { max_depth = 5 }, replicas = 3 } }
+)");
+  const Image whole = render({"run", script}, "whole.exr");
+  ASSERT_GT(brightness(whole), 0);
+  Farm farm({"run", script, "--set", "parts=3", "--output", path("killed.exr")});
+  ASSERT_TRUE(Farm::eventually([&] { return farm.err_so_far().find("render 10%") != std::string::npos; }, 60))
+      << farm.err_so_far();
+  const auto victims = actor_pids(farm.tag(), "pathtrace.1");
+  ASSERT_EQ(victims.size(), 1u);
+  ::kill(victims[0], SIGKILL);
+  auto r = farm.wait(120);
+  ASSERT_EQ(r.status, 0) << r.err;
+  EXPECT_NE(r.err.find("replica 'pathtrace.1' of 'pathtrace' is gone"), std::string::npos) << r.err;
+  expect_no_leftovers(r);
+  const auto killed = read_image(path("killed.exr"));
+  ASSERT_TRUE(killed.ok());
+  EXPECT_TRUE(killed->pixels == whole.pixels);
+}
+
 // The directional cache (seed 002 §3) is filled in setup and frozen, so it does not depend on the layout either: a
 // split scene and one renderer or two give the same pixels, and the op reports how often the cache answered.
 TEST_F(PartitionTest, TheDirectionalCacheGivesTheSamePixelsOnEveryLayout) {

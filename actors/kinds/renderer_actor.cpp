@@ -44,6 +44,7 @@ class RendererActor final : public Actor {
     sampler_ = sampler_of(image_);
     camera_ = std::make_unique<Camera>(config.camera, image_.width, image_.height);
     tracing_ = RemoteTracing::for_config(config, rt, *scene_);
+    colocate_ = tracing_ && rt.input_holds_parts(0);
     return Ok{};
   }
 
@@ -71,7 +72,13 @@ class RendererActor final : public Actor {
     std::vector<RGB> radiance;        // one value a point, from replies that came that way
     std::vector<RGB> pixel_radiance;  // a pixel's points' radiance summed (fold_by_pixel), from folded replies
     std::vector<uint8_t> folded;      // which pixels came folded
-    std::vector<uint32_t> pixel;      // when folding: each point's pixel in the tile
+    std::vector<uint32_t> pixel;      // when folding: each point's pixel in the tile (in sending order)
+    // Points sent grouped by part (partition { colocate = true }): the regrouped tile, each of its points' index in
+    // `work`, and the pixels whose points lie in more than one part.
+    TileWork grouped;
+    std::vector<uint32_t> order;
+    std::vector<uint8_t> split_pixel;  // per pixel of the tile
+    std::vector<uint32_t> sample_part;  // the part each camera sample's hit was found in
     size_t batches_left = 0;
   };
 
@@ -121,8 +128,9 @@ class RendererActor final : public Actor {
     std::vector<uint64_t> keys;
     tile_camera_rays(*camera_, image_, rect, rays, keys);
     std::vector<Hit> hits(rays.size());
+    if (colocate_) job->sample_part.resize(rays.size());
     try {
-      co_await tracing_->intersect(rays, hits);
+      co_await tracing_->intersect(rays, hits, job->sample_part);
     } catch (const std::exception& e) {
       rt.fail(std::string("tracing camera rays through the scene's parts failed: ") + e.what());
       co_return;
@@ -133,18 +141,26 @@ class RendererActor final : public Actor {
 
   void shade_tile(const std::shared_ptr<TileJob>& job, Runtime& rt) {
     rt.stats().points += job->work.points.size();
-    const TileWork& work = job->work;
-    const size_t n = work.points.size();
+    const size_t n = job->work.points.size();
+    // A pool whose replicas hold scene parts themselves (partition { colocate = true }) gets each part's points
+    // apart, to a replica holding it: the tile's points are sent grouped by part (in point order within a part),
+    // and their radiance put back in point order, so the pixels sum it exactly as they would unsent.
+    std::vector<size_t> part_end{n};  // where each group of points ends, in sending order
+    std::vector<int64_t> group_part{-1};
+    if (colocate_ && n > 0) group_by_part(*job, part_end, group_part);
+    const TileWork& work = job->order.empty() ? job->work : job->grouped;
     // A built-in LightOp rebuilds positions, normals, materials and keys from the scene and the tile, and can sum a
     // pixel's radiance itself: a reply then holds a value a pixel, not a point. Batches then end between pixels, and
-    // one with a pixel that sees an emitter is not folded: that pixel's samples are summed with their emission.
+    // one with a pixel that sees an emitter is not folded: that pixel's samples are summed with their emission. Nor
+    // is one with a pixel whose points lie in two parts, as it is answered in two replies.
     const bool lean = rt.input_is_lean(0), fold = lean && params_.batch > 1;
     const size_t pixels = static_cast<size_t>(work.rect.pixel_count());
     job->radiance.assign(n, RGB{});
     job->pixel_radiance.assign(fold ? pixels : 0, RGB{});
     job->folded.assign(fold ? pixels : 0, 0);
-    std::vector<uint8_t> sees_emitter(fold ? pixels : 0);
-    for (size_t p = 0; p < sees_emitter.size(); ++p) sees_emitter[p] = pixel_sees_emitter(work, p);
+    std::vector<uint8_t> unfoldable(fold ? pixels : 0);
+    for (size_t p = 0; p < unfoldable.size(); ++p)
+      unfoldable[p] = pixel_sees_emitter(work, p) || (!job->split_pixel.empty() && job->split_pixel[p]);
     if (n == 0) return finish_tile(job, rt);
     if (fold) {
       const uint32_t spp = static_cast<uint32_t>(work.spp);
@@ -152,37 +168,95 @@ class RendererActor final : public Actor {
       for (size_t j = 0; j < n; ++j) job->pixel[j] = work.sample_of_point[j] / spp;
     }
     const std::vector<uint32_t>& pixel = job->pixel;
-    for (size_t begin = 0, end = 0; begin < n; begin = end) {
-      end = std::min(begin + static_cast<size_t>(params_.batch), n);
-      while (fold && end < n && pixel[end] == pixel[end - 1]) ++end;
-      // The batch's pixels (runs of points), and whether any of them sees an emitter.
-      size_t runs = 0;
-      bool foldable = fold;
-      for (size_t j = begin; fold && j < end; ++j)
-        if (j == begin || pixel[j] != pixel[j - 1]) {
-          ++runs;
-          foldable = foldable && !sees_emitter[pixel[j]];
-        }
-      ++job->batches_left;
-      ++rt.stats().requests;
-      Value body = lean ? encode_camera_request(work, begin, end, *scene_, sampler_, image_.width, foldable)
-                        : encode_shade_request(work.points, begin, end);
-      const bool folded = body.find("fold") != nullptr;
-      const size_t values = folded ? runs : end - begin;
-      rt.ask_input(0, wire::Op::shade, std::move(body),
-                   [this, job, begin, end, folded, values, &rt](Result<wire::Message> r) {
-                     if (!r) return rt.fail("lighting failed: " + r.error().message);
-                     auto radiance = decode_radiance(r->body, values);
-                     if (!radiance) return rt.fail("lighting '" + rt.input_name(0) + "': " + radiance.error().message);
-                     take_radiance(*job, begin, end, folded, *radiance);
-                     if (--job->batches_left == 0) finish_tile(job, rt);
-                   });
+    for (size_t g = 0, begin = 0; g < part_end.size(); ++g) {
+      for (size_t end = begin; begin < part_end[g]; begin = end) {
+        end = std::min(begin + static_cast<size_t>(params_.batch), part_end[g]);
+        while (fold && end < part_end[g] && pixel[end] == pixel[end - 1]) ++end;
+        // The batch's pixels (runs of points), and whether any of them cannot be folded.
+        size_t runs = 0;
+        bool foldable = fold;
+        for (size_t j = begin; fold && j < end; ++j)
+          if (j == begin || pixel[j] != pixel[j - 1]) {
+            ++runs;
+            foldable = foldable && !unfoldable[pixel[j]];
+          }
+        ++job->batches_left;
+        ++rt.stats().requests;
+        Value body = lean ? encode_camera_request(work, begin, end, *scene_, sampler_, image_.width, foldable)
+                          : encode_shade_request(work.points, begin, end);
+        const bool folded = body.find("fold") != nullptr;
+        const size_t values = folded ? runs : end - begin;
+        rt.ask_input(
+            0, wire::Op::shade, std::move(body),
+            [this, job, begin, end, folded, values, &rt](Result<wire::Message> r) {
+              if (!r) return rt.fail("lighting failed: " + r.error().message);
+              auto radiance = decode_radiance(r->body, values);
+              if (!radiance) return rt.fail("lighting '" + rt.input_name(0) + "': " + radiance.error().message);
+              take_radiance(*job, begin, end, folded, *radiance);
+              if (--job->batches_left == 0) finish_tile(job, rt);
+            },
+            group_part[g]);
+      }
+    }
+  }
+
+  // The tile's points regrouped by the part their camera ray's hit was found in (job.sample_part), into
+  // job.grouped, in point order within a part.
+  void group_by_part(TileJob& job, std::vector<size_t>& part_end, std::vector<int64_t>& group_part) const {
+    const TileWork& work = job.work;
+    const size_t n = work.points.size(), parts = tracing_->parts();
+    std::vector<uint32_t> part(n);
+    std::vector<size_t> count(parts + 1, 0);
+    for (size_t i = 0; i < n; ++i) {
+      part[i] = std::min<uint32_t>(job.sample_part[work.sample_of_point[i]], static_cast<uint32_t>(parts));
+      ++count[part[i]];
+    }
+    std::vector<size_t> next(parts + 1, 0);
+    part_end.clear();
+    group_part.clear();
+    for (size_t k = 0, at = 0; k <= parts; ++k) {
+      next[k] = at;
+      at += count[k];
+      if (count[k] == 0) continue;
+      part_end.push_back(at);
+      group_part.push_back(k < parts ? static_cast<int64_t>(k) : -1);
+    }
+    job.order.resize(n);
+    for (size_t i = 0; i < n; ++i) job.order[next[part[i]]++] = static_cast<uint32_t>(i);
+    TileWork& g = job.grouped;
+    g = TileWork{};
+    g.rect = work.rect;
+    g.spp = work.spp;
+    g.eye = work.eye;
+    g.emitted = work.emitted;
+    g.rebuildable = work.rebuildable;
+    g.sampler = work.sampler;
+    g.image_width = work.image_width;
+    g.points.reserve(n);
+    const bool with_triangles = !work.points.triangle.empty();
+    for (uint32_t i : job.order) {
+      const ShadingPoints& w = work.points;
+      if (with_triangles) g.points.push_back(w.position[i], w.normal[i], w.wo[i], w.material[i], w.key[i], w.triangle[i]);
+      else g.points.push_back(w.position[i], w.normal[i], w.wo[i], w.material[i], w.key[i]);
+      g.sample_of_point.push_back(work.sample_of_point[i]);
+      if (!work.distance.empty()) g.distance.push_back(work.distance[i]);
+    }
+    const uint32_t spp = static_cast<uint32_t>(work.spp);
+    // A pixel's points are consecutive in point order; in another part's group they may come back later.
+    std::vector<int64_t> seen_in(static_cast<size_t>(work.rect.pixel_count()), -1);
+    job.split_pixel.assign(seen_in.size(), 0);
+    for (size_t i = 0; i < n; ++i) {
+      const uint32_t px = work.sample_of_point[i] / spp;
+      if (seen_in[px] >= 0 && seen_in[px] != part[i]) job.split_pixel[px] = 1;
+      seen_in[px] = part[i];
     }
   }
 
   static void take_radiance(TileJob& job, size_t begin, size_t end, bool folded, const std::vector<RGB>& radiance) {
     if (!folded) {
-      std::copy(radiance.begin(), radiance.end(), job.radiance.begin() + static_cast<ptrdiff_t>(begin));
+      if (job.order.empty()) std::copy(radiance.begin(), radiance.end(), job.radiance.begin() + static_cast<ptrdiff_t>(begin));
+      else
+        for (size_t j = begin; j < end; ++j) job.radiance[job.order[j]] = radiance[j - begin];
       return;
     }
     const auto& pixel = job.pixel;
@@ -221,6 +295,7 @@ class RendererActor final : public Actor {
   std::shared_ptr<const Scene> scene_;
   std::shared_ptr<const RayTracer> tracer_;       // none in a partitioned farm
   std::unique_ptr<RemoteTracing> tracing_;        // a partitioned scene's geometry actors, or none
+  bool colocate_ = false;                         // the lighting pool's replicas hold parts: send points by part
   std::vector<Task> tracing_tasks_;               // tiles whose camera rays are out at the parts (finished ones kept until the next tile)
   std::unique_ptr<Camera> camera_;
   ImageSpec image_;

@@ -17,6 +17,7 @@ Value::Array inputs_value(const std::vector<InputSpec>& inputs) {
       entry["endpoint"] = in.endpoint;
     if (!in.key.empty()) entry["key"] = in.key;
     if (in.lean) entry["lean"] = true;
+    if (in.part >= 0) entry["part"] = in.part;
     ins.push_back(std::move(entry));
   }
   return ins;
@@ -86,6 +87,12 @@ Status read_inputs(const Value& body, const char* field, std::vector<InputSpec>&
     out.push_back({name->as_string(), endpoint->as_string(), window ? window->as_int() : 4,
                    key ? key->as_string() : std::string()});
     out.back().lean = lean && lean->as_bool();
+    if (const Value* part = in.find("part"); part && !part->is_nil()) {
+      if (!part->is_int() || part->as_int() < 0 || part->as_int() > 65535)
+        return make_error("CONFIG input '" + name->as_string() + "': part must be an integer in [0, 65535]",
+                          ErrorCode::bad_request);
+      out.back().part = part->as_int();
+    }
   }
   return Ok{};
 }
@@ -113,6 +120,7 @@ Value ActorConfig::to_value() const {
     m["part_boxes"] = floats_to_bytes(part_boxes);
   }
   if (!part_triangles.empty()) m["part_triangles"] = u32_to_bytes(part_triangles);
+  if (local_part >= 0) m["local_part"] = local_part;
   return m;
 }
 
@@ -166,6 +174,14 @@ Result<ActorConfig> ActorConfig::from_value(const Value& body) {
   if (const Value* tris = body.find("part_triangles"); tris && !tris->is_nil()) {
     if (!tris->is_bytes() || !bytes_to_u32(tris->as_bytes(), c.part_triangles))
       return make_error("CONFIG 'part_triangles' must be u32 triangle ids", ErrorCode::bad_request);
+  }
+  if (const Value* local = body.find("local_part"); local && !local->is_nil()) {
+    if (!local->is_int() || local->as_int() < 0 || local->as_int() >= static_cast<int64_t>(c.geometry.size()) ||
+        c.part_triangles.empty())
+      return make_error("CONFIG 'local_part' must name one of the " + std::to_string(c.geometry.size()) +
+                            " parts, with its part_triangles",
+                        ErrorCode::bad_request);
+    c.local_part = local->as_int();
   }
   if (const Value* pool = body.find("pool"); pool && !pool->is_nil()) {
     const Value* name = pool->find("name");

@@ -28,6 +28,9 @@ struct InputSpec {
   // The input takes a shade request's `nrm` and `m` from the scene when it carries `tri` (a built-in LightOp): the
   // asker may leave them out (CONFIG inputs[i].lean). A pool is lean when all its replicas are.
   bool lean = false;
+  // A pool's replica that holds a part of a partitioned scene itself (CONFIG replicas[j].part; partition
+  // { colocate = true }): the points that lie in that part go to it. -1: none.
+  int64_t part = -1;
   bool is_pool() const { return !strategy.empty(); }
 };
 
@@ -57,6 +60,9 @@ struct ActorConfig {
   std::vector<InputSpec> geometry;
   std::vector<float> part_boxes;         // 6 per part: lo x y z, hi x y z
   std::vector<uint32_t> part_triangles;  // scene triangle ids, ascending
+  // A LightOp that holds a part itself (partition { colocate = true }): which one (its triangles are then in
+  // part_triangles), so that its rays in that part are traced in this process. -1: none.
+  int64_t local_part = -1;
 
   Value to_value() const;
   // Every field checked; an error names the field.

@@ -24,13 +24,17 @@ PoolClient::PoolClient(std::string name, std::vector<Replica> replicas, const Po
       replicas_(std::move(replicas)),
       options_(options),
       scheduler_(options.strategy, replicas_.size(), options.stall_cap, options.seed) {
-  for (size_t r = 0; r < replicas_.size(); ++r) scheduler_.set_remote(r, replicas_[r].remote);
+  for (size_t r = 0; r < replicas_.size(); ++r) {
+    scheduler_.set_remote(r, replicas_[r].remote);
+    scheduler_.set_group(r, replicas_[r].part);
+  }
 }
 
-void PoolClient::request(wire::Op op, Value body, wire::RequestClient::Callback callback) {
+void PoolClient::request(wire::Op op, Value body, wire::RequestClient::Callback callback, int64_t part) {
   const uint64_t rid = next_request_++;
   Request& req = requests_[rid];
   req.op = op;
+  req.part = part;
   req.callback = std::move(callback);
   if (const Value* n = body.find("n"); n && n->is_int() && n->as_int() >= 0) req.points = static_cast<size_t>(n->as_int());
   req.body = std::move(body);
@@ -51,7 +55,7 @@ void PoolClient::start(uint64_t rid) {
   req.started = true;
   ++started_;
   const size_t count = req.points;
-  const size_t pieces = req.op == wire::Op::shade && options_.split > 0 && count > options_.split
+  const size_t pieces = req.op == wire::Op::shade && req.part < 0 && options_.split > 0 && count > options_.split
                             ? std::min(scheduler_.live(), (count + options_.split - 1) / options_.split)
                             : 1;
   if (pieces <= 1) {
@@ -94,7 +98,8 @@ void PoolClient::start(uint64_t rid) {
 
 void PoolClient::dispatch(uint64_t pid) {
   Piece& piece = pieces_.at(pid);
-  const auto r = scheduler_.pick();
+  const int64_t part = requests_.at(piece.request).part;
+  const auto r = part >= 0 ? scheduler_.pick(part) : scheduler_.pick();
   if (!r) return;  // nobody left: the owner stops (lost() said so)
   piece.replica = *r;
   scheduler_.sent(*r, piece.end - piece.begin);

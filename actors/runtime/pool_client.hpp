@@ -44,13 +44,15 @@ class PoolClient {
     std::string name;
     wire::RequestClient* connection = nullptr;
     bool remote = false;  // on another host than this client (least_loaded prefers the others on a tie)
+    int64_t part = -1;    // the scene part it holds itself (partition { colocate = true }), or -1
   };
   PoolClient(std::string name, std::vector<Replica> replicas, const PoolOptions& options);
 
   const std::string& name() const { return name_; }
   // Same contract as RequestClient::request: the callback runs once, with the reply (body {L} for shade) or the
-  // error of the replica that failed it.
-  void request(wire::Op op, Value body, wire::RequestClient::Callback callback);
+  // error of the replica that failed it. `part` >= 0: the points lie in that scene part, and the request goes whole
+  // to a live replica that holds it (any live one if none does).
+  void request(wire::Op op, Value body, wire::RequestClient::Callback callback, int64_t part = -1);
   // Replica `name` is gone. Returns false if it is not one of this pool's; otherwise its pieces are sent again to
   // the live replicas (none live: the waiting requests stay, and live() says 0).
   bool lost(const std::string& replica);
@@ -66,6 +68,7 @@ class PoolClient {
     Value body;  // until started
     wire::RequestClient::Callback callback;
     size_t points = 0;
+    int64_t part = -1;
     size_t pieces_left = 1;
     bool started = false;
     std::vector<RGB> radiance;  // split requests gather here (one value a point, or a pixel's run)

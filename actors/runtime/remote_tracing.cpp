@@ -17,7 +17,15 @@ std::unique_ptr<RemoteTracing> RemoteTracing::for_config(const ActorConfig& conf
     const float* b = config.part_boxes.data() + 6 * p;
     boxes.push_back(Bounds{{b[0], b[1], b[2]}, {b[3], b[4], b[5]}});
   }
-  return std::make_unique<RemoteTracing>(rt, scene, std::move(boxes), 4096);
+  auto tracing = std::make_unique<RemoteTracing>(rt, scene, std::move(boxes), 4096);
+  if (config.local_part >= 0)
+    tracing->hold_part(static_cast<size_t>(config.local_part), std::make_unique<RayTracer>(scene, config.part_triangles));
+  return tracing;
+}
+
+void RemoteTracing::hold_part(size_t part, std::unique_ptr<RayTracer> tracer) {
+  local_part_ = part;
+  local_tracer_ = std::move(tracer);
 }
 
 namespace {
@@ -32,10 +40,12 @@ struct PartRound {
 }  // namespace
 
 // The rounds of intersect and occluded, which differ only in what a part answers and when a ray is done.
+// The part this process holds, if any, is traced in place, exactly as its geometry actor would trace it.
 template <bool Any>
 static Task trace_rounds(Runtime& rt, const Scene& scene, const std::vector<Bounds>& boxes, size_t batch,
-                         std::span<const Ray> rays, std::span<Hit> hits, std::span<uint8_t> blocked,
-                         uint64_t& visits, uint64_t& requests) {
+                         size_t local_part, const RayTracer* local_tracer, std::span<const Ray> rays,
+                         std::span<Hit> hits, std::span<uint8_t> blocked, std::span<uint32_t> hit_part,
+                         uint64_t& visits, uint64_t& local_visits, uint64_t& requests) {
   const size_t parts = boxes.size();
   RayRoutes routes(rays, boxes);
   while (!routes.done()) {
@@ -50,6 +60,7 @@ static Task trace_rounds(Runtime& rt, const Scene& scene, const std::vector<Boun
       if constexpr (Any) r->blocked.resize(r->rays.size());
       else r->hits.resize(r->rays.size());
       visits += r->rays.size();
+      if (p == local_part) continue;  // after the requests are out, so that both run at once
       for (size_t begin = 0; begin < r->rays.size(); begin += batch) {
         const size_t end = std::min(begin + batch, r->rays.size());
         std::vector<Ray> chunk;
@@ -79,6 +90,19 @@ static Task trace_rounds(Runtime& rt, const Scene& scene, const std::vector<Boun
                                });
       }
     }
+    if (local_part < parts && round[local_part]) {
+      PartRound& r = *round[local_part];
+      local_visits += r.rays.size();
+      std::vector<Ray> local;
+      local.reserve(r.rays.size());
+      for (uint32_t i : r.rays) {
+        Ray ray = rays[i];
+        if (!Any && hits[i].valid()) ray.tfar = hits[i].t;
+        local.push_back(ray);
+      }
+      if constexpr (Any) local_tracer->occluded(local, r.blocked);
+      else local_tracer->intersect_unsettled(local, r.hits);
+    }
     co_await Gather(state);
     for (size_t p = 0; p < parts; ++p) {
       if (!round[p]) continue;
@@ -87,7 +111,10 @@ static Task trace_rounds(Runtime& rt, const Scene& scene, const std::vector<Boun
         if constexpr (Any) {
           blocked[r.rays[k]] |= r.blocked[k];
         } else {
-          if (r.hits[k].valid()) hits[r.rays[k]] = r.hits[k];
+          if (r.hits[k].valid()) {
+            hits[r.rays[k]] = r.hits[k];
+            if (!hit_part.empty()) hit_part[r.rays[k]] = static_cast<uint32_t>(p);
+          }
         }
       }
     }
@@ -97,21 +124,29 @@ static Task trace_rounds(Runtime& rt, const Scene& scene, const std::vector<Boun
 }
 
 Task RemoteTracing::intersect(std::span<const Ray> rays, std::span<Hit> hits) {
+  return intersect(rays, hits, {});
+}
+
+Task RemoteTracing::intersect(std::span<const Ray> rays, std::span<Hit> hits, std::span<uint32_t> hit_part) {
   std::fill(hits.begin(), hits.end(), Hit{});
+  std::fill(hit_part.begin(), hit_part.end(), kNoPart);
   rays_ += rays.size();
-  co_await trace_rounds<false>(rt_, scene_, boxes_, batch_, rays, hits, {}, visits_, requests_);
+  co_await trace_rounds<false>(rt_, scene_, boxes_, batch_, local_part_, local_tracer_.get(), rays, hits, {}, hit_part,
+                               visits_, local_visits_, requests_);
   for (size_t i = 0; i < rays.size(); ++i) hits[i] = ties_.settle(rays[i], hits[i]);
 }
 
 Task RemoteTracing::occluded(std::span<const Ray> rays, std::span<uint8_t> occluded) {
   std::fill(occluded.begin(), occluded.end(), uint8_t{0});
   rays_ += rays.size();
-  co_await trace_rounds<true>(rt_, scene_, boxes_, batch_, rays, {}, occluded, visits_, requests_);
+  co_await trace_rounds<true>(rt_, scene_, boxes_, batch_, local_part_, local_tracer_.get(), rays, {}, occluded, {},
+                              visits_, local_visits_, requests_);
 }
 
 Value RemoteTracing::stats(bool whole_scene_bvh) const {
   return Value::Map{{"traced_rays", static_cast<int64_t>(rays_)},
                     {"part_visits", static_cast<int64_t>(visits_)},
+                    {"local_part_visits", static_cast<int64_t>(local_visits_)},
                     {"trace_requests", static_cast<int64_t>(requests_)},
                     {"whole_scene_bvh", whole_scene_bvh}};
 }

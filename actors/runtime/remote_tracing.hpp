@@ -22,13 +22,24 @@ class RemoteTracing final : public Tracing {
   // `boxes`: each part's box as the director sent it, in the order of the runtime's geometry actors. `batch`: rays
   // per request at most.
   RemoteTracing(Runtime& rt, const Scene& scene, std::vector<Bounds> boxes, size_t batch);
-  // The tracing a CONFIG's `geometry` and `part_boxes` describe (4096 rays a request), or null without them.
+  // This process holds part `part` itself (a BVH of `tracer`'s triangles, the same as its geometry actor's): rays
+  // that visit it are traced here, and only the other parts are asked.
+  void hold_part(size_t part, std::unique_ptr<RayTracer> tracer);
+  // The tracing a CONFIG's `geometry` and `part_boxes` describe (4096 rays a request), holding `local_part` itself
+  // when the CONFIG gives one; null without them.
   static std::unique_ptr<RemoteTracing> for_config(const ActorConfig& config, Runtime& rt, const Scene& scene);
   Task intersect(std::span<const Ray> rays, std::span<Hit> hits) override;
+  // As intersect, and which part's triangle each hit was found on (kNoPart for a miss): where a point lies, for
+  // sending it to a replica that holds its part (partition { colocate = true }). A tie settled onto a coplanar twin
+  // keeps the part of the face that was found.
+  static constexpr uint32_t kNoPart = UINT32_MAX;
+  Task intersect(std::span<const Ray> rays, std::span<Hit> hits, std::span<uint32_t> hit_part);
   Task occluded(std::span<const Ray> rays, std::span<uint8_t> occluded) override;
-  // What went to the parts: rays asked about, part visits (a ray in n parts' boxes makes up to n), requests; and
-  // whether the asking process holds a BVH of the whole scene anyway (a host agent's).
+  // What went to the parts: rays asked about, part visits (a ray in n parts' boxes makes up to n), of them those
+  // traced in the part this process holds, requests; and whether the asking process holds a BVH of the whole
+  // scene anyway (a host agent's).
   Value stats(bool whole_scene_bvh) const;
+  size_t parts() const { return boxes_.size(); }
 
  private:
   Runtime& rt_;
@@ -36,7 +47,9 @@ class RemoteTracing final : public Tracing {
   std::vector<Bounds> boxes_;  // padded (render/partition.hpp)
   CoplanarTies ties_;
   size_t batch_;
-  uint64_t rays_ = 0, visits_ = 0, requests_ = 0;
+  size_t local_part_ = SIZE_MAX;
+  std::unique_ptr<RayTracer> local_tracer_;
+  uint64_t rays_ = 0, visits_ = 0, local_visits_ = 0, requests_ = 0;
 };
 
 }  // namespace lf

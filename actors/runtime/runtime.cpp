@@ -351,7 +351,8 @@ void Runtime::handle_control(wire::Message& m, Actor& actor) {
           std::vector<PoolClient::Replica> replicas;
           for (const auto& replica : in.replicas) {
             if (auto st = connect(replica); !st) return fail(st.error().message);
-            replicas.push_back({replica.name, inputs_.back().get(), !same_host(replica.endpoint)});
+            replicas.push_back({replica.name, inputs_.back().get(), !same_host(replica.endpoint), replica.part});
+            input.holds_parts = input.holds_parts || replica.part >= 0;
           }
           const PoolOptions options =
               pool_options(in.strategy, in.split, in.replicas.front().window, in.seed, static_cast<size_t>(in.window));
@@ -448,9 +449,9 @@ void Runtime::handle_control(wire::Message& m, Actor& actor) {
   }
 }
 
-void Runtime::ask_input(size_t i, wire::Op op, Value body, wire::RequestClient::Callback callback) {
+void Runtime::ask_input(size_t i, wire::Op op, Value body, wire::RequestClient::Callback callback, int64_t part) {
   LightingInput& in = lighting_[i];
-  if (in.pool) return in.pool->request(op, std::move(body), std::move(callback));
+  if (in.pool) return in.pool->request(op, std::move(body), std::move(callback), part);
   inputs_[in.connection]->request(op, std::move(body), std::move(callback));
 }
 

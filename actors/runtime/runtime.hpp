@@ -111,7 +111,11 @@ class Runtime {
   // dispatches to itself (CONFIG inputs[i].pool): ask_input() serves both; input(i) is the connection of a single
   // actor (ring nodes, a multiplexer's replicas).
   size_t input_count() const { return lighting_.size(); }
-  void ask_input(size_t i, wire::Op op, Value body, wire::RequestClient::Callback callback);
+  // `part` >= 0: the body's points lie in that part of a partitioned scene, and a pool sends them to a replica that
+  // holds it (partition { colocate = true }).
+  void ask_input(size_t i, wire::Op op, Value body, wire::RequestClient::Callback callback, int64_t part = -1);
+  // Input i is a pool some of whose replicas hold a scene part themselves: the asker should say each request's part.
+  bool input_holds_parts(size_t i) const { return lighting_[i].holds_parts; }
   bool input_is_pool(size_t i) const { return lighting_[i].pool != nullptr; }
   // Input i takes normals and materials from the scene (CONFIG inputs[i].lean; a pool: every replica does).
   bool input_is_lean(size_t i) const { return lighting_[i].lean; }
@@ -171,6 +175,7 @@ class Runtime {
     size_t connection = SIZE_MAX;       // into inputs_, for a single actor
     std::unique_ptr<PoolClient> pool;   // for a pool dispatched here
     bool lean = false;
+    bool holds_parts = false;           // some replica holds a scene part itself
   };
   std::vector<LightingInput> lighting_;
   size_t first_geometry_ = 0, geometry_inputs_ = 0;

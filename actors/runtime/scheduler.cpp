@@ -70,6 +70,22 @@ std::optional<size_t> Scheduler::pick() {
   return std::nullopt;
 }
 
+std::optional<size_t> Scheduler::pick(int64_t group) {
+  const size_t n = replicas_.size();
+  std::optional<size_t> best;
+  size_t best_load = 0;
+  for (size_t k = 0; k < n; ++k) {
+    const size_t r = (next_ + k) % n;
+    if (!replicas_[r].live || replicas_[r].group != group) continue;
+    const size_t load = replicas_[r].out + replicas_[r].queue;
+    if (!best || load < best_load) {
+      best = r;
+      best_load = load;
+    }
+  }
+  return best ? best : pick();
+}
+
 void Scheduler::sent(size_t r, size_t points) {
   ++replicas_[r].out;
   ++replicas_[r].packets;

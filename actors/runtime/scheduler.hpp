@@ -25,6 +25,10 @@ class Scheduler {
 
   // The replica for the next packet, or nullopt when every replica is lost.
   std::optional<size_t> pick();
+  // The least loaded live replica of `group` (set_group), or pick() when none of them lives: a partitioned farm's
+  // points go to a replica that holds their part (partition { colocate = true }), whatever the pool's strategy.
+  std::optional<size_t> pick(int64_t group);
+  void set_group(size_t replica, int64_t group) { replicas_[replica].group = group; }
   void sent(size_t replica, size_t points);
   void answered(size_t replica, uint32_t reported_queue);
   void lost(size_t replica);  // never picked again
@@ -42,6 +46,7 @@ class Scheduler {
   struct Replica {
     bool live = true;
     bool remote = false;      // on another host than the dispatcher
+    int64_t group = -1;       // the scene part it holds (-1: none)
     size_t out = 0;           // packets sent and not answered
     uint32_t queue = 0;       // last reported queue length
     uint64_t packets = 0, points = 0;

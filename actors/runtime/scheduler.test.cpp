@@ -21,6 +21,25 @@ TEST(Scheduler, RoundRobinCycles) {
   EXPECT_EQ(order, (std::vector<size_t>{0, 1, 2, 0, 1, 2}));
 }
 
+// partition { colocate = true }: a packet of one part's points goes to the least loaded live replica holding that
+// part, whatever the strategy, and to any replica once none of those lives.
+TEST(Scheduler, APartsPacketGoesToAReplicaHoldingThatPart) {
+  Scheduler s(S::round_robin, 4, 8);
+  for (size_t r = 0; r < 4; ++r) s.set_group(r, static_cast<int64_t>(r % 2));  // replicas 0, 2 hold part 0; 1, 3 part 1
+  EXPECT_EQ(*s.pick(1), 1u);
+  s.sent(1, 10);
+  EXPECT_EQ(*s.pick(1), 3u);  // replica 1 is busier now
+  s.sent(3, 10);
+  s.sent(3, 10);
+  EXPECT_EQ(*s.pick(1), 1u);
+  EXPECT_EQ(*s.pick(0), 0u);
+  s.lost(1);
+  s.lost(3);
+  const auto any = s.pick(1);
+  ASSERT_TRUE(any.has_value());
+  EXPECT_TRUE(*any == 0u || *any == 2u);
+}
+
 TEST(Scheduler, LeastLoadedSendsToTheShortestQueue) {
   Scheduler s(S::least_loaded, 3, 8);
   // Replicas report queues 5, 0, 2 on their last replies.
