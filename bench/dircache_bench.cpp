@@ -9,7 +9,7 @@
 // renderers' camera rays included). Goals: hit ratio >= 60.8 % at the accurate setting with RMSE <= 1.3x the
 // uncached farm's, and the bytes to the parts at least halved. Writes bench-dircache.json.
 //
-//   build/bench/dircache_bench [--size WIDTH] [--reference-spp N] [--json FILE]
+//   build/bench/dircache_bench [--size WIDTH] [--reference-spp N] [--radius R] [--json FILE]
 #include <cstdio>
 #include <fstream>
 #include <string>
@@ -20,12 +20,14 @@
 
 int main(int argc, char** argv) {
   int width = 160, reference_spp = 1024;
+  double radius = 0.5;
   std::string json_path = "bench-dircache.json";
   for (int i = 1; i + 1 < argc; i += 2) {
     const std::string a = argv[i];
     if (a == "--size") width = std::atoi(argv[i + 1]);
     else if (a == "--reference-spp") reference_spp = std::atoi(argv[i + 1]);
     else if (a == "--json") json_path = argv[i + 1];
+    else if (a == "--radius") radius = std::atof(argv[i + 1]);
   }
   const std::string obj = bench::shared_scene("lost_empire/lost_empire.obj");
   if (obj.empty()) return 0;
@@ -57,17 +59,17 @@ int main(int argc, char** argv) {
     int spp, fill;
     double radius;
   };
-  const Setting settings[3] = {{"accurate", 32, 32, 1.0}, {"fast", 16, 8, 1.0}, {"low", 8, 2, 1.0}};
+  const Setting settings[3] = {{"accurate", 32, 8, radius}, {"fast", 16, 4, radius}, {"low", 8, 2, radius}};
   const std::string out = (bench::fs::temp_directory_path() / "lightfarm-dircache.exr").string();
   std::printf("Lost Empire %s, pathtrace depth 4, 3 parts, 2 renderers, a pool of 3; reference %d spp\n", size.c_str(),
               reference_spp);
   std::printf("home: each replica holds a part itself and is sent the points there (partition { colocate = true })\n");
-  std::printf("%-9s %-5s %-5s %8s %12s %8s %12s %12s %12s %12s %8s %9s\n", "quality", "home", "cache", "seconds",
-              "rays sent", "rmse", "diffuse", "local", "global", "lookup", "hit", "MB parts");
+  std::printf("%-9s %-5s %-5s %8s %12s %8s %12s %12s %12s %12s %8s %9s %9s\n", "quality", "home", "cache", "seconds",
+              "rays sent", "rmse", "diffuse", "local", "global", "lookup", "hit", "MB sent", "MB parts");
   lf::Value::Array rows;
   for (const Setting& s : settings) {
     for (bool home : {false, true}) {
-      double plain_rmse = 0, plain_mb = 0, plain_sent = 0;
+      double plain_rmse = 0, plain_mb = 0, plain_sent = 0, plain_sent_mb = 0;
       for (bool cache : {false, true}) {
         const auto run = bench::run_farm(script,
                                          {"spp=" + std::to_string(s.spp), "fill=" + std::to_string(s.fill),
@@ -80,27 +82,30 @@ int main(int argc, char** argv) {
         auto op = [&](const char* key) { return bench::sum_detail_over_kind(run.stats, "pathtrace", key); };
         // Ray visits the op's replicas sent to geometry actors (those in a replica's own part stay home).
         const double sent = op("part_visits") - op("local_part_visits");
+        const double sent_mb = op("ray_bytes_to_parts") / 1e6;  // those rays and their answers
         const double mb = bench::sum_over_kind(run.stats, "geometry", "bytes_in") / 1e6;
         const double diffuse = op("diffuse_rays"), local = op("local_rays"), global = op("global_rays"),
                      lookups = op("cache_lookups");
         const double hit = global + lookups > 0 ? lookups / (global + lookups) : 0;
-        std::printf("%-9s %-5s %-5s %8.2f %12.0f %8.4f %12.0f %12.0f %12.0f %12.0f %7.1f%% %9.1f\n", s.name,
+        std::printf("%-9s %-5s %-5s %8.2f %12.0f %8.4f %12.0f %12.0f %12.0f %12.0f %7.1f%% %9.1f %9.1f\n", s.name,
                     home ? "yes" : "no", cache ? "yes" : "no", run.wall_seconds, sent, rmse, diffuse, local, global,
-                    lookups, 100 * hit, mb);
+                    lookups, 100 * hit, sent_mb, mb);
         if (!cache) {
           plain_rmse = rmse;
           plain_mb = mb;
           plain_sent = sent;
+          plain_sent_mb = sent_mb;
         } else {
-          // MB parts counts everything the geometry actors received: the renderers' camera rays too (they hold no
-          // geometry), and the fill pass's paths. The ray visits the replicas sent are what moved between parts.
-          std::printf("                cache / no cache: rmse %.2fx (goal <= 1.3); ray visits sent to other parts "
-                      "%.2fx, MB to the parts %.2fx (goal <= 0.5)\n",
-                      rmse / plain_rmse, sent / plain_sent, mb / plain_mb);
+          // MB sent: the rays the replicas sent to other processes' parts, and their answers (the fill pass's
+          // included): with home parts, what moved between parts. MB parts: everything the geometry actors
+          // received, the renderers' camera rays too (renderers hold no geometry), with message headers.
+          std::printf("                cache / no cache: rmse %.2fx (goal <= 1.3); hit ratio %.1f%% (goal >= 60.8%%); "
+                      "rays sent %.2fx, MB sent %.2fx (goal <= 0.5), MB parts %.2fx\n",
+                      rmse / plain_rmse, 100 * hit, sent / plain_sent, sent_mb / plain_sent_mb, mb / plain_mb);
         }
         rows.push_back(lf::Value::Map{{"quality", s.name}, {"home", home}, {"cache", cache}, {"spp", s.spp},
                                       {"fill_spp", s.fill}, {"radius", s.radius}, {"seconds", run.wall_seconds},
-                                      {"ray_visits_sent", sent}, {"relative_rmse", rmse}, {"diffuse_rays", diffuse},
+                                      {"ray_visits_sent", sent}, {"mb_sent", sent_mb}, {"relative_rmse", rmse}, {"diffuse_rays", diffuse},
                                       {"local_rays", local}, {"global_rays", global}, {"cache_lookups", lookups},
                                       {"hit_ratio", hit}, {"mb_to_parts", mb}});
       }

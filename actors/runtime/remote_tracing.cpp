@@ -45,7 +45,7 @@ template <bool Any>
 static Task trace_rounds(Runtime& rt, const Scene& scene, const std::vector<Bounds>& boxes, size_t batch,
                          size_t local_part, const RayTracer* local_tracer, std::span<const Ray> rays,
                          std::span<Hit> hits, std::span<uint8_t> blocked, std::span<uint32_t> hit_part,
-                         uint64_t& visits, uint64_t& local_visits, uint64_t& requests) {
+                         uint64_t& visits, uint64_t& local_visits, uint64_t& requests, uint64_t& payload_bytes) {
   const size_t parts = boxes.size();
   RayRoutes routes(rays, boxes);
   while (!routes.done()) {
@@ -61,6 +61,8 @@ static Task trace_rounds(Runtime& rt, const Scene& scene, const std::vector<Boun
       else r->hits.resize(r->rays.size());
       visits += r->rays.size();
       if (p == local_part) continue;  // after the requests are out, so that both run at once
+      // A ray goes as 8 floats and comes back as a hit (triangle and distance) or one byte (trace_codec.hpp).
+      payload_bytes += r->rays.size() * (8 * sizeof(float) + (Any ? 1 : sizeof(uint32_t) + sizeof(float)));
       for (size_t begin = 0; begin < r->rays.size(); begin += batch) {
         const size_t end = std::min(begin + batch, r->rays.size());
         std::vector<Ray> chunk;
@@ -132,7 +134,7 @@ Task RemoteTracing::intersect(std::span<const Ray> rays, std::span<Hit> hits, st
   std::fill(hit_part.begin(), hit_part.end(), kNoPart);
   rays_ += rays.size();
   co_await trace_rounds<false>(rt_, scene_, boxes_, batch_, local_part_, local_tracer_.get(), rays, hits, {}, hit_part,
-                               visits_, local_visits_, requests_);
+                               visits_, local_visits_, requests_, payload_bytes_);
   for (size_t i = 0; i < rays.size(); ++i) hits[i] = ties_.settle(rays[i], hits[i]);
 }
 
@@ -140,7 +142,7 @@ Task RemoteTracing::occluded(std::span<const Ray> rays, std::span<uint8_t> occlu
   std::fill(occluded.begin(), occluded.end(), uint8_t{0});
   rays_ += rays.size();
   co_await trace_rounds<true>(rt_, scene_, boxes_, batch_, local_part_, local_tracer_.get(), rays, {}, occluded, {},
-                              visits_, local_visits_, requests_);
+                              visits_, local_visits_, requests_, payload_bytes_);
 }
 
 Value RemoteTracing::stats(bool whole_scene_bvh) const {
@@ -148,6 +150,7 @@ Value RemoteTracing::stats(bool whole_scene_bvh) const {
                     {"part_visits", static_cast<int64_t>(visits_)},
                     {"local_part_visits", static_cast<int64_t>(local_visits_)},
                     {"trace_requests", static_cast<int64_t>(requests_)},
+                    {"ray_bytes_to_parts", static_cast<int64_t>(payload_bytes_)},
                     {"whole_scene_bvh", whole_scene_bvh}};
 }
 

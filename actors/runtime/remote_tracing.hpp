@@ -36,8 +36,9 @@ class RemoteTracing final : public Tracing {
   Task intersect(std::span<const Ray> rays, std::span<Hit> hits, std::span<uint32_t> hit_part);
   Task occluded(std::span<const Ray> rays, std::span<uint8_t> occluded) override;
   // What went to the parts: rays asked about, part visits (a ray in n parts' boxes makes up to n), of them those
-  // traced in the part this process holds, requests; and whether the asking process holds a BVH of the whole
-  // scene anyway (a host agent's).
+  // traced in the part this process holds, requests, the rays' and answers' bytes that crossed to other processes
+  // (payload, both ways, without message headers); and whether the asking process holds a BVH of the whole scene
+  // anyway (a host agent's).
   Value stats(bool whole_scene_bvh) const;
   size_t parts() const { return boxes_.size(); }
 
@@ -49,7 +50,7 @@ class RemoteTracing final : public Tracing {
   size_t batch_;
   size_t local_part_ = SIZE_MAX;
   std::unique_ptr<RayTracer> local_tracer_;
-  uint64_t rays_ = 0, visits_ = 0, local_visits_ = 0, requests_ = 0;
+  uint64_t rays_ = 0, visits_ = 0, local_visits_ = 0, requests_ = 0, payload_bytes_ = 0;
 };
 
 }  // namespace lf
