@@ -154,10 +154,12 @@ std::vector<double> probe_weights(const Scene& scene, const RayTracer& tracer, c
 
 std::vector<ScenePart> partition_by_probes(const Scene& scene, const RayTracer& tracer, const Camera& camera,
                                            int width, int height, int parts, int rounds) {
+  constexpr double kEvenParts = 1.2;
   const Probes probes = probe_rays(scene, tracer, camera, width, height);
   std::vector<double> weights = hit_weights(scene, probes);
   std::vector<ScenePart> best;
   double best_busiest = 0, best_total = 0;
+  bool best_even = false;
   std::vector<PartCrossing> crossings;
   for (int round = 0; round <= rounds; ++round) {
     std::vector<ScenePart> split = partition_scene(scene, parts, weights);
@@ -174,10 +176,15 @@ std::vector<ScenePart> partition_by_probes(const Scene& scene, const RayTracer& 
     const double total = std::accumulate(visits.begin(), visits.end(), 0.0);
     const double mean = total / static_cast<double>(visits.size());
     const double busiest = *std::max_element(visits.begin(), visits.end());
-    // The busiest part bounds a frame's time; of two splits as busy, the one with less work in all.
-    if (best.empty() || busiest < best_busiest || (busiest == best_busiest && total < best_total)) {
+    // The busiest part bounds a frame's time when each part has a host of its own; of two splits as busy, the one
+    // with less work in all. A split whose parts are even (busiest at most kEvenParts times the mean) beats an uneven
+    // one: on Lost Empire the least busy uneven split saves ~2 % on the busiest part, and leaves it 1.45x the mean.
+    const bool even = mean > 0 && busiest <= kEvenParts * mean;
+    if (best.empty() || (even && !best_even) ||
+        (even == best_even && (busiest < best_busiest || (busiest == best_busiest && total < best_total)))) {
       best_busiest = busiest;
       best_total = total;
+      best_even = even;
       best = split;
     }
     if (round == rounds || mean <= 0) break;

@@ -43,9 +43,9 @@ std::vector<double> probe_weights(const Scene& scene, const RayTracer& tracer, c
                                   int height);
 // The split from probe weights, then `rounds` of rebalancing by what the probe rays would do in it: each ray visits
 // the parts whose boxes it enters before its hit, so a part's visits are its share of ray work; parts above the mean
-// get heavier weights (a smaller box) and the scene is split again. Returns the split whose busiest part has the
-// fewest visits (what bounds a frame's time), of equals the one with the fewest visits in all. Evening the parts out
-// further is possible but only by adding work to all of them (docs/decisions.md).
+// get heavier weights (a smaller box) and the scene is split again. Returns, of the splits whose parts are even (the
+// busiest at most 1.2x the mean), else of all, the one whose busiest part has the fewest visits (what bounds a
+// frame's time when each part has a host), of equals the one with the fewest visits in all (docs/decisions.md).
 std::vector<ScenePart> partition_by_probes(const Scene& scene, const RayTracer& tracer, const Camera& camera,
                                            int width, int height, int parts, int rounds = 4);
 

@@ -184,7 +184,8 @@ renderers { count = 1, lighting = lightop "combine" { inputs = { direct, lightop
 }
 
 // A real interior with thin double-sided blocks (coplanar back-to-back faces, which the tie rule settles) and a
-// three-bounce path tracer: the split farm's pixels are the whole farm's.
+// three-bounce path tracer: the split farm's pixels are the whole farm's, at 2, 3 and 5 parts and with replicas
+// that hold their parts.
 TEST_F(PartitionTest, LostEmpireIsTheSameWhetherItsSceneIsSplitOrNot) {
   const std::string obj = kSource + "/../shared/scenes/lost_empire/lost_empire.obj";
   if (!fs::exists(obj)) GTEST_SKIP() << "no " << obj;
@@ -192,16 +193,20 @@ TEST_F(PartitionTest, LostEmpireIsTheSameWhetherItsSceneIsSplitOrNot) {
 material "Torch" { emission = {9, 9, 6} }
 camera { eye = {-8, 16, 20}, at = {6, 12, 0}, fov = 70 }
 image { width = 64, height = 48, spp = 2, tile = 16 }
-if param("parts", 0) > 0 then partition { parts = param("parts", 0) } end
-renderers { count = 2, lighting = lightop "pathtrace" { max_depth = 3 } }
+if param("parts", 0) > 0 then partition { parts = param("parts", 0), colocate = param("colocate", false) } end
+local op = lightop "pathtrace" { max_depth = 3 }
+renderers { count = 2, lighting = param("colocate", false) and multiplexer { op, replicas = 3 } or op }
 )");
   const Image whole = render({"run", script}, "whole.exr");
   ASSERT_GT(brightness(whole), 0);
-  for (int parts : {2, 3}) {
+  for (int parts : {2, 3, 5}) {
     const Image split = render({"run", script, "--set", "parts=" + std::to_string(parts)},
                                "split-" + std::to_string(parts) + ".exr");
     EXPECT_TRUE(split.pixels == whole.pixels) << parts << " parts";
   }
+  // Replicas that hold their parts (a pool of 3 over 3 parts) shade where they trace, with the same pixels.
+  const Image home = render({"run", script, "--set", "parts=3", "--set", "colocate=true"}, "home.exr");
+  EXPECT_TRUE(home.pixels == whole.pixels) << "replicas holding their parts";
 }
 
 // A part is held by one process only: losing it mid-frame stops the farm with a message that says so, writes no
