@@ -45,8 +45,20 @@ template <bool Any>
 static Task trace_rounds(Runtime& rt, const Scene& scene, const std::vector<Bounds>& boxes, size_t batch,
                          size_t local_part, const RayTracer* local_tracer, std::span<const Ray> rays,
                          std::span<Hit> hits, std::span<uint8_t> blocked, std::span<uint32_t> hit_part,
-                         uint64_t& visits, uint64_t& local_visits, uint64_t& requests, uint64_t& payload_bytes) {
+                         RemoteTracing::Counts& counts) {
   const size_t parts = boxes.size();
+  // The rays of a round's part from `begin` to `end`, each searching only as near as its best hit so far (only as
+  // near or nearer can replace it).
+  auto rays_of = [&](const PartRound& r, size_t begin, size_t end) {
+    std::vector<Ray> out;
+    out.reserve(end - begin);
+    for (size_t k = begin; k < end; ++k) {
+      Ray ray = rays[r.rays[k]];
+      if (!Any && hits[r.rays[k]].valid()) ray.tfar = hits[r.rays[k]].t;
+      out.push_back(ray);
+    }
+    return out;
+  };
   RayRoutes routes(rays, boxes);
   while (!routes.done()) {
     const auto& by_part = routes.round();
@@ -59,21 +71,15 @@ static Task trace_rounds(Runtime& rt, const Scene& scene, const std::vector<Boun
       auto r = round[p];
       if constexpr (Any) r->blocked.resize(r->rays.size());
       else r->hits.resize(r->rays.size());
-      visits += r->rays.size();
+      counts.visits += r->rays.size();
       if (p == local_part) continue;  // after the requests are out, so that both run at once
       // A ray goes as 8 floats and comes back as a hit (triangle and distance) or one byte (trace_codec.hpp).
-      payload_bytes += r->rays.size() * (8 * sizeof(float) + (Any ? 1 : sizeof(uint32_t) + sizeof(float)));
+      counts.payload_bytes += r->rays.size() * (8 * sizeof(float) + (Any ? 1 : sizeof(uint32_t) + sizeof(float)));
       for (size_t begin = 0; begin < r->rays.size(); begin += batch) {
         const size_t end = std::min(begin + batch, r->rays.size());
-        std::vector<Ray> chunk;
-        chunk.reserve(end - begin);
-        for (size_t k = begin; k < end; ++k) {
-          Ray ray = rays[r->rays[k]];
-          if (!Any && hits[r->rays[k]].valid()) ray.tfar = hits[r->rays[k]].t;  // only as near or nearer can replace it
-          chunk.push_back(ray);
-        }
+        const std::vector<Ray> chunk = rays_of(*r, begin, end);
         ++state->remaining;
-        ++requests;
+        ++counts.requests;
         const std::string part_name = rt.geometry_name(p);
         const size_t triangles = scene.triangle_count();
         rt.geometry(p).request(wire::Op::trace, encode_trace_request(chunk, Any),
@@ -94,14 +100,8 @@ static Task trace_rounds(Runtime& rt, const Scene& scene, const std::vector<Boun
     }
     if (local_part < parts && round[local_part]) {
       PartRound& r = *round[local_part];
-      local_visits += r.rays.size();
-      std::vector<Ray> local;
-      local.reserve(r.rays.size());
-      for (uint32_t i : r.rays) {
-        Ray ray = rays[i];
-        if (!Any && hits[i].valid()) ray.tfar = hits[i].t;
-        local.push_back(ray);
-      }
+      counts.local_visits += r.rays.size();
+      const std::vector<Ray> local = rays_of(r, 0, r.rays.size());
       if constexpr (Any) local_tracer->occluded(local, r.blocked);
       else local_tracer->intersect_unsettled(local, r.hits);
     }
@@ -132,25 +132,25 @@ Task RemoteTracing::intersect(std::span<const Ray> rays, std::span<Hit> hits) {
 Task RemoteTracing::intersect(std::span<const Ray> rays, std::span<Hit> hits, std::span<uint32_t> hit_part) {
   std::fill(hits.begin(), hits.end(), Hit{});
   std::fill(hit_part.begin(), hit_part.end(), kNoPart);
-  rays_ += rays.size();
+  counts_.rays += rays.size();
   co_await trace_rounds<false>(rt_, scene_, boxes_, batch_, local_part_, local_tracer_.get(), rays, hits, {}, hit_part,
-                               visits_, local_visits_, requests_, payload_bytes_);
+                               counts_);
   for (size_t i = 0; i < rays.size(); ++i) hits[i] = ties_.settle(rays[i], hits[i]);
 }
 
 Task RemoteTracing::occluded(std::span<const Ray> rays, std::span<uint8_t> occluded) {
   std::fill(occluded.begin(), occluded.end(), uint8_t{0});
-  rays_ += rays.size();
+  counts_.rays += rays.size();
   co_await trace_rounds<true>(rt_, scene_, boxes_, batch_, local_part_, local_tracer_.get(), rays, {}, occluded, {},
-                              visits_, local_visits_, requests_, payload_bytes_);
+                              counts_);
 }
 
 Value RemoteTracing::stats(bool whole_scene_bvh) const {
-  return Value::Map{{"traced_rays", static_cast<int64_t>(rays_)},
-                    {"part_visits", static_cast<int64_t>(visits_)},
-                    {"local_part_visits", static_cast<int64_t>(local_visits_)},
-                    {"trace_requests", static_cast<int64_t>(requests_)},
-                    {"ray_bytes_to_parts", static_cast<int64_t>(payload_bytes_)},
+  return Value::Map{{"traced_rays", static_cast<int64_t>(counts_.rays)},
+                    {"part_visits", static_cast<int64_t>(counts_.visits)},
+                    {"local_part_visits", static_cast<int64_t>(counts_.local_visits)},
+                    {"trace_requests", static_cast<int64_t>(counts_.requests)},
+                    {"ray_bytes_to_parts", static_cast<int64_t>(counts_.payload_bytes)},
                     {"whole_scene_bvh", whole_scene_bvh}};
 }
 

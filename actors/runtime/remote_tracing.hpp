@@ -41,6 +41,10 @@ class RemoteTracing final : public Tracing {
   // anyway (a host agent's).
   Value stats(bool whole_scene_bvh) const;
   size_t parts() const { return boxes_.size(); }
+  // What stats() reports: rays asked about, part visits, of them in the part held here, requests sent, payload bytes.
+  struct Counts {
+    uint64_t rays = 0, visits = 0, local_visits = 0, requests = 0, payload_bytes = 0;
+  };
 
  private:
   Runtime& rt_;
@@ -50,7 +54,7 @@ class RemoteTracing final : public Tracing {
   size_t batch_;
   size_t local_part_ = SIZE_MAX;
   std::unique_ptr<RayTracer> local_tracer_;
-  uint64_t rays_ = 0, visits_ = 0, local_visits_ = 0, requests_ = 0, payload_bytes_ = 0;
+  Counts counts_;
 };
 
 }  // namespace lf
