@@ -4,7 +4,9 @@
 // kept between runs with --reference) and the render phase's seconds (median). The figure of merit is the usual
 // efficiency 1 / (RMSE² × seconds): how much less time the tree needs for the same noise.
 //
-//   build/bench/lights_bench [--json FILE] [--runs N] [--reference FILE.exr] [--reference-spp N]
+// A third variant draws the point on the chosen triangle by its solid angle (light_point = "solid_angle").
+//
+//   build/bench/lights_bench [--json FILE] [--runs N] [--reference FILE.exr] [--reference-spp N] [--width W]
 #include <cmath>
 #include <cstdio>
 #include <fstream>
@@ -48,25 +50,27 @@ Render render(const std::string& script, const std::vector<std::string>& sets) {
 
 int main(int argc, char** argv) {
   std::string json_path = "bench-lights.json", reference_file;
-  int runs = 3, reference_spp = 1024;
+  int runs = 3, reference_spp = 1024, width = 320;
   for (int i = 1; i + 1 < argc; i += 2) {
     const std::string a = argv[i];
     if (a == "--json") json_path = argv[i + 1];
     else if (a == "--runs") runs = std::atoi(argv[i + 1]);
     else if (a == "--reference") reference_file = argv[i + 1];
     else if (a == "--reference-spp") reference_spp = std::atoi(argv[i + 1]);
+    else if (a == "--width") width = std::atoi(argv[i + 1]);
   }
   const std::string script = std::string(LIGHTFARM_SOURCE_DIR) + "/examples/lost_empire.lua";
   if (!bench::fs::exists(std::string(LIGHTFARM_SOURCE_DIR) + "/../shared/scenes/lost_empire/lost_empire.obj")) {
     std::printf("Lost Empire is not in ../shared/scenes: nothing to measure\n");
     return 0;
   }
+  const std::string size[2] = {"width=" + std::to_string(width), "height=" + std::to_string(width * 3 / 4)};
   lf::Image reference;
   if (auto kept = reference_file.empty() ? lf::Result<lf::Image>(lf::make_error("none")) : lf::read_image(reference_file)) {
     reference = *kept;
     std::printf("reference: %s (kept from an earlier run)\n", reference_file.c_str());
   } else {
-    Render r = render(script, {"spp=" + std::to_string(reference_spp), "light_samples=4"});
+    Render r = render(script, {"spp=" + std::to_string(reference_spp), "light_samples=4", size[0], size[1]});
     reference = r.image;
     if (!reference_file.empty()) (void)lf::write_image(reference, reference_file);
     std::printf("reference: tree, %d spp x 4 light samples, render %.1f s\n", reference_spp, r.render_seconds);
@@ -74,19 +78,21 @@ int main(int argc, char** argv) {
 
   std::printf("\n%5s %-6s %10s %10s %10s\n", "spp", "lights", "rel. RMSE", "render s", "efficiency");
   lf::Value::Array rows;
-  std::vector<double> gains;
+  std::vector<double> gains, solid_gains;
   for (int spp : {4, 16, 64}) {
-    std::vector<double> seconds[2];
-    double rmse[2] = {0, 0};
-    const char* names[2] = {"tree", "power"};
+    // "solid": the tree's pick, and a point uniform over the solid angle of the chosen triangle (light_point).
+    std::vector<double> seconds[3];
+    double rmse[3] = {0, 0, 0};
+    const char* names[3] = {"tree", "power", "solid"};
     for (int run = 0; run < runs; ++run)
-      for (int k = 0; k < 2; ++k) {
-        Render r = render(script, {"spp=" + std::to_string(spp), std::string("light_sampling=") + names[k]});
+      for (int k = 0; k < 3; ++k) {
+        Render r = render(script, {"spp=" + std::to_string(spp), std::string("light_sampling=") + (k == 1 ? "power" : "tree"),
+                                   std::string("light_point=") + (k == 2 ? "solid_angle" : "area"), size[0], size[1]});
         seconds[k].push_back(r.render_seconds);
         rmse[k] = relative_rmse(r.image, reference);  // the same every run: images are deterministic
       }
-    double efficiency[2];
-    for (int k = 0; k < 2; ++k) {
+    double efficiency[3];
+    for (int k = 0; k < 3; ++k) {
       const bench::Spread s = bench::spread(seconds[k]);
       efficiency[k] = 1.0 / (rmse[k] * rmse[k] * s.median);
       std::printf("%5d %-6s %10.4f %10.3f %10.1f   (render s min %.3f max %.3f)\n", spp, names[k], rmse[k], s.median,
@@ -95,11 +101,17 @@ int main(int argc, char** argv) {
                                     {"render_seconds", s.to_value()}, {"efficiency", efficiency[k]}});
     }
     gains.push_back(efficiency[0] / efficiency[1]);
-    std::printf("%5d tree / power efficiency %.2f\n", spp, gains.back());
+    solid_gains.push_back(efficiency[2] / efficiency[0]);
+    std::printf("%5d tree / power efficiency %.2f, solid angle / area points %.2f\n", spp, gains.back(),
+                solid_gains.back());
   }
-  const bench::Spread g = bench::spread(gains);
+  const bench::Spread g = bench::spread(gains), sg = bench::spread(solid_gains);
   std::printf("\ntree / power efficiency over sample counts: min %.2f median %.2f max %.2f\n", g.min, g.median, g.max);
-  std::ofstream(json_path) << lf::to_json(lf::Value::Map{{"rows", rows}, {"tree_over_power_efficiency", g.to_value()}}, 2)
+  std::printf("solid angle / area points (both with the tree): min %.2f median %.2f max %.2f\n", sg.min, sg.median,
+              sg.max);
+  std::ofstream(json_path) << lf::to_json(lf::Value::Map{{"rows", rows}, {"tree_over_power_efficiency", g.to_value()},
+                                                         {"solid_angle_over_area_efficiency", sg.to_value()}},
+                                          2)
                            << "\n";
   std::printf("wrote %s\n", json_path.c_str());
 }

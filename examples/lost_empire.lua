@@ -32,16 +32,17 @@ if param("parts", 0) > 0 then partition { parts = param("parts", 0) } end
 
 local lighting = param("lighting", "direct")
 local light_sampling = param("light_sampling", "tree")
+local light_point = param("light_point", "area")  -- "solid_angle": by the solid angle each light triangle subtends
 local function direct()
   -- mis: points a fraction of a block from a torch also get a BSDF sample (without it, their 1/d^2 light samples
   -- are fireflies that dominate the error).
-  return lightop "direct" { light_samples = param("light_samples", 2), light_sampling = light_sampling,
+  return lightop "direct" { light_samples = param("light_samples", 2), light_sampling = light_sampling, light_point = light_point,
                             mis = param("mis", true) }
 end
 if lighting == "direct" then
   renderers { count = param("renderers", 2), lighting = direct() }
 elseif lighting == "network" then
-  local paths = lightop "pathtrace" { max_depth = param("max_depth", 8), light_sampling = light_sampling,
+  local paths = lightop "pathtrace" { max_depth = param("max_depth", 8), light_sampling = light_sampling, light_point = light_point,
                                       name = "bounces" }
   local indirect = lightop "irradiance" { input = paths, a = param("a", 0.2), stride = param("stride", 8),
                                           finest = param("finest", 2), name = "indirect" }
@@ -50,7 +51,7 @@ elseif lighting == "network" then
   local specular = lightop "specular" { input = lightop "combine" { inputs = { lit, indirect }, name = "landing" } }
   renderers { count = param("renderers", 2), lighting = lightop "combine" { inputs = { lit, indirect, specular } } }
 elseif lighting == "pathtrace" then
-  local paths = multiplexer { lightop "pathtrace" { max_depth = param("max_depth", 8), light_sampling = light_sampling,
+  local paths = multiplexer { lightop "pathtrace" { max_depth = param("max_depth", 8), light_sampling = light_sampling, light_point = light_point,
                                                     directional_cache = param("directional_cache", false) },
                               replicas = param("replicas", 2) }
   renderers { count = param("renderers", 2), lighting = paths }

@@ -5,6 +5,7 @@
 #include "render/math.hpp"
 #include "render/sampler.hpp"
 #include "render/scene.hpp"
+#include "render/spherical_triangle.hpp"
 
 namespace lf {
 
@@ -50,6 +51,49 @@ inline LightSample light_sample_at(const Scene& scene, size_t e, float p_light, 
   return LightSample{y, scene.normal(tri), tri, le, p_light / area};
 }
 
+// How a point on a chosen triangle light is drawn: uniform over its (sampled) area, or uniform over the solid angle
+// it subtends at the shaded point (render/spherical_triangle.hpp), which takes away the 1 / d^2 weight of points next
+// to a light. Emitters with cut-out parts (render/emitter_cutouts.hpp), lights too small to be worth it from there
+// (kMinSampledSolidAngle) and point lights are drawn by area (or are points) either way.
+enum class LightPoint : uint8_t { area, solid_angle };
+
+// Whether emitter e seen from x is drawn by solid angle, and that solid angle. One function for sampling and for
+// the density at a BSDF hit, so that both take the same branch with the same number.
+inline bool solid_angle_sampled(const Scene& scene, size_t e, Vec3 x, LightPoint mode, double& omega) {
+  omega = 0;
+  if (mode != LightPoint::solid_angle || e >= scene.emitters().size() || scene.emitter_cutouts().restricted(e))
+    return false;
+  const uint32_t tri = scene.emitters()[e];
+  omega = spherical_triangle_solid_angle(x, scene.vertex(tri, 0), scene.vertex(tri, 1), scene.vertex(tri, 2));
+  return omega >= kMinSampledSolidAngle;
+}
+
+// As light_sample_at, with the point drawn as `mode` says for a shaded point at x.
+inline LightSample light_sample_from(const Scene& scene, size_t e, float p_light, Uniform2 uv, Vec3 x, LightPoint mode) {
+  double omega = 0;
+  if (solid_angle_sampled(scene, e, x, mode, omega)) {
+    const uint32_t tri = scene.emitters()[e];
+    const Vec3 p0 = scene.vertex(tri, 0), p1 = scene.vertex(tri, 1), p2 = scene.vertex(tri, 2);
+    const std::optional<Vec3> dir = sample_spherical_triangle(x, p0, p1, p2, uv.u, uv.v, omega);
+    const Vec3 ng = scene.normal(tri);
+    const float facing = dir ? dot(*dir, ng) : 0.0f;
+    const float t = facing != 0 ? dot(p0 - x, ng) / facing : 0.0f;
+    if (dir && t > 0 && std::isfinite(t)) {
+      const Vec3 y = x + *dir * t;
+      // Barycentrics of y, for the emitter's alpha (a wholly cut-out emitter sends nothing).
+      const Vec3 e1 = p1 - p0, e2 = p2 - p0, py = y - p0;
+      const float d11 = dot(e1, e1), d12 = dot(e1, e2), d22 = dot(e2, e2), d1 = dot(py, e1), d2 = dot(py, e2);
+      const float den = d11 * d22 - d12 * d12;
+      const float b1 = den != 0 ? (d22 * d1 - d12 * d2) / den : 0.0f, b2 = den != 0 ? (d11 * d2 - d12 * d1) / den : 0.0f;
+      const RGB le = scene.opaque(tri, Vec3{1 - b1 - b2, b1, b2}) ? scene.material(scene.material_of(tri)).ke : RGB{};
+      // Density 1 / omega over directions, as an area density at y: cos_y / (omega t^2).
+      const float pdf_area = p_light * static_cast<float>(std::fabs(facing) / (omega * static_cast<double>(t) * t));
+      return LightSample{y, ng, tri, le, pdf_area};
+    }
+  }
+  return light_sample_at(scene, e, p_light, uv);
+}
+
 // A low-discrepancy Sampler draws the light and the point on it from one 2D point (the pick's remainder and v), so
 // that a pixel's samples stay stratified over the lights' area together; an Rng, or the independent sampler, draws
 // three numbers in turn, as always.
@@ -72,25 +116,32 @@ inline LightSample sample_light(const Scene& scene, Draws& rng) {
   return light_sample_at(scene, e, p_light, rng.uniform2());
 }
 
-// Picks a light by what it can give point x facing n (the scene's light tree), and a uniform point on it; nullopt
-// when no light can reach x's side.
+// Picks a light by what it can give point x facing n (the scene's light tree), and a point on it as `mode` says;
+// nullopt when no light can reach x's side.
 template <class Draws>
-inline std::optional<LightSample> sample_light_at(const Scene& scene, Vec3 x, Vec3 n, Draws& rng) {
+inline std::optional<LightSample> sample_light_at(const Scene& scene, Vec3 x, Vec3 n, Draws& rng,
+                                                  LightPoint mode = LightPoint::area) {
   size_t e = 0;
   float p_light = 0;
   if (draws_jointly(rng)) {
     Uniform2 uv = rng.uniform2();
     if (!scene.light_tree().pick(x, n, uv.u, e, p_light, &uv.u)) return std::nullopt;
-    return light_sample_at(scene, e, p_light, uv);
+    return light_sample_from(scene, e, p_light, uv, x, mode);
   }
   if (!scene.light_tree().pick(x, n, rng.uniform(), e, p_light)) return std::nullopt;
-  return light_sample_at(scene, e, p_light, rng.uniform2());
+  return light_sample_from(scene, e, p_light, rng.uniform2(), x, mode);
 }
 
-// The area density with which sample_light_at(x, n) draws a point on emitter triangle `tri`.
-inline float light_pdf_area_at(const Scene& scene, uint32_t tri, Vec3 x, Vec3 n) {
+// The area density with which sample_light_at(x, n, mode) draws point y on emitter triangle `tri` (y seen from x at
+// distance dist with cosine cos_y at the light).
+inline float light_pdf_area_at(const Scene& scene, uint32_t tri, Vec3 x, Vec3 n, LightPoint mode = LightPoint::area,
+                               float dist = 0, float cos_y = 0) {
   const size_t e = scene.emitter_index_of(tri);
-  return scene.light_tree().probability(x, n, e) / emitter_sampled_area(scene, tri, e);
+  const float p_light = scene.light_tree().probability(x, n, e);
+  double omega = 0;
+  if (solid_angle_sampled(scene, e, x, mode, omega))
+    return p_light * static_cast<float>(std::fabs(cos_y) / (omega * static_cast<double>(dist) * dist));
+  return p_light / emitter_sampled_area(scene, tri, e);
 }
 
 // The area density with which sample_light draws a point on triangle `tri` (for MIS when a BSDF-sampled ray hits

@@ -9,6 +9,7 @@
 #include <span>
 
 #include "render/directional_cache.hpp"
+#include "render/light_sampling.hpp"
 #include "render/lightop.hpp"
 #include "render/sampler.hpp"
 
@@ -26,6 +27,9 @@ struct PathOptions {
   bool light_only_on_diffuse = false;
   // Choose lights through the scene's light tree (by what each can give the point), or else by power alone.
   bool light_tree = true;
+  // With the light tree: a point on the chosen triangle light uniform over its area, or over the solid angle it
+  // subtends (render/light_sampling.hpp).
+  LightPoint light_point = LightPoint::area;
   // The directional cache (render/directional_cache.hpp), for diffuse continuation rays: one that meets a surface
   // inside its cell's neighbourhood goes on as usual; one that leaves it takes the cache's radiance for its direction
   // where the cache answers, and is traced on through the scene where it does not. While the cache is not frozen,

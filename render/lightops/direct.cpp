@@ -19,6 +19,8 @@ class DirectLight final : public LightOp {
   explicit DirectLight(const ParamTable& p)
       : light_samples_(static_cast<int>(p.get_int("light_samples", 1, 1, 1 << 20))),
         light_tree_(p.get_string("light_sampling", "tree", {"tree", "power"}) == "tree"),
+        light_point_(p.get_string("light_point", "area", {"area", "solid_angle"}) == "solid_angle" ? LightPoint::solid_angle
+                                                                                                : LightPoint::area),
         mis_(p.get_bool("mis", false)),
         seed_(static_cast<uint64_t>(p.get_int("seed", 0, 0, INT32_MAX))) {}
 
@@ -34,12 +36,14 @@ class DirectLight final : public LightOp {
     o.stream = streams::direct ^ (seed_ << 8);
     o.light_only_on_diffuse = !mis_;
     o.light_tree = light_tree_;
+    o.light_point = light_point_;
     co_await trace_paths(ctx_, points, radiance, o);
   }
 
  private:
   int light_samples_;
   bool light_tree_;
+  LightPoint light_point_;
   bool mis_;
   uint64_t seed_;
   SceneContext ctx_;

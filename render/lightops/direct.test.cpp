@@ -21,7 +21,7 @@ struct Rig {
   uint32_t floor = 0;
 
   Rig(const std::vector<Vec3>& light_polygon, int light_samples, bool blocker = false,
-      SamplerKind sampler = SamplerKind::independent)
+      SamplerKind sampler = SamplerKind::independent, Value::Map params = {})
       : light(light_polygon) {
     floor = scene.add_material({"white", {1, 1, 1}, {}});
     auto grey = scene.add_material({"grey", {0.5f, 0.5f, 0.5f}, {}});
@@ -32,8 +32,8 @@ struct Rig {
     if (blocker) scene.add_quad({-1.2f, 0.5f, -1.2f}, {1.2f, 0.5f, -1.2f}, {1.2f, 0.5f, 1.2f}, {-1.2f, 0.5f, 1.2f}, grey);
     EXPECT_TRUE(scene.finalize("test").ok());
     tracer = std::make_unique<RayTracer>(scene);
-    op = create_lightop(*find_lightop_kind("direct"),
-                        ParamTable(Value::Map{{"light_samples", light_samples}}, "lightop 'direct'"));
+    params["light_samples"] = light_samples;
+    op = create_lightop(*find_lightop_kind("direct"), ParamTable(std::move(params), "lightop 'direct'"));
     SceneContext ctx{&scene, tracer.get()};
     ctx.sampler = sampler;
     run_to_completion(op->setup(ctx, none));
@@ -108,6 +108,32 @@ TEST(Direct, OffsetRectangleAndDiscMatchLambertsFormula) {
   }
   // Coaxial disc: F = r^2 / (h^2 + r^2); the 64-gon is within 0.2 % of the circle.
   EXPECT_NEAR(b[0].y / (3 * (1.5 * 1.5) / (4 + 1.5 * 1.5)), 1.0, 0.012);
+}
+
+// light_point = "solid_angle": the point on the light is drawn uniformly over the solid angle the light's triangle
+// subtends, so it still gives Lambert's formula, and right under a wide light (where a uniform point on the area
+// carries cos cos / d^2 weights that vary a lot) with far less noise.
+TEST(Direct, SolidAngleLightPointsMatchLambertsFormulaWithLessNoiseUnderAWideLight) {
+  const std::vector<Vec3> low{{-1, 0.2f, -1}, {1, 0.2f, -1}, {1, 0.2f, 1}, {-1, 0.2f, 1}};
+  const Value::Map solid{{"light_point", "solid_angle"}};
+  Rig exact(low, 20000, false, SamplerKind::independent, solid);
+  const std::vector<Vec3> where{{0, 0, 0}, {0.9f, 0, 0.3f}, {1.5f, 0, -0.5f}};
+  const auto got = exact.shade(points_at(where));
+  for (size_t i = 0; i < where.size(); ++i)
+    EXPECT_NEAR(got[i].y / (3 * form_factor(where[i], {0, 1, 0}, low)), 1.0, 0.01) << i;
+  auto rmse = [&](Value::Map params) {
+    Rig rig(low, 16, false, SamplerKind::independent, std::move(params));
+    ShadingPoints pts;
+    for (uint64_t i = 0; i < 256; ++i) pts.push_back({0.3f, 0, 0.2f}, {0, 1, 0}, {0, 1, 0}, 0, sample_key(i, 0));
+    const double f = form_factor({0.3f, 0, 0.2f}, {0, 1, 0}, low);
+    double sum = 0;
+    for (const RGB& l : rig.shade(pts)) sum += (l.y / (3 * f) - 1) * (l.y / (3 * f) - 1);
+    return std::sqrt(sum / 256);
+  };
+  const double by_area = rmse({}), by_solid_angle = rmse(solid);
+  EXPECT_LT(by_solid_angle, 0.5 * by_area) << by_area << " -> " << by_solid_angle;
+  std::printf("direct under a wide light, relative RMSE at 16 light samples: area %.4f, solid angle %.4f\n", by_area,
+              by_solid_angle);
 }
 
 TEST(Direct, ShadowsAndBackFacesGiveNothing) {

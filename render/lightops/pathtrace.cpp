@@ -18,6 +18,9 @@ class PathTrace final : public LightOp {
                                                                                              : PathOptions::Roulette::throughput;
     options_.samples = static_cast<int>(p.get_int("samples", 1, 1, 1 << 16));
     options_.light_tree = p.get_string("light_sampling", "tree", {"tree", "power"}) == "tree";
+    options_.light_point = p.get_string("light_point", "area", {"area", "solid_angle"}) == "solid_angle"
+                               ? LightPoint::solid_angle
+                               : LightPoint::area;
     options_.stream = streams::pathtrace ^ (static_cast<uint64_t>(p.get_int("seed", 0, 0, INT32_MAX)) << 8);
     use_cache_ = p.get_bool("directional_cache", false);
     cache_options_.cells = static_cast<int>(p.get_int("cache_cells", cache_options_.cells, 1, 256));
