@@ -21,12 +21,13 @@ struct Rig {
   uint32_t floor = 0;
 
   Rig(const std::vector<Vec3>& light_polygon, int light_samples, bool blocker = false,
-      SamplerKind sampler = SamplerKind::independent, Value::Map params = {})
+      SamplerKind sampler = SamplerKind::independent, Value::Map params = {}, float floor_half = 50)
       : light(light_polygon) {
     floor = scene.add_material({"white", {1, 1, 1}, {}});
     auto grey = scene.add_material({"grey", {0.5f, 0.5f, 0.5f}, {}});
     auto emitter = scene.add_material({"light", {0, 0, 0}, {2, 3, 4}});
-    scene.add_quad({-50, 0, -50}, {-50, 0, 50}, {50, 0, 50}, {50, 0, -50}, floor);
+    scene.add_quad({-floor_half, 0, -floor_half}, {-floor_half, 0, floor_half}, {floor_half, 0, floor_half},
+                   {floor_half, 0, -floor_half}, floor);
     // Light polygon as a fan; the caller gives corners so that the winding faces down.
     for (size_t i = 1; i + 1 < light.size(); ++i) scene.add_triangle(light[0], light[i], light[i + 1], emitter);
     if (blocker) scene.add_quad({-1.2f, 0.5f, -1.2f}, {1.2f, 0.5f, -1.2f}, {1.2f, 0.5f, 1.2f}, {-1.2f, 0.5f, 1.2f}, grey);
@@ -121,6 +122,13 @@ TEST(Direct, SolidAngleLightPointsMatchLambertsFormulaWithLessNoiseUnderAWideLig
   const auto got = exact.shade(points_at(where));
   for (size_t i = 0; i < where.size(); ++i)
     EXPECT_NEAR(got[i].y / (3 * form_factor(where[i], {0, 1, 0}, low)), 1.0, 0.01) << i;
+  // With a BSDF sample too, MIS weighs each by the other's density, so the light's must be the solid-angle one. (On
+  // a small floor: rays leave a surface 1e-4 of the scene's diagonal above it, which on the 100-wide floor is 7 % of
+  // this light's height, and a BSDF ray from there sees the light larger than the light sample did.)
+  Rig weighed(low, 100000, false, SamplerKind::independent, Value::Map{{"light_point", "solid_angle"}, {"mis", true}}, 2);
+  const auto mixed = weighed.shade(points_at(where));
+  for (size_t i = 0; i < where.size(); ++i)
+    EXPECT_NEAR(mixed[i].y / (3 * form_factor(where[i], {0, 1, 0}, low)), 1.0, 0.01) << "with mis, " << i;
   auto rmse = [&](Value::Map params) {
     Rig rig(low, 16, false, SamplerKind::independent, std::move(params));
     ShadingPoints pts;
