@@ -73,6 +73,25 @@ void trace_tile(const Scene& scene, const RayTracer& tracer, const Camera& camer
   tile_points(scene, camera, image, rect, rays, hits, keys, work);
 }
 
+void reorder_points(const TileWork& work, std::span<const uint32_t> order, TileWork& out) {
+  out = TileWork{};
+  out.rect = work.rect;
+  out.spp = work.spp;
+  out.eye = work.eye;
+  out.emitted = work.emitted;
+  out.rebuildable = work.rebuildable;
+  out.sampler = work.sampler;
+  out.image_width = work.image_width;
+  out.points.reserve(order.size());
+  const ShadingPoints& w = work.points;
+  for (uint32_t i : order) {
+    if (w.triangle.empty()) out.points.push_back(w.position[i], w.normal[i], w.wo[i], w.material[i], w.key[i]);
+    else out.points.push_back(w.position[i], w.normal[i], w.wo[i], w.material[i], w.key[i], w.triangle[i]);
+    out.sample_of_point.push_back(work.sample_of_point[i]);
+    if (!work.distance.empty()) out.distance.push_back(work.distance[i]);
+  }
+}
+
 Vec3 point_on_ray(Vec3 origin, Vec3 wo, float t) { return origin + (-wo) * t; }
 
 uint64_t tile_sample_key(SamplerKind kind, int64_t image_width, const TileRect& rect, int spp, uint32_t sample) {

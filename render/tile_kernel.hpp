@@ -60,6 +60,10 @@ void tile_points(const Scene& scene, const Camera& camera, const ImageSpec& imag
 void trace_tile(const Scene& scene, const RayTracer& tracer, const Camera& camera, const ImageSpec& image,
                 const TileRect& rect, TileWork& work);
 
+// `work` with its points (and their samples and distances) in the order `order` gives (indices into work's points):
+// the same tile, sent in another order (a partitioned farm's renderer groups its points by part). Still rebuildable.
+void reorder_points(const TileWork& work, std::span<const uint32_t> order, TileWork& out);
+
 // The radiance of points in one pixel, summed: one sum per run of consecutive points whose samples (pixel-major
 // sample indices of a tile with `spp` samples per pixel) lie in one pixel, added in point order from zero. The
 // renderer folds a tile's radiance this way, and a LightOp asked for a folded reply (docs/PROTOCOL.md) folds its

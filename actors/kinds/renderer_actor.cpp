@@ -223,24 +223,7 @@ class RendererActor final : public Actor {
     }
     job.order.resize(n);
     for (size_t i = 0; i < n; ++i) job.order[next[part[i]]++] = static_cast<uint32_t>(i);
-    TileWork& g = job.grouped;
-    g = TileWork{};
-    g.rect = work.rect;
-    g.spp = work.spp;
-    g.eye = work.eye;
-    g.emitted = work.emitted;
-    g.rebuildable = work.rebuildable;
-    g.sampler = work.sampler;
-    g.image_width = work.image_width;
-    g.points.reserve(n);
-    const bool with_triangles = !work.points.triangle.empty();
-    for (uint32_t i : job.order) {
-      const ShadingPoints& w = work.points;
-      if (with_triangles) g.points.push_back(w.position[i], w.normal[i], w.wo[i], w.material[i], w.key[i], w.triangle[i]);
-      else g.points.push_back(w.position[i], w.normal[i], w.wo[i], w.material[i], w.key[i]);
-      g.sample_of_point.push_back(work.sample_of_point[i]);
-      if (!work.distance.empty()) g.distance.push_back(work.distance[i]);
-    }
+    reorder_points(work, job.order, job.grouped);
     const uint32_t spp = static_cast<uint32_t>(work.spp);
     // A pixel's points are consecutive in point order; in another part's group they may come back later.
     std::vector<int64_t> seen_in(static_cast<size_t>(work.rect.pixel_count()), -1);
