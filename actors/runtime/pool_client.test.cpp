@@ -66,13 +66,13 @@ class Replicas {
 
 class PoolClientTest : public ::testing::Test {
  protected:
-  void make(size_t count, PoolOptions options, size_t replica_window = 4) {
+  void make(size_t count, PoolOptions options, size_t replica_window = 4, std::vector<int64_t> parts = {}) {
     replicas = std::make_unique<Replicas>(count);
     std::vector<PoolClient::Replica> list;
     for (size_t r = 0; r < count; ++r) {
       connections.push_back(std::make_unique<wire::RequestClient>("client", "replica-" + std::to_string(r), replica_window));
       ASSERT_TRUE(connections.back()->connect(replicas->endpoints[r]).ok());
-      list.push_back({"replica-" + std::to_string(r), connections.back().get()});
+      list.push_back({"replica-" + std::to_string(r), connections.back().get(), false, r < parts.size() ? parts[r] : -1});
     }
     pool = std::make_unique<PoolClient>("pool", std::move(list), options);
   }
@@ -80,18 +80,20 @@ class PoolClientTest : public ::testing::Test {
     for (auto& c : connections) c->on_readable();
   }
   std::vector<Held> drain(size_t r) { return replicas->drain(r, [this] { poll(); }); }
-  // Sends `count` requests of `n` points; answers land in results[i].
-  void send(size_t count, size_t n) {
+  // Sends `count` requests of `n` points (of scene part `part`, -1: none); answers land in results[i].
+  void send(size_t count, size_t n, int64_t part = -1) {
     for (size_t i = 0; i < count; ++i) {
       const size_t slot = results.size();
       results.emplace_back();
-      pool->request(wire::Op::shade, encode_shade_request(points(n, 1000 * slot), 0, n),
-                    [this, slot, n](Result<wire::Message> reply) {
-                      ASSERT_TRUE(reply.ok()) << reply.error().message;
-                      auto L = decode_radiance(reply->body, n);
-                      ASSERT_TRUE(L.ok());
-                      results[slot] = *L;
-                    });
+      pool->request(
+          wire::Op::shade, encode_shade_request(points(n, 1000 * slot), 0, n),
+          [this, slot, n](Result<wire::Message> reply) {
+            ASSERT_TRUE(reply.ok()) << reply.error().message;
+            auto L = decode_radiance(reply->body, n);
+            ASSERT_TRUE(L.ok());
+            results[slot] = *L;
+          },
+          part);
     }
   }
 
@@ -116,6 +118,31 @@ TEST_F(PoolClientTest, TheClientsWindowBoundsItsRequestsAcrossThePool) {
   EXPECT_EQ(more.size() + more1.size(), 1u);
   EXPECT_EQ(results[0].size(), 5u);
   EXPECT_EQ(results[0][2].x, 2.0f);
+}
+
+// partition { colocate = true }: a request of one part's points goes whole (never split) to a replica holding that
+// part; once none lives, to the others, and so do the pieces the lost one held.
+TEST_F(PoolClientTest, APartsPointsGoWholeToAReplicaHoldingThatPart) {
+  PoolOptions o;
+  o.strategy = Scheduler::Strategy::round_robin;
+  o.split = 4;
+  make(3, o, 4, {0, 1, 1});
+  send(2, 10, 1);
+  send(1, 10, 0);
+  auto held0 = drain(0), held1 = drain(1), held2 = drain(2);
+  ASSERT_EQ(held0.size(), 1u);
+  EXPECT_EQ(held0[0].n, 10u);
+  EXPECT_EQ(held0[0].first_k, 2000.f);  // the part-0 request
+  ASSERT_EQ(held1.size() + held2.size(), 2u);  // the part-1 requests, least loaded first: one each
+  EXPECT_EQ(held1.size(), 1u);
+  for (const auto& h : held1) EXPECT_EQ(h.n, 10u);
+  for (const auto& h : held2) EXPECT_EQ(h.n, 10u);
+  // Replica 0 is lost: its piece, and the next part-0 request, go to the others.
+  EXPECT_TRUE(pool->lost("replica-0"));
+  send(1, 6, 0);
+  auto again1 = drain(1), again2 = drain(2);
+  EXPECT_EQ(again1.size() + again2.size(), 2u);
+  EXPECT_TRUE(drain(0).empty());
 }
 
 TEST_F(PoolClientTest, ASplitRequestComesBackWholeInItsOrder) {
