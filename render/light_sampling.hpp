@@ -126,9 +126,12 @@ inline std::optional<LightSample> sample_light_at(const Scene& scene, Vec3 x, Ve
   if (draws_jointly(rng)) {
     Uniform2 uv = rng.uniform2();
     if (!scene.light_tree().pick(x, n, uv.u, e, p_light, &uv.u)) return std::nullopt;
+    // The default's path is exactly the area sample, with nothing to decide per sample.
+    if (mode == LightPoint::area) return light_sample_at(scene, e, p_light, uv);
     return light_sample_from(scene, e, p_light, uv, x, mode);
   }
   if (!scene.light_tree().pick(x, n, rng.uniform(), e, p_light)) return std::nullopt;
+  if (mode == LightPoint::area) return light_sample_at(scene, e, p_light, rng.uniform2());
   return light_sample_from(scene, e, p_light, rng.uniform2(), x, mode);
 }
 
@@ -139,7 +142,7 @@ inline float light_pdf_area_at(const Scene& scene, uint32_t tri, Vec3 x, Vec3 n,
   const size_t e = scene.emitter_index_of(tri);
   const float p_light = scene.light_tree().probability(x, n, e);
   double omega = 0;
-  if (solid_angle_sampled(scene, e, x, mode, omega))
+  if (mode != LightPoint::area && solid_angle_sampled(scene, e, x, mode, omega))
     return p_light * static_cast<float>(std::fabs(cos_y) / (omega * static_cast<double>(dist) * dist));
   return p_light / emitter_sampled_area(scene, tri, e);
 }
