@@ -258,6 +258,16 @@ bool traces_through_parts(const ActorSpec& a) {
   return kind && kind->traces_through_context && !a.is_multiplexer();
 }
 
+int64_t colocated_part(const FarmSpec& spec, int i) {
+  const ActorSpec& a = spec.actors.at(static_cast<size_t>(i));
+  const int pool = spec.pool_of(i);
+  if (!spec.partition_colocate || spec.partition_parts <= 0 || pool < 0 || a.is_renderer() || !traces_through_parts(a))
+    return -1;
+  const auto& replicas = spec.actors[static_cast<size_t>(pool)].inputs;
+  const auto j = std::find(replicas.begin(), replicas.end(), i) - replicas.begin();
+  return static_cast<int64_t>(j % spec.partition_parts);
+}
+
 std::string to_dot(const FarmSpec& spec) {
   std::string out = "digraph farm {\n  rankdir=LR;\n  node [shape=box, style=rounded];\n";
   auto id = [](const std::string& name) { return "\"" + name + "\""; };
@@ -277,7 +287,9 @@ std::string to_dot(const FarmSpec& spec) {
                                 : a.is_geometry()       ? ", shape=cylinder"
                                                         : "";
       const std::string kind = a.dispatched_by_clients ? "pool" : a.kind;
-      by_host[a.host].push_back("    " + id(a.name) + " [label=\"" + a.name + "\\n(" + kind + ")\"" + shape + "];");
+      const int64_t part = colocated_part(spec, static_cast<int>(&a - spec.actors.data()));
+      const std::string holds = part >= 0 ? ", holds part " + std::to_string(part) : "";
+      by_host[a.host].push_back("    " + id(a.name) + " [label=\"" + a.name + "\\n(" + kind + holds + ")\"" + shape + "];");
     }
   }
   for (const auto& [host, lines] : by_host) {

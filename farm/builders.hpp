@@ -69,6 +69,9 @@ Status validate(const FarmSpec& spec);
 // In a partitioned farm, whether actor `a` sends rays to the geometry actors: renderers (their camera rays) and the
 // LightOps whose kind traces through the parts (direct, pathtrace), not pools.
 bool traces_through_parts(const ActorSpec& a);
+// partition { colocate = true }: the part actor `i` holds itself, or -1. Replica j of a pool whose op traces through
+// the parts holds part j mod N.
+int64_t colocated_part(const FarmSpec& spec, int i);
 
 // The actor graph as Graphviz DOT: one node per actor (renderers folded into one), edges in the direction light
 // flows, one cluster per host; a radiosity ring drawn as rings.

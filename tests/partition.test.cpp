@@ -272,6 +272,15 @@ renderers { lighting = lightop "direct" {} }
   // And whose rays they answer: the renderers' and the op's.
   EXPECT_NE(r.out.find("\"geometry.1\" -> \"renderers\" [style=dotted, label=\"rays\"];"), std::string::npos) << r.out;
   EXPECT_NE(r.out.find("\"geometry.0\" -> \"direct\" [style=dotted, label=\"rays\"];"), std::string::npos) << r.out;
+  // With colocate, which part each replica holds (replica j: part j mod 2).
+  const std::string home = write("home.lua", R"(scene { builtin = "cornell" }
+partition { parts = 2, colocate = true }
+renderers { lighting = multiplexer { lightop "direct" {}, replicas = 3 } }
+)");
+  r = run_lightfarm({"graph", home});
+  EXPECT_EQ(r.status, 0) << r.err;
+  EXPECT_NE(r.out.find("[label=\"direct.1\\n(direct, holds part 1)\"]"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("[label=\"direct.2\\n(direct, holds part 0)\"]"), std::string::npos) << r.out;
 }
 
 }  // namespace

@@ -369,13 +369,9 @@ class Director final : public ControlOut, public Outbox {
     }
   }
 
-  // partition { colocate = true }: the part replica `index` of a pool holds itself when its op traces through the
-  // parts (parts in turn across the replicas), else -1.
-  int64_t colocated_part(const std::string& replica, size_t index) const {
-    if (!spec_.partition_colocate || parts_.empty()) return -1;
-    const LightOpKind* kind = find_lightop_kind(supervisor_.at(replica).spec->kind);
-    if (!kind || !kind->traces_through_context) return -1;
-    return static_cast<int64_t>(index % parts_.size());
+  // partition { colocate = true }: the part actor `name` holds itself (farm/builders), once the scene is split.
+  int64_t colocated_part(const std::string& name) const {
+    return parts_.empty() ? -1 : lf::colocated_part(spec_, spec_.find(name));
   }
 
   Status configure_actor(ActorRecord& a) {
@@ -391,7 +387,7 @@ class Director final : public ControlOut, public Outbox {
       }
       // A replica lost before this client was configured is left out (it may never have said where it listens).
       std::vector<InputSpec> live;
-      for (size_t j = 0; j < in.replicas.size(); ++j) in.replicas[j].part = colocated_part(in.replicas[j].name, j);
+      for (auto& r : in.replicas) r.part = colocated_part(r.name);
       for (auto& r : in.replicas) {
         const ActorRecord& replica = supervisor_.at(r.name);
         if (replica.lost) continue;
@@ -409,7 +405,7 @@ class Director final : public ControlOut, public Outbox {
         config.part_triangles = parts_.at(static_cast<size_t>(a.spec->params.at("part").as_int())).triangles;
       } else if (a.spec->loads_scene()) {
         if (config.pool) {
-          config.local_part = colocated_part(a.name(), static_cast<size_t>(config.pool->index));
+          config.local_part = colocated_part(a.name());
           if (config.local_part >= 0) config.part_triangles = parts_.at(static_cast<size_t>(config.local_part)).triangles;
         }
         // A renderer traces its camera rays through the parts, and a LightOp its rays (those of its ops that can:
