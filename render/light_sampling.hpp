@@ -57,12 +57,18 @@ inline LightSample light_sample_at(const Scene& scene, size_t e, float p_light, 
 // (kMinSampledSolidAngle) and point lights are drawn by area (or are points) either way.
 enum class LightPoint : uint8_t { area, solid_angle };
 
-// Whether emitter e seen from x is drawn by solid angle, and that solid angle. One function for sampling and for
-// the density at a BSDF hit, so that both take the same branch with the same number.
+// Whether emitter e may be drawn by solid angle at all (a triangle without cut-out parts, in that mode); from a
+// point, it then is when its solid angle there reaches kMinSampledSolidAngle.
+inline bool solid_angle_candidate(const Scene& scene, size_t e, LightPoint mode) {
+  return mode == LightPoint::solid_angle && e < scene.emitters().size() && !scene.emitter_cutouts().restricted(e);
+}
+
+// Whether emitter e seen from x is drawn by solid angle, and that solid angle: the density at a BSDF hit. The
+// sampler below decides with the same function of the same corners (sample_spherical_triangle), so both take the
+// same branch with the same number.
 inline bool solid_angle_sampled(const Scene& scene, size_t e, Vec3 x, LightPoint mode, double& omega) {
   omega = 0;
-  if (mode != LightPoint::solid_angle || e >= scene.emitters().size() || scene.emitter_cutouts().restricted(e))
-    return false;
+  if (!solid_angle_candidate(scene, e, mode)) return false;
   const uint32_t tri = scene.emitters()[e];
   omega = spherical_triangle_solid_angle(x, scene.vertex(tri, 0), scene.vertex(tri, 1), scene.vertex(tri, 2));
   return omega >= kMinSampledSolidAngle;
@@ -70,10 +76,10 @@ inline bool solid_angle_sampled(const Scene& scene, size_t e, Vec3 x, LightPoint
 
 // As light_sample_at, with the point drawn as `mode` says for a shaded point at x.
 inline LightSample light_sample_from(const Scene& scene, size_t e, float p_light, Uniform2 uv, Vec3 x, LightPoint mode) {
-  double omega = 0;
-  if (solid_angle_sampled(scene, e, x, mode, omega)) {
+  if (solid_angle_candidate(scene, e, mode)) {
     const uint32_t tri = scene.emitters()[e];
     const Vec3 p0 = scene.vertex(tri, 0), p1 = scene.vertex(tri, 1), p2 = scene.vertex(tri, 2);
+    double omega = 0;  // nullopt below kMinSampledSolidAngle: then an area sample, as solid_angle_sampled says
     const std::optional<Vec3> dir = sample_spherical_triangle(x, p0, p1, p2, uv.u, uv.v, omega);
     const Vec3 ng = scene.normal(tri);
     const float facing = dir ? dot(*dir, ng) : 0.0f;
@@ -142,7 +148,7 @@ inline float light_pdf_area_at(const Scene& scene, uint32_t tri, Vec3 x, Vec3 n,
   const size_t e = scene.emitter_index_of(tri);
   const float p_light = scene.light_tree().probability(x, n, e);
   double omega = 0;
-  if (mode != LightPoint::area && solid_angle_sampled(scene, e, x, mode, omega))
+  if (solid_angle_sampled(scene, e, x, mode, omega))
     return p_light * static_cast<float>(std::fabs(cos_y) / (omega * static_cast<double>(dist) * dist));
   return p_light / emitter_sampled_area(scene, tri, e);
 }

@@ -20,7 +20,7 @@ double length(D3 a) { return std::sqrt(dot(a, a)); }
 // The corners seen from x as unit vectors, and the triangle's angles there; false when it is degenerate from x.
 struct Seen {
   D3 a, b, c;
-  double alpha, beta, gamma, area;
+  double alpha, cos_alpha, area;  // alpha: the angle at a
 };
 
 bool see(Vec3 x, Vec3 p0, Vec3 p1, Vec3 p2, Seen& s) {
@@ -40,11 +40,11 @@ bool see(Vec3 x, Vec3 p0, Vec3 p1, Vec3 p2, Seen& s) {
   n_ab = n_ab * (1 / l_ab);
   n_bc = n_bc * (1 / l_bc);
   n_ca = n_ca * (1 / l_ca);
-  auto angle = [](D3 u, D3 v) { return std::acos(std::clamp(dot(u, v), -1.0, 1.0)); };
-  s.alpha = angle(n_ab, n_ca * -1);
-  s.beta = angle(n_bc, n_ab * -1);
-  s.gamma = angle(n_ca, n_bc * -1);
-  s.area = std::max(0.0, s.alpha + s.beta + s.gamma - M_PI);
+  auto cos_angle = [](D3 u, D3 v) { return std::clamp(dot(u, v), -1.0, 1.0); };
+  s.cos_alpha = cos_angle(n_ab, n_ca * -1);
+  s.alpha = std::acos(s.cos_alpha);
+  const double beta = std::acos(cos_angle(n_bc, n_ab * -1)), gamma = std::acos(cos_angle(n_ca, n_bc * -1));
+  s.area = std::max(0.0, s.alpha + beta + gamma - M_PI);
   return true;
 }
 
@@ -70,7 +70,7 @@ std::optional<Vec3> sample_spherical_triangle(Vec3 x, Vec3 p0, Vec3 p1, Vec3 p2,
   // point on arc BC' whose cosine to B is uniform in [cos(BC'), 1].
   const double area_u = static_cast<double>(u) * omega;
   const double sn = std::sin(area_u - s.alpha), cs = std::cos(area_u - s.alpha);
-  const double cos_alpha = std::cos(s.alpha), sin_alpha = std::sin(s.alpha);
+  const double cos_alpha = s.cos_alpha, sin_alpha = std::sqrt(std::max(0.0, 1 - cos_alpha * cos_alpha));
   const double cos_c = dot(s.a, s.b);
   const double uu = cs - cos_alpha;
   const double vv = sn + sin_alpha * cos_c;

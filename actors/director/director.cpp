@@ -387,10 +387,10 @@ class Director final : public ControlOut, public Outbox {
       }
       // A replica lost before this client was configured is left out (it may never have said where it listens).
       std::vector<InputSpec> live;
-      for (auto& r : in.replicas) r.part = colocated_part(r.name);
       for (auto& r : in.replicas) {
         const ActorRecord& replica = supervisor_.at(r.name);
         if (replica.lost) continue;
+        r.part = colocated_part(r.name);
         std::tie(r.endpoint, r.key) = endpoint_for(a, replica);
         live.push_back(std::move(r));
       }

@@ -73,12 +73,10 @@ class RendererActor final : public Actor {
     std::vector<RGB> pixel_radiance;  // a pixel's points' radiance summed (fold_by_pixel), from folded replies
     std::vector<uint8_t> folded;      // which pixels came folded
     std::vector<uint32_t> pixel;      // when folding: each point's pixel in the tile (in sending order)
-    // Points sent grouped by part (partition { colocate = true }): the regrouped tile, each of its points' index in
-    // `work`, and the pixels whose points lie in more than one part.
-    TileWork grouped;
+    // Points sent grouped by part (partition { colocate = true }): the part each camera sample's hit was found in,
+    // and the index in `work` of each point as sent (empty: sent in point order).
+    std::vector<uint32_t> sample_part;
     std::vector<uint32_t> order;
-    std::vector<uint8_t> split_pixel;  // per pixel of the tile
-    std::vector<uint32_t> sample_part;  // the part each camera sample's hit was found in
     size_t batches_left = 0;
   };
 
@@ -147,8 +145,10 @@ class RendererActor final : public Actor {
     // and their radiance put back in point order, so the pixels sum it exactly as they would unsent.
     std::vector<size_t> part_end{n};  // where each group of points ends, in sending order
     std::vector<int64_t> group_part{-1};
-    if (colocate_ && n > 0) group_by_part(*job, part_end, group_part);
-    const TileWork& work = job->order.empty() ? job->work : job->grouped;
+    TileWork grouped;                  // the tile as sent, when grouped
+    std::vector<uint8_t> split_pixel;  // then: per pixel, whether its points lie in more than one part
+    if (colocate_ && n > 0) group_by_part(*job, grouped, split_pixel, part_end, group_part);
+    const TileWork& work = job->order.empty() ? job->work : grouped;
     // A built-in LightOp rebuilds positions, normals, materials and keys from the scene and the tile, and can sum a
     // pixel's radiance itself: a reply then holds a value a pixel, not a point. Batches then end between pixels, and
     // one with a pixel that sees an emitter is not folded: that pixel's samples are summed with their emission. Nor
@@ -160,7 +160,7 @@ class RendererActor final : public Actor {
     job->folded.assign(fold ? pixels : 0, 0);
     std::vector<uint8_t> unfoldable(fold ? pixels : 0);
     for (size_t p = 0; p < unfoldable.size(); ++p)
-      unfoldable[p] = pixel_sees_emitter(work, p) || (!job->split_pixel.empty() && job->split_pixel[p]);
+      unfoldable[p] = pixel_sees_emitter(work, p) || (!split_pixel.empty() && split_pixel[p]);
     if (n == 0) return finish_tile(job, rt);
     if (fold) {
       const uint32_t spp = static_cast<uint32_t>(work.spp);
@@ -200,9 +200,10 @@ class RendererActor final : public Actor {
     }
   }
 
-  // The tile's points regrouped by the part their camera ray's hit was found in (job.sample_part), into
-  // job.grouped, in point order within a part.
-  void group_by_part(TileJob& job, std::vector<size_t>& part_end, std::vector<int64_t>& group_part) const {
+  // The tile's points regrouped by the part their camera ray's hit was found in (job.sample_part), into `grouped`,
+  // in point order within a part; job.order says where each came from.
+  void group_by_part(TileJob& job, TileWork& grouped, std::vector<uint8_t>& split_pixel, std::vector<size_t>& part_end,
+                     std::vector<int64_t>& group_part) const {
     const TileWork& work = job.work;
     const size_t n = work.points.size(), parts = tracing_->parts();
     std::vector<uint32_t> part(n);
@@ -223,14 +224,14 @@ class RendererActor final : public Actor {
     }
     job.order.resize(n);
     for (size_t i = 0; i < n; ++i) job.order[next[part[i]]++] = static_cast<uint32_t>(i);
-    reorder_points(work, job.order, job.grouped);
+    reorder_points(work, job.order, grouped);
     const uint32_t spp = static_cast<uint32_t>(work.spp);
     // A pixel's points are consecutive in point order; in another part's group they may come back later.
     std::vector<int64_t> seen_in(static_cast<size_t>(work.rect.pixel_count()), -1);
-    job.split_pixel.assign(seen_in.size(), 0);
+    split_pixel.assign(seen_in.size(), 0);
     for (size_t i = 0; i < n; ++i) {
       const uint32_t px = work.sample_of_point[i] / spp;
-      if (seen_in[px] >= 0 && seen_in[px] != part[i]) job.split_pixel[px] = 1;
+      if (seen_in[px] >= 0 && seen_in[px] != part[i]) split_pixel[px] = 1;
       seen_in[px] = part[i];
     }
   }
