@@ -74,7 +74,7 @@ int main(int argc, char** argv) {
       const lf::Vec3 t = lf::normalize(lf::cross(a, n)), b = lf::cross(n, t);
       const float r = std::sqrt(u(rng)), phi = 6.2831853f * u(rng);
       const lf::Vec3 d = t * (r * std::cos(phi)) + b * (r * std::sin(phi)) + n * std::sqrt(std::max(0.0f, 1 - r * r));
-      const lf::Vec3 p = rays[i].origin + rays[i].direction * hits[i].t + n * scene->epsilon();
+      const lf::Vec3 p = scene->ray_origin(hits[i].triangle, rays[i].origin + rays[i].direction * hits[i].t, n);
       rays.push_back(lf::Ray{p, lf::normalize(d)});
     }
   }

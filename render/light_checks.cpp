@@ -29,7 +29,6 @@ std::vector<LightEscape> light_escapes(const Scene& scene, const std::vector<std
   std::vector<LightEscape> out;
   if (scene.emitters().empty() && scene.point_lights().empty()) return out;
   const RayTracer tracer(scene);
-  const float eps = scene.epsilon();
   // Emitter triangles by material, with their areas' running sum for picking one in proportion.
   std::map<uint32_t, std::vector<uint32_t>> by_material;
   for (uint32_t t : scene.emitters()) by_material[scene.material_of(t)].push_back(t);
@@ -48,7 +47,7 @@ std::vector<LightEscape> light_escapes(const Scene& scene, const std::vector<std
       const Vec3 y = scene.vertex(t, 0) * (1 - su) + scene.vertex(t, 1) * (su * (1 - v)) + scene.vertex(t, 2) * (su * v);
       const Vec3 n = scene.normal(t);
       const float a = rng.uniform(), b = rng.uniform();
-      rays.push_back(Ray{y + n * eps, cosine_hemisphere(n, a, b)});  // emitted flux goes as the cosine
+      rays.push_back(Ray{scene.ray_origin(t, y, n), cosine_hemisphere(n, a, b)});  // emitted flux goes as the cosine
     }
     const std::string& name = scene.material(material).name;
     // A script light's material is named after its line ("light at farm.lua:12"): the warning starts there.

@@ -43,6 +43,7 @@ struct ShadingPoints {
   void clear();
   void push_back(Vec3 p, Vec3 n, Vec3 w, uint32_t m, uint64_t k);
   void push_back(Vec3 p, Vec3 n, Vec3 w, uint32_t m, uint64_t k, uint32_t tri);
+  uint32_t triangle_of(size_t i) const { return triangle.empty() ? UINT32_MAX : triangle[i]; }
   // True when point i is on the side its triangle's winding faces (or nothing says otherwise).
   bool outside(size_t i, const Scene& scene) const {
     return triangle.empty() || dot(scene.normal(triangle[i]), wo[i]) >= 0;

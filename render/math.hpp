@@ -35,6 +35,11 @@ inline float length(Vec3 a) { return std::sqrt(dot(a, a)); }
 inline Vec3 normalize(Vec3 a) { return a / length(a); }
 constexpr float average(RGB c) { return (c.x + c.y + c.z) / 3.0f; }
 constexpr bool is_black(RGB c) { return c.x <= 0 && c.y <= 0 && c.z <= 0; }
+inline float largest_coordinate(Vec3 a) {
+  const float x = std::fabs(a.x), y = std::fabs(a.y), z = std::fabs(a.z);
+  const float xy = x > y ? x : y;  // not fmax: no NaN here, and this stays a max instruction
+  return xy > z ? xy : z;
+}
 
 inline constexpr float kPi = 3.14159265358979323846f;
 

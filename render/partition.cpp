@@ -125,7 +125,8 @@ Probes probe_rays(const Scene& scene, const RayTracer& tracer, const Camera& cam
     const Uniform2 u = rng.uniform2();
     const float r = std::sqrt(u.u), phi = 6.2831853f * u.v;
     const Vec3 d = t * (r * std::cos(phi)) + b * (r * std::sin(phi)) + nrm * std::sqrt(std::max(0.0f, 1 - r * r));
-    p.rays.push_back(Ray{p.rays[i].origin + p.rays[i].direction * p.hits[i].t + nrm * scene.epsilon(), normalize(d)});
+    const Vec3 x = p.rays[i].origin + p.rays[i].direction * p.hits[i].t;
+    p.rays.push_back(Ray{scene.ray_origin(p.hits[i].triangle, x, nrm), normalize(d)});
   }
   std::vector<Hit> bounce_hits(p.rays.size() - camera_rays);
   tracer.intersect(std::span<const Ray>(p.rays).subspan(camera_rays), bounce_hits);

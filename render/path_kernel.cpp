@@ -15,9 +15,11 @@ namespace {
 
 struct Path {
   Vec3 x, n, wo;
+  Vec3 above;  // where rays that leave x on the face's side start (Scene::ray_origin)
   Vec3 ng;     // the face's normal on n's side (n is the shading normal)
   RGB albedo;  // the diffuse reflectance here (a texture's, or the material's kd)
   uint32_t material;
+  uint32_t triangle;  // UINT32_MAX: a point that names none
   bool outside;
   RGB beta{1, 1, 1};  // throughput
   RGB L{};            // gathered radiance
@@ -42,16 +44,20 @@ constexpr uint32_t kSlotsPerVertex = 5;
 Task trace_paths(const SceneContext& ctx, const ShadingPoints& points, std::span<RGB> radiance, const PathOptions& o,
                  PathTally* tally) {
   const Scene& scene = *ctx.scene;
-  const float eps = scene.epsilon();
   const size_t n = points.size();
   const size_t per = static_cast<size_t>(o.samples);
   std::vector<Path> paths;
   paths.reserve(n * per);
-  for (size_t i = 0; i < n; ++i)
+  for (size_t i = 0; i < n; ++i) {
+    const Vec3 ng = points.face_normal(i, scene);
+    const Vec3 above = scene.ray_origin(points.triangle_of(i), points.position[i], ng);
+    const RGB albedo = points.albedo(i, scene, ctx.pixel_footprint(points.position[i]));
+    const bool outside = points.outside(i, scene);
     for (size_t s = 0; s < per; ++s)
-      paths.push_back(Path{points.position[i], points.normal[i], points.wo[i], points.face_normal(i, scene),
-                           points.albedo(i, scene, ctx.pixel_footprint(points.position[i])), points.material[i], points.outside(i, scene), {1, 1, 1}, {},
+      paths.push_back(Path{points.position[i], points.normal[i], points.wo[i], above, ng, albedo, points.material[i],
+                           points.triangle_of(i), outside, {1, 1, 1}, {},
                            Sampler(ctx.sampler, points.key[i], o.stream, static_cast<uint32_t>(s), static_cast<uint32_t>(per))});
+  }
 
   std::vector<Ray> rays;
   std::vector<uint8_t> blocked;
@@ -60,14 +66,15 @@ Task trace_paths(const SceneContext& ctx, const ShadingPoints& points, std::span
   std::vector<size_t> continuing;
   std::vector<Bsdf::Sample> samples;
 
-  // The directional cache's view of a diffuse vertex's direction wi towards a light's point `distance` away: whether
-  // a ray that way leaves the local neighbourhood before reaching it, and the cache answers that direction.
+  // The directional cache's view of a diffuse vertex's direction wi towards a light's point `distance` away from
+  // the ray's origin: whether a ray that way leaves the local neighbourhood before reaching it, and the cache
+  // answers that direction.
   DirectionalCache* cache = o.cache;
   RGB cached{};
-  auto cache_answers = [&](const Path& path, const Material& m, Vec3 wi, float distance) {
+  auto cache_answers = [&](const Path& path, const Material& m, Vec3 origin, Vec3 wi, float distance) {
     if (!cache || m.type != Material::Type::diffuse) return false;
     const uint32_t cell = cache->cell_of(path.x);
-    return distance > cache->local_reach(cell, path.x + path.ng * eps, wi) && cache->lookup(cell, wi, cached);
+    return distance > cache->local_reach(cell, origin, wi) && cache->lookup(cell, wi, cached);
   };
   struct Recording {
     size_t path;
@@ -112,20 +119,23 @@ Task trace_paths(const SceneContext& ctx, const ShadingPoints& points, std::span
       if (!above_both(wi, path.n, path.ng) || cos_y <= 0) continue;
       const RGB f = bsdf.eval(path.n, path.wo, wi);
       if (is_black(f)) continue;
+      // The shadow ray runs between the two surfaces' offset points, so it neither starts below this one nor ends
+      // beyond the light's.
+      const Vec3 origin = path.above;
+      const Vec3 target = ls.is_point ? ls.point : scene.ray_origin(ls.triangle, ls.point, ls.normal);
+      const Vec3 to_light = target - origin;
+      const float span = length(to_light);
       if (ls.is_point) {
         // A point light: I cos / d^2, and no BSDF sample can ever hit it, so no MIS.
         pending.push_back({p, path.beta * f * ls.radiance * (cos_x / (dist2 * ls.pdf_area))});
       } else {
         const float light_pdf = ls.pdf_area * dist2 / cos_y;  // per solid angle
         const bool light_only = (o.light_only_on_diffuse && m.type == Material::Type::diffuse) ||
-                                cache_answers(path, m, wi, length(ls.point - (path.x + path.ng * eps)));
+                                cache_answers(path, m, origin, wi, span);
         const float w = light_only ? 1.0f : power_heuristic(light_pdf, bsdf.pdf(path.n, path.wo, wi));
         pending.push_back({p, path.beta * f * ls.radiance * (cos_x * w / light_pdf)});
       }
-      const Vec3 origin = path.x + path.ng * eps;
-      const Vec3 to_light = ls.point - origin;
-      const float span = length(to_light);
-      rays.push_back(Ray{origin, to_light / span, 0.0f, ls.is_point ? span : span - eps});
+      rays.push_back(Ray{origin, to_light / span, 0.0f, span});
     }
     blocked.resize(rays.size());
     if (!rays.empty()) co_await trace_occluded(ctx, rays, blocked);
@@ -155,8 +165,8 @@ Task trace_paths(const SceneContext& ctx, const ShadingPoints& points, std::span
       path.beta = path.beta * s->weight;
       path.bsdf_pdf = s->pdf;
       path.delta = s->delta;
-      const Vec3 side = dot(s->wi, path.ng) > 0 ? path.ng : -path.ng;  // refraction leaves through the back
-      rays.push_back(Ray{path.x + side * eps, s->wi});
+      const bool through = dot(s->wi, path.ng) <= 0;  // refraction leaves through the back
+      rays.push_back(Ray{through ? scene.ray_origin(path.triangle, path.x, -path.ng) : path.above, s->wi});
       continuing.push_back(p);
       samples.push_back(*s);
     }
@@ -169,7 +179,7 @@ Task trace_paths(const SceneContext& ctx, const ShadingPoints& points, std::span
         const Path& path = paths[continuing[r]];
         if (scene.material(path.material).type != Material::Type::diffuse) continue;
         ray_cell[r] = cache->cell_of(path.x);
-        rays[r].tfar = cache->local_reach(ray_cell[r], path.x + path.ng * eps, rays[r].direction);
+        rays[r].tfar = cache->local_reach(ray_cell[r], rays[r].origin, rays[r].direction);
       }
     }
     if (!rays.empty()) co_await trace_intersect(ctx, rays, hits);
@@ -250,8 +260,10 @@ Task trace_paths(const SceneContext& ctx, const ShadingPoints& points, std::span
       const SurfacePoint sp = surface_at(scene, tri, path.x, wo);
       path.n = sp.ns;
       path.ng = sp.ng;
+      path.above = scene.ray_origin(tri, path.x, sp.ng);
       path.wo = wo;
       path.material = scene.material_of(tri);
+      path.triangle = tri;
       path.albedo = hit_material.kd_map < 0 ? hit_material.kd : scene.albedo(tri, scene.barycentrics(tri, path.x), ctx.pixel_footprint(path.x));
       path.outside = front;
     }

@@ -1,8 +1,10 @@
 #pragma once
 // Scene: triangles with materials, and the emitters among them. Built from a built-in scene (builtin_scenes.cpp) or
 // an OBJ+MTL file via tinyobjloader (obj_scene.cpp), plus the lights a script adds (script_lights.cpp).
+#include <algorithm>
 #include <array>
 #include <cstdint>
+#include <limits>
 #include <memory>
 #include <span>
 #include <string>
@@ -169,8 +171,27 @@ class Scene {
 
   // The box around every vertex (after finalize()).
   const Bounds& bounds() const { return bounds_; }
-  // A distance small against the scene's size, for offsetting ray origins.
+  // A distance small against the scene's size: the ray offset for points that name no triangle, and a scale for
+  // tolerances that are not about floating-point error (a photon map's default radius, radiosity's gather).
   float epsilon() const { return epsilon_; }
+  // Where a ray that leaves point p of `triangle` on the side of unit normal `side` (the face's normal, or its
+  // opposite for a ray through the face) starts: kRayOffsetUlps units of float precision of the coordinates
+  // involved above the face's plane. The height is measured from the plane itself, so the origin is on the right
+  // side whatever rounding p carries (a point found as origin + t * direction is off the plane by that ray's
+  // error), and it scales with the coordinates, not with the scene, so small things in a large scene are not
+  // pushed apart. `triangle` = UINT32_MAX (a point that names none): p + side * epsilon().
+  Vec3 ray_origin(uint32_t triangle, Vec3 p, Vec3 side) const {
+    if (triangle == UINT32_MAX) return p + side * epsilon_;
+    const Vec3 a = vertex(triangle, 0);
+    const float scale = std::max(largest_coordinate(p), largest_coordinate(a));
+    // p's distance from the plane, off by about one unit of scale's precision: well inside the margin.
+    const float height = dot(side, p - a);
+    return p + side * (kRayOffsetUlps * std::numeric_limits<float>::epsilon() * scale - height);
+  }
+  // Embree's float test of an origin against a triangle is off by a few units of the precision of the coordinates
+  // involved (differences of coordinates, the face normal from a cross product, which thin triangles make less
+  // precise); 128 leaves a wide margin and is still 1e-5 of them.
+  static constexpr float kRayOffsetUlps = 128;
 
   static Result<Scene> builtin(const std::string& name);
   static Result<Scene> load_obj(const std::string& path);

@@ -35,11 +35,13 @@ class AmbientOcclusion final : public lf::LightOp {
       const lf::Vec3 t{1.0f + sign * n.x * n.x * a, sign * b, -sign * n.x};
       const lf::Vec3 s{b, sign + n.y * n.y * a, -n.y};
       lf::Rng rng(points.key[i], kStream);
+      // Rays leave just above the face (the scene works out how far above from the point's triangle).
+      const lf::Vec3 origin = scene.ray_origin(points.triangle_of(i), points.position[i], points.face_normal(i, scene));
       for (int k = 0; k < samples_; ++k) {
         const float u = rng.uniform(), v = rng.uniform();
         const float r = std::sqrt(u), phi = 2.0f * lf::kPi * v;
         const lf::Vec3 d = t * (r * std::cos(phi)) + s * (r * std::sin(phi)) + n * std::sqrt(1.0f - u);
-        rays.push_back(lf::Ray{points.position[i] + n * scene.epsilon(), d, 0.0f, radius_});
+        rays.push_back(lf::Ray{origin, d, 0.0f, radius_});
       }
     }
     std::vector<uint8_t> blocked(rays.size());

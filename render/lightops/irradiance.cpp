@@ -115,7 +115,7 @@ class Irradiance final : public LightOp {
       } else {
         ++own_values_;
         misses.push_back(Candidate{points.position[i], points.normal[i], points.face_normal(i, scene),
-                                   splitmix64(points.key[i] ^ 0x1e7)});
+                                   splitmix64(points.key[i] ^ 0x1e7), points.triangle_of(i)});
         miss_owner.push_back(i);
       }
     }
@@ -135,6 +135,7 @@ class Irradiance final : public LightOp {
     Vec3 x, n;  // n: the shading normal, which the record's hemisphere is around
     Vec3 ng;    // the face's normal on n's side
     uint64_t key;
+    uint32_t triangle;  // UINT32_MAX: a point that names none
   };
 
   // `prepass` points stratified over the area of non-emitting, non-specular triangles, in a fixed order (front
@@ -161,7 +162,7 @@ class Irradiance final : public LightOp {
       const float su = std::sqrt(rng.uniform()), v = rng.uniform();
       const Vec3 b{1 - su, su * (1 - v), su * v};
       const Vec3 x = scene.vertex(t, 0) * b.x + scene.vertex(t, 1) * b.y + scene.vertex(t, 2) * b.z;
-      out.push_back(Candidate{x, scene.shading_normal(t, b), scene.normal(t), splitmix64(c ^ 0x1c)});
+      out.push_back(Candidate{x, scene.shading_normal(t, b), scene.normal(t), splitmix64(c ^ 0x1c), t});
     }
     return out;
   }
@@ -187,7 +188,6 @@ class Irradiance final : public LightOp {
     std::vector<Hit> hits(rays.size());
     std::vector<uint64_t> ids(rays.size());
     for (size_t i = 0; i < ids.size(); ++i) ids[i] = i;
-    const float eps = scene.epsilon();
     for (int bounce = 0; bounce <= 4 && !rays.empty(); ++bounce) {
       hits.resize(rays.size());
       ctx.tracer->intersect(rays, hits);
@@ -203,14 +203,14 @@ class Irradiance final : public LightOp {
         const Vec3 n = sp.ng;
         const Material& m = scene.material(scene.material_of(t));
         if (!m.specular()) {
-          if (!is_black(m.kd)) found.emplace_back(ids[i], Candidate{p, sp.ns, sp.ng, splitmix64(ids[i] ^ 0xca3e5a)});
+          if (!is_black(m.kd)) found.emplace_back(ids[i], Candidate{p, sp.ns, sp.ng, splitmix64(ids[i] ^ 0xca3e5a), t});
           continue;
         }
         Vec3 dir = reflect(wo, n);
         if (m.type == Material::Type::glass)
           if (auto t_dir = refract(wo, n, front ? m.ior : 1.0f / m.ior)) dir = *t_dir;
         const Vec3 side = dot(dir, n) > 0 ? n : -n;
-        next.push_back(Ray{p + side * eps, dir});
+        next.push_back(Ray{scene.ray_origin(t, p, side), dir});
         next_ids.push_back(ids[i]);
       }
       rays = std::move(next);
@@ -237,13 +237,14 @@ class Irradiance final : public LightOp {
     for (const Candidate& c : seen) {
       Vec3 u, v;
       basis(c.n, u, v);
+      const Vec3 origin = scene.ray_origin(c.triangle, c.x, c.ng);
       for (int q = 0; q < per; ++q) {
         Rng rng(c.key, streams::irradiance ^ (seed_ << 8) ^ 0x0e7u ^ (static_cast<uint64_t>(q) << 24));
         const float a = rng.uniform(), b = rng.uniform();
         const int j = q % rows, k = q / rows, cols = (per + rows - 1) / rows;
         Vec3 d = stratum_direction(j, k, rows, cols, a, b, u, v, c.n);
         if (dot(d, c.ng) <= 0) d = d - c.ng * (2 * dot(d, c.ng));  // below the face: its mirror image above
-        rays.push_back(Ray{c.x + c.ng * scene.epsilon(), d});
+        rays.push_back(Ray{origin, d});
       }
     }
     std::vector<Hit> hits(rays.size());
@@ -256,7 +257,7 @@ class Irradiance final : public LightOp {
       if (m.specular() || is_black(m.kd)) continue;
       const Vec3 x = rays[r].origin + rays[r].direction * hits[r].t;
       const SurfacePoint sp = surface_at(scene, t, x, -rays[r].direction);
-      out.push_back(Candidate{x, sp.ns, sp.ng, splitmix64(seen[r / static_cast<size_t>(per)].key ^ (0x0e70000ull + r))});
+      out.push_back(Candidate{x, sp.ns, sp.ng, splitmix64(seen[r / static_cast<size_t>(per)].key ^ (0x0e70000ull + r)), t});
     }
     return out;
   }
@@ -272,11 +273,12 @@ class Irradiance final : public LightOp {
       Vec3 u, v;
       basis(c.n, u, v);
       frames.push_back({u, v, c.n});
+      const Vec3 origin = scene.ray_origin(c.triangle, c.x, c.ng);
       for (int j = 0; j < m_; ++j)
         for (int k = 0; k < n_; ++k) {
           Rng rng(c.key, streams::irradiance ^ (seed_ << 8) ^ (static_cast<uint64_t>(j * n_ + k) << 20));
           const float a = rng.uniform(), b = rng.uniform();
-          rays.push_back(Ray{c.x + c.ng * scene.epsilon(), stratum_direction(j, k, m_, n_, a, b, u, v, c.n)});
+          rays.push_back(Ray{origin, stratum_direction(j, k, m_, n_, a, b, u, v, c.n)});
         }
     }
     std::vector<Hit> hits(rays.size());

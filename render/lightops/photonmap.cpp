@@ -234,7 +234,6 @@ class PhotonMap final : public LightOp {
   std::vector<Photon> shoot(const Scene& scene, const RayTracer& tracer, uint64_t begin, uint64_t end,
                             const SceneContext& ctx) const {
     const float count = static_cast<float>(photons_);
-    const float eps = scene.epsilon();
     std::vector<Photon> stored;
     struct Flight {
       Ray ray;
@@ -262,7 +261,8 @@ class PhotonMap final : public LightOp {
         // directions), 4 pi I / P(light) for a point light. Lights picked by power make it the same share of the
         // total for every photon.
         const RGB flux = ls.radiance * ((ls.is_point ? 4.0f * kPi : kPi) / (ls.pdf_area * count));
-        flights.push_back(Flight{Ray{ls.point + ls.normal * eps, dir}, flux, rng});  // normal is 0 for points
+        const Vec3 origin = ls.is_point ? ls.point : scene.ray_origin(ls.triangle, ls.point, ls.normal);
+        flights.push_back(Flight{Ray{origin, dir}, flux, rng});
       }
       std::vector<Ray> rays;
       std::vector<Hit> hits;
@@ -291,7 +291,7 @@ class PhotonMap final : public LightOp {
           if (!s) continue;
           f.flux = f.flux * s->weight;
           const Vec3 side = dot(s->wi, n) > 0 ? n : -n;
-          f.ray = Ray{x + side * eps, s->wi};
+          f.ray = Ray{scene.ray_origin(tri, x, side), s->wi};
           ++f.specular_bounces;
           next.push_back(f);
         }

@@ -26,12 +26,12 @@ class Specular final : public LightOp {
 
   Task shade(const ShadingPoints& points, std::span<RGB> radiance, Inputs& inputs) override {
     const Scene& scene = *ctx_.scene;
-    const float eps = scene.epsilon();
     struct Chain {
       size_t owner;
       Vec3 x, n, wo;
       Vec3 ng;  // the face's normal on n's side (n is the shading normal)
       uint32_t material;
+      uint32_t triangle;  // UINT32_MAX: a point that names none
       bool outside;
       RGB weight{1, 1, 1};
       RGB emitted{};
@@ -44,7 +44,7 @@ class Specular final : public LightOp {
       if (!scene.material(points.material[i]).specular()) continue;
       for (int s = 0; s < samples_; ++s)
         chains.push_back(Chain{i, points.position[i], points.normal[i], points.wo[i], points.face_normal(i, scene),
-                               points.material[i],
+                               points.material[i], points.triangle_of(i),
                                points.outside(i, scene), {1, 1, 1}, {}, -1,
                                Rng(points.key[i], streams::specular ^ (seed_ << 8) ^ (uint64_t(s) << 32))});
     }
@@ -63,7 +63,7 @@ class Specular final : public LightOp {
         if (!s) continue;
         ch.weight = ch.weight * s->weight;
         const Vec3 side = dot(s->wi, ch.ng) > 0 ? ch.ng : -ch.ng;
-        rays.push_back(Ray{ch.x + side * eps, s->wi});
+        rays.push_back(Ray{scene.ray_origin(ch.triangle, ch.x, side), s->wi});
         moving.push_back(c);
       }
       hits.resize(rays.size());
@@ -81,7 +81,7 @@ class Specular final : public LightOp {
         const Material& hit = scene.material(m);
         if (hit.emissive() && front) ch.emitted += ch.weight * hit.ke;
         if (hit.specular()) {
-          ch = Chain{ch.owner, x, sp.ns, wo, sp.ng, m, front, ch.weight, ch.emitted, -1, ch.rng};
+          ch = Chain{ch.owner, x, sp.ns, wo, sp.ng, m, tri, front, ch.weight, ch.emitted, -1, ch.rng};
           active.push_back(moving[r]);
           continue;
         }
