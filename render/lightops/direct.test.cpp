@@ -163,6 +163,48 @@ TEST(Direct, SolidAngleLightPointsMatchLambertsFormulaWithLessNoiseUnderAWideLig
               by_solid_angle);
 }
 
+// Far from the origin a float's precision is coarse (6e-5 at 1000, 5e-4 at 5000) and a surface's own shadow rays
+// can hit it again unless they start far enough above it: a ray origin that scales with the coordinates keeps a
+// 4-wide floor under a 2x2 light as bright at 5000 units out as at the origin. (An offset of 1e-4 of the scene's
+// diagonal, 6e-4 here, let the floor itself block 2-4 % of the light samples at 5000 units out.)
+TEST(Direct, AFloorFarFromTheOriginIsLitAsAtTheOrigin) {
+  for (const float away : {0.0f, 1000.0f, 5000.0f}) {
+    SCOPED_TRACE(away);
+    const Vec3 c{away, away, away};
+    Scene scene;
+    const uint32_t white = scene.add_material({"white", {1, 1, 1}, {}});
+    const uint32_t emitter = scene.add_material({"light", {0, 0, 0}, {1, 1, 1}});
+    scene.add_quad(c + Vec3{-2, 0, -2}, c + Vec3{-2, 0, 2}, c + Vec3{2, 0, 2}, c + Vec3{2, 0, -2}, white);
+    const std::vector<Vec3> light{c + Vec3{-1, 1, -1}, c + Vec3{1, 1, -1}, c + Vec3{1, 1, 1}, c + Vec3{-1, 1, 1}};
+    scene.add_quad(light[0], light[1], light[2], light[3], emitter);
+    ASSERT_TRUE(scene.finalize("far").ok());
+    RayTracer tracer(scene);
+    auto op = create_lightop(*find_lightop_kind("direct"), ParamTable(Value::Map{{"light_samples", 65536}}, "direct"));
+    LocalInputs none;
+    run_to_completion(op->setup(SceneContext{&scene, &tracer}, none));
+    // Points on the floor where a camera 8 units away finds them (carrying that ray's rounding), naming the triangle.
+    const std::vector<Vec3> where{{0.1f, 0, 0.2f}, {-0.7f, 0, 0.4f}, {1.3f, 0, -0.9f}};
+    const Vec3 eye = c + Vec3{7, 3, 4};  // low enough to see under the light
+    std::vector<Ray> down;
+    for (const Vec3& w : where) down.push_back(Ray{eye, normalize(w - Vec3{7, 3, 4})});
+    std::vector<Hit> hits(down.size());
+    tracer.intersect(down, hits);
+    ShadingPoints pts;
+    for (size_t i = 0; i < where.size(); ++i) {
+      ASSERT_TRUE(hits[i].valid());
+      ASSERT_EQ(scene.material_of(hits[i].triangle), white);
+      pts.push_back(down[i].origin + down[i].direction * hits[i].t, {0, 1, 0}, {0, 1, 0}, white, sample_key(i, 0),
+                    hits[i].triangle);
+    }
+    std::vector<RGB> out(pts.size());
+    run_to_completion(op->shade(pts, out, none));
+    for (size_t i = 0; i < where.size(); ++i) {
+      const std::vector<Vec3> light_here{light[0] - c, light[1] - c, light[2] - c, light[3] - c};
+      EXPECT_NEAR(out[i].y / form_factor(pts.position[i] - c, {0, 1, 0}, light_here), 1.0, 0.01) << i;
+    }
+  }
+}
+
 TEST(Direct, ShadowsAndBackFacesGiveNothing) {
   Rig rig({{-1, 1, -1}, {1, 1, -1}, {1, 1, 1}, {-1, 1, 1}}, 64, /*blocker=*/true);
   auto out = rig.shade(points_at({{0, 0, 0}, {3, 0, 3}}));
