@@ -14,7 +14,7 @@ class PathTrace final : public LightOp {
   explicit PathTrace(const ParamTable& p) {
     options_.max_depth = static_cast<int>(p.get_int("max_depth", 8, 1, 1024));
     options_.rr_depth = static_cast<int>(p.get_int("rr_depth", 3, 1, 1024));
-    options_.roulette = p.get_string("roulette", "throughput", {"throughput", "sqrt"}) == "sqrt" ? PathOptions::Roulette::sqrt
+    options_.roulette = p.get_string("roulette", "sqrt", {"sqrt", "throughput"}) == "sqrt" ? PathOptions::Roulette::sqrt
                                                                                              : PathOptions::Roulette::throughput;
     options_.samples = static_cast<int>(p.get_int("samples", 1, 1, 1 << 16));
     options_.light_tree = p.get_string("light_sampling", "tree", {"tree", "power"}) == "tree";

@@ -85,6 +85,20 @@ TEST(PathTrace, SqrtRouletteIsUnbiasedInTheFurnace) {
   }
 }
 
+// Cycles' rule is the default (docs/decisions.md, "Roulette by the square root"): a pathtrace op without `roulette`
+// shades exactly as one with "sqrt", and not as one with "throughput".
+TEST(PathTrace, SqrtRouletteIsTheDefault) {
+  auto scene = Scene::builtin("cornell");
+  ASSERT_TRUE(scene.ok());
+  RayTracer tracer(*scene);
+  ShadingPoints pts;
+  for (int i = 0; i < 16; ++i)
+    pts.push_back({0.1f + 0.05f * i, 0.0f, 0.3f}, {0, 1, 0}, {0, 1, 0}, scene->material_of(0), sample_key(i, 0));
+  const auto by_default = shade("pathtrace", Value::Map{{"samples", 64}}, *scene, tracer, pts);
+  EXPECT_EQ(by_default, shade("pathtrace", Value::Map{{"samples", 64}, {"roulette", "sqrt"}}, *scene, tracer, pts));
+  EXPECT_NE(by_default, shade("pathtrace", Value::Map{{"samples", 64}, {"roulette", "throughput"}}, *scene, tracer, pts));
+}
+
 struct Estimate {
   std::vector<double> mean, se2;  // per point, green channel: mean and squared standard error over seeds
 };
