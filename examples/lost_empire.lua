@@ -14,6 +14,8 @@
 --   lightfarm run examples/lost_empire.lua                                  -> lost_empire.png
 --   lightfarm run examples/lost_empire.lua --set lighting=network
 --   lightfarm run examples/lost_empire.lua --set light_sampling=power       (choose torches by power alone)
+--   lightfarm run examples/lost_empire.lua --set seed=1                     (other samples: two seeds give the
+--                                                                            noise without a reference, bench/peer)
 --
 -- Data locality (seed 002): `--set parts=3` splits the scene over 3 geometry actors that `direct` and `pathtrace`
 -- trace through (the same image), and with lighting=pathtrace `--set directional_cache=true` lets the directional
@@ -33,26 +35,27 @@ if param("parts", 0) > 0 then partition { parts = param("parts", 0) } end
 local lighting = param("lighting", "direct")
 local light_sampling = param("light_sampling", "tree")
 local light_point = param("light_point", "area")  -- "solid_angle": by the solid angle each light triangle subtends
+local seed = param("seed", 0)
 local function direct()
   -- mis: points a fraction of a block from a torch also get a BSDF sample (without it, their 1/d^2 light samples
   -- are fireflies that dominate the error).
   return lightop "direct" { light_samples = param("light_samples", 2), light_sampling = light_sampling, light_point = light_point,
-                            mis = param("mis", true) }
+                            mis = param("mis", true), seed = seed }
 end
 if lighting == "direct" then
   renderers { count = param("renderers", 2), lighting = direct() }
 elseif lighting == "network" then
   local paths = lightop "pathtrace" { max_depth = param("max_depth", 8), light_sampling = light_sampling, light_point = light_point,
-                                      name = "bounces" }
+                                      name = "bounces", seed = seed }
   local indirect = lightop "irradiance" { input = paths, a = param("a", 0.2), stride = param("stride", 8),
-                                          finest = param("finest", 2), name = "indirect" }
+                                          finest = param("finest", 2), name = "indirect", seed = seed }
   -- The water is glass: what its refraction and reflection chains land on is lit by the same two ops.
   local lit = direct()
-  local specular = lightop "specular" { input = lightop "combine" { inputs = { lit, indirect }, name = "landing" } }
+  local specular = lightop "specular" { input = lightop "combine" { inputs = { lit, indirect }, name = "landing" }, seed = seed }
   renderers { count = param("renderers", 2), lighting = lightop "combine" { inputs = { lit, indirect, specular } } }
 elseif lighting == "pathtrace" then
   local paths = multiplexer { lightop "pathtrace" { max_depth = param("max_depth", 8), light_sampling = light_sampling, light_point = light_point,
-                                                    directional_cache = param("directional_cache", false) },
+                                                    directional_cache = param("directional_cache", false), seed = seed },
                               replicas = param("replicas", 2) }
   renderers { count = param("renderers", 2), lighting = paths }
 elseif lighting == "emission" then
