@@ -86,12 +86,8 @@ inline LightSample light_sample_from(const Scene& scene, size_t e, float p_light
     const float t = facing != 0 ? dot(p0 - x, ng) / facing : 0.0f;
     if (dir && t > 0 && std::isfinite(t)) {
       const Vec3 y = x + *dir * t;
-      // Barycentrics of y, for the emitter's alpha (a wholly cut-out emitter sends nothing).
-      const Vec3 e1 = p1 - p0, e2 = p2 - p0, py = y - p0;
-      const float d11 = dot(e1, e1), d12 = dot(e1, e2), d22 = dot(e2, e2), d1 = dot(py, e1), d2 = dot(py, e2);
-      const float den = d11 * d22 - d12 * d12;
-      const float b1 = den != 0 ? (d22 * d1 - d12 * d2) / den : 0.0f, b2 = den != 0 ? (d11 * d2 - d12 * d1) / den : 0.0f;
-      const RGB le = scene.opaque(tri, Vec3{1 - b1 - b2, b1, b2}) ? scene.material(scene.material_of(tri)).ke : RGB{};
+      // The emitter's alpha there (a wholly cut-out emitter sends nothing).
+      const RGB le = scene.opaque(tri, scene.barycentrics(tri, y)) ? scene.material(scene.material_of(tri)).ke : RGB{};
       // Density 1 / omega over directions, as an area density at y: cos_y / (omega t^2).
       const float pdf_area = p_light * static_cast<float>(std::fabs(facing) / (omega * static_cast<double>(t) * t));
       return LightSample{y, ng, tri, le, pdf_area};
