@@ -247,7 +247,7 @@ Task trace_paths(const SceneContext& ctx, const ShadingPoints& points, std::span
         continue;
       }
       if (depth >= o.rr_depth) {
-        const float most = std::max({path.beta.x, path.beta.y, path.beta.z});
+        const float most = std::max({path.beta.x, path.beta.y, path.beta.z}) / o.rr_threshold;
         const float q = o.roulette == PathOptions::Roulette::sqrt ? std::min(1.0f, std::sqrt(most)) : std::min(0.95f, most);
         path.rng.at_dimension(kSlotsPerVertex * (depth - 1) + 4);
         if (path.rng.uniform() >= q) {

@@ -18,10 +18,12 @@ namespace lf {
 struct PathOptions {
   int max_depth = 8;          // vertices that gather light; 1 is direct light only
   int rr_depth = 3;           // Russian roulette from this vertex on
-  // How roulette weighs a path's throughput beta (its largest channel): survival min(1, sqrt(beta)) ("sqrt",
-  // Cycles' rule), which ends fewer paths that still carry a fair share of the pixel's light, or min(0.95, beta)
-  // ("throughput"). docs/decisions.md, "Roulette by the square root".
+  // How roulette weighs a path's throughput beta (its largest channel) over rr_threshold, b = beta / rr_threshold:
+  // survival min(1, sqrt(b)) ("sqrt", Cycles' rule when rr_threshold is 1), which ends fewer paths that still carry
+  // a fair share of the pixel's light, or min(0.95, b) ("throughput"). A path whose throughput is at least
+  // rr_threshold always goes on. docs/decisions.md, "Roulette by the square root" and "Roulette below a quarter".
   enum class Roulette : uint8_t { throughput, sqrt } roulette = Roulette::sqrt;
+  float rr_threshold = 0.25f;
   int samples = 1;            // paths per point, averaged
   uint64_t stream = 0;        // random stream of the calling op (sampler.hpp); the sampler is the farm's (ctx)
   // With max_depth 1: on diffuse surfaces use light sampling alone (a BSDF ray adds cost, not quality there).

@@ -16,6 +16,7 @@ class PathTrace final : public LightOp {
     options_.rr_depth = static_cast<int>(p.get_int("rr_depth", 3, 1, 1024));
     options_.roulette = p.get_string("roulette", "sqrt", {"sqrt", "throughput"}) == "sqrt" ? PathOptions::Roulette::sqrt
                                                                                              : PathOptions::Roulette::throughput;
+    options_.rr_threshold = static_cast<float>(p.get_float("rr_threshold", options_.rr_threshold, 1e-6, 1));
     options_.samples = static_cast<int>(p.get_int("samples", 1, 1, 1 << 16));
     options_.light_tree = p.get_string("light_sampling", "tree", {"tree", "power"}) == "tree";
     options_.light_point = p.get_string("light_point", "area", {"area", "solid_angle"}) == "solid_angle"

@@ -25,11 +25,12 @@ std::vector<RGB> shade(const char* kind, Value::Map params, const Scene& scene, 
 
 // A closed cube seen from inside: every face emits E and reflects rho (diffuse). Radiance everywhere is
 // E / (1 - rho); the renderer adds the E it sees, so the reflected part a LightOp returns is rho E / (1 - rho).
-// Paths of 4096 samples from 16 points, with `roulette` (and the rule it follows: survival q for a throughput beta).
-// Every path's throughput is the same function of its length here, so the mean path length follows from the rule:
-// vertices 1-3 always (roulette starts after the third, when beta is rho^3), then each with probability q, the
-// path carrying beta / q on.
-void expect_furnace(const char* roulette, double (*survival)(double beta), double rho, double& mean_vertices) {
+// Paths of 4096 samples from 16 points, with `roulette` and `rr_threshold` (and the rule they follow: survival q
+// for a throughput beta). Every path's throughput is the same function of its length here, so the mean path length
+// follows from the rule: vertices 1-3 always (roulette starts after the third, when beta is rho^3), then each with
+// probability q, the path carrying beta / q on.
+void expect_furnace(const char* roulette, double rr_threshold, double (*survival)(double beta), double rho,
+                    double& mean_vertices) {
   Scene s;
   const float e = 1.0f, r = static_cast<float>(rho);
   auto m = s.add_material({"furnace", {r, r, r}, {e, e, e}});
@@ -43,7 +44,9 @@ void expect_furnace(const char* roulette, double (*survival)(double beta), doubl
     pts.push_back({0.0f, u, 0.5f}, {1, 0, 0}, {1, 0, 0}, m, sample_key(i, 1));
   }
   auto op = create_lightop(*find_lightop_kind("pathtrace"),
-                           ParamTable(Value::Map{{"samples", 4096}, {"max_depth", 1000}, {"roulette", roulette}}, "pathtrace"));
+                           ParamTable(Value::Map{{"samples", 4096}, {"max_depth", 1000}, {"roulette", roulette},
+                                                      {"rr_threshold", rr_threshold}},
+                                           "pathtrace"));
   LocalInputs none;
   run_to_completion(op->setup(SceneContext{&s, &tracer}, none));
   std::vector<RGB> out(pts.size());
@@ -69,24 +72,27 @@ void expect_furnace(const char* roulette, double (*survival)(double beta), doubl
 TEST(PathTrace, FurnaceConvergesToEOverOneMinusRho) {
   for (double rho : {0.5, 0.8}) {
     double vertices = 0;
-    expect_furnace("throughput", [](double beta) { return std::min(0.95, beta); }, rho, vertices);
+    expect_furnace("throughput", 1.0, [](double beta) { return std::min(0.95, beta); }, rho, vertices);
     // The rule in closed form: the fourth vertex with probability rho^3, each later one with probability rho.
     EXPECT_NEAR(vertices / (3 + rho * rho * rho / (1 - rho)), 1.0, 0.02) << "rho " << rho;
   }
 }
 
 // Roulette by the square root of the throughput ends fewer paths; it must stay unbiased, and end them as its rule
-// says.
+// says: Cycles' rule (rr_threshold 1), and the default, which ends no path whose throughput is a quarter or more.
 TEST(PathTrace, SqrtRouletteIsUnbiasedInTheFurnace) {
   for (double rho : {0.5, 0.8}) {
-    double vertices = 0;
-    expect_furnace("sqrt", [](double beta) { return std::min(1.0, std::sqrt(beta)); }, rho, vertices);
-    EXPECT_GT(vertices, 3 + rho * rho * rho / (1 - rho)) << "longer paths than roulette by the throughput";
+    double cycles = 0, quarter = 0;
+    expect_furnace("sqrt", 1.0, [](double beta) { return std::min(1.0, std::sqrt(beta)); }, rho, cycles);
+    EXPECT_GT(cycles, 3 + rho * rho * rho / (1 - rho)) << "longer paths than roulette by the throughput";
+    expect_furnace("sqrt", 0.25, [](double beta) { return std::min(1.0, std::sqrt(beta / 0.25)); }, rho, quarter);
+    EXPECT_GT(quarter, cycles) << "longer paths than Cycles' rule, rho " << rho;
   }
 }
 
-// Cycles' rule is the default (docs/decisions.md, "Roulette by the square root"): a pathtrace op without `roulette`
-// shades exactly as one with "sqrt", and not as one with "throughput".
+// Roulette by the square root, below a quarter, is the default (docs/decisions.md, "Roulette by the square root",
+// "Roulette below a quarter"): a pathtrace op without `roulette` or `rr_threshold` shades exactly as one with "sqrt"
+// and 0.25, and not as one with "throughput" or with Cycles' threshold of 1.
 TEST(PathTrace, SqrtRouletteIsTheDefault) {
   auto scene = Scene::builtin("cornell");
   ASSERT_TRUE(scene.ok());
@@ -95,8 +101,10 @@ TEST(PathTrace, SqrtRouletteIsTheDefault) {
   for (int i = 0; i < 16; ++i)
     pts.push_back({0.1f + 0.05f * i, 0.0f, 0.3f}, {0, 1, 0}, {0, 1, 0}, scene->material_of(0), sample_key(i, 0));
   const auto by_default = shade("pathtrace", Value::Map{{"samples", 64}}, *scene, tracer, pts);
-  EXPECT_EQ(by_default, shade("pathtrace", Value::Map{{"samples", 64}, {"roulette", "sqrt"}}, *scene, tracer, pts));
+  EXPECT_EQ(by_default, shade("pathtrace", Value::Map{{"samples", 64}, {"roulette", "sqrt"}, {"rr_threshold", 0.25}},
+                              *scene, tracer, pts));
   EXPECT_NE(by_default, shade("pathtrace", Value::Map{{"samples", 64}, {"roulette", "throughput"}}, *scene, tracer, pts));
+  EXPECT_NE(by_default, shade("pathtrace", Value::Map{{"samples", 64}, {"rr_threshold", 1.0}}, *scene, tracer, pts));
 }
 
 struct Estimate {
