@@ -19,7 +19,7 @@
 #include <vector>
 
 #include "render/camera.hpp"
-#include "render/coplanar_ties.hpp"
+#include "render/tied_hits.hpp"
 #include "render/scene.hpp"
 #include "render/tracer.hpp"
 
@@ -87,7 +87,7 @@ class RayRoutes {
 // Tracing through every part in this process: what the geometry actors do together, used to check them and the
 // split. A ray visits parts in the order parts_along gives and stops once its hit is nearer than the next part's
 // entry, so it finds the whole scene's nearest hit; coplanar overlapping faces are settled by the same rule as the
-// whole scene's tracer (render/coplanar_ties.hpp), so the hit is the same.
+// whole scene's tracer (render/tied_hits.hpp), so the hit is the same.
 class PartitionedTracer {
  public:
   PartitionedTracer(const Scene& scene, std::vector<ScenePart> parts);
@@ -105,7 +105,7 @@ class PartitionedTracer {
   std::vector<ScenePart> parts_;
   std::vector<Bounds> boxes_;  // padded
   std::vector<std::unique_ptr<RayTracer>> tracers_;
-  CoplanarTies ties_;
+  TiedHits ties_;
   mutable std::vector<uint64_t> rays_per_part_;
 };
 

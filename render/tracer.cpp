@@ -1,6 +1,6 @@
 #include "render/tracer.hpp"
 
-#include "render/coplanar_ties.hpp"
+#include "render/tied_hits.hpp"
 
 #include <embree3/rtcore.h>
 #include <malloc.h>
@@ -36,7 +36,7 @@ struct RayTracer::Impl {
   RTCDevice device = nullptr;
   RTCScene scene = nullptr;
   Primitives prims;
-  std::unique_ptr<CoplanarTies> ties;  // the whole scene's; a part's tracer leaves ties to its caller
+  std::unique_ptr<TiedHits> ties;  // the whole scene's; a part's tracer leaves ties to its caller
   ~Impl() {
     if (scene) rtcReleaseScene(scene);
     if (device) rtcReleaseDevice(device);
@@ -109,7 +109,7 @@ RayTracer::RayTracer(const Scene& scene, std::vector<uint32_t> triangles)
   rtcReleaseGeometry(geom);
   rtcCommitScene(impl_->scene);
   if (rtcGetDeviceError(impl_->device) != RTC_ERROR_NONE) throw std::runtime_error("Embree: cannot build the scene");
-  if (whole) impl_->ties = std::make_unique<CoplanarTies>(scene);
+  if (whole) impl_->ties = std::make_unique<TiedHits>(scene);
   // The build's temporaries (half again the BVH's size) stay in the heap after they are freed; give them back,
   // since every actor of a host holds its own BVH.
   ::malloc_trim(0);
@@ -132,14 +132,21 @@ static void fill(RTCRay& r, const Ray& ray) {
   r.flags = 0;
 }
 
+// The rays and Embree's answers of this thread's last intersect_unsettled (settling reads its barycentrics).
+static std::vector<RTCRayHit>& rayhit_buffer() {
+  thread_local std::vector<RTCRayHit> buffer;
+  return buffer;
+}
+
 void RayTracer::intersect(std::span<const Ray> rays, std::span<Hit> hits, bool coherent) const {
   intersect_unsettled(rays, hits, coherent);
-  if (impl_->ties)
-    for (size_t i = 0; i < rays.size(); ++i) hits[i] = impl_->ties->settle(rays[i], hits[i]);
+  if (!impl_->ties) return;
+  const std::vector<RTCRayHit>& answers = rayhit_buffer();
+  for (size_t i = 0; i < rays.size(); ++i) hits[i] = impl_->ties->settle(rays[i], hits[i], answers[i].hit.u, answers[i].hit.v);
 }
 
 void RayTracer::intersect_unsettled(std::span<const Ray> rays, std::span<Hit> hits, bool coherent) const {
-  thread_local std::vector<RTCRayHit> buffer;
+  std::vector<RTCRayHit>& buffer = rayhit_buffer();
   buffer.resize(rays.size());
   for (size_t i = 0; i < rays.size(); ++i) {
     fill(buffer[i].ray, rays[i]);

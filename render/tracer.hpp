@@ -40,7 +40,7 @@ class RayTracer {
   // packet: use it only for batches that are the same on every farm layout (a tile's camera rays). Everything
   // else is traced ray by ray, so a ray's hit never depends on the batch it came in (DESIGN §4).
   // Coplanar overlapping faces hit at the same distance are settled by a rule from the scene alone
-  // (render/coplanar_ties.hpp), so the hit does not depend on which BVH found it.
+  // (render/tied_hits.hpp), so the hit does not depend on which BVH found it.
   void intersect(std::span<const Ray> rays, std::span<Hit> hits, bool coherent = false) const;
   // The hit this BVH finds, ties unsettled (a part's own search; the partitioned tracer settles them after).
   void intersect_unsettled(std::span<const Ray> rays, std::span<Hit> hits, bool coherent = false) const;

@@ -4,7 +4,7 @@
 //   request: { n: count, r: f32[8n] (per ray: origin xyz, direction xyz, tnear, tfar), any: bool }
 //   reply:   any = false: { n, tri: u32[n] (0xffffffff: no hit in this part), t: f32[n] }
 //            any = true:  { n, hit: u8[n] (1: something of this part lies on the ray) }
-// The answer is the part's own: the asker visits the parts along each ray and settles ties (render/coplanar_ties.hpp).
+// The answer is the part's own: the asker visits the parts along each ray and settles ties (render/tied_hits.hpp).
 #include <cstdint>
 #include <span>
 #include <vector>

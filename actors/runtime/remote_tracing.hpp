@@ -11,7 +11,7 @@
 #include "actors/runtime/actor_config.hpp"
 #include "actors/runtime/runtime.hpp"
 #include "core/value.hpp"
-#include "render/coplanar_ties.hpp"
+#include "render/tied_hits.hpp"
 #include "render/lightop.hpp"
 #include "render/partition.hpp"
 
@@ -50,7 +50,7 @@ class RemoteTracing final : public Tracing {
   Runtime& rt_;
   const Scene& scene_;
   std::vector<Bounds> boxes_;  // padded (render/partition.hpp)
-  CoplanarTies ties_;
+  TiedHits ties_;
   size_t batch_;
   size_t local_part_ = SIZE_MAX;
   std::unique_ptr<RayTracer> local_tracer_;
