@@ -204,7 +204,7 @@ Hit TiedHits::settle(const Ray& ray, Hit hit) const {
   constexpr float any = 1e30f;
   if (!meets(scene_, ray, hit.triangle, any, u, v, t)) u = v = 1.0f / 3;  // parallel: only partners can tie
   if (!overlapped && std::min({1 - u - v, u, v}) >= kEdgeBand) return hit;
-  return settle_among_neighbours(ray, hit, u, v);
+  return settle_among_neighbours(ray, hit, u, v, t > 0 ? t : hit.t);
 }
 
 Hit TiedHits::settle(const Ray& ray, Hit hit, float u, float v) const {
@@ -214,15 +214,21 @@ Hit TiedHits::settle(const Ray& ray, Hit hit, float u, float v) const {
   return settle(ray, hit);
 }
 
-Hit TiedHits::settle_among_neighbours(const Ray& ray, Hit hit, float u, float v) const {
+Hit TiedHits::settle_among_neighbours(const Ray& ray, Hit hit, float u, float v, float distance) const {
   Hit best{};
   bool best_front = false;
-  auto consider = [&](uint32_t c) {
+  // A neighbour ties only where it meets the ray on its own edge at the same distance: a face with a corner at the
+  // edge's end may also be met elsewhere along the ray (the floor beyond a wall's bottom edge), which is no tie. An
+  // overlapping partner of a neighbour may hold the point inside it, so for it only the distance counts.
+  enum class Kind { reported, neighbour, neighbours_partner };
+  auto consider = [&](uint32_t c, Kind kind) {
     // A little slack at the edges, so that the face the BVH reported is not lost to rounding, and a neighbour the ray
     // meets on their shared edge is found from either side.
     constexpr float slack = 1e-5f;
     float cu = 0, cv = 0, t = 0;
     if (!meets(scene_, ray, c, slack, cu, cv, t)) return;
+    if (kind != Kind::reported && !(std::fabs(t - distance) <= kSameDistance * distance)) return;
+    if (kind == Kind::neighbour && std::min({1 - cu - cv, cu, cv}) >= kEdgeBand) return;
     if (!scene_.opaque(c, {1 - cu - cv, cu, cv})) return;
     const bool front = dot(scene_.normal(c), ray.direction) < 0;
     if (!best.valid() || (front && !best_front) || (front == best_front && c < best.triangle)) {
@@ -230,11 +236,8 @@ Hit TiedHits::settle_among_neighbours(const Ray& ray, Hit hit, float u, float v)
       best_front = front;
     }
   };
-  auto consider_with_partners = [&](uint32_t c) {
-    consider(c);
-    for (uint32_t k = first_[c]; k < first_[c + 1]; ++k) consider(partners_[k]);
-  };
-  consider_with_partners(hit.triangle);
+  consider(hit.triangle, Kind::reported);
+  for (uint32_t k = first_[hit.triangle]; k < first_[hit.triangle + 1]; ++k) consider(partners_[k], Kind::reported);
   // The corners at the ends of the edges the hit is next to: every face with a corner there.
   const float weight[3] = {1 - u - v, u, v};
   bool corner_near[3] = {false, false, false};
@@ -245,7 +248,11 @@ Hit TiedHits::settle_among_neighbours(const Ray& ray, Hit hit, float u, float v)
   for (int c = 0; c < 3; ++c) {
     if (!corner_near[c]) continue;
     const uint32_t p = position_of_vertex_[corners[c]];
-    for (uint32_t k = fan_first_[p]; k < fan_first_[p + 1]; ++k) consider_with_partners(fan_[k]);
+    for (uint32_t k = fan_first_[p]; k < fan_first_[p + 1]; ++k) {
+      const uint32_t f = fan_[k];
+      consider(f, Kind::neighbour);
+      for (uint32_t m = first_[f]; m < first_[f + 1]; ++m) consider(partners_[m], Kind::neighbours_partner);
+    }
   }
   return best.valid() ? best : hit;
 }

@@ -6,8 +6,9 @@
 //  - coplanar faces that overlap (a face and its back-to-back twin, a table top's two sides, a decal on a wall);
 //  - a hit on or next to an edge or corner that neighbouring faces share (a quad's diagonal, a cube's edge, a fan's
 //    centre): within kEdgeBand of an edge, in the reported face's barycentrics.
-// Among the faces of that neighbourhood that contain the hit point (the reported face's overlapping partners, the
-// faces with a corner at the near edge's ends, and their partners), the rule picks the one facing the ray (a viewer
+// Among the faces of that neighbourhood that contain the hit point (the reported face's overlapping partners, and
+// the faces with a corner at the near edge's ends, and their partners, where the ray meets them at the same
+// distance, on their own edge for the former), the rule picks the one facing the ray (a viewer
 // sees the side turned towards it), then the lower triangle id, and computes its distance here by one formula,
 // whichever face the BVH reported. Neighbours are faces with a corner at the same position (vertices are compared by
 // value, so a mesh written with repeated vertices is still one surface); a T-junction (a corner lying on another
@@ -28,6 +29,9 @@ class TiedHits {
   // A BVH's own barycentrics differ from this class's by far less than kCoarseBand - kEdgeBand: a hit farther than
   // kCoarseBand from its face's edges by them is farther than kEdgeBand by this class's, and is left alone at once.
   static constexpr float kCoarseBand = 1e-3f;
+  // A neighbour ties only at the reported face's distance, within this share of it (two faces' distances to the
+  // point they share differ by rounding, ~1e-7 of it).
+  static constexpr float kSameDistance = 1e-4f;
 
   explicit TiedHits(const Scene& scene);
   // Triangles that have at least one overlapping coplanar face.
@@ -44,7 +48,8 @@ class TiedHits {
   std::vector<uint32_t> fan(uint32_t t, int corner) const;
 
  private:
-  Hit settle_among_neighbours(const Ray& ray, Hit hit, float u, float v) const;
+  // u, v, distance: the reported face's barycentrics and distance by this class's formula.
+  Hit settle_among_neighbours(const Ray& ray, Hit hit, float u, float v, float distance) const;
 
   const Scene& scene_;
   std::vector<uint32_t> first_;     // partners of t: partners_[first_[t]] .. partners_[first_[t + 1] - 1]

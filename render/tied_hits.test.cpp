@@ -110,6 +110,27 @@ TEST(TiedHits, AHitOnASharedEdgeOrCornerSettlesToOneFace) {
   EXPECT_EQ(ties.fan(6, 0).size(), 6u);
 }
 
+// A ray through the diagonal of a wall's quad, from Lost Empire (one of its camera rays): a floor beyond the wall
+// has a corner at the diagonal's end, and the ray meets the floor too, farther on and inside it. That is no tie: the
+// wall is what the ray hits, whichever of its two triangles was reported, even though the floor has the lower id.
+TEST(TiedHits, AFaceThatSharesACornerButIsMetFartherOnIsNoTie) {
+  Scene s;
+  const uint32_t m = s.add_material(Material{"white", {0.5f, 0.5f, 0.5f}, {}});
+  const uint32_t lamp = s.add_material(Material{"lamp", {}, {1, 1, 1}});
+  s.add_triangle({-7, 15, 20}, {-5, 15, 21}, {-5, 15, 17}, m);  // 0: the floor, facing +y
+  s.add_triangle({-7, 15, 19}, {-7, 15, 20}, {-7, 16, 19}, m);  // 1, 2: the wall, facing -x
+  s.add_triangle({-7, 15, 20}, {-7, 16, 20}, {-7, 16, 19}, m);
+  s.add_quad({-10, 20, 18}, {-9, 20, 18}, {-9, 20, 19}, {-10, 20, 19}, lamp);
+  ASSERT_TRUE(s.finalize("wall and floor"));
+  TiedHits ties(s);
+  const Ray ray{{-8, 16, 20}, {0.804641306f, -0.522382975f, -0.282255888f}};
+  for (uint32_t reported : {1u, 2u}) {
+    const Hit settled = ties.settle(ray, Hit{reported, 1.24278975f});
+    EXPECT_EQ(settled.triangle, 1u) << "reported " << reported;
+    EXPECT_NEAR(settled.t, 1.24278975f, 1e-5f) << "reported " << reported;
+  }
+}
+
 // Away from every edge nothing changes: the face and distance the BVH reported stand. Next to an edge (within
 // kEdgeBand) both overloads agree, whether the barycentrics come from the BVH or are worked out here.
 TEST(TiedHits, AHitAwayFromEdgesIsLeftAsReported) {
