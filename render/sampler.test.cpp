@@ -99,9 +99,10 @@ TEST(Sampler, SobolPointsEqualThePlainDefinition) {
   for (int n = 0; n < 100000; ++n) {
     const uint32_t index = n < 4096 ? static_cast<uint32_t>(n) : pick.next();
     const uint64_t seed = (static_cast<uint64_t>(pick.next()) << 32) | pick.next();
-    const uint32_t shuffled = sobol::owen_scramble(index, sobol::hash32(seed));
-    const float u = sobol::to_unit(sobol::owen_scramble(sobol::dimension0(shuffled), sobol::hash32(seed ^ 0x5bd1e995u)));
-    const float v = sobol::to_unit(sobol::owen_scramble(sobol::dimension1(shuffled), sobol::hash32(seed ^ 0x68e31da4u)));
+    const sobol::DimensionSeeds k = sobol::dimension_seeds(seed);
+    const uint32_t shuffled = sobol::owen_scramble(index, k.shuffle);
+    const float u = sobol::to_unit(sobol::owen_scramble(sobol::dimension0(shuffled), k.first));
+    const float v = sobol::to_unit(sobol::owen_scramble(sobol::dimension1(shuffled), k.second));
     const Uniform2 p = sobol::point2(index, seed);
     ASSERT_EQ(p.u, u) << "index " << index;
     ASSERT_EQ(p.v, v) << "index " << index;
