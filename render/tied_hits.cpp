@@ -120,8 +120,8 @@ TiedHits::TiedHits(const Scene& scene) : scene_(scene) {
   for (const auto& p : pairs) partners_.push_back(p.second);
 
   // Vertices by position: equal coordinates, one position (a mesh may repeat a vertex for each face), numbered in
-  // the order they first appear. An open-addressing table of the first vertex seen at each place (a sort of the
-  // vertices took 4x as long).
+  // the order they first appear. An open-addressing table of the first vertex seen at each place (sorting the
+  // vertices took twice as long).
   const auto vertices = scene.vertices();
   auto bits = [](float f) {
     uint32_t b;

@@ -140,11 +140,13 @@ TEST(TiedHits, AHitAwayFromEdgesIsLeftAsReported) {
   const Hit kept = ties.settle(inside, Hit{1, 2.0f});
   EXPECT_EQ(kept.triangle, 1u);
   EXPECT_EQ(kept.t, 2.0f) << "the BVH's own distance";
-  EXPECT_EQ(ties.settle(inside, Hit{1, 2.0f}, 0.5f, 0.25f).t, 2.0f);
+  EXPECT_EQ(ties.settle(inside, Hit{1, 2.0f}, 0.25f, 0.5f).t, 2.0f);
   const Ray near_diagonal{{0.5f + 2e-6f, 0.5f, 2}, {0, 0, -1}};
   for (uint32_t reported : {0u, 1u}) {
     const Hit computed = ties.settle(near_diagonal, Hit{reported, 2.0f});
-    const Hit given = ties.settle(near_diagonal, Hit{reported, 2.0f}, reported == 0 ? 0.5f : 0.0f, 0.0f);
+    // What a BVH would give there (u, v: the weights of corners 1 and 2) on each of the quad's triangles.
+    const Hit given = reported == 0 ? ties.settle(near_diagonal, Hit{0, 2.0f}, 2e-6f, 0.5f)
+                                    : ties.settle(near_diagonal, Hit{1, 2.0f}, 0.5f, 0.5f);
     EXPECT_EQ(computed.triangle, 0u);
     EXPECT_EQ(given.triangle, 0u);
     EXPECT_EQ(computed.t, given.t);
