@@ -114,6 +114,13 @@ constexpr DimensionSeeds dimension_seeds(uint64_t seed) {
   return {static_cast<uint32_t>(h >> 32), static_cast<uint32_t>(h), static_cast<uint32_t>((h * 0xd1342543de82ef95ull) >> 32)};
 }
 constexpr float to_unit(uint32_t x) { return static_cast<float>(x >> 8) * 0x1p-24f; }
+// to_unit(reverse_bits(x)) with three byte lookups: the 24 bits a float keeps are x's low 24 reversed.
+constexpr float reversed_to_unit(uint32_t x) {
+  const auto& t = reversed_bytes.byte;
+  return static_cast<float>((uint32_t{t[x & 0xffu]} << 16) | (uint32_t{t[(x >> 8) & 0xffu]} << 8) |
+                            uint32_t{t[(x >> 16) & 0xffu]}) *
+         0x1p-24f;
+}
 
 // reverse_bits(dimension1(i)), by bytes: dimension 1 is linear over GF(2) in the bits of i (each set bit XORs in its
 // direction number), so four 256-entry tables give it in four lookups instead of a loop over i's bits.
@@ -136,13 +143,13 @@ inline constexpr ReversedDimension1 reversed_dimension1{};
 constexpr float point1_of_reversed(uint32_t reversed_index, uint64_t seed) {
   const DimensionSeeds k = dimension_seeds(seed);
   const uint32_t shuffled = reverse_bits(laine_karras(reversed_index, k.shuffle));
-  return to_unit(reverse_bits(laine_karras(shuffled, k.first)));
+  return reversed_to_unit(laine_karras(shuffled, k.first));
 }
 constexpr Uniform2 point2_of_reversed(uint32_t reversed_index, uint64_t seed) {
   const DimensionSeeds k = dimension_seeds(seed);
   const uint32_t shuffled = reverse_bits(laine_karras(reversed_index, k.shuffle));
-  return {to_unit(reverse_bits(laine_karras(shuffled, k.first))),
-          to_unit(reverse_bits(laine_karras(reversed_dimension1(shuffled), k.second)))};
+  return {reversed_to_unit(laine_karras(shuffled, k.first)),
+          reversed_to_unit(laine_karras(reversed_dimension1(shuffled), k.second))};
 }
 constexpr float point1(uint32_t index, uint64_t seed) { return point1_of_reversed(reverse_bits(index), seed); }
 constexpr Uniform2 point2(uint32_t index, uint64_t seed) { return point2_of_reversed(reverse_bits(index), seed); }
