@@ -26,11 +26,12 @@ class TiedHits {
   // A hit this close to an edge of its face (the smallest barycentric) is settled among the faces around it. Wide
   // against rounding: a face can only be reported for a ray that passes within float precision of it (~1e-7).
   static constexpr float kEdgeBand = 1e-4f;
-  // A BVH's own barycentrics differ from this class's by far less than kCoarseBand - kEdgeBand: a hit farther than
-  // kCoarseBand from its face's edges by them is farther than kEdgeBand by this class's, and is left alone at once.
+  // A BVH's own barycentrics and this class's are two float computations of one value, expected to differ by float
+  // rounding (not measured), far less than kCoarseBand - kEdgeBand: a hit farther than kCoarseBand from its face's
+  // edges by them is then farther than kEdgeBand by this class's, and is left alone at once.
   static constexpr float kCoarseBand = 1e-3f;
   // A neighbour ties only at the reported face's distance, within this share of it (two faces' distances to the
-  // point they share differ by rounding, ~1e-7 of it).
+  // point they share differ by float rounding only; on tied_hits.test's Lost Empire ray both read 1.24278975).
   static constexpr float kSameDistance = 1e-4f;
 
   explicit TiedHits(const Scene& scene);
