@@ -2,6 +2,7 @@
 // Sampling a point on the scene's area lights, shared by every LightOp that does next-event estimation.
 #include <optional>
 
+#include "render/light_selection.hpp"
 #include "render/math.hpp"
 #include "render/sampler.hpp"
 #include "render/scene.hpp"
@@ -118,31 +119,58 @@ inline LightSample sample_light(const Scene& scene, Draws& rng) {
   return light_sample_at(scene, e, p_light, rng.uniform2());
 }
 
-// Picks a light by what it can give point x facing n (the scene's light tree), and a point on it as `mode` says;
-// nullopt when no light can reach x's side.
+// The light for point x facing n from one number u in [0, 1): through the scene's light tree, or, in a learned
+// cell of `selection`, from the cell's lights for u below its share and through the tree above it (each part
+// rescaled to [0, 1)), `probability` then being the mixture's. `remainder` as LightTree::pick. False when the tree
+// finds no light that can reach x's side (and u fell in its part).
+inline bool pick_light(const Scene& scene, Vec3 x, Vec3 n, float u, const LightSelection* selection, size_t& light,
+                       float& probability, float* remainder) {
+  const int32_t cell = selection ? selection->cell_of(x, n) : -1;
+  if (cell < 0) return scene.light_tree().pick(x, n, u, light, probability, remainder);
+  const float share = selection->share();
+  if (u < share) {
+    float p_cell = 0;
+    selection->pick(cell, std::min(u / share, 0x1.fffffep-1f), light, p_cell, remainder);
+    probability = share * p_cell + (1 - share) * scene.light_tree().probability(x, n, light);
+    return true;
+  }
+  float p_tree = 0;
+  if (!scene.light_tree().pick(x, n, std::min((u - share) / (1 - share), 0x1.fffffep-1f), light, p_tree, remainder))
+    return false;
+  probability = share * selection->probability(cell, light) + (1 - share) * p_tree;
+  return true;
+}
+
+// Picks a light for point x facing n: through the scene's light tree (by what each can give the point), or, with a
+// learned LightSelection whose cell holds x, from that cell's lights with chance selection->share() and through the
+// tree otherwise; then a point on it as `mode` says. nullopt when no light can reach x's side.
 template <class Draws>
 inline std::optional<LightSample> sample_light_at(const Scene& scene, Vec3 x, Vec3 n, Draws& rng,
-                                                  LightPoint mode = LightPoint::area) {
+                                                  LightPoint mode = LightPoint::area,
+                                                  const LightSelection* selection = nullptr) {
   size_t e = 0;
   float p_light = 0;
+  auto pick = [&](float u, float* remainder) { return pick_light(scene, x, n, u, selection, e, p_light, remainder); };
   if (draws_jointly(rng)) {
     Uniform2 uv = rng.uniform2();
-    if (!scene.light_tree().pick(x, n, uv.u, e, p_light, &uv.u)) return std::nullopt;
+    if (!pick(uv.u, &uv.u)) return std::nullopt;
     // The default's path is exactly the area sample, with nothing to decide per sample.
     if (mode == LightPoint::area) return light_sample_at(scene, e, p_light, uv);
     return light_sample_from(scene, e, p_light, uv, x, mode);
   }
-  if (!scene.light_tree().pick(x, n, rng.uniform(), e, p_light)) return std::nullopt;
+  if (!pick(rng.uniform(), nullptr)) return std::nullopt;
   if (mode == LightPoint::area) return light_sample_at(scene, e, p_light, rng.uniform2());
   return light_sample_from(scene, e, p_light, rng.uniform2(), x, mode);
 }
 
-// The area density with which sample_light_at(x, n, mode) draws point y on emitter triangle `tri` (y seen from x at
-// distance dist with cosine cos_y at the light).
+// The area density with which sample_light_at(x, n, mode, selection) draws point y on emitter triangle `tri` (y
+// seen from x at distance dist with cosine cos_y at the light).
 inline float light_pdf_area_at(const Scene& scene, uint32_t tri, Vec3 x, Vec3 n, LightPoint mode = LightPoint::area,
-                               float dist = 0, float cos_y = 0) {
+                               float dist = 0, float cos_y = 0, const LightSelection* selection = nullptr) {
   const size_t e = scene.emitter_index_of(tri);
-  const float p_light = scene.light_tree().probability(x, n, e);
+  float p_light = scene.light_tree().probability(x, n, e);
+  if (const int32_t cell = selection ? selection->cell_of(x, n) : -1; cell >= 0)
+    p_light = selection->share() * selection->probability(cell, e) + (1 - selection->share()) * p_light;
   double omega = 0;
   if (solid_angle_sampled(scene, e, x, mode, omega))
     return p_light * static_cast<float>(std::fabs(cos_y) / (omega * static_cast<double>(dist) * dist));

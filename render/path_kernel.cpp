@@ -107,7 +107,8 @@ Task trace_paths(const SceneContext& ctx, const ShadingPoints& points, std::span
       if (bsdf.is_delta()) continue;
       path.rng.at_dimension(kSlotsPerVertex * (depth - 1));
       std::optional<LightSample> picked =
-          o.light_tree ? sample_light_at(scene, path.x, path.n, path.rng, o.light_point) : sample_light(scene, path.rng);
+          o.light_tree ? sample_light_at(scene, path.x, path.n, path.rng, o.light_point, o.light_selection)
+                       : sample_light(scene, path.rng);
       if (!picked) continue;
       const LightSample& ls = *picked;
       const Vec3 d = ls.point - path.x;
@@ -233,7 +234,8 @@ Task trace_paths(const SceneContext& ctx, const ShadingPoints& points, std::span
         float w = 1.0f;
         if (!path.delta) {
           const float cos_y = dot(ng, wo);
-          const float pdf_area = o.light_tree ? light_pdf_area_at(scene, tri, path.x, path.n, o.light_point, hits[r].t, cos_y)
+          const float pdf_area = o.light_tree ? light_pdf_area_at(scene, tri, path.x, path.n, o.light_point, hits[r].t, cos_y,
+                                                                o.light_selection)
                                               : light_pdf_area(scene, tri);
           const float light_pdf = pdf_area * hits[r].t * hits[r].t / cos_y;
           w = power_heuristic(path.bsdf_pdf, light_pdf);

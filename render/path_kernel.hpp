@@ -33,6 +33,9 @@ struct PathOptions {
   // With the light tree: a point on the chosen triangle light uniform over its area, or over the solid angle it
   // subtends (render/light_sampling.hpp).
   LightPoint light_point = LightPoint::area;
+  // With the light tree: lights learned where the camera looks (render/light_selection.hpp), mixed with the tree's
+  // choice at points in a learned cell.
+  const LightSelection* light_selection = nullptr;
   // The directional cache (render/directional_cache.hpp), for diffuse continuation rays: one that meets a surface
   // inside its cell's neighbourhood goes on as usual; one that leaves it takes the cache's radiance for its direction
   // where the cache answers, and is traced on through the scene where it does not. While the cache is not frozen,

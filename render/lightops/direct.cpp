@@ -2,11 +2,13 @@
 //
 // `light_samples` samples per point. Each draws a light through the scene's light tree (by what each light can give
 // the point: power, distance, orientation; render/light_tree.hpp), or with `light_sampling = "power"` by power
-// alone, and a uniform point on it, and casts a shadow ray; on glossy surfaces it also samples the BSDF, and the two are
-// combined by multiple importance sampling (render/path_kernel.cpp with one vertex). On diffuse surfaces light
-// sampling alone is used unless `mis = true`: then they get the BSDF sample too, which tames points close to a
-// light (a uniform point on a light seen under a wide angle has a 1/d^2 weight; a cosine direction does not). Emitters emit on the side their winding faces. Mirrors and glass get nothing here:
-// that is `specular`'s job.
+// alone, or with `light_sampling = "learned"` partly from the lights found before rendering to light the point's
+// cell where the camera looks (render/light_selection.hpp); then a uniform point on it, and a shadow ray. On glossy
+// surfaces it also samples the BSDF, and the two are combined by multiple importance sampling
+// (render/path_kernel.cpp with one vertex). On diffuse surfaces light sampling alone is used unless `mis = true`:
+// then they get the BSDF sample too, which tames points close to a light (a uniform point on a light seen under a
+// wide angle has a 1/d^2 weight; a cosine direction does not). Emitters emit on the side their winding faces.
+// Mirrors and glass get nothing here: that is `specular`'s job.
 #include "render/lightop_registry.hpp"
 #include "render/path_kernel.hpp"
 #include "render/sampler.hpp"
@@ -18,15 +20,26 @@ class DirectLight final : public LightOp {
  public:
   explicit DirectLight(const ParamTable& p)
       : light_samples_(static_cast<int>(p.get_int("light_samples", 1, 1, 1 << 20))),
-        light_tree_(p.get_string("light_sampling", "tree", {"tree", "power"}) == "tree"),
+        light_sampling_(p.get_string("light_sampling", "tree", {"tree", "power", "learned"})),
         light_point_(p.get_string("light_point", "area", {"area", "solid_angle"}) == "solid_angle" ? LightPoint::solid_angle
                                                                                                 : LightPoint::area),
         mis_(p.get_bool("mis", false)),
-        seed_(static_cast<uint64_t>(p.get_int("seed", 0, 0, INT32_MAX))) {}
+        seed_(static_cast<uint64_t>(p.get_int("seed", 0, 0, INT32_MAX))),
+        selection_options_(light_selection_options(p, seed_)) {}
 
   Task setup(SceneContext ctx, Inputs&) override {
     ctx_ = ctx;
-    co_return;
+    if (light_sampling_ == "learned") {
+      if (!ctx.camera) throw LightOpError("direct: light_sampling = \"learned\" needs the farm's camera");
+      co_await LightSelection::build(ctx, selection_options_, selection_);
+    }
+  }
+
+  Value stats() const override {
+    if (light_sampling_ != "learned") return Value();
+    Value::Map m;
+    selection_.add_stats(m);
+    return m;
   }
 
   Task shade(const ShadingPoints& points, std::span<RGB> radiance, Inputs&) override {
@@ -35,17 +48,20 @@ class DirectLight final : public LightOp {
     o.samples = light_samples_;
     o.stream = streams::direct ^ (seed_ << 8);
     o.light_only_on_diffuse = !mis_;
-    o.light_tree = light_tree_;
+    o.light_tree = light_sampling_ != "power";
+    o.light_selection = light_sampling_ == "learned" ? &selection_ : nullptr;
     o.light_point = light_point_;
     co_await trace_paths(ctx_, points, radiance, o);
   }
 
  private:
   int light_samples_;
-  bool light_tree_;
+  std::string light_sampling_;
   LightPoint light_point_;
   bool mis_;
   uint64_t seed_;
+  LightSelectionOptions selection_options_;
+  LightSelection selection_;
   SceneContext ctx_;
 };
 

@@ -37,6 +37,7 @@ class Irradiance final : public LightOp {
         finest_(static_cast<int>(p.get_int("finest", 2, 1, 64))),
         min_spacing_(static_cast<float>(p.get_float("min_spacing", 0.002, 0, 1))),
         max_spacing_(static_cast<float>(p.get_float("max_spacing", 0.2, 0, 10))),
+        own_rays_(static_cast<int>(p.get_int("own_rays", 0, 0, 1 << 16))),
         seed_(static_cast<uint64_t>(p.get_int("seed", 0, 0, INT32_MAX))) {}
 
   Task setup(SceneContext ctx, Inputs& inputs) override {
@@ -65,7 +66,7 @@ class Irradiance final : public LightOp {
       const size_t r = static_cast<size_t>(ctx.replica_index), count = static_cast<size_t>(ctx.replica_count);
       const size_t begin = open.size() * r / count, end = open.size() * (r + 1) / count;
       std::vector<IrradianceRecord> mine;
-      co_await compute(std::span<const Candidate>(open.data() + begin, end - begin), inputs, mine);
+      co_await compute(std::span<const Candidate>(open.data() + begin, end - begin), inputs, mine, m_, n_);
       std::vector<std::string> parts;
       co_await exchange.all_gather(IrradianceCache::serialize(mine), &parts);
       for (const auto& part : parts) {
@@ -121,7 +122,9 @@ class Irradiance final : public LightOp {
     }
     if (misses.empty()) co_return;
     std::vector<IrradianceRecord> own;
-    co_await compute(misses, inputs, own);  // used once, never inserted
+    // Used once, never inserted: `own_rays` cosine-distributed rays (strata in azimuth), else a record's hemisphere.
+    if (own_rays_ > 0) co_await compute(misses, inputs, own, 1, own_rays_);
+    else co_await compute(misses, inputs, own, m_, n_);
     for (size_t j = 0; j < misses.size(); ++j) {
       const size_t i = miss_owner[j];
       radiance[i] = points.albedo(i, scene, ctx_.pixel_footprint(points.position[i])) * own[j].irradiance * (1.0f / kPi);
@@ -262,10 +265,10 @@ class Irradiance final : public LightOp {
     return out;
   }
 
-  // One record per candidate, from M x N hemisphere samples whose radiance comes from the input in one batch.
-  Task compute(std::span<const Candidate> candidates, Inputs& inputs, std::vector<IrradianceRecord>& out) {
+  // One record per candidate, from m x n hemisphere samples whose radiance comes from the input in one batch.
+  Task compute(std::span<const Candidate> candidates, Inputs& inputs, std::vector<IrradianceRecord>& out, int m, int n) {
     const Scene& scene = *ctx_.scene;
-    const size_t per = static_cast<size_t>(m_ * n_);
+    const size_t per = static_cast<size_t>(m * n);
     std::vector<Ray> rays;
     rays.reserve(candidates.size() * per);
     std::vector<std::array<Vec3, 3>> frames;
@@ -274,11 +277,11 @@ class Irradiance final : public LightOp {
       basis(c.n, u, v);
       frames.push_back({u, v, c.n});
       const Vec3 origin = scene.ray_origin(c.triangle, c.x, c.ng);
-      for (int j = 0; j < m_; ++j)
-        for (int k = 0; k < n_; ++k) {
-          Rng rng(c.key, streams::irradiance ^ (seed_ << 8) ^ (static_cast<uint64_t>(j * n_ + k) << 20));
+      for (int j = 0; j < m; ++j)
+        for (int k = 0; k < n; ++k) {
+          Rng rng(c.key, streams::irradiance ^ (seed_ << 8) ^ (static_cast<uint64_t>(j * n + k) << 20));
           const float a = rng.uniform(), b = rng.uniform();
-          rays.push_back(Ray{origin, stratum_direction(j, k, m_, n_, a, b, u, v, c.n)});
+          rays.push_back(Ray{origin, stratum_direction(j, k, m, n, a, b, u, v, c.n)});
         }
     }
     std::vector<Hit> hits(rays.size());
@@ -301,8 +304,8 @@ class Irradiance final : public LightOp {
     const float min_r = min_spacing_ * extent_, max_r = max_spacing_ * extent_;
     for (size_t c = 0; c < candidates.size(); ++c) {
       HemisphereSamples s;
-      s.m = m_;
-      s.n = n_;
+      s.m = m;
+      s.n = n;
       s.radiance.resize(per);
       s.distance.resize(per);
       for (size_t q = 0; q < per; ++q) {
@@ -327,6 +330,7 @@ class Irradiance final : public LightOp {
   int overture_rays_;
   int stride_, finest_;
   float min_spacing_, max_spacing_;
+  int own_rays_;
   uint64_t seed_;
   float extent_ = 1;
   SceneContext ctx_;

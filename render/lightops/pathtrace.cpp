@@ -18,7 +18,10 @@ class PathTrace final : public LightOp {
                                                                                              : PathOptions::Roulette::throughput;
     options_.rr_threshold = static_cast<float>(p.get_float("rr_threshold", options_.rr_threshold, 1e-6, 1));
     options_.samples = static_cast<int>(p.get_int("samples", 1, 1, 1 << 16));
-    options_.light_tree = p.get_string("light_sampling", "tree", {"tree", "power"}) == "tree";
+    const std::string light_sampling = p.get_string("light_sampling", "tree", {"tree", "power", "learned"});
+    options_.light_tree = light_sampling != "power";
+    learned_ = light_sampling == "learned";
+    selection_options_ = light_selection_options(p, static_cast<uint64_t>(p.get_int("seed", 0, 0, INT32_MAX)));
     options_.light_point = p.get_string("light_point", "area", {"area", "solid_angle"}) == "solid_angle"
                                ? LightPoint::solid_angle
                                : LightPoint::area;
@@ -39,6 +42,11 @@ class PathTrace final : public LightOp {
 
   Task setup(SceneContext ctx, Inputs&) override {
     ctx_ = ctx;
+    if (learned_) {
+      if (!ctx.camera) throw LightOpError("pathtrace: light_sampling = \"learned\" needs the farm's camera");
+      co_await LightSelection::build(ctx, selection_options_, selection_);
+      options_.light_selection = &selection_;
+    }
     if (use_cache_) co_await fill_cache();
   }
 
@@ -49,6 +57,7 @@ class PathTrace final : public LightOp {
   Value stats() const override {
     Value::Map m{{"paths", static_cast<int64_t>(tally_.paths)},
                  {"mean_path_vertices", tally_.paths ? static_cast<double>(tally_.vertices) / tally_.paths : 0.0}};
+    if (learned_) selection_.add_stats(m);
     if (cache_) {
       // Seed 002's Table 3, for the render (the fill pass's own rays apart).
       const double far = static_cast<double>(tally_.global_rays + tally_.cache_lookups);
@@ -113,6 +122,9 @@ class PathTrace final : public LightOp {
   PathTally tally_, fill_tally_;
   SceneContext ctx_;
   bool use_cache_ = false;
+  bool learned_ = false;
+  LightSelectionOptions selection_options_;
+  LightSelection selection_;
   DirectionalCacheOptions cache_options_;
   int fill_spp_ = 4, fill_stride_ = 2;
   std::unique_ptr<DirectionalCache> cache_;
