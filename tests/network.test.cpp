@@ -146,8 +146,9 @@ namespace lf::test {
 namespace {
 
 // A real interior does not change the rule that the image does not depend on the layout (issue 13): Lost Empire,
-// its torches lit, direct light through the light tree plus a camera-placed irradiance cache, at 64x48 — one
-// renderer and a single cache against three renderers and the cache as a pool of two replicas (which build their
+// its torches lit, direct light through the light tree and learned lights plus a camera-placed irradiance cache,
+// at 64x48 — one renderer, a single direct op and a single cache against three renderers, direct light as a pool
+// of two (each replica learns the lights itself) and the cache as a pool of two replicas (which build their
 // records in shares and exchange them). Bit for bit.
 TEST_F(NetworkTest, LostEmpireIsTheSameOnEveryLayout) {
   const std::string obj = kSource + "/../shared/scenes/lost_empire/lost_empire.obj";
@@ -156,13 +157,15 @@ TEST_F(NetworkTest, LostEmpireIsTheSameOnEveryLayout) {
 material "Torch" { emission = {9, 9, 6}, kd = {0, 0, 0} }
 camera { eye = {-5, 18, -30}, at = {5, 12, 5}, fov = 70 }
 image { width = 64, height = 48, spp = 2, tile = 16 }
-local direct = lightop "direct" { light_samples = 2 }
+local lit = lightop "direct" { light_samples = 2, light_sampling = "learned" }
+local direct = param("direct_replicas", 1) > 1 and multiplexer { lit, replicas = param("direct_replicas", 1) } or lit
 local cache = lightop "irradiance" { input = direct, theta = 4, phi = 12 }
 local indirect = param("cache_replicas", 1) > 1 and multiplexer { cache, replicas = param("cache_replicas", 1) } or cache
 renderers { count = param("renderers", 1), lighting = lightop "combine" { inputs = { direct, indirect } } }
 )");
   const Image single = render({"run", script, "--set", "renderers=1", "--set", "cache_replicas=1"}, "single.exr");
-  const Image spread = render({"run", script, "--set", "renderers=3", "--set", "cache_replicas=2"}, "spread.exr");
+  const Image spread = render(
+      {"run", script, "--set", "renderers=3", "--set", "cache_replicas=2", "--set", "direct_replicas=2"}, "spread.exr");
   ASSERT_EQ(single.pixels.size(), spread.pixels.size());
   EXPECT_TRUE(single.pixels == spread.pixels) << "images differ between layouts";
   double sum = 0;
