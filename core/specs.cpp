@@ -57,7 +57,7 @@ CameraSpec CameraSpec::from_value(const Value& v) {
 }
 
 Value ImageSpec::to_value() const {
-  return Value::Map{{"width", width}, {"height", height},   {"spp", spp},           {"tile", tile},
+  return Value::Map{{"width", width}, {"height", height},   {"spp", spp}, {"shade_spp", shade_spp}, {"tile", tile},
                     {"output", output}, {"exposure", exposure}, {"tonemap", tonemap}, {"sampler", sampler}};
 }
 
@@ -66,6 +66,7 @@ ImageSpec ImageSpec::from_value(const Value& v) {
   i.width = static_cast<int>(num(v, "width", i.width));
   i.height = static_cast<int>(num(v, "height", i.height));
   i.spp = static_cast<int>(num(v, "spp", i.spp));
+  i.shade_spp = static_cast<int>(num(v, "shade_spp", 0));
   i.tile = static_cast<int>(num(v, "tile", i.tile));
   i.output = str(v, "output");
   i.exposure = num(v, "exposure", 0);

@@ -44,6 +44,12 @@ struct ImageSpec {
   int width = 256;
   int height = 256;
   int spp = 4;
+  // Of each pixel's spp camera samples, how many the lighting shades (the first ones; 0: all). The others only
+  // see what the camera sees directly (emitters and the edges of lit ones): cheap samples that antialias torches
+  // and lamps without paying for their lighting. The pixel is then mean(emission over spp) + mean(lighting over
+  // shade_spp), both unbiased.
+  int shade_spp = 0;
+  int shaded_per_pixel() const { return shade_spp > 0 && shade_spp < spp ? shade_spp : spp; }
   int tile = 32;
   std::string output = "out.png";
   // For 8-bit outputs (PNG, TIFF) only: scale by 2^exposure, then map to [0, 1] ("clamp", "reinhard", "aces").

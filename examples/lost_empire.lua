@@ -27,7 +27,10 @@ scene    { file = "../../shared/scenes/lost_empire/lost_empire.obj" }
 -- estimator without finite variance: fireflies that never average out).
 material "Torch" { emission = {9, 9, 6}, kd = {0, 0, 0} }
 camera   { eye = {-5, 18, -30}, at = {5, 12, 5}, fov = 70 }
-image    { width = param("width", 320), height = param("height", 240), spp = param("spp", 16),
+-- shade_spp: of the spp camera samples per pixel, how many the lighting shades; the others only see the torches'
+-- flames, whose sub-pixel shapes need many camera samples but no light (docs/lua-api.md, image).
+local spp = param("spp", 16)
+image    { width = param("width", 320), height = param("height", 240), spp = spp, shade_spp = param("shade_spp", spp),
            exposure = param("exposure", 2), output = param("output", "lost_empire.png") }
 
 if param("parts", 0) > 0 then partition { parts = param("parts", 0) } end
@@ -48,7 +51,8 @@ elseif lighting == "network" then
   local paths = lightop "pathtrace" { max_depth = param("max_depth", 8), light_sampling = light_sampling, light_point = light_point,
                                       name = "bounces", seed = seed }
   local indirect = lightop "irradiance" { input = paths, a = param("a", 0.2), stride = param("stride", 8),
-                                          finest = param("finest", 2), name = "indirect", seed = seed }
+                                          finest = param("finest", 2), own_rays = param("own_rays", 8),
+                                          name = "indirect", seed = seed }
   -- The water is glass: what its refraction and reflection chains land on is lit by the same two ops.
   local lit = direct()
   local specular = lightop "specular" { input = lightop "combine" { inputs = { lit, indirect }, name = "landing" }, seed = seed }

@@ -219,8 +219,8 @@ int l_camera(lua_State* L) {
   return 0;
 }
 
-// image { width = 512, height = 512, spp = 16, tile = 16, output = "cornell.png", exposure = 0, tonemap = "clamp",
-//         sampler = "sobol" }
+// image { width = 512, height = 512, spp = 16, shade_spp = 16, tile = 16, output = "cornell.png", exposure = 0,
+//         tonemap = "clamp", sampler = "sobol" }
 int l_image(lua_State* L) {
   Builder& b = builder(L);
   if (b.have_image) luaL_error(L, "image is declared twice");
@@ -230,6 +230,8 @@ int l_image(lua_State* L) {
     i.width = static_cast<int>(p.get_int("width", i.width, 1, 16384));
     i.height = static_cast<int>(p.get_int("height", i.height, 1, 16384));
     i.spp = static_cast<int>(p.get_int("spp", i.spp, 1, 65536));
+    i.shade_spp = static_cast<int>(p.get_int("shade_spp", i.spp, 1, i.spp));
+    if (i.shade_spp == i.spp) i.shade_spp = 0;  // all of them: the plain pixel mean
     i.tile = static_cast<int>(p.get_int("tile", i.tile, 1, 1024));
     i.output = p.get_string("output", i.output);
     i.exposure = p.get_float("exposure", i.exposure, -20, 20);

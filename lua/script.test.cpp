@@ -162,6 +162,8 @@ TEST_F(ScriptTest, BadParametersNameLineAndParameter) {
   EXPECT_EQ(error_of("\nimage { tonemap = \"filmic\" }\n").rfind("farm.lua:2: image: parameter 'tonemap' must be one of", 0), 0u)
       << error_of("\nimage { tonemap = \"filmic\" }\n");
   EXPECT_EQ(error_of("image { exposure = 40 }\n"), "farm.lua:1: image: parameter 'exposure' must be in [-20, 20], got 40");
+  EXPECT_EQ(error_of("image { spp = 8,\n shade_spp = 16 }\n"),
+            "farm.lua:1: image: parameter 'shade_spp' must be in [1, 8], got 16");
   EXPECT_EQ(error_of("scene { builtin = \"cornell\" }\nlight { quad = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0.5}, {0, 1, 0}}, "
                      "radiance = {1, 1, 1} }\n")
                 .rfind("farm.lua:2: light: the quad is not planar (its 4th corner is 0.447214 off the plane", 0),

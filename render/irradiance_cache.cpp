@@ -88,7 +88,7 @@ IrradianceCache::Key IrradianceCache::key_of(int level, Vec3 p) const {
 void IrradianceCache::insert(const IrradianceRecord& r) {
   grid_cell_ = 0;  // a frozen grid no longer lists everything
   grid_.clear();
-  wide_.clear();
+  grid_levels_.clear();
   // Valid where |x - x_i| / R_i < a (up to kMaxRelax * a for relaxed lookups): the deepest level whose cells are
   // at least that wide.
   const float valid = kMaxRelax * a_ * r.harmonic_distance;
@@ -109,10 +109,11 @@ bool IrradianceCache::lookup(Vec3 x, Vec3 n, RGB& irradiance, float relax) const
 
 void IrradianceCache::freeze() {
   grid_.clear();
-  wide_.clear();
+  grid_levels_.clear();
   if (records_.empty()) return;
   // Cells half as wide as the median record's valid radius (measured: narrower is no faster); a record touching
-  // more than kMaxCells cells is checked by every lookup instead.
+  // more than kMaxCells cells goes to the next coarser grid. (Before, such records were checked by every lookup:
+  // on Lost Empire 1726 of 5635 records, 1700 candidates a lookup, ~10 us.)
   constexpr double kMaxCells = 512;
   std::vector<float> radius;
   for (const auto& r : records_) radius.push_back(kMaxRelax * a_ * r.harmonic_distance);
@@ -122,37 +123,51 @@ void IrradianceCache::freeze() {
   for (uint32_t id = 0; id < records_.size(); ++id) {
     const Vec3 p = records_[id].position;
     const float r = radius[id];
-    const int lo[3] = {static_cast<int>(std::floor((p.x - r) / grid_cell_)), static_cast<int>(std::floor((p.y - r) / grid_cell_)),
-                       static_cast<int>(std::floor((p.z - r) / grid_cell_))};
-    const int hi[3] = {static_cast<int>(std::floor((p.x + r) / grid_cell_)), static_cast<int>(std::floor((p.y + r) / grid_cell_)),
-                       static_cast<int>(std::floor((p.z + r) / grid_cell_))};
-    const double cells = static_cast<double>(hi[0] - lo[0] + 1) * (hi[1] - lo[1] + 1) * (hi[2] - lo[2] + 1);
-    if (cells > kMaxCells) {
-      wide_.push_back(id);
-      continue;
+    for (int level = 0;; ++level) {
+      const float cell = grid_cell_ * static_cast<float>(1 << (2 * level));
+      const int lo[3] = {static_cast<int>(std::floor((p.x - r) / cell)), static_cast<int>(std::floor((p.y - r) / cell)),
+                         static_cast<int>(std::floor((p.z - r) / cell))};
+      const int hi[3] = {static_cast<int>(std::floor((p.x + r) / cell)), static_cast<int>(std::floor((p.y + r) / cell)),
+                         static_cast<int>(std::floor((p.z + r) / cell))};
+      const double cells = static_cast<double>(hi[0] - lo[0] + 1) * (hi[1] - lo[1] + 1) * (hi[2] - lo[2] + 1);
+      if (cells > kMaxCells && level < kMaxGridLevel) continue;
+      for (int x = lo[0]; x <= hi[0]; ++x)
+        for (int y = lo[1]; y <= hi[1]; ++y)
+          for (int z = lo[2]; z <= hi[2]; ++z) grid_[Key{level, x, y, z}].push_back(id);
+      if (std::find(grid_levels_.begin(), grid_levels_.end(), level) == grid_levels_.end()) grid_levels_.push_back(level);
+      break;
     }
-    for (int x = lo[0]; x <= hi[0]; ++x)
-      for (int y = lo[1]; y <= hi[1]; ++y)
-        for (int z = lo[2]; z <= hi[2]; ++z) grid_[Key{0, x, y, z}].push_back(id);
   }
+  std::sort(grid_levels_.begin(), grid_levels_.end());
 }
 
 template <class Visit>
 void IrradianceCache::for_candidates(Vec3 x, Visit&& visit) const {
   if (grid_cell_ > 0) {
-    // Frozen: the one cell holding x lists every record whose sphere might reach it, in record order; the wide
-    // ones are merged in by index so that the order stays the record order.
-    const Key k{0, static_cast<int>(std::floor(x.x / grid_cell_)), static_cast<int>(std::floor(x.y / grid_cell_)),
-                static_cast<int>(std::floor(x.z / grid_cell_))};
-    auto it = grid_.find(k);
-    static const std::vector<uint32_t> none;
-    const std::vector<uint32_t>& cell = it == grid_.end() ? none : it->second;
-    size_t i = 0, j = 0;
-    while (i < cell.size() || j < wide_.size()) {
-      if (j >= wide_.size() || (i < cell.size() && cell[i] < wide_[j]))
-        visit(records_[cell[i++]]);
-      else
-        visit(records_[wide_[j++]]);
+    // Frozen: the cell holding x in each grid lists every record of that grid whose sphere might reach it, in
+    // record order; the grids' lists are merged by index so that the order stays the record order.
+    constexpr size_t kLists = kMaxGridLevel + 1;
+    const uint32_t* at[kLists];
+    const uint32_t* end[kLists];
+    size_t lists = 0;
+    for (int level : grid_levels_) {
+      const float cell = grid_cell_ * static_cast<float>(1 << (2 * level));
+      auto it = grid_.find(Key{level, static_cast<int>(std::floor(x.x / cell)), static_cast<int>(std::floor(x.y / cell)),
+                               static_cast<int>(std::floor(x.z / cell))});
+      if (it == grid_.end() || it->second.empty()) continue;
+      at[lists] = it->second.data();
+      end[lists++] = it->second.data() + it->second.size();
+    }
+    while (lists > 0) {
+      size_t first = 0;
+      for (size_t l = 1; l < lists; ++l)
+        if (*at[l] < *at[first]) first = l;
+      visit(records_[*at[first]++]);
+      if (at[first] == end[first]) {
+        at[first] = at[lists - 1];
+        end[first] = end[lists - 1];
+        --lists;
+      }
     }
     return;
   }

@@ -50,9 +50,12 @@ class IrradianceCache {
   // answer averaged.
   int lookup_first(Vec3 x, Vec3 n, std::span<const float> relax, RGB& irradiance, uint32_t* records = nullptr) const;
   static constexpr float kMaxRelax = 4.0f;
-  // No more inserts: builds a one-level grid in which every record is listed in each cell its widest valid
-  // sphere touches, so that a lookup reads one cell instead of 27 per octree level. Lookups then give the same
-  // records, visited in record order.
+  static constexpr int kMaxGridLevel = 12;  // the coarsest frozen grid: cells 4^12 times the finest
+  // No more inserts: builds grids in which every record is listed in each cell its widest valid sphere touches,
+  // so that a lookup reads one cell per grid instead of 27 per octree level. The finest grid's cells are half the
+  // median record's valid radius; a record that would touch more than 512 of them goes to a grid 4 times coarser,
+  // and so on (a cache in open space holds records valid tens of cells wide). Lookups then give the same records,
+  // visited in record order.
   void freeze();
   size_t size() const { return records_.size(); }
   const std::vector<IrradianceRecord>& records() const { return records_; }
@@ -78,10 +81,11 @@ class IrradianceCache {
   std::vector<IrradianceRecord> records_;
   std::unordered_map<Key, std::vector<uint32_t>, KeyHash> cells_;
   std::vector<int> levels_;  // levels that hold records, ascending: lookups visit only these
-  // The frozen grid (empty until freeze()): cell size, cell -> records, and records too wide for it.
+  // The frozen grids (empty until freeze()): the finest one's cell size, cell (level k: cells grid_cell_ * 4^k)
+  // -> records in index order, and the levels that hold records.
   float grid_cell_ = 0;
   std::unordered_map<Key, std::vector<uint32_t>, KeyHash> grid_;
-  std::vector<uint32_t> wide_;
+  std::vector<int> grid_levels_;
   template <class Visit>
   void for_candidates(Vec3 x, Visit&& visit) const;
 };

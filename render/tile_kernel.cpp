@@ -37,6 +37,8 @@ void tile_points(const Scene& scene, const Camera& camera, const ImageSpec& imag
   const size_t samples = rays.size();
   work.rect = rect;
   work.spp = image.spp;
+  work.shaded = image.shade_spp;
+  const size_t per_pixel = static_cast<size_t>(image.spp), shaded = static_cast<size_t>(image.shaded_per_pixel());
   work.points.clear();
   work.points.reserve(samples);
   work.sample_of_point.clear();
@@ -50,9 +52,13 @@ void tile_points(const Scene& scene, const Camera& camera, const ImageSpec& imag
     if (!hits[i].valid()) continue;
     const uint32_t tri = hits[i].triangle;
     const Vec3 wo = -rays[i].direction;
+    const Material& m = scene.material(scene.material_of(tri));
+    if (i % per_pixel >= shaded) {  // seen, not shaded: only its emission counts (surface_at's front)
+      if (m.emissive() && dot(scene.normal(tri), wo) > 0) work.emitted[i] = m.ke;
+      continue;
+    }
     const Vec3 p = point_on_ray(rays[i].origin, wo, hits[i].t);
     const SurfacePoint sp = surface_at(scene, tri, p, wo);
-    const Material& m = scene.material(scene.material_of(tri));
     if (sp.front && m.emissive()) work.emitted[i] = m.ke;
     work.points.push_back(p, sp.ns, wo, scene.material_of(tri), keys[i], tri);
     work.sample_of_point.push_back(static_cast<uint32_t>(i));
@@ -77,6 +83,7 @@ void reorder_points(const TileWork& work, std::span<const uint32_t> order, TileW
   out = TileWork{};
   out.rect = work.rect;
   out.spp = work.spp;
+  out.shaded = work.shaded;
   out.eye = work.eye;
   out.emitted = work.emitted;
   out.rebuildable = work.rebuildable;
@@ -132,13 +139,27 @@ bool pixel_sees_emitter(const TileWork& work, size_t pixel) {
 void resolve_tile(const TileWork& work, std::span<const RGB> radiance, std::span<const RGB> pixel_radiance,
                   std::span<const uint8_t> folded, std::vector<RGB>& pixels) {
   const size_t samples = work.emitted.size();
+  const size_t spp = static_cast<size_t>(work.spp);
+  pixels.assign(samples / spp, RGB{});
+  const float inv = 1.0f / static_cast<float>(spp);
+  if (work.shaded > 0 && work.shaded < work.spp) {
+    // Emission over all samples, lighting over the shaded ones (ImageSpec::shade_spp).
+    const float inv_shaded = 1.0f / static_cast<float>(work.shaded);
+    std::vector<RGB> lit(pixels.size());
+    for (size_t j = 0; j < work.sample_of_point.size(); ++j)
+      if (folded.empty() || !folded[work.sample_of_point[j] / static_cast<uint32_t>(work.spp)])
+        lit[work.sample_of_point[j] / spp] += radiance[j];
+    for (size_t p = 0; p < pixels.size(); ++p) {
+      RGB seen{};
+      for (size_t k = 0; k < spp; ++k) seen += work.emitted[p * spp + k];
+      pixels[p] = seen * inv + (!folded.empty() && folded[p] ? pixel_radiance[p] : lit[p]) * inv_shaded;
+    }
+    return;
+  }
   std::vector<RGB> per_sample(work.emitted);
   for (size_t j = 0; j < work.sample_of_point.size(); ++j)
     if (folded.empty() || !folded[work.sample_of_point[j] / static_cast<uint32_t>(work.spp)])
       per_sample[work.sample_of_point[j]] += radiance[j];
-  const size_t spp = static_cast<size_t>(work.spp);
-  pixels.assign(samples / spp, RGB{});
-  const float inv = 1.0f / static_cast<float>(spp);
   for (size_t p = 0; p < pixels.size(); ++p) {
     if (!folded.empty() && folded[p]) {
       pixels[p] = pixel_radiance[p] * inv;

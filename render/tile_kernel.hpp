@@ -29,7 +29,8 @@ std::vector<TileRect> make_tiles(int width, int height, int tile_size);
 struct TileWork {
   TileRect rect;
   int spp = 1;
-  ShadingPoints points;                 // one per camera sample that hit a surface
+  int shaded = 0;  // of each pixel's spp samples, the first `shaded` are points (ImageSpec::shade_spp; 0: all)
+  ShadingPoints points;                 // one per shaded camera sample that hit a surface
   std::vector<uint32_t> sample_of_point;  // which sample (pixel-major, then sample index) each point is
   std::vector<float> distance;          // per point: how far along its camera ray from `eye` it lies
   Vec3 eye{};                           // where every camera ray starts

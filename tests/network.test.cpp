@@ -194,5 +194,40 @@ renderers { count = param("renderers", 1), lighting = lighting }
   EXPECT_GT(sum, 0) << "a black image proves nothing";
 }
 
+// image { shade_spp = M }: the lighting shades the first M of each pixel's spp camera samples, and emission is
+// averaged over all of them. On the Cornell box, whose light the camera sees: a pixel of the 16-spp image that
+// shades 4 is the 4-spp image's pixel plus the difference between the 16- and the 4-sample emission (from images
+// lit by the `emission` op, which the renderer's own emission doubles), and bit for bit the 4-spp pixel where
+// no sample sees the light. Two renderers against one, so that the rule does not depend on the layout either.
+TEST_F(NetworkTest, ShadeSppLightsTheFirstSamplesAndSeesEmittersWithAll) {
+  const std::string script = write("shade_spp.lua", R"(
+scene { builtin = "cornell" }
+camera { eye = {278, 273, -800}, at = {278, 273, 0}, fov = 39.3 }
+image { width = 48, height = 48, spp = param("spp", 4), shade_spp = param("shade_spp", param("spp", 4)), tile = 16 }
+local lit = param("lighting", "direct") == "direct" and lightop "direct" { light_samples = 1 } or lightop "emission" {}
+renderers { count = param("renderers", 1), lighting = lit }
+)");
+  const Image both = render({"run", script, "--set", "spp=16", "--set", "shade_spp=4", "--set", "renderers=2"}, "both.exr");
+  const Image four = render({"run", script, "--set", "spp=4"}, "four.exr");
+  const Image seen16 = render({"run", script, "--set", "spp=16", "--set", "lighting=emission"}, "seen16.exr");
+  const Image seen4 = render({"run", script, "--set", "spp=4", "--set", "lighting=emission"}, "seen4.exr");
+  ASSERT_EQ(both.pixels.size(), four.pixels.size());
+  size_t unlit_equal = 0, unlit = 0, edges = 0;
+  for (size_t i = 0; i < both.pixels.size(); ++i) {
+    const double emission16 = average(seen16.pixels[i]) / 2, emission4 = average(seen4.pixels[i]) / 2;
+    if (emission16 == 0 && emission4 == 0) {
+      ++unlit;
+      unlit_equal += both.pixels[i] == four.pixels[i];
+      continue;
+    }
+    edges += emission16 != emission4;
+    EXPECT_NEAR(average(both.pixels[i]) - average(four.pixels[i]), emission16 - emission4, 1e-4 * (1 + emission16))
+        << "pixel " << i;
+  }
+  EXPECT_GT(unlit, both.pixels.size() / 2);
+  EXPECT_EQ(unlit_equal, unlit);
+  EXPECT_GT(edges, 10u) << "no pixel where 16 samples see more or less of the light than 4: nothing was tested";
+}
+
 }  // namespace
 }  // namespace lf::test

@@ -58,8 +58,10 @@ void print_report(const FarmSpec& spec, const Supervisor& supervisor, const RunF
     std::fprintf(stderr, "%-14s %s\n", a.name.c_str(), line.c_str());
   }
   std::fprintf(stderr, "\nrender: %.2f M samples/s\n", samples / f.render_seconds / 1e6);
-  std::printf("wrote %s (%dx%d, %d spp)\n", spec.image.output.c_str(), spec.image.width, spec.image.height,
-              spec.image.spp);
+  const std::string shaded =
+      spec.image.shaded_per_pixel() < spec.image.spp ? ", " + std::to_string(spec.image.shade_spp) + " shaded" : "";
+  std::printf("wrote %s (%dx%d, %d spp%s)\n", spec.image.output.c_str(), spec.image.width, spec.image.height,
+              spec.image.spp, shaded.c_str());
 }
 
 Status write_stats_json(const FarmSpec& spec, const Supervisor& supervisor, const RunFigures& f,
