@@ -73,7 +73,8 @@ int main(int argc, char** argv) {
     reference = *kept;
     std::printf("reference: %s (kept from an earlier run)\n", reference_file.c_str());
   } else {
-    Render r = render(script, {"spp=" + std::to_string(reference_spp), "light_samples=4", size[0], size[1]});
+    Render r = render(script, {"spp=" + std::to_string(reference_spp), "light_samples=4", "light_sampling=tree", size[0],
+                               size[1]});
     reference = r.image;
     if (!reference_file.empty()) (void)lf::write_image(reference, reference_file);
     std::printf("reference: tree, %d spp x 4 light samples, render %.1f s\n", reference_spp, r.render_seconds);

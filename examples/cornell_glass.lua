@@ -13,9 +13,12 @@ local caustics = multiplexer { lightop "photonmap" { photons = param("photons", 
                                replicas = param("photon_replicas", 2) }
 -- Indirect light: a cache over direct light (one bounce), and a cache over that plus direct (two bounces). The
 -- first serves the second's hemisphere rays, anywhere in the box: its records are spread by area; the second's go
--- where the camera looks (the default).
-local bounce1  = lightop "irradiance" { input = direct, name = "bounce1", placement = "area", prepass = param("prepass", 20000) }
-local lit1     = lightop "combine" { inputs = { direct, caustics, bounce1 }, name = "lit1" }
+-- where the camera looks (the default). `direct` gives mirrors and glass nothing, so what the caches' rays see in
+-- them (the light, and the walls it lights) comes from `through`, their chains landing on direct light.
+local through  = lightop "specular" { input = direct, name = "through" }
+local first    = lightop "combine" { inputs = { direct, through }, name = "first" }
+local bounce1  = lightop "irradiance" { input = first, name = "bounce1", placement = "area", prepass = param("prepass", 20000) }
+local lit1     = lightop "combine" { inputs = { direct, through, caustics, bounce1 }, name = "lit1" }
 local indirect = lightop "irradiance" { input = lit1, name = "indirect" }
 -- What leaves a surface a mirror/glass chain lands on.
 local landing  = lightop "combine" { inputs = { direct, caustics, indirect }, name = "landing" }

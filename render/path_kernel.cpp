@@ -91,8 +91,10 @@ Task trace_paths(const SceneContext& ctx, const ShadingPoints& points, std::span
 
   // The paths still alive, in path order: each bounce visits only these (most paths end after a few bounces, and a
   // pass over every path at every depth cost more than the dead ones' share of the work).
-  std::vector<uint32_t> active(paths.size());
-  for (size_t p = 0; p < paths.size(); ++p) active[p] = static_cast<uint32_t>(p);
+  std::vector<uint32_t> active;
+  active.reserve(paths.size());
+  for (size_t p = 0; p < paths.size(); ++p)
+    if (!o.dark_on_specular || !scene.material(paths[p].material).specular()) active.push_back(static_cast<uint32_t>(p));
 
   if (tally) tally->paths += paths.size();
   for (int depth = 1; depth <= o.max_depth && !active.empty(); ++depth) {

@@ -28,6 +28,9 @@ struct PathOptions {
   uint64_t stream = 0;        // random stream of the calling op (sampler.hpp); the sampler is the farm's (ctx)
   // With max_depth 1: on diffuse surfaces use light sampling alone (a BSDF ray adds cost, not quality there).
   bool light_only_on_diffuse = false;
+  // Points on mirrors and glass get nothing: in a network the `specular` op follows their chains, emitters met
+  // included, so a BSDF ray from here would count those emitters twice.
+  bool dark_on_specular = false;
   // Choose lights through the scene's light tree (by what each can give the point), or else by power alone.
   bool light_tree = true;
   // With the light tree: a point on the chosen triangle light uniform over its area, or over the solid angle it

@@ -48,6 +48,7 @@ class DirectLight final : public LightOp {
     o.samples = light_samples_;
     o.stream = streams::direct ^ (seed_ << 8);
     o.light_only_on_diffuse = !mis_;
+    o.dark_on_specular = true;
     o.light_tree = light_sampling_ != "power";
     o.light_selection = light_sampling_ == "learned" ? &selection_ : nullptr;
     o.light_point = light_point_;
