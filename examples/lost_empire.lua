@@ -15,9 +15,9 @@
 --
 --   lightfarm run examples/lost_empire.lua                                  -> lost_empire.png
 --   lightfarm run examples/lost_empire.lua --set lighting=network
---   lightfarm run examples/lost_empire.lua --set lighting=network --set spp=256 --set shade_spp=32 --set light_samples=4
---                                  (256 camera samples a pixel for the flames' shapes, 32 of them lit: the
---                                   setting bench/lost_empire_bench found best for its time)
+--   lightfarm run examples/lost_empire.lua --set lighting=network --set spp=256 --set shade_spp=128
+--                                  (256 camera samples a pixel for the flames' shapes, 128 of them lit: of
+--                                   bench/lost_empire_bench's settings, the least error for its time)
 --   lightfarm run examples/lost_empire.lua --set light_sampling=tree        (the light tree alone)
 --   lightfarm run examples/lost_empire.lua --set light_sampling=power       (choose torches by power alone)
 --   lightfarm run examples/lost_empire.lua --set seed=1                     (other samples: two seeds give the
