@@ -56,7 +56,8 @@ if lighting == "direct" then
 elseif lighting == "network" then
   -- The cache's hemisphere rays land mostly where the camera does not look, so learned lights do little for
   -- them (measured: RMSE 0.1765 with, 0.1782 without) while each replica would spend ~2.3 s learning: the tree.
-  local paths = lightop "pathtrace" { max_depth = param("max_depth", 8), light_sampling = param("bounce_light_sampling", "tree"),
+  local paths = lightop "pathtrace" { max_depth = param("max_depth", 8),
+                                      light_sampling = param("bounce_light_sampling", "tree"),
                                       light_point = light_point, name = "bounces", seed = seed }
   -- Two processes trace the cache's hemisphere rays (most of the pre-pass), one per core.
   local bounce_replicas = param("bounce_replicas", 2)
