@@ -123,7 +123,8 @@ int main(int argc, char** argv) {
   const std::vector<std::vector<std::string>> networks{{"spp=256", "shade_spp=16", "light_samples=4"},
                                                        {"spp=256", "shade_spp=32", "light_samples=4"},
                                                        {"spp=256", "shade_spp=64", "light_samples=4"},
-                                                       {"spp=256", "shade_spp=128", "light_samples=2"}};
+                                                       {"spp=256", "shade_spp=128", "light_samples=2"},
+                                                       {"spp=256", "shade_spp=128", "light_samples=1"}};
   for (const auto& sets : networks) {
     std::vector<std::string> all{"lighting=network"};
     all.insert(all.end(), sets.begin(), sets.end());
