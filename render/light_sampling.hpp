@@ -137,7 +137,7 @@ inline bool pick_light(const Scene& scene, Vec3 x, Vec3 n, float u, const LightS
   float p_tree = 0;
   if (!scene.light_tree().pick(x, n, std::min((u - share) / (1 - share), 0x1.fffffep-1f), light, p_tree, remainder))
     return false;
-  probability = share * selection->probability(cell, light) + (1 - share) * p_tree;
+  probability = selection->mixture(cell, light, p_tree);
   return true;
 }
 
@@ -170,7 +170,7 @@ inline float light_pdf_area_at(const Scene& scene, uint32_t tri, Vec3 x, Vec3 n,
   const size_t e = scene.emitter_index_of(tri);
   float p_light = scene.light_tree().probability(x, n, e);
   if (const int32_t cell = selection ? selection->cell_of(x, n) : -1; cell >= 0)
-    p_light = selection->share() * selection->probability(cell, e) + (1 - selection->share()) * p_light;
+    p_light = selection->mixture(cell, e, p_light);
   double omega = 0;
   if (solid_angle_sampled(scene, e, x, mode, omega))
     return p_light * static_cast<float>(std::fabs(cos_y) / (omega * static_cast<double>(dist) * dist));

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <map>
+#include <string>
 
 #include "render/light_sampling.hpp"
 #include "render/surface.hpp"
@@ -80,8 +81,9 @@ float LightSelection::probability(int32_t cell, size_t light) const {
   return at != end && *at == light ? probability_[static_cast<size_t>(at - lights_.data())] : 0.0f;
 }
 
-Task LightSelection::build(const SceneContext& ctx, const LightSelectionOptions& options, LightSelection& out) {
-  if (!ctx.camera) throw LightOpError("light_selection needs the farm's camera");
+Task LightSelection::build(const SceneContext& ctx, const LightSelectionOptions& options, LightSelection& out,
+                           const char* op) {
+  if (!ctx.camera) throw LightOpError(std::string(op) + ": light_sampling = \"learned\" needs the farm's camera");
   const Scene& scene = *ctx.scene;
   out = LightSelection{};
   out.share_ = options.share;

@@ -35,8 +35,10 @@ LightSelectionOptions light_selection_options(const ParamTable& p, uint64_t seed
 
 class LightSelection {
  public:
-  // Learns the cells (traces through ctx, so a partitioned farm works too). Needs ctx.camera.
-  static Task build(const SceneContext& ctx, const LightSelectionOptions& options, LightSelection& out);
+  // Learns the cells (traces through ctx, so a partitioned farm works too). Needs ctx.camera: without one, a
+  // LightOpError names `op` (the LightOp asking) and says so.
+  static Task build(const SceneContext& ctx, const LightSelectionOptions& options, LightSelection& out,
+                    const char* op = "light_selection");
 
   // The learned cell of a point at x facing n, or -1.
   int32_t cell_of(Vec3 x, Vec3 n) const;
@@ -46,6 +48,11 @@ class LightSelection {
   // The chance cell's distribution gives light (0 for one it never saw).
   float probability(int32_t cell, size_t light) const;
   float share() const { return share_; }
+  // The chance of light at a point in `cell` under the mixture: the cell's distribution with chance share(), the
+  // tree (which gives the light p_tree) otherwise.
+  float mixture(int32_t cell, size_t light, float p_tree) const {
+    return share_ * probability(cell, light) + (1 - share_) * p_tree;
+  }
 
   size_t cell_count() const { return cells_.size(); }
   size_t entry_count() const { return lights_.size(); }

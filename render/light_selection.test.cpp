@@ -130,14 +130,7 @@ TEST(LightSelection, PicksFollowTheMixtureItReportsAndMisIsGivenTheSame) {
 std::vector<RGB> shade_direct(const WalledCorridor& c, const ShadingPoints& pts, const std::string& sampling,
                               int samples, bool with_camera = true) {
   RayTracer tracer(c.scene);
-  auto op = create_lightop(*find_lightop_kind("direct"),
-                           ParamTable(Value::Map{{"light_samples", samples}, {"light_sampling", sampling}}, "direct"));
-  LocalInputs none;
-  SceneContext ctx = with_camera ? c.context(tracer) : SceneContext{&c.scene, &tracer};
-  run_to_completion(op->setup(ctx, none));
-  std::vector<RGB> out(pts.size());
-  run_to_completion(op->shade(pts, out, none));
-  return out;
+  return test::shade_direct(with_camera ? c.context(tracer) : SceneContext{&c.scene, &tracer}, pts, sampling, samples);
 }
 
 // Floor points before the wall: what the lamps before it give (white floor: L = sum Le F) plus the point light's

@@ -100,13 +100,7 @@ TEST(LightTree, NoLightThatCanReachAPointIsLeftOut) {
 
 std::vector<RGB> shade_direct(const Corridor& c, const ShadingPoints& pts, const std::string& sampling, int samples) {
   RayTracer tracer(c.scene);
-  auto op = create_lightop(*find_lightop_kind("direct"),
-                           ParamTable(Value::Map{{"light_samples", samples}, {"light_sampling", sampling}}, "direct"));
-  LocalInputs none;
-  run_to_completion(op->setup(SceneContext{&c.scene, &tracer}, none));
-  std::vector<RGB> out(pts.size());
-  run_to_completion(op->shade(pts, out, none));
-  return out;
+  return test::shade_direct(SceneContext{&c.scene, &tracer}, pts, sampling, samples);
 }
 
 // Floor points along the corridor: what the down-facing lamps give (white floor: L = sum Le F) plus the point

@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "render/lightop.hpp"
+#include "render/lightop_registry.hpp"
 #include "render/scene.hpp"
 
 namespace lf::test {
@@ -17,6 +18,18 @@ namespace lf::test {
 // Lambert's contour formula: the form factor from a differential area at p with normal n to a polygon,
 // F = 1/(2 pi) sum_i angle(r_i, r_i+1) n . unit(r_i x r_i+1), r_i unit vectors to the corners. In double: for a small
 // polygon far away the angles are tiny and float's acos of a cosine near 1 is off by percents.
+// `direct` run in-process on pts (no inputs), `samples` light samples a point drawn as `sampling` says.
+inline std::vector<RGB> shade_direct(const SceneContext& ctx, const ShadingPoints& pts, const std::string& sampling,
+                                     int samples) {
+  auto op = create_lightop(*find_lightop_kind("direct"),
+                           ParamTable(Value::Map{{"light_samples", samples}, {"light_sampling", sampling}}, "direct"));
+  LocalInputs none;
+  run_to_completion(op->setup(ctx, none));
+  std::vector<RGB> out(pts.size());
+  run_to_completion(op->shade(pts, out, none));
+  return out;
+}
+
 inline double form_factor(Vec3 p, Vec3 n, const std::vector<Vec3>& polygon) {
   using D3 = std::array<double, 3>;
   auto unit_to = [&](Vec3 q) {

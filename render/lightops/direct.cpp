@@ -29,10 +29,7 @@ class DirectLight final : public LightOp {
 
   Task setup(SceneContext ctx, Inputs&) override {
     ctx_ = ctx;
-    if (light_sampling_ == "learned") {
-      if (!ctx.camera) throw LightOpError("direct: light_sampling = \"learned\" needs the farm's camera");
-      co_await LightSelection::build(ctx, selection_options_, selection_);
-    }
+    if (light_sampling_ == "learned") co_await LightSelection::build(ctx, selection_options_, selection_, "direct");
   }
 
   Value stats() const override {

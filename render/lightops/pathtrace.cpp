@@ -43,8 +43,7 @@ class PathTrace final : public LightOp {
   Task setup(SceneContext ctx, Inputs&) override {
     ctx_ = ctx;
     if (learned_) {
-      if (!ctx.camera) throw LightOpError("pathtrace: light_sampling = \"learned\" needs the farm's camera");
-      co_await LightSelection::build(ctx, selection_options_, selection_);
+      co_await LightSelection::build(ctx, selection_options_, selection_, "pathtrace");
       options_.light_selection = &selection_;
     }
     if (use_cache_) co_await fill_cache();
