@@ -4,6 +4,11 @@
 // light leaving that surface back along the chain. An emitter the chain lands on adds its own emission (the
 // input returns reflected light only). Points on non-specular surfaces get nothing: that is the other ops' job.
 // One input.
+//
+// `emission_samples` chains per point look only for emitters: a flame seen in a window or in water is as small as
+// one seen directly, and needs as many chains as the camera gives it samples, while what the chain lands on
+// (asking the input: the expensive part) is smooth enough for `samples`. The emission is the mean over all
+// chains, the landing light the mean over the first `samples`: both unbiased.
 #include "render/bsdf.hpp"
 #include "render/surface.hpp"
 #include "render/lightop_registry.hpp"
@@ -16,6 +21,7 @@ class Specular final : public LightOp {
  public:
   explicit Specular(const ParamTable& p)
       : samples_(static_cast<int>(p.get_int("samples", 1, 1, 1 << 16))),
+        emission_samples_(static_cast<int>(p.get_int("emission_samples", samples_, samples_, 1 << 16))),
         max_depth_(static_cast<int>(p.get_int("max_depth", 8, 1, 256))),
         seed_(static_cast<uint64_t>(p.get_int("seed", 0, 0, INT32_MAX))) {}
 
@@ -33,6 +39,7 @@ class Specular final : public LightOp {
       uint32_t material;
       uint32_t triangle;  // UINT32_MAX: a point that names none
       bool outside;
+      bool asks_input;  // one of the first `samples` chains: its landing is shaded
       RGB weight{1, 1, 1};
       RGB emitted{};
       int landed = -1;  // index into `ends` once it reaches a non-specular surface
@@ -42,10 +49,10 @@ class Specular final : public LightOp {
     for (size_t i = 0; i < points.size(); ++i) {
       radiance[i] = RGB{};
       if (!scene.material(points.material[i]).specular()) continue;
-      for (int s = 0; s < samples_; ++s)
+      for (int s = 0; s < emission_samples_; ++s)
         chains.push_back(Chain{i, points.position[i], points.normal[i], points.wo[i], points.face_normal(i, scene),
                                points.material[i], points.triangle_of(i),
-                               points.outside(i, scene), {1, 1, 1}, {}, -1,
+                               points.outside(i, scene), s < samples_, {1, 1, 1}, {}, -1,
                                Rng(points.key[i], streams::specular ^ (seed_ << 8) ^ (uint64_t(s) << 32))});
     }
     ShadingPoints ends;
@@ -81,10 +88,11 @@ class Specular final : public LightOp {
         const Material& hit = scene.material(m);
         if (hit.emissive() && front) ch.emitted += ch.weight * hit.ke;
         if (hit.specular()) {
-          ch = Chain{ch.owner, x, sp.ns, wo, sp.ng, m, tri, front, ch.weight, ch.emitted, -1, ch.rng};
+          ch = Chain{ch.owner, x, sp.ns, wo, sp.ng, m, tri, front, ch.asks_input, ch.weight, ch.emitted, -1, ch.rng};
           active.push_back(moving[r]);
           continue;
         }
+        if (!ch.asks_input) continue;
         ch.landed = static_cast<int>(ends.size());
         const uint64_t key = splitmix64(points.key[ch.owner] ^ (0x5bec0000ull + static_cast<uint64_t>(moving[r])));
         ends.push_back(x, sp.ns, wo, m, key, tri);
@@ -92,16 +100,17 @@ class Specular final : public LightOp {
     }
     std::vector<RGB> arriving;
     if (ends.size() > 0 && inputs.count() > 0) co_await inputs.shade(0, ends, arriving);
-    const float inv = 1.0f / static_cast<float>(samples_);
+    const float per_landing = 1.0f / static_cast<float>(samples_);
+    const float per_emission = 1.0f / static_cast<float>(emission_samples_);
     for (const Chain& ch : chains) {
-      RGB l = ch.emitted;
-      if (ch.landed >= 0 && !arriving.empty()) l += ch.weight * arriving[static_cast<size_t>(ch.landed)];
-      radiance[ch.owner] += l * inv;
+      RGB l = ch.emitted * per_emission;
+      if (ch.landed >= 0 && !arriving.empty()) l += ch.weight * arriving[static_cast<size_t>(ch.landed)] * per_landing;
+      radiance[ch.owner] += l;
     }
   }
 
  private:
-  int samples_, max_depth_;
+  int samples_, emission_samples_, max_depth_;
   uint64_t seed_;
   SceneContext ctx_;
 };

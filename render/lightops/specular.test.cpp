@@ -45,6 +45,10 @@ TEST(Specular, GlassSlabTransmitsOneMinusROverOnePlusR) {
   auto out = run_specular(s, tracer, "direct", {}, Value::Map{{"samples", 20000}, {"max_depth", 64}}, pts);
   const float r = fresnel_dielectric(1.0f, 1.5f);
   for (const RGB& l : out) EXPECT_NEAR(l.y / ((1 - r) / (1 + r)), 1.0, 0.01);
+
+  // One chain asks the input, 20000 look for the floor's emission: the emission is their mean.
+  out = run_specular(s, tracer, "direct", {}, Value::Map{{"samples", 1}, {"emission_samples", 20000}, {"max_depth", 64}}, pts);
+  for (const RGB& l : out) EXPECT_NEAR(l.y / ((1 - r) / (1 + r)), 1.0, 0.01);
 }
 
 // A mirror passes on Ks times what its input says about the point its reflection lands on.
@@ -73,6 +77,10 @@ TEST(Specular, MirrorReflectsItsInputsLight) {
   run_to_completion(d->shade(landing, expected, none));
   ASSERT_GT(expected[0].y, 0.0f);
   EXPECT_NEAR(out[0].y / (0.9f * expected[0].y), 1.0, 0.01);
+  // Chains that only look for emitters do not dilute what the asking chain brings back.
+  auto with_emission_chains = run_specular(s, tracer, "direct", Value::Map{{"light_samples", 200000}},
+                                           Value::Map{{"emission_samples", 8}}, on_mirror);
+  EXPECT_NEAR(with_emission_chains[0].y / (0.9f * expected[0].y), 1.0, 0.01);
 
   // A point on the (diffuse) floor is not specular's business.
   auto none_out = run_specular(s, tracer, "direct", {}, Value::Map{}, landing);
