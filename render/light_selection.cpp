@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <map>
 #include <string>
 
@@ -36,6 +37,11 @@ LightSelectionOptions light_selection_options(const ParamTable& p, uint64_t seed
   o.share = static_cast<float>(p.get_float("learned_share", o.share, 0, 0.99));
   o.seed = seed;
   return o;
+}
+
+bool learns_lights(const Value::Map& params) {
+  const auto it = params.find("light_sampling");
+  return it != params.end() && it->second.is_string() && it->second.as_string() == "learned";
 }
 
 void LightSelection::add_stats(Value::Map& m) const {
@@ -80,6 +86,68 @@ float LightSelection::probability(int32_t cell, size_t light) const {
   const uint32_t* at = std::lower_bound(begin, end, static_cast<uint32_t>(light));
   return at != end && *at == light ? probability_[static_cast<size_t>(at - lights_.data())] : 0.0f;
 }
+
+namespace {
+
+// A replica's share of the learning, as bytes: its shadow-ray counts, then per cell it learned the cell's index,
+// its light count and (light, moment) pairs.
+struct SharedCellHeader {
+  uint32_t cell, lights;
+};
+struct SharedMoment {
+  uint32_t light;
+  uint32_t pad = 0;
+  double moment;
+};
+
+// Sends this replica's cells to the others and takes theirs: afterwards `moment` holds every cell's and the
+// counts every replica's, exactly what one process learning alone would hold.
+Task exchange_moments(Exchange& exchange, const std::vector<uint32_t>& mine,
+                      std::vector<std::map<uint32_t, double>>& moment, uint64_t& shadow_rays, uint64_t& blocked_rays) {
+  std::string part;
+  auto put = [&part](const void* data, size_t size) { part.append(static_cast<const char*>(data), size); };
+  put(&shadow_rays, sizeof shadow_rays);
+  put(&blocked_rays, sizeof blocked_rays);
+  for (uint32_t c : mine) {
+    const SharedCellHeader h{c, static_cast<uint32_t>(moment[c].size())};
+    put(&h, sizeof h);
+    for (const auto& [light, m] : moment[c]) {
+      const SharedMoment e{light, 0, m};
+      put(&e, sizeof e);
+    }
+  }
+  std::vector<std::string> parts;
+  co_await exchange.all_gather(std::move(part), &parts);
+  shadow_rays = blocked_rays = 0;
+  for (const std::string& p : parts) {
+    const auto malformed = [] { return LightOpError("learned lights: a replica's share is malformed"); };
+    size_t at = 0;
+    auto get = [&](void* data, size_t size) {
+      if (p.size() - at < size) throw malformed();
+      std::memcpy(data, p.data() + at, size);
+      at += size;
+    };
+    uint64_t shadow = 0, blocked = 0;
+    get(&shadow, sizeof shadow);
+    get(&blocked, sizeof blocked);
+    shadow_rays += shadow;
+    blocked_rays += blocked;
+    while (at < p.size()) {
+      SharedCellHeader h;
+      get(&h, sizeof h);
+      if (h.cell >= moment.size()) throw malformed();
+      auto& cell = moment[h.cell];
+      cell.clear();
+      for (uint32_t i = 0; i < h.lights; ++i) {
+        SharedMoment e;
+        get(&e, sizeof e);
+        cell[e.light] = e.moment;
+      }
+    }
+  }
+}
+
+}  // namespace
 
 Task LightSelection::build(const SceneContext& ctx, const LightSelectionOptions& options, LightSelection& out,
                            const char* op) {
@@ -128,17 +196,22 @@ Task LightSelection::build(const SceneContext& ctx, const LightSelectionOptions&
   // the first round's mixture 27 % more (docs/decisions.md, "Lights learned where the camera looks").
   const size_t n = static_cast<size_t>(std::max(1, options.samples));
   std::vector<std::map<uint32_t, double>> moment(cell_ranges.size());  // per cell and light: sum of p (f / p)^2
+  // A pool's replicas each learn every replicas-th cell; a cell's samples are seeded by the cell alone.
+  const size_t replicas = ctx.exchange ? static_cast<size_t>(std::max(1, ctx.replica_count)) : 1;
+  const size_t replica = replicas > 1 ? static_cast<size_t>(ctx.replica_index) : 0;
+  std::vector<uint32_t> mine;
+  for (size_t c = replica; c < cell_ranges.size(); c += replicas) mine.push_back(static_cast<uint32_t>(c));
   const size_t batch_cells = 64;
-  for (size_t cell_begin = 0; cell_begin < cell_ranges.size(); cell_begin += batch_cells) {
-    ctx.report("learning lights", cell_begin, cell_ranges.size());
-    const size_t cell_end = std::min(cell_ranges.size(), cell_begin + batch_cells);
+  for (size_t batch = 0; batch < mine.size(); batch += batch_cells) {
+    ctx.report("learning lights", batch, mine.size());
     struct Pending {
       uint32_t cell, light;
       float value, chance;  // f / p, and p (the tree's chance of the light)
     };
     std::vector<Pending> pending;
     std::vector<Ray> shadow;
-    for (size_t c = cell_begin; c < cell_end; ++c) {
+    for (size_t b = batch; b < std::min(mine.size(), batch + batch_cells); ++b) {
+      const size_t c = mine[b];
       const auto [first, last] = cell_ranges[c];
       const uint64_t key = keyed[first].first;
       for (size_t s = 0; s < n; ++s) {
@@ -178,6 +251,7 @@ Task LightSelection::build(const SceneContext& ctx, const LightSelectionOptions&
       moment[pending[k].cell][pending[k].light] += v * v * pending[k].chance;
     }
   }
+  if (replicas > 1) co_await exchange_moments(*ctx.exchange, mine, moment, out.shadow_rays_, out.blocked_rays_);
   // Each cell's distribution (its lights in index order); a cell whose samples all came back dark learns nothing.
   for (size_t c = 0; c < cell_ranges.size(); ++c) {
     double sum = 0;
@@ -197,7 +271,7 @@ Task LightSelection::build(const SceneContext& ctx, const LightSelectionOptions&
     out.index_.emplace(keyed[cell_ranges[c].first].first, static_cast<int32_t>(out.cells_.size()));
     out.cells_.push_back(cell);
   }
-  ctx.report("learning lights", cell_ranges.size(), std::max<size_t>(cell_ranges.size(), 1));
+  ctx.report("learning lights", mine.size(), std::max<size_t>(mine.size(), 1));
 }
 
 }  // namespace lf

@@ -32,11 +32,16 @@ struct LightSelectionOptions {
 
 // The options from an op's parameters (`learned_cell`, `learned_samples`, `learned_stride`, `learned_share`).
 LightSelectionOptions light_selection_options(const ParamTable& p, uint64_t seed);
+// Whether an op with these parameters learns lights (light_sampling = "learned"): replicas of such a `direct` or
+// `pathtrace` pool share the learning (LightOpKind::shares_setup_with).
+bool learns_lights(const Value::Map& params);
 
 class LightSelection {
  public:
   // Learns the cells (traces through ctx, so a partitioned farm works too). Needs ctx.camera: without one, a
-  // LightOpError names `op` (the LightOp asking) and says so.
+  // LightOpError names `op` (the LightOp asking) and says so. Replicas of a pool (ctx.replica_count > 1) each learn
+  // every replica_count-th cell and exchange what they learned (ctx.exchange): every replica ends up with what one
+  // process learning alone would have, bit for bit, in 1/replica_count of the time.
   static Task build(const SceneContext& ctx, const LightSelectionOptions& options, LightSelection& out,
                     const char* op = "light_selection");
 

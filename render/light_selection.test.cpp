@@ -90,6 +90,46 @@ TEST(LightSelection, CellsLearnWhichLightsTheirPointsSee) {
   EXPECT_EQ(again.shadow_rays(), selection.shadow_rays());
 }
 
+// A pool's replicas learn a third of the cells each and exchange them: each ends with exactly what one process
+// learning alone has.
+TEST(LightSelection, ReplicasShareTheLearningAndEachHoldsWhatOneProcessLearns) {
+  WalledCorridor c;
+  RayTracer tracer(c.scene);
+  const LightSelection alone = learn(c, tracer);
+  constexpr int kReplicas = 3;
+  test::Board board(kReplicas);
+  std::vector<std::unique_ptr<test::BoardExchange>> exchanges;
+  std::vector<LightSelection> learned(kReplicas);
+  std::vector<uint64_t> learned_cells(kReplicas);  // how many cells each replica said it learns
+  std::vector<Task> builds;
+  for (int r = 0; r < kReplicas; ++r)
+    exchanges.push_back(std::make_unique<test::BoardExchange>(board, static_cast<size_t>(r)));
+  for (int r = 0; r < kReplicas; ++r) {
+    SceneContext ctx = c.context(tracer);
+    ctx.replica_index = r;
+    ctx.replica_count = kReplicas;
+    ctx.exchange = exchanges[static_cast<size_t>(r)].get();
+    ctx.progress = [&learned_cells, r](const char*, uint64_t, uint64_t total) { learned_cells[static_cast<size_t>(r)] = total; };
+    builds.push_back(LightSelection::build(ctx, {}, learned[static_cast<size_t>(r)]));
+  }
+  for (auto& b : builds) {
+    ASSERT_TRUE(b.done());
+    b.rethrow_if_failed();
+  }
+  const size_t lights = c.scene.emitters().size() + 1;
+  for (int r = 0; r < kReplicas; ++r) {
+    const LightSelection& s = learned[static_cast<size_t>(r)];
+    EXPECT_LE(learned_cells[static_cast<size_t>(r)], (alone.cell_count() + kReplicas - 1) / kReplicas);
+    ASSERT_EQ(s.cell_count(), alone.cell_count());
+    EXPECT_EQ(s.entry_count(), alone.entry_count());
+    EXPECT_EQ(s.shadow_rays(), alone.shadow_rays());
+    EXPECT_EQ(s.blocked_rays(), alone.blocked_rays());
+    for (int32_t cell = 0; cell < static_cast<int32_t>(s.cell_count()); ++cell)
+      for (size_t l = 0; l < lights; ++l)
+        ASSERT_EQ(s.probability(cell, l), alone.probability(cell, l)) << "replica " << r << ", cell " << cell;
+  }
+}
+
 TEST(LightSelection, PicksFollowTheMixtureItReportsAndMisIsGivenTheSame) {
   WalledCorridor c;
   RayTracer tracer(c.scene);

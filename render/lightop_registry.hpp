@@ -23,6 +23,12 @@ struct LightOpKind {
   // Every ray it traces goes through SceneContext::tracing when that is set (render/lightop.hpp): in a partitioned
   // farm such an op needs no BVH of its own, and its process builds none.
   bool traces_through_context = false;
+  // For a kind that shares only with some parameters (`direct` learning lights): whether these do. Null: always
+  // as shares_setup says.
+  bool (*shares_setup_with)(const Value::Map& params) = nullptr;
+  bool shares_setup_for(const Value::Map& params) const {
+    return shares_setup_with ? shares_setup_with(params) : shares_setup;
+  }
 };
 
 std::span<const LightOpKind* const> lightop_kinds();

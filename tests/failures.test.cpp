@@ -210,6 +210,29 @@ TEST_F(FailureTest, APhotonReplicaLostDuringSetupIsNamedOnce) {
   EXPECT_TRUE(wait_no_leftovers(r.tag).empty());
 }
 
+// The same for a pool of `direct` learning lights: its replicas learn the cells in shares.
+TEST_F(FailureTest, ALearningReplicaLostDuringSetupIsNamedOnce) {
+  const std::string script = write("learning.lua", R"(scene { builtin = "cornell" }
+image { width = 64, height = 64, spp = 1 }
+renderers { count = 1, lighting = multiplexer { lightop "direct" { light_sampling = "learned", learned_samples = 400000 },
+                                               replicas = 2 } }
+)");
+  Farm farm({"run", script, "--output", path("learning.png")});
+  ASSERT_TRUE(Farm::eventually([&] { return farm.err_so_far().find("direct.1: learning lights") != std::string::npos; }, 60))
+      << farm.err_so_far();
+  auto replica = actor_pids(farm.tag(), "direct.1");
+  ASSERT_EQ(replica.size(), 1u);
+  ::kill(replica[0], SIGKILL);
+  auto r = farm.wait(60);
+  EXPECT_EQ(r.status, 1) << r.err;
+  EXPECT_NE(r.err.find("lightfarm: error: replica 'direct.1' was killed by signal 9 (Killed) during setup; the replicas "
+                       "of 'direct' share their setup (direct), so its share cannot be redone"),
+            std::string::npos)
+      << r.err;
+  EXPECT_FALSE(fs::exists(path("learning.png")));
+  EXPECT_TRUE(wait_no_leftovers(r.tag).empty());
+}
+
 // A renderer and a pool replica that die before saying hello (LIGHTFARM_FAULT aborts them at start) are left out:
 // the pool is configured without the replica, the other renderer takes every tile, and the image is the
 // fault-free one. (The chaos soak found frames failing when a kill landed before the render.)

@@ -149,8 +149,8 @@ namespace {
 // A real interior does not change the rule that the image does not depend on the layout (issue 13): Lost Empire,
 // its torches lit, direct light through the light tree and learned lights plus a camera-placed irradiance cache,
 // at 64x48 — one renderer, a single direct op and a single cache against three renderers, direct light as a pool
-// of two (each replica learns the lights itself) and the cache as a pool of two replicas (which build their
-// records in shares and exchange them). Bit for bit.
+// of two (whose replicas learn the lights in shares and exchange them) and the cache as a pool of two replicas
+// (which build their records in shares and exchange them). Bit for bit.
 TEST_F(NetworkTest, LostEmpireIsTheSameOnEveryLayout) {
   const std::string obj = kSource + "/../shared/scenes/lost_empire/lost_empire.obj";
   if (!fs::exists(obj)) GTEST_SKIP() << "no " << obj;

@@ -423,7 +423,7 @@ class Director final : public ControlOut, public Outbox {
     // Replicas that share their setup send each other their parts directly: a photon map's tens of MB then cross
     // one link (IPC on one host) once, instead of going to the director and out again, decoded and re-encoded.
     if (config.pool && config.pool->count > 1)
-      if (const LightOpKind* kind = find_lightop_kind(a.spec->kind); kind && kind->shares_setup) {
+      if (const LightOpKind* kind = find_lightop_kind(a.spec->kind); kind && kind->shares_setup_for(a.spec->params)) {
         const auto& replicas = spec_.actors[static_cast<size_t>(spec_.pool_of(a.index))].inputs;
         for (int r : replicas) {
           const ActorRecord& sibling = supervisor_.at(spec_.actors[static_cast<size_t>(r)].name);

@@ -269,7 +269,7 @@ Status Supervisor::lose(ActorRecord& a, const std::string& why) {
   // A replica whose pool shares its setup, lost before the setup is over: its share exists nowhere else. Said at
   // once, rather than "sends its work to the others" and a failure later.
   if (stage_ <= Stage::setup)
-    if (const LightOpKind* kind = find_lightop_kind(a.spec->kind); kind && kind->shares_setup)
+    if (const LightOpKind* kind = find_lightop_kind(a.spec->kind); kind && kind->shares_setup_for(a.spec->params))
       return make_error("replica '" + a.name() + "' " + why + " during " +
                         (starting_up(stage_) ? std::string("start-up") : std::string("setup")) + "; the replicas of '" +
                         pool.name() + "' share their setup (" + std::string(kind->name) +

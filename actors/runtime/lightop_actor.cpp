@@ -236,7 +236,7 @@ class LightOpActor final : public Actor {
       auto peers = std::make_unique<PeerExchange>(rt, static_cast<size_t>(replica_index_), static_cast<size_t>(replica_count_));
       peer_exchange_ = peers.get();
       exchange_ = std::move(peers);
-    } else if (replica_count_ > 1 && kind_.shares_setup) {
+    } else if (replica_count_ > 1 && kind_.shares_setup_for(config.params)) {
       return make_error("CONFIG makes '" + rt.name() + "' replica " + std::to_string(replica_index_) + " of " +
                         std::to_string(replica_count_) + " without naming the others (pool.peers), with whom " +
                         std::string(kind_.name) + " shares its setup");

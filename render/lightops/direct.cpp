@@ -68,6 +68,6 @@ class DirectLight final : public LightOp {
 extern const LightOpKind direct_kind{
     "direct", "direct light from area lights: light sampling, with MIS on glossy surfaces", 0, 0,
     [](const ParamTable& p) -> std::unique_ptr<LightOp> { return std::make_unique<DirectLight>(p); },
-    /*shares_setup=*/false, /*traces_through_context=*/true};
+    /*shares_setup=*/false, /*traces_through_context=*/true, /*shares_setup_with=*/learns_lights};
 
 }  // namespace lf

@@ -134,6 +134,6 @@ class PathTrace final : public LightOp {
 extern const LightOpKind pathtrace_kind{
     "pathtrace", "unbiased path tracing with next-event estimation, MIS and Russian roulette", 0, 0,
     [](const ParamTable& p) -> std::unique_ptr<LightOp> { return std::make_unique<PathTrace>(p); },
-    /*shares_setup=*/false, /*traces_through_context=*/true};
+    /*shares_setup=*/false, /*traces_through_context=*/true, /*shares_setup_with=*/learns_lights};
 
 }  // namespace lf
