@@ -9,7 +9,7 @@
 --                irradiance cache placed where the camera looks whose hemisphere rays are shaded by one path
 --                each (all further bounces), plus the chains through the water (specular). The cache's records
 --                interpolate the indirect light smoothly; the path tracer's noise is averaged inside each record's
---                8 x 24 hemisphere rays.
+--                12 x 32 hemisphere rays.
 --   "pathtrace"  the same light by path tracing alone (the reference bench/lost_empire_bench measures against)
 --   "emission"   the lights alone, as the camera sees them (the benchmark's mask of pixels that see a light)
 --
@@ -37,7 +37,8 @@ camera   { eye = {-5, 18, -30}, at = {5, 12, 5}, fov = 70 }
 -- shade_spp: of the spp camera samples per pixel, how many the lighting shades; the others only see the torches'
 -- flames, whose sub-pixel shapes need many camera samples but no light (docs/lua-api.md, image).
 local spp = param("spp", 16)
-image    { width = param("width", 320), height = param("height", 240), spp = spp, shade_spp = param("shade_spp", spp),
+local shade_spp = param("shade_spp", spp)
+image    { width = param("width", 320), height = param("height", 240), spp = spp, shade_spp = shade_spp,
            exposure = param("exposure", 2), output = param("output", "lost_empire.png") }
 
 if param("parts", 0) > 0 then partition { parts = param("parts", 0) } end
@@ -65,11 +66,17 @@ elseif lighting == "network" then
   if bounce_replicas > 1 then paths = multiplexer { paths, replicas = bounce_replicas } end
   local indirect = lightop "irradiance" { input = paths, a = param("a", 0.2), stride = param("stride", 8),
                                           finest = param("finest", 2), own_rays = param("own_rays", 8),
-                                          theta = param("theta", 8), phi = param("phi", 24),
+                                          theta = param("theta", 12), phi = param("phi", 32),
                                           name = "indirect", seed = seed }
-  -- The water is glass: what its refraction and reflection chains land on is lit by the same two ops.
+  -- The water is glass: what its refraction and reflection chains land on is lit by the same two ops. The flames
+  -- seen in the water are as small as those seen directly: chains that only look for them (a few rays each) give
+  -- them 4x the camera's samples; without them they were the network's largest noise (docs/decisions.md).
+  -- Direct light is most of the render's work: two replicas, one per core (they learn the lights in halves).
   local lit = direct()
-  local specular = lightop "specular" { input = lightop "combine" { inputs = { lit, indirect }, name = "landing" }, seed = seed }
+  if param("direct_replicas", 2) > 1 then lit = multiplexer { lit, replicas = param("direct_replicas", 2) } end
+  local specular = lightop "specular" { input = lightop "combine" { inputs = { lit, indirect }, name = "landing" },
+                                        emission_samples = param("emission_samples", math.max(1, 4 * spp // math.max(1, shade_spp))),
+                                        seed = seed }
   renderers { count = param("renderers", 2), lighting = lightop "combine" { inputs = { lit, indirect, specular } } }
 elseif lighting == "pathtrace" then
   local paths = multiplexer { lightop "pathtrace" { max_depth = param("max_depth", 8), light_sampling = light_sampling, light_point = light_point,
