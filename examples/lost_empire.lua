@@ -15,10 +15,10 @@
 --
 --   lightfarm run examples/lost_empire.lua                                  -> lost_empire.png
 --   lightfarm run examples/lost_empire.lua --set lighting=network
---   lightfarm run examples/lost_empire.lua --set lighting=network --set spp=256 --set shade_spp=128
---                                  (256 camera samples a pixel for the flames' shapes, 128 of them lit: with
---                                   64 lit x 4 light samples, the least error for its time that
---                                   bench/lost_empire_bench found)
+--   lightfarm run examples/lost_empire.lua --set lighting=network --set spp=256 --set shade_spp=32 --set light_samples=6
+--                                  (256 camera samples a pixel for the flames' shapes, 32 of them lit with 6
+--                                   light samples each: the least error for its time that bench/lost_empire_bench
+--                                   found, with 48 x 4 and 64 x 4 as good)
 --   lightfarm run examples/lost_empire.lua --set light_sampling=tree        (the light tree alone)
 --   lightfarm run examples/lost_empire.lua --set light_sampling=power       (choose torches by power alone)
 --   lightfarm run examples/lost_empire.lua --set seed=1                     (other samples: two seeds give the
