@@ -73,7 +73,8 @@ elseif lighting == "network" then
   -- them 4x the camera's samples; without them they were the network's largest noise (docs/decisions.md).
   -- Direct light is most of the render's work: two replicas, one per core (they learn the lights in halves).
   local lit = direct()
-  if param("direct_replicas", 2) > 1 then lit = multiplexer { lit, replicas = param("direct_replicas", 2) } end
+  local direct_replicas = param("direct_replicas", 2)
+  if direct_replicas > 1 then lit = multiplexer { lit, replicas = direct_replicas } end
   local specular = lightop "specular" { input = lightop "combine" { inputs = { lit, indirect }, name = "landing" },
                                         emission_samples = param("emission_samples", math.max(1, 4 * spp // math.max(1, shade_spp))),
                                         seed = seed }

@@ -1,5 +1,6 @@
 #pragma once
-// Little helpers for the scene's binary forms (scene_file, scene_image): append plain values to a byte string,
+// Little helpers for binary forms (the scene's: scene_file, scene_image; a pool's learned lights): append plain
+// values to a byte string,
 // and read them back from a byte range without ever reading past its end.
 #include <cstdint>
 #include <cstring>
@@ -30,6 +31,7 @@ class Reader {
   bool f32(float& v) { return take(&v, 4); }
   bool u8(uint8_t& v) { return take(&v, 1); }
   bool u64(uint64_t& v) { return take(&v, 8); }
+  bool f64(double& v) { return take(&v, 8); }
   bool vec(Vec3& v) { return f32(v.x) && f32(v.y) && f32(v.z); }
   bool str(std::string& s, uint32_t n) {
     if (bytes_.size() - at_ < n) return false;

@@ -2,10 +2,10 @@
 
 #include <algorithm>
 #include <cmath>
-#include <cstring>
 #include <map>
 #include <string>
 
+#include "render/byte_io.hpp"
 #include "render/light_sampling.hpp"
 #include "render/surface.hpp"
 
@@ -89,59 +89,42 @@ float LightSelection::probability(int32_t cell, size_t light) const {
 
 namespace {
 
-// A replica's share of the learning, as bytes: its shadow-ray counts, then per cell it learned the cell's index,
-// its light count and (light, moment) pairs.
-struct SharedCellHeader {
-  uint32_t cell, lights;
-};
-struct SharedMoment {
-  uint32_t light;
-  uint32_t pad = 0;
-  double moment;
-};
-
 // Sends this replica's cells to the others and takes theirs: afterwards `moment` holds every cell's and the
-// counts every replica's, exactly what one process learning alone would hold.
+// counts every replica's, exactly what one process learning alone would hold. A share, as bytes (byte_io): u64
+// shadow rays, u64 blocked, then per cell learned: u32 cell, u32 light count, that many (u32 light, f64 moment).
 Task exchange_moments(Exchange& exchange, const std::vector<uint32_t>& mine,
                       std::vector<std::map<uint32_t, double>>& moment, uint64_t& shadow_rays, uint64_t& blocked_rays) {
   std::string part;
-  auto put = [&part](const void* data, size_t size) { part.append(static_cast<const char*>(data), size); };
-  put(&shadow_rays, sizeof shadow_rays);
-  put(&blocked_rays, sizeof blocked_rays);
+  bytes::put(part, shadow_rays);
+  bytes::put(part, blocked_rays);
   for (uint32_t c : mine) {
-    const SharedCellHeader h{c, static_cast<uint32_t>(moment[c].size())};
-    put(&h, sizeof h);
+    bytes::put(part, c);
+    bytes::put(part, static_cast<uint32_t>(moment[c].size()));
     for (const auto& [light, m] : moment[c]) {
-      const SharedMoment e{light, 0, m};
-      put(&e, sizeof e);
+      bytes::put(part, light);
+      bytes::put(part, m);
     }
   }
   std::vector<std::string> parts;
   co_await exchange.all_gather(std::move(part), &parts);
   shadow_rays = blocked_rays = 0;
+  const LightOpError malformed("learned lights: a replica's share is malformed");
   for (const std::string& p : parts) {
-    const auto malformed = [] { return LightOpError("learned lights: a replica's share is malformed"); };
-    size_t at = 0;
-    auto get = [&](void* data, size_t size) {
-      if (p.size() - at < size) throw malformed();
-      std::memcpy(data, p.data() + at, size);
-      at += size;
-    };
+    bytes::Reader in(p);
     uint64_t shadow = 0, blocked = 0;
-    get(&shadow, sizeof shadow);
-    get(&blocked, sizeof blocked);
+    if (!in.u64(shadow) || !in.u64(blocked)) throw malformed;
     shadow_rays += shadow;
     blocked_rays += blocked;
-    while (at < p.size()) {
-      SharedCellHeader h;
-      get(&h, sizeof h);
-      if (h.cell >= moment.size()) throw malformed();
-      auto& cell = moment[h.cell];
+    while (!in.done()) {
+      uint32_t c = 0, lights = 0;
+      if (!in.u32(c) || !in.u32(lights) || c >= moment.size() || !in.room(lights, 12)) throw malformed;
+      auto& cell = moment[c];
       cell.clear();
-      for (uint32_t i = 0; i < h.lights; ++i) {
-        SharedMoment e;
-        get(&e, sizeof e);
-        cell[e.light] = e.moment;
+      for (uint32_t i = 0; i < lights; ++i) {
+        uint32_t light = 0;
+        double m = 0;
+        if (!in.u32(light) || !in.f64(m)) throw malformed;
+        cell[light] = m;
       }
     }
   }

@@ -50,6 +50,19 @@ class FailureTest : public FarmFixture {
     EXPECT_TRUE(wait_no_leftovers(r.tag).empty()) << "processes left behind";
     return r;
   }
+
+  // Starts `args`, kills the actor named `victim` with SIGKILL once the farm's log shows `progress` (a fixed delay
+  // after start landed in start-up on a loaded machine), and waits for the run into `r`.
+  void kill_once_reported(const std::vector<std::string>& args, const std::string& progress, const std::string& victim,
+                          RunResult& r) {
+    Farm farm(args);
+    ASSERT_TRUE(Farm::eventually([&] { return farm.err_so_far().find(progress) != std::string::npos; }, 60))
+        << farm.err_so_far();
+    auto pids = actor_pids(farm.tag(), victim);
+    ASSERT_EQ(pids.size(), 1u);
+    ::kill(pids[0], SIGKILL);
+    r = farm.wait(60);
+  }
 };
 
 std::vector<std::string> small(const std::string& script, std::vector<std::string> sets) {
@@ -189,15 +202,11 @@ TEST_F(FailureTest, WhatAnActorStartedDiesWithTheFarm) {
 // A photon-map replica lost while the pool shoots and shares its photons: its share exists nowhere else. The
 // farm says so at once, without first claiming that the others take its work.
 TEST_F(FailureTest, APhotonReplicaLostDuringSetupIsNamedOnce) {
-  Farm farm({"run", kSource + "/examples/cornell_glass.lua", "--set", "photons=8000000", "--set", "width=64", "--set",
-             "height=64", "--set", "spp=1", "--output", path("glass.png")});
-  // Killed once it reports shooting (a fixed delay after it started landed in start-up on a loaded machine).
-  ASSERT_TRUE(Farm::eventually([&] { return farm.err_so_far().find("photonmap.1: shooting photons") != std::string::npos; }, 60))
-      << farm.err_so_far();
-  auto replica = actor_pids(farm.tag(), "photonmap.1");
-  ASSERT_EQ(replica.size(), 1u);
-  ::kill(replica[0], SIGKILL);
-  auto r = farm.wait(60);
+  RunResult r;
+  ASSERT_NO_FATAL_FAILURE(kill_once_reported({"run", kSource + "/examples/cornell_glass.lua", "--set", "photons=8000000",
+                                              "--set", "width=64", "--set", "height=64", "--set", "spp=1", "--output",
+                                              path("glass.png")},
+                                             "photonmap.1: shooting photons", "photonmap.1", r));
   EXPECT_EQ(r.status, 1) << r.err;
   std::vector<std::string> naming;  // the lines that speak of the lost replica
   std::istringstream lines(r.err);
@@ -217,13 +226,9 @@ image { width = 64, height = 64, spp = 1 }
 renderers { count = 1, lighting = multiplexer { lightop "direct" { light_sampling = "learned", learned_samples = 400000 },
                                                replicas = 2 } }
 )");
-  Farm farm({"run", script, "--output", path("learning.png")});
-  ASSERT_TRUE(Farm::eventually([&] { return farm.err_so_far().find("direct.1: learning lights") != std::string::npos; }, 60))
-      << farm.err_so_far();
-  auto replica = actor_pids(farm.tag(), "direct.1");
-  ASSERT_EQ(replica.size(), 1u);
-  ::kill(replica[0], SIGKILL);
-  auto r = farm.wait(60);
+  RunResult r;
+  ASSERT_NO_FATAL_FAILURE(
+      kill_once_reported({"run", script, "--output", path("learning.png")}, "direct.1: learning lights", "direct.1", r));
   EXPECT_EQ(r.status, 1) << r.err;
   EXPECT_NE(r.err.find("lightfarm: error: replica 'direct.1' was killed by signal 9 (Killed) during setup; the replicas "
                        "of 'direct' share their setup (direct), so its share cannot be redone"),
