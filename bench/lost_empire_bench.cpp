@@ -7,11 +7,18 @@
 // 256-spp RMSE in at most a third of its time. Each network point reports its cache's coverage.
 //
 // Both use the script's defaults: lights learned where the camera looks (light_sampling = "learned"). The network
-// points see 256 to 1024 camera samples a pixel and light `shade_spp` of them (image { shade_spp }): the torches'
+// points see 256 camera samples a pixel and light `shade_spp` of them (image { shade_spp }): the torches'
 // flames are sub-pixel shapes whose antialiasing needs many camera samples but no light (at 256 seen the pixels
 // that see a flame held a quarter of the network's squared error). So that the path tracer gets the same help, it
 // is also run that way (256 seen / 64 shaded, 512 seen / 256 shaded), and once with the light tree alone (the
 // sampling of the goal's 256-spp figure before learned lights).
+//
+// Adaptive sampling (image { adaptive_spp, adaptive_threshold }) lights more of a pixel's samples where its first
+// shade_spp are noisy; most network points use it, and two path tracer points do too, so that what it brings is
+// measured on both sides.
+//
+// Run r renders every point with seed = r, and a point's RMSE is the root of its mean squared error over the runs:
+// one seed's error is noisy itself.
 //
 // RMSE is over the average of the channels, relative to the reference's mean. A second figure leaves out the
 // pixels that see a light and their neighbours (from an emission-only render): their error is how much of a
@@ -49,8 +56,10 @@ struct Point {
   std::string method;
   std::vector<std::string> sets;
   double seconds = 0;  // median wall time over the runs
-  double rmse = 0, rmse_unlit = 0;
-  lf::Value cache;  // the irradiance cache's counts (network points)
+  double rmse = 0, rmse_unlit = 0;  // over the runs' seeds: the root of the mean squared error
+  std::vector<double> run_rmse;     // each run's
+  lf::Value cache;     // the irradiance cache's counts (network points)
+  lf::Value adaptive;  // adaptive sampling's counts, summed over the renderers (last run)
 };
 
 lf::Image render(const std::string& script, const std::vector<std::string>& sets, bench::FarmRun& run) {
@@ -64,6 +73,16 @@ lf::Image render(const std::string& script, const std::vector<std::string>& sets
     std::exit(1);
   }
   return *img;
+}
+
+// The lit samples a render of these settings takes without adaptive sampling (shade_spp, else spp, a pixel).
+double shaded_samples(const std::vector<std::string>& sets, size_t pixels) {
+  double spp = 0, shade = 0;
+  for (const auto& x : sets) {
+    if (x.rfind("spp=", 0) == 0) spp = std::atof(x.c_str() + 4);
+    if (x.rfind("shade_spp=", 0) == 0) shade = std::atof(x.c_str() + 10);
+  }
+  return (shade > 0 ? shade : spp) * static_cast<double>(pixels);
 }
 
 std::string joined(const std::vector<std::string>& sets) {
@@ -123,12 +142,17 @@ int main(int argc, char** argv) {
   points.push_back({"pathtrace", {"lighting=pathtrace", "spp=256", "shade_spp=64"}});
   points.push_back({"pathtrace", {"lighting=pathtrace", "spp=256", "light_sampling=tree"}});
   points.push_back({"pathtrace", {"lighting=pathtrace", "spp=512", "shade_spp=256"}});
-  const std::vector<std::vector<std::string>> networks{{"spp=256", "shade_spp=32", "light_samples=4"},
-                                                       {"spp=256", "shade_spp=32", "light_samples=6"},
-                                                       {"spp=512", "shade_spp=32", "light_samples=4"},
-                                                       {"spp=512", "shade_spp=32", "light_samples=6"},
-                                                       {"spp=512", "shade_spp=48", "light_samples=4"},
-                                                       {"spp=1024", "shade_spp=32", "light_samples=6"}};
+  // Adaptive sampling helps the path tracer too: it is measured the same way.
+  points.push_back({"pathtrace", {"lighting=pathtrace", "spp=256", "shade_spp=64", "adaptive_spp=256", "adaptive_threshold=0.04"}});
+  points.push_back({"pathtrace", {"lighting=pathtrace", "spp=256", "shade_spp=128", "adaptive_spp=256", "adaptive_threshold=0.02"}});
+  const std::vector<std::vector<std::string>> networks{
+      {"spp=256", "shade_spp=32", "light_samples=4"},
+      {"spp=256", "shade_spp=32", "light_samples=6"},
+      {"spp=256", "shade_spp=16", "light_samples=3", "adaptive_spp=256", "adaptive_threshold=0.04"},
+      {"spp=256", "shade_spp=16", "light_samples=4", "adaptive_spp=256", "adaptive_threshold=0.05"},
+      {"spp=256", "shade_spp=16", "light_samples=4", "adaptive_spp=256", "adaptive_threshold=0.03"},
+      {"spp=256", "shade_spp=32", "light_samples=4", "adaptive_spp=256", "adaptive_threshold=0.03"},
+      {"spp=256", "shade_spp=32", "light_samples=6", "adaptive_spp=256", "adaptive_threshold=0.02"}};
   for (const auto& sets : networks) {
     std::vector<std::string> all{"lighting=network"};
     all.insert(all.end(), sets.begin(), sets.end());
@@ -139,24 +163,39 @@ int main(int argc, char** argv) {
     other.insert(other.end(), networks[0].begin(), networks[0].end());
     points.push_back({std::string("network/") + sampling, other});
   }
-  // Interleaved runs, so that a noisy stretch of the machine does not fall on one method.
+  // Interleaved runs, so that a noisy stretch of the machine does not fall on one method. Run r renders with
+  // seed = r: a single seed's error is itself noisy (pathtrace 256 spp: 0.084 / 0.087 / 0.090 for seeds 0 / 1 / 2).
   std::vector<std::vector<double>> seconds(points.size());
+  std::vector<double> squared(points.size(), 0.0), squared_unlit(points.size(), 0.0);
   for (int r = 0; r < runs; ++r)
     for (size_t i = 0; i < points.size(); ++i) {
       Point& p = points[i];
-      const lf::Image img = render(script, p.sets, run);
+      std::vector<std::string> sets = p.sets;
+      sets.push_back("seed=" + std::to_string(r));
+      const lf::Image img = render(script, sets, run);
       seconds[i].push_back(run.wall_seconds);
-      p.rmse = relative_rmse(img, reference);
-      p.rmse_unlit = relative_rmse(img, reference, &near_light);
+      const double e = relative_rmse(img, reference), e_unlit = relative_rmse(img, reference, &near_light);
+      p.run_rmse.push_back(e);
+      squared[i] += e * e;
+      squared_unlit[i] += e_unlit * e_unlit;
+      p.rmse = std::sqrt(squared[i] / static_cast<double>(p.run_rmse.size()));
+      p.rmse_unlit = std::sqrt(squared_unlit[i] / static_cast<double>(p.run_rmse.size()));
       if (p.method != "pathtrace")
         p.cache = lf::Value::Map{{"records", run.number("records")},     {"lookups", run.number("lookups")},
                                  {"served_a", run.number("served_a")},   {"served_2a", run.number("served_2a")},
                                  {"served_4a", run.number("served_4a")}, {"own_values", run.number("own_values")}};
+      auto summed = [&](const char* key) {
+        double total = 0;
+        for (double v : bench::json_numbers(run.stats, key)) total += v;
+        return total;
+      };
+      if (summed("adaptive_pixels") > 0)
+        p.adaptive = lf::Value::Map{{"pixels", summed("adaptive_pixels")}, {"samples", summed("adaptive_samples")}};
     }
   for (size_t i = 0; i < points.size(); ++i) points[i].seconds = bench::median(seconds[i]);
 
-  std::printf("%-14s %-52s %7s %13s %10s %8s   %s\n", "method", "settings", "wall s", "(min-max)", "rel. RMSE", "away",
-              "cache: records, served at a / 2a / 4a, own values");
+  std::printf("%-14s %-62s %7s %13s %10s %8s   %s\n", "method", "settings", "wall s", "(min-max)", "rel. RMSE", "away",
+              "cache: records, served at a / 2a / 4a, own values; adaptive: pixels, lit samples added");
   lf::Value::Array rows;
   for (const Point& p : points) {
     std::string cache;
@@ -168,16 +207,24 @@ int main(int argc, char** argv) {
                     share("served_2a"), share("served_4a"), share("own_values"));
       cache = buf;
     }
+    if (const lf::Value* pixels = p.adaptive.find("pixels")) {
+      char buf[120];
+      std::snprintf(buf, sizeof buf, "%sadaptive %.1f %% of pixels, +%.0f %% lit samples", cache.empty() ? "" : "; ",
+                    100.0 * pixels->as_double() / static_cast<double>(reference.pixels.size()),
+                    100.0 * p.adaptive.find("samples")->as_double() / shaded_samples(p.sets, reference.pixels.size()));
+      cache += buf;
+    }
     const bench::Spread s = bench::spread(seconds[static_cast<size_t>(&p - points.data())]);
     char range[40];
     std::snprintf(range, sizeof range, "(%.1f-%.1f)", s.min, s.max);
-    std::printf("%-14s %-52s %7.1f %13s %10.4f %8.4f   %s\n", p.method.c_str(), joined(p.sets).c_str(), p.seconds, range,
+    std::printf("%-14s %-62s %7.1f %13s %10.4f %8.4f   %s\n", p.method.c_str(), joined(p.sets).c_str(), p.seconds, range,
                 p.rmse, p.rmse_unlit, cache.c_str());
-    lf::Value::Array times;
+    lf::Value::Array times, per_seed;
     for (double s : seconds[static_cast<size_t>(&p - points.data())]) times.push_back(s);
+    for (double e : p.run_rmse) per_seed.push_back(e);
     rows.push_back(lf::Value::Map{{"method", p.method}, {"settings", joined(p.sets)}, {"wall_seconds", p.seconds},
                                   {"runs", std::move(times)}, {"rmse", p.rmse}, {"rmse_away_from_lights", p.rmse_unlit},
-                                  {"cache", p.cache}});
+                                  {"rmse_by_seed", per_seed}, {"cache", p.cache}, {"adaptive", p.adaptive}});
   }
 
   const Point& final_pt = points[2];  // pathtrace at 256 spp
@@ -215,8 +262,11 @@ int main(int argc, char** argv) {
   const size_t best_net = best_of("network"), best_pt = best_of("pathtrace");
   std::vector<double> gains;
   for (int r = 0; r < runs; ++r)
-    gains.push_back((points[best_pt].rmse * points[best_pt].rmse * seconds[best_pt][static_cast<size_t>(r)]) /
-                    (points[best_net].rmse * points[best_net].rmse * seconds[best_net][static_cast<size_t>(r)]));
+  {
+    const size_t k = static_cast<size_t>(r);
+    const double pt = points[best_pt].run_rmse[k], net = points[best_net].run_rmse[k];
+    gains.push_back((pt * pt * seconds[best_pt][k]) / (net * net * seconds[best_net][k]));
+  }
   const bench::Spread gain = bench::spread(gains);
   std::printf("\nefficiency 1/(RMSE^2 s), best network (%s) / best pathtrace (%s): %.2f (runs %.2f-%.2f)\n",
               joined(points[best_net].sets).c_str(), joined(points[best_pt].sets).c_str(), gain.median, gain.min,

@@ -57,7 +57,8 @@ CameraSpec CameraSpec::from_value(const Value& v) {
 }
 
 Value ImageSpec::to_value() const {
-  return Value::Map{{"width", width}, {"height", height},   {"spp", spp}, {"shade_spp", shade_spp}, {"tile", tile},
+  return Value::Map{{"width", width}, {"height", height},   {"spp", spp}, {"shade_spp", shade_spp}, {"adaptive_spp", adaptive_spp},
+                    {"adaptive_threshold", adaptive_threshold}, {"tile", tile},
                     {"output", output}, {"exposure", exposure}, {"tonemap", tonemap}, {"sampler", sampler}};
 }
 
@@ -67,6 +68,8 @@ ImageSpec ImageSpec::from_value(const Value& v) {
   i.height = static_cast<int>(num(v, "height", i.height));
   i.spp = static_cast<int>(num(v, "spp", i.spp));
   i.shade_spp = static_cast<int>(num(v, "shade_spp", 0));
+  i.adaptive_spp = static_cast<int>(num(v, "adaptive_spp", 0));
+  i.adaptive_threshold = num(v, "adaptive_threshold", i.adaptive_threshold);
   i.tile = static_cast<int>(num(v, "tile", i.tile));
   i.output = str(v, "output");
   i.exposure = num(v, "exposure", 0);

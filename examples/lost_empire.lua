@@ -38,8 +38,15 @@ camera   { eye = {-5, 18, -30}, at = {5, 12, 5}, fov = 70 }
 -- flames, whose sub-pixel shapes need many camera samples but no light (docs/lua-api.md, image).
 local spp = param("spp", 16)
 local shade_spp = param("shade_spp", spp)
-image    { width = param("width", 320), height = param("height", 240), spp = spp, shade_spp = shade_spp,
-           exposure = param("exposure", 2), output = param("output", "lost_empire.png") }
+-- adaptive_spp: pixels still noisy after shade_spp lit samples (near the torches, mostly) get more of their spp
+-- samples lit, up to adaptive_spp (docs/lua-api.md, image).
+local look = { width = param("width", 320), height = param("height", 240), spp = spp, shade_spp = shade_spp,
+               exposure = param("exposure", 2), output = param("output", "lost_empire.png") }
+if param("adaptive_spp", 0) > 0 then
+  look.adaptive_spp = param("adaptive_spp", 0)
+  look.adaptive_threshold = param("adaptive_threshold", 0.05)
+end
+image(look)
 
 if param("parts", 0) > 0 then partition { parts = param("parts", 0) } end
 

@@ -219,8 +219,8 @@ int l_camera(lua_State* L) {
   return 0;
 }
 
-// image { width = 512, height = 512, spp = 16, shade_spp = 16, tile = 16, output = "cornell.png", exposure = 0,
-//         tonemap = "clamp", sampler = "sobol" }
+// image { width = 512, height = 512, spp = 16, shade_spp = 16, adaptive_spp = 64, adaptive_threshold = 0.05,
+//         tile = 16, output = "cornell.png", exposure = 0, tonemap = "clamp", sampler = "sobol" }
 int l_image(lua_State* L) {
   Builder& b = builder(L);
   if (b.have_image) luaL_error(L, "image is declared twice");
@@ -232,6 +232,15 @@ int l_image(lua_State* L) {
     i.spp = static_cast<int>(p.get_int("spp", i.spp, 1, 65536));
     i.shade_spp = static_cast<int>(p.get_int("shade_spp", i.spp, 1, i.spp));
     if (i.shade_spp == i.spp) i.shade_spp = 0;  // all of them: the plain pixel mean
+    if (p.has("adaptive_threshold") && !p.has("adaptive_spp"))
+      throw ParamError("image: adaptive_threshold needs adaptive_spp (the most shaded samples a noisy pixel may get)");
+    if (p.has("adaptive_spp")) {
+      if (i.shade_spp == 0)
+        throw ParamError("image: adaptive_spp needs shade_spp below spp (it shades more of the spp samples where the "
+                         "first shade_spp are noisy)");
+      i.adaptive_spp = static_cast<int>(p.get_int("adaptive_spp", i.spp, i.shade_spp + 1, i.spp));
+      i.adaptive_threshold = p.get_float("adaptive_threshold", i.adaptive_threshold, 1e-6, 1);
+    }
     i.tile = static_cast<int>(p.get_int("tile", i.tile, 1, 1024));
     i.output = p.get_string("output", i.output);
     i.exposure = p.get_float("exposure", i.exposure, -20, 20);

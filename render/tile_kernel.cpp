@@ -1,6 +1,7 @@
 #include "render/tile_kernel.hpp"
 
 #include <algorithm>
+#include <cmath>
 
 #include "render/sampler.hpp"
 #include "render/surface.hpp"
@@ -34,6 +35,12 @@ void tile_camera_rays(const Camera& camera, const ImageSpec& image, const TileRe
 
 void tile_points(const Scene& scene, const Camera& camera, const ImageSpec& image, const TileRect& rect,
                  std::span<const Ray> rays, std::span<const Hit> hits, std::span<const uint64_t> keys, TileWork& work) {
+  tile_points(scene, camera, image, rect, rays, hits, keys, {}, work);
+}
+
+void tile_points(const Scene& scene, const Camera& camera, const ImageSpec& image, const TileRect& rect,
+                 std::span<const Ray> rays, std::span<const Hit> hits, std::span<const uint64_t> keys,
+                 std::span<const uint16_t> more_shaded, TileWork& work) {
   const size_t samples = rays.size();
   work.rect = rect;
   work.spp = image.spp;
@@ -53,7 +60,10 @@ void tile_points(const Scene& scene, const Camera& camera, const ImageSpec& imag
     const uint32_t tri = hits[i].triangle;
     const Vec3 wo = -rays[i].direction;
     const Material& m = scene.material(scene.material_of(tri));
-    if (i % per_pixel >= shaded) {  // seen, not shaded: only its emission counts (surface_at's front)
+    if (!more_shaded.empty()) {  // the samples from `shaded` up to the pixel's own count, and only those
+      const size_t k = i % per_pixel;
+      if (k < shaded || k >= more_shaded[i / per_pixel]) continue;
+    } else if (i % per_pixel >= shaded) {  // seen, not shaded: only its emission counts (surface_at's front)
       if (m.emissive() && dot(scene.normal(tri), wo) > 0) work.emitted[i] = m.ke;
       continue;
     }
@@ -77,6 +87,71 @@ void trace_tile(const Scene& scene, const RayTracer& tracer, const Camera& camer
   // (partition.test: CameraRaysInPacketsHitWhatTheyHitOneByOne), which camera rays through a partitioned scene are.
   tracer.intersect(rays, hits, /*coherent=*/true);
   tile_points(scene, camera, image, rect, rays, hits, keys, work);
+}
+
+void trace_more_samples(const Scene& scene, const RayTracer& tracer, const Camera& camera, const ImageSpec& image,
+                        const TileRect& rect, std::span<const uint16_t> shaded_of_pixel, TileWork& work) {
+  std::vector<Ray> rays;
+  std::vector<uint64_t> keys;
+  tile_camera_rays(camera, image, rect, rays, keys);
+  const size_t per_pixel = static_cast<size_t>(image.spp), shaded = static_cast<size_t>(image.shaded_per_pixel());
+  std::vector<uint32_t> wanted;
+  for (size_t i = 0; i < rays.size(); ++i)
+    if (const size_t k = i % per_pixel; k >= shaded && k < shaded_of_pixel[i / per_pixel])
+      wanted.push_back(static_cast<uint32_t>(i));
+  std::vector<Ray> some(wanted.size());
+  std::vector<Hit> some_hits(wanted.size());
+  for (size_t j = 0; j < wanted.size(); ++j) some[j] = rays[wanted[j]];
+  tracer.intersect(some, some_hits, /*coherent=*/true);
+  std::vector<Hit> hits(rays.size());
+  for (size_t j = 0; j < wanted.size(); ++j) hits[wanted[j]] = some_hits[j];
+  tile_points(scene, camera, image, rect, rays, hits, keys, shaded_of_pixel, work);
+}
+
+std::vector<uint16_t> adaptive_shaded_counts(const ImageSpec& image, const TileWork& work, std::span<const RGB> radiance) {
+  const size_t spp = static_cast<size_t>(work.spp), pixels = work.emitted.size() / spp;
+  const int shaded = image.shaded_per_pixel();
+  std::vector<double> sum(pixels, 0.0), sum_sq(pixels, 0.0);
+  for (size_t j = 0; j < work.sample_of_point.size(); ++j) {
+    const double v = average(radiance[j]);
+    const size_t p = work.sample_of_point[j] / spp;
+    sum[p] += v;
+    sum_sq[p] += v * v;
+  }
+  std::vector<uint16_t> counts(pixels, static_cast<uint16_t>(shaded));
+  const double n = shaded;
+  // The noise allowed, in radiance: adaptive_threshold of display white at the image's exposure.
+  const double allowed = image.adaptive_threshold / std::exp2(image.exposure);
+  for (size_t p = 0; p < pixels; ++p) {
+    const double mean = sum[p] / n;
+    // The standard error of the lighting's mean, from the sample variance (samples that hit nothing are zeros).
+    const double variance = std::max(0.0, (sum_sq[p] - n * mean * mean) / (n - 1));
+    const double error = std::sqrt(variance / n);
+    if (!(error > allowed)) continue;
+    // Enough samples to bring the error to the threshold, as a doubling of shade_spp (a prefix of the pixel's
+    // samples whose length is a power of two times shade_spp stays stratified), at most adaptive_spp.
+    const double wanted = allowed > 0 ? n * (error / allowed) * (error / allowed) : 1e30;
+    int count = shaded;
+    while (count < image.adaptive_spp && count < wanted) count *= 2;
+    counts[p] = static_cast<uint16_t>(std::min(count, image.adaptive_spp));
+  }
+  return counts;
+}
+
+void resolve_adaptive_tile(const TileWork& first, std::span<const RGB> first_radiance, const TileWork& more,
+                           std::span<const RGB> more_radiance, std::span<const uint16_t> shaded_of_pixel,
+                           std::vector<RGB>& pixels) {
+  const size_t spp = static_cast<size_t>(first.spp), count = first.emitted.size() / spp;
+  pixels.assign(count, RGB{});
+  std::vector<RGB> lit(count);
+  for (size_t j = 0; j < first.sample_of_point.size(); ++j) lit[first.sample_of_point[j] / spp] += first_radiance[j];
+  for (size_t j = 0; j < more.sample_of_point.size(); ++j) lit[more.sample_of_point[j] / spp] += more_radiance[j];
+  const float inv = 1.0f / static_cast<float>(spp);
+  for (size_t p = 0; p < count; ++p) {
+    RGB seen{};
+    for (size_t k = 0; k < spp; ++k) seen += first.emitted[p * spp + k];
+    pixels[p] = seen * inv + lit[p] * (1.0f / static_cast<float>(shaded_of_pixel[p]));
+  }
 }
 
 void reorder_points(const TileWork& work, std::span<const uint32_t> order, TileWork& out) {

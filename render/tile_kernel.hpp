@@ -2,6 +2,7 @@
 // The renderer's per-tile kernel, apart from the host program that moves tiles around (Embree tutorials' split):
 // trace the camera rays of a tile into shading points, then fold the radiance the lighting network returns into
 // pixels. The renderer actor and the bare single-process benchmark both call exactly this.
+#include <cstdint>
 #include <span>
 #include <vector>
 
@@ -57,9 +58,29 @@ void tile_camera_rays(const Camera& camera, const ImageSpec& image, const TileRe
 // The tile's shading points from its camera rays' hits (rays, hits and keys as tile_camera_rays gave them).
 void tile_points(const Scene& scene, const Camera& camera, const ImageSpec& image, const TileRect& rect,
                  std::span<const Ray> rays, std::span<const Hit> hits, std::span<const uint64_t> keys, TileWork& work);
+// As above, for an adaptive tile's second round: only the samples of pixel p from shaded_per_pixel() up to
+// more_shaded[p] become points (nothing else is touched in `work` but its points).
+void tile_points(const Scene& scene, const Camera& camera, const ImageSpec& image, const TileRect& rect,
+                 std::span<const Ray> rays, std::span<const Hit> hits, std::span<const uint64_t> keys,
+                 std::span<const uint16_t> more_shaded, TileWork& work);
 // Both, with the rays traced by `tracer`.
 void trace_tile(const Scene& scene, const RayTracer& tracer, const Camera& camera, const ImageSpec& image,
                 const TileRect& rect, TileWork& work);
+
+// Adaptive sampling (ImageSpec::adaptive_spp). After a tile's first round, each pixel's count of shaded samples:
+// shade_spp where the standard error of its lighting's mean (from its shaded samples' spread) is within
+// adaptive_threshold of the pixel's value, else shade_spp doubled until it would be (as estimated), at most
+// adaptive_spp. A function of the pixel's own samples only, so the image does not depend on the farm's layout.
+// `radiance` is one value a point of `work` (a tile with shaded_per_pixel() < spp).
+std::vector<uint16_t> adaptive_shaded_counts(const ImageSpec& image, const TileWork& work, std::span<const RGB> radiance);
+// The second round's points: pixel p's samples from shaded_per_pixel() up to shaded_of_pixel[p], traced again
+// (their camera rays are the first round's, so their hits are too).
+void trace_more_samples(const Scene& scene, const RayTracer& tracer, const Camera& camera, const ImageSpec& image,
+                        const TileRect& rect, std::span<const uint16_t> shaded_of_pixel, TileWork& work);
+// pixels[p] = mean of emission over all spp samples + the lighting of both rounds' points over shaded_of_pixel[p].
+void resolve_adaptive_tile(const TileWork& first, std::span<const RGB> first_radiance, const TileWork& more,
+                           std::span<const RGB> more_radiance, std::span<const uint16_t> shaded_of_pixel,
+                           std::vector<RGB>& pixels);
 
 // `work` with its points (and their samples and distances) in the order `order` gives (indices into work's points):
 // the same tile, sent in another order (a partitioned farm's renderer groups its points by part). Still rebuildable.

@@ -2,6 +2,9 @@
 // two cached bounces of indirect light — against a path-traced reference the test renders itself.
 #include <gtest/gtest.h>
 
+#include <fstream>
+#include <iterator>
+
 #include "render/camera.hpp"
 #include "render/image.hpp"
 #include "render/scene.hpp"
@@ -228,6 +231,49 @@ renderers { count = param("renderers", 1), lighting = lit }
   EXPECT_GT(unlit, both.pixels.size() / 2);
   EXPECT_EQ(unlit_equal, unlit);
   EXPECT_GT(edges, 10u) << "no pixel where 16 samples see more or less of the light than 4: nothing was tested";
+}
+
+// image { adaptive_spp }: after shade_spp lit samples a pixel whose lighting is still noisy gets more of its spp
+// samples lit. On the Cornell box with one light sample a point (noisy penumbrae, clean walls): the image is the
+// same with one renderer and two; a pixel that got no more samples is bit for bit the plain shade_spp image's; the
+// renderers count the pixels that did, and those are far closer to the image that lights all spp samples (whose
+// first samples they share: a pixel taken to spp is exactly its pixel).
+TEST_F(NetworkTest, AdaptiveSamplingLightsMoreSamplesOnlyWhereThePixelIsNoisy) {
+  const std::string script = write("adaptive.lua", R"(
+scene { builtin = "cornell" }
+local look = { width = 48, height = 48, spp = 16, shade_spp = param("shade_spp", 2), tile = 16 }
+if param("adaptive", false) then look.adaptive_spp = 16; look.adaptive_threshold = 0.02 end
+image(look)
+renderers { count = param("renderers", 1), lighting = lightop "direct" { light_samples = 1 } }
+)");
+  const std::string stats = (dir / "adaptive.json").string();
+  const Image adaptive = render({"run", script, "--set", "adaptive=true", "--stats-json", stats}, "adaptive.exr");
+  const Image two = render({"run", script, "--set", "adaptive=true", "--set", "renderers=2"}, "two.exr");
+  const Image plain = render({"run", script}, "plain.exr");
+  const Image all = render({"run", script, "--set", "shade_spp=16"}, "all.exr");
+  ASSERT_EQ(adaptive.pixels.size(), plain.pixels.size());
+  EXPECT_TRUE(adaptive.pixels == two.pixels) << "images differ between layouts";
+  std::ifstream in(stats);
+  const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  const auto at = text.find("\"adaptive_pixels\"");
+  ASSERT_NE(at, std::string::npos) << text;
+  const long counted = std::strtol(text.c_str() + text.find(':', at) + 1, nullptr, 10);
+  size_t changed = 0;
+  double before = 0, after = 0;
+  for (size_t i = 0; i < plain.pixels.size(); ++i) {
+    if (adaptive.pixels[i] == plain.pixels[i]) continue;
+    ++changed;
+    const double a = average(adaptive.pixels[i]) - average(all.pixels[i]), b = average(plain.pixels[i]) - average(all.pixels[i]);
+    after += a * a;
+    before += b * b;
+  }
+  std::printf("adaptive: %zu pixels changed (%ld counted), squared error against all samples %.4g -> %.4g\n", changed,
+              counted, before, after);
+  EXPECT_GT(changed, plain.pixels.size() / 50) << "too few pixels were noisy to test anything";
+  EXPECT_LT(changed, plain.pixels.size() / 2) << "the threshold should leave the clean walls alone";
+  EXPECT_LE(changed, static_cast<size_t>(counted));
+  EXPECT_GE(changed, static_cast<size_t>(counted) * 9 / 10);
+  EXPECT_LT(after, 0.25 * before) << "the pixels given more samples are not closer to the fully lit image";
 }
 
 }  // namespace

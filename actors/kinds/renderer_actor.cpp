@@ -45,11 +45,16 @@ class RendererActor final : public Actor {
     camera_ = std::make_unique<Camera>(config.camera, image_.width, image_.height);
     tracing_ = RemoteTracing::for_config(config, rt, *scene_);
     colocate_ = tracing_ && rt.input_holds_parts(0);
+    if (image_.adaptive_spp > 0 && tracing_)
+      return make_error("image: adaptive_spp is not available with partition (a tile's second round traces here)");
     return Ok{};
   }
 
   Value extra_stats() const override {
-    return tracing_ ? tracing_->stats(tracer_ != nullptr) : Value();
+    if (tracing_) return tracing_->stats(tracer_ != nullptr);
+    if (image_.adaptive_spp == 0) return Value();
+    return Value::Map{{"adaptive_pixels", static_cast<int64_t>(adaptive_pixels_)},
+                      {"adaptive_samples", static_cast<int64_t>(adaptive_samples_)}};
   }
 
   void on_phase(wire::Phase phase, Runtime& rt) override {
@@ -78,6 +83,11 @@ class RendererActor final : public Actor {
     std::vector<uint32_t> sample_part;
     std::vector<uint32_t> order;
     size_t batches_left = 0;
+    // Adaptive sampling: the first round's points and radiance while the second round's are out, and each
+    // pixel's count of shaded samples (empty: no second round).
+    TileWork first;
+    std::vector<RGB> first_radiance;
+    std::vector<uint16_t> shaded_of_pixel;
   };
 
   void ask_for_tiles(Runtime& rt) {
@@ -153,7 +163,8 @@ class RendererActor final : public Actor {
     // pixel's radiance itself: a reply then holds a value a pixel, not a point. Batches then end between pixels, and
     // one with a pixel that sees an emitter is not folded: that pixel's samples are summed with their emission. Nor
     // is one with a pixel whose points lie in two parts, as it is answered in two replies.
-    const bool lean = rt.input_is_lean(0), fold = lean && params_.batch > 1;
+    // Adaptive sampling reads each point's radiance: nothing is folded.
+    const bool lean = rt.input_is_lean(0), fold = lean && params_.batch > 1 && image_.adaptive_spp == 0;
     const size_t pixels = static_cast<size_t>(work.rect.pixel_count());
     job->radiance.assign(n, RGB{});
     job->pixel_radiance.assign(fold ? pixels : 0, RGB{});
@@ -252,8 +263,10 @@ class RendererActor final : public Actor {
   }
 
   void finish_tile(const std::shared_ptr<TileJob>& job, Runtime& rt) {
+    if (image_.adaptive_spp > 0 && job->shaded_of_pixel.empty() && shade_more(job, rt)) return;
     std::vector<RGB> pixels;
-    resolve_tile(job->work, job->radiance, job->pixel_radiance, job->folded, pixels);
+    if (job->shaded_of_pixel.empty()) resolve_tile(job->work, job->radiance, job->pixel_radiance, job->folded, pixels);
+    else resolve_adaptive_tile(job->first, job->first_radiance, job->work, job->radiance, job->shaded_of_pixel, pixels);
     ++rt.stats().tiles;
     ++done_acks_out_;
     std::erase(jobs_, job);
@@ -267,6 +280,26 @@ class RendererActor final : public Actor {
                       check_finished(rt);
                     });
     ask_for_tiles(rt);
+  }
+
+  // Adaptive sampling's second round for a tile whose first is in: true when points went out for it.
+  bool shade_more(const std::shared_ptr<TileJob>& job, Runtime& rt) {
+    auto counts = adaptive_shaded_counts(image_, job->work, job->radiance);
+    const int shaded = image_.shaded_per_pixel();
+    size_t more = 0;
+    for (uint16_t c : counts) {
+      more += c - static_cast<size_t>(shaded);
+      adaptive_pixels_ += c > shaded;
+    }
+    if (more == 0) return false;
+    adaptive_samples_ += more;
+    job->shaded_of_pixel = std::move(counts);
+    job->first = std::move(job->work);
+    job->first_radiance = std::move(job->radiance);
+    job->work = TileWork{};
+    trace_more_samples(*scene_, *tracer_, *camera_, image_, job->first.rect, job->shaded_of_pixel, job->work);
+    shade_tile(job, rt);
+    return true;
   }
 
   void check_finished(Runtime& rt) {
@@ -290,6 +323,8 @@ class RendererActor final : public Actor {
   size_t tile_requests_out_ = 0;
   size_t done_acks_out_ = 0;
   std::vector<std::shared_ptr<TileJob>> jobs_;
+  uint64_t adaptive_pixels_ = 0;   // pixels that got a second round
+  uint64_t adaptive_samples_ = 0;  // the shaded samples those rounds added
 };
 
 }  // namespace
