@@ -15,10 +15,12 @@
 --
 --   lightfarm run examples/lost_empire.lua                                  -> lost_empire.png
 --   lightfarm run examples/lost_empire.lua --set lighting=network
---   lightfarm run examples/lost_empire.lua --set lighting=network --set spp=256 --set shade_spp=32 --set light_samples=6
---                                  (256 camera samples a pixel for the flames' shapes, 32 of them lit with 6
---                                   light samples each: the least error for its time that bench/lost_empire_bench
---                                   found, with 48 x 4 and 64 x 4 as good)
+--   lightfarm run examples/lost_empire.lua --set lighting=network --set spp=256 --set shade_spp=16 --set light_samples=4 \
+--       --set adaptive_spp=256 --set adaptive_threshold=0.04 --set a=0.3 --set phi=16
+--                                  (256 camera samples a pixel for the flames' shapes, 16 of them lit with 4
+--                                   light samples each, up to 256 lit where a pixel stays noisy (near the
+--                                   torches), and a sparser cache: the path tracer's 256-spp error in 0.29 of
+--                                   its time, bench/lost_empire_bench)
 --   lightfarm run examples/lost_empire.lua --set light_sampling=tree        (the light tree alone)
 --   lightfarm run examples/lost_empire.lua --set light_sampling=power       (choose torches by power alone)
 --   lightfarm run examples/lost_empire.lua --set seed=1                     (other samples: two seeds give the
