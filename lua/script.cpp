@@ -235,6 +235,8 @@ int l_image(lua_State* L) {
     if (p.has("adaptive_threshold") && !p.has("adaptive_spp"))
       throw ParamError("image: adaptive_threshold needs adaptive_spp (the most shaded samples a noisy pixel may get)");
     if (p.has("adaptive_spp")) {
+      if (i.shade_spp == 1)
+        throw ParamError("image: adaptive_spp needs shade_spp of at least 2 (a pixel's spread needs two samples)");
       if (i.shade_spp == 0)
         throw ParamError("image: adaptive_spp needs shade_spp below spp (it shades more of the spp samples where the "
                          "first shade_spp are noisy)");

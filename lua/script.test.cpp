@@ -167,6 +167,8 @@ TEST_F(ScriptTest, BadParametersNameLineAndParameter) {
   EXPECT_EQ(error_of("image { spp = 8, adaptive_spp = 8 }\n"),
             "farm.lua:1: image: adaptive_spp needs shade_spp below spp (it shades more of the spp samples where the "
             "first shade_spp are noisy)");
+  EXPECT_EQ(error_of("image { spp = 8, shade_spp = 1, adaptive_spp = 8 }\n"),
+            "farm.lua:1: image: adaptive_spp needs shade_spp of at least 2 (a pixel's spread needs two samples)");
   EXPECT_EQ(error_of("image { spp = 8, shade_spp = 2, adaptive_threshold = 0.1 }\n"),
             "farm.lua:1: image: adaptive_threshold needs adaptive_spp (the most shaded samples a noisy pixel may get)");
   EXPECT_EQ(error_of("image { spp = 8, shade_spp = 2, adaptive_spp = 16 }\n"),

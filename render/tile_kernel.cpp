@@ -40,7 +40,7 @@ void tile_points(const Scene& scene, const Camera& camera, const ImageSpec& imag
 
 void tile_points(const Scene& scene, const Camera& camera, const ImageSpec& image, const TileRect& rect,
                  std::span<const Ray> rays, std::span<const Hit> hits, std::span<const uint64_t> keys,
-                 std::span<const uint16_t> more_shaded, TileWork& work) {
+                 std::span<const uint32_t> more_shaded, TileWork& work) {
   const size_t samples = rays.size();
   work.rect = rect;
   work.spp = image.spp;
@@ -90,7 +90,7 @@ void trace_tile(const Scene& scene, const RayTracer& tracer, const Camera& camer
 }
 
 void trace_more_samples(const Scene& scene, const RayTracer& tracer, const Camera& camera, const ImageSpec& image,
-                        const TileRect& rect, std::span<const uint16_t> shaded_of_pixel, TileWork& work) {
+                        const TileRect& rect, std::span<const uint32_t> shaded_of_pixel, TileWork& work) {
   std::vector<Ray> rays;
   std::vector<uint64_t> keys;
   tile_camera_rays(camera, image, rect, rays, keys);
@@ -108,7 +108,7 @@ void trace_more_samples(const Scene& scene, const RayTracer& tracer, const Camer
   tile_points(scene, camera, image, rect, rays, hits, keys, shaded_of_pixel, work);
 }
 
-std::vector<uint16_t> adaptive_shaded_counts(const ImageSpec& image, const TileWork& work, std::span<const RGB> radiance) {
+std::vector<uint32_t> adaptive_shaded_counts(const ImageSpec& image, const TileWork& work, std::span<const RGB> radiance) {
   const size_t spp = static_cast<size_t>(work.spp), pixels = work.emitted.size() / spp;
   const int shaded = image.shaded_per_pixel();
   std::vector<double> sum(pixels, 0.0), sum_sq(pixels, 0.0);
@@ -118,7 +118,7 @@ std::vector<uint16_t> adaptive_shaded_counts(const ImageSpec& image, const TileW
     sum[p] += v;
     sum_sq[p] += v * v;
   }
-  std::vector<uint16_t> counts(pixels, static_cast<uint16_t>(shaded));
+  std::vector<uint32_t> counts(pixels, static_cast<uint32_t>(shaded));
   const double n = shaded;
   // The noise allowed, in radiance: adaptive_threshold of display white at the image's exposure.
   const double allowed = image.adaptive_threshold / std::exp2(image.exposure);
@@ -133,13 +133,13 @@ std::vector<uint16_t> adaptive_shaded_counts(const ImageSpec& image, const TileW
     const double wanted = allowed > 0 ? n * (error / allowed) * (error / allowed) : 1e30;
     int count = shaded;
     while (count < image.adaptive_spp && count < wanted) count *= 2;
-    counts[p] = static_cast<uint16_t>(std::min(count, image.adaptive_spp));
+    counts[p] = static_cast<uint32_t>(std::min(count, image.adaptive_spp));
   }
   return counts;
 }
 
 void resolve_adaptive_tile(const TileWork& first, std::span<const RGB> first_radiance, const TileWork& more,
-                           std::span<const RGB> more_radiance, std::span<const uint16_t> shaded_of_pixel,
+                           std::span<const RGB> more_radiance, std::span<const uint32_t> shaded_of_pixel,
                            std::vector<RGB>& pixels) {
   const size_t spp = static_cast<size_t>(first.spp), count = first.emitted.size() / spp;
   pixels.assign(count, RGB{});

@@ -62,7 +62,7 @@ void tile_points(const Scene& scene, const Camera& camera, const ImageSpec& imag
 // more_shaded[p] become points (nothing else is touched in `work` but its points).
 void tile_points(const Scene& scene, const Camera& camera, const ImageSpec& image, const TileRect& rect,
                  std::span<const Ray> rays, std::span<const Hit> hits, std::span<const uint64_t> keys,
-                 std::span<const uint16_t> more_shaded, TileWork& work);
+                 std::span<const uint32_t> more_shaded, TileWork& work);
 // Both, with the rays traced by `tracer`.
 void trace_tile(const Scene& scene, const RayTracer& tracer, const Camera& camera, const ImageSpec& image,
                 const TileRect& rect, TileWork& work);
@@ -72,14 +72,14 @@ void trace_tile(const Scene& scene, const RayTracer& tracer, const Camera& camer
 // adaptive_threshold of the pixel's value, else shade_spp doubled until it would be (as estimated), at most
 // adaptive_spp. A function of the pixel's own samples only, so the image does not depend on the farm's layout.
 // `radiance` is one value a point of `work` (a tile with shaded_per_pixel() < spp).
-std::vector<uint16_t> adaptive_shaded_counts(const ImageSpec& image, const TileWork& work, std::span<const RGB> radiance);
+std::vector<uint32_t> adaptive_shaded_counts(const ImageSpec& image, const TileWork& work, std::span<const RGB> radiance);
 // The second round's points: pixel p's samples from shaded_per_pixel() up to shaded_of_pixel[p], traced again
 // (their camera rays are the first round's, so their hits are too).
 void trace_more_samples(const Scene& scene, const RayTracer& tracer, const Camera& camera, const ImageSpec& image,
-                        const TileRect& rect, std::span<const uint16_t> shaded_of_pixel, TileWork& work);
+                        const TileRect& rect, std::span<const uint32_t> shaded_of_pixel, TileWork& work);
 // pixels[p] = mean of emission over all spp samples + the lighting of both rounds' points over shaded_of_pixel[p].
 void resolve_adaptive_tile(const TileWork& first, std::span<const RGB> first_radiance, const TileWork& more,
-                           std::span<const RGB> more_radiance, std::span<const uint16_t> shaded_of_pixel,
+                           std::span<const RGB> more_radiance, std::span<const uint32_t> shaded_of_pixel,
                            std::vector<RGB>& pixels);
 
 // `work` with its points (and their samples and distances) in the order `order` gives (indices into work's points):

@@ -33,10 +33,10 @@ TEST(AdaptiveSampling, APixelGetsSamplesByItsOwnSpread) {
   // Flat: no spread. One bright sample in four: standard error 1, far above 0.05 (capped at 16). A little spread:
   // standard error 0.0577, so 4 x (0.0577 / 0.05)^2 = 5.3 samples would do: the next doubling, 8.
   Tile t({{0.5f, 0.5f, 0.5f, 0.5f}, {0, 0, 0, 4}, {1, 1.2f, 1, 1.2f}});
-  EXPECT_EQ(adaptive_shaded_counts(t.image, t.work, t.radiance), (std::vector<uint16_t>{4, 16, 8}));
+  EXPECT_EQ(adaptive_shaded_counts(t.image, t.work, t.radiance), (std::vector<uint32_t>{4, 16, 8}));
   // One stop brighter on display: the same noise is twice as visible.
   t.image.exposure = 1;
-  EXPECT_EQ(adaptive_shaded_counts(t.image, t.work, t.radiance), (std::vector<uint16_t>{4, 16, 16}));
+  EXPECT_EQ(adaptive_shaded_counts(t.image, t.work, t.radiance), (std::vector<uint32_t>{4, 16, 16}));
   // A sample that hit nothing is a zero of the pixel's lighting, not left out.
   Tile missing({{0.5f, 0.5f, 0.5f}, {}, {}});
   EXPECT_EQ(adaptive_shaded_counts(missing.image, missing.work, missing.radiance)[0], 16);
@@ -53,7 +53,7 @@ TEST(AdaptiveSampling, APixelWithNoMoreSamplesResolvesAsWithout) {
   more.spp = 16;
   for (uint32_t k = 4; k < 8; ++k) more.sample_of_point.push_back(16 + k);
   const std::vector<RGB> more_radiance(4, RGB{2, 2, 2});
-  resolve_adaptive_tile(t.work, t.radiance, more, more_radiance, std::vector<uint16_t>{4, 8, 4}, adaptive);
+  resolve_adaptive_tile(t.work, t.radiance, more, more_radiance, std::vector<uint32_t>{4, 8, 4}, adaptive);
   EXPECT_TRUE(adaptive[0] == plain[0]);
   EXPECT_TRUE(adaptive[2] == plain[2]);
   EXPECT_FLOAT_EQ(adaptive[1].x, 1.5f);

@@ -87,7 +87,7 @@ class RendererActor final : public Actor {
     // pixel's count of shaded samples (empty: no second round).
     TileWork first;
     std::vector<RGB> first_radiance;
-    std::vector<uint16_t> shaded_of_pixel;
+    std::vector<uint32_t> shaded_of_pixel;
   };
 
   void ask_for_tiles(Runtime& rt) {
@@ -287,7 +287,7 @@ class RendererActor final : public Actor {
     auto counts = adaptive_shaded_counts(image_, job->work, job->radiance);
     const int shaded = image_.shaded_per_pixel();
     size_t more = 0;
-    for (uint16_t c : counts) {
+    for (uint32_t c : counts) {
       more += c - static_cast<size_t>(shaded);
       adaptive_pixels_ += c > shaded;
     }
