@@ -57,7 +57,7 @@ struct Point {
   std::vector<std::string> sets;
   double seconds = 0;  // median wall time over the runs
   double rmse = 0, rmse_unlit = 0;  // over the runs' seeds: the root of the mean squared error
-  std::vector<double> run_rmse;     // each run's
+  std::vector<double> run_rmse, run_rmse_unlit;  // each run's
   lf::Value cache;     // the irradiance cache's counts (network points)
   lf::Value adaptive;  // adaptive sampling's counts, summed over the renderers (last run)
 };
@@ -169,7 +169,6 @@ int main(int argc, char** argv) {
   // Interleaved runs, so that a noisy stretch of the machine does not fall on one method. Run r renders with
   // seed = r: a single seed's error is itself noisy (pathtrace 256 spp: 0.084 / 0.087 / 0.090 for seeds 0 / 1 / 2).
   std::vector<std::vector<double>> seconds(points.size());
-  std::vector<double> squared(points.size(), 0.0), squared_unlit(points.size(), 0.0);
   for (int r = 0; r < runs; ++r)
     for (size_t i = 0; i < points.size(); ++i) {
       Point& p = points[i];
@@ -177,12 +176,8 @@ int main(int argc, char** argv) {
       sets.push_back("seed=" + std::to_string(r));
       const lf::Image img = render(script, sets, run);
       seconds[i].push_back(run.wall_seconds);
-      const double e = relative_rmse(img, reference), e_unlit = relative_rmse(img, reference, &near_light);
-      p.run_rmse.push_back(e);
-      squared[i] += e * e;
-      squared_unlit[i] += e_unlit * e_unlit;
-      p.rmse = std::sqrt(squared[i] / static_cast<double>(p.run_rmse.size()));
-      p.rmse_unlit = std::sqrt(squared_unlit[i] / static_cast<double>(p.run_rmse.size()));
+      p.run_rmse.push_back(relative_rmse(img, reference));
+      p.run_rmse_unlit.push_back(relative_rmse(img, reference, &near_light));
       if (p.method != "pathtrace")
         p.cache = lf::Value::Map{{"records", run.number("records")},     {"lookups", run.number("lookups")},
                                  {"served_a", run.number("served_a")},   {"served_2a", run.number("served_2a")},
@@ -195,7 +190,16 @@ int main(int argc, char** argv) {
       if (summed("adaptive_pixels") > 0)
         p.adaptive = lf::Value::Map{{"pixels", summed("adaptive_pixels")}, {"samples", summed("adaptive_samples")}};
     }
-  for (size_t i = 0; i < points.size(); ++i) points[i].seconds = bench::median(seconds[i]);
+  auto root_mean_square = [](const std::vector<double>& v) {
+    double sum = 0;
+    for (double e : v) sum += e * e;
+    return std::sqrt(sum / static_cast<double>(v.size()));
+  };
+  for (size_t i = 0; i < points.size(); ++i) {
+    points[i].seconds = bench::median(seconds[i]);
+    points[i].rmse = root_mean_square(points[i].run_rmse);
+    points[i].rmse_unlit = root_mean_square(points[i].run_rmse_unlit);
+  }
 
   std::printf("%-14s %-74s %7s %13s %10s %8s   %s\n", "method", "settings", "wall s", "(min-max)", "rel. RMSE", "away",
               "cache: records, served at a / 2a / 4a, own values; adaptive: pixels, lit samples added");
@@ -264,11 +268,9 @@ int main(int argc, char** argv) {
   };
   const size_t best_net = best_of("network"), best_pt = best_of("pathtrace");
   std::vector<double> gains;
-  for (int r = 0; r < runs; ++r)
-  {
-    const size_t k = static_cast<size_t>(r);
-    const double pt = points[best_pt].run_rmse[k], net = points[best_net].run_rmse[k];
-    gains.push_back((pt * pt * seconds[best_pt][k]) / (net * net * seconds[best_net][k]));
+  for (size_t r = 0; r < static_cast<size_t>(runs); ++r) {
+    const double pt = points[best_pt].run_rmse[r], net = points[best_net].run_rmse[r];
+    gains.push_back((pt * pt * seconds[best_pt][r]) / (net * net * seconds[best_net][r]));
   }
   const bench::Spread gain = bench::spread(gains);
   std::printf("\nefficiency 1/(RMSE^2 s), best network (%s) / best pathtrace (%s): %.2f (runs %.2f-%.2f)\n",

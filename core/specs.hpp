@@ -51,8 +51,8 @@ struct ImageSpec {
   int shade_spp = 0;
   int shaded_per_pixel() const { return shade_spp > 0 && shade_spp < spp ? shade_spp : spp; }
   // Adaptive sampling (0: off): a pixel whose lighting is still noisy after its shade_spp samples (the standard
-  // error of their mean above adaptive_threshold x the pixel's value) gets more of its spp samples shaded, in
-  // doublings of shade_spp, up to adaptive_spp (render/tile_kernel.hpp, adaptive_shaded_counts).
+  // error of their mean above adaptive_threshold of display white at `exposure`) gets more of its spp samples
+  // shaded, in doublings of shade_spp, up to adaptive_spp (render/tile_kernel.hpp, adaptive_shaded_counts).
   int adaptive_spp = 0;
   double adaptive_threshold = 0.05;
   int tile = 32;

@@ -104,8 +104,9 @@ uint32_t LightTree::build(std::vector<Node>& nodes, std::vector<Item>& items, si
     leaf.leaf = true;
     return index;
   }
-  // Halve at the median along the widest extent of the centroids: a balanced tree (depth ceil(log2 n), so a
-  // light's turns fit one 64-bit trail). Ties go by light number, so every standard library splits alike.
+  // Halve at the median along the widest extent of the centroids: a balanced tree (depth ceil(log2 n), so the
+  // four-way tree's levels, two bits each, fit one 64-bit trail). Ties go by light number, so every standard
+  // library splits alike.
   Vec3 lo = items[first].centroid, hi = lo;
   for (size_t i = first; i < last; ++i) {
     lo = min3(lo, items[i].centroid);
@@ -213,6 +214,12 @@ void LightTree::importance(const Wide& node, Vec3 x, Vec3 n, float out[kWidth]) 
   std::memcpy(out, &result, sizeof result);
 }
 
+float LightTree::weigh(const Wide& node, Vec3 x, Vec3 n, float weight[kWidth]) const {
+  importance(node, x, n, weight);
+  // One order of additions for pick() and probability(), so that they agree bit for bit.
+  return weight[0] + weight[1] + weight[2] + weight[3];
+}
+
 namespace {
 
 // The slot a descent takes at a node whose children weigh `weight` (total > 0) for u in [0, 1): the slots share
@@ -240,8 +247,7 @@ bool LightTree::pick(Vec3 x, Vec3 n, float u, size_t& light, float& probability,
   for (;;) {
     const Wide& node = nodes_[static_cast<size_t>(at)];
     float weight[kWidth];
-    importance(node, x, n, weight);
-    const float total = weight[0] + weight[1] + weight[2] + weight[3];
+    const float total = weigh(node, x, n, weight);
     if (!(total > 0)) return false;
     float below = 0;
     const int k = choose_slot(weight, total, u, below);
@@ -265,8 +271,7 @@ float LightTree::probability(Vec3 x, Vec3 n, size_t light) const {
   for (int level = 0;; ++level) {
     const Wide& node = nodes_[static_cast<size_t>(at)];
     float weight[kWidth];
-    importance(node, x, n, weight);
-    const float total = weight[0] + weight[1] + weight[2] + weight[3];
+    const float total = weigh(node, x, n, weight);
     const int k = static_cast<int>((trail_[light] >> (2 * level)) & 3);
     if (!(total > 0) || !(weight[k] > 0)) return 0;
     p *= weight[k] / total;

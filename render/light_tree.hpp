@@ -1,9 +1,10 @@
 #pragma once
 // LightTree: chooses among many lights by how much each can give a particular shading point, not by power alone
-// (Conty Estevez & Kulla, "Importance Sampling of Many Lights with Adaptive Tree Splitting", 2018). A binary tree
+// (Conty Estevez & Kulla, "Importance Sampling of Many Lights with Adaptive Tree Splitting", 2018). A tree
 // over the scene's lights (emitter triangles and point lights, in Scene's light numbering); each node bounds its
 // lights' positions (a box), their emitting directions (a cone around an axis) and holds their power. A descent
-// from the root goes left or right with probability proportional to each child's importance at the point:
+// from the root goes to one of a node's children with probability proportional to each child's importance at the
+// point:
 // power x (bounded) cosine at the light x (bounded) cosine at the point / distance². The bounds are conservative,
 // so a light that can reach the point always has a non-zero probability; the probability of the light picked is
 // the product along the way, and probability() walks the same path again (for MIS when a BSDF ray hits a light).
@@ -69,6 +70,8 @@ class LightTree {
   int32_t collapse(const std::vector<Node>& binary, uint32_t at, int depth, uint64_t trail);
   // Each child's importance at x: an upper bound, up to a constant, of what its lights can give x.
   void importance(const Wide& node, Vec3 x, Vec3 n, float out[kWidth]) const;
+  // The children's importances into `weight`, and their sum.
+  float weigh(const Wide& node, Vec3 x, Vec3 n, float weight[kWidth]) const;
 
   std::vector<Wide> nodes_;
   std::vector<uint64_t> trail_;  // per light: the slots from the root to its leaf, 2 bits per level

@@ -69,7 +69,8 @@ void trace_tile(const Scene& scene, const RayTracer& tracer, const Camera& camer
 
 // Adaptive sampling (ImageSpec::adaptive_spp). After a tile's first round, each pixel's count of shaded samples:
 // shade_spp where the standard error of its lighting's mean (from its shaded samples' spread) is within
-// adaptive_threshold of the pixel's value, else shade_spp doubled until it would be (as estimated), at most
+// adaptive_threshold / 2^exposure (that share of display white), else shade_spp doubled until it would be (as
+// estimated), at most
 // adaptive_spp. A function of the pixel's own samples only, so the image does not depend on the farm's layout.
 // `radiance` is one value a point of `work` (a tile with shaded_per_pixel() < spp).
 std::vector<uint32_t> adaptive_shaded_counts(const ImageSpec& image, const TileWork& work, std::span<const RGB> radiance);
