@@ -8,7 +8,8 @@ scene  { builtin = "cornell" }
 camera { eye = {278, 273, -800}, at = {278, 273, 0}, fov = 39.3 }
 image  { width = param("width", 512), height = param("height", 512), spp = param("spp", 16),
          tile = param("tile", 32), output = "cornell_pool.png" }
-farm   { heartbeat_timeout = param("heartbeat_timeout", 10) }
+-- Direct light alone (a pool's demonstration): "partial" says the light that bounces more is left out on purpose.
+farm   { heartbeat_timeout = param("heartbeat_timeout", 10), light_paths = "partial" }
 
 local direct = multiplexer {
   lightop "direct" { light_samples = param("light_samples", 2) },

@@ -63,11 +63,12 @@ local function direct()
                             mis = param("mis", true), seed = seed }
 end
 if lighting == "direct" then
+  farm { light_paths = "partial" }  -- direct light alone, on purpose
   renderers { count = param("renderers", 2), lighting = direct() }
 elseif lighting == "network" then
   -- The cache's hemisphere rays land mostly where the camera does not look, so learned lights do little for
   -- them (measured: RMSE 0.1765 with, 0.1782 without) while each replica would spend ~2.3 s learning: the tree.
-  local paths = lightop "pathtrace" { max_depth = param("max_depth", 8),
+  local paths = lightop "pathtrace" { max_depth = param("max_depth", 100),
                                       light_sampling = param("bounce_light_sampling", "tree"),
                                       light_point = light_point, name = "bounces", seed = seed }
   -- Two processes trace the cache's hemisphere rays (most of the pre-pass), one per core.
@@ -84,16 +85,20 @@ elseif lighting == "network" then
   local lit = direct()
   local direct_replicas = param("direct_replicas", 2)
   if direct_replicas > 1 then lit = multiplexer { lit, replicas = direct_replicas } end
-  local specular = lightop "specular" { input = lightop "combine" { inputs = { lit, indirect }, name = "landing" },
+  -- Glossy lobes (materials set glossy from the script: Lost Empire's own are diffuse) reflect what the bounce
+  -- paths bring, as the cache does for the diffuse part; an op with no glossy point to shade costs nothing.
+  local shiny = lightop "glossy" { input = paths, samples = param("glossy_samples", 1), name = "glossy", seed = seed }
+  local specular = lightop "specular" { input = lightop "combine" { inputs = { lit, indirect, shiny }, name = "landing" },
                                         emission_samples = param("emission_samples", math.max(1, 4 * spp // math.max(1, shade_spp))),
                                         seed = seed }
-  renderers { count = param("renderers", 2), lighting = lightop "combine" { inputs = { lit, indirect, specular } } }
+  renderers { count = param("renderers", 2), lighting = lightop "combine" { inputs = { lit, indirect, shiny, specular } } }
 elseif lighting == "pathtrace" then
-  local paths = multiplexer { lightop "pathtrace" { max_depth = param("max_depth", 8), light_sampling = light_sampling, light_point = light_point,
+  local paths = multiplexer { lightop "pathtrace" { max_depth = param("max_depth", 100), light_sampling = light_sampling, light_point = light_point,
                                                     directional_cache = param("directional_cache", false), seed = seed },
                               replicas = param("replicas", 2) }
   renderers { count = param("renderers", 2), lighting = paths }
 elseif lighting == "emission" then
+  farm { light_paths = "off" }  -- a mask of what the camera sees of the lights (counted twice), not a rendering
   renderers { count = param("renderers", 2), lighting = lightop "emission" {} }
 else
   error("lighting must be \"direct\", \"network\", \"pathtrace\" or \"emission\", not \"" .. tostring(lighting) .. "\"")

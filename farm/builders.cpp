@@ -6,6 +6,7 @@
 #include <set>
 #include <string_view>
 
+#include "farm/light_path_check.hpp"
 #include "render/lightop_registry.hpp"
 
 namespace lf {
@@ -301,6 +302,12 @@ std::string to_dot(const FarmSpec& spec) {
   std::string ring_op;
   std::map<int64_t, std::string> ring_nodes;  // node number -> name
   int64_t rings = 1, length = 1;
+  // Each arrow says which light paths it carries (farm/light_path_check.hpp).
+  const std::vector<std::string> carried = light_path_summaries(spec);
+  auto arrow = [&](int from) {
+    const std::string& what = carried[static_cast<size_t>(from)];
+    return what.empty() ? std::string(";\n") : " [label=\"" + what + "\"];\n";
+  };
   for (const auto& a : spec.actors) {
     if (a.is_renderer()) continue;
     if (a.is_ring_node()) {
@@ -311,7 +318,7 @@ std::string to_dot(const FarmSpec& spec) {
       continue;  // drawn as rings below, not as their all-to-all connections
     }
     if (a.kind == "radiosity") ring_op = a.name;
-    for (int in : a.inputs) out += "  " + id(spec.actors[static_cast<size_t>(in)].name) + " -> " + id(a.name) + ";\n";
+    for (int in : a.inputs) out += "  " + id(spec.actors[static_cast<size_t>(in)].name) + " -> " + id(a.name) + arrow(in);
   }
   // A partitioned scene: the parts answer the rays of the renderers and of the ops that trace through them
   // (dotted: rays, not light).
@@ -335,7 +342,7 @@ std::string to_dot(const FarmSpec& spec) {
     if (!ring_op.empty()) out += "  " + id(name) + " -> " + id(ring_op) + " [style=dotted];\n";
   }
   if (spec.lighting >= 0)
-    out += "  " + id(spec.actors[static_cast<size_t>(spec.lighting)].name) + " -> " + id("renderers") + ";\n";
+    out += "  " + id(spec.actors[static_cast<size_t>(spec.lighting)].name) + " -> " + id("renderers") + arrow(spec.lighting);
   out += "  \"renderers\" -> film;\n}\n";
   return out;
 }

@@ -69,6 +69,10 @@ struct FarmSpec {
   std::string director_address;     // where remote actors reach the director; empty: found from the routes
   std::string security = "curve";   // "curve": every link authenticated and encrypted; "none": to measure its cost
   std::string monitor;              // farm { monitor = "[ADDR:]PORT" }: the live monitor's address (--monitor wins)
+  // farm { light_paths }: how the lighting network's light paths are checked against the scene before launch
+  // (farm/light_path_check.hpp): "check" (paths counted twice are an error, paths left out a warning), "complete"
+  // (both errors), "partial" (the network computes part of the light on purpose), "off".
+  std::string light_paths = "check";
   // A host with two or more scene-loading actors of a shipped scene loads it and builds its BVH once, in a host
   // agent that forks those actors (actors/runtime/host_agent.hpp); false: every actor loads its own.
   bool host_agents = true;

@@ -627,7 +627,7 @@ int l_material_table(lua_State* L) {
 int l_material(lua_State* L) { return with_name(L, l_material_table); }
 
 // farm { heartbeat_timeout = 10, request_timeout = 120, director_address, security = "curve", monitor,
-// host_agents = true }: settings of the farm as a whole.
+// host_agents = true, light_paths = "check" }: settings of the farm as a whole.
 int l_farm(lua_State* L) {
   Builder& b = builder(L);
   ParamTable p = table_params(L, 1, "farm");
@@ -638,6 +638,7 @@ int l_farm(lua_State* L) {
     b.spec.security = p.get_string("security", b.spec.security, {"curve", "none"});
     b.spec.monitor = p.get_string("monitor", b.spec.monitor);
     b.spec.host_agents = p.get_bool("host_agents", b.spec.host_agents);
+    b.spec.light_paths = p.get_string("light_paths", b.spec.light_paths, {"check", "complete", "partial", "off"});
     p.report_unused();
   });
   return 0;

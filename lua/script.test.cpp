@@ -240,7 +240,13 @@ TEST_F(ScriptTest, FarmSettingsAndHosts) {
   EXPECT_DOUBLE_EQ(r->heartbeat_timeout, 2.5);
   EXPECT_EQ(error_of("farm { heartbeat = 3 }\n"),
             "farm.lua:1: farm: unknown parameter 'heartbeat' (known: director_address, heartbeat_timeout, host_agents, "
-            "monitor, request_timeout, security)");
+            "light_paths, monitor, request_timeout, security)");
+  EXPECT_EQ(r->light_paths, "check") << "paths counted twice are errors, paths left out warnings, by default";
+  auto partial = evaluate_script(write("farm.lua", std::string(kCornell) + "farm { light_paths = \"partial\" }\n"));
+  ASSERT_TRUE(partial.ok()) << partial.error().message;
+  EXPECT_EQ(partial->light_paths, "partial");
+  EXPECT_EQ(error_of("farm { light_paths = \"some\" }\n"),
+            "farm.lua:1: farm: parameter 'light_paths' must be one of check, complete, partial, off, got 'some'");
   auto own = evaluate_script(write("farm.lua", std::string(kCornell) + "farm { host_agents = false }\n"));
   ASSERT_TRUE(own.ok()) << own.error().message;
   EXPECT_FALSE(own->host_agents);

@@ -38,6 +38,27 @@ float fresnel_dielectric(float cos_i, float eta) {
   return 0.5f * (rs * rs + rp * rp);
 }
 
+// Around the mirror direction r with density proportional to cos^ns.
+static Vec3 phong_direction(Vec3 r, float ns, float u1, float u2) {
+  Vec3 t, s;
+  basis(r, t, s);
+  const float cos_a = std::pow(u1, 1.0f / (ns + 1.0f));
+  const float sin_a = std::sqrt(std::max(0.0f, 1.0f - cos_a * cos_a));
+  const float phi = 2.0f * kPi * u2;
+  return normalize(t * (sin_a * std::cos(phi)) + s * (sin_a * std::sin(phi)) + r * cos_a);
+}
+
+std::optional<Bsdf::Sample> Bsdf::sample_glossy(Vec3 n, Vec3 wo, float u1, float u2) const {
+  if (!has_glossy_lobe() || dot(n, wo) <= 0) return std::nullopt;
+  const Vec3 wi = phong_direction(reflect(wo, n), m_.ns, u1, u2);
+  const float cos_i = dot(n, wi);
+  if (cos_i <= 0) return std::nullopt;
+  // f = ks (ns + 2) / (2 pi) cos^ns(alpha), pdf = (ns + 1) / (2 pi) cos^ns(alpha): their ratio needs no power.
+  const float ca = std::max(0.0f, dot(reflect(wo, n), wi));
+  const float pdf = (m_.ns + 1.0f) / (2.0f * kPi) * std::pow(ca, m_.ns);
+  return Sample{wi, m_.ks * ((m_.ns + 2.0f) / (m_.ns + 1.0f) * cos_i), pdf, false};
+}
+
 float Bsdf::diffuse_probability() const {
   const float d = average(kd_), g = average(m_.ks);
   return d + g > 0 ? d / (d + g) : 1.0f;
@@ -96,14 +117,7 @@ std::optional<Bsdf::Sample> Bsdf::sample(Vec3 n, Vec3 wo, bool entering, float u
   if (u0 < pd) {
     wi = cosine_hemisphere(n, u1, u2);
   } else {
-    // Around the mirror direction with density proportional to cos^ns.
-    const Vec3 r = reflect(wo, n);
-    Vec3 t, s;
-    basis(r, t, s);
-    const float cos_a = std::pow(u1, 1.0f / (m_.ns + 1.0f));
-    const float sin_a = std::sqrt(std::max(0.0f, 1.0f - cos_a * cos_a));
-    const float phi = 2.0f * kPi * u2;
-    wi = normalize(t * (sin_a * std::cos(phi)) + s * (sin_a * std::sin(phi)) + r * cos_a);
+    wi = phong_direction(reflect(wo, n), m_.ns, u1, u2);
   }
   const float cos_i = dot(n, wi);
   if (cos_i <= 0) return std::nullopt;

@@ -31,6 +31,11 @@ class Bsdf {
   // `entering`: wo is on the outside of the surface (for glass: which way refraction bends).
   std::optional<Sample> sample(Vec3 n, Vec3 wo, bool entering, float u0, float u1, float u2) const;
 
+  // A glossy material's Phong lobe alone: whether it has one, and a direction drawn in proportion to it, weighted
+  // by that lobe's f * cos / pdf (the diffuse part left out: the `glossy` LightOp's share of the BSDF).
+  bool has_glossy_lobe() const { return m_.type == Material::Type::glossy && !is_black(m_.ks); }
+  std::optional<Sample> sample_glossy(Vec3 n, Vec3 wo, float u1, float u2) const;
+
  private:
   float diffuse_probability() const;
   const Material& m_;

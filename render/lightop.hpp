@@ -14,6 +14,7 @@
 #include <cstdint>
 #include <exception>
 #include <memory>
+#include <optional>
 #include <span>
 #include <stdexcept>
 #include <string>
@@ -21,6 +22,7 @@
 
 #include "core/params.hpp"
 #include "render/camera.hpp"
+#include "render/light_paths.hpp"
 #include "render/math.hpp"
 #include "render/sampler.hpp"
 #include "render/scene.hpp"
@@ -232,6 +234,14 @@ class LightOp {
   // What the op did, for STATS and the end-of-run table (a map of numbers; nil when there is nothing to tell):
   // how to tune it comes from here (docs/lua-api.md).
   virtual Value stats() const { return Value(); }
+  // Which light paths shade() counts, given what each input's answer counts (render/light_paths.hpp): e.g.
+  // `irradiance` returns its input's paths each followed by a diffuse event. The farm composes these along the
+  // network before it launches anything and checks that every path the scene's materials allow reaches the camera
+  // exactly once (farm/light_path_check.hpp). nullopt: the op does not say (the check then passes over it).
+  virtual std::optional<LightPaths> paths(std::span<const LightPaths> inputs) const {
+    (void)inputs;
+    return std::nullopt;
+  }
 };
 
 // Inputs served in-process: each input is another LightOp in the same address space, called directly.

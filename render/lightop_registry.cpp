@@ -7,6 +7,7 @@ extern const LightOpKind pathtrace_kind;
 extern const LightOpKind combine_kind;
 extern const LightOpKind emission_kind;
 extern const LightOpKind specular_kind;
+extern const LightOpKind glossy_kind;
 extern const LightOpKind photonmap_kind;
 extern const LightOpKind irradiance_kind;
 extern const LightOpKind radiosity_kind;
@@ -17,6 +18,7 @@ static const LightOpKind* const kAllKinds[] = {
     &combine_kind,
     &emission_kind,
     &specular_kind,
+    &glossy_kind,
     &photonmap_kind,
     &irradiance_kind,
     &radiosity_kind,

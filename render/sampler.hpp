@@ -204,6 +204,7 @@ inline constexpr uint64_t specular = 4;
 inline constexpr uint64_t photons = 5;
 inline constexpr uint64_t irradiance = 6;
 inline constexpr uint64_t light_check = 7;  // render/light_checks.cpp
+inline constexpr uint64_t glossy = 8;
 }  // namespace streams
 
 }  // namespace lf

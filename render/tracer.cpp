@@ -2,6 +2,7 @@
 
 #include "render/tied_hits.hpp"
 
+#include <algorithm>
 #include <embree3/rtcore.h>
 #include <malloc.h>
 
@@ -132,6 +133,9 @@ static void fill(RTCRay& r, const Ray& ray) {
   r.flags = 0;
 }
 
+// Rays given to Embree in one stream call at most.
+constexpr size_t kStreamPiece = size_t{1} << 20;
+
 // The rays and Embree's answers of this thread's last intersect_unsettled (settling reads its barycentrics).
 static std::vector<RTCRayHit>& rayhit_buffer() {
   thread_local std::vector<RTCRayHit> buffer;
@@ -157,7 +161,11 @@ void RayTracer::intersect_unsettled(std::span<const Ray> rays, std::span<Hit> hi
   RTCIntersectContext context;
   rtcInitIntersectContext(&context);
   context.flags = coherent ? RTC_INTERSECT_CONTEXT_FLAG_COHERENT : RTC_INTERSECT_CONTEXT_FLAG_INCOHERENT;
-  rtcIntersect1M(impl_->scene, &context, buffer.data(), static_cast<unsigned>(rays.size()), sizeof(RTCRayHit));
+  // In pieces: Embree's stream offsets are 32-bit, and a batch of 40 M rays (an eight-cache network's own values,
+  // in one process) crashed inside it.
+  for (size_t first = 0; first < rays.size(); first += kStreamPiece)
+    rtcIntersect1M(impl_->scene, &context, buffer.data() + first,
+                   static_cast<unsigned>(std::min(kStreamPiece, rays.size() - first)), sizeof(RTCRayHit));
   for (size_t i = 0; i < rays.size(); ++i) {
     if (buffer[i].hit.geomID == RTC_INVALID_GEOMETRY_ID) {
       hits[i] = Hit{};
@@ -173,7 +181,9 @@ void RayTracer::occluded(std::span<const Ray> rays, std::span<uint8_t> occluded)
   for (size_t i = 0; i < rays.size(); ++i) fill(buffer[i], rays[i]);
   RTCIntersectContext context;
   rtcInitIntersectContext(&context);
-  rtcOccluded1M(impl_->scene, &context, buffer.data(), static_cast<unsigned>(rays.size()), sizeof(RTCRay));
+  for (size_t first = 0; first < rays.size(); first += kStreamPiece)
+    rtcOccluded1M(impl_->scene, &context, buffer.data() + first,
+                  static_cast<unsigned>(std::min(kStreamPiece, rays.size() - first)), sizeof(RTCRay));
   // Embree marks an occluded ray by setting tfar to -inf.
   for (size_t i = 0; i < rays.size(); ++i) occluded[i] = buffer[i].tfar < 0 ? 1 : 0;
 }

@@ -428,7 +428,7 @@ TEST_F(SlurmTest, AShippedSceneIsLoadedOncePerNodeByItsAgent) {
   write("room.obj", kRoomObj);
   write("room.mtl", kRoomMtl);
   const std::string body = "scene { file = \"room.obj\" }\ncamera { eye = {0, 1, 3.5}, at = {0, 1, 0}, fov = 45 }\n"
-                           "image { width = 48, height = 48, spp = 4 }\n";
+                           "image { width = 48, height = 48, spp = 4 }\nfarm { light_paths = \"partial\" }\n";
   auto local = write("local.lua", body + "renderers { count = 2, lighting = multiplexer { lightop \"direct\" {}, replicas = 3 } }\n");
   auto slurm = write("slurm.lua", body + "local nodes = slurm_hosts()\n"
                                        "local d = multiplexer { lightop \"direct\" {}, replicas = 3, host = nodes }\n"

@@ -25,6 +25,7 @@
 #include "actors/director/monitor.hpp"
 #include "actors/director/report.hpp"
 #include "actors/director/ring_service.hpp"
+#include "farm/light_path_check.hpp"
 #include "render/light_checks.hpp"
 #include "render/lightop_registry.hpp"
 #include "actors/director/supervisor.hpp"
@@ -207,6 +208,14 @@ class Director final : public ControlOut, public Outbox {
     const auto load_start = Clock::now();
     auto scene = Scene::load(spec_.scene);
     if (!scene) throw FarmFailure{spec_.scene.loc.str() + ": " + scene.error().message};
+    // Light counted twice or left out by the network, for this scene's materials: a script error, before launch.
+    const LightPathReport paths = check_light_paths(spec_, scene_lobes(*scene));
+    for (const auto& warning : paths.warnings) log_warn(warning);
+    if (!paths.errors.empty()) {
+      std::string all;
+      for (const auto& e : paths.errors) all += (all.empty() ? "" : "\n") + e;
+      throw FarmFailure{all, 2};
+    }
     if (const double took = seconds_since(load_start); took >= 1.0 && !options_.quiet)
       log_info("scene: read " + spec_.scene.file + " (" + std::to_string(scene->triangle_count()) + " triangles) in " +
                seconds_text(std::round(took * 10) / 10));

@@ -18,6 +18,12 @@ class Combine final : public LightOp {
     co_return;
   }
 
+  std::optional<LightPaths> paths(std::span<const LightPaths> inputs) const override {
+    LightPaths sum;
+    for (size_t i = 0; i < inputs.size(); ++i) sum += inputs[i] * (weights_.empty() ? 1.0f : weights_[i]);
+    return sum;
+  }
+
   Task shade(const ShadingPoints& points, std::span<RGB> radiance, Inputs& inputs) override {
     std::vector<std::vector<RGB>> parts(inputs.count());
     std::vector<InputQuery> queries;

@@ -39,6 +39,11 @@ class DirectLight final : public LightOp {
     return m;
   }
 
+  // Light straight from an emitter, scattered at the point by its diffuse or glossy lobe.
+  std::optional<LightPaths> paths(std::span<const LightPaths>) const override {
+    return LightPaths::every(1, 1, Lobes::of({Lobe::diffuse, Lobe::glossy}));
+  }
+
   Task shade(const ShadingPoints& points, std::span<RGB> radiance, Inputs&) override {
     PathOptions o;
     o.max_depth = 1;

@@ -13,6 +13,7 @@ class Emission final : public LightOp {
     ctx_ = ctx;
     co_return;
   }
+  std::optional<LightPaths> paths(std::span<const LightPaths>) const override { return LightPaths::emission(); }
   Task shade(const ShadingPoints& points, std::span<RGB> radiance, Inputs&) override {
     const Scene& scene = *ctx_.scene;
     for (size_t i = 0; i < points.size(); ++i)

@@ -37,7 +37,8 @@ class Irradiance final : public LightOp {
         finest_(static_cast<int>(p.get_int("finest", 2, 1, 64))),
         min_spacing_(static_cast<float>(p.get_float("min_spacing", 0.002, 0, 1))),
         max_spacing_(static_cast<float>(p.get_float("max_spacing", 0.2, 0, 10))),
-        own_rays_(static_cast<int>(p.get_int("own_rays", 0, 0, 1 << 16))),
+        own_rays_(static_cast<int>(p.get_int("own_rays", 8, 0, 1 << 16))),
+        bounds_(bounds_up_to(p.get_float("relax", 1, 1, 4))),
         seed_(static_cast<uint64_t>(p.get_int("seed", 0, 0, INT32_MAX))) {}
 
   Task setup(SceneContext ctx, Inputs& inputs) override {
@@ -93,6 +94,11 @@ class Irradiance final : public LightOp {
                       {"records_per_lookup", served ? static_cast<double>(records_used_) / served : 0.0}};
   }
 
+  // What the input gives at the hemisphere's hits, reflected by the point's diffuse lobe.
+  std::optional<LightPaths> paths(std::span<const LightPaths> inputs) const override {
+    return inputs.empty() ? LightPaths() : inputs[0].then(Lobe::diffuse);
+  }
+
   Task shade(const ShadingPoints& points, std::span<RGB> radiance, Inputs& inputs) override {
     const Scene& scene = *ctx_.scene;
     std::vector<Candidate> misses;
@@ -101,13 +107,12 @@ class Irradiance final : public LightOp {
       radiance[i] = RGB{};
       const Material& m = scene.material(points.material[i]);
       if (m.specular() || is_black(m.kd)) continue;
-      // The records valid under a, else under 2a and 4a: a point the cache barely misses still uses its nearest
-      // records (deterministically: the cache does not change while rendering) instead of paying for a hemisphere,
-      // whose own samples would miss the next cache down a network in turn.
+      // The records valid under a, else (with `relax`) under 2a and 4a: a point the cache barely misses then uses its
+      // nearest records (deterministically: the cache does not change while rendering) instead of paying for its
+      // own value. Such points lie mostly near what occludes them, where the records farther off are brighter.
       RGB e;
-      static constexpr float kBounds[] = {1.0f, 2.0f, 4.0f};
       uint32_t records = 0;
-      const int bound = cache_->lookup_first(points.position[i], points.normal[i], kBounds, e, &records);
+      const int bound = cache_->lookup_first(points.position[i], points.normal[i], bounds_, e, &records);
       ++lookups_;
       if (bound >= 0) {
         ++served_[bound];
@@ -331,6 +336,13 @@ class Irradiance final : public LightOp {
   int stride_, finest_;
   float min_spacing_, max_spacing_;
   int own_rays_;
+  // The bounds a lookup tries in turn, as multiples of a: {1}, {1, 2} or {1, 2, 4}.
+  std::vector<float> bounds_;
+  static std::vector<float> bounds_up_to(double relax) {
+    std::vector<float> b{1.0f};
+    for (float f = 2.0f; f <= relax + 1e-6; f *= 2) b.push_back(f);
+    return b;
+  }
   uint64_t seed_;
   float extent_ = 1;
   SceneContext ctx_;

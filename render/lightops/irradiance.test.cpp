@@ -86,7 +86,7 @@ TEST(Irradiance, FurnaceNetworkComposedToFullDepthGivesEOverOneMinusRho) {
     LightOp* combine = ops.back().get();
     LocalInputs* combine_inputs = wiring.back().get();
     run_to_completion(combine->setup(ctx, *combine_inputs));
-    ops.push_back(make("irradiance", Value::Map{{"prepass", 1500}, {"theta", 4}, {"phi", 12}, {"placement", "area"}}));
+    ops.push_back(make("irradiance", Value::Map{{"prepass", 1500}, {"theta", 4}, {"phi", 12}, {"placement", "area"}, {"own_rays", 0}, {"relax", 4}}));
     wiring.push_back(std::make_unique<LocalInputs>(std::vector<std::pair<LightOp*, Inputs*>>{{combine, combine_inputs}}));
     run_to_completion(ops.back()->setup(ctx, *wiring.back()));
     below = ops.back().get();
@@ -192,6 +192,9 @@ struct CameraCache {
     auto direct = make("direct", Value::Map{{"light_samples", light_samples}});
     run_to_completion(direct->setup(ctx, none));
     LocalInputs to_direct({{direct.get(), &none}});
+    // How well placement serves, the relaxed bounds included (as measured when they were the default).
+    cache_params.emplace("relax", 4);
+    cache_params.emplace("own_rays", 0);
     auto irr = make("irradiance", std::move(cache_params));  // placement = "camera" is the default
     run_to_completion(irr->setup(ctx, to_direct));
     bounce.resize(pts.size());
@@ -275,12 +278,14 @@ TEST(Irradiance, TheOverturePlacesAFeedingCacheWhereTheNextCacheLooks) {
     std::vector<RGB> b_light;
   };
   auto chain = [&](Value::Map a_params) {
+    a_params.emplace("relax", 4);
+    a_params.emplace("own_rays", 0);
     auto a = make("irradiance", std::move(a_params));
     run_to_completion(a->setup(ctx, to_direct));
     auto lit = make("combine", Value::Map{});
     LocalInputs to_both({{direct.get(), &none}, {a.get(), &to_direct}});
     LocalInputs to_lit({{lit.get(), &to_both}});
-    auto b = make("irradiance", Value::Map{});
+    auto b = make("irradiance", Value::Map{{"relax", 4}, {"own_rays", 0}});
     run_to_completion(b->setup(ctx, to_lit));
     Chain c;
     c.b_light.resize(pts.size());

@@ -9,10 +9,15 @@
 namespace lf {
 namespace {
 
+// Paths end by Russian roulette; max_depth only bounds the pathological (a closed box of white walls). 8, the old
+// default, left out 2 % of a glossy-walled Cornell box's light (its paths were measured with max_depth 64): a
+// path after 100 events carries at most 0.95^100 = 0.6 % of its light on surfaces that reflect 95 %.
+constexpr int kDefaultMaxDepth = 100;
+
 class PathTrace final : public LightOp {
  public:
   explicit PathTrace(const ParamTable& p) {
-    options_.max_depth = static_cast<int>(p.get_int("max_depth", 8, 1, 1024));
+    options_.max_depth = static_cast<int>(p.get_int("max_depth", kDefaultMaxDepth, 1, 1024));
     options_.rr_depth = static_cast<int>(p.get_int("rr_depth", 3, 1, 1024));
     options_.roulette = p.get_string("roulette", "sqrt", {"sqrt", "throughput"}) == "sqrt" ? PathOptions::Roulette::sqrt
                                                                                              : PathOptions::Roulette::throughput;
@@ -47,6 +52,11 @@ class PathTrace final : public LightOp {
       options_.light_selection = &selection_;
     }
     if (use_cache_) co_await fill_cache();
+  }
+
+  // Every path of up to max_depth events (Russian roulette ends paths without leaving any out).
+  std::optional<LightPaths> paths(std::span<const LightPaths>) const override {
+    return LightPaths::every(1, options_.max_depth);
   }
 
   Task shade(const ShadingPoints& points, std::span<RGB> radiance, Inputs&) override {

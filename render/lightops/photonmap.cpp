@@ -161,6 +161,14 @@ class PhotonMap final : public LightOp {
   }
 
  public:
+  // Light that reached a diffuse or glossy point through mirrors and glass alone: L S+ (D|G).
+  std::optional<LightPaths> paths(std::span<const LightPaths>) const override {
+    const LightPaths chains = LightPaths::emission().then_repeated(Lobe::specular, 1, max_depth_);
+    LightPaths landed = chains.then(Lobe::diffuse);
+    landed += chains.then(Lobe::glossy);
+    return landed;
+  }
+
   // photons_shot: by the whole pool; photons_stored: in this map (caustic photons only); lookups: non-specular
   // points asked for; served_precomputed: answered by the nearest precomputed irradiance (`precompute`), the rest
   // by a k-nearest estimate. Setup's time: shooting this replica's share, the exchange of shares (waiting for the

@@ -27,6 +27,12 @@ class Radiosity final : public LightOp {
     offset_ = 20 * ctx.scene->epsilon();
   }
 
+  // Reflected radiosity: light after one or more diffuse reflections, and only those (the solution treats every
+  // surface as diffuse with its Kd: mirrors and glass absorb).
+  std::optional<LightPaths> paths(std::span<const LightPaths>) const override {
+    return LightPaths::every(1, LightPaths::kMaxEvents, Lobes::of({Lobe::diffuse}));
+  }
+
   Task shade(const ShadingPoints& points, std::span<RGB> radiance, Inputs&) override {
     std::fill(radiance.begin(), radiance.end(), RGB{});
     if (!tracer_) co_return;

@@ -9,6 +9,9 @@
 // one seen directly, and needs as many chains as the camera gives it samples, while what the chain lands on
 // (asking the input: the expensive part) is smooth enough for `samples`. The emission is the mean over all
 // chains, the landing light the mean over the first `samples`: both unbiased.
+//
+// `emitters = false`: chains add nothing for the emitters they meet (L S+), for a network in which another op counts
+// that light, e.g. a cache whose hemisphere sees mirrors beside a caustic photon map that holds L S+ D.
 #include "render/bsdf.hpp"
 #include "render/surface.hpp"
 #include "render/lightop_registry.hpp"
@@ -23,11 +26,20 @@ class Specular final : public LightOp {
       : samples_(static_cast<int>(p.get_int("samples", 1, 1, 1 << 16))),
         emission_samples_(static_cast<int>(p.get_int("emission_samples", samples_, samples_, 1 << 16))),
         max_depth_(static_cast<int>(p.get_int("max_depth", 8, 1, 256))),
-        seed_(static_cast<uint64_t>(p.get_int("seed", 0, 0, INT32_MAX))) {}
+        seed_(static_cast<uint64_t>(p.get_int("seed", 0, 0, INT32_MAX))),
+        emitters_(p.get_bool("emitters", true)) {}
 
   Task setup(SceneContext ctx, Inputs&) override {
     ctx_ = ctx;
     co_return;
+  }
+
+  // Chains of 1..max_depth specular events from where they land: an emitter's own light there (added here), or what
+  // the input gives at a diffuse or glossy landing (its emission too, should it return that).
+  std::optional<LightPaths> paths(std::span<const LightPaths> inputs) const override {
+    LightPaths landing = emitters_ ? LightPaths::emission() : LightPaths();
+    if (!inputs.empty()) landing += inputs[0].ending_in(Lobes::of({Lobe::diffuse, Lobe::glossy}), true);
+    return landing.then_repeated(Lobe::specular, 1, max_depth_);
   }
 
   Task shade(const ShadingPoints& points, std::span<RGB> radiance, Inputs& inputs) override {
@@ -86,7 +98,7 @@ class Specular final : public LightOp {
         const bool front = sp.front;
         const uint32_t m = scene.material_of(tri);
         const Material& hit = scene.material(m);
-        if (hit.emissive() && front) ch.emitted += ch.weight * hit.ke;
+        if (emitters_ && hit.emissive() && front) ch.emitted += ch.weight * hit.ke;
         if (hit.specular()) {
           ch = Chain{ch.owner, x, sp.ns, wo, sp.ng, m, tri, front, ch.asks_input, ch.weight, ch.emitted, -1, ch.rng};
           active.push_back(moving[r]);
@@ -112,6 +124,7 @@ class Specular final : public LightOp {
  private:
   int samples_, emission_samples_, max_depth_;
   uint64_t seed_;
+  bool emitters_;
   SceneContext ctx_;
 };
 

@@ -1,0 +1,231 @@
+#include "farm/light_path_check.hpp"
+
+#include <algorithm>
+#include <functional>
+#include <map>
+#include <optional>
+
+#include "render/lightop_registry.hpp"
+
+namespace lf {
+
+SceneLobes scene_lobes(const Scene& scene) {
+  std::vector<bool> used(scene.materials().size(), false);
+  for (uint32_t t = 0; t < scene.triangle_count(); ++t) used[scene.material_of(t)] = true;
+  SceneLobes out;
+  out.emits = !scene.point_lights().empty();
+  for (size_t id = 0; id < used.size(); ++id) {
+    if (!used[id]) continue;
+    const Material& m = scene.material(static_cast<uint32_t>(id));
+    out.emits = out.emits || m.emissive();
+    const bool has[kLobeCount] = {
+        !m.specular() && (!is_black(m.kd) || m.kd_map >= 0),
+        m.type == Material::Type::glossy && !is_black(m.ks),
+        m.type == Material::Type::glass || (m.type == Material::Type::mirror && !is_black(m.ks)),
+    };
+    for (int l = 0; l < kLobeCount; ++l)
+      if (has[l]) {
+        out.lobes.has[l] = true;
+        out.materials[l].push_back(m.name);
+      }
+  }
+  return out;
+}
+
+namespace {
+
+// What every actor's answer counts, composed from the ops without inputs up; nullopt where unknown, with why.
+struct Composition {
+  std::vector<std::optional<LightPaths>> paths;
+  std::vector<std::string> unknown;  // per actor: why its paths are unknown (empty when known or not an op)
+  std::vector<bool> done;
+};
+
+const std::optional<LightPaths>& compose(const FarmSpec& spec, int i, Composition& c) {
+  const size_t at = static_cast<size_t>(i);
+  if (c.done[at]) return c.paths[at];
+  c.done[at] = true;  // a cycle (which validate() refuses) ends here as unknown
+  const ActorSpec& a = spec.actors[at];
+  if (a.is_multiplexer()) {
+    // A pool answers as any of its replicas does.
+    if (!a.inputs.empty()) {
+      c.paths[at] = compose(spec, a.inputs[0], c);
+      c.unknown[at] = c.unknown[static_cast<size_t>(a.inputs[0])];
+    }
+    return c.paths[at];
+  }
+  const LightOpKind* kind = a.runtime.count("cmd") ? nullptr : find_lightop_kind(a.kind);
+  if (!kind) {
+    c.unknown[at] = "'" + a.name + "' (" + a.kind + ") does not say which light paths it returns";
+    return c.paths[at];
+  }
+  std::vector<LightPaths> inputs;
+  for (int in : a.inputs) {
+    const auto& p = compose(spec, in, c);
+    if (!p) {
+      c.unknown[at] = c.unknown[static_cast<size_t>(in)];
+      return c.paths[at];
+    }
+    inputs.push_back(*p);
+  }
+  try {
+    const auto op = kind->create(ParamTable(a.params, a.name));
+    c.paths[at] = op->paths(inputs);
+    if (!c.paths[at]) c.unknown[at] = "'" + a.name + "' (" + a.kind + ") does not say which light paths it returns";
+  } catch (const std::exception& e) {
+    c.unknown[at] = "'" + a.name + "': " + e.what();
+  }
+  return c.paths[at];
+}
+
+Composition compose_all(const FarmSpec& spec) {
+  Composition c;
+  c.paths.resize(spec.actors.size());
+  c.unknown.resize(spec.actors.size());
+  c.done.assign(spec.actors.size(), false);
+  for (size_t i = 0; i < spec.actors.size(); ++i)
+    if (!spec.actors[i].is_renderer() && !spec.actors[i].is_ring_node() && !spec.actors[i].is_geometry())
+      compose(spec, static_cast<int>(i), c);
+  return c;
+}
+
+// The largest count of any path the scene allows (the lone L aside).
+float most_counted(const LightPaths& p, Lobes lobes) {
+  float most = 0;
+  for (size_t i = 1; i < LightPaths::kPathCount; ++i)
+    if (LightPaths::made_of(i, lobes)) most = std::max(most, p.count_at(i));
+  return most;
+}
+
+std::string list(const std::vector<std::string>& items, size_t at_most) {
+  std::string s;
+  for (size_t i = 0; i < items.size() && i < at_most; ++i) s += (s.empty() ? "" : ", ") + items[i];
+  if (items.size() > at_most) s += ", and " + std::to_string(items.size() - at_most) + " more";
+  return s;
+}
+
+std::string quoted_list(const std::vector<std::string>& names, size_t at_most) {
+  std::vector<std::string> q;
+  for (const auto& n : names) q.push_back("'" + n + "'");
+  return list(q, at_most);
+}
+
+// Paths an op counts more than once although each of its inputs counts every path at most once: where a double
+// count begins. For a combine, which inputs both carry each.
+std::string doubled_here(const FarmSpec& spec, size_t at, const Composition& c, Lobes lobes) {
+  const ActorSpec& a = spec.actors[at];
+  const LightPaths& out = *c.paths[at];
+  std::vector<std::string> doubled;
+  std::map<std::string, std::vector<std::string>> carriers;  // path -> inputs that carry it
+  for (size_t i = 1; i < LightPaths::kPathCount; ++i) {
+    if (!LightPaths::made_of(i, lobes) || out.count_at(i) <= 1.0f) continue;
+    const std::string path = LightPaths::path_of(i);
+    doubled.push_back(path);
+    for (int in : a.inputs)
+      if (c.paths[static_cast<size_t>(in)]->count_at(i) > 0) carriers[path].push_back(spec.actors[static_cast<size_t>(in)].name);
+  }
+  if (doubled.empty()) return {};
+  std::string why;
+  if (carriers.count(doubled[0]) && carriers[doubled[0]].size() >= 2)
+    why = ": its inputs " + quoted_list(carriers[doubled[0]], 4) + " each compute " + doubled[0];
+  return a.loc.str() + ": '" + a.name + "' counts light twice (" + list(doubled, 4) + ")" + why +
+         "; each light path must come from one input only (docs/lua-api.md, \"Light paths\")";
+}
+
+// A group of left-out paths, by the lobe at the point the camera sees and whether they are direct light.
+struct Gap {
+  const char* what;
+  const char* supplied_by;
+  Lobe lobe;
+  std::vector<std::string> paths;
+};
+
+}  // namespace
+
+LightPathReport check_light_paths(const FarmSpec& spec, const SceneLobes& scene) {
+  LightPathReport report;
+  if (spec.light_paths == "off" || spec.lighting < 0) return report;
+  const Composition c = compose_all(spec);
+  const size_t root = static_cast<size_t>(spec.lighting);
+  const ActorSpec& lighting = spec.actors[root];
+  if (!c.paths[root]) {
+    report.warnings.push_back(lighting.loc.str() + ": the lighting network's light paths are not checked: " + c.unknown[root]);
+    return report;
+  }
+  const LightPaths& seen = *c.paths[root];
+  const Lobes lobes = scene.lobes;
+
+  // Counted twice: at every op reachable from the lighting where it begins.
+  if (most_counted(seen, lobes) > 1.0f) {
+    std::vector<bool> reached(spec.actors.size(), false);
+    std::function<void(size_t)> visit = [&](size_t i) {
+      if (reached[i]) return;
+      reached[i] = true;
+      for (int in : spec.actors[i].inputs) visit(static_cast<size_t>(in));
+    };
+    visit(root);
+    for (size_t i = 0; i < spec.actors.size(); ++i) {
+      if (!reached[i] || !c.paths[i] || spec.actors[i].is_multiplexer()) continue;
+      bool inputs_once = true;
+      for (int in : spec.actors[i].inputs) inputs_once = inputs_once && most_counted(*c.paths[static_cast<size_t>(in)], lobes) <= 1.0f;
+      if (!inputs_once) continue;
+      if (auto message = doubled_here(spec, i, c, lobes); !message.empty()) report.errors.push_back(message);
+    }
+    if (report.errors.empty())
+      report.errors.push_back(lighting.loc.str() + ": the lighting network counts some light twice (" +
+                              list([&] {
+                                std::vector<std::string> twice;
+                                for (size_t i = 1; i < LightPaths::kPathCount; ++i)
+                                  if (LightPaths::made_of(i, lobes) && seen.count_at(i) > 1.0f) twice.push_back(LightPaths::path_of(i));
+                                return twice;
+                              }(), 4) + ")");
+  }
+  if (seen.count("L") != 0)
+    report.errors.push_back(lighting.loc.str() + ": '" + lighting.name +
+                            "' answers with the shaded point's own emission (L), which the renderers add themselves: "
+                            "the camera would see every emitter twice");
+
+  if (spec.light_paths == "partial") return report;
+  if (!scene.emits) {
+    report.warnings.push_back(lighting.loc.str() + ": nothing in the scene emits light: the image will be black");
+    return report;
+  }
+  Gap gaps[] = {
+      {"direct light on diffuse surfaces", "direct", Lobe::diffuse, {}},
+      {"direct light on glossy surfaces", "direct", Lobe::glossy, {}},
+      {"light seen in mirrors and glass", "specular", Lobe::specular, {}},
+      {"indirect light reflected by diffuse surfaces", "irradiance (a cache over the light leaving what it sees) or pathtrace", Lobe::diffuse, {}},
+      {"indirect light reflected by glossy lobes", "glossy (over the light leaving what its lobe samples see)", Lobe::glossy, {}},
+  };
+  for (size_t i = 1; i < LightPaths::kPathCount; ++i) {
+    if (!LightPaths::made_of(i, lobes) || seen.count_at(i) != 0) continue;
+    const std::string path = LightPaths::path_of(i);
+    const char last = path.back();
+    const bool direct = path.size() == 2;
+    Gap& g = last == 'S' ? gaps[2] : last == 'D' ? gaps[direct ? 0 : 3] : gaps[direct ? 1 : 4];
+    g.paths.push_back(path);
+  }
+  for (const Gap& g : gaps) {
+    if (g.paths.empty()) continue;
+    std::string message = lighting.loc.str() + ": the lighting network leaves out " + g.what + " (" + list(g.paths, 3) +
+                          "), on " + quoted_list(scene.materials[static_cast<int>(g.lobe)], 3) +
+                          ": no op computes it; a `" + g.supplied_by + "` op would";
+    if (spec.light_paths == "complete") {
+      report.errors.push_back(message);
+    } else {
+      message += " (farm { light_paths = \"partial\" } says a network computes part of the light on purpose)";
+      report.warnings.push_back(message);
+    }
+  }
+  return report;
+}
+
+std::vector<std::string> light_path_summaries(const FarmSpec& spec) {
+  const Composition c = compose_all(spec);
+  std::vector<std::string> out(spec.actors.size());
+  for (size_t i = 0; i < spec.actors.size(); ++i)
+    if (c.paths[i]) out[i] = c.paths[i]->summary();
+  return out;
+}
+
+}  // namespace lf

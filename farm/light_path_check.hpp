@@ -1,0 +1,42 @@
+#pragma once
+// Path-space accounting: does the lighting network count every light path that reaches the camera in this scene
+// exactly once? Each LightOp says which paths its answer counts given its inputs' (LightOp::paths, in Heckbert's
+// notation: render/light_paths.hpp); this composes them along the farm's graph, from the ops without inputs to the
+// one the renderers ask, and compares the result with the paths the scene's materials allow: a letter for each lobe
+// some material has (D: diffuse reflectance, G: a glossy Phong lobe, S: mirror or glass).
+//
+//   counted twice  an error, at the line of the op where two parts first both add the same light
+//   left out       a warning at the lighting's line naming the paths, the materials they end on and the op kind
+//                  that computes them; an error with farm { light_paths = "complete" }, nothing with "partial"
+//                  (a network meant to compute part of the light, e.g. direct light alone)
+//
+// Exec actors (plug-ins) do not say what they compute: a network with one is not checked, which a warning says.
+#include <string>
+#include <vector>
+
+#include "farm/farm_spec.hpp"
+#include "render/light_paths.hpp"
+#include "render/scene.hpp"
+
+namespace lf {
+
+struct LightPathReport {
+  std::vector<std::string> errors;    // "farm.lua:12: ..." each
+  std::vector<std::string> warnings;
+};
+
+// The lobes the scene's materials have where at least one triangle uses them, and whether anything emits.
+struct SceneLobes {
+  Lobes lobes;
+  bool emits = false;
+  std::vector<std::string> materials[kLobeCount];  // names of the materials with each lobe, in material order
+};
+SceneLobes scene_lobes(const Scene& scene);
+
+LightPathReport check_light_paths(const FarmSpec& spec, const SceneLobes& scene);
+
+// What each actor's answer counts, over every lobe (no scene needed): a short summary per actor index, empty for
+// actors that are not LightOps or do not say. For the arrows of `lightfarm graph`.
+std::vector<std::string> light_path_summaries(const FarmSpec& spec);
+
+}  // namespace lf

@@ -1,0 +1,104 @@
+// glossy: indirect light reflected by a glossy lobe. At a point whose material has one (a Phong lobe, Ks > 0),
+// `samples` directions drawn in proportion to that lobe; where each lands, the input is asked (in one batch) for
+// the light leaving that surface back towards the point. The answer is the lobe's share of the reflected light:
+// ks (ns + 2) / (ns + 1) cos(wi) times what arrives, averaged. One input.
+//
+// The emitters a sample lands on add nothing: `direct` already counts light straight from them at glossy points
+// (with multiple importance sampling between its light samples and its own lobe samples), so this op counts only
+// what its input says leaves the landing, i.e. light that has scattered at least once more. The two split the
+// lobe's light by path (L G for direct, L ... X G for this op), not by estimator, so neither needs the other's
+// densities. The diffuse part of the same material is the caches' or the path tracer's (irradiance: L ... D).
+#include "render/bsdf.hpp"
+#include "render/lightop_registry.hpp"
+#include "render/sampler.hpp"
+#include "render/surface.hpp"
+
+namespace lf {
+namespace {
+
+class Glossy final : public LightOp {
+ public:
+  explicit Glossy(const ParamTable& p)
+      : samples_(static_cast<int>(p.get_int("samples", 1, 1, 1 << 16))),
+        seed_(static_cast<uint64_t>(p.get_int("seed", 0, 0, INT32_MAX))) {}
+
+  Task setup(SceneContext ctx, Inputs& inputs) override {
+    if (inputs.count() != 1) throw LightOpError("glossy needs one input");
+    ctx_ = ctx;
+    co_return;
+  }
+
+  std::optional<LightPaths> paths(std::span<const LightPaths> inputs) const override {
+    return inputs.empty() ? LightPaths() : inputs[0].then(Lobe::glossy);
+  }
+
+  Value stats() const override {
+    return Value::Map{{"glossy_points", static_cast<int64_t>(points_)}, {"rays", static_cast<int64_t>(rays_)},
+                      {"landed", static_cast<int64_t>(landed_)}};
+  }
+
+  Task shade(const ShadingPoints& points, std::span<RGB> radiance, Inputs& inputs) override {
+    const Scene& scene = *ctx_.scene;
+    std::vector<Ray> rays;
+    std::vector<RGB> weights;
+    std::vector<size_t> owners;
+    std::vector<uint32_t> sample_of;
+    for (size_t i = 0; i < points.size(); ++i) {
+      radiance[i] = RGB{};
+      const Bsdf bsdf(scene.material(points.material[i]));
+      if (!bsdf.has_glossy_lobe()) continue;
+      ++points_;
+      const Vec3 ng = points.face_normal(i, scene);
+      const Vec3 origin = scene.ray_origin(points.triangle_of(i), points.position[i], ng);
+      for (int s = 0; s < samples_; ++s) {
+        Sampler sampler(ctx_.sampler, points.key[i], streams::glossy ^ (seed_ << 8), static_cast<uint32_t>(s),
+                        static_cast<uint32_t>(samples_));
+        const Uniform2 u = sampler.uniform2();
+        auto sample = bsdf.sample_glossy(points.normal[i], points.wo[i], u.u, u.v);
+        // A reflection the shading normal allows below the face would leave through the surface: no light.
+        if (!sample || dot(sample->wi, ng) <= 0) continue;
+        rays.push_back(Ray{origin, sample->wi});
+        weights.push_back(sample->weight);
+        owners.push_back(i);
+        sample_of.push_back(static_cast<uint32_t>(s));
+      }
+    }
+    rays_ += rays.size();
+    std::vector<Hit> hits(rays.size());
+    if (!rays.empty()) co_await trace_intersect(ctx_, rays, hits);
+    ShadingPoints landings;
+    std::vector<size_t> landing_ray;
+    for (size_t r = 0; r < rays.size(); ++r) {
+      if (!hits[r].valid()) continue;
+      const uint32_t tri = hits[r].triangle;
+      const Vec3 wo = -rays[r].direction;
+      const Vec3 x = rays[r].origin + rays[r].direction * hits[r].t;
+      landings.push_back(x, surface_at(scene, tri, x, wo).ns, wo, scene.material_of(tri),
+                         splitmix64(points.key[owners[r]] ^ (0x6105500000ull + sample_of[r])), tri);
+      landing_ray.push_back(r);
+    }
+    landed_ += landings.size();
+    std::vector<RGB> arriving;
+    if (landings.size() > 0) co_await inputs.shade(0, landings, arriving);
+    const float per_sample = 1.0f / static_cast<float>(samples_);
+    for (size_t j = 0; j < landing_ray.size(); ++j) {
+      const size_t r = landing_ray[j];
+      radiance[owners[r]] += weights[r] * arriving[j] * per_sample;
+    }
+  }
+
+ private:
+  int samples_;
+  uint64_t seed_;
+  SceneContext ctx_;
+  uint64_t points_ = 0, rays_ = 0, landed_ = 0;
+};
+
+}  // namespace
+
+extern const LightOpKind glossy_kind{
+    "glossy", "indirect light reflected by glossy lobes, asking its input where each lobe sample lands", 1, 1,
+    [](const ParamTable& p) -> std::unique_ptr<LightOp> { return std::make_unique<Glossy>(p); },
+    /*shares_setup=*/false, /*traces_through_context=*/true};
+
+}  // namespace lf
