@@ -9,29 +9,6 @@
 
 namespace lf {
 
-SceneLobes scene_lobes(const Scene& scene) {
-  std::vector<bool> used(scene.materials().size(), false);
-  for (uint32_t t = 0; t < scene.triangle_count(); ++t) used[scene.material_of(t)] = true;
-  SceneLobes out;
-  out.emits = !scene.point_lights().empty();
-  for (size_t id = 0; id < used.size(); ++id) {
-    if (!used[id]) continue;
-    const Material& m = scene.material(static_cast<uint32_t>(id));
-    out.emits = out.emits || m.emissive();
-    const bool has[kLobeCount] = {
-        !m.specular() && (!is_black(m.kd) || m.kd_map >= 0),
-        m.type == Material::Type::glossy && !is_black(m.ks),
-        m.type == Material::Type::glass || (m.type == Material::Type::mirror && !is_black(m.ks)),
-    };
-    for (int l = 0; l < kLobeCount; ++l)
-      if (has[l]) {
-        out.lobes.has[l] = true;
-        out.materials[l].push_back(m.name);
-      }
-  }
-  return out;
-}
-
 namespace {
 
 // What every actor's answer counts, composed from the ops without inputs up; nullopt where unknown, with why.

@@ -16,7 +16,6 @@
 
 #include "farm/farm_spec.hpp"
 #include "render/light_paths.hpp"
-#include "render/scene.hpp"
 
 namespace lf {
 
@@ -24,14 +23,6 @@ struct LightPathReport {
   std::vector<std::string> errors;    // "farm.lua:12: ..." each
   std::vector<std::string> warnings;
 };
-
-// The lobes the scene's materials have where at least one triangle uses them, and whether anything emits.
-struct SceneLobes {
-  Lobes lobes;
-  bool emits = false;
-  std::vector<std::string> materials[kLobeCount];  // names of the materials with each lobe, in material order
-};
-SceneLobes scene_lobes(const Scene& scene);
 
 LightPathReport check_light_paths(const FarmSpec& spec, const SceneLobes& scene);
 

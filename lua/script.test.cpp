@@ -1,5 +1,6 @@
 #include "lua/script.hpp"
 #include "farm/builders.hpp"
+#include "farm/light_path_check.hpp"
 #include "render/lightop_registry.hpp"
 
 #include <gtest/gtest.h>
@@ -369,6 +370,21 @@ TEST_F(ScriptTest, ScriptsHaveAnInstructionAndAMemoryBudget) {
             (dir / "farm.lua").string() + ":4: the script used more than 8 MiB of memory (a table that keeps growing?)");
   // Real scripts are far inside the default budgets.
   EXPECT_TRUE(evaluate_script(std::string(LIGHTFARM_SOURCE_DIR) + "/examples/cornell_glass_radiosity.lua").ok());
+}
+
+// The network `lightfarm scene` suggests for a scene's lobes counts every light path on them once.
+TEST_F(ScriptTest, TheSuggestedNetworksAreComplete) {
+  const Lobes sets[] = {Lobes::of({Lobe::diffuse}), Lobes::of({Lobe::diffuse, Lobe::glossy}),
+                        Lobes::of({Lobe::diffuse, Lobe::specular}), Lobes::all()};
+  for (const Lobes& lobes : sets) {
+    auto r = evaluate_script(write("farm.lua", "scene { builtin = \"cornell\" }\n" + complete_network_for(lobes)));
+    ASSERT_TRUE(r.ok()) << r.error().message;
+    SceneLobes scene;
+    scene.lobes = lobes;
+    scene.emits = true;
+    const LightPathReport report = check_light_paths(*r, scene);
+    EXPECT_TRUE(report.errors.empty() && report.warnings.empty()) << complete_network_for(lobes);
+  }
 }
 
 }  // namespace

@@ -1,10 +1,54 @@
 #include "render/light_paths.hpp"
 
+#include "render/scene.hpp"
+
 #include <algorithm>
 #include <bitset>
 #include <optional>
 
 namespace lf {
+
+SceneLobes scene_lobes(const Scene& scene) {
+  std::vector<bool> used(scene.materials().size(), false);
+  for (uint32_t t = 0; t < scene.triangle_count(); ++t) used[scene.material_of(t)] = true;
+  SceneLobes out;
+  out.emits = !scene.point_lights().empty();
+  for (size_t id = 0; id < used.size(); ++id) {
+    if (!used[id]) continue;
+    const Material& m = scene.material(static_cast<uint32_t>(id));
+    out.emits = out.emits || m.emissive();
+    const bool has[kLobeCount] = {
+        !m.specular() && (!is_black(m.kd) || m.kd_map >= 0),
+        m.type == Material::Type::glossy && !is_black(m.ks),
+        m.type == Material::Type::glass || (m.type == Material::Type::mirror && !is_black(m.ks)),
+    };
+    for (int l = 0; l < kLobeCount; ++l)
+      if (has[l]) {
+        out.lobes.has[l] = true;
+        out.materials[l].push_back(m.name);
+      }
+  }
+  return out;
+}
+
+std::string complete_network_for(const Lobes& lobes) {
+  const bool glossy = lobes.contains(Lobe::glossy), mirrors = lobes.contains(Lobe::specular);
+  std::string s = "local paths    = lightop \"pathtrace\" {}                       -- what leaves the surfaces the ops below see\n"
+                  "local direct   = lightop \"direct\" {}                          -- L(D|G)\n"
+                  "local indirect = lightop \"irradiance\" { input = paths }       -- L(D|G|S)+D\n";
+  std::string parts = "direct, indirect";
+  if (glossy) {
+    s += "local shiny    = lightop \"glossy\" { input = paths }           -- L(D|G|S)+G\n";
+    parts += ", shiny";
+  }
+  if (mirrors) {
+    s += "local chains   = lightop \"specular\" { input = lightop \"combine\" { inputs = { " + parts +
+         " } } }  -- L(D|G|S)*S\n";
+    parts += ", chains";
+  }
+  return s + "renderers { lighting = lightop \"combine\" { inputs = { " + parts + " } } }\n";
+}
+
 
 namespace {
 

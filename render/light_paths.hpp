@@ -33,6 +33,19 @@ struct Lobes {
   bool contains(Lobe x) const { return has[static_cast<int>(x)]; }
 };
 
+class Scene;
+
+// The lobes the scene's materials have where at least one triangle uses them, and whether anything emits.
+struct SceneLobes {
+  Lobes lobes;
+  bool emits = false;
+  std::vector<std::string> materials[kLobeCount];  // names of the materials with each lobe, in material order
+};
+SceneLobes scene_lobes(const Scene& scene);
+
+// Lua for a network that counts every path on these lobes once (what `lightfarm scene` suggests).
+std::string complete_network_for(const Lobes& lobes);
+
 class LightPaths {
  public:
   static constexpr int kMaxEvents = 6;

@@ -5,6 +5,7 @@
 #include <map>
 
 #include "render/light_checks.hpp"
+#include "render/light_paths.hpp"
 #include "render/scene.hpp"
 
 namespace lf {
@@ -107,6 +108,24 @@ Result<std::string> describe_scene(const std::string& obj_path) {
   const float distance = radius / std::sin(0.5f * 45.0f * kPi / 180.0f);  // the sphere fits the view cone
   const Vec3 eye = centre + normalize(Vec3{0, 0.35f, 1}) * distance;
   out += "  camera     camera { eye = " + vec(eye) + ", at = " + vec(centre) + ", fov = 45 }\n";
+
+  // The lobes its materials have, and a network that counts every light path on them once (docs/lua-api.md,
+  // "Light paths"); the farm checks whichever network the script wires against the same lobes.
+  const SceneLobes lobes = scene_lobes(*scene);
+  std::string present;
+  static const char* kLobeNames[] = {"D (diffuse)", "G (glossy)", "S (mirror, glass)"};
+  for (int l = 0; l < kLobeCount; ++l)
+    if (lobes.lobes.has[l])
+      present += (present.empty() ? "" : ", ") + std::string(kLobeNames[l]) + " on " +
+                 std::to_string(lobes.materials[l].size()) + " material" + (lobes.materials[l].size() == 1 ? "" : "s");
+  out += "  lobes      " + (present.empty() ? std::string("none") : present) + "\n";
+  out += "  network    every light path on these lobes once:\n";
+  const std::string network = complete_network_for(lobes.lobes);
+  for (size_t at = 0; at < network.size();) {
+    const size_t end = network.find('\n', at);
+    out += "    " + network.substr(at, end - at) + "\n";
+    at = end + 1;
+  }
   return out;
 }
 

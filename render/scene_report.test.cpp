@@ -42,6 +42,9 @@ TEST(SceneReport, DescribesARoomAndFramesIt) {
             std::string::npos)
       << t;
   EXPECT_NE(t.find("usemtl 'nope' names no material"), std::string::npos) << t;
+  // Diffuse surfaces only (the lamp too, and the grey default): a network of direct light and a cache.
+  EXPECT_NE(t.find("  lobes      D (diffuse) on 3 materials\n"), std::string::npos) << t;
+  EXPECT_NE(t.find("renderers { lighting = lightop \"combine\" { inputs = { direct, indirect } } }"), std::string::npos) << t;
 
   // The suggested camera sees every corner of the bounds within its 45-degree field of view.
   const auto at_camera = t.find("camera { eye = {");
