@@ -76,6 +76,7 @@ elseif lighting == "network" then
   if bounce_replicas > 1 then paths = multiplexer { paths, replicas = bounce_replicas } end
   local indirect = lightop "irradiance" { input = paths, a = param("a", 0.2), stride = param("stride", 8),
                                           finest = param("finest", 2), own_rays = param("own_rays", 8),
+                                          relax = param("relax", 1),
                                           theta = param("theta", 12), phi = param("phi", 32),
                                           name = "indirect", seed = seed }
   -- The water is glass: what its refraction and reflection chains land on is lit by the same two ops. The flames
