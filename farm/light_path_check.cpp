@@ -2,7 +2,6 @@
 
 #include <algorithm>
 #include <functional>
-#include <map>
 #include <optional>
 
 #include "render/lightop_registry.hpp"
@@ -17,6 +16,10 @@ struct Composition {
   std::vector<std::string> unknown;  // per actor: why its paths are unknown (empty when known or not an op)
   std::vector<bool> done;
 };
+
+std::string undeclared(const ActorSpec& a) {
+  return "'" + a.name + "' (" + a.kind + ") does not say which light paths it returns";
+}
 
 const std::optional<LightPaths>& compose(const FarmSpec& spec, int i, Composition& c) {
   const size_t at = static_cast<size_t>(i);
@@ -33,7 +36,7 @@ const std::optional<LightPaths>& compose(const FarmSpec& spec, int i, Compositio
   }
   const LightOpKind* kind = a.runtime.count("cmd") ? nullptr : find_lightop_kind(a.kind);
   if (!kind) {
-    c.unknown[at] = "'" + a.name + "' (" + a.kind + ") does not say which light paths it returns";
+    c.unknown[at] = undeclared(a);
     return c.paths[at];
   }
   std::vector<LightPaths> inputs;
@@ -48,7 +51,7 @@ const std::optional<LightPaths>& compose(const FarmSpec& spec, int i, Compositio
   try {
     const auto op = kind->create(ParamTable(a.params, a.name));
     c.paths[at] = op->paths(inputs);
-    if (!c.paths[at]) c.unknown[at] = "'" + a.name + "' (" + a.kind + ") does not say which light paths it returns";
+    if (!c.paths[at]) c.unknown[at] = undeclared(a);
   } catch (const std::exception& e) {
     c.unknown[at] = "'" + a.name + "': " + e.what();
   }
@@ -66,13 +69,24 @@ Composition compose_all(const FarmSpec& spec) {
   return c;
 }
 
-// The largest count of any path the scene allows (the lone L aside).
-float most_counted(const LightPaths& p, Lobes lobes) {
-  float most = 0;
+// The paths of at least one event the scene allows whose count passes `keep`, shortest first.
+template <class Keep>
+std::vector<size_t> paths_where(const LightPaths& p, Lobes lobes, Keep keep) {
+  std::vector<size_t> out;
   for (size_t i = 1; i < LightPaths::kPathCount; ++i)
-    if (LightPaths::made_of(i, lobes)) most = std::max(most, p.count_at(i));
-  return most;
+    if (LightPaths::made_of(i, lobes) && keep(p.count_at(i))) out.push_back(i);
+  return out;
 }
+
+std::vector<std::string> named(const std::vector<size_t>& paths) {
+  std::vector<std::string> out;
+  for (size_t i : paths) out.push_back(LightPaths::path_of(i));
+  return out;
+}
+
+bool counts_twice(float count) { return count > 1.0f; }
+
+bool counts_some_twice(const LightPaths& p, Lobes lobes) { return !paths_where(p, lobes, counts_twice).empty(); }
 
 std::string list(const std::vector<std::string>& items, size_t at_most) {
   std::string s;
@@ -91,21 +105,15 @@ std::string quoted_list(const std::vector<std::string>& names, size_t at_most) {
 // count begins. For a combine, which inputs both carry each.
 std::string doubled_here(const FarmSpec& spec, size_t at, const Composition& c, Lobes lobes) {
   const ActorSpec& a = spec.actors[at];
-  const LightPaths& out = *c.paths[at];
-  std::vector<std::string> doubled;
-  std::map<std::string, std::vector<std::string>> carriers;  // path -> inputs that carry it
-  for (size_t i = 1; i < LightPaths::kPathCount; ++i) {
-    if (!LightPaths::made_of(i, lobes) || out.count_at(i) <= 1.0f) continue;
-    const std::string path = LightPaths::path_of(i);
-    doubled.push_back(path);
-    for (int in : a.inputs)
-      if (c.paths[static_cast<size_t>(in)]->count_at(i) > 0) carriers[path].push_back(spec.actors[static_cast<size_t>(in)].name);
-  }
+  const std::vector<size_t> doubled = paths_where(*c.paths[at], lobes, counts_twice);
   if (doubled.empty()) return {};
-  std::string why;
-  if (carriers.count(doubled[0]) && carriers[doubled[0]].size() >= 2)
-    why = ": its inputs " + quoted_list(carriers[doubled[0]], 4) + " each compute " + doubled[0];
-  return a.loc.str() + ": '" + a.name + "' counts light twice (" + list(doubled, 4) + ")" + why +
+  // The inputs that carry the shortest of them (a combine's double count).
+  std::vector<std::string> carriers;
+  for (int in : a.inputs)
+    if (c.paths[static_cast<size_t>(in)]->count_at(doubled[0]) > 0) carriers.push_back(spec.actors[static_cast<size_t>(in)].name);
+  const std::string first = LightPaths::path_of(doubled[0]);
+  const std::string why = carriers.size() >= 2 ? ": its inputs " + quoted_list(carriers, 4) + " each compute " + first : "";
+  return a.loc.str() + ": '" + a.name + "' counts light twice (" + list(named(doubled), 4) + ")" + why +
          "; each light path must come from one input only (docs/lua-api.md, \"Light paths\")";
 }
 
@@ -118,6 +126,12 @@ struct Gap {
 };
 
 }  // namespace
+
+std::string LightPathReport::error_text() const {
+  std::string all;
+  for (const auto& e : errors) all += (all.empty() ? "" : "\n") + e;
+  return all;
+}
 
 LightPathReport check_light_paths(const FarmSpec& spec, const SceneLobes& scene) {
   LightPathReport report;
@@ -133,7 +147,7 @@ LightPathReport check_light_paths(const FarmSpec& spec, const SceneLobes& scene)
   const Lobes lobes = scene.lobes;
 
   // Counted twice: at every op reachable from the lighting where it begins.
-  if (most_counted(seen, lobes) > 1.0f) {
+  if (counts_some_twice(seen, lobes)) {
     std::vector<bool> reached(spec.actors.size(), false);
     std::function<void(size_t)> visit = [&](size_t i) {
       if (reached[i]) return;
@@ -144,18 +158,13 @@ LightPathReport check_light_paths(const FarmSpec& spec, const SceneLobes& scene)
     for (size_t i = 0; i < spec.actors.size(); ++i) {
       if (!reached[i] || !c.paths[i] || spec.actors[i].is_multiplexer()) continue;
       bool inputs_once = true;
-      for (int in : spec.actors[i].inputs) inputs_once = inputs_once && most_counted(*c.paths[static_cast<size_t>(in)], lobes) <= 1.0f;
+      for (int in : spec.actors[i].inputs) inputs_once = inputs_once && !counts_some_twice(*c.paths[static_cast<size_t>(in)], lobes);
       if (!inputs_once) continue;
       if (auto message = doubled_here(spec, i, c, lobes); !message.empty()) report.errors.push_back(message);
     }
     if (report.errors.empty())
       report.errors.push_back(lighting.loc.str() + ": the lighting network counts some light twice (" +
-                              list([&] {
-                                std::vector<std::string> twice;
-                                for (size_t i = 1; i < LightPaths::kPathCount; ++i)
-                                  if (LightPaths::made_of(i, lobes) && seen.count_at(i) > 1.0f) twice.push_back(LightPaths::path_of(i));
-                                return twice;
-                              }(), 4) + ")");
+                              list(named(paths_where(seen, lobes, counts_twice)), 4) + ")");
   }
   if (seen.count("L") != 0)
     report.errors.push_back(lighting.loc.str() + ": '" + lighting.name +
@@ -174,8 +183,7 @@ LightPathReport check_light_paths(const FarmSpec& spec, const SceneLobes& scene)
       {"indirect light reflected by diffuse surfaces", "irradiance (a cache over the light leaving what it sees) or pathtrace", Lobe::diffuse, {}},
       {"indirect light reflected by glossy lobes", "glossy (over the light leaving what its lobe samples see)", Lobe::glossy, {}},
   };
-  for (size_t i = 1; i < LightPaths::kPathCount; ++i) {
-    if (!LightPaths::made_of(i, lobes) || seen.count_at(i) != 0) continue;
+  for (size_t i : paths_where(seen, lobes, [](float count) { return count == 0; })) {
     const std::string path = LightPaths::path_of(i);
     const char last = path.back();
     const bool direct = path.size() == 2;

@@ -22,6 +22,7 @@ namespace lf {
 struct LightPathReport {
   std::vector<std::string> errors;    // "farm.lua:12: ..." each
   std::vector<std::string> warnings;
+  std::string error_text() const;  // the errors, a line each
 };
 
 LightPathReport check_light_paths(const FarmSpec& spec, const SceneLobes& scene);

@@ -1,6 +1,7 @@
 #include "lua/script.hpp"
 #include "farm/builders.hpp"
 #include "farm/light_path_check.hpp"
+#include "render/scene_report.hpp"
 #include "render/lightop_registry.hpp"
 
 #include <gtest/gtest.h>

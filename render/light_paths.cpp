@@ -31,35 +31,16 @@ SceneLobes scene_lobes(const Scene& scene) {
   return out;
 }
 
-std::string complete_network_for(const Lobes& lobes) {
-  const bool glossy = lobes.contains(Lobe::glossy), mirrors = lobes.contains(Lobe::specular);
-  std::string s = "local paths    = lightop \"pathtrace\" {}                       -- what leaves the surfaces the ops below see\n"
-                  "local direct   = lightop \"direct\" {}                          -- L(D|G)\n"
-                  "local indirect = lightop \"irradiance\" { input = paths }       -- L(D|G|S)+D\n";
-  std::string parts = "direct, indirect";
-  if (glossy) {
-    s += "local shiny    = lightop \"glossy\" { input = paths }           -- L(D|G|S)+G\n";
-    parts += ", shiny";
-  }
-  if (mirrors) {
-    s += "local chains   = lightop \"specular\" { input = lightop \"combine\" { inputs = { " + parts +
-         " } } }  -- L(D|G|S)*S\n";
-    parts += ", chains";
-  }
-  return s + "renderers { lighting = lightop \"combine\" { inputs = { " + parts + " } } }\n";
-}
-
-
+// Paths are numbered in bijective base 3: the lone L is 0 and w X is 3 w + X + 1, so a path's last event is
+// (index - 1) mod 3, the path before it (index - 1) / 3, and the paths of k events follow those of k - 1.
 namespace {
 
-constexpr size_t power3(int k) {
-  size_t p = 1;
-  for (int i = 0; i < k; ++i) p *= 3;
-  return p;
+constexpr size_t first_of(int events) {  // the index of the first path of that many events
+  size_t first = 0;
+  for (int k = 0; k < events; ++k) first = 3 * first + 1;
+  return first;
 }
-// Index of the first path of k events.
-constexpr size_t offset_of(int k) { return (power3(k) - 1) / 2; }
-static_assert(offset_of(LightPaths::kMaxEvents + 1) == LightPaths::kPathCount);
+static_assert(first_of(LightPaths::kMaxEvents + 1) == LightPaths::kPathCount);
 
 int lobe_of(char c) {
   for (int i = 0; i < kLobeCount; ++i)
@@ -67,37 +48,32 @@ int lobe_of(char c) {
   return -1;
 }
 
-}  // namespace
-
-int LightPaths::events_of(size_t index) {
-  int k = 0;
-  while (offset_of(k + 1) <= index) ++k;
-  return k;
+// Index of path w followed by lobe x, or none past the longest paths tracked.
+std::optional<size_t> appended(size_t index, int x) {
+  const size_t next = 3 * index + static_cast<size_t>(x) + 1;
+  return next < LightPaths::kPathCount ? std::optional<size_t>(next) : std::nullopt;
 }
 
+int last_lobe(size_t index) { return static_cast<int>((index - 1) % 3); }
+
+}  // namespace
+
 std::string LightPaths::path_of(size_t index) {
-  const int k = events_of(index);
-  size_t value = index - offset_of(k);
-  std::string events(static_cast<size_t>(k), ' ');
-  for (int i = k - 1; i >= 0; --i) {
-    events[static_cast<size_t>(i)] = kLobeLetters[value % 3];
-    value /= 3;
-  }
+  std::string events;
+  for (; index > 0; index = (index - 1) / 3) events.insert(events.begin(), kLobeLetters[last_lobe(index)]);
   return "L" + events;
 }
 
 bool LightPaths::made_of(size_t index, Lobes lobes) {
-  const int k = events_of(index);
-  size_t value = index - offset_of(k);
-  for (int i = 0; i < k; ++i, value /= 3)
-    if (!lobes.has[value % 3]) return false;
+  for (; index > 0; index = (index - 1) / 3)
+    if (!lobes.has[last_lobe(index)]) return false;
   return true;
 }
 
 size_t LightPaths::index_of(std::string_view events) {
-  size_t value = 0;
-  for (char c : events) value = value * 3 + static_cast<size_t>(lobe_of(c));
-  return offset_of(static_cast<int>(events.size())) + value;
+  size_t index = 0;
+  for (char c : events) index = 3 * index + static_cast<size_t>(lobe_of(c)) + 1;
+  return index;
 }
 
 LightPaths LightPaths::emission() {
@@ -108,16 +84,15 @@ LightPaths LightPaths::emission() {
 
 LightPaths LightPaths::every(int min_events, int max_events, Lobes lobes) {
   LightPaths p;
-  for (size_t i = offset_of(std::max(0, min_events)); i < offset_of(std::min(max_events, kMaxEvents) + 1); ++i)
+  for (size_t i = first_of(std::max(0, min_events)); i < first_of(std::min(max_events, kMaxEvents) + 1); ++i)
     if (made_of(i, lobes)) p.counts_[i] = 1;
   return p;
 }
 
 LightPaths LightPaths::then(Lobe x) const {
   LightPaths p;
-  for (int k = 0; k < kMaxEvents; ++k)
-    for (size_t v = 0; v < power3(k); ++v)
-      p.counts_[offset_of(k + 1) + v * 3 + static_cast<size_t>(x)] = counts_[offset_of(k) + v];
+  for (size_t i = 0; i < kPathCount; ++i)
+    if (auto next = appended(i, static_cast<int>(x))) p.counts_[*next] = counts_[i];
   return p;
 }
 
@@ -134,7 +109,7 @@ LightPaths LightPaths::ending_in(Lobes lobes, bool with_emission) const {
   LightPaths p;
   p.counts_[0] = with_emission ? counts_[0] : 0.0f;
   for (size_t i = 1; i < kPathCount; ++i)
-    if (lobes.has[(i - offset_of(events_of(i))) % 3]) p.counts_[i] = counts_[i];
+    if (lobes.has[last_lobe(i)]) p.counts_[i] = counts_[i];
   return p;
 }
 
@@ -170,13 +145,6 @@ bool LightPaths::empty() const {
 namespace {
 
 using PathBits = std::bitset<LightPaths::kPathCount>;
-
-// Index of path w followed by lobe x: indices count paths in bijective base 3 (w x is 3 w + x + 1), or none past
-// the longest paths tracked.
-std::optional<size_t> appended(size_t index, int x) {
-  const size_t next = 3 * index + static_cast<size_t>(x) + 1;
-  return next < LightPaths::kPathCount ? std::optional<size_t>(next) : std::nullopt;
-}
 
 // A piece of a path pattern: one of some lobes, repeated.
 struct Atom {

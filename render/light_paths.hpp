@@ -43,9 +43,6 @@ struct SceneLobes {
 };
 SceneLobes scene_lobes(const Scene& scene);
 
-// Lua for a network that counts every path on these lobes once (what `lightfarm scene` suggests).
-std::string complete_network_for(const Lobes& lobes);
-
 class LightPaths {
  public:
   static constexpr int kMaxEvents = 6;
@@ -83,7 +80,6 @@ class LightPaths {
   float count_at(size_t index) const { return counts_[index]; }
   // Whether every letter of path `index` is in `lobes`.
   static bool made_of(size_t index, Lobes lobes);
-  static int events_of(size_t index);
 
   // A short description for a diagram's arrow: per number of events, "L(D|G|S){1,5}D" where every path of that
   // shape is there, else the paths themselves (or how many there are).

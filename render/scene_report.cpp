@@ -5,7 +5,6 @@
 #include <map>
 
 #include "render/light_checks.hpp"
-#include "render/light_paths.hpp"
 #include "render/scene.hpp"
 
 namespace lf {
@@ -30,6 +29,24 @@ const char* kind_name(Material::Type t) {
 }
 
 }  // namespace
+
+std::string complete_network_for(const Lobes& lobes) {
+  const bool glossy = lobes.contains(Lobe::glossy), mirrors = lobes.contains(Lobe::specular);
+  std::string s = "local paths    = lightop \"pathtrace\" {}                       -- what leaves the surfaces the ops below see\n"
+                  "local direct   = lightop \"direct\" {}                          -- L(D|G)\n"
+                  "local indirect = lightop \"irradiance\" { input = paths }       -- L(D|G|S)+D\n";
+  std::string parts = "direct, indirect";
+  if (glossy) {
+    s += "local shiny    = lightop \"glossy\" { input = paths }           -- L(D|G|S)+G\n";
+    parts += ", shiny";
+  }
+  if (mirrors) {
+    s += "local chains   = lightop \"specular\" { input = lightop \"combine\" { inputs = { " + parts +
+         " } } }  -- L(D|G|S)*S\n";
+    parts += ", chains";
+  }
+  return s + "renderers { lighting = lightop \"combine\" { inputs = { " + parts + " } } }\n";
+}
 
 Result<std::string> describe_scene(const std::string& obj_path) {
   auto catalogue = Scene::catalogue_obj(obj_path);

@@ -1,5 +1,5 @@
 #pragma once
-// The director (Session + NetManager, DESIGN §1): a phase sequencer. It runs the stages
+// The director (the Session and NetManager of Kipfer, "Distributed Lighting Networks", 1999): a phase sequencer. It runs the stages
 //   prepare -> launch -> hello -> configure -> setup -> render -> finish
 // over the parts around it: the Supervisor (actor table, heartbeats, exits, losses; launchers per host) and the
 // services registered by operation (TileService: render master and film; ExchangeService: all-gather and fetch;

@@ -1,6 +1,6 @@
 #pragma once
 // The live monitor (`lightfarm run --monitor [ADDR:]PORT`): a web page served by the director while the farm runs
-// (NetWatch, seed 000). cpp-httplib serves, on threads of its own:
+// (after NetWatch in Kipfer, "Distributed Lighting Networks", 1999). cpp-httplib serves, on threads of its own:
 //   /              the page (monitor_page.cpp: HTML, CSS and JS in the binary, nothing from elsewhere)
 //   /events        Server-Sent Events: `state` (the JSON of /api/state) at least once a second and whenever it
 //                  changes, `preview` as tiles land: the whole image once, then to each stream only the

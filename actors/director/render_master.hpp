@@ -1,7 +1,7 @@
 #pragma once
 // RenderMaster: hands out tiles on demand and takes results back. It remembers who holds each tile and accepts
-// a result only from that holder and only once (DESIGN §8), so a late or repeated answer cannot overwrite or
-// double-count. Pure logic: the director feeds it requests; tests feed it without processes.
+// a result only from that holder and only once (a tile handed out again after a loss may come back twice), so a
+// late or repeated answer cannot overwrite or double-count. Pure logic: the director feeds it requests; tests feed it without processes.
 #include <cstdint>
 #include <map>
 #include <optional>

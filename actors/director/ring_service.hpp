@@ -1,5 +1,6 @@
 #pragma once
-// The ring service: the director's side of a radiosity ring (seed 003 §2.2, the "master processor"). Serves
+// The ring service: the director's side of a radiosity ring (the "master processor" of Stürzlinger, Schaufler
+// and Volkert, "Load Balancing for a Parallel Radiosity Algorithm", §2.2). Serves
 //   ring.shooter (codecs/ring_codec.hpp)  every iteration each node reports its best local shooter and unshot power
 //                                         once its own packets are all home; when all have, the service picks the
 //                                         global shooter (or declares convergence) and answers them all — which is

@@ -1,6 +1,6 @@
 #pragma once
 // Director services: the central capabilities actors ask the director for, each registered by the operations it
-// serves (DESIGN §6). The director owns the control socket and the actor table; a service sees only requests,
+// serves (tiles, setup exchanges, the radiosity ring's barrier: what cannot go peer to peer). The director owns the control socket and the actor table; a service sees only requests,
 // phases and losses, and answers through an Outbox. So each is tested by feeding it messages and reading the
 // Outbox (see *.test.cpp beside each), and a new central capability is a new Service, never a new branch in the
 // director.

@@ -61,7 +61,8 @@ class Specular final : public LightOp {
     for (size_t i = 0; i < points.size(); ++i) {
       radiance[i] = RGB{};
       if (!scene.material(points.material[i]).specular()) continue;
-      for (int s = 0; s < emission_samples_; ++s)
+      // Chains that only look for emitters have nothing to do when emitters count for nothing here.
+      for (int s = 0; s < (emitters_ ? emission_samples_ : samples_); ++s)
         chains.push_back(Chain{i, points.position[i], points.normal[i], points.wo[i], points.face_normal(i, scene),
                                points.material[i], points.triangle_of(i),
                                points.outside(i, scene), s < samples_, {1, 1, 1}, {}, -1,
