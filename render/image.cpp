@@ -17,6 +17,12 @@
 
 namespace lf {
 
+bool all_black(const Image& image) {
+  for (const RGB& p : image.pixels)
+    if (!is_black(p)) return false;
+  return true;
+}
+
 namespace fs = std::filesystem;
 
 static std::string extension_of(const std::string& path) {

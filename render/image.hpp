@@ -20,6 +20,9 @@ struct Image {
   const RGB& at(int x, int y) const { return pixels[static_cast<size_t>(y) * width + x]; }
 };
 
+// True when every pixel is exactly 0: nothing the camera saw was lit or emitting.
+bool all_black(const Image& image);
+
 // An error if the extension is not one we write, or the directory does not exist or is not writable.
 Status check_output_path(const std::string& path);
 // How an 8-bit output shows linear radiance: scaled by 2^exposure, then mapped to [0, 1] per channel by the tone

@@ -135,6 +135,27 @@ TEST_F(FarmTest, MaterialChangesReachEveryActor) {
   }
 }
 
+// A camera that sees nothing lit (here it looks out of the open Cornell box) gives an image of zeros: the farm
+// still writes it and exits 0, and says why the picture is black; a lit picture says nothing of the kind.
+TEST_F(FarmTest, AnImageOfZerosIsAWarningNamingLikelyCauses) {
+  const std::string head = "scene { builtin = \"cornell\" }\nimage { width = 16, height = 16, spp = 1 }\n"
+                           "farm { light_paths = \"partial\" }\n";
+  const std::string tail = "renderers { count = 1, lighting = lightop \"direct\" {} }\n";
+  auto away = run_lightfarm({"run", write("away.lua", head + "camera { eye = {278, 273, -800}, at = {278, 273, -1600} }\n" + tail),
+                             "--output", path("away.exr"), "--quiet"});
+  ASSERT_EQ(away.status, 0) << away.err;
+  expect_no_leftovers(away);
+  auto image = read_image(path("away.exr"));
+  ASSERT_TRUE(image.ok());
+  EXPECT_TRUE(all_black(*image));
+  EXPECT_NE(away.err.find("away.exr: every pixel is 0, nothing the camera sees is lit: it may look at the back"),
+            std::string::npos)
+      << away.err;
+  auto seen = run_lightfarm({"run", write("seen.lua", head + tail), "--output", path("seen.exr"), "--quiet"});
+  ASSERT_EQ(seen.status, 0) << seen.err;
+  EXPECT_EQ(seen.err.find("every pixel is 0"), std::string::npos) << seen.err;
+}
+
 TEST_F(FarmTest, RendererCountDoesNotChangeAPixel) {
   auto one = render_cornell(path("one.exr"), {"--set", "renderers=1"});
   auto three = render_cornell(path("three.exr"), {"--set", "renderers=3"});

@@ -588,6 +588,10 @@ class Director final : public ControlOut, public Outbox {
     const Display display{static_cast<float>(spec_.image.exposure), spec_.image.tonemap};
     if (auto st = write_image(tiles_.film(), spec_.image.output, display); !st) throw FarmFailure{st.error().message};
     image_written_ = true;
+    if (all_black(tiles_.film()))
+      log_warn(spec_.image.output + ": every pixel is 0, nothing the camera sees is lit: it may look at the back of the "
+               "scene's surfaces from outside or past them (`lightfarm scene FILE.obj` suggests a camera that frames "
+               "the scene), or the lights may face away from what it sees");
     supervisor_.broadcast(wire::make_phase("director", Phase::finish));
     // Wait for every actor's STATS and BYE, and for its process to end.
     const auto deadline = Clock::now() + std::chrono::seconds(10);
