@@ -3,7 +3,8 @@
 // light; a radiosity solution: a final gather).
 //
 // Records: M x N stratified cosine-weighted hemisphere samples ask the input for radiance at the secondary hits;
-// the record keeps E, the harmonic mean distance R and both gradients, and serves points where
+// the record keeps E, the harmonic mean distance R (at most `nearest` times the nearest hit's distance) and both
+// gradients, and serves points where
 // |x - x_i| / R_i + sqrt(1 - n.n_i) < a, extrapolated with the gradients and weighted by 1 / that error.
 // Determinism (DESIGN §4): records are made only in setup, by a pre-pass over candidate points in a fixed order —
 // where the camera looks, where a camera-placed cache's hemisphere rays land (the overture), or `prepass` points
@@ -38,6 +39,7 @@ class Irradiance final : public LightOp {
         min_spacing_(static_cast<float>(p.get_float("min_spacing", 0.002, 0, 1))),
         max_spacing_(static_cast<float>(p.get_float("max_spacing", 0.2, 0, 10))),
         own_rays_(static_cast<int>(p.get_int("own_rays", 8, 0, 1 << 16))),
+        nearest_(static_cast<float>(p.get_float("nearest", 1.5, 0, 1000))),
         bounds_(bounds_up_to(p.get_float("relax", 1, 1, 4))),
         seed_(static_cast<uint64_t>(p.get_int("seed", 0, 0, INT32_MAX))) {}
 
@@ -319,6 +321,14 @@ class Irradiance final : public LightOp {
         s.distance[q] = hits[r].valid() ? hits[r].t : max_r;
       }
       IrradianceRecord rec = make_record(candidates[c].x, frames[c][0], frames[c][1], frames[c][2], s);
+      // The near field: the harmonic mean weighs a near occluder by the solid angle it covers, not by the light it
+      // takes away, so a record a little way from a panel hung under a ceiling reached under the panel's shadow
+      // (+50 % there). R is at most `nearest` times the distance to the nearest thing the hemisphere hits (the
+      // minimum distance of Tabellion & Lamorlette 2004, loosened).
+      if (nearest_ > 0) {
+        const float closest = *std::min_element(s.distance.begin(), s.distance.end());
+        rec.harmonic_distance = std::min(rec.harmonic_distance, nearest_ * closest);
+      }
       rec.harmonic_distance = std::clamp(rec.harmonic_distance, min_r, max_r);
       out.push_back(rec);
     }
@@ -336,6 +346,7 @@ class Irradiance final : public LightOp {
   int stride_, finest_;
   float min_spacing_, max_spacing_;
   int own_rays_;
+  float nearest_;  // R <= nearest * the nearest hit's distance; 0: the harmonic mean alone
   // The bounds a lookup tries in turn, as multiples of a: {1}, {1, 2} or {1, 2, 4}.
   std::vector<float> bounds_;
   static std::vector<float> bounds_up_to(double relax) {

@@ -86,7 +86,11 @@ TEST(Irradiance, FurnaceNetworkComposedToFullDepthGivesEOverOneMinusRho) {
     LightOp* combine = ops.back().get();
     LocalInputs* combine_inputs = wiring.back().get();
     run_to_completion(combine->setup(ctx, *combine_inputs));
-    ops.push_back(make("irradiance", Value::Map{{"prepass", 1500}, {"theta", 4}, {"phi", 12}, {"placement", "area"}, {"own_rays", 0}, {"relax", 4}}));
+    // nearest = 0: a furnace has no occluder to respect, and each point no record serves asks the cache below for
+    // a whole hemisphere (own_rays = 0), so the misses that R's limit makes near the box's edges multiply by 48 at
+    // each of the 8 levels.
+    ops.push_back(make("irradiance", Value::Map{{"prepass", 1500}, {"theta", 4}, {"phi", 12}, {"placement", "area"},
+                                                {"own_rays", 0}, {"relax", 4}, {"nearest", 0}}));
     wiring.push_back(std::make_unique<LocalInputs>(std::vector<std::pair<LightOp*, Inputs*>>{{combine, combine_inputs}}));
     run_to_completion(ops.back()->setup(ctx, *wiring.back()));
     below = ops.back().get();
@@ -232,7 +236,7 @@ TEST(Irradiance, RecordsWhereTheCameraLooksServeTheImage) {
 }
 
 // The same on a real interior (issue 13): Lost Empire with its torches emitting, from a camera inside the city at
-// 160 x 120. The camera pass finds the points the image needs, so records serve at least 95 % of them.
+// 160 x 120. The camera pass finds the points the image needs, so records serve at least 94 % of them.
 TEST(Irradiance, RecordsWhereTheCameraLooksServeLostEmpire) {
   auto loaded = test::lost_empire_with_torches();
   if (!loaded) GTEST_SKIP() << "no " << test::kLostEmpireObj;
@@ -241,7 +245,54 @@ TEST(Irradiance, RecordsWhereTheCameraLooksServeLostEmpire) {
   const int w = 160, h = 120;
   CameraCache c(*scene, CameraSpec{{-8, 16, 20}, {6, 12, 0}, {0, 1, 0}, 70}, w, h, 1, {{"theta", 4}, {"phi", 12}});
   ASSERT_GT(c.pts.size(), static_cast<size_t>(w * h / 2));
-  EXPECT_GE(c.served(), 0.95) << c.figures();
+  // 94.6 % since records' R is limited by their nearest hit (irradiance { nearest }); 95.x % before.
+  EXPECT_GE(c.served(), 0.94) << c.figures();
+}
+
+// The near field of an occluder: a light panel hung 0.1 under the ceiling of a 2 m room, emitting downwards, casts a
+// shadow on the ceiling around it (its back hides the lit floor). The harmonic mean distance weighs the panel by the
+// solid angle it covers, so records a little way off reached into that shadow: within 0.1 of the panel's edge, +4.7 %
+// with Ward's R alone
+// (nearest = 0; 8.5 % within 0.05). With R at most 1.5 times the nearest hit's distance (the default) the ceiling
+// there gets what one bounce of the path tracer gives it (+0.6 %; nearest = 2: +1.6 %).
+TEST(Irradiance, RecordsDoNotReachIntoAnOccludersShadow) {
+  Scene s;
+  const auto wall = s.add_material({"wall", {0.6f, 0.6f, 0.6f}, {}});
+  const auto panel = s.add_material({"panel", {}, {10, 10, 10}});
+  const float size = 2, ceiling = 2, hung = 1.9f;
+  const Vec3 c[8] = {{0, 0, 0}, {size, 0, 0}, {size, ceiling, 0}, {0, ceiling, 0},
+                     {0, 0, size}, {size, 0, size}, {size, ceiling, size}, {0, ceiling, size}};
+  s.add_quad(c[0], c[1], c[2], c[3], wall);
+  s.add_quad(c[4], c[7], c[6], c[5], wall);
+  s.add_quad(c[0], c[4], c[5], c[1], wall);
+  s.add_quad(c[3], c[2], c[6], c[7], wall);
+  s.add_quad(c[0], c[3], c[7], c[4], wall);
+  s.add_quad(c[1], c[5], c[6], c[2], wall);
+  // Wound to emit downwards (-y).
+  s.add_quad({0.7f, hung, 1.3f}, {0.7f, hung, 0.7f}, {1.3f, hung, 0.7f}, {1.3f, hung, 1.3f}, panel);
+  ASSERT_TRUE(s.finalize("panel room").ok());
+  const CameraSpec up_at_the_ceiling{{1, 0.2, 1.7}, {1, 2, 0.9}, {0, 1, 0}, 60};
+  auto near_panel = [&](Vec3 p) {  // on the ceiling, outside the panel, at most 0.25 from its edge
+    const float dx = std::max(std::abs(p.x - 1) - 0.3f, 0.0f), dz = std::max(std::abs(p.z - 1) - 0.3f, 0.0f);
+    return p.y > ceiling - 1e-3f && (dx > 0 || dz > 0) && std::max(dx, dz) < 0.1f;
+  };
+  auto ratio = [&](double nearest) {
+    CameraCache cache(s, up_at_the_ceiling, 96, 96, 4, {{"relax", 1}, {"own_rays", 0}, {"nearest", nearest}});
+    ShadingPoints shadow;
+    std::vector<RGB> cached;
+    for (size_t i = 0; i < cache.pts.size(); ++i)
+      if (near_panel(cache.pts.position[i])) {
+        shadow.push_back(cache.pts.position[i], cache.pts.normal[i], cache.pts.wo[i], cache.pts.material[i],
+                         cache.pts.key[i], cache.pts.triangle[i]);
+        cached.push_back(cache.bounce[i]);
+      }
+    EXPECT_GT(shadow.size(), 300u);
+    return cached_over_one_bounce(cache.ctx, shadow, cached, 1024);
+  };
+  const double ward = ratio(0), limited = ratio(1.5);
+  std::printf("around the panel: nearest = 0: %.4f, nearest = 1.5: %.4f of one path-traced bounce\n", ward, limited);
+  EXPECT_GT(ward, 1.03) << "the harmonic mean alone reaches into the shadow";
+  EXPECT_NEAR(limited, 1.0, 0.015);
 }
 
 // Ward's overture (issue 13): a cache feeding a second, camera-placed cache puts its records where that cache's
@@ -301,9 +352,10 @@ TEST(Irradiance, TheOverturePlacesAFeedingCacheWhereTheNextCacheLooks) {
   const double records = count(overture.a_stats, "records");
   const Chain area = chain({{"placement", "area"}, {"prepass", static_cast<int64_t>(records)}});
   EXPECT_GE(served(overture.a_stats), 0.95) << "records " << records;
-  // What A cannot serve B pays for with a whole hemisphere: the overture leaves several times fewer such points
-  // (at 80 x 60: 0.09 % against 0.69 % of A's lookups).
-  EXPECT_LT(3 * count(overture.a_stats, "own_values"), count(area.a_stats, "own_values"))
+  // What A cannot serve B pays for with a whole hemisphere: the overture leaves fewer such points (at 80 x 60: 610
+  // against 1676; 0.09 % against 0.69 % of A's lookups before records' R was limited by their nearest hit, which
+  // makes A's records near the room's edges smaller whatever placed them).
+  EXPECT_LT(2 * count(overture.a_stats, "own_values"), count(area.a_stats, "own_values"))
       << "area: records " << count(area.a_stats, "records");
   EXPECT_LE(count(area.a_stats, "records"), records);
 
