@@ -133,8 +133,32 @@ std::string LightPathReport::error_text() const {
   return all;
 }
 
+// A cache that the scene's materials leave nothing to serve: a warning at its op's line (it would say 0 records or
+// cells at the end, after the time its pre-pass took).
+static void warn_about_empty_caches(const FarmSpec& spec, const SceneLobes& scene, LightPathReport& report) {
+  for (const ActorSpec& a : spec.actors) {
+    auto param = [&](const char* key) {
+      auto it = a.params.find(key);
+      return it != a.params.end() && it->second.is_bool() && it->second.as_bool();
+    };
+    if (a.kind == "pathtrace" && param("directional_cache") && scene.diffuse_only.empty())
+      report.warnings.push_back(
+          a.loc.str() + ": '" + a.name + "' has directional_cache = true, but no material of the scene is diffuse " +
+          "alone (the cache answers only rays that leave such surfaces; " +
+          (scene.materials[static_cast<int>(Lobe::glossy)].empty()
+               ? std::string("none reflects diffusely")
+               : quoted_list(scene.materials[static_cast<int>(Lobe::glossy)], 3) + " also have a glossy lobe") +
+          "): it will answer nothing and only cost its filling pass");
+    if (a.kind == "irradiance" && scene.materials[static_cast<int>(Lobe::diffuse)].empty())
+      report.warnings.push_back(a.loc.str() + ": '" + a.name +
+                                "' caches diffuse light, but no material of the scene reflects diffusely: it has "
+                                "nothing to cache");
+  }
+}
+
 LightPathReport check_light_paths(const FarmSpec& spec, const SceneLobes& scene) {
   LightPathReport report;
+  if (spec.lighting >= 0) warn_about_empty_caches(spec, scene, report);
   if (spec.light_paths == "off" || spec.lighting < 0) return report;
   const Composition c = compose_all(spec);
   const size_t root = static_cast<size_t>(spec.lighting);

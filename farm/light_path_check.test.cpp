@@ -156,6 +156,32 @@ TEST(LightPathCheck, APoolCountsAsItsReplicaAndPlugInsAreNotChecked) {
                                 "say which light paths it returns");
 }
 
+// A cache the scene leaves nothing to serve is a warning at its line: the directional cache on a scene whose every
+// diffuse material also has a glossy lobe (an exporter's Ks 0.2 / Ns 40 on everything built 0 cells, silently), an
+// irradiance cache on mirrors alone. With one material diffuse alone, nothing is said.
+TEST(LightPathCheck, ACacheWithNothingToCacheIsAWarning) {
+  FarmSpec s;
+  s.light_paths = "partial";
+  s.lighting = add(s, "paths", "pathtrace", {}, {{"directional_cache", true}});
+  SceneLobes exported = lobes({Lobe::diffuse, Lobe::glossy});
+  exported.materials[static_cast<int>(Lobe::glossy)] = {"carpet", "wall"};
+  auto report = check_light_paths(s, exported);
+  ASSERT_EQ(report.warnings.size(), 1u) << joined(report.warnings);
+  EXPECT_TRUE(mentions(report.warnings, "farm.lua:1: 'paths' has directional_cache = true, but no material of the "
+                                        "scene is diffuse alone"));
+  EXPECT_TRUE(mentions(report.warnings, "'carpet', 'wall' also have a glossy lobe")) << joined(report.warnings);
+  exported.diffuse_only = {"ceiling"};
+  EXPECT_TRUE(check_light_paths(s, exported).warnings.empty());
+
+  FarmSpec cache;
+  cache.light_paths = "partial";
+  cache.lighting = add(cache, "indirect", "irradiance", {add(cache, "direct", "direct")});
+  report = check_light_paths(cache, lobes({Lobe::specular}));
+  EXPECT_TRUE(mentions(report.warnings, "farm.lua:2: 'indirect' caches diffuse light, but no material of the scene "
+                                        "reflects diffusely")) << joined(report.warnings);
+  EXPECT_TRUE(check_light_paths(cache, lobes({Lobe::diffuse})).warnings.empty());
+}
+
 TEST(LightPathCheck, GraphArrowsSayWhatTheyCarry) {
   const FarmSpec s = complete_network();
   const auto carried = light_path_summaries(s);

@@ -383,6 +383,8 @@ TEST_F(ScriptTest, TheSuggestedNetworksAreComplete) {
     SceneLobes scene;
     scene.lobes = lobes;
     scene.emits = true;
+    for (int l = 0; l < kLobeCount; ++l)
+      if (lobes.has[l]) scene.materials[l] = {"m"};
     const LightPathReport report = check_light_paths(*r, scene);
     EXPECT_TRUE(report.errors.empty() && report.warnings.empty()) << complete_network_for(lobes);
   }
