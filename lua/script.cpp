@@ -569,7 +569,8 @@ int l_light(lua_State* L) {
   return 0;
 }
 
-// material "Name" { emission = {r, g, b}, kd = {r, g, b}, ks = {r, g, b}, ns = 20, ior = 1.5, type = "glossy" }:
+// material "Name" { emission = {r, g, b}, kd = {r, g, b}, ks = {r, g, b}, mirror = {r, g, b}, tf = {r, g, b}, ns = 20,
+// ior = 1.5, type = "glossy" }:
 // changes a material of the scene by name (an OBJ's MTL, or a built-in scene's); the scene must come first.
 int l_material_table(lua_State* L) {
   Builder& b = builder(L);
@@ -610,12 +611,14 @@ int l_material_table(lua_State* L) {
     colour("emission", 1e6);
     colour("kd", 1);
     colour("ks", 1);
+    colour("mirror", 1);
+    colour("tf", 1);
     if (p.has("ns")) change["ns"] = p.get_float("ns", 0, 0, 1e6);
     if (p.has("ior")) change["ior"] = p.get_float("ior", 1.5, 1, 3);
     if (p.has("type")) change["type"] = p.get_string("type", "diffuse", {"diffuse", "glossy", "mirror", "glass"});
     p.report_unused();
   });
-  // The scene's own check (kd + ks at most 1) with the words it would use later.
+  // The scene's own check (kd + ks + mirror at most 1) with the words it would use later.
   Scene probe;
   probe.add_material({name, {}, {}});
   if (auto st = probe.apply_material_overrides(Value::Array{Value(change)}); !st)

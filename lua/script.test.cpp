@@ -144,7 +144,7 @@ TEST_F(ScriptTest, MaterialChangesNameTheirLineWhenWrong) {
   EXPECT_EQ(error_of("material \"light\" { emission = {1, 1, 1} }\nscene { builtin = \"cornell\" }\n"),
             "farm.lua:1: material \"light\" needs scene { ... } before it");
   EXPECT_EQ(error_of("scene { builtin = \"cornell\" }\nmaterial \"red\" { kd = {0.9, 0, 0}, ks = {0.5, 0, 0} }\n"),
-            "farm.lua:2: material 'red': kd + ks exceeds 1 in some channel, so the surface would create energy");
+            "farm.lua:2: material 'red': kd + ks + mirror exceeds 1 in some channel, so the surface would create energy");
   EXPECT_EQ(error_of("scene { builtin = \"cornell\" }\nmaterial \"red\" { kd = {2, 0, 0} }\n"),
             "farm.lua:2: material 'red': kd must be between 0 and 1 in each channel");
   EXPECT_EQ(error_of("scene { builtin = \"cornell\" }\nmaterial \"red\" { glow = 1 }\n").rfind(

@@ -59,6 +59,17 @@ std::optional<Bsdf::Sample> Bsdf::sample_glossy(Vec3 n, Vec3 wo, float u1, float
   return Sample{wi, m_.ks * ((m_.ns + 2.0f) / (m_.ns + 1.0f) * cos_i), pdf, false};
 }
 
+std::optional<Bsdf::Sample> Bsdf::sample_mirror_term(Vec3 n, Vec3 wo) const {
+  if (!m_.has_mirror_term() || dot(n, wo) <= 0) return std::nullopt;
+  return Sample{reflect(wo, n), m_.kr, 1.0f, true};
+}
+
+float Bsdf::mirror_probability() const {
+  if (!m_.has_mirror_term()) return 0.0f;
+  const float r = average(m_.kr), rest = average(kd_) + (m_.type == Material::Type::glossy ? average(m_.ks) : 0.0f);
+  return r / (r + rest);
+}
+
 float Bsdf::diffuse_probability() const {
   const float d = average(kd_), g = average(m_.ks);
   return d + g > 0 ? d / (d + g) : 1.0f;
@@ -79,11 +90,13 @@ RGB Bsdf::eval(Vec3 n, Vec3 wo, Vec3 wi) const {
 float Bsdf::pdf(Vec3 n, Vec3 wo, Vec3 wi) const {
   if (is_delta() || dot(n, wi) <= 0 || dot(n, wo) <= 0) return 0;
   const float diffuse = dot(n, wi) / kPi;
-  if (m_.type != Material::Type::glossy) return diffuse;
+  // sample() reaches the other lobes only when it does not take the mirror term.
+  const float other = 1.0f - mirror_probability();
+  if (m_.type != Material::Type::glossy) return other * diffuse;
   const float pd = diffuse_probability();
   const float ca = dot(reflect(wo, n), wi);
   const float lobe = ca > 0 ? (m_.ns + 1.0f) / (2.0f * kPi) * std::pow(ca, m_.ns) : 0.0f;
-  return pd * diffuse + (1 - pd) * lobe;
+  return other * (pd * diffuse + (1 - pd) * lobe);
 }
 
 std::optional<Bsdf::Sample> Bsdf::sample(Vec3 n, Vec3 wo, bool entering, float u0, float u1, float u2) const {
@@ -97,12 +110,16 @@ std::optional<Bsdf::Sample> Bsdf::sample(Vec3 n, Vec3 wo, bool entering, float u
       if (u0 < f) return Sample{reflect(wo, n), RGB{1, 1, 1}, f, true};
       auto t = refract(wo, n, eta);
       if (!t) return Sample{reflect(wo, n), RGB{1, 1, 1}, 1.0f, true};
-      return Sample{*t, RGB{1, 1, 1}, 1.0f - f, true};
+      // Light is filtered once, where it enters (a closed object tints what passes through it once).
+      return Sample{*t, entering ? m_.tf : RGB{1, 1, 1}, 1.0f - f, true};
     }
     default: break;
   }
   if (dot(n, wo) <= 0) return std::nullopt;
-  if (m_.type == Material::Type::diffuse) {
+  if (const float pr = mirror_probability(); pr > 0) {
+    if (u0 < pr) return Sample{reflect(wo, n), m_.kr * (1.0f / pr), pr, true};
+    u0 = (u0 - pr) / (1.0f - pr);  // pdf() counts the other lobes' share
+  } else if (m_.type == Material::Type::diffuse) {
     // Lambert alone, the commonest case: pdf() and eval() below, with the checks they would repeat left out and the
     // same arithmetic in the same order, so the same bits.
     const Vec3 wi = cosine_hemisphere(n, u1, u2);

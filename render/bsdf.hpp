@@ -1,6 +1,6 @@
 #pragma once
-// Scattering at a surface point: diffuse (Lambert), glossy (Lambert + a normalized Phong lobe), perfect mirror,
-// and dielectric glass with Fresnel. Directions point away from the surface; `n` is the unit normal on the side
+// Scattering at a surface point: diffuse (Lambert), glossy (Lambert + a normalized Phong lobe), either with a
+// perfect mirror term beside, perfect mirror, and dielectric glass with Fresnel. Directions point away from the surface; `n` is the unit normal on the side
 // of wo. eval() returns f(wo, wi) without the cosine; sample() returns wi with weight f * |cos| / pdf.
 #include <algorithm>
 #include <optional>
@@ -15,7 +15,9 @@ class Bsdf {
   explicit Bsdf(const Material& m) : m_(m), kd_(m.kd) {}
   // With the diffuse reflectance at the point (a texture's), kept to at most 1 - ks per channel.
   Bsdf(const Material& m, RGB albedo)
-      : m_(m), kd_{std::min(albedo.x, 1 - m.ks.x), std::min(albedo.y, 1 - m.ks.y), std::min(albedo.z, 1 - m.ks.z)} {}
+      : m_(m),
+        kd_{std::min(albedo.x, 1 - m.ks.x - m.kr.x), std::min(albedo.y, 1 - m.ks.y - m.kr.y),
+            std::min(albedo.z, 1 - m.ks.z - m.kr.z)} {}
 
   // Mirror and glass scatter into single directions: light sampling cannot reach them, only sample() can.
   bool is_delta() const { return m_.type == Material::Type::mirror || m_.type == Material::Type::glass; }
@@ -35,9 +37,13 @@ class Bsdf {
   // by that lobe's f * cos / pdf (the diffuse part left out: the `glossy` LightOp's share of the BSDF).
   bool has_glossy_lobe() const { return m_.type == Material::Type::glossy && !is_black(m_.ks); }
   std::optional<Sample> sample_glossy(Vec3 n, Vec3 wo, float u1, float u2) const;
+  // A diffuse or glossy surface's mirror term alone (Material::kr), weighted by kr: the `specular` op's share.
+  std::optional<Sample> sample_mirror_term(Vec3 n, Vec3 wo) const;
 
  private:
   float diffuse_probability() const;
+  // The chance sample() takes a surface's mirror term (0 without one), in proportion to its reflectance.
+  float mirror_probability() const;
   const Material& m_;
   RGB kd_;
 };

@@ -67,6 +67,8 @@ inline void put_material(std::string& out, const Material& m) {
   out.push_back(static_cast<char>(m.type));
   put(out, m.kd_map);
   put(out, m.alpha_map);
+  put_rgb(out, m.kr);
+  put_rgb(out, m.tf);
 }
 inline bool read_material(Reader& r, Material& m) {
   uint32_t len = 0;
@@ -79,6 +81,7 @@ inline bool read_material(Reader& r, Material& m) {
   if (!r.u32(kd_map) || !r.u32(alpha_map)) return false;
   m.kd_map = static_cast<int32_t>(kd_map);
   m.alpha_map = static_cast<int32_t>(alpha_map);
+  if (!r.vec(m.kr) || !r.vec(m.tf)) return false;
   return m.kd_map >= -1 && m.alpha_map >= -1;
 }
 

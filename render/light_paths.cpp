@@ -20,7 +20,7 @@ SceneLobes scene_lobes(const Scene& scene) {
     const bool has[kLobeCount] = {
         !m.specular() && (!is_black(m.kd) || m.kd_map >= 0),
         m.type == Material::Type::glossy && !is_black(m.ks),
-        m.type == Material::Type::glass || (m.type == Material::Type::mirror && !is_black(m.ks)),
+        m.type == Material::Type::glass || (m.type == Material::Type::mirror && !is_black(m.ks)) || m.has_mirror_term(),
     };
     for (int l = 0; l < kLobeCount; ++l)
       if (has[l]) {

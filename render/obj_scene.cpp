@@ -15,27 +15,44 @@
 
 namespace lf {
 
-Material material_from_mtl(std::string name, RGB kd, RGB ks, RGB ke, float ns, float ni, int illum) {
+Material material_from_mtl(std::string name, RGB kd, RGB ks, RGB ke, float ns, float ni, int illum, RGB tf) {
   Material m{std::move(name), kd, ke};
   m.ks = ks;
   m.ns = ns;
   m.ior = ni > 1.0f ? ni : 1.5f;
-  if (illum == 3 || illum == 5) {
-    m.type = Material::Type::mirror;
-    if (is_black(m.ks)) m.ks = {1, 1, 1};
-    m.kd = {};
-  } else if (illum == 4 || illum == 6 || illum == 7 || illum == 9) {
-    m.type = Material::Type::glass;
-    m.kd = {};
-  } else if (illum == 2 && !is_black(ks) && ns > 0) {
-    m.type = Material::Type::glossy;
-    // Per channel kd + ks <= 1.
+  // Per channel kd + ks <= 1.
+  auto cap = [&] {
     const RGB sum = m.kd + m.ks;
     const float peak = std::max({sum.x, sum.y, sum.z});
     if (peak > 1.0f) {
       m.kd *= 1.0f / peak;
       m.ks *= 1.0f / peak;
     }
+  };
+  if (illum == 3 && !is_black(kd) && !is_black(ks)) {
+    // "Reflection on, ray trace on": Kd, the highlight Ks^Ns and a mirror reflection Ks. Ks is one specular
+    // reflectance, so a lobe and the mirror share it (half each) rather than each taking all of it.
+    cap();
+    if (ns > 0) {
+      m.type = Material::Type::glossy;
+      m.kr = m.ks * 0.5f;
+      m.ks = m.ks * 0.5f;
+    } else {
+      m.kr = m.ks;
+      m.ks = {};
+    }
+  } else if (illum == 3 || illum == 5) {
+    m.type = Material::Type::mirror;
+    if (is_black(m.ks)) m.ks = {1, 1, 1};
+    m.kd = {};
+  } else if (illum == 4 || illum == 6 || illum == 7 || illum == 9) {
+    m.type = Material::Type::glass;
+    m.kd = {};
+    // tinyobjloader reads a missing Tf as 0 0 0; a glass that keeps nothing of what enters is not what it means.
+    if (!is_black(tf)) m.tf = {std::min(tf.x, 1.0f), std::min(tf.y, 1.0f), std::min(tf.z, 1.0f)};
+  } else if (illum == 2 && !is_black(ks) && ns > 0) {
+    m.type = Material::Type::glossy;
+    cap();
   } else {
     m.ks = {};
   }
@@ -90,7 +107,8 @@ Result<Scene> Scene::from_obj_reader(const tinyobj::ObjReader& reader, const std
     if (ambient && !emits) s.ambient_only_.push_back(m.name);
     s.add_material(material_from_mtl(m.name, {m.diffuse[0], m.diffuse[1], m.diffuse[2]},
                                      {m.specular[0], m.specular[1], m.specular[2]},
-                                     {m.emission[0], m.emission[1], m.emission[2]}, m.shininess, m.ior, m.illum));
+                                     {m.emission[0], m.emission[1], m.emission[2]}, m.shininess, m.ior, m.illum,
+                                     {m.transmittance[0], m.transmittance[1], m.transmittance[2]}));
   }
   // Textures, each file read once per use (a colour map keeps RGB, an alpha map one channel). One that cannot be
   // read leaves its material flat, with a warning.

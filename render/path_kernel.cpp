@@ -161,7 +161,9 @@ Task trace_paths(const SceneContext& ctx, const ShadingPoints& points, std::span
       const Uniform2 direction = path.rng.uniform2();
       auto s = Bsdf(m, path.albedo).sample(path.n, path.wo, path.outside, u0, direction.u, direction.v);
       // Only glass may send a path through the face; a reflection the shading normal allows below it ends here.
-      if (!s || is_black(s->weight) || (m.type != Material::Type::glass && dot(s->wi, path.ng) <= 0)) {
+      // A diffuse or glossy surface's mirror term is the specular op's where specular surfaces are (`direct`).
+      if (!s || is_black(s->weight) || (m.type != Material::Type::glass && dot(s->wi, path.ng) <= 0) ||
+          (o.dark_on_specular && s->delta)) {
         path.alive = false;
         continue;
       }
@@ -180,7 +182,7 @@ Task trace_paths(const SceneContext& ctx, const ShadingPoints& points, std::span
       // Diffuse rays first look only as far as their neighbourhood reaches.
       for (size_t r = 0; r < continuing.size(); ++r) {
         const Path& path = paths[continuing[r]];
-        if (scene.material(path.material).type != Material::Type::diffuse) continue;
+        if (scene.material(path.material).type != Material::Type::diffuse || samples[r].delta) continue;
         ray_cell[r] = cache->cell_of(path.x);
         rays[r].tfar = cache->local_reach(ray_cell[r], rays[r].origin, rays[r].direction);
       }

@@ -31,18 +31,23 @@ struct Material {
   RGB ks;         // glossy: Phong lobe reflectance; mirror: reflectance
   float ns = 0;   // glossy: Phong exponent
   float ior = 1.5f;  // glass: index of refraction
+  RGB kr;            // diffuse and glossy: a perfect mirror term beside their lobes (MTL illum 3 with Kd)
+  RGB tf{1, 1, 1};   // glass: what light entering it keeps, per channel (MTL Tf)
   // Textures (indices into Scene::textures(), -1 for none). kd_map replaces kd where the triangle has texture
   // coordinates; alpha_map cuts the surface out where its coverage is below one half (docs/decisions.md).
   int32_t kd_map = -1;
   int32_t alpha_map = -1;
   bool emissive() const { return !is_black(ke); }
   bool specular() const { return type == Type::mirror || type == Type::glass; }
+  // A diffuse or glossy surface that also reflects like a mirror (kr): its mirror term is the `specular` op's.
+  bool has_mirror_term() const { return !specular() && !is_black(kr); }
 };
 
-// The MTL illum model and coefficients as a Material type (docs/decisions.md): illum 3 and 5 are mirrors (Ks),
-// 4, 6, 7 and 9 glass (Ni), 2 with Ks > 0 and Ns > 0 glossy, anything else diffuse. Kd + Ks is scaled to at most 1
-// so that no surface creates energy.
-Material material_from_mtl(std::string name, RGB kd, RGB ks, RGB ke, float ns, float ni, int illum);
+// The MTL illum model and coefficients as a Material (docs/lua-api.md, "Materials"): illum 5, and 3 without Kd, are
+// mirrors (Ks); 3 with Kd keeps Kd and adds Ks as a mirror term, shared with a Phong lobe where Ns > 0; 4, 6, 7 and
+// 9 are glass (Ni, tinted by Tf where the file gives one); 2 with Ks > 0 and Ns > 0 glossy; anything else diffuse.
+// Kd + Ks is scaled to at most 1 per channel so that no surface creates energy.
+Material material_from_mtl(std::string name, RGB kd, RGB ks, RGB ke, float ns, float ni, int illum, RGB tf = {});
 
 struct Bounds {
   Vec3 lo, hi;

@@ -1,4 +1,5 @@
 #include "render/scene.hpp"
+#include "render/scene_file.hpp"
 
 #include <gtest/gtest.h>
 
@@ -90,6 +91,29 @@ TEST(Scene, AnObjFromMemoryIsTheSameSceneAsFromItsFile) {
   auto bad = Scene::parse_obj_unlit("f 1 2 3\n", "", "broken.obj");
   ASSERT_FALSE(bad.ok());
   EXPECT_EQ(bad.error().message, "scene file 'broken.obj': a face refers to a vertex that does not exist");
+}
+
+// MTL as exporters mean it: illum 3 with Kd keeps it beside the mirror, Tf tints glass; both survive the compact
+// form that ships a scene to hosts.
+TEST(Scene, Illum3AndTfReachTheMaterialAndTheShippedScene) {
+  const std::string obj = "mtllib x.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nusemtl coat\nf 1 2 3\nusemtl tint\nf 1 2 3\nusemtl lamp\nf 1 2 3\n";
+  const std::string mtl = "newmtl lamp\nKe 1 1 1\nnewmtl coat\nillum 3\nKd 0.5 0.4 0.3\nKs 0.4 0.4 0.4\nNs 80\n"
+                          "newmtl tint\nillum 7\nNi 1.4\nTf 0.3 0.6 0.9\n";
+  auto s = Scene::parse_obj_unlit(obj, mtl, "x.obj");
+  ASSERT_TRUE(s.ok()) << s.error().message;
+  const Material& coat = s->material(s->material_of(0));
+  EXPECT_EQ(coat.type, Material::Type::glossy);
+  EXPECT_FLOAT_EQ(coat.kd.y, 0.4f);
+  EXPECT_FLOAT_EQ(coat.ks.x, 0.2f);
+  EXPECT_FLOAT_EQ(coat.kr.x, 0.2f);
+  EXPECT_FLOAT_EQ(coat.ns, 80);
+  const Material& tint = s->material(s->material_of(1));
+  EXPECT_EQ(tint.type, Material::Type::glass);
+  EXPECT_FLOAT_EQ(tint.tf.y, 0.6f);
+  auto shipped = scene_from_bytes(scene_to_bytes(*s), "x.lfscene");
+  ASSERT_TRUE(shipped.ok()) << shipped.error().message;
+  EXPECT_FLOAT_EQ(shipped->material(shipped->material_of(0)).kr.z, 0.2f);
+  EXPECT_FLOAT_EQ(shipped->material(shipped->material_of(1)).tf.z, 0.9f);
 }
 
 TEST(Scene, McGuireEmptyCOReadsTheIndentedMaterial) {

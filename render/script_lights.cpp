@@ -80,6 +80,14 @@ Status Scene::apply_material_overrides(const Value::Array& overrides) {
       if (!vec3_of(v, c)) return make_error(which + ": ks must be {r, g, b}");
       m->ks = c;
     }
+    if (const Value* v = o.find("mirror")) {
+      if (!vec3_of(v, c)) return make_error(which + ": mirror must be {r, g, b}");
+      m->kr = c;
+    }
+    if (const Value* v = o.find("tf")) {
+      if (!vec3_of(v, c)) return make_error(which + ": tf must be {r, g, b}");
+      m->tf = c;
+    }
     if (const Value* v = o.find("ns"); v && v->is_number()) m->ns = static_cast<float>(v->as_double());
     if (const Value* v = o.find("ior"); v && v->is_number()) m->ior = static_cast<float>(v->as_double());
     if (const Value* v = o.find("type"); v && v->is_string()) {
@@ -90,9 +98,10 @@ Status Scene::apply_material_overrides(const Value::Array& overrides) {
       else if (t == "glass") m->type = Material::Type::glass;
       else return make_error(which + ": unknown type '" + t + "'");
     }
-    const RGB sum = m->kd + m->ks;
+    if (m->specular()) m->kr = {};  // a mirror's reflectance is ks, and glass has none beside its Fresnel
+    const RGB sum = m->kd + m->ks + m->kr;
     if (m->type != Material::Type::glass && std::max({sum.x, sum.y, sum.z}) > 1.0f + 1e-6f)
-      return make_error(which + ": kd + ks exceeds 1 in some channel, so the surface would create energy");
+      return make_error(which + ": kd + ks + mirror exceeds 1 in some channel, so the surface would create energy");
   }
   return Ok{};
 }

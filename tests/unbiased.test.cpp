@@ -1,7 +1,7 @@
 // Every shipped network that says it computes all the light (light_paths not "partial") against a converged path
 // tracer, on a matrix of small scenes: diffuse (the Cornell box), mirror and glass (cornell_glass), glossy (McGuire's
 // CornellBox-Glossy: a glossy sphere and box) and glossy everywhere (its walls, floor and ceiling given a Phong lobe
-// from the script). Each network is the example's own text with the scene and camera lines swapped for the test's.
+// from the script), and a floor both diffuse and a mirror. Each network is the example's own text with the scene and camera lines swapped for the test's.
 // A network that leaves a light path out or counts one twice is darker or brighter on average: the mean is held to
 // 1 %, which a missing third bounce (~3 %) or a missing glossy bounce (~5-11 %) fails.
 #include <gtest/gtest.h>
@@ -28,16 +28,20 @@ struct TestScene {
 std::vector<TestScene> scenes() {
   const std::string cornell_camera = "camera { eye = {278, 273, -800}, at = {278, 273, 0}, fov = 39.3 }\n";
   const std::string glossy = "scene { file = \"" + kShared + "CornellBox-Glossy.obj\" }\n"
-                             "light { quad = {{-0.2, 1.58, 0.2}, {-0.2, 1.58, -0.2}, {0.2, 1.58, -0.2}, {0.2, 1.58, 0.2}}, "
+                             "light { quad = {{-0.2, 1.57, 0.2}, {-0.2, 1.57, -0.2}, {0.2, 1.57, -0.2}, {0.2, 1.57, 0.2}}, "
                              "radiance = {17, 12, 4} }\n"
                              "camera { eye = {0, 1, 3.6}, at = {0, 1, 0}, fov = 38 }\n";
   std::string shiny_walls = glossy;
   for (const char* wall : {"leftWall", "rightWall", "floor", "ceiling", "backWall"})
     shiny_walls += std::string("material \"") + wall + "\" { type = \"glossy\", ks = {0.2, 0.2, 0.2}, ns = 40 }\n";
+  // A floor that is diffuse and a mirror at once (MTL illum 3 with Kd): direct light and the caches take its Kd, the
+  // specular op its mirror term, a photon map follows that term too.
+  const std::string mirror_floor = glossy + "material \"floor\" { kd = {0.4, 0.4, 0.4}, mirror = {0.4, 0.4, 0.4} }\n";
   return {{"cornell", "scene { builtin = \"cornell\" }\n" + cornell_camera},
           {"cornell_glass", "scene { builtin = \"cornell_glass\" }\n" + cornell_camera},
           {"glossy", glossy},
-          {"glossy_walls", shiny_walls}};
+          {"glossy_walls", shiny_walls},
+          {"mirror_floor", mirror_floor}};
 }
 
 // The example's text with its scene, material and camera statements replaced by the scene's.

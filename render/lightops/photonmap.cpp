@@ -14,6 +14,7 @@
 // k), other points and points with no such neighbour the full estimate.
 #include <nanoflann.hpp>
 
+#include <algorithm>
 #include <chrono>
 #include <cstring>
 
@@ -291,11 +292,19 @@ class PhotonMap final : public LightOp {
           const Vec3 x = f.ray.origin + f.ray.direction * hits[i].t;
           if (!m.specular()) {
             if (f.specular_bounces > 0) stored.push_back(Photon{x, wo, f.flux, front ? ng : -ng});
-            continue;  // a caustic map keeps only L S+ D paths and stops at the first diffuse surface
+            // A caustic map keeps only L S+ D paths and stops at the first diffuse surface, unless that surface
+            // also reflects like a mirror: then on through its mirror term, kept in proportion to kr.
+            if (!m.has_mirror_term()) continue;
           }
           const Vec3 n = front ? ng : -ng;  // offsets; the smooth normal ns reflects and refracts
           const Vec3 ns = surface_at(scene, tri, x, wo).ns;
-          auto s = Bsdf(m).sample(ns, wo, front, f.rng.uniform(), 0.5f, 0.5f);
+          std::optional<Bsdf::Sample> s;
+          if (m.specular()) {
+            s = Bsdf(m).sample(ns, wo, front, f.rng.uniform(), 0.5f, 0.5f);
+          } else if (const float keep = std::min(1.0f, std::max({m.kr.x, m.kr.y, m.kr.z})); f.rng.uniform() < keep) {
+            s = Bsdf(m).sample_mirror_term(ns, wo);
+            if (s) s->weight = s->weight * (1.0f / keep);
+          }
           if (!s) continue;
           f.flux = f.flux * s->weight;
           const Vec3 side = dot(s->wi, n) > 0 ? n : -n;

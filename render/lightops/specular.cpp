@@ -1,7 +1,8 @@
-// specular: light that reaches a point on a mirror or glass surface along a chain of perfect reflections and
-// refractions. From such a point it follows the chain (choosing reflection or refraction at glass by Fresnel,
-// `samples` chains per point) until it lands on a non-specular surface, then asks its input, in one batch, for the
-// light leaving that surface back along the chain. An emitter the chain lands on adds its own emission (the
+// specular: light that reaches a point on a mirror or glass surface (or through the mirror term of a diffuse or
+// glossy one) along a chain of perfect reflections and refractions. From such a point it follows the chain
+// (choosing reflection or refraction at glass by Fresnel, `samples` chains per point) until it lands on a
+// non-specular surface, then asks its input, in one batch, for the light leaving that surface back along the
+// chain; where that surface has a mirror term too, the chain also goes on through it. An emitter the chain lands on adds its own emission (the
 // input returns reflected light only). Points on non-specular surfaces get nothing: that is the other ops' job.
 // One input.
 //
@@ -46,29 +47,39 @@ class Specular final : public LightOp {
     const Scene& scene = *ctx_.scene;
     struct Chain {
       size_t owner;
+      int sample;  // which of the point's chains
       Vec3 x, n, wo;
       Vec3 ng;  // the face's normal on n's side (n is the shading normal)
       uint32_t material;
       uint32_t triangle;  // UINT32_MAX: a point that names none
       bool outside;
-      bool asks_input;  // one of the first `samples` chains: its landing is shaded
+      bool asks_input;  // one of the first `samples` chains: its landings are shaded
       RGB weight{1, 1, 1};
       RGB emitted{};
-      int landed = -1;  // index into `ends` once it reaches a non-specular surface
       Rng rng;
+    };
+    // Where a chain reached a diffuse or glossy surface: the input's light there, times the chain's weight. A chain
+    // lands once on a mirror or glass chain's end, and goes on through the mirror term of a surface that has one.
+    struct Landing {
+      size_t chain;
+      RGB weight;
+    };
+    auto reflects = [&](uint32_t material) {
+      const Material& m = scene.material(material);
+      return m.specular() || m.has_mirror_term();
     };
     std::vector<Chain> chains;
     for (size_t i = 0; i < points.size(); ++i) {
       radiance[i] = RGB{};
-      if (!scene.material(points.material[i]).specular()) continue;
+      if (!reflects(points.material[i])) continue;
       // Chains that only look for emitters have nothing to do when emitters count for nothing here.
       for (int s = 0; s < (emitters_ ? emission_samples_ : samples_); ++s)
-        chains.push_back(Chain{i, points.position[i], points.normal[i], points.wo[i], points.face_normal(i, scene),
-                               points.material[i], points.triangle_of(i),
-                               points.outside(i, scene), s < samples_, {1, 1, 1}, {}, -1,
-                               Rng(points.key[i], streams::specular ^ (seed_ << 8) ^ (uint64_t(s) << 32))});
+        chains.push_back(Chain{i, s, points.position[i], points.normal[i], points.wo[i], points.face_normal(i, scene),
+                               points.material[i], points.triangle_of(i), points.outside(i, scene), s < samples_,
+                               {1, 1, 1}, {}, Rng(points.key[i], streams::specular ^ (seed_ << 8) ^ (uint64_t(s) << 32))});
     }
     ShadingPoints ends;
+    std::vector<Landing> landings;  // one per entry of `ends`
     std::vector<size_t> active(chains.size());
     for (size_t c = 0; c < chains.size(); ++c) active[c] = c;
     std::vector<Ray> rays;
@@ -79,7 +90,9 @@ class Specular final : public LightOp {
       for (size_t c : active) {
         Chain& ch = chains[c];
         const float u0 = ch.rng.uniform();
-        auto s = Bsdf(scene.material(ch.material)).sample(ch.n, ch.wo, ch.outside, u0, 0.5f, 0.5f);
+        const Material& m = scene.material(ch.material);
+        const Bsdf bsdf(m);
+        auto s = m.specular() ? bsdf.sample(ch.n, ch.wo, ch.outside, u0, 0.5f, 0.5f) : bsdf.sample_mirror_term(ch.n, ch.wo);
         if (!s) continue;
         ch.weight = ch.weight * s->weight;
         const Vec3 side = dot(s->wi, ch.ng) > 0 ? ch.ng : -ch.ng;
@@ -100,26 +113,33 @@ class Specular final : public LightOp {
         const uint32_t m = scene.material_of(tri);
         const Material& hit = scene.material(m);
         if (emitters_ && hit.emissive() && front) ch.emitted += ch.weight * hit.ke;
-        if (hit.specular()) {
-          ch = Chain{ch.owner, x, sp.ns, wo, sp.ng, m, tri, front, ch.asks_input, ch.weight, ch.emitted, -1, ch.rng};
-          active.push_back(moving[r]);
-          continue;
+        if (!hit.specular() && ch.asks_input) {
+          // Keyed by the point, the chain and the depth: the same on every batch and layout.
+          const uint64_t key = splitmix64(points.key[ch.owner] ^ (0x5bec0000ull + static_cast<uint64_t>(ch.sample) * 256 +
+                                                                  static_cast<uint64_t>(depth)));
+          ends.push_back(x, sp.ns, wo, m, key, tri);
+          landings.push_back(Landing{moving[r], ch.weight});
         }
-        if (!ch.asks_input) continue;
-        ch.landed = static_cast<int>(ends.size());
-        const uint64_t key = splitmix64(points.key[ch.owner] ^ (0x5bec0000ull + static_cast<uint64_t>(moving[r])));
-        ends.push_back(x, sp.ns, wo, m, key, tri);
+        if (reflects(m)) {
+          ch.x = x;
+          ch.n = sp.ns;
+          ch.wo = wo;
+          ch.ng = sp.ng;
+          ch.material = m;
+          ch.triangle = tri;
+          ch.outside = front;
+          active.push_back(moving[r]);
+        }
       }
     }
     std::vector<RGB> arriving;
     if (ends.size() > 0 && inputs.count() > 0) co_await inputs.shade(0, ends, arriving);
     const float per_landing = 1.0f / static_cast<float>(samples_);
     const float per_emission = 1.0f / static_cast<float>(emission_samples_);
-    for (const Chain& ch : chains) {
-      RGB l = ch.emitted * per_emission;
-      if (ch.landed >= 0 && !arriving.empty()) l += ch.weight * arriving[static_cast<size_t>(ch.landed)] * per_landing;
-      radiance[ch.owner] += l;
-    }
+    for (const Chain& ch : chains) radiance[ch.owner] += ch.emitted * per_emission;
+    if (!arriving.empty())
+      for (size_t e = 0; e < landings.size(); ++e)
+        radiance[chains[landings[e].chain].owner] += landings[e].weight * arriving[e] * per_landing;
   }
 
  private:
