@@ -4,8 +4,10 @@
 #include <cstdio>
 #include <map>
 
+#include "render/camera.hpp"
 #include "render/light_checks.hpp"
 #include "render/scene.hpp"
+#include "render/tracer.hpp"
 
 namespace lf {
 
@@ -26,6 +28,57 @@ const char* kind_name(Material::Type t) {
     case Material::Type::glass: return "glass";
   }
   return "?";
+}
+
+// Where to look from: the side of the scene whose visible surfaces face its light. From 8 directions around the
+// bounding sphere (a little above it, +z first), a coarse 32 x 24 view counts the camera rays whose first hit is on
+// the side of its surface that faces the emitters' centre (with no emitters: every hit); the first best wins. A
+// fixed +z view looked at the back of a backdrop whose lamp and test object were on its -z side: an image of zeros.
+Vec3 suggested_eye(const Scene& s, Vec3 centre, float distance) {
+  const auto eye_at = [&](int k) {
+    const float az = static_cast<float>(k) * kPi / 4;
+    return centre + normalize(Vec3{std::sin(az), 0.35f, std::cos(az)}) * distance;
+  };
+  Vec3 light{};
+  double weight = 0;
+  for (uint32_t t : s.emitters()) {
+    const float a = s.area(t);
+    light += (s.vertex(t, 0) + s.vertex(t, 1) + s.vertex(t, 2)) * (a / 3.0f);
+    weight += a;
+  }
+  for (const auto& p : s.point_lights()) {
+    light += p.position;
+    weight += 1;
+  }
+  const bool lit = weight > 0;
+  if (lit) light = light * static_cast<float>(1.0 / weight);
+  const RayTracer tracer(s);
+  int best = 0;
+  size_t best_score = 0;
+  constexpr int kWidth = 32, kHeight = 24;
+  for (int k = 0; k < 8; ++k) {
+    const Vec3 eye = eye_at(k);
+    CameraSpec spec;
+    spec.eye = {eye.x, eye.y, eye.z};
+    spec.at = {centre.x, centre.y, centre.z};
+    spec.fov = 45;
+    const Camera camera(spec, kWidth, kHeight);
+    std::vector<Ray> rays;
+    for (int y = 0; y < kHeight; ++y)
+      for (int x = 0; x < kWidth; ++x) rays.push_back(camera.ray(static_cast<float>(x) + 0.5f, static_cast<float>(y) + 0.5f));
+    std::vector<Hit> hits(rays.size());
+    tracer.intersect(rays, hits);
+    size_t score = 0;
+    for (size_t r = 0; r < rays.size(); ++r) {
+      if (!hits[r].valid()) continue;
+      const Vec3 p = rays[r].origin + rays[r].direction * hits[r].t;
+      Vec3 n = s.normal(hits[r].triangle);
+      if (dot(n, rays[r].direction) > 0) n = -n;  // the side the camera sees
+      score += !lit || dot(n, light - p) > 0;
+    }
+    if (score > best_score) best = k, best_score = score;
+  }
+  return eye_at(best);
 }
 
 }  // namespace
@@ -119,11 +172,12 @@ Result<std::string> describe_scene(const std::string& obj_path) {
   }
   for (const auto& w : catalogue->warnings) out += "  warning    " + w + "\n";
 
-  // A camera that frames the bounding sphere from the +z side, a little above, with a 45-degree field of view.
+  // A camera that frames the bounding sphere, a little above it, with a 45-degree field of view, from the side
+  // whose surfaces face the light.
   const Vec3 centre = (lo + hi) * 0.5f;
   const float radius = 0.5f * bounds.diagonal();
   const float distance = radius / std::sin(0.5f * 45.0f * kPi / 180.0f);  // the sphere fits the view cone
-  const Vec3 eye = centre + normalize(Vec3{0, 0.35f, 1}) * distance;
+  const Vec3 eye = suggested_eye(s, centre, distance);
   out += "  camera     camera { eye = " + vec(eye) + ", at = " + vec(centre) + ", fov = 45 }\n";
 
   // The lobes its materials have, and a network that counts every light path on them once (docs/lua-api.md,

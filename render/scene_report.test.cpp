@@ -65,5 +65,30 @@ TEST(SceneReport, DescribesARoomAndFramesIt) {
   std::filesystem::remove_all(dir);
 }
 
+// A material-test setup: a small knob in front of a large backdrop, lit by a lamp on the same side (-z). The camera
+// looks from that side, where the backdrop's lit face and the knob are, not at the backdrop's unlit back (+z, the
+// view every scene got before: an image of zeros).
+TEST(SceneReport, TheSuggestedCameraLooksAtTheLitSide) {
+  const auto dir = std::filesystem::temp_directory_path() / ("lightfarm-report-lit-" + std::to_string(::getpid()));
+  std::filesystem::create_directories(dir);
+  const std::string obj = (dir / "knob.obj").string();
+  std::ofstream(obj) << "mtllib knob.mtl\n"
+                        "v -5 0 0\nv 5 0 0\nv 5 5 0\nv -5 5 0\n"                      // backdrop in z = 0
+                        "v -0.5 4 -3\nv 0.5 4 -3\nv 0.5 4 -2\nv -0.5 4 -2\n"          // lamp, 4 up, in front
+                        "v -0.3 0 -1.3\nv 0.3 0 -1.3\nv 0.3 0.6 -1.3\nv -0.3 0.6 -1.3\n"  // knob's front face
+                        "usemtl grey\nf 1 2 3 4\nf 9 10 11 12\nusemtl lamp\nf 5 6 7 8\n";
+  std::ofstream(dir / "knob.mtl") << "newmtl grey\nKd 0.5 0.5 0.5\nnewmtl lamp\nKe 5 5 5\n";
+  auto text = describe_scene(obj);
+  ASSERT_TRUE(text.ok()) << text.error().message;
+  const auto at_camera = text->find("camera { eye = {");
+  ASSERT_NE(at_camera, std::string::npos) << *text;
+  Vec3 eye, at;
+  ASSERT_EQ(std::sscanf(text->c_str() + at_camera, "camera { eye = {%f, %f, %f}, at = {%f, %f, %f}", &eye.x, &eye.y,
+                        &eye.z, &at.x, &at.y, &at.z),
+            6);
+  EXPECT_LT(eye.z, at.z - 1) << *text;
+  std::filesystem::remove_all(dir);
+}
+
 }  // namespace
 }  // namespace lf
