@@ -89,7 +89,7 @@ Value map_of(KeysAndValues&&... kv) {
   return Value(std::move(m));
 }
 
-// Floats as little-endian float32 bytes and back (the wire's bulk format, DESIGN §3).
+// Floats as little-endian float32 bytes and back (the wire's bulk format, docs/PROTOCOL.md).
 Bytes floats_to_bytes(std::span<const float> floats);
 // Returns false when the byte count is not a multiple of 4.
 bool bytes_to_floats(const Bytes& bytes, std::vector<float>& out);

@@ -73,8 +73,8 @@ GlobalBsp GlobalBsp::build(const Mesh& mesh, int positions, bool balanced) {
   GlobalBsp best;
   size_t best_load = SIZE_MAX;
   const auto probe = balanced ? probe_segments(mesh, kProbeSegments) : std::vector<std::pair<Vec3, Vec3>>{};
-  // A deeper tree lets leaves be dealt more evenly, but a ray then crosses more positions and is cast more often
-  // (and every node stores the tree, seed 003 §5.2): try each depth and keep the one whose busiest position has
+  // A deeper tree lets leaves be dealt more evenly, but a ray then crosses more positions and is cast more often (and
+  // every node stores the tree, Stürzlinger et al. §5.2): try each depth and keep the one whose busiest position has
   // the least probe work.
   const int deepest = balanced ? base + 6 : base;
   for (int depth = base; depth <= deepest; ++depth) {

@@ -1,7 +1,7 @@
 #pragma once
-// The global BSP tree (seed 003 §4): the upper levels of an axis-aligned BSP over the scene, the same on every
-// node; each leaf stands for a subtree that one ring position holds. A segment's processor vector is the set
-// of positions whose leaves it crosses: only they can hold something that blocks it.
+// The global BSP tree (Stürzlinger et al. §4): the upper levels of an axis-aligned BSP over the scene, the same on
+// every node; each leaf stands for a subtree that one ring position holds. A segment's processor vector is the set of
+// positions whose leaves it crosses: only they can hold something that blocks it.
 #include <cstdint>
 #include <vector>
 
@@ -16,7 +16,7 @@ struct Box {
 
 class GlobalBsp {
  public:
-  // `balanced` (static load balancing of visibility complexity, seed 003 §5.2): the depth and the dealing of
+  // `balanced` (static load balancing of visibility complexity, Stürzlinger et al. §5.2): the depth and the dealing of
   // leaves chosen so that the busiest position has the least visibility work. The paper weighs a leaf by its
   // polygons; with Embree a ray's cost hardly depends on how many polygons a node holds, but on whether the node
   // has to cast it at all, so work is measured with a fixed probe of segments (between facing surfaces, half of

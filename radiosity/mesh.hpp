@@ -41,7 +41,7 @@ struct Mesh {
 
 Result<Mesh> build_mesh(const Scene& scene, const MeshSettings& settings);
 
-// Static load balancing of radiosity samples (seed 003 §5.1): splits the patches with the most elements until
+// Static load balancing of radiosity samples (Stürzlinger et al. §5.1): splits the patches with the most elements until
 // none holds more than a quarter of a node's share, so that whole patches can be dealt out evenly.
 void split_for_balance(Mesh& mesh, int nodes);
 // Which node computes each patch: contiguous runs of equal patch counts (`balanced` false, the plain scheme), or

@@ -1,6 +1,6 @@
 #pragma once
-// A ring node's algorithm (seed 003 §3-§6), with no transport: the actor (actors/kinds/ring_node_actor.cpp) moves its
-// packets between processes, and tests move them in-process.
+// A ring node's algorithm (Stürzlinger et al. §3-§6), with no transport: the actor (actors/kinds/ring_node_actor.cpp)
+// moves its packets between processes, and tests move them in-process.
 //
 // N = rings x length nodes. Node (r, p) computes radiosity for its share of the patches (a Part) and holds, for
 // visibility, the surfaces of the global BSP leaves of position p; every ring holds the whole geometry once. Its

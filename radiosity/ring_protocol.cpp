@@ -144,7 +144,7 @@ std::vector<RingAction> RingNodeProtocol::step(Clock::time_point now) {
     }
   }
   if (!running()) return out;
-  // One own packet round the ring at a time (seed 003: never more packets in a ring than nodes).
+  // One own packet round the ring at a time (Stürzlinger et al.: never more packets in a ring than nodes).
   if (own_out_ == 0 && !borrowed_) {
     if (auto p = node_.take_pending()) {
       ++own_out_;
@@ -180,8 +180,8 @@ std::vector<RingAction> RingNodeProtocol::step(Clock::time_point now) {
   return out;
 }
 
-// Dynamic load balancing (seed 003 §6.2): idle, ask a random node at this position in another ring for some of
-// its packets; one that is idle too answers with the rings it knows to be idle.
+// Dynamic load balancing (Stürzlinger et al. §6.2): idle, ask a random node at this position in another ring for some
+// of its packets; one that is idle too answers with the rings it knows to be idle.
 void RingNodeProtocol::poll(std::vector<RingAction>& out, Clock::time_point now) {
   polling_ = false;
   if (!config_.dynamic_balance || config_.layout.rings < 2 || poll_out_) return;

@@ -1,5 +1,5 @@
 #pragma once
-// A ring node's protocol (seed 003 §4-§6) as a state machine with no sockets: the actor
+// A ring node's protocol (Stürzlinger et al. §4-§6) as a state machine with no sockets: the actor
 // (actors/kinds/ring_node_actor.cpp) feeds it what arrives and carries out the actions it returns; tests do the
 // same in-process (ring_protocol.test.cpp), and the director's ring service reads the same report and choice.
 //
@@ -13,13 +13,13 @@
 //   done            the director took them
 // Packets of an iteration the node has not begun wait in its inbox; older ones are dropped.
 //
-// Recovery (seed 003 has none; docs/decisions.md): a node's elements exist nowhere else, so when one is lost the
-// director restarts it and rolls the whole ring back to its last checkpoint: every `checkpoint_every` iterations each
-// node's report carries its leaf elements, and a rollback hands each node its own back (or starts them all afresh
+// Recovery (Stürzlinger et al. have none; docs/decisions.md): a node's elements exist nowhere else, so when one is lost
+// the director restarts it and rolls the whole ring back to its last checkpoint: every `checkpoint_every` iterations
+// each node's report carries its leaf elements, and a rollback hands each node its own back (or starts them all afresh
 // when there is none). The rollback opens a new epoch; packets, polls, reports and results of an older epoch are
-// dropped. Iterations are deterministic (visibility does not depend on which node or ring traced it, and a round's
-// sums run in element order), so the ring then repeats the lost iterations exactly and the solution equals the
-// fault-free one.
+// dropped. Iterations are deterministic (visibility does not depend on which node or ring traced it, and a round's sums
+// run in element order), so the ring then repeats the lost iterations exactly and the solution equals the fault-free
+// one.
 #include <chrono>
 #include <deque>
 #include <optional>

@@ -1,7 +1,7 @@
 #pragma once
-// Progressive refinement radiosity (seed 003 §1): the patch with the most unshot power shoots; every receiving
-// element's sample points see M sub-areas of the shooter through rays (an M-bit visibility vector per sample) and
-// take the analytic form factor of the visible ones; elements whose samples disagree too much are split and
+// Progressive refinement radiosity (Stürzlinger et al. §1): the patch with the most unshot power shoots; every
+// receiving element's sample points see M sub-areas of the shooter through rays (an M-bit visibility vector per sample)
+// and take the analytic form factor of the visible ones; elements whose samples disagree too much are split and
 // re-sampled for the same shooter (adaptive subdivision).
 //
 // Part holds the elements of some patches and does everything but casting rays: it says which samples need

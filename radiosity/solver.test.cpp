@@ -46,7 +46,7 @@ Mesh furnace_mesh(float rho, float radiosity) {
   return *mesh;
 }
 
-// A closed box that emits E everywhere and reflects rho converges to B = E / (1 - rho) (DESIGN §7).
+// A closed box that emits E everywhere and reflects rho converges to B = E / (1 - rho).
 TEST(SerialSolver, FurnaceConvergesToTheClosedForm) {
   for (float rho : {0.5f, 0.8f}) {
     const Mesh mesh = furnace_mesh(rho, 2.0f);

@@ -1,8 +1,8 @@
 #pragma once
-// The directional irradiance cache of seed 002 (Jansen & Reinhard, §2.4 and §3.2): for each cell of space, a
-// picture of the radiance arriving from beyond the cell's surroundings, so that a diffuse ray that would leave them
-// can often be answered here instead of being traced through the rest of the scene (in a partitioned farm: instead
-// of travelling to other parts).
+// The directional irradiance cache of Jansen & Reinhard ("Data Locality in Parallel Rendering", §2.4 and §3.2): for
+// each cell of space, a picture of the radiance arriving from beyond the cell's surroundings, so that a diffuse ray
+// that would leave them can often be answered here instead of being traced through the rest of the scene (in a
+// partitioned farm: instead of travelling to other parts).
 //
 // Space is cut into a grid of cubic cells (the paper uses octree leaves; a grid gives every point its cell with no
 // tree to build or ship, and cells of one size). Each cell holds a quadtree over the sphere of directions, in the
@@ -14,8 +14,8 @@
 // child starts from its parent's mean with a count of one (the paper's footnote). A direction is answered when its
 // leaf is at least `uniform_depth` deep, has `min_samples` rays, and is either smooth or as deep as allowed.
 //
-// Determinism (DESIGN §4): the cache is filled in a setup pass in a fixed order and then frozen; while rendering it
-// only answers, so a pixel never depends on what was traced before it.
+// Determinism (an image must not depend on the farm's layout): the cache is filled in a setup pass in a fixed order and
+// then frozen; while rendering it only answers, so a pixel never depends on what was traced before it.
 #include <cstdint>
 #include <unordered_map>
 #include <vector>

@@ -1,5 +1,5 @@
-// The directional cache (seed 002 §3.2): its quadtree's rule, and the path tracer with it against closed forms and
-// against itself without it.
+// The directional cache (Jansen & Reinhard, §3.2): its quadtree's rule, and the path tracer with it against closed
+// forms and against itself without it.
 #include "render/directional_cache.hpp"
 
 #include <gtest/gtest.h>

@@ -10,9 +10,9 @@
 // few samples of the pre-pass missed a light, and the density of the mixture is what multiple importance sampling
 // weighs against. Outside learned cells (points the camera does not see) the tree alone is used.
 //
-// Determinism (DESIGN §4): a pure function of the scene, the camera, the image size and the options: the candidate
-// points in pixel order, the cells by key, every sample seeded by its cell and index. Every process that builds it
-// builds the same thing, so images do not depend on the layout.
+// Determinism: a pure function of the scene, the camera, the image size and the options: the candidate points in
+// pixel order, the cells by key, every sample seeded by its cell and index. Every process that builds it builds the
+// same thing, so images do not depend on the farm's layout.
 #include <cstdint>
 #include <unordered_map>
 #include <vector>

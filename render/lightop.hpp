@@ -1,6 +1,6 @@
 #pragma once
-// The LightOp interface (DESIGN §2). A LightOp is a plain class: set up on the scene, then shade batches of
-// shading points into outgoing radiance, asking its inputs (predecessors in the lighting network) where the
+// The LightOp interface (Kipfer's lighting networks). A LightOp is a plain class: set up on the scene, then shade
+// batches of shading points into outgoing radiance, asking its inputs (predecessors in the lighting network) where the
 // algorithm needs light from elsewhere. It never sees ZeroMQ or msgpack: the actor runtime wraps it
 // (actors/runtime/lightop_actor.cpp), and tests run it in-process (LocalInputs below).
 //

@@ -53,8 +53,8 @@ struct PathOptions {
 struct PathTally {
   uint64_t paths = 0;
   uint64_t vertices = 0;
-  // With a directional cache: diffuse continuation rays, and how each ended (seed 002's Table 3): a hit inside the
-  // neighbourhood (local), traced beyond it (global), answered by the cache (lookup).
+  // With a directional cache: diffuse continuation rays, and how each ended (Jansen & Reinhard's Table 3): a hit inside
+  // the neighbourhood (local), traced beyond it (global), answered by the cache (lookup).
   uint64_t diffuse_rays = 0, local_rays = 0, global_rays = 0, cache_lookups = 0;
 };
 

@@ -1,5 +1,5 @@
 #pragma once
-// Deterministic sampling (DESIGN §4). Every random number is a function of (pixel, sample index, stream, draw
+// Deterministic sampling. Every random number is a function of (pixel, sample index, stream, draw
 // number) and nothing else, so an image does not depend on which process computed which tile or in which order.
 #include <cstdint>
 

@@ -36,11 +36,11 @@ class RayTracer {
   RayTracer(const RayTracer&) = delete;
   RayTracer& operator=(const RayTracer&) = delete;
 
-  // `coherent` lets Embree trace the stream in SIMD packets, whose arithmetic depends on which rays share a
-  // packet: use it only for batches that are the same on every farm layout (a tile's camera rays). Everything
-  // else is traced ray by ray, so a ray's hit never depends on the batch it came in (DESIGN §4).
-  // Coplanar overlapping faces hit at the same distance are settled by a rule from the scene alone
-  // (render/tied_hits.hpp), so the hit does not depend on which BVH found it.
+  // `coherent` lets Embree trace the stream in SIMD packets, whose arithmetic depends on which rays share a packet: use
+  // it only for batches that are the same on every farm layout (a tile's camera rays). Everything else is traced ray by
+  // ray, so a ray's hit never depends on the batch it came in (images must not depend on the farm's layout). Coplanar
+  // overlapping faces hit at the same distance are settled by a rule from the scene alone (render/tied_hits.hpp), so
+  // the hit does not depend on which BVH found it.
   void intersect(std::span<const Ray> rays, std::span<Hit> hits, bool coherent = false) const;
   // The hit this BVH finds, ties unsettled (a part's own search; the partitioned tracer settles them after).
   void intersect_unsettled(std::span<const Ray> rays, std::span<Hit> hits, bool coherent = false) const;

@@ -132,8 +132,8 @@ renderers { count = 2, lighting = multiplexer { lightop "pathtrace" { max_depth 
   EXPECT_TRUE(killed->pixels == whole.pixels);
 }
 
-// The directional cache (seed 002 §3) is filled in setup and frozen, so it does not depend on the layout either: a
-// split scene and one renderer or two give the same pixels, and the op reports how often the cache answered.
+// The directional cache (Jansen & Reinhard, §3) is filled in setup and frozen, so it does not depend on the layout
+// either: a split scene and one renderer or two give the same pixels, and the op reports how often the cache answered.
 TEST_F(PartitionTest, TheDirectionalCacheGivesTheSamePixelsOnEveryLayout) {
   const std::string script = write("cache.lua", R"(scene { builtin = "cornell" }
 image { width = 48, height = 48, spp = 4, tile = 16 }

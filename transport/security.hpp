@@ -1,9 +1,9 @@
 #pragma once
-// CURVE on every link (DESIGN §6). The director makes a keypair for itself and one for every actor; each actor
-// gets its own secret outside its command line and environment (the first line of its standard input), with the
-// public keys of the whole farm. Every server socket (the director's control socket, each actor's data socket)
-// speaks CURVE with its own keypair and lets in only clients whose public key is the farm's: a ZAP handler in each
-// process checks them and logs refusals, at most one line a second.
+// CURVE on every link, so that no stranger on the network can join a farm or read its traffic. The director makes a
+// keypair for itself and one for every actor; each actor gets its own secret outside its command line and environment
+// (the first line of its standard input), with the public keys of the whole farm. Every server socket (the director's
+// control socket, each actor's data socket) speaks CURVE with its own keypair and lets in only clients whose public key
+// is the farm's: a ZAP handler in each process checks them and logs refusals, at most one line a second.
 #include <atomic>
 #include <memory>
 #include <mutex>

@@ -1,5 +1,5 @@
 #pragma once
-// The tile service: the render master and the film (DESIGN §1). Serves
+// The tile service: the render master and the film (Kipfer's MasterRenderer). Serves
 //   tile       {}                          -> {tile: {id, x0, y0, x1, y1}}, or {} once every tile is done
 //   tile_done  {id, pixels: f32[3 w h]}    -> {}; ERROR refused unless the sender holds the tile (and only once);
 //                                             ERROR bad_request for a body without id and pixels

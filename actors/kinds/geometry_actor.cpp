@@ -1,5 +1,5 @@
 // geometry: one part of a partitioned scene (partition { parts = N }; render/partition.hpp), the data-parallel half
-// of seed 002: rays come to the part that holds the triangles.
+// of Jansen & Reinhard: rays come to the part that holds the triangles.
 //
 // Accepts on the data socket:
 //   REQUEST op="trace" { n, r, any }  ->  REPLY { n, tri, t } (nearest hit in this part; tri 0xffffffff: none)

@@ -1,6 +1,6 @@
-// radiosity_node: one node of a radiosity ring (seed 003) as an actor. The protocol itself — states, packets,
-// lending and borrowing — is radiosity::RingNodeProtocol (radiosity/ring_protocol.hpp); this file only carries its
-// messages (bodies in actors/codecs/ring_codec.hpp).
+// radiosity_node: one node of a radiosity ring (Stürzlinger, Schaufler & Volkert) as an actor. The protocol itself —
+// states, packets, lending and borrowing — is radiosity::RingNodeProtocol (radiosity/ring_protocol.hpp); this file only
+// carries its messages (bodies in actors/codecs/ring_codec.hpp).
 //
 // Accepts on the data socket (from other nodes), each answered at once with REPLY {}:
 //   REQUEST ring.visit / ring.back / ring.return   a sample packet; ERROR bad_request for a malformed one or one

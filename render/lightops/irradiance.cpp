@@ -6,13 +6,13 @@
 // the record keeps E, the harmonic mean distance R (at most `nearest` times the nearest hit's distance) and both
 // gradients, and serves points where
 // |x - x_i| / R_i + sqrt(1 - n.n_i) < a, extrapolated with the gradients and weighted by 1 / that error.
-// Determinism (DESIGN §4): records are made only in setup, by a pre-pass over candidate points in a fixed order —
-// where the camera looks, where a camera-placed cache's hemisphere rays land (the overture), or `prepass` points
-// spread over the scene's non-specular surfaces by area — in rounds: each round keeps the points the cache cannot
-// yet serve, replicas of a pool each compute a contiguous share of them, and the shares are merged in order
-// (all-gather), so every replica inserts the same records in the same order as a single op would. While
-// rendering, a point the cache cannot serve (even with the bound relaxed to 2a, then 4a) computes its own value
-// from its own hemisphere samples and adds no record, so no point's value depends on which points came first.
+// Determinism (an image must not depend on the farm's layout): records are made only in setup, by a pre-pass over
+// candidate points in a fixed order — where the camera looks, where a camera-placed cache's hemisphere rays land (the
+// overture), or `prepass` points spread over the scene's non-specular surfaces by area — in rounds: each round keeps
+// the points the cache cannot yet serve, replicas of a pool each compute a contiguous share of them, and the shares are
+// merged in order (all-gather), so every replica inserts the same records in the same order as a single op would. While
+// rendering, a point the cache cannot serve (with `relax`, not even under 2a, then 4a) computes its own value from
+// its own hemisphere samples and adds no record, so no point's value depends on which points came first.
 // Output: Kd / pi * E (the diffuse part); nothing on mirrors and glass.
 #include <algorithm>
 

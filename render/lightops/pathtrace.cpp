@@ -87,7 +87,7 @@ class PathTrace final : public LightOp {
   // The cache is filled before rendering, from paths started where the camera looks (the first hit through every
   // `cache_fill_stride`-th pixel, `cache_fill_spp` paths each), batch after batch in pixel order, recording as it
   // goes and answering where it already can (the paper's on-the-fly filling); then it is frozen, so that rendering
-  // only reads it and no pixel depends on another (DESIGN §4).
+  // only reads it and no pixel depends on another, or on the farm's layout.
   Task fill_cache() {
     if (!ctx_.camera) throw LightOpError("pathtrace: directional_cache needs the farm's camera");
     cache_ = std::make_unique<DirectionalCache>(*ctx_.scene, cache_options_);

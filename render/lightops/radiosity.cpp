@@ -1,6 +1,6 @@
-// radiosity: shades with a converged radiosity solution (DESIGN §7). In setup it fetches the solution the farm's
-// radiosity ring published (a RadiosityField); a point's outgoing radiance is its reflected radiosity (B - E)
-// interpolated from the vertices of the element under it, divided by pi (diffuse). It composes like any op, e.g.
+// radiosity: shades with a converged radiosity solution. In setup it fetches the solution the farm's radiosity ring
+// published (a RadiosityField); a point's outgoing radiance is its reflected radiosity (B - E) interpolated from the
+// vertices of the element under it, divided by pi (diffuse). It composes like any op, e.g.
 // irradiance { input = radiosity } as a final gather. No inputs, no parameters.
 #include <algorithm>
 
