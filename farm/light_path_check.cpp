@@ -141,14 +141,11 @@ static void warn_about_empty_caches(const FarmSpec& spec, const SceneLobes& scen
       auto it = a.params.find(key);
       return it != a.params.end() && it->second.is_bool() && it->second.as_bool();
     };
-    if (a.kind == "pathtrace" && param("directional_cache") && scene.diffuse_only.empty())
-      report.warnings.push_back(
-          a.loc.str() + ": '" + a.name + "' has directional_cache = true, but no material of the scene is diffuse " +
-          "alone (the cache answers only rays that leave such surfaces; " +
-          (scene.materials[static_cast<int>(Lobe::glossy)].empty()
-               ? std::string("none reflects diffusely")
-               : quoted_list(scene.materials[static_cast<int>(Lobe::glossy)], 3) + " also have a glossy lobe") +
-          "): it will answer nothing and only cost its filling pass");
+    if (a.kind == "pathtrace" && param("directional_cache") && scene.materials[static_cast<int>(Lobe::diffuse)].empty())
+      report.warnings.push_back(a.loc.str() + ": '" + a.name +
+                                "' has directional_cache = true, but no material of the scene reflects diffusely (the "
+                                "cache answers only rays a diffuse lobe sends): it will answer nothing and only cost "
+                                "its filling pass");
     if (a.kind == "irradiance" && scene.materials[static_cast<int>(Lobe::diffuse)].empty())
       report.warnings.push_back(a.loc.str() + ": '" + a.name +
                                 "' caches diffuse light, but no material of the scene reflects diffusely: it has "

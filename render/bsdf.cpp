@@ -64,6 +64,52 @@ std::optional<Bsdf::Sample> Bsdf::sample_mirror_term(Vec3 n, Vec3 wo) const {
   return Sample{reflect(wo, n), m_.kr, 1.0f, true};
 }
 
+// Normalized Phong: (ns + 2) / (2 pi) cos^ns(alpha) integrates, times cos(theta), to at most 1.
+static float phong(float ns, float cos_alpha) {
+  return cos_alpha > 0 ? (ns + 2.0f) / (2.0f * kPi) * std::pow(cos_alpha, ns) : 0.0f;
+}
+
+RGB Bsdf::eval_diffuse(Vec3 n, Vec3 wo, Vec3 wi) const {
+  if (is_delta() || dot(n, wi) <= 0 || dot(n, wo) <= 0) return {};
+  return kd_ * (1.0f / kPi);
+}
+
+RGB Bsdf::eval_glossy(Vec3 n, Vec3 wo, Vec3 wi) const {
+  if (!has_glossy_lobe() || dot(n, wi) <= 0 || dot(n, wo) <= 0) return {};
+  return m_.ks * phong(m_.ns, dot(reflect(wo, n), wi));
+}
+
+float Bsdf::pdf_diffuse(Vec3 n, Vec3 wo, Vec3 wi) const {
+  if (is_delta() || dot(n, wi) <= 0 || dot(n, wo) <= 0) return 0;
+  const float pd = m_.type == Material::Type::glossy ? diffuse_probability() : 1.0f;
+  return (1.0f - mirror_probability()) * pd * dot(n, wi) / kPi;
+}
+
+float Bsdf::pdf_glossy(Vec3 n, Vec3 wo, Vec3 wi) const {
+  if (m_.type != Material::Type::glossy || dot(n, wi) <= 0 || dot(n, wo) <= 0) return 0;
+  const float ca = dot(reflect(wo, n), wi);
+  const float lobe = ca > 0 ? (m_.ns + 1.0f) / (2.0f * kPi) * std::pow(ca, m_.ns) : 0.0f;
+  return (1.0f - mirror_probability()) * (1.0f - diffuse_probability()) * lobe;
+}
+
+std::optional<Bsdf::Sample> Bsdf::sample_by_lobe(Vec3 n, Vec3 wo, float u0, float u1, float u2) const {
+  if (m_.type != Material::Type::glossy || dot(n, wo) <= 0) return sample(n, wo, true, u0, u1, u2);
+  if (const float pr = mirror_probability(); pr > 0) {
+    if (u0 < pr) return Sample{reflect(wo, n), m_.kr * (1.0f / pr), pr, true};
+    u0 = (u0 - pr) / (1.0f - pr);
+  }
+  const bool diffuse = u0 < diffuse_probability();
+  const Vec3 wi = diffuse ? cosine_hemisphere(n, u1, u2) : phong_direction(reflect(wo, n), m_.ns, u1, u2);
+  const float cos_i = dot(n, wi);
+  if (cos_i <= 0) return std::nullopt;
+  const float p = diffuse ? pdf_diffuse(n, wo, wi) : pdf_glossy(n, wo, wi);
+  if (!(p > 0)) return std::nullopt;
+  const RGB f = diffuse ? eval_diffuse(n, wo, wi) : eval_glossy(n, wo, wi);
+  Sample s{wi, f * (cos_i / p), p, false};
+  s.diffuse_lobe = diffuse;
+  return s;
+}
+
 float Bsdf::mirror_probability() const {
   if (!m_.has_mirror_term()) return 0.0f;
   const float r = average(m_.kr), rest = average(kd_) + (m_.type == Material::Type::glossy ? average(m_.ks) : 0.0f);
@@ -75,10 +121,6 @@ float Bsdf::diffuse_probability() const {
   return d + g > 0 ? d / (d + g) : 1.0f;
 }
 
-// Normalized Phong: (ns + 2) / (2 pi) cos^ns(alpha) integrates, times cos(theta), to at most 1.
-static float phong(float ns, float cos_alpha) {
-  return cos_alpha > 0 ? (ns + 2.0f) / (2.0f * kPi) * std::pow(cos_alpha, ns) : 0.0f;
-}
 
 RGB Bsdf::eval(Vec3 n, Vec3 wo, Vec3 wi) const {
   if (is_delta() || dot(n, wi) <= 0 || dot(n, wo) <= 0) return {};

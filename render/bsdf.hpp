@@ -29,6 +29,7 @@ class Bsdf {
     RGB weight;      // f * |cos(wi)| / pdf
     float pdf;       // of wi (meaningless for delta lobes)
     bool delta;
+    bool diffuse_lobe = false;  // sample_by_lobe() chose the Lambert lobe
   };
   // `entering`: wo is on the outside of the surface (for glass: which way refraction bends).
   std::optional<Sample> sample(Vec3 n, Vec3 wo, bool entering, float u0, float u1, float u2) const;
@@ -37,6 +38,15 @@ class Bsdf {
   // by that lobe's f * cos / pdf (the diffuse part left out: the `glossy` LightOp's share of the BSDF).
   bool has_glossy_lobe() const { return m_.type == Material::Type::glossy && !is_black(m_.ks); }
   std::optional<Sample> sample_glossy(Vec3 n, Vec3 wo, float u1, float u2) const;
+  // A glossy surface's lobes one at a time (the directional cache answers its diffuse lobe's rays): the mirror term,
+  // the Lambert lobe or the Phong lobe, chosen as sample() chooses; the weight is that lobe's f * cos over the
+  // chance of choosing it times its density, `pdf` that product (for MIS with light samples of the same lobe).
+  std::optional<Sample> sample_by_lobe(Vec3 n, Vec3 wo, float u0, float u1, float u2) const;
+  // The parts of eval() and the densities sample_by_lobe() draws them with, for light samples' MIS per lobe.
+  RGB eval_diffuse(Vec3 n, Vec3 wo, Vec3 wi) const;
+  RGB eval_glossy(Vec3 n, Vec3 wo, Vec3 wi) const;
+  float pdf_diffuse(Vec3 n, Vec3 wo, Vec3 wi) const;
+  float pdf_glossy(Vec3 n, Vec3 wo, Vec3 wi) const;
   // A diffuse or glossy surface's mirror term alone (Material::kr), weighted by kr: the `specular` op's share.
   std::optional<Sample> sample_mirror_term(Vec3 n, Vec3 wo) const;
 

@@ -162,6 +162,32 @@ TEST(Bsdf, AMirrorTermAddsItsReflectance) {
   }
 }
 
+// A glossy surface sampled one lobe at a time reflects what sample() does (the same lobe choice, each lobe's weight
+// over its own density), and the lobes' densities add up to pdf().
+TEST(Bsdf, SamplingByLobeReflectsTheSame) {
+  Material g = material_from_mtl("g", {0.4f, 0.4f, 0.4f}, {0.4f, 0.4f, 0.4f}, {}, 30, 1, 3);  // Kd, lobe, mirror
+  ASSERT_TRUE(g.has_mirror_term());
+  Bsdf b(g);
+  const Vec3 wo = direction(35);
+  Rng rng(9, 9);
+  const int n = 400000;
+  double whole = 0, by_lobe = 0, diffuse_share = 0;
+  for (int i = 0; i < n; ++i) {
+    const float u0 = rng.uniform(), u1 = rng.uniform(), u2 = rng.uniform();
+    if (auto s = b.sample(kN, wo, true, u0, u1, u2)) whole += s->weight.x;
+    if (auto s = b.sample_by_lobe(kN, wo, u0, u1, u2)) {
+      by_lobe += s->weight.x;
+      if (s->diffuse_lobe) {
+        diffuse_share += s->weight.x;
+        EXPECT_NEAR(s->pdf, b.pdf_diffuse(kN, wo, s->wi), 1e-5f);
+      }
+      if (!s->delta) EXPECT_NEAR(b.pdf_diffuse(kN, wo, s->wi) + b.pdf_glossy(kN, wo, s->wi), b.pdf(kN, wo, s->wi), 1e-4f);
+    }
+  }
+  EXPECT_NEAR(by_lobe / n, whole / n, 0.005);
+  EXPECT_NEAR(diffuse_share / n, 0.4, 0.005) << "the Lambert lobe's own albedo";
+}
+
 // MTL Tf tints glass: light keeps tf where it enters (once per passage through a closed object), nothing where it
 // leaves, and the Fresnel reflection stays white. A missing Tf (read as 0 0 0) leaves the glass clear.
 TEST(Bsdf, TfFiltersWhatEntersGlass) {

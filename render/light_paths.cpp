@@ -27,7 +27,7 @@ SceneLobes scene_lobes(const Scene& scene) {
         out.lobes.has[l] = true;
         out.materials[l].push_back(m.name);
       }
-    if (has[0] && m.type == Material::Type::diffuse) out.diffuse_only.push_back(m.name);
+
   }
   return out;
 }

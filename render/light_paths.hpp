@@ -40,9 +40,6 @@ struct SceneLobes {
   Lobes lobes;
   bool emits = false;
   std::vector<std::string> materials[kLobeCount];  // names of the materials with each lobe, in material order
-  // The materials with a diffuse lobe and no glossy one (a mirror term beside allowed): those whose diffuse rays the
-  // directional cache answers.
-  std::vector<std::string> diffuse_only;
 };
 SceneLobes scene_lobes(const Scene& scene);
 

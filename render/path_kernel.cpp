@@ -71,8 +71,11 @@ Task trace_paths(const SceneContext& ctx, const ShadingPoints& points, std::span
   // answers that direction.
   DirectionalCache* cache = o.cache;
   RGB cached{};
+  // A glossy vertex with the cache takes its lobes one at a time, so that its diffuse lobe's rays are the cache's as a
+  // diffuse surface's are (MIS then pairs each lobe's samples with the light samples' share of that lobe).
+  auto by_lobe = [&](const Material& m) { return cache && m.type == Material::Type::glossy; };
   auto cache_answers = [&](const Path& path, const Material& m, Vec3 origin, Vec3 wi, float distance) {
-    if (!cache || m.type != Material::Type::diffuse) return false;
+    if (!cache || (m.type != Material::Type::diffuse && !by_lobe(m))) return false;
     const uint32_t cell = cache->cell_of(path.x);
     return distance > cache->local_reach(cell, origin, wi) && cache->lookup(cell, wi, cached);
   };
@@ -133,10 +136,19 @@ Task trace_paths(const SceneContext& ctx, const ShadingPoints& points, std::span
         pending.push_back({p, path.beta * f * ls.radiance * (cos_x / (dist2 * ls.pdf_area))});
       } else {
         const float light_pdf = ls.pdf_area * dist2 / cos_y;  // per solid angle
-        const bool light_only = (o.light_only_on_diffuse && m.type == Material::Type::diffuse) ||
-                                cache_answers(path, m, origin, wi, span);
-        const float w = light_only ? 1.0f : power_heuristic(light_pdf, bsdf.pdf(path.n, path.wo, wi));
-        pending.push_back({p, path.beta * f * ls.radiance * (cos_x * w / light_pdf)});
+        if (by_lobe(m)) {
+          const float w_d = cache_answers(path, m, origin, wi, span)
+                                ? 1.0f
+                                : power_heuristic(light_pdf, bsdf.pdf_diffuse(path.n, path.wo, wi));
+          const float w_g = power_heuristic(light_pdf, bsdf.pdf_glossy(path.n, path.wo, wi));
+          const RGB fw = bsdf.eval_diffuse(path.n, path.wo, wi) * w_d + bsdf.eval_glossy(path.n, path.wo, wi) * w_g;
+          pending.push_back({p, path.beta * fw * ls.radiance * (cos_x / light_pdf)});
+        } else {
+          const bool light_only = (o.light_only_on_diffuse && m.type == Material::Type::diffuse) ||
+                                  cache_answers(path, m, origin, wi, span);
+          const float w = light_only ? 1.0f : power_heuristic(light_pdf, bsdf.pdf(path.n, path.wo, wi));
+          pending.push_back({p, path.beta * f * ls.radiance * (cos_x * w / light_pdf)});
+        }
       }
       rays.push_back(Ray{origin, to_light / span, 0.0f, span});
     }
@@ -159,7 +171,9 @@ Task trace_paths(const SceneContext& ctx, const ShadingPoints& points, std::span
       path.rng.at_dimension(kSlotsPerVertex * (depth - 1) + 2);
       const float u0 = path.rng.uniform();
       const Uniform2 direction = path.rng.uniform2();
-      auto s = Bsdf(m, path.albedo).sample(path.n, path.wo, path.outside, u0, direction.u, direction.v);
+      const Bsdf bsdf(m, path.albedo);
+      auto s = by_lobe(m) ? bsdf.sample_by_lobe(path.n, path.wo, u0, direction.u, direction.v)
+                          : bsdf.sample(path.n, path.wo, path.outside, u0, direction.u, direction.v);
       // Only glass may send a path through the face; a reflection the shading normal allows below it ends here.
       // A diffuse or glossy surface's mirror term is the specular op's where specular surfaces are (`direct`).
       if (!s || is_black(s->weight) || (m.type != Material::Type::glass && dot(s->wi, path.ng) <= 0) ||
@@ -182,7 +196,9 @@ Task trace_paths(const SceneContext& ctx, const ShadingPoints& points, std::span
       // Diffuse rays first look only as far as their neighbourhood reaches.
       for (size_t r = 0; r < continuing.size(); ++r) {
         const Path& path = paths[continuing[r]];
-        if (scene.material(path.material).type != Material::Type::diffuse || samples[r].delta) continue;
+        if ((scene.material(path.material).type != Material::Type::diffuse && !samples[r].diffuse_lobe) ||
+            samples[r].delta)
+          continue;
         ray_cell[r] = cache->cell_of(path.x);
         rays[r].tfar = cache->local_reach(ray_cell[r], rays[r].origin, rays[r].direction);
       }
