@@ -9,7 +9,8 @@
 // renderers' camera rays included). Goals: hit ratio >= 60.8 % at the accurate setting with RMSE <= 1.3x the
 // uncached farm's, and the bytes to the parts at least halved. Writes bench-dircache.json.
 //
-//   build/bench/dircache_bench [--size WIDTH] [--reference-spp N] [--radius R] [--json FILE]
+//   build/bench/dircache_bench [--size WIDTH] [--reference-spp N] [--radius R] [--json FILE] [--glossy]
+#include <algorithm>
 #include <cstdio>
 #include <fstream>
 #include <string>
@@ -17,13 +18,21 @@
 #include "bench/bench_util.hpp"
 #include "bench/image_error.hpp"
 #include "core/value.hpp"
+#include "render/scene.hpp"
 
 int main(int argc, char** argv) {
   int width = 160, reference_spp = 1024;
   double radius = 0.5;
   std::string json_path = "bench-dircache.json";
+  bool glossy = false;
+  for (int i = 1; i < argc; ++i)
+    if (std::string(argv[i]) == "--glossy") glossy = true;
   for (int i = 1; i + 1 < argc; i += 2) {
     const std::string a = argv[i];
+    if (a == "--glossy") {
+      --i;
+      continue;
+    }
     if (a == "--size") width = std::atoi(argv[i + 1]);
     else if (a == "--reference-spp") reference_spp = std::atoi(argv[i + 1]);
     else if (a == "--json") json_path = argv[i + 1];
@@ -32,9 +41,22 @@ int main(int argc, char** argv) {
   const std::string obj = bench::shared_scene("lost_empire/lost_empire.obj");
   if (obj.empty()) return 0;
   const int height = width * 3 / 4;
+  // --glossy: every diffuse material gets a Phong lobe as exporters write them (Ks 0.2, Ns 40; less where Kd leaves
+  // less room), so that the cache works on the diffuse lobe of glossy materials.
+  std::string shine;
+  if (glossy) {
+    auto scene = lf::Scene::load_obj_unlit(obj);
+    if (!scene) return 1;
+    for (const auto& m : scene->materials()) {
+      const float room = 1.0f - std::max({m.kd.x, m.kd.y, m.kd.z});
+      if (m.name == "Torch" || m.name == "(default)" || m.type != lf::Material::Type::diffuse || room < 0.02f) continue;
+      const std::string ks = std::to_string(std::min(0.2f, room));
+      shine += "material \"" + m.name + "\" { type = \"glossy\", ks = {" + ks + ", " + ks + ", " + ks + "}, ns = 40 }\n";
+    }
+  }
   const std::string script = bench::temp_script(
       "dircache.lua",
-      "scene { file = \"" + obj + "\" }\n"
+      "scene { file = \"" + obj + "\" }\n" + shine +
       "material \"Torch\" { emission = {9, 9, 6}, kd = {0, 0, 0} }\n"  // as examples/lost_empire.lua: no fireflies
       "camera { eye = {-8, 16, 20}, at = {6, 12, 0}, fov = 70 }\n"
       "image { width = " + std::to_string(width) + ", height = " + std::to_string(height) +
@@ -44,7 +66,7 @@ int main(int argc, char** argv) {
       "  seed = param(\"seed\", 0), directional_cache = param(\"cache\", false), cache_cells = param(\"cells\", 8),\n"
       "  cache_radius = param(\"radius\", 1.5), cache_fill_spp = param(\"fill\", 4) } } }\n");
   const std::string size = std::to_string(width) + "x" + std::to_string(height);
-  const std::string reference_path = "bench-dircache-reference-v2-" + size + ".exr";
+  const std::string reference_path = "bench-dircache-reference-v2-" + size + (glossy ? "-glossy" : "") + ".exr";
   if (!bench::fs::exists(reference_path)) {
     std::printf("rendering the reference (%d spp, another seed, no cache, whole scene) ...\n", reference_spp);
     bench::run_farm(script, {"spp=" + std::to_string(reference_spp), "seed=7", "parts=0"}, reference_path);
