@@ -55,9 +55,19 @@ pids() {
 
 up() {
   local n=${3:?hosts.sh up DIR N}
-  local id=${4:-$(( $(cksum <<< "$dir" | cut -d' ' -f1) % 250 + 1 ))}
+  local id=${4:-}
   mkdir -p "$dir"
   down
+  if [ -z "$id" ]; then
+    id=$(( $(cksum <<< "$dir" | cut -d' ' -f1) % 250 + 1 ))
+    # The id a folder hashes to may be another rig's, or that of one whose namespaces the kernel is still tearing
+    # down (their veths outlive `ip netns del` until the last process in them is reaped): "File exists". The next
+    # free one then.
+    for _ in $(seq 1 250); do
+      if ! ip link show "lfbr$id" > /dev/null 2>&1 && ! ip -o link show | grep -q " lfv$id-"; then break; fi
+      id=$(( id % 250 + 1 ))
+    done
+  fi
   local bridge="lfbr$id" namespaces=""
   if ! ip netns add "lfh$id-probe" 2>/dev/null; then
     echo "hosts.sh: cannot create network namespaces here (needs root with CAP_NET_ADMIN)" >&2
