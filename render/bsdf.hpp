@@ -1,7 +1,8 @@
 #pragma once
 // Scattering at a surface point: diffuse (Lambert), glossy (Lambert + a normalized Phong lobe), either with a
-// perfect mirror term beside, perfect mirror, and dielectric glass with Fresnel. Directions point away from the surface; `n` is the unit normal on the side
-// of wo. eval() returns f(wo, wi) without the cosine; sample() returns wi with weight f * |cos| / pdf.
+// perfect mirror term beside, perfect mirror, and dielectric glass with Fresnel. Directions point away from the
+// surface; `n` is the unit normal on the side of wo. eval() returns f(wo, wi) without the cosine; sample() returns wi
+// with weight f * |cos| / pdf.
 #include <algorithm>
 #include <optional>
 

@@ -1,10 +1,9 @@
-// specular: light that reaches a point on a mirror or glass surface (or through the mirror term of a diffuse or
-// glossy one) along a chain of perfect reflections and refractions. From such a point it follows the chain
-// (choosing reflection or refraction at glass by Fresnel, `samples` chains per point) until it lands on a
-// non-specular surface, then asks its input, in one batch, for the light leaving that surface back along the
-// chain; where that surface has a mirror term too, the chain also goes on through it. An emitter the chain lands on adds its own emission (the
-// input returns reflected light only). Points on non-specular surfaces get nothing: that is the other ops' job.
-// One input.
+// specular: light that reaches a point along a chain of perfect reflections and refractions, from a mirror or glass
+// surface or through the mirror term of a diffuse or glossy one. From such a point it follows the chain (choosing
+// reflection or refraction at glass by Fresnel, `samples` chains per point) until it lands on a non-specular
+// surface, then asks its input, in one batch, for the light leaving that surface back along the chain; where that
+// surface has a mirror term too, the chain also goes on through it. An emitter the chain lands on adds its own
+// emission (the input returns reflected light only). The other lobes of a point are the other ops' job. One input.
 //
 // `emission_samples` chains per point look only for emitters: a flame seen in a window or in water is as small as
 // one seen directly, and needs as many chains as the camera gives it samples, while what the chain lands on
@@ -58,8 +57,8 @@ class Specular final : public LightOp {
       RGB emitted{};
       Rng rng;
     };
-    // Where a chain reached a diffuse or glossy surface: the input's light there, times the chain's weight. A chain
-    // lands once on a mirror or glass chain's end, and goes on through the mirror term of a surface that has one.
+    // Where a chain reached a diffuse or glossy surface: the input's light there, times the chain's weight so far. A
+    // chain that reaches one with a mirror term goes on through that term, and may land again further on.
     struct Landing {
       size_t chain;
       RGB weight;
@@ -76,7 +75,8 @@ class Specular final : public LightOp {
       for (int s = 0; s < (emitters_ ? emission_samples_ : samples_); ++s)
         chains.push_back(Chain{i, s, points.position[i], points.normal[i], points.wo[i], points.face_normal(i, scene),
                                points.material[i], points.triangle_of(i), points.outside(i, scene), s < samples_,
-                               {1, 1, 1}, {}, Rng(points.key[i], streams::specular ^ (seed_ << 8) ^ (uint64_t(s) << 32))});
+                               {1, 1, 1}, {},
+                               Rng(points.key[i], streams::specular ^ (seed_ << 8) ^ (uint64_t(s) << 32))});
     }
     ShadingPoints ends;
     std::vector<Landing> landings;  // one per entry of `ends`
@@ -92,7 +92,8 @@ class Specular final : public LightOp {
         const float u0 = ch.rng.uniform();
         const Material& m = scene.material(ch.material);
         const Bsdf bsdf(m);
-        auto s = m.specular() ? bsdf.sample(ch.n, ch.wo, ch.outside, u0, 0.5f, 0.5f) : bsdf.sample_mirror_term(ch.n, ch.wo);
+        auto s = m.specular() ? bsdf.sample(ch.n, ch.wo, ch.outside, u0, 0.5f, 0.5f)
+                              : bsdf.sample_mirror_term(ch.n, ch.wo);
         if (!s) continue;
         ch.weight = ch.weight * s->weight;
         const Vec3 side = dot(s->wi, ch.ng) > 0 ? ch.ng : -ch.ng;
@@ -115,8 +116,8 @@ class Specular final : public LightOp {
         if (emitters_ && hit.emissive() && front) ch.emitted += ch.weight * hit.ke;
         if (!hit.specular() && ch.asks_input) {
           // Keyed by the point, the chain and the depth: the same on every batch and layout.
-          const uint64_t key = splitmix64(points.key[ch.owner] ^ (0x5bec0000ull + static_cast<uint64_t>(ch.sample) * 256 +
-                                                                  static_cast<uint64_t>(depth)));
+          const uint64_t chain = static_cast<uint64_t>(ch.sample) * 256 + static_cast<uint64_t>(depth);
+          const uint64_t key = splitmix64(points.key[ch.owner] ^ (0x5bec0000ull + chain));
           ends.push_back(x, sp.ns, wo, m, key, tri);
           landings.push_back(Landing{moving[r], ch.weight});
         }
