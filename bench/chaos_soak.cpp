@@ -1,4 +1,4 @@
-// Chaos soak (issue 12): frames of mixed networks (pools, photon maps, irradiance caches, radiosity rings) while
+// Chaos soak: frames of mixed networks (pools, photon maps, irradiance caches, radiosity rings) while
 // random recoverable actors are SIGKILLed, or SIGSTOPped and continued, at random moments of the frame. Reports per network: frames, frames finished, finished frames whose
 // image differs from the fault-free one (goal 0), failed frames, processes left behind (goal 0) and files left in
 // /tmp, /dev/shm and the output folder (goal 0). Writes bench-chaos.json.

@@ -1,4 +1,4 @@
-// The directional cache measured like seed 002's Tables 1-3 (issue 14): Lost Empire (../shared/scenes, torches
+// The directional cache measured like Jansen & Reinhard's Tables 1-3: Lost Empire (../shared/scenes, torches
 // emitting), a camera inside the city, a partitioned farm (3 geometry actors, 2 renderers, a pool of 3 `pathtrace` of
 // depth 4), at three quality settings, each without and with the directional cache, and each with the replicas
 // holding no part or one part each (partition { colocate = true }: "home"). Per run: wall time (setup and fill

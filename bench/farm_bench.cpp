@@ -220,7 +220,7 @@ int main(int argc, char** argv) {
     if (g.multiplexer_cpu > 0) std::snprintf(multiplexer, sizeof multiplexer, "multiplexer %.2f, ", g.multiplexer_cpu);
     std::printf("  CPU-seconds of the last farm 2+2: %.2f in %.2f s wall (director %.2f, renderers %.2f, %sreplicas %.2f)\n",
                 g.cpu_seconds, g.wall, g.director_cpu, g.renderers_cpu, multiplexer, g.lightops_cpu);
-    print_spread("farm 1+1 / bare 1 thread (render phase)", s.overhead, heavy ? "" : "   goal >= 0.85 (issue 2)");
+    print_spread("farm 1+1 / bare 1 thread (render phase)", s.overhead, heavy ? "" : "   goal >= 0.85");
     print_spread("CPU efficiency: farm 1+1 per CPU-s / bare", s.efficiency,
                  heavy ? "   goal >= 0.95" : "   goal >= 0.7 (whole run, all processes)");
     print_spread("farm 2+2 / bare 2 threads", s.versus_bare2, heavy ? "   goal >= 0.95" : "   goal >= 0.85");

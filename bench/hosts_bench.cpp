@@ -1,4 +1,4 @@
-// Farms across hosts (issue 11): hosts are network namespaces on this machine with their own sshd
+// Farms across hosts: hosts are network namespaces on this machine with their own sshd
 // (tests/rig/hosts.sh; needs root). Prints, for each figure, min/median/max over --runs, and writes
 // bench-hosts.json:
 //   launch to first tile, 12 actors (8 replicas, 3 renderers, the multiplexer) over 3 ssh hosts, over a Slurm

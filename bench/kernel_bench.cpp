@@ -1,4 +1,4 @@
-// The path kernel alone (issue 16): one process, one thread, no farm — trace a tile, shade its points with
+// The path kernel alone: one process, one thread, no farm — trace a tile, shade its points with
 // `pathtrace` (depth 12), resolve — on McGuire's empty Cornell box (the peer comparison's scene, Sobol sampler) and on
 // the built-in Cornell box (farm_bench's, with its glass and mirror). Prints paths per second (median, min, max of
 // --runs interleaved frames) and a hash of each frame's pixels, so that a change to the kernel that must not change

@@ -1,4 +1,4 @@
-// Many lights (issue 13, item 6): direct light on Lost Empire (examples/lost_empire.lua: 1636 torch triangles and
+// Many lights: direct light on Lost Empire (examples/lost_empire.lua: 1636 torch triangles and
 // the lava), lights chosen through the light tree vs by power alone. For each sample count both are rendered in the
 // same run, interleaved, `--runs` times; the figures are the relative RMSE against a high-sample reference (tree,
 // kept between runs with --reference) and the seconds of the setup and render phases (median; setup is where the

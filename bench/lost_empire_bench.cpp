@@ -1,4 +1,4 @@
-// Quality per time on Lost Empire (issue 13): examples/lost_empire.lua at 320x240 (torches emitting, the camera
+// Quality per time on Lost Empire: examples/lost_empire.lua at 320x240 (torches emitting, the camera
 // inside the city), relative RMSE against a high-sample `pathtrace` reference (kept between runs with --reference)
 // versus wall time of the whole farm run (start, scene load, pre-pass and render), for `pathtrace` at several
 // sample counts and for the lighting network (`lighting = "network"`: direct light, a pool of two, plus a

@@ -1,4 +1,4 @@
-// The live monitor's cost (issue 15): render time of examples/cornell.lua without `--monitor`, with it and one
+// The live monitor's cost: render time of examples/cornell.lua without `--monitor`, with it and one
 // headless Chromium attached to the live page (started before the farm; plus an SSE client on /events), and with it and the SSE client alone
 // (what the monitor costs apart from a browser on the same 2 cores); interleaved, `--runs` of each, the median
 // ratios and their spread. Beside wall time, CPU: the farm's own (director + actors, from their STATS) without and

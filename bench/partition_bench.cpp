@@ -1,4 +1,4 @@
-// A partitioned farm against the whole-scene farm (issue 14): Lost Empire (../shared/scenes, torches emitting), a
+// A partitioned farm against the whole-scene farm: Lost Empire (../shared/scenes, torches emitting), a
 // camera inside the city, 2 renderers and one `pathtrace` (depth 3), its scene whole or split into 2, 3 and 5
 // geometry actors (partition { parts = N }). Per split: render time over the whole farm's (median, min, max over
 // --runs, interleaved), each part's share of the rays it traced (imbalance = max / mean; goal <= 1.2 with the

@@ -1,4 +1,4 @@
-// Pool and packet benchmarks (issue 4): async packets vs synchronous single points, least_loaded vs round_robin
+// Pool and packet benchmarks: async packets vs synchronous single points, least_loaded vs round_robin
 // with one slowed replica, and renderer / replica scaling. Prints a table and writes JSON; medians of several
 // runs, ratios measured in the same run.
 //

@@ -1,4 +1,4 @@
-// Quality per time on cornell_glass (issue 3): relative RMSE against a high-sample path-traced reference versus
+// Quality per time on cornell_glass: relative RMSE against a high-sample path-traced reference versus
 // wall time, for `pathtrace` alone and for two lighting networks — examples/cornell_glass.lua (irradiance caches
 // over direct light) and examples/cornell_glass_radiosity.lua (one cache over a radiosity solution) — at several
 // sample counts. Goal: a network reaches the path tracer's final RMSE in at most a third of the path tracer's time.

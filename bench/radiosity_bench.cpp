@@ -1,4 +1,4 @@
-// Load balancing of the radiosity ring (seed 003, Tables 1-4), on the built-in furnished room: for each layout
+// Load balancing of the radiosity ring (Stürzlinger et al., Tables 1-4), on the built-in furnished room: for each layout
 // (N nodes as rings x ring length) and each balancing scheme, the per-node work — visibility rays cast, packets
 // processed — as max/mean imbalance, and the mean iteration wall time. Work counts stay meaningful when 8
 // processes share 2 cores; times do not (they are printed for the record).

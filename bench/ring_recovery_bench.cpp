@@ -1,4 +1,4 @@
-// Recovery of a radiosity ring (issue 12): what checkpoints cost when nothing fails, and what they save when a
+// Recovery of a radiosity ring: what checkpoints cost when nothing fails, and what they save when a
 // node is lost. On the built-in furnished room (examples/radiosity_room.lua's mesh, 2 x 2 nodes, a fixed number of
 // iterations), interleaved, each repeated:
 //   - fault-free solves with checkpoint_every = 0 (none), 10 and 1: solve seconds, and each against "none";

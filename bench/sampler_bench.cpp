@@ -1,4 +1,4 @@
-// Error per sample of the two samplers (issue 16, item 4): McGuire's empty Cornell box (CornellBox-Empty-RG in
+// Error per sample of the two samplers: McGuire's empty Cornell box (CornellBox-Empty-RG in
 // ../shared/scenes), path traced to depth 12 by a farm of 2 renderers and a pool of 2 `pathtrace`, with
 // image { sampler = "independent" } and "sobol" at 4..256 spp; relative RMSE (per pixel, over the reference's mean,
 // the light's pixels left out) against a 4096-spp independent reference made with another seed and kept between

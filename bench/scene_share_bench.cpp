@@ -1,4 +1,4 @@
-// What a big scene costs each actor (issue 11): Lost Empire (225k triangles, ../shared/scenes). Prints min/median/max
+// What a big scene costs each actor: Lost Empire (225k triangles, ../shared/scenes). Prints min/median/max
 // over --runs and writes bench-scene-share.json:
 //   in one process: parsing the OBJ (what every actor did before scenes were shipped), reading the shipped file
 //     into a private copy, mapping the host's shared scene image (what an actor does now), building the BVH

@@ -1,4 +1,4 @@
-// Tracing a partitioned scene in one process (issue 14, render/partition.hpp) on Lost Empire (../shared/scenes):
+// Tracing a partitioned scene in one process (render/partition.hpp) on Lost Empire (../shared/scenes):
 // rays per second of the whole scene's BVH with ties left to Embree and with them settled by the rule (what every
 // farm now pays for images that do not depend on the BVH), and of the scene split into 2, 3 and 5 parts traced
 // part by part; for each split, each part's share of the ray visits (imbalance = max / mean, the issue's <= 1.2

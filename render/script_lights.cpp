@@ -66,27 +66,17 @@ Status Scene::apply_material_overrides(const Value::Array& overrides) {
       if (candidate.name == name->as_string()) m = &candidate;
     if (!m) return make_error("material '" + name->as_string() + "' is not in the scene");
     const std::string which = "material '" + m->name + "'";
-    Vec3 c;
-    if (const Value* v = o.find("emission")) {
-      if (!vec3_of(v, c)) return make_error(which + ": emission must be {r, g, b}");
-      m->ke = c;
-    }
-    if (const Value* v = o.find("kd")) {
-      if (!vec3_of(v, c)) return make_error(which + ": kd must be {r, g, b}");
-      m->kd = c;
+    // A colour the change gives, into `field`; false when it gives one that is not {r, g, b}.
+    auto colour = [&](const char* key, RGB& field) {
+      const Value* v = o.find(key);
+      return !v || vec3_of(v, field);
+    };
+    for (auto [key, field] : {std::pair<const char*, RGB*>{"emission", &m->ke}, {"ks", &m->ks}, {"mirror", &m->kr},
+                              {"tf", &m->tf}})
+      if (!colour(key, *field)) return make_error(which + ": " + key + " must be {r, g, b}");
+    if (o.find("kd")) {
+      if (!colour("kd", m->kd)) return make_error(which + ": kd must be {r, g, b}");
       m->kd_map = -1;  // a flat colour from the script replaces the texture too
-    }
-    if (const Value* v = o.find("ks")) {
-      if (!vec3_of(v, c)) return make_error(which + ": ks must be {r, g, b}");
-      m->ks = c;
-    }
-    if (const Value* v = o.find("mirror")) {
-      if (!vec3_of(v, c)) return make_error(which + ": mirror must be {r, g, b}");
-      m->kr = c;
-    }
-    if (const Value* v = o.find("tf")) {
-      if (!vec3_of(v, c)) return make_error(which + ": tf must be {r, g, b}");
-      m->tf = c;
     }
     if (const Value* v = o.find("ns"); v && v->is_number()) m->ns = static_cast<float>(v->as_double());
     if (const Value* v = o.find("ior"); v && v->is_number()) m->ior = static_cast<float>(v->as_double());

@@ -50,9 +50,11 @@ inline double form_factor(Vec3 p, Vec3 n, const std::vector<Vec3>& polygon) {
   return std::abs(sum) / (2 * M_PI);
 }
 
-// A closed unit cube whose six faces, wound inwards, all have material m (the furnace).
-inline void add_closed_box(Scene& s, uint32_t m) {
-  const Vec3 c[8] = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}, {0, 0, 1}, {1, 0, 1}, {1, 1, 1}, {0, 1, 1}};
+// A closed box from the origin to `size` (a unit cube unless said) whose six faces, wound inwards, all have
+// material m (the furnace, a room).
+inline void add_closed_box(Scene& s, uint32_t m, Vec3 size = {1, 1, 1}) {
+  const float x = size.x, y = size.y, z = size.z;
+  const Vec3 c[8] = {{0, 0, 0}, {x, 0, 0}, {x, y, 0}, {0, y, 0}, {0, 0, z}, {x, 0, z}, {x, y, z}, {0, y, z}};
   s.add_quad(c[0], c[1], c[2], c[3], m);
   s.add_quad(c[4], c[7], c[6], c[5], m);
   s.add_quad(c[0], c[4], c[5], c[1], m);
