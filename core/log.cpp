@@ -13,10 +13,10 @@ static LogObserver g_observer;
 
 void set_log_observer(LogObserver observer) { g_observer = std::move(observer); }
 
-static void emit(const char* level, const std::string& message) {
+static void emit(const char* level, const std::string& message, LogKind kind = LogKind::plain) {
   // One fprintf per line so lines from several processes sharing a terminal do not interleave mid-line.
   std::fprintf(stderr, "%s: %s%s\n", g_name.c_str(), level, message.c_str());
-  if (g_observer) g_observer(level, message);
+  if (g_observer) g_observer(level, message, kind);
 }
 
 std::string seconds_text(double seconds) {
@@ -25,8 +25,17 @@ std::string seconds_text(double seconds) {
   return buf;
 }
 
-void log_info(const std::string& m) { emit("", m); }
-void log_warn(const std::string& m) { emit("warning: ", m); }
+const char* log_kind_name(LogKind kind) {
+  switch (kind) {
+    case LogKind::loss: return "loss";
+    case LogKind::recovery: return "recovery";
+    case LogKind::plain: break;
+  }
+  return "plain";
+}
+
+void log_info(const std::string& m, LogKind kind) { emit("", m, kind); }
+void log_warn(const std::string& m, LogKind kind) { emit("warning: ", m, kind); }
 void log_error(const std::string& m) { emit("error: ", m); }
 void log_debug(const std::string& m) {
   static const bool enabled = std::getenv("LIGHTFARM_DEBUG") != nullptr;

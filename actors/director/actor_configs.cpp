@@ -2,7 +2,9 @@
 
 #include <algorithm>
 
+#include "farm/builders.hpp"
 #include "farm/kind_params.hpp"
+#include "render/lightop_registry.hpp"
 
 namespace lf {
 
@@ -51,6 +53,106 @@ ActorConfig config_for(const FarmSpec& spec, int actor, const std::function<std:
     config.pool = PoolPlace{spec.actors[static_cast<size_t>(pool)].name, at, static_cast<int64_t>(replicas.size())};
   }
   return config;
+}
+
+}  // namespace lf
+
+namespace lf {
+
+std::pair<std::string, std::string> ConfigBuilder::endpoint_for(const ActorRecord& receiver,
+                                                                const ActorRecord& input) const {
+  if (input.spec->host == receiver.spec->host && !receiver.local_endpoint.empty() && !input.local_endpoint.empty())
+    return {input.local_endpoint, ""};
+  return {input.endpoint, d_.public_key_of(input.name())};
+}
+
+// partition { colocate = true }: the part actor `name` holds itself (farm/builders), once the scene is split.
+int64_t ConfigBuilder::colocated_part(const std::string& name) const {
+  return d_.parts.empty() ? -1 : lf::colocated_part(spec_, spec_.find(name));
+}
+
+ActorConfig ConfigBuilder::build(const ActorRecord& a, const ActorTable& actors) const {
+  auto name_of = [&](int i) -> const std::string& { return spec_.actors[static_cast<size_t>(i)].name; };
+  auto endpoint_of = [&](int i) { return actors.at(name_of(i)).endpoint; };
+  std::function<std::string(int)> key_of;
+  if (d_.curve()) key_of = [&](int i) { return d_.public_key_of(name_of(i)); };
+  ActorConfig config = config_for(spec_, a.index, endpoint_of, key_of);
+  std::vector<InputSpec> inputs;
+  for (auto& in : config.inputs) {
+    if (actors.at(in.name).lost) continue;
+    if (!in.is_pool()) {
+      std::tie(in.endpoint, in.key) = endpoint_for(a, actors.at(in.name));
+    } else {
+      std::vector<InputSpec> live;
+      for (auto& r : in.replicas) {
+        const ActorRecord& replica = actors.at(r.name);
+        if (replica.lost) continue;
+        r.part = colocated_part(r.name);
+        std::tie(r.endpoint, r.key) = endpoint_for(a, replica);
+        live.push_back(std::move(r));
+      }
+      in.replicas = std::move(live);
+    }
+    inputs.push_back(std::move(in));
+  }
+  config.inputs = std::move(inputs);
+  if (!d_.scene_bytes.empty()) {
+    config.scene.cache = d_.scene_paths.at(a.spec->host);
+    config.scene.hash = d_.scene_hash;
+  }
+  if (!d_.parts.empty()) add_parts(a, actors, config);
+  add_pool_peers(a, actors, config);
+  return config;
+}
+
+// A geometry actor holds its part; a renderer traces its camera rays through the parts, and a LightOp its rays
+// (those of its ops that can: direct, pathtrace), holding the part colocated with it itself.
+void ConfigBuilder::add_parts(const ActorRecord& a, const ActorTable& actors, ActorConfig& config) const {
+  if (a.spec->is_geometry()) {
+    config.part_triangles = d_.parts.at(static_cast<size_t>(a.spec->params.at("part").as_int())).triangles;
+    return;
+  }
+  if (!a.spec->loads_scene()) return;
+  if (config.pool) {
+    config.local_part = colocated_part(a.name());
+    if (config.local_part >= 0) config.part_triangles = d_.parts.at(static_cast<size_t>(config.local_part)).triangles;
+  }
+  for (const auto& g : spec_.actors) {
+    if (!g.is_geometry()) continue;
+    const auto [endpoint, key] = endpoint_for(a, actors.at(g.name));
+    config.geometry.push_back({g.name, endpoint, 4, key});
+  }
+  for (const ScenePart& p : d_.parts)
+    config.part_boxes.insert(config.part_boxes.end(),
+                             {p.bounds.lo.x, p.bounds.lo.y, p.bounds.lo.z, p.bounds.hi.x, p.bounds.hi.y, p.bounds.hi.z});
+}
+
+// Replicas that share their setup send each other their parts directly: a photon map's tens of MB then cross one
+// link (IPC on one host) once, instead of going to the director and out again, decoded and re-encoded.
+void ConfigBuilder::add_pool_peers(const ActorRecord& a, const ActorTable& actors, ActorConfig& config) const {
+  if (!config.pool || config.pool->count <= 1) return;
+  const LightOpKind* kind = find_lightop_kind(a.spec->kind);
+  if (!kind || !kind->shares_setup_for(a.spec->params)) return;
+  for (int r : spec_.actors[static_cast<size_t>(spec_.pool_of(a.index))].inputs) {
+    const ActorRecord& sibling = actors.at(spec_.actors[static_cast<size_t>(r)].name);
+    if (sibling.name() == a.name()) continue;
+    const auto [endpoint, key] = endpoint_for(a, sibling);
+    config.pool->peers.push_back({sibling.name(), endpoint, 4, key});
+  }
+}
+
+std::vector<std::pair<std::string, Value>> ConfigBuilder::peer_moved(const ActorRecord& moved,
+                                                                     const ActorTable& actors) const {
+  std::vector<std::pair<std::string, Value>> told;
+  for (const auto& [name, a] : actors) {
+    if (a.lost || !a.configured || a.exited || &a == &moved) continue;
+    for (int input : a.spec->inputs) {
+      if (input != moved.index) continue;
+      const auto [endpoint, key] = endpoint_for(a, moved);
+      told.emplace_back(name, Value::Map{{"name", moved.name()}, {"endpoint", endpoint}, {"key", key}});
+    }
+  }
+  return told;
 }
 
 }  // namespace lf

@@ -77,5 +77,79 @@ TEST(ActorConfigs, OnlyBuiltInLightOpsAreAskedWithLeanRequests) {
   EXPECT_FALSE(decoded->inputs[1].lean);
 }
 
+// CONFIG as the director sends it, over the actor table and the deployment: a pool's client gets each live replica
+// at the endpoint it reaches it by (IPC on its own host, TCP with the replica's key elsewhere), the scene's path in
+// its own host's cache, and nothing of a replica lost before it was configured; a restarted replica's new address
+// goes to every configured actor that asks it.
+TEST(ConfigBuilder, ClientsReachLiveReplicasByTheirHostsEndpointAndKey) {
+  FarmSpec spec;
+  spec.hosts = {HostSpec{}, HostSpec{.name = "far", .launcher = "ssh", .address = "10.0.0.2"}};
+  PoolSpec pool;
+  pool.op = add_actor(spec, ActorSpec{.name = "direct", .kind = "direct"});
+  pool.replicas = 3;
+  pool.hosts = {"local", "far", "local"};
+  auto mux = replicate(spec, pool);
+  ASSERT_TRUE(mux.ok()) << mux.error().message;
+  add_renderers(spec, 1, *mux, RendererParams{}, {}, {});
+  settle_pool_dispatch(spec);
+
+  Deployment d;
+  d.scene_bytes = "scene";
+  d.scene_hash = "h";
+  d.scene_paths = {{"local", "/cache/h.lfscene"}, {"far", "/far-cache/h.lfscene"}};
+  std::map<std::string, ActorRecord> table;
+  for (size_t i = 0; i < spec.actors.size(); ++i) {
+    ActorRecord r;
+    r.spec = &spec.actors[i];
+    r.index = static_cast<int>(i);
+    r.endpoint = "tcp://" + std::string(r.spec->host == "far" ? "10.0.0.2" : "127.0.0.1") + ":" + std::to_string(7000 + i);
+    r.local_endpoint = "ipc:///run/" + r.spec->name;
+    table[r.spec->name] = r;
+    d.actor_keys[r.spec->name].public_key = "key-of-" + r.spec->name;
+  }
+  table.at("direct.2").lost = true;
+  const ConfigBuilder builder(spec, d);
+
+  const ActorRecord& renderer = table.at("renderer-0");
+  const ActorConfig c = builder.build(renderer, table);
+  ASSERT_EQ(c.inputs.size(), 1u);
+  ASSERT_TRUE(c.inputs[0].is_pool());
+  ASSERT_EQ(c.inputs[0].replicas.size(), 2u);  // direct.2 was lost before
+  EXPECT_EQ(c.inputs[0].replicas[0].endpoint, "ipc:///run/direct.0");
+  EXPECT_EQ(c.inputs[0].replicas[0].key, "");  // same host: the private folder, no CURVE
+  EXPECT_EQ(c.inputs[0].replicas[1].endpoint, table.at("direct.1").endpoint);
+  EXPECT_EQ(c.inputs[0].replicas[1].key, "key-of-direct.1");
+  EXPECT_EQ(c.scene.cache, "/cache/h.lfscene");
+  EXPECT_EQ(builder.build(table.at("direct.1"), table).scene.cache, "/far-cache/h.lfscene");
+
+  // A client that offers no IPC socket itself is reached over TCP even on the same host.
+  table.at("renderer-0").local_endpoint.clear();
+  EXPECT_EQ(builder.build(table.at("renderer-0"), table).inputs[0].replicas[0].endpoint, table.at("direct.0").endpoint);
+
+}
+
+TEST(ConfigBuilder, ARestartedInputsAskersLearnWhereItListensNow) {
+  FarmSpec spec;
+  const int node = add_actor(spec, ActorSpec{.name = "ring.0.0", .kind = "radiosity_node"});
+  add_actor(spec, ActorSpec{.name = "ring.0.1", .kind = "radiosity_node", .inputs = {node}});
+  add_actor(spec, ActorSpec{.name = "late", .kind = "radiosity_node", .inputs = {node}});
+  Deployment d;
+  std::map<std::string, ActorRecord> table;
+  for (size_t i = 0; i < spec.actors.size(); ++i) {
+    ActorRecord r;
+    r.spec = &spec.actors[i];
+    r.index = static_cast<int>(i);
+    r.endpoint = "tcp://127.0.0.1:" + std::to_string(7000 + i);
+    r.configured = r.spec->name != "late";  // not configured yet: its CONFIG will say where the node is
+    table[r.spec->name] = r;
+  }
+  table.at("ring.0.0").endpoint = "tcp://127.0.0.1:7100";
+  const auto moved = ConfigBuilder(spec, d).peer_moved(table.at("ring.0.0"), table);
+  ASSERT_EQ(moved.size(), 1u);
+  EXPECT_EQ(moved[0].first, "ring.0.1");
+  EXPECT_EQ(moved[0].second.find("endpoint")->as_string(), "tcp://127.0.0.1:7100");
+  EXPECT_EQ(moved[0].second.find("key")->as_string(), "");  // no CURVE in this farm
+}
+
 }  // namespace
 }  // namespace lf

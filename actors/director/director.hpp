@@ -20,7 +20,11 @@ struct RunOptions {
   double monitor_hold = 0;            // seconds the monitor stays up after the frame
 };
 
-// Returns the process exit status: 0 on success, 1 if the farm failed, 128+signal if interrupted.
+// Returns the process exit status: 0 on success, 1 if the farm failed, 2 for a fault of the script or command line
+// found before anything started, 128+signal if interrupted.
 int run_farm(const FarmSpec& spec, const RunOptions& options);
+// The same over launchers the caller holds (a test's fakes: director.test.cpp).
+class Launchers;
+int run_farm(const FarmSpec& spec, const RunOptions& options, Launchers& launchers);
 
 }  // namespace lf

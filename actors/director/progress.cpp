@@ -37,4 +37,17 @@ void Progress::update(size_t done, double elapsed, bool force) {
   }
 }
 
+bool StepProgress::report(const std::string& actor, const std::string& what, uint64_t done, uint64_t total,
+                          std::string& line) {
+  if (quiet_ || total == 0) return false;
+  const int quarter = static_cast<int>(4 * done / total);
+  const auto now = std::chrono::steady_clock::now();
+  auto [step, fresh] = shown_.try_emplace(actor + "\n" + what, Shown{now, 0});
+  if (quarter <= step->second.quarter || now - step->second.first < std::chrono::seconds(1)) return false;
+  step->second.quarter = quarter;
+  line = actor + ": " + what + " " + std::to_string(25 * quarter) + "% (" + std::to_string(done) + " of " +
+         std::to_string(total) + ")";
+  return true;
+}
+
 }  // namespace lf

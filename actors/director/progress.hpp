@@ -4,6 +4,8 @@
 #include <chrono>
 #include <cstddef>
 #include <cstdint>
+#include <map>
+#include <string>
 
 namespace lf {
 
@@ -22,6 +24,23 @@ class Progress {
   std::chrono::steady_clock::time_point last_ = std::chrono::steady_clock::now() - std::chrono::seconds(1);
   size_t last_tenth_ = 0;
   bool finished_ = false;
+};
+
+// A long setup step (photons, a cache's pre-pass) as it goes: a line at each quarter, per actor and step, once the
+// step has taken a second (short ones say nothing).
+class StepProgress {
+ public:
+  explicit StepProgress(bool quiet) : quiet_(quiet) {}
+  // Whether a line is due; `line` is then set.
+  bool report(const std::string& actor, const std::string& what, uint64_t done, uint64_t total, std::string& line);
+
+ private:
+  struct Shown {
+    std::chrono::steady_clock::time_point first;  // the step's first report
+    int quarter = 0;                              // the last quarter shown
+  };
+  bool quiet_;
+  std::map<std::string, Shown> shown_;  // actor + step
 };
 
 }  // namespace lf

@@ -3,6 +3,9 @@
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
+#include <filesystem>
+
+#include <unistd.h>
 
 #include "core/log.hpp"
 #include "radiosity/ply.hpp"
@@ -41,6 +44,13 @@ Status RingService::prepare(const Scene& scene) {
              std::to_string(plan_->mesh.element_count()) + " elements on " + std::to_string(config_.layout.rings) +
              " x " + std::to_string(config_.layout.length) + " nodes (balance " + config_.balance_name() +
              ", global BSP depth " + std::to_string(plan_->bsp.depth()) + ")");
+  // The solution's PLY is written after the frame: a folder that cannot take it is said before anything starts.
+  if (!config_.ply.empty()) {
+    const auto dir = std::filesystem::path(config_.ply).parent_path();
+    if (::access(dir.c_str(), W_OK) != 0)
+      return make_error("radiosity: cannot write '" + config_.ply + "': folder '" + dir.string() +
+                        "' does not exist or is not writable");
+  }
   return Ok{};
 }
 
@@ -167,7 +177,8 @@ Status RingService::on_lost(const std::string& node, const std::string& why, Out
   unshot_fraction_.resize(static_cast<size_t>(std::max<int64_t>(c, 0)));
   if (!quiet_)
     log_info(c < 0 ? std::string("radiosity: the ring starts the solve again (no checkpoint yet)")
-                   : "radiosity: the ring goes back to its checkpoint after iteration " + std::to_string(c));
+                   : "radiosity: the ring goes back to its checkpoint after iteration " + std::to_string(c),
+             LogKind::recovery);
   return Ok{};
 }
 

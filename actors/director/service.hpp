@@ -9,18 +9,27 @@
 
 #include "core/result.hpp"
 #include "core/value.hpp"
+#include "transport/message.hpp"
 #include "transport/protocol.hpp"
 
 namespace lf {
 
-// Where a service's answers go: the director sends them on the control socket.
+// Where everything the director's parts say to actors goes: the control socket (ControlChannel), a recorder in
+// tests. One method; the others are the same message built for the purpose (a recorder may keep them apart).
 class Outbox {
  public:
   virtual ~Outbox() = default;
-  virtual void reply(const std::string& actor, uint64_t id, Value body) = 0;
-  virtual void refuse(const std::string& actor, uint64_t id, ErrorCode code, const std::string& message) = 0;
+  virtual void send(const std::string& actor, wire::Message message) = 0;
+  virtual void reply(const std::string& actor, uint64_t id, Value body) {
+    send(actor, wire::make_reply("director", id, std::move(body)));
+  }
+  virtual void refuse(const std::string& actor, uint64_t id, ErrorCode code, const std::string& message) {
+    send(actor, wire::make_error_reply("director", id, code, message));
+  }
   // A message the director starts (not an answer), e.g. ROLLBACK.
-  virtual void tell(const std::string& actor, wire::MsgType type, Value body) = 0;
+  virtual void tell(const std::string& actor, wire::MsgType type, Value body) {
+    send(actor, wire::make(type, "director", std::move(body)));
+  }
 };
 
 class Service {

@@ -27,6 +27,9 @@ class RecordingOutbox final : public Outbox {
   void tell(const std::string& actor, wire::MsgType type, Value body) override {
     sent.push_back({actor, 0, false, {}, {}, std::move(body), type});
   }
+  void send(const std::string& actor, wire::Message m) override {
+    sent.push_back({actor, m.header.id, false, {}, {}, std::move(m.body), m.header.type});
+  }
   // Takes what was sent so far.
   std::vector<Sent> take() { return std::exchange(sent, {}); }
   std::vector<Sent> sent;

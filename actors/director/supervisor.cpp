@@ -18,7 +18,7 @@ namespace {
 double seconds_between(Clock::time_point a, Clock::time_point b) { return std::chrono::duration<double>(b - a).count(); }
 }  // namespace
 
-Supervisor::Supervisor(const FarmSpec& spec, Launchers& launchers, ControlOut& out, Events events)
+Supervisor::Supervisor(const FarmSpec& spec, Launchers& launchers, Outbox& out, Events events)
     : spec_(spec), launchers_(launchers), out_(out), events_(std::move(events)) {
   for (size_t i = 0; i < spec.actors.size(); ++i) {
     ActorRecord r;
@@ -222,7 +222,8 @@ Status Supervisor::restart(ActorRecord& a, const std::string& why) {
   if (!events_.needs_restart || !events_.needs_restart(a)) {
     a.lost = true;
     a.loss = why;
-    log_warn("ring node '" + a.name() + "' " + why + " after the ring's solution was complete; it is not needed any more");
+    log_warn("ring node '" + a.name() + "' " + why + " after the ring's solution was complete; it is not needed any more",
+             LogKind::loss);
     return Ok{};
   }
   if (a.restarts >= kMaxRestarts)
@@ -230,7 +231,8 @@ Status Supervisor::restart(ActorRecord& a, const std::string& why) {
                       ", after " + std::to_string(a.restarts) + " restarts; stopping the farm");
   ++a.restarts;
   log_warn("ring node '" + a.name() + "' " + why + "; restarting it (" + std::to_string(a.restarts) + " of at most " +
-           std::to_string(kMaxRestarts) + ")");
+           std::to_string(kMaxRestarts) + ")",
+           LogKind::recovery);
   auto pid = start(*a.spec);
   if (!pid) return make_error("cannot restart ring node '" + a.name() + "': " + pid.error().message);
   const bool was_configured = a.configured;
@@ -283,7 +285,7 @@ Status Supervisor::lose(ActorRecord& a, const std::string& why) {
     return make_error("lost the last replica of '" + pool.name() + "': " + replicas);
   }
   if (auto st = events_.lost(a, why); !st) return st;
-  log_warn("replica '" + a.name() + "' " + why + "; '" + pool.name() + "' sends its work to the others");
+  log_warn("replica '" + a.name() + "' " + why + "; '" + pool.name() + "' sends its work to the others", LogKind::loss);
   // Whoever dispatches to the pool hears of it: its multiplexer, or each of its clients. One not yet configured
   // hears nothing: its CONFIG will leave the replica out.
   const wire::Message down = wire::make(MsgType::peer_down, "director", Value::Map{{"name", a.name()}});
@@ -325,6 +327,20 @@ void Supervisor::send_heartbeats(Clock::time_point now) {
   if (seconds_between(last_heartbeat_, now) < std::min(1.0, spec_.heartbeat_timeout / 4)) return;
   last_heartbeat_ = now;
   broadcast(wire::make(MsgType::heartbeat, "director"));
+}
+
+std::string Supervisor::in_flight() const {
+  std::string text;
+  for (const auto& [name, a] : actors_) {
+    auto figure = [&a = a](const char* key) {
+      const Value* v = a.live.find(key);
+      return v && v->is_number() ? v->as_int() : int64_t{0};
+    };
+    if (a.lost || (figure("in_flight") == 0 && figure("queue") == 0)) continue;
+    text += (text.empty() ? "" : ", ") + name + " " + std::to_string(figure("in_flight")) + " out / " +
+            std::to_string(figure("queue")) + " queued";
+  }
+  return text;
 }
 
 }  // namespace lf

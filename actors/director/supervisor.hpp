@@ -12,7 +12,7 @@
 //     configures the new process when it says HELLO and tells the others where it listens once it is READY
 //     configure. One lost after the ring's solution is complete is simply lost;
 //   - any other death, an ERROR from an actor, or a bad HELLO stops the farm with a message naming the actor.
-// Socket-free: the director passes messages in and sends what the supervisor says through ControlOut, so the
+// Socket-free: the director passes messages in and sends what the supervisor says through an Outbox, so the
 // supervisor is tested by feeding it messages and exits (supervisor.test.cpp).
 #include <sys/types.h>
 
@@ -24,6 +24,7 @@
 #include <vector>
 
 #include "actors/director/launcher.hpp"
+#include "actors/director/service.hpp"
 #include "actors/director/stage.hpp"
 #include "core/log.hpp"
 #include "core/result.hpp"
@@ -57,13 +58,6 @@ struct ActorRecord {
   const std::string& name() const { return spec->name; }
 };
 
-// Where the supervisor's messages go (the director's control socket; a recorder in tests).
-class ControlOut {
- public:
-  virtual ~ControlOut() = default;
-  virtual void send(const std::string& actor, wire::Message message) = 0;
-};
-
 class Supervisor {
  public:
   // What the supervisor hands to the director: requests for the services, and losses for them to recover from.
@@ -80,7 +74,7 @@ class Supervisor {
   };
   static constexpr int kMaxRestarts = 3;
 
-  Supervisor(const FarmSpec& spec, Launchers& launchers, ControlOut& out, Events events);
+  Supervisor(const FarmSpec& spec, Launchers& launchers, Outbox& out, Events events);
 
   // Starts every actor (`lightfarm actor ...`, or an exec actor's own command) pointed at `director_endpoint`.
   // With `local_address` (a farm that spans hosts), every actor also gets `--bind tcp://ADDRESS:*`: its host's
@@ -120,6 +114,9 @@ class Supervisor {
   // The actor's pid on its host (remote actors' records hold handles), and "pid N[ on HOST]" for messages.
   pid_t host_pid(const ActorRecord& a) const { return a.pid > 0 ? launchers_.host_pid(a.pid) : 0; }
   std::string where(const ActorRecord& a) const { return launchers_.where(a.pid); }
+  // What the live actors have in flight and queued, from their heartbeats ("a 3 out / 2 queued, b ..."), for a
+  // frame that makes no progress; empty when nobody has anything.
+  std::string in_flight() const;
 
  private:
   bool recoverable(const ActorRecord& a) const;
@@ -131,7 +128,7 @@ class Supervisor {
 
   const FarmSpec& spec_;
   Launchers& launchers_;
-  ControlOut& out_;
+  Outbox& out_;
   Events events_;
   std::map<std::string, ActorRecord> actors_;
   // How launch() started actors, for restarts.

@@ -39,7 +39,7 @@ class FakeLauncher final : public Launcher {
   std::vector<std::pair<pid_t, int>> killed;
 };
 
-struct Recorder final : ControlOut {
+struct Recorder final : Outbox {
   void send(const std::string& actor, wire::Message m) override { sent.emplace_back(actor, std::move(m)); }
   std::vector<std::pair<std::string, wire::Message>> sent;
 };

@@ -1,6 +1,7 @@
 #include "actors/director/tile_service.hpp"
 
 #include <algorithm>
+#include <cmath>
 
 #include "core/log.hpp"
 
@@ -27,6 +28,12 @@ Status TileService::on_phase(wire::Phase phase, Outbox& out) {
 
 double TileService::seconds_since_progress() const {
   return rendering_ ? std::chrono::duration<double>(Clock::now() - last_progress_).count() : 0.0;
+}
+
+std::string TileService::stall_report(const std::string& in_flight) const {
+  return "no tile has landed for " + seconds_text(std::round(seconds_since_progress())) + " (" +
+         std::to_string(tiles_done()) + " of " + std::to_string(tiles_total()) + " done): " + holders() +
+         "; requests " + (in_flight.empty() ? std::string("none in flight") : in_flight);
 }
 
 std::string TileService::holders() const {
@@ -73,7 +80,7 @@ Status TileService::on_lost(const std::string& actor, const std::string& why, Ou
   if (std::find(renderers_.begin(), renderers_.end(), actor) == renderers_.end()) return Ok{};
   std::erase_if(waiting_, [&](const auto& w) { return w.first == actor; });
   const size_t tiles = master_.release(actor);
-  log_warn("renderer '" + actor + "' " + why + "; its " + std::to_string(tiles) + " tiles go to the others");
+  log_warn("renderer '" + actor + "' " + why + "; its " + std::to_string(tiles) + " tiles go to the others", LogKind::loss);
   serve_waiting(out);
   return Ok{};
 }

@@ -36,6 +36,8 @@ class TileService final : public Service {
   // tile requests wait: what a farm that makes no progress is waiting on.
   double seconds_since_progress() const;
   std::string holders() const;
+  // The warning for a frame that made no progress: how long, who holds what, and `in_flight` (the actors' requests).
+  std::string stall_report(const std::string& in_flight) const;
   // Final progress line; the bar's end.
   void finish_progress();
   bool drawing_progress() const { return progress_.drawing(); }
