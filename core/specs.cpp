@@ -4,19 +4,6 @@ namespace lf {
 
 static Value vec3(const std::array<double, 3>& a) { return Value::Array{a[0], a[1], a[2]}; }
 
-static std::array<double, 3> vec3_of(const Value* v, std::array<double, 3> fallback) {
-  if (!v || !v->is_array() || v->as_array().size() != 3) return fallback;
-  const auto& a = v->as_array();
-  for (const auto& e : a)
-    if (!e.is_number()) return fallback;
-  return {a[0].as_double(), a[1].as_double(), a[2].as_double()};
-}
-
-static double num(const Value& v, const char* key, double fallback) {
-  const Value* e = v.find(key);
-  return e && e->is_number() ? e->as_double() : fallback;
-}
-
 static std::string str(const Value& v, const char* key) {
   const Value* e = v.find(key);
   return e && e->is_string() ? e->as_string() : std::string();
@@ -43,39 +30,81 @@ SceneSpec SceneSpec::from_value(const Value& v) {
   return s;
 }
 
+CameraSpec CameraSpec::read(const ParamTable& p) {
+  CameraSpec c;
+  c.eye = p.get_vec3("eye", c.eye);
+  c.at = p.get_vec3("at", c.at);
+  c.up = p.get_vec3("up", c.up);
+  c.fov = p.get_float("fov", c.fov, 0.1, 179.0);
+  const double dx = c.at[0] - c.eye[0], dy = c.at[1] - c.eye[1], dz = c.at[2] - c.eye[2];
+  if (dx * dx + dy * dy + dz * dz == 0) throw ParamError("camera: eye and at are the same point");
+  const double cx = dy * c.up[2] - dz * c.up[1], cy = dz * c.up[0] - dx * c.up[2], cz = dx * c.up[1] - dy * c.up[0];
+  if (cx * cx + cy * cy + cz * cz == 0) throw ParamError("camera: up is parallel to the viewing direction");
+  return c;
+}
+
 Value CameraSpec::to_value() const {
   return Value::Map{{"eye", vec3(eye)}, {"at", vec3(at)}, {"up", vec3(up)}, {"fov", fov}};
 }
 
-CameraSpec CameraSpec::from_value(const Value& v) {
-  CameraSpec c;
-  c.eye = vec3_of(v.find("eye"), c.eye);
-  c.at = vec3_of(v.find("at"), c.at);
-  c.up = vec3_of(v.find("up"), c.up);
-  c.fov = num(v, "fov", c.fov);
-  return c;
+// CONFIG's camera and image are read by the script's own readers: an actor takes nothing a script could not say.
+template <class Spec>
+static Result<Spec> read_back(const Value& v, const char* what) {
+  if (!v.is_map()) return make_error(std::string("CONFIG '") + what + "' must be a map", ErrorCode::bad_request);
+  try {
+    ParamTable p(v.as_map(), what);
+    Spec spec = Spec::read(p);
+    p.report_unused();
+    return spec;
+  } catch (const ParamError& e) {
+    return make_error(std::string("CONFIG: ") + e.what(), ErrorCode::bad_request);
+  }
+}
+
+Result<CameraSpec> CameraSpec::from_value(const Value& v) { return read_back<CameraSpec>(v, "camera"); }
+
+const std::vector<std::string>& ImageSpec::tonemaps() {
+  static const std::vector<std::string> names{"clamp", "reinhard", "aces"};
+  return names;
+}
+
+ImageSpec ImageSpec::read(const ParamTable& p) {
+  ImageSpec i;
+  i.width = static_cast<int>(p.get_int("width", i.width, 1, 16384));
+  i.height = static_cast<int>(p.get_int("height", i.height, 1, 16384));
+  i.spp = static_cast<int>(p.get_int("spp", i.spp, 1, 65536));
+  i.shade_spp = static_cast<int>(p.get_int("shade_spp", i.spp, 1, i.spp));
+  if (i.shade_spp == i.spp) i.shade_spp = 0;  // all of them: the plain pixel mean
+  if (p.has("adaptive_threshold") && !p.has("adaptive_spp"))
+    throw ParamError("image: adaptive_threshold needs adaptive_spp (the most shaded samples a noisy pixel may get)");
+  if (p.has("adaptive_spp")) {
+    if (i.shade_spp == 1)
+      throw ParamError("image: adaptive_spp needs shade_spp of at least 2 (a pixel's spread needs two samples)");
+    if (i.shade_spp == 0)
+      throw ParamError("image: adaptive_spp needs shade_spp below spp (it shades more of the spp samples where the "
+                       "first shade_spp are noisy)");
+    i.adaptive_spp = static_cast<int>(p.get_int("adaptive_spp", i.spp, i.shade_spp + 1, i.spp));
+    i.adaptive_threshold = p.get_float("adaptive_threshold", i.adaptive_threshold, 1e-6, 1);
+  }
+  i.tile = static_cast<int>(p.get_int("tile", i.tile, 1, 1024));
+  i.output = p.get_string("output", i.output);
+  i.exposure = p.get_float("exposure", i.exposure, -20, 20);
+  i.tonemap = p.get_string("tonemap", i.tonemap, tonemaps());
+  i.sampler = p.get_string("sampler", i.sampler, {"independent", "sobol"});
+  return i;
 }
 
 Value ImageSpec::to_value() const {
-  return Value::Map{{"width", width}, {"height", height},   {"spp", spp}, {"shade_spp", shade_spp}, {"adaptive_spp", adaptive_spp},
-                    {"adaptive_threshold", adaptive_threshold}, {"tile", tile},
-                    {"output", output}, {"exposure", exposure}, {"tonemap", tonemap}, {"sampler", sampler}};
+  Value::Map m{{"width", width},   {"height", height},     {"spp", spp},         {"tile", tile},
+               {"output", output}, {"exposure", exposure}, {"tonemap", tonemap}, {"sampler", sampler}};
+  if (shade_spp > 0) m["shade_spp"] = shade_spp;
+  if (adaptive_spp > 0) {
+    m["adaptive_spp"] = adaptive_spp;
+    m["adaptive_threshold"] = adaptive_threshold;
+  }
+  return m;
 }
 
-ImageSpec ImageSpec::from_value(const Value& v) {
-  ImageSpec i;
-  i.width = static_cast<int>(num(v, "width", i.width));
-  i.height = static_cast<int>(num(v, "height", i.height));
-  i.spp = static_cast<int>(num(v, "spp", i.spp));
-  i.shade_spp = static_cast<int>(num(v, "shade_spp", 0));
-  i.adaptive_spp = static_cast<int>(num(v, "adaptive_spp", 0));
-  i.adaptive_threshold = num(v, "adaptive_threshold", i.adaptive_threshold);
-  i.tile = static_cast<int>(num(v, "tile", i.tile));
-  i.output = str(v, "output");
-  i.exposure = num(v, "exposure", 0);
-  if (const Value* t = v.find("tonemap"); t && t->is_string()) i.tonemap = t->as_string();
-  if (const Value* s = v.find("sampler"); s && s->is_string()) i.sampler = s->as_string();
-  return i;
-}
+Result<ImageSpec> ImageSpec::from_value(const Value& v) { return read_back<ImageSpec>(v, "image"); }
 
 }  // namespace lf

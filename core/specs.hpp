@@ -5,6 +5,8 @@
 #include <string>
 #include <vector>
 
+#include "core/params.hpp"
+#include "core/result.hpp"
 #include "core/value.hpp"
 
 namespace lf {
@@ -36,8 +38,11 @@ struct CameraSpec {
   std::array<double, 3> at{278, 273, 0};
   std::array<double, 3> up{0, 1, 0};
   double fov = 39.3;  // vertical, degrees
+  // camera { } with its ranges and rules (eye and at apart, up not along the view): how a script is read and how
+  // an actor reads CONFIG back. Throws ParamError.
+  static CameraSpec read(const ParamTable& p);
   Value to_value() const;
-  static CameraSpec from_value(const Value& v);
+  static Result<CameraSpec> from_value(const Value& v);
 };
 
 struct ImageSpec {
@@ -64,8 +69,12 @@ struct ImageSpec {
   // The numbers camera, direct light and path tracing draw: "independent" (PCG32) or "sobol" (Owen-scrambled
   // Sobol points, render/sampler.hpp).
   std::string sampler = "sobol";
-  Value to_value() const;
-  static ImageSpec from_value(const Value& v);
+  // image { } with its ranges, defaults and rules (shade_spp at most spp; adaptive sampling needs shade_spp of 2 or
+  // more below spp): how a script is read and how an actor reads CONFIG back. Throws ParamError.
+  static ImageSpec read(const ParamTable& p);
+  static const std::vector<std::string>& tonemaps();  // clamp, reinhard, aces
+  Value to_value() const;  // what read() takes back
+  static Result<ImageSpec> from_value(const Value& v);
 };
 
 }  // namespace lf

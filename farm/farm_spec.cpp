@@ -12,6 +12,13 @@ int FarmSpec::pool_of(int i) const {
   return -1;
 }
 
+std::vector<std::string> FarmSpec::renderer_names() const {
+  std::vector<std::string> names;
+  for (const auto& a : actors)
+    if (a.is_renderer()) names.push_back(a.name);
+  return names;
+}
+
 int FarmSpec::renderer_count() const {
   int n = 0;
   for (const auto& a : actors) n += a.is_renderer();

@@ -84,6 +84,7 @@ struct FarmSpec {
   SourceLoc partition_loc;
 
   int renderer_count() const;
+  std::vector<std::string> renderer_names() const;
   // Index of the multiplexer whose replica actor `i` is, or -1.
   int pool_of(int i) const;
   // Index of the actor named `name`, or -1.

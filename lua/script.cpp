@@ -20,6 +20,7 @@
 #include "core/params.hpp"
 #include "farm/builders.hpp"
 #include "farm/slurm_hosts.hpp"
+#include "farm/spec_readers.hpp"
 #include "radiosity/config.hpp"
 #include "render/image.hpp"
 #include "render/lightop_registry.hpp"
@@ -180,19 +181,11 @@ int l_scene(lua_State* L) {
   if (b.have_scene) luaL_error(L, "scene is declared twice");
   ParamTable p = table_params(L, 1, "scene");
   with_params(L, [&] {
-    b.spec.scene.builtin = p.get_string("builtin", "", Scene::builtin_names());
-    b.spec.scene.file = p.get_string("file", "");
+    SceneSpec read = read_scene(p, b.script_dir);
     p.report_unused();
+    b.spec.scene.builtin = read.builtin;
+    b.spec.scene.file = read.file;
   });
-  if (b.spec.scene.builtin.empty() == b.spec.scene.file.empty())
-    luaL_error(L, "scene needs exactly one of builtin = \"cornell\" or file = \"path.obj\"");
-  if (!b.spec.scene.file.empty()) {
-    fs::path f(b.spec.scene.file);
-    if (f.is_relative()) f = b.script_dir / f;  // relative to the script, so a farm travels with its scene
-    std::error_code ec;
-    if (!fs::is_regular_file(f, ec)) luaL_error(L, "scene file '%s' not found", f.string().c_str());
-    b.spec.scene.file = fs::absolute(f).lexically_normal().string();
-  }
   b.spec.scene.loc = caller_loc(L);
   b.have_scene = true;
   return 0;
@@ -203,18 +196,10 @@ int l_camera(lua_State* L) {
   Builder& b = builder(L);
   if (b.have_camera) luaL_error(L, "camera is declared twice");
   ParamTable p = table_params(L, 1, "camera");
-  CameraSpec& c = b.spec.camera;
   with_params(L, [&] {
-    c.eye = p.get_vec3("eye", c.eye);
-    c.at = p.get_vec3("at", c.at);
-    c.up = p.get_vec3("up", c.up);
-    c.fov = p.get_float("fov", c.fov, 0.1, 179.0);
+    b.spec.camera = CameraSpec::read(p);
     p.report_unused();
   });
-  double dx = c.at[0] - c.eye[0], dy = c.at[1] - c.eye[1], dz = c.at[2] - c.eye[2];
-  if (dx * dx + dy * dy + dz * dz == 0) luaL_error(L, "camera: eye and at are the same point");
-  double cx = dy * c.up[2] - dz * c.up[1], cy = dz * c.up[0] - dx * c.up[2], cz = dx * c.up[1] - dy * c.up[0];
-  if (cx * cx + cy * cy + cz * cz == 0) luaL_error(L, "camera: up is parallel to the viewing direction");
   b.have_camera = true;
   return 0;
 }
@@ -225,29 +210,8 @@ int l_image(lua_State* L) {
   Builder& b = builder(L);
   if (b.have_image) luaL_error(L, "image is declared twice");
   ParamTable p = table_params(L, 1, "image");
-  ImageSpec& i = b.spec.image;
   with_params(L, [&] {
-    i.width = static_cast<int>(p.get_int("width", i.width, 1, 16384));
-    i.height = static_cast<int>(p.get_int("height", i.height, 1, 16384));
-    i.spp = static_cast<int>(p.get_int("spp", i.spp, 1, 65536));
-    i.shade_spp = static_cast<int>(p.get_int("shade_spp", i.spp, 1, i.spp));
-    if (i.shade_spp == i.spp) i.shade_spp = 0;  // all of them: the plain pixel mean
-    if (p.has("adaptive_threshold") && !p.has("adaptive_spp"))
-      throw ParamError("image: adaptive_threshold needs adaptive_spp (the most shaded samples a noisy pixel may get)");
-    if (p.has("adaptive_spp")) {
-      if (i.shade_spp == 1)
-        throw ParamError("image: adaptive_spp needs shade_spp of at least 2 (a pixel's spread needs two samples)");
-      if (i.shade_spp == 0)
-        throw ParamError("image: adaptive_spp needs shade_spp below spp (it shades more of the spp samples where the "
-                         "first shade_spp are noisy)");
-      i.adaptive_spp = static_cast<int>(p.get_int("adaptive_spp", i.spp, i.shade_spp + 1, i.spp));
-      i.adaptive_threshold = p.get_float("adaptive_threshold", i.adaptive_threshold, 1e-6, 1);
-    }
-    i.tile = static_cast<int>(p.get_int("tile", i.tile, 1, 1024));
-    i.output = p.get_string("output", i.output);
-    i.exposure = p.get_float("exposure", i.exposure, -20, 20);
-    i.tonemap = p.get_string("tonemap", i.tonemap, display_tonemaps());
-    i.sampler = p.get_string("sampler", i.sampler, {"independent", "sobol"});
+    b.spec.image = ImageSpec::read(p);
     p.report_unused();
   });
   b.have_image = true;
@@ -260,30 +224,7 @@ int l_host_table(lua_State* L) {
   const char* name = luaL_checkstring(L, lua_upvalueindex(2));
   ParamTable p = table_params(L, 1, std::string("host '") + name + "'");
   HostSpec h;
-  h.name = name;
-  with_params(L, [&] {
-    h.launcher = p.get_string("launcher", "local", {"local", "ssh", "slurm"});
-    h.address = p.get_string("address", h.launcher == "local" ? "127.0.0.1" : "");
-    if (h.launcher != "local") h.lightfarm = p.get_string("lightfarm", "");
-    if (h.launcher == "ssh") {
-      h.user = p.get_string("user", "");
-      h.port = static_cast<int>(p.get_int("port", 0, 0, 65535));
-      h.ssh_config = p.get_string("ssh_config", "");
-    }
-    p.report_unused();
-  });
-
-  if (h.name == "local") luaL_error(L, "host 'local' is this machine; give another name");
-  if (h.address.empty())
-    luaL_error(L, "host '%s': a%s host needs address = \"...\" (where its actors listen%s)", name,
-               h.launcher == "ssh" ? "n ssh" : " slurm", h.launcher == "ssh" ? " and ssh reaches it" : "");
-  if (!h.ssh_config.empty()) {
-    fs::path f(h.ssh_config);
-    if (f.is_relative()) f = b.script_dir / f;
-    std::error_code ec;
-    if (!fs::is_regular_file(f, ec)) luaL_error(L, "host '%s': ssh_config '%s' not found", name, f.string().c_str());
-    h.ssh_config = fs::absolute(f).lexically_normal().string();
-  }
+  with_params(L, [&] { h = read_host(name, p, b.script_dir); });
   for (const auto& other : b.spec.hosts)
     if (other.name == h.name) luaL_error(L, "host '%s' is declared twice", name);
   h.loc = caller_loc(L);
@@ -383,28 +324,6 @@ int l_lightop_table(lua_State* L) {
   a.name = wanted;
   push_actor(L, add_actor(b.spec, std::move(a)));
   return 1;
-}
-
-// Where `program` runs from: a path with a slash is relative to the script; a bare name is looked up on PATH.
-std::string resolve_program(const std::string& program, const fs::path& script_dir) {
-  auto executable = [](const fs::path& p) {
-    std::error_code ec;
-    return fs::is_regular_file(p, ec) && ::access(p.c_str(), X_OK) == 0;
-  };
-  if (program.find('/') != std::string::npos) {
-    fs::path p = fs::path(program).is_absolute() ? fs::path(program) : script_dir / program;
-    return executable(p) ? fs::absolute(p).lexically_normal().string() : std::string();
-  }
-  const char* path = std::getenv("PATH");
-  std::string dirs = path ? path : "/usr/bin:/bin";
-  for (size_t start = 0; start <= dirs.size();) {
-    size_t end = dirs.find(':', start);
-    if (end == std::string::npos) end = dirs.size();
-    fs::path candidate = fs::path(dirs.substr(start, end - start)) / program;
-    if (executable(candidate)) return candidate.string();
-    start = end + 1;
-  }
-  return {};
 }
 
 // lightop.exec { cmd = {"python3", "my_op.py"}, params..., input(s), name, host } -> LightOp handle
@@ -547,23 +466,8 @@ int l_radiosity(lua_State* L) {
 int l_light(lua_State* L) {
   Builder& b = builder(L);
   luaL_checktype(L, 1, LUA_TTABLE);
-  Value light = to_value(L, 1, "light");
-  if (!light.is_map()) luaL_error(L, "light needs quad, sphere or point");
-  for (const auto& [key, v] : light.as_map())
-    if (key != "quad" && key != "sphere" && key != "radius" && key != "point" && key != "radiance" && key != "intensity")
-      luaL_error(L, "light: unknown parameter '%s' (known: quad, sphere, radius, radiance, point, intensity)", key.c_str());
-  const int shapes = (light.find("quad") != nullptr) + (light.find("sphere") != nullptr) + (light.find("point") != nullptr);
-  if (shapes != 1) luaL_error(L, "light needs exactly one of quad, sphere or point");
-  for (const char* colour : {"radiance", "intensity"})
-    if (const Value* c = light.find(colour); c && c->is_array())
-      for (const auto& e : c->as_array())
-        if (e.is_number() && e.as_double() < 0) luaL_error(L, "light: %s must not be negative", colour);
-  Scene check;  // the scene's own reader says what is wrong, with the same words it would use later
-  if (auto st = check.add_script_lights(Value::Array{light}); !st) {
-    std::string why = st.error().message;
-    why = why.substr(why.find(':') + 2);
-    luaL_error(L, "light: %s", why.c_str());
-  }
+  Value light;
+  with_params(L, [&] { light = read_light(to_value(L, 1, "light")); });
   if (const SourceLoc at = caller_loc(L); at.line > 0) light.as_map()["at"] = at.str();
   b.spec.scene.lights.push_back(std::move(light));
   return 0;
@@ -576,54 +480,11 @@ int l_material_table(lua_State* L) {
   Builder& b = builder(L);
   const std::string name = luaL_checkstring(L, lua_upvalueindex(2));
   if (!b.have_scene) luaL_error(L, "material \"%s\" needs scene { ... } before it", name.c_str());
-  if (!b.material_names) {
-    std::vector<std::string> names;
-    if (!b.spec.scene.file.empty()) {
-      auto listed = Scene::catalogue_obj(b.spec.scene.file);
-      if (listed) names = listed->material_names;
-    } else if (auto s = Scene::builtin_unlit(b.spec.scene.builtin)) {
-      for (const auto& m : s->materials()) names.push_back(m.name);
-    }
-    b.material_names = std::move(names);
-  }
-  const auto& names = *b.material_names;
-  if (std::find(names.begin(), names.end(), name) == names.end()) {
-    std::string known;
-    for (size_t i = 0; i < names.size() && i < 12; ++i) known += (i ? ", " : "") + names[i];
-    if (names.size() > 12) known += ", ... (" + std::to_string(names.size()) + " in all)";
-    luaL_error(L, "material '%s' is not in the scene (its materials: %s)", name.c_str(),
-               known.empty() ? "none" : known.c_str());
-  }
+  if (!b.material_names) b.material_names = scene_material_names(b.spec.scene);
   for (const auto& m : b.spec.scene.materials)
     if (m.find("name")->as_string() == name) luaL_error(L, "material '%s' is changed twice", name.c_str());
   ParamTable p = table_params(L, 1, "material '" + name + "'");
-  Value::Map change{{"name", name}};
-  with_params(L, [&] {
-    auto colour = [&](const char* key, double max) {
-      if (!p.has(key)) return;
-      const auto c = p.get_vec3(key, {0, 0, 0});
-      for (double v : c)
-        if (!(v >= 0 && v <= max))
-          throw ParamError("material '" + name + "': " + key + " must be between 0 and " + (max > 1 ? "1e6" : "1") +
-                           " in each channel");
-      change[key] = Value::Array{c[0], c[1], c[2]};
-    };
-    colour("emission", 1e6);
-    colour("kd", 1);
-    colour("ks", 1);
-    colour("mirror", 1);
-    colour("tf", 1);
-    if (p.has("ns")) change["ns"] = p.get_float("ns", 0, 0, 1e6);
-    if (p.has("ior")) change["ior"] = p.get_float("ior", 1.5, 1, 3);
-    if (p.has("type")) change["type"] = p.get_string("type", "diffuse", {"diffuse", "glossy", "mirror", "glass"});
-    p.report_unused();
-  });
-  // The scene's own check (kd + ks + mirror at most 1) with the words it would use later.
-  Scene probe;
-  probe.add_material({name, {}, {}});
-  if (auto st = probe.apply_material_overrides(Value::Array{Value(change)}); !st)
-    luaL_error(L, "%s", st.error().message.c_str());
-  b.spec.scene.materials.push_back(std::move(change));
+  with_params(L, [&] { b.spec.scene.materials.push_back(read_material_change(name, p, *b.material_names)); });
   return 0;
 }
 
@@ -634,16 +495,7 @@ int l_material(lua_State* L) { return with_name(L, l_material_table); }
 int l_farm(lua_State* L) {
   Builder& b = builder(L);
   ParamTable p = table_params(L, 1, "farm");
-  with_params(L, [&] {
-    b.spec.heartbeat_timeout = p.get_float("heartbeat_timeout", b.spec.heartbeat_timeout, 0.5, 3600);
-    b.spec.request_timeout = p.get_float("request_timeout", b.spec.request_timeout, 0.1, 86400);
-    b.spec.director_address = p.get_string("director_address", b.spec.director_address);
-    b.spec.security = p.get_string("security", b.spec.security, {"curve", "none"});
-    b.spec.monitor = p.get_string("monitor", b.spec.monitor);
-    b.spec.host_agents = p.get_bool("host_agents", b.spec.host_agents);
-    b.spec.light_paths = p.get_string("light_paths", b.spec.light_paths, {"check", "complete", "partial", "off"});
-    p.report_unused();
-  });
+  with_params(L, [&] { read_farm_settings(p, b.spec); });
   return 0;
 }
 

@@ -111,7 +111,7 @@ TEST_F(ScriptTest, TheSamplerIsIndependentOrSobol) {
                                                   "renderers { count = 1, lighting = lightop \"direct\" {} }\n"));
   ASSERT_TRUE(chosen.ok()) << chosen.error().message;
   EXPECT_EQ(chosen->image.sampler, "independent");
-  EXPECT_EQ(ImageSpec::from_value(chosen->image.to_value()).sampler, "independent") << "it travels in CONFIG";
+  EXPECT_EQ(ImageSpec::from_value(chosen->image.to_value())->sampler, "independent") << "it travels in CONFIG";
   EXPECT_EQ(error_of("image { sampler = \"halton\" }\n"),
             "farm.lua:1: image: parameter 'sampler' must be one of independent, sobol, got 'halton'");
 }

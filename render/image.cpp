@@ -53,11 +53,6 @@ Status check_output_path(const std::string& path) {
   return Ok{};
 }
 
-const std::vector<std::string>& display_tonemaps() {
-  static const std::vector<std::string> names{"clamp", "reinhard", "aces"};
-  return names;
-}
-
 namespace {
 // A Display read once per image, not per pixel: the exposure's factor and the curve.
 struct ToneCurve {

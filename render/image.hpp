@@ -32,7 +32,6 @@ struct Display {
   float exposure = 0;
   std::string tonemap = "clamp";
 };
-const std::vector<std::string>& display_tonemaps();
 // One linear channel value as the display maps it, before sRGB encoding (in [0, 1]).
 float display_value(float linear, const Display& display);
 // The same, sRGB-encoded: what an 8-bit output stores, over 255.

@@ -2,12 +2,8 @@
 
 #include <sys/prctl.h>
 
-#include <array>
 #include <chrono>
-#include <cmath>
 #include <cstdio>
-#include <future>
-#include <map>
 #include <memory>
 #include <thread>
 
@@ -33,17 +29,9 @@
 namespace lf {
 namespace {
 
-using wire::MsgType;
-using wire::Phase;
+using wire::MsgType, wire::Phase;
 
 double seconds_since(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
-
-std::vector<std::string> renderers_of(const FarmSpec& spec) {
-  std::vector<std::string> names;
-  for (const auto& a : spec.actors)
-    if (a.is_renderer()) names.push_back(a.name);
-  return names;
-}
 
 class Director {
  public:
@@ -63,7 +51,7 @@ class Director {
                                        [this](ActorRecord& a) { return rejoin(a); },
                                        [this](const ActorRecord& a, const std::string& what, uint64_t done,
                                               uint64_t total) { show_progress(a, what, done, total); }}),
-        tiles_(spec.image, renderers_of(spec), options.progress_on_terminal, options.quiet),
+        tiles_(spec.image, spec.renderer_names(), options.progress_on_terminal, options.quiet),
         ring_(spec, exchange_, options.quiet, options.progress_on_terminal),
         loop_(spec, control_, supervisor_, launchers_),
         step_progress_(options.quiet) {}
@@ -77,15 +65,7 @@ class Director {
       auto feed = MonitorFeed::start(options_.monitor, spec_, supervisor_, tiles_, ring_, timeline_);
       if (!feed) return log_error(feed.error().message), 2;
       monitor_ = std::move(*feed);
-      log_info("monitor: " + monitor_->url());
-      monitor_->update(true);
     }
-    struct Join {
-      std::thread& t;
-      ~Join() {
-        if (t.joinable()) t.join();
-      }
-    } join_image_io{image_io_};
     int status = 0;
     try {
       run_stages();
@@ -156,16 +136,9 @@ class Director {
     deployment_ = deployer.finish(scene);
     supervisor_.set_host_agents(deployment_.agent_sockets);
     if (ring_.active()) check(ring_.prepare(scene));
-    wire::Socket& control = control_.socket();
-    if (deployment_.curve()) {
-      control.make_curve_server(deployment_.director_keys.secret_key);
-      deployment_.authenticator->watch(control);
-    }
-    const std::string& address = deployment_.local_address;
-    auto endpoint = control.bind("tcp://" + (address.empty() ? std::string("127.0.0.1") : address) + ":*");
+    auto endpoint = control_.open(deployment_);
     if (!endpoint) throw FarmFailure{endpoint.error().message};
     control_endpoint_ = *endpoint;
-    control.set_linger_ms(0);
   }
 
   Status configure_actor(ActorRecord& a) {
@@ -177,10 +150,7 @@ class Director {
 
   void show_progress(const ActorRecord& a, const std::string& what, uint64_t done, uint64_t total) {
     if (monitor_) monitor_->on_progress(a.name(), what, done, total);
-    if (std::string line; step_progress_.report(a.name(), what, done, total, line)) {
-      if (tiles_.drawing_progress()) std::fprintf(stderr, "\n");
-      log_info(line);
-    }
+    step_progress_.report(a.name(), what, done, total, tiles_.drawing_progress());
   }
 
   // A restarted actor is configured: every configured actor that has it as an input learns where it listens now,
@@ -266,7 +236,7 @@ class Director {
     // render once the first tile is in: not with the actors' start-up, which it slowed, and not after the last
     // tile, which adds its time to every frame. dlopen holds the loader's lock, which creating a thread needs:
     // by now this process has made its own threads (ZeroMQ's, the ZAP handler, hosts connecting).
-    if (!image_io_.joinable() && tiles_.tiles_done() > 0) image_io_ = std::thread(preload_image_writer, spec_.image.output);
+    if (!image_io_.joinable() && tiles_.tiles_done() > 0) image_io_ = std::jthread(preload_image_writer, spec_.image.output);
     loop_.turn(timeout_ms);
     if (monitor_) monitor_->update(false);
   }
@@ -291,7 +261,7 @@ class Director {
   RunOptions options_;
   FarmTimeline timeline_;
   Launchers& launchers_;
-  std::thread image_io_;     // loads the image writer beside the render (pump)
+  std::jthread image_io_;    // loads the image writer beside the render (pump)
   Deployment deployment_;    // declared before the control socket, whose CURVE handshakes its authenticator serves
   ControlChannel control_;
   std::string control_endpoint_;

@@ -19,6 +19,8 @@ Result<std::unique_ptr<MonitorFeed>> MonitorFeed::start(const std::string& addre
   set_log_observer([f = feed.get()](const std::string& level, const std::string& text, LogKind kind) {
     f->keep_log_line(level, text, kind);
   });
+  log_info("monitor: " + feed->url());
+  feed->update(true);
   return feed;
 }
 

@@ -37,17 +37,17 @@ void Progress::update(size_t done, double elapsed, bool force) {
   }
 }
 
-bool StepProgress::report(const std::string& actor, const std::string& what, uint64_t done, uint64_t total,
-                          std::string& line) {
-  if (quiet_ || total == 0) return false;
+void StepProgress::report(const std::string& actor, const std::string& what, uint64_t done, uint64_t total,
+                          bool bar_drawing) {
+  if (quiet_ || total == 0) return;
   const int quarter = static_cast<int>(4 * done / total);
   const auto now = std::chrono::steady_clock::now();
   auto [step, fresh] = shown_.try_emplace(actor + "\n" + what, Shown{now, 0});
-  if (quarter <= step->second.quarter || now - step->second.first < std::chrono::seconds(1)) return false;
+  if (quarter <= step->second.quarter || now - step->second.first < std::chrono::seconds(1)) return;
   step->second.quarter = quarter;
-  line = actor + ": " + what + " " + std::to_string(25 * quarter) + "% (" + std::to_string(done) + " of " +
-         std::to_string(total) + ")";
-  return true;
+  if (bar_drawing) std::fprintf(stderr, "\n");
+  log_info(actor + ": " + what + " " + std::to_string(25 * quarter) + "% (" + std::to_string(done) + " of " +
+           std::to_string(total) + ")");
 }
 
 }  // namespace lf

@@ -31,8 +31,8 @@ class Progress {
 class StepProgress {
  public:
   explicit StepProgress(bool quiet) : quiet_(quiet) {}
-  // Whether a line is due; `line` is then set.
-  bool report(const std::string& actor, const std::string& what, uint64_t done, uint64_t total, std::string& line);
+  // Logs the line when one is due; `bar_drawing`: the render's bar holds the terminal's line (a new one first).
+  void report(const std::string& actor, const std::string& what, uint64_t done, uint64_t total, bool bar_drawing);
 
  private:
   struct Shown {

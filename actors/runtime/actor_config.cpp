@@ -157,8 +157,12 @@ Result<ActorConfig> ActorConfig::from_value(const Value& body) {
     if (!*r) return r->error();
   c.params = std::move(*params);
   c.scene = SceneSpec::from_value(*scene);
-  c.camera = CameraSpec::from_value(*camera);
-  c.image = ImageSpec::from_value(*image);
+  auto read_camera = CameraSpec::from_value(*camera);
+  if (!read_camera) return read_camera.error();
+  c.camera = *read_camera;
+  auto read_image = ImageSpec::from_value(*image);
+  if (!read_image) return read_image.error();
+  c.image = std::move(*read_image);
   c.runtime = std::move(*runtime);
   c.debug = std::move(*debug);
   if (auto st = read_inputs(body, "inputs", c.inputs, true); !st) return st.error();

@@ -1,0 +1,163 @@
+#include "farm/spec_readers.hpp"
+
+#include <unistd.h>
+
+#include <algorithm>
+#include <cstdlib>
+
+#include "render/scene.hpp"
+
+namespace lf {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+// `file` relative to the script, made absolute; "" when no regular file is there.
+std::string existing_file(const std::string& file, const fs::path& script_dir) {
+  fs::path f(file);
+  if (f.is_relative()) f = script_dir / f;
+  std::error_code ec;
+  return fs::is_regular_file(f, ec) ? fs::absolute(f).lexically_normal().string() : std::string();
+}
+
+std::string script_relative(const std::string& file, const fs::path& script_dir) {
+  fs::path f(file);
+  return (f.is_relative() ? script_dir / f : f).string();
+}
+
+}  // namespace
+
+SceneSpec read_scene(const ParamTable& p, const fs::path& script_dir) {
+  SceneSpec s;
+  s.builtin = p.get_string("builtin", "", Scene::builtin_names());
+  s.file = p.get_string("file", "");
+  if (s.builtin.empty() == s.file.empty())
+    throw ParamError("scene needs exactly one of builtin = \"cornell\" or file = \"path.obj\"");
+  if (!s.file.empty()) {
+    const std::string found = existing_file(s.file, script_dir);
+    if (found.empty()) throw ParamError("scene file '" + script_relative(s.file, script_dir) + "' not found");
+    s.file = found;
+  }
+  return s;
+}
+
+std::vector<std::string> scene_material_names(const SceneSpec& scene) {
+  std::vector<std::string> names;
+  if (!scene.file.empty()) {
+    if (auto listed = Scene::catalogue_obj(scene.file)) names = listed->material_names;
+  } else if (auto s = Scene::builtin_unlit(scene.builtin)) {
+    for (const auto& m : s->materials()) names.push_back(m.name);
+  }
+  return names;
+}
+
+HostSpec read_host(const std::string& name, const ParamTable& p, const fs::path& script_dir) {
+  HostSpec h;
+  h.name = name;
+  h.launcher = p.get_string("launcher", "local", {"local", "ssh", "slurm"});
+  h.address = p.get_string("address", h.launcher == "local" ? "127.0.0.1" : "");
+  if (h.launcher != "local") h.lightfarm = p.get_string("lightfarm", "");
+  if (h.launcher == "ssh") {
+    h.user = p.get_string("user", "");
+    h.port = static_cast<int>(p.get_int("port", 0, 0, 65535));
+    h.ssh_config = p.get_string("ssh_config", "");
+  }
+  p.report_unused();
+  if (h.name == "local") throw ParamError("host 'local' is this machine; give another name");
+  if (h.address.empty()) {
+    const bool ssh = h.launcher == "ssh";
+    throw ParamError("host '" + name + "': a" + (ssh ? "n ssh" : " slurm") + " host needs address = \"...\" (where its actors listen" +
+                     (ssh ? " and ssh reaches it" : "") + ")");
+  }
+  if (!h.ssh_config.empty()) {
+    const std::string found = existing_file(h.ssh_config, script_dir);
+    if (found.empty())
+      throw ParamError("host '" + name + "': ssh_config '" + script_relative(h.ssh_config, script_dir) + "' not found");
+    h.ssh_config = found;
+  }
+  return h;
+}
+
+Value read_material_change(const std::string& name, const ParamTable& p, const std::vector<std::string>& names) {
+  if (std::find(names.begin(), names.end(), name) == names.end()) {
+    std::string known;
+    for (size_t i = 0; i < names.size() && i < 12; ++i) known += (i ? ", " : "") + names[i];
+    if (names.size() > 12) known += ", ... (" + std::to_string(names.size()) + " in all)";
+    throw ParamError("material '" + name + "' is not in the scene (its materials: " + (known.empty() ? "none" : known) + ")");
+  }
+  Value::Map change{{"name", name}};
+  auto colour = [&](const char* key, double max) {
+    if (!p.has(key)) return;
+    const auto c = p.get_vec3(key, {0, 0, 0});
+    for (double v : c)
+      if (!(v >= 0 && v <= max))
+        throw ParamError("material '" + name + "': " + key + " must be between 0 and " + (max > 1 ? "1e6" : "1") +
+                         " in each channel");
+    change[key] = Value::Array{c[0], c[1], c[2]};
+  };
+  colour("emission", 1e6);
+  for (const char* key : {"kd", "ks", "mirror", "tf"}) colour(key, 1);
+  if (p.has("ns")) change["ns"] = p.get_float("ns", 0, 0, 1e6);
+  if (p.has("ior")) change["ior"] = p.get_float("ior", 1.5, 1, 3);
+  if (p.has("type")) change["type"] = p.get_string("type", "diffuse", {"diffuse", "glossy", "mirror", "glass"});
+  p.report_unused();
+  // The scene's own check (kd + ks + mirror at most 1) with the words it would use later.
+  Scene probe;
+  probe.add_material({name, {}, {}});
+  if (auto st = probe.apply_material_overrides(Value::Array{Value(change)}); !st) throw ParamError(st.error().message);
+  return change;
+}
+
+Value read_light(const Value& light) {
+  if (!light.is_map()) throw ParamError("light needs quad, sphere or point");
+  for (const auto& [key, v] : light.as_map())
+    if (key != "quad" && key != "sphere" && key != "radius" && key != "point" && key != "radiance" && key != "intensity")
+      throw ParamError("light: unknown parameter '" + key + "' (known: quad, sphere, radius, radiance, point, intensity)");
+  const int shapes = (light.find("quad") != nullptr) + (light.find("sphere") != nullptr) + (light.find("point") != nullptr);
+  if (shapes != 1) throw ParamError("light needs exactly one of quad, sphere or point");
+  for (const char* colour : {"radiance", "intensity"})
+    if (const Value* c = light.find(colour); c && c->is_array())
+      for (const auto& e : c->as_array())
+        if (e.is_number() && e.as_double() < 0) throw ParamError(std::string("light: ") + colour + " must not be negative");
+  Scene check;  // the scene's own reader says what is wrong, with the same words it would use later
+  if (auto st = check.add_script_lights(Value::Array{light}); !st) {
+    const std::string& why = st.error().message;
+    throw ParamError("light: " + why.substr(why.find(':') + 2));
+  }
+  return light;
+}
+
+void read_farm_settings(const ParamTable& p, FarmSpec& spec) {
+  spec.heartbeat_timeout = p.get_float("heartbeat_timeout", spec.heartbeat_timeout, 0.5, 3600);
+  spec.request_timeout = p.get_float("request_timeout", spec.request_timeout, 0.1, 86400);
+  spec.director_address = p.get_string("director_address", spec.director_address);
+  spec.security = p.get_string("security", spec.security, {"curve", "none"});
+  spec.monitor = p.get_string("monitor", spec.monitor);
+  spec.host_agents = p.get_bool("host_agents", spec.host_agents);
+  spec.light_paths = p.get_string("light_paths", spec.light_paths, {"check", "complete", "partial", "off"});
+  p.report_unused();
+}
+
+std::string resolve_program(const std::string& program, const fs::path& script_dir) {
+  auto executable = [](const fs::path& p) {
+    std::error_code ec;
+    return fs::is_regular_file(p, ec) && ::access(p.c_str(), X_OK) == 0;
+  };
+  if (program.find('/') != std::string::npos) {
+    fs::path p = fs::path(program).is_absolute() ? fs::path(program) : script_dir / program;
+    return executable(p) ? fs::absolute(p).lexically_normal().string() : std::string();
+  }
+  const char* path = std::getenv("PATH");
+  const std::string dirs = path ? path : "/usr/bin:/bin";
+  for (size_t start = 0; start <= dirs.size();) {
+    size_t end = dirs.find(':', start);
+    if (end == std::string::npos) end = dirs.size();
+    if (fs::path candidate = fs::path(dirs.substr(start, end - start)) / program; executable(candidate))
+      return candidate.string();
+    start = end + 1;
+  }
+  return {};
+}
+
+}  // namespace lf

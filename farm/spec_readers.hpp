@@ -1,0 +1,39 @@
+#pragma once
+// What a farm script's tables mean, read without Lua: each of scene { }, host { }, material { }, light { } and
+// farm { } has one reader here over a ParamTable, with its ranges, defaults and the rules between its fields (the
+// image and the camera are read by ImageSpec::read and CameraSpec::read in core/, which CONFIG uses too). A bad
+// value throws ParamError with the message the user sees; the Lua binding adds the script's file and line.
+// Relative paths are taken from `script_dir`, so a farm travels with its files.
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include "core/params.hpp"
+#include "farm/farm_spec.hpp"
+
+namespace lf {
+
+// scene { builtin = "cornell" } | scene { file = "room.obj" }: exactly one, the file there.
+SceneSpec read_scene(const ParamTable& p, const std::filesystem::path& script_dir);
+// The names of the scene's materials (an OBJ's MTL without loading its geometry, or a built-in scene's).
+std::vector<std::string> scene_material_names(const SceneSpec& scene);
+
+// host "name" { launcher, address, user, port, ssh_config, lightfarm }.
+HostSpec read_host(const std::string& name, const ParamTable& p, const std::filesystem::path& script_dir);
+
+// material "name" { emission, kd, ks, mirror, tf, ns, ior, type }: the change as the scene applies it
+// ({name, ...}), checked against `scene_materials` and by the scene's own rules (kd + ks + mirror at most 1).
+Value read_material_change(const std::string& name, const ParamTable& p, const std::vector<std::string>& scene_materials);
+
+// light { quad | sphere + radius | point, radiance | intensity }: the light, checked by the scene's own reader.
+Value read_light(const Value& light);
+
+// farm { heartbeat_timeout, request_timeout, director_address, security, monitor, host_agents, light_paths },
+// over what `spec` holds.
+void read_farm_settings(const ParamTable& p, FarmSpec& spec);
+
+// Where a plug-in's `program` runs from: a path with a slash is relative to the script; a bare name is looked up
+// on PATH. Empty when it is not there or not executable.
+std::string resolve_program(const std::string& program, const std::filesystem::path& script_dir);
+
+}  // namespace lf

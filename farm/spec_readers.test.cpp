@@ -1,0 +1,163 @@
+// The script's tables as the readers take them, with no Lua: ranges, defaults, the rules between fields, and the
+// image and camera as an actor reads them back from CONFIG.
+#include "farm/spec_readers.hpp"
+
+#include <gtest/gtest.h>
+
+#include <fstream>
+
+namespace lf {
+namespace {
+
+namespace fs = std::filesystem;
+
+ParamTable table(Value::Map m, const char* owner) { return ParamTable(std::move(m), owner); }
+
+// The message of the ParamError `fn` throws ("" when it throws none).
+template <class Fn>
+std::string error_of(Fn&& fn) {
+  try {
+    fn();
+  } catch (const ParamError& e) {
+    return e.what();
+  }
+  return "";
+}
+
+TEST(ImageReader, DefaultsRangesAndAdaptiveSamplingRules) {
+  const ImageSpec d = ImageSpec::read(table({}, "image"));
+  EXPECT_EQ(d.width, 256);
+  EXPECT_EQ(d.shade_spp, 0);  // every sample shaded
+  EXPECT_EQ(d.adaptive_spp, 0);
+  const ImageSpec all = ImageSpec::read(table({{"spp", 8}, {"shade_spp", 8}}, "image"));
+  EXPECT_EQ(all.shade_spp, 0) << "shade_spp = spp is the plain mean";
+  EXPECT_NE(error_of([] { ImageSpec::read(table({{"width", 0}}, "image")); }).find("width"), std::string::npos);
+  EXPECT_NE(error_of([] { ImageSpec::read(table({{"spp", 4}, {"shade_spp", 5}}, "image")); }).find("shade_spp"),
+            std::string::npos);
+  EXPECT_EQ(error_of([] { ImageSpec::read(table({{"adaptive_threshold", 0.1}}, "image")); }),
+            "image: adaptive_threshold needs adaptive_spp (the most shaded samples a noisy pixel may get)");
+  EXPECT_EQ(error_of([] { ImageSpec::read(table({{"spp", 8}, {"shade_spp", 1}, {"adaptive_spp", 8}}, "image")); }),
+            "image: adaptive_spp needs shade_spp of at least 2 (a pixel's spread needs two samples)");
+  EXPECT_NE(error_of([] { ImageSpec::read(table({{"spp", 8}, {"adaptive_spp", 8}}, "image")); }).find("below spp"),
+            std::string::npos);
+  EXPECT_NE(error_of([] { ImageSpec::read(table({{"tonemap", "filmic"}}, "image")); }).find("filmic"), std::string::npos);
+  const ImageSpec adaptive =
+      ImageSpec::read(table({{"spp", 64}, {"shade_spp", 4}, {"adaptive_spp", 32}, {"adaptive_threshold", 0.02}}, "image"));
+  EXPECT_EQ(adaptive.adaptive_spp, 32);
+  EXPECT_DOUBLE_EQ(adaptive.adaptive_threshold, 0.02);
+}
+
+TEST(ImageReader, CONFIGCarriesWhatTheScriptSaidAndRefusesWhatItCouldNot) {
+  const ImageSpec a = ImageSpec::read(table({{"width", 320}, {"height", 200}, {"spp", 64}, {"shade_spp", 4},
+                                             {"adaptive_spp", 32}, {"exposure", 1.5}, {"tonemap", "aces"},
+                                             {"sampler", "independent"}, {"output", "x.png"}},
+                                            "image"));
+  auto back = ImageSpec::from_value(a.to_value());
+  ASSERT_TRUE(back.ok()) << back.error().message;
+  EXPECT_EQ(back->to_value(), a.to_value());
+  EXPECT_EQ(back->shaded_per_pixel(), 4);
+  Value::Map bad = a.to_value().as_map();
+  bad["spp"] = int64_t{0};
+  auto refused = ImageSpec::from_value(bad);
+  ASSERT_FALSE(refused.ok());
+  EXPECT_EQ(refused.error().code, ErrorCode::bad_request);
+  EXPECT_NE(refused.error().message.find("spp"), std::string::npos) << refused.error().message;
+  bad = a.to_value().as_map();
+  bad["colour"] = "red";
+  EXPECT_FALSE(ImageSpec::from_value(bad).ok()) << "an unknown field is refused, not ignored";
+}
+
+TEST(CameraReader, DegenerateViewsAreRefusedInTheScriptAndInCONFIG) {
+  const CameraSpec c = CameraSpec::read(table({{"eye", Value::Array{0, 1, 5}}, {"at", Value::Array{0, 1, 0}}}, "camera"));
+  EXPECT_EQ(c.eye[2], 5);
+  EXPECT_DOUBLE_EQ(c.fov, 39.3);
+  EXPECT_EQ(error_of([] { CameraSpec::read(table({{"eye", Value::Array{1, 1, 1}}, {"at", Value::Array{1, 1, 1}}}, "camera")); }),
+            "camera: eye and at are the same point");
+  EXPECT_EQ(error_of([] {
+              CameraSpec::read(table({{"eye", Value::Array{0, 0, 0}}, {"at", Value::Array{0, 5, 0}}}, "camera"));
+            }),
+            "camera: up is parallel to the viewing direction");
+  EXPECT_NE(error_of([] { CameraSpec::read(table({{"fov", 180}}, "camera")); }).find("fov"), std::string::npos);
+  auto back = CameraSpec::from_value(c.to_value());
+  ASSERT_TRUE(back.ok());
+  EXPECT_EQ(back->to_value(), c.to_value());
+  Value::Map same = c.to_value().as_map();
+  same["at"] = same["eye"];
+  EXPECT_FALSE(CameraSpec::from_value(same).ok());
+}
+
+struct FileReaders : ::testing::Test {
+  fs::path dir = fs::temp_directory_path() / ("spec-readers-" + std::to_string(::getpid()));
+  void SetUp() override {
+    fs::create_directories(dir / "sub");
+    std::ofstream(dir / "sub" / "room.obj") << "v 0 0 0\n";
+    std::ofstream(dir / "ssh.conf") << "Host *\n";
+  }
+  void TearDown() override { fs::remove_all(dir); }
+};
+
+TEST_F(FileReaders, SceneFilesAreTakenFromTheScriptsFolder) {
+  const SceneSpec s = read_scene(table({{"file", "sub/room.obj"}}, "scene"), dir);
+  EXPECT_EQ(s.file, (dir / "sub" / "room.obj").string());
+  EXPECT_EQ(read_scene(table({{"builtin", "cornell"}}, "scene"), dir).builtin, "cornell");
+  EXPECT_EQ(error_of([&] { read_scene(table({{"file", "gone.obj"}}, "scene"), dir); }),
+            "scene file '" + (dir / "gone.obj").string() + "' not found");
+  EXPECT_EQ(error_of([&] { read_scene(table({}, "scene"), dir); }),
+            "scene needs exactly one of builtin = \"cornell\" or file = \"path.obj\"");
+  EXPECT_NE(error_of([&] { read_scene(table({{"builtin", "teapot"}}, "scene"), dir); }).find("cornell"), std::string::npos);
+}
+
+TEST_F(FileReaders, HostsNeedAnAddressAndTheirSshConfig) {
+  const HostSpec h = read_host("h1", table({{"launcher", "ssh"}, {"address", "10.0.0.2"}, {"ssh_config", "ssh.conf"}}, "host"), dir);
+  EXPECT_EQ(h.ssh_config, (dir / "ssh.conf").string());
+  EXPECT_TRUE(h.remote());
+  EXPECT_EQ(read_host("l2", table({}, "host"), dir).address, "127.0.0.1");
+  EXPECT_EQ(error_of([&] { read_host("h1", table({{"launcher", "ssh"}}, "host"), dir); }),
+            "host 'h1': an ssh host needs address = \"...\" (where its actors listen and ssh reaches it)");
+  EXPECT_EQ(error_of([&] { read_host("s1", table({{"launcher", "slurm"}}, "host"), dir); }),
+            "host 's1': a slurm host needs address = \"...\" (where its actors listen)");
+  EXPECT_EQ(error_of([&] { read_host("local", table({}, "host"), dir); }), "host 'local' is this machine; give another name");
+  EXPECT_NE(error_of([&] { read_host("h1", table({{"user", "me"}}, "host"), dir); }).find("user"), std::string::npos)
+      << "ssh's settings on a local host are a mistake, not ignored";
+}
+
+TEST(MaterialReader, ChangesAreCheckedAgainstTheSceneAndItsRules) {
+  const std::vector<std::string> names{"floor", "wall"};
+  const Value change = read_material_change("floor", table({{"kd", Value::Array{0.5, 0.5, 0.5}}, {"ns", 20}}, "m"), names);
+  EXPECT_EQ(change.find("name")->as_string(), "floor");
+  EXPECT_EQ(change.find("ns")->as_double(), 20);
+  EXPECT_EQ(error_of([&] { read_material_change("roof", table({}, "m"), names); }),
+            "material 'roof' is not in the scene (its materials: floor, wall)");
+  EXPECT_EQ(error_of([&] { read_material_change("wall", table({{"kd", Value::Array{2, 0, 0}}}, "m"), names); }),
+            "material 'wall': kd must be between 0 and 1 in each channel");
+  EXPECT_NE(error_of([&] {
+              read_material_change("wall", table({{"kd", Value::Array{0.8, 0.8, 0.8}}, {"ks", Value::Array{0.5, 0.5, 0.5}}}, "m"),
+                                   names);
+            }),
+            "")
+      << "kd + ks above 1 would make light";
+}
+
+TEST(LightReader, OneShapeAndNoNegativeLight) {
+  EXPECT_NO_THROW(read_light(Value::Map{{"point", Value::Array{0, 1, 0}}, {"intensity", Value::Array{1, 1, 1}}}));
+  EXPECT_EQ(error_of([] { read_light(Value::Map{{"point", Value::Array{0, 1, 0}}, {"sphere", Value::Array{0, 0, 0}}}); }),
+            "light needs exactly one of quad, sphere or point");
+  EXPECT_EQ(error_of([] { read_light(Value::Map{{"point", Value::Array{0, 1, 0}}, {"intensity", Value::Array{-1, 1, 1}}}); }),
+            "light: intensity must not be negative");
+  EXPECT_NE(error_of([] { read_light(Value::Map{{"spot", Value::Array{0, 1, 0}}}); }).find("unknown parameter 'spot'"),
+            std::string::npos);
+}
+
+TEST(FarmSettings, RangesAndChoices) {
+  FarmSpec spec;
+  read_farm_settings(table({{"heartbeat_timeout", 3}, {"security", "none"}}, "farm"), spec);
+  EXPECT_EQ(spec.heartbeat_timeout, 3);
+  EXPECT_EQ(spec.security, "none");
+  EXPECT_EQ(spec.request_timeout, 120) << "unchanged";
+  EXPECT_NE(error_of([&] { read_farm_settings(table({{"heartbeat_timeout", 0.1}}, "farm"), spec); }).find("heartbeat_timeout"),
+            std::string::npos);
+  EXPECT_NE(error_of([&] { read_farm_settings(table({{"security", "tls"}}, "farm"), spec); }).find("tls"), std::string::npos);
+}
+
+}  // namespace
+}  // namespace lf
