@@ -26,6 +26,16 @@ static const LightOpKind* const kAllKinds[] = {
 
 std::span<const LightOpKind* const> lightop_kinds() { return kAllKinds; }
 
+std::string LightOpKind::input_count_error(int count) const {
+  if (count >= min_inputs && (max_inputs < 0 || count <= max_inputs)) return {};
+  const std::string want = max_inputs == min_inputs ? std::to_string(min_inputs)
+                           : max_inputs < 0         ? "at least " + std::to_string(min_inputs)
+                                                    : std::to_string(min_inputs) + " to " + std::to_string(max_inputs);
+  const int largest = max_inputs < 0 ? min_inputs : max_inputs;  // "1 input", "at least 1 input", "0 to 1 input"
+  return "lightop '" + std::string(name) + "' takes " + want + (largest == 1 ? " input" : " inputs") + ", got " +
+         std::to_string(count);
+}
+
 const LightOpKind* find_lightop_kind(std::string_view name) {
   for (const auto* k : kAllKinds)
     if (k->name == name) return k;

@@ -29,6 +29,8 @@ struct LightOpKind {
   bool shares_setup_for(const Value::Map& params) const {
     return shares_setup_with ? shares_setup_with(params) : shares_setup;
   }
+  // "lightop 'combine' takes at least 1 input, got 0" when `count` inputs are too few or too many; else empty.
+  std::string input_count_error(int count) const;
 };
 
 std::span<const LightOpKind* const> lightop_kinds();

@@ -1,0 +1,94 @@
+// The script functions that say what is rendered: scene, camera, image, light, material. Each reads its table
+// through a reader (core/specs, farm/spec_readers) and adds the script's line to what goes wrong.
+#include "farm/spec_readers.hpp"
+#include "lua/binding.hpp"
+
+namespace lf::lua_binding {
+namespace {
+// scene { builtin = "cornell" } | scene { file = "room.obj" }
+int l_scene(lua_State* L) {
+  Builder& b = builder(L);
+  if (b.have_scene) luaL_error(L, "scene is declared twice");
+  ParamTable p = table_params(L, 1, "scene");
+  with_params(L, [&] {
+    SceneSpec read = read_scene(p, b.script_dir);
+    p.report_unused();
+    b.spec.scene.builtin = read.builtin;
+    b.spec.scene.file = read.file;
+  });
+  b.spec.scene.loc = caller_loc(L);
+  b.have_scene = true;
+  return 0;
+}
+
+// camera { eye = {x,y,z}, at = {x,y,z}, up = {0,1,0}, fov = 39.3 }
+int l_camera(lua_State* L) {
+  Builder& b = builder(L);
+  if (b.have_camera) luaL_error(L, "camera is declared twice");
+  ParamTable p = table_params(L, 1, "camera");
+  with_params(L, [&] {
+    b.spec.camera = CameraSpec::read(p);
+    p.report_unused();
+  });
+  b.have_camera = true;
+  return 0;
+}
+
+// image { width = 512, height = 512, spp = 16, shade_spp = 16, adaptive_spp = 64, adaptive_threshold = 0.05,
+//         tile = 16, output = "cornell.png", exposure = 0, tonemap = "clamp", sampler = "sobol" }
+int l_image(lua_State* L) {
+  Builder& b = builder(L);
+  if (b.have_image) luaL_error(L, "image is declared twice");
+  ParamTable p = table_params(L, 1, "image");
+  with_params(L, [&] {
+    b.spec.image = ImageSpec::read(p);
+    p.report_unused();
+  });
+  b.have_image = true;
+  return 0;
+}
+
+
+// light { quad = {c1, c2, c3, c4}, radiance = {r,g,b} } | light { sphere = {x,y,z}, radius = r, radiance = ... }
+// | light { point = {x,y,z}, intensity = {r,g,b} }: a light added to the scene (any number of them). A quad emits
+// on the side its corners wind counter-clockwise around.
+int l_light(lua_State* L) {
+  Builder& b = builder(L);
+  luaL_checktype(L, 1, LUA_TTABLE);
+  Value light;
+  with_params(L, [&] { light = read_light(to_value(L, 1, "light")); });
+  if (const SourceLoc at = caller_loc(L); at.line > 0) light.as_map()["at"] = at.str();
+  b.spec.scene.lights.push_back(std::move(light));
+  return 0;
+}
+
+// material "Name" { emission = {r, g, b}, kd = {r, g, b}, ks = {r, g, b}, mirror = {r, g, b}, tf = {r, g, b}, ns = 20,
+// ior = 1.5, type = "glossy" }:
+// changes a material of the scene by name (an OBJ's MTL, or a built-in scene's); the scene must come first.
+int l_material_table(lua_State* L) {
+  Builder& b = builder(L);
+  const std::string name = luaL_checkstring(L, lua_upvalueindex(2));
+  if (!b.have_scene) luaL_error(L, "material \"%s\" needs scene { ... } before it", name.c_str());
+  if (!b.material_names) b.material_names = scene_material_names(b.spec.scene);
+  for (const auto& m : b.spec.scene.materials)
+    if (m.find("name")->as_string() == name) luaL_error(L, "material '%s' is changed twice", name.c_str());
+  ParamTable p = table_params(L, 1, "material '" + name + "'");
+  with_params(L, [&] { b.spec.scene.materials.push_back(read_material_change(name, p, *b.material_names)); });
+  return 0;
+}
+
+int l_material(lua_State* L) { return with_name(L, l_material_table); }
+
+}  // namespace
+
+void register_scene_functions(lua_State* L, Builder& b) {
+  const luaL_Reg functions[] = {{"scene", l_scene}, {"camera", l_camera}, {"image", l_image},
+                                {"light", l_light}, {"material", l_material}};
+  for (const luaL_Reg& f : functions) {
+    lua_pushlightuserdata(L, &b);
+    lua_pushcclosure(L, f.func, 1);
+    lua_setglobal(L, f.name);
+  }
+}
+
+}  // namespace lf::lua_binding
