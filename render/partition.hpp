@@ -1,6 +1,6 @@
 #pragma once
-// A scene split by space into parts of about equal estimated ray cost, for data-parallel tracing (issue 14; seed
-// 002_77771c1e37b78e8b.txt §2.1): each part is what one `geometry` actor holds, and a ray is traced part by part
+// A scene split by space into parts of about equal estimated ray cost, for data-parallel tracing (data partitioning
+// as in Jansen & Reinhard, "Data Locality in Parallel Rendering", section 2.1): each part is what one `geometry` actor holds, and a ray is traced part by part
 // along its way, nearest part first, until a hit is nearer than the next part's box.
 //
 // The split is a BSP by recursive bisection: a set of triangles that must become k parts is cut across the longest

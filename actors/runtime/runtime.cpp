@@ -271,12 +271,12 @@ void Runtime::refresh_live(size_t queue_length) {
     total.bytes_in += local_->counters().bytes_in;
     total.bytes_out += local_->counters().bytes_out;
   }
-  for (auto& c : inputs_) {
-    total.bytes_in += c->socket().counters().bytes_in;
-    total.bytes_out += c->socket().counters().bytes_out;
-  }
   uint64_t in_flight = 0;  // requests sent to inputs and not yet answered
-  for (auto& c : inputs_) in_flight += c->outstanding();
+  for (auto& row : connections_.rows()) {
+    total.bytes_in += row.client->socket().counters().bytes_in;
+    total.bytes_out += row.client->socket().counters().bytes_out;
+    in_flight += row.client->outstanding();
+  }
   Value live = Value::Map{{"in_flight", in_flight},                {"requests", stats_.requests},
                           {"points", stats_.points},
                           {"tiles", stats_.tiles},               {"busy_seconds", stats_.busy_seconds},
@@ -297,14 +297,14 @@ void Runtime::send_stats_and_bye() {
   add(control_.counters());
   add(data_.counters());
   if (local_) add(local_->counters());
-  for (auto& c : inputs_) add(c->socket().counters());
+  for (auto& row : connections_.rows()) add(row.client->socket().counters());
   Value stats = stats_.to_value(total);
   if (actor_) {
     Value detail = actor_->extra_stats();
     if (!detail.is_nil()) stats.as_map()["detail"] = std::move(detail);
   }
   Value::Array pools;
-  for (const auto& in : lighting_)
+  for (const auto& in : connections_.lighting())
     if (in.pool) pools.push_back(in.pool->stats());
   if (!pools.empty()) stats.as_map()["pools"] = std::move(pools);
   send_control(wire::make(MsgType::stats, args_.name, std::move(stats)));
@@ -313,72 +313,7 @@ void Runtime::send_stats_and_bye() {
 
 void Runtime::handle_control(wire::Message& m, Actor& actor) {
   switch (m.header.type) {
-    case MsgType::config: {
-      if (configured_) return;
-      configured_ = true;
-      auto config = ActorConfig::from_value(m.body);
-      if (!config) return fail(config.error().message);
-      heartbeat_timeout_ = config->heartbeat_timeout;
-      heartbeat_interval_ = std::min(1.0, heartbeat_timeout_ / 4);
-      // Connect to every input before the actor configures, so that it may ask them during setup.
-      request_timeout_ = config->request_timeout;
-      // A replica is on this host when it is reached over IPC, or at the address this actor listens on itself.
-      auto host_of = [](const std::string& endpoint) {
-        const size_t start = endpoint.find("://"), colon = endpoint.rfind(':');
-        return start == std::string::npos || colon <= start ? endpoint : endpoint.substr(start + 3, colon - start - 3);
-      };
-      auto same_host = [&](const std::string& endpoint) {
-        return endpoint.rfind("ipc://", 0) == 0 || endpoint.rfind("inproc://", 0) == 0 ||
-               host_of(endpoint) == host_of(args_.bind);
-      };
-      auto connect = [&](const InputSpec& in) -> Status {
-        auto client = connect_input(in.name, in.endpoint, in.key, static_cast<size_t>(in.window));
-        if (!client) return client.error();
-        inputs_.push_back(std::move(*client));
-        input_names_.push_back(in.name);
-        input_windows_.push_back(static_cast<size_t>(in.window));
-        return Ok{};
-      };
-      for (const auto& in : config->inputs) {
-        LightingInput input;
-        input.name = in.name;
-        if (!in.is_pool()) {
-          input.connection = inputs_.size();
-          input.lean = in.lean;
-          if (auto st = connect(in); !st) return fail(st.error().message);
-        } else {
-          input.lean = std::all_of(in.replicas.begin(), in.replicas.end(), [](const InputSpec& r) { return r.lean; });
-          std::vector<PoolClient::Replica> replicas;
-          for (const auto& replica : in.replicas) {
-            if (auto st = connect(replica); !st) return fail(st.error().message);
-            replicas.push_back({replica.name, inputs_.back().get(), !same_host(replica.endpoint), replica.part});
-            input.holds_parts = input.holds_parts || replica.part >= 0;
-          }
-          const PoolOptions options =
-              pool_options(in.strategy, in.split, in.replicas.front().window, in.seed, static_cast<size_t>(in.window));
-          input.pool = std::make_unique<PoolClient>(in.name, std::move(replicas), options);
-        }
-        lighting_.push_back(std::move(input));
-      }
-      first_geometry_ = inputs_.size();
-      geometry_inputs_ = config->geometry.size();
-      for (const auto& in : config->geometry)
-        if (auto st = connect(in); !st) return fail(st.error().message);
-      first_pool_peer_ = inputs_.size();
-      pool_peers_ = config->pool ? config->pool->peers.size() : 0;
-      if (config->pool)
-        for (const auto& in : config->pool->peers)
-          if (auto st = connect(in); !st) return fail(st.error().message);
-      inputs_changed_ = true;
-      auto started = Clock::now();
-      Status st = actor.configure(*config, *this);
-      add_busy(started);
-      if (!st) return fail(st.error().message);
-      stats_.configure_seconds = std::chrono::duration<double>(Clock::now() - started).count();
-      stats_.start_seconds = seconds_since_process_start();
-      phase_done(wire::Phase::configure);
-      return;
-    }
+    case MsgType::config: return on_config(m, actor);
     case MsgType::phase: {
       const auto phase = wire::phase_of(m.header);
       if (!phase || *phase == wire::Phase::configure) {
@@ -416,7 +351,7 @@ void Runtime::handle_control(wire::Message& m, Actor& actor) {
     case MsgType::peer_down: {
       const Value* name = m.body.find("name");
       if (!name || !name->is_string()) return;
-      for (auto& in : lighting_)
+      for (auto& in : connections_.lighting())
         if (in.pool && in.pool->lost(name->as_string())) {
           if (in.pool->live() == 0) fail("lost the last replica of '" + in.name + "'");
           return;
@@ -424,21 +359,7 @@ void Runtime::handle_control(wire::Message& m, Actor& actor) {
       actor.on_peer_down(name->as_string(), *this);
       return;
     }
-    case MsgType::peer_moved: {
-      const Value *name = m.body.find("name"), *endpoint = m.body.find("endpoint"), *key = m.body.find("key");
-      if (!name || !name->is_string() || !endpoint || !endpoint->is_string())
-        return log_warn("ignored a PEER_MOVED without name and endpoint");
-      const auto at = std::find(input_names_.begin(), input_names_.end(), name->as_string());
-      if (at == input_names_.end()) return log_warn("ignored a PEER_MOVED about '" + name->as_string() + "', not an input");
-      const size_t i = static_cast<size_t>(at - input_names_.begin());
-      auto client = connect_input(*at, endpoint->as_string(), key && key->is_string() ? key->as_string() : "",
-                                  input_windows_[i]);
-      if (!client) return fail(client.error().message);
-      inputs_[i] = std::move(*client);  // the old socket closes, and with it whatever was outstanding there
-      inputs_changed_ = true;
-      actor.on_peer_moved(*at, *this);
-      return;
-    }
+    case MsgType::peer_moved: return on_peer_moved(m, actor);
     case MsgType::rollback: {
       auto started = Clock::now();
       actor.on_rollback(m.body, *this);
@@ -449,10 +370,42 @@ void Runtime::handle_control(wire::Message& m, Actor& actor) {
   }
 }
 
+void Runtime::on_config(const wire::Message& m, Actor& actor) {
+  if (configured_) return;
+  configured_ = true;
+  auto config = ActorConfig::from_value(m.body);
+  if (!config) return fail(config.error().message);
+  heartbeat_timeout_ = config->heartbeat_timeout;
+  heartbeat_interval_ = std::min(1.0, heartbeat_timeout_ / 4);
+  request_timeout_ = config->request_timeout;
+  // Connect to every input before the actor configures, so that it may ask them during setup.
+  if (auto st = connections_.connect_config(*config, args_.bind); !st) return fail(st.error().message);
+  auto started = Clock::now();
+  Status st = actor.configure(*config, *this);
+  add_busy(started);
+  if (!st) return fail(st.error().message);
+  stats_.configure_seconds = std::chrono::duration<double>(Clock::now() - started).count();
+  stats_.start_seconds = seconds_since_process_start();
+  phase_done(wire::Phase::configure);
+}
+
+void Runtime::on_peer_moved(const wire::Message& m, Actor& actor) {
+  const Value *name = m.body.find("name"), *endpoint = m.body.find("endpoint"), *key = m.body.find("key");
+  if (!name || !name->is_string() || !endpoint || !endpoint->is_string())
+    return log_warn("ignored a PEER_MOVED without name and endpoint");
+  const auto& rows = connections_.rows();
+  if (std::none_of(rows.begin(), rows.end(), [&](const Connections::Row& r) { return r.name == name->as_string(); }))
+    return log_warn("ignored a PEER_MOVED about '" + name->as_string() + "', not an input");
+  if (auto st = connections_.reconnect(name->as_string(), endpoint->as_string(), key && key->is_string() ? key->as_string() : "");
+      !st)
+    return fail(st.error().message);
+  actor.on_peer_moved(name->as_string(), *this);
+}
+
 void Runtime::ask_input(size_t i, wire::Op op, Value body, wire::RequestClient::Callback callback, int64_t part) {
-  LightingInput& in = lighting_[i];
+  Connections::LightingInput& in = connections_.lighting()[i];
   if (in.pool) return in.pool->request(op, std::move(body), std::move(callback), part);
-  inputs_[in.connection]->request(op, std::move(body), std::move(callback));
+  connections_.rows()[in.row].client->request(op, std::move(body), std::move(callback));
 }
 
 Result<std::unique_ptr<wire::RequestClient>> Runtime::connect_input(const std::string& name, const std::string& endpoint,
@@ -537,15 +490,14 @@ int Runtime::run(Actor& actor) {
       log_debug("stopping on signal " + std::to_string(stop_signal()));
       return 128 + stop_signal();
     }
-    if (inputs_changed_) {
+    if (connections_.take_changed()) {
       // Inputs were connected, or one was replaced (PEER_MOVED): the poller is made again around the live sockets.
       poller.clear();
       poller.add(control_);
       poller.add(data_);
       if (local_) poller.add(*local_);
-      for (auto& in : inputs_) poller.add(in->socket());
-      polled_inputs = inputs_.size();
-      inputs_changed_ = false;
+      for (auto& row : connections_.rows()) poller.add(row.client->socket());
+      polled_inputs = connections_.rows().size();
     }
     // While the actor has work of its own, do not sleep in poll.
     long timeout = actor.has_local_work() ? 0 : 100;
@@ -567,7 +519,7 @@ int Runtime::run(Actor& actor) {
       // director's, and requests in flight waited for the same reason. Checked here, since the stop may have
       // come anywhere in this turn.
       last_from_director = Clock::now();
-      for (auto& in : inputs_) in->restart_deadlines();
+      for (auto& row : connections_.rows()) row.client->restart_deadlines();
     }
     // Judged right after reading what the director sent: a long piece of work here must not look like its silence
     // (its heartbeats wait in the queue meanwhile).
@@ -581,8 +533,9 @@ int Runtime::run(Actor& actor) {
     if (local_ && ready[2] && !stopping_) handle_data(actor, *local_);
     for (size_t i = 0; i < polled_inputs && !stopping_; ++i) {
       auto started = Clock::now();
-      if (ready[first_input + i]) inputs_[i]->on_readable();
-      inputs_[i]->expire_overdue();
+      wire::RequestClient& client = *connections_.rows()[i].client;
+      if (ready[first_input + i]) client.on_readable();
+      client.expire_overdue();
       add_busy(started);
     }
     if (!stopping_) {

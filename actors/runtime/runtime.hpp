@@ -26,6 +26,7 @@
 #include <vector>
 
 #include "actors/runtime/actor_config.hpp"
+#include "actors/runtime/connections.hpp"
 #include "actors/runtime/pool_client.hpp"
 #include "core/log.hpp"
 #include "core/value.hpp"
@@ -110,27 +111,28 @@ class Runtime {
   // The lighting network's inputs, in script order. An input is one actor, or a pool whose replicas this actor
   // dispatches to itself (CONFIG inputs[i].pool): ask_input() serves both; input(i) is the connection of a single
   // actor (ring nodes, a multiplexer's replicas).
-  size_t input_count() const { return lighting_.size(); }
+  size_t input_count() const { return connections_.lighting().size(); }
   // `part` >= 0: the body's points lie in that part of a partitioned scene, and a pool sends them to a replica that
   // holds it (partition { colocate = true }).
   void ask_input(size_t i, wire::Op op, Value body, wire::RequestClient::Callback callback, int64_t part = -1);
   // Input i is a pool some of whose replicas hold a scene part themselves: the asker should say each request's part.
-  bool input_holds_parts(size_t i) const { return lighting_[i].holds_parts; }
-  bool input_is_pool(size_t i) const { return lighting_[i].pool != nullptr; }
+  bool input_holds_parts(size_t i) const { return connections_.lighting()[i].holds_parts; }
+  bool input_is_pool(size_t i) const { return connections_.lighting()[i].pool != nullptr; }
   // Input i takes normals and materials from the scene (CONFIG inputs[i].lean; a pool: every replica does).
-  bool input_is_lean(size_t i) const { return lighting_[i].lean; }
-  wire::RequestClient& input(size_t i) { return *inputs_.at(lighting_[i].connection); }  // throws for a pool
-  const std::string& input_name(size_t i) const { return lighting_[i].name; }
+  bool input_is_lean(size_t i) const { return connections_.lighting()[i].lean; }
+  // Throws for a pool.
+  wire::RequestClient& input(size_t i) { return *connections_.rows().at(connections_.lighting()[i].row).client; }
+  const std::string& input_name(size_t i) const { return connections_.lighting()[i].name; }
   // A partitioned scene's geometry actors (CONFIG 'geometry', part order), connected like inputs and polled with
   // them, but not inputs of the lighting network.
-  size_t geometry_count() const { return geometry_inputs_; }
-  wire::RequestClient& geometry(size_t part) { return *inputs_[first_geometry_ + part]; }
-  const std::string& geometry_name(size_t part) const { return input_names_[first_geometry_ + part]; }
+  size_t geometry_count() const { return connections_.count(Group::geometry); }
+  wire::RequestClient& geometry(size_t part) { return *connections_.in_group(Group::geometry, part).client; }
+  const std::string& geometry_name(size_t part) { return connections_.in_group(Group::geometry, part).name; }
   // The other replicas of this actor's pool when it shares its setup peer to peer (CONFIG pool.peers, replica
   // order), connected like inputs; not inputs of the lighting network.
-  size_t pool_peer_count() const { return pool_peers_; }
-  wire::RequestClient& pool_peer(size_t k) { return *inputs_[first_pool_peer_ + k]; }
-  const std::string& pool_peer_name(size_t k) const { return input_names_[first_pool_peer_ + k]; }
+  size_t pool_peer_count() const { return connections_.count(Group::pool_peer); }
+  wire::RequestClient& pool_peer(size_t k) { return *connections_.in_group(Group::pool_peer, k).client; }
+  const std::string& pool_peer_name(size_t k) { return connections_.in_group(Group::pool_peer, k).name; }
 
   using DirectorCallback = std::function<void(Result<wire::Message>)>;
   // A request to the director (tiles, results), answered by a REPLY on the control channel.
@@ -146,7 +148,10 @@ class Runtime {
   void add_busy(std::chrono::steady_clock::time_point since);
 
  private:
+  using Group = Connections::Group;
   void handle_control(wire::Message& m, Actor& actor);
+  void on_config(const wire::Message& m, Actor& actor);
+  void on_peer_moved(const wire::Message& m, Actor& actor);
   // Connects input `name` at `endpoint` (with the peer's CURVE `key`, empty for a same-host IPC endpoint).
   Result<std::unique_ptr<wire::RequestClient>> connect_input(const std::string& name, const std::string& endpoint,
                                                              const std::string& key, size_t window);
@@ -168,24 +173,13 @@ class Runtime {
   std::map<std::string, wire::Socket*> reply_via_;
   RateLimitedLog bad_messages_;  // anyone can send garbage; it must not flood the log
   // Every connection this actor asks on: single lighting inputs and pools' replicas, geometry actors, pool peers.
-  std::vector<std::unique_ptr<wire::RequestClient>> inputs_;
-  std::vector<std::string> input_names_;
-  struct LightingInput {
-    std::string name;
-    size_t connection = SIZE_MAX;       // into inputs_, for a single actor
-    std::unique_ptr<PoolClient> pool;   // for a pool dispatched here
-    bool lean = false;
-    bool holds_parts = false;           // some replica holds a scene part itself
-  };
-  std::vector<LightingInput> lighting_;
-  size_t first_geometry_ = 0, geometry_inputs_ = 0;
-  size_t first_pool_peer_ = 0, pool_peers_ = 0;
+  Connections connections_{[this](const std::string& name, const std::string& endpoint, const std::string& key,
+                                  size_t window) { return connect_input(name, endpoint, key, window); }};
   std::map<uint64_t, DirectorCallback> director_pending_;
   uint64_t next_director_id_ = 1;
   ActorStats stats_;
   double heartbeat_timeout_ = 30.0;
   double request_timeout_ = 0;
-  std::vector<size_t> input_windows_;
   // Heartbeats come from a thread with a control socket of its own (routing id NAME#heartbeat), so that one long
   // shade or setup never looks like death; a stopped or killed process still goes silent.
   void start_heartbeats();
@@ -201,7 +195,6 @@ class Runtime {
   bool configured_ = false;
   bool stopping_ = false;
   int exit_status_ = 0;
-  bool inputs_changed_ = false;
   std::map<std::string, std::chrono::steady_clock::time_point> progress_sent_;
 };
 

@@ -1,0 +1,92 @@
+// The connection table an actor builds from CONFIG: rows in CONFIG's order by group, pools over their replicas'
+// rows, PEER_MOVED replacing one row's connection, and a connection that cannot be made failing CONFIG.
+#include "actors/runtime/connections.hpp"
+
+#include <gtest/gtest.h>
+
+namespace lf {
+namespace {
+
+struct ConnectionsTest : ::testing::Test {
+  std::vector<std::string> connected;  // NAME@ENDPOINT, as the connector was asked
+  std::string refuse;                  // a name the connector cannot reach
+  Connections table{[this](const std::string& name, const std::string& endpoint, const std::string&,
+                           size_t window) -> Result<std::unique_ptr<wire::RequestClient>> {
+    if (name == refuse) return make_error("cannot reach '" + name + "'");
+    connected.push_back(name + "@" + endpoint);
+    auto client = std::make_unique<wire::RequestClient>("me", name, window);
+    if (auto st = client->connect(endpoint); !st) return st.error();
+    return client;
+  }};
+
+  static InputSpec input(std::string name, int64_t window = 4, int64_t part = -1) {
+    InputSpec in;
+    in.name = name;
+    in.endpoint = "inproc://" + name;
+    in.window = window;
+    in.part = part;
+    in.lean = true;
+    return in;
+  }
+
+  // One single input, a pool of two (one holding part 1), two geometry parts, one pool peer.
+  ActorConfig config() {
+    ActorConfig c;
+    c.inputs.push_back(input("direct", 6));
+    InputSpec pool;
+    pool.name = "cache";
+    pool.strategy = "least_loaded";
+    pool.window = 8;
+    pool.replicas = {input("cache.0"), input("cache.1", 4, 1)};
+    c.inputs.push_back(pool);
+    c.geometry = {input("part.0"), input("part.1")};
+    c.pool = PoolPlace{};
+    c.pool->peers = {input("sum.1")};
+    return c;
+  }
+};
+
+TEST_F(ConnectionsTest, RowsFollowConfigAndGroupsKeepTheirOrder) {
+  ASSERT_TRUE(table.connect_config(config(), "tcp://127.0.0.1:*").ok());
+  EXPECT_EQ(connected, (std::vector<std::string>{"direct@inproc://direct", "cache.0@inproc://cache.0",
+                                                 "cache.1@inproc://cache.1", "part.0@inproc://part.0",
+                                                 "part.1@inproc://part.1", "sum.1@inproc://sum.1"}));
+  EXPECT_TRUE(table.take_changed());
+  EXPECT_FALSE(table.take_changed());
+  ASSERT_EQ(table.lighting().size(), 2u);
+  EXPECT_EQ(table.lighting()[0].row, 0u);
+  EXPECT_EQ(table.rows()[0].window, 6u);
+  EXPECT_FALSE(table.lighting()[0].pool);
+  ASSERT_TRUE(table.lighting()[1].pool);
+  EXPECT_TRUE(table.lighting()[1].holds_parts);
+  EXPECT_TRUE(table.lighting()[1].lean);
+  EXPECT_EQ(table.count(Connections::Group::lighting), 3u);
+  EXPECT_EQ(table.count(Connections::Group::geometry), 2u);
+  EXPECT_EQ(table.in_group(Connections::Group::geometry, 1).name, "part.1");
+  EXPECT_EQ(table.count(Connections::Group::pool_peer), 1u);
+  EXPECT_EQ(table.in_group(Connections::Group::pool_peer, 0).name, "sum.1");
+}
+
+TEST_F(ConnectionsTest, PeerMovedReplacesOneRowAndKeepsItsWindow) {
+  ASSERT_TRUE(table.connect_config(config(), "tcp://127.0.0.1:*").ok());
+  table.take_changed();
+  const wire::RequestClient* before = table.rows()[0].client.get();
+  ASSERT_TRUE(table.reconnect("direct", "inproc://direct-again", "").ok());
+  EXPECT_NE(table.rows()[0].client.get(), before);
+  EXPECT_EQ(table.rows()[0].window, 6u);
+  EXPECT_EQ(connected.back(), "direct@inproc://direct-again");
+  EXPECT_TRUE(table.take_changed()) << "the poller must be made again around the new socket";
+  auto unknown = table.reconnect("nobody", "inproc://x", "");
+  ASSERT_FALSE(unknown.ok());
+  EXPECT_EQ(unknown.error().message, "'nobody' is not an input");
+}
+
+TEST_F(ConnectionsTest, AnInputThatCannotBeReachedFailsConfig) {
+  refuse = "part.1";
+  auto st = table.connect_config(config(), "tcp://127.0.0.1:*");
+  ASSERT_FALSE(st.ok());
+  EXPECT_EQ(st.error().message, "cannot reach 'part.1'");
+}
+
+}  // namespace
+}  // namespace lf
