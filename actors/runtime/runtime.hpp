@@ -27,6 +27,7 @@
 
 #include "actors/runtime/actor_config.hpp"
 #include "actors/runtime/connections.hpp"
+#include "actors/runtime/process.hpp"
 #include "actors/runtime/pool_client.hpp"
 #include "core/log.hpp"
 #include "core/value.hpp"
@@ -55,9 +56,6 @@ struct ActorStats {
   Value to_value(const wire::SocketCounters& totals) const;
 };
 
-// An actor forked by a host agent counts its start-up from the `lightfarm actor` process that asked for it (its
-// stub), as if it had loaded everything itself.
-void count_start_from(pid_t pid);
 
 class Runtime;
 
@@ -198,23 +196,9 @@ class Runtime {
   std::map<std::string, std::chrono::steady_clock::time_point> progress_sent_;
 };
 
-// The farm's keys, from the first line of standard input (--curve): never on the command line or in the
-// environment, where other users of the host could read them.
-Result<wire::FarmKeys> read_farm_keys_from_stdin();
-
 // The routing id an actor's heartbeat thread uses towards the director, and back: the actor a routing id beats for
 // (nullopt for any other id).
 std::string heartbeat_identity(const std::string& actor);
 std::optional<std::string> heartbeat_owner(const std::string& identity);
-
-// Installs SIGINT/SIGTERM handlers that make poll loops stop; returns true once a signal has arrived.
-void install_stop_signals();
-// The director's Ctrl-Z: SIGTSTP only sets a flag (take_suspend_request), so that it pauses its actors first.
-void install_suspend_signal();
-// True once after a SIGCONT: this process was stopped, and time passed that nobody could account for.
-bool take_resumed();
-bool take_suspend_request();
-bool stop_requested();
-int stop_signal();
 
 }  // namespace lf
