@@ -2,6 +2,7 @@
 
 #include <algorithm>
 
+#include "actors/codecs/control_codec.hpp"
 #include "farm/builders.hpp"
 #include "farm/kind_params.hpp"
 #include "render/lightop_registry.hpp"
@@ -149,7 +150,7 @@ std::vector<std::pair<std::string, Value>> ConfigBuilder::peer_moved(const Actor
     for (int input : a.spec->inputs) {
       if (input != moved.index) continue;
       const auto [endpoint, key] = endpoint_for(a, moved);
-      told.emplace_back(name, Value::Map{{"name", moved.name()}, {"endpoint", endpoint}, {"key", key}});
+      told.emplace_back(name, control::encode_peer_moved({moved.name(), endpoint, key}));
     }
   }
   return told;

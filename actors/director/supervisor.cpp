@@ -1,3 +1,4 @@
+#include "actors/codecs/control_codec.hpp"
 #include "actors/director/supervisor.hpp"
 
 #include <signal.h>
@@ -288,7 +289,7 @@ Status Supervisor::lose(ActorRecord& a, const std::string& why) {
   log_warn("replica '" + a.name() + "' " + why + "; '" + pool.name() + "' sends its work to the others", LogKind::loss);
   // Whoever dispatches to the pool hears of it: its multiplexer, or each of its clients. One not yet configured
   // hears nothing: its CONFIG will leave the replica out.
-  const wire::Message down = wire::make(MsgType::peer_down, "director", Value::Map{{"name", a.name()}});
+  const wire::Message down = wire::make(MsgType::peer_down, "director", control::encode_peer_down(a.name()));
   if (pool.spec->has_process()) {
     if (pool.configured) send(pool.name(), down);
     return Ok{};

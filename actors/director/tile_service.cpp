@@ -1,5 +1,7 @@
 #include "actors/director/tile_service.hpp"
 
+#include "actors/codecs/control_codec.hpp"
+
 #include <algorithm>
 #include <cmath>
 
@@ -55,16 +57,14 @@ Status TileService::on_request(const std::string& actor, wire::Op op, uint64_t i
     serve_waiting(out);
     return Ok{};
   }
-  const Value* tile = body.find("id");
-  const Value* pixels = body.find("pixels");
-  std::vector<float> rgb;
-  if (!tile || !tile->is_int() || !pixels || !pixels->is_bytes() || !bytes_to_floats(pixels->as_bytes(), rgb)) {
-    out.refuse(actor, id, ErrorCode::bad_request, "tile_done needs id and pixels");
+  auto done = control::decode_tile_done(body);
+  if (!done) {
+    out.refuse(actor, id, done.error().code, done.error().message);
     return Ok{};
   }
-  auto outcome = master_.complete(actor, static_cast<uint64_t>(tile->as_int()), rgb);
+  auto outcome = master_.complete(actor, done->id, done->rgb);
   if (outcome != RenderMaster::Outcome::accepted) {
-    log_warn("refused tile " + std::to_string(tile->as_int()) + " from '" + actor + "': " + RenderMaster::describe(outcome));
+    log_warn("refused tile " + std::to_string(done->id) + " from '" + actor + "': " + RenderMaster::describe(outcome));
     out.refuse(actor, id, ErrorCode::refused, RenderMaster::describe(outcome));
     return Ok{};
   }
@@ -90,14 +90,14 @@ void TileService::serve_waiting(Outbox& out) {
   if (!rendering_) return;
   while (!waiting_.empty()) {
     const auto [actor, id] = waiting_.front();
-    Value::Map body;
+    std::optional<control::Tile> tile;
     if (auto t = master_.next(actor)) {
-      body["tile"] = Value::Map{{"id", t->id}, {"x0", t->rect.x0}, {"y0", t->rect.y0}, {"x1", t->rect.x1}, {"y1", t->rect.y1}};
+      tile = control::Tile{t->id, t->rect};
     } else if (!master_.finished()) {
       return;  // keep waiting
     }
     waiting_.erase(waiting_.begin());
-    out.reply(actor, id, std::move(body));
+    out.reply(actor, id, control::encode_tile_reply(tile));
   }
 }
 

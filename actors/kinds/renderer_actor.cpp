@@ -8,6 +8,7 @@
 // camera rays go to the geometry actors instead, through RemoteTracing. Answers READY render when the master has no tiles
 // left and every finished tile was acknowledged. Keeps up to `tiles_in_flight` tiles going, so it traces the next
 // tile while the lighting network shades the last.
+#include "actors/codecs/control_codec.hpp"
 #include "actors/kinds/renderer_actor.hpp"
 
 #include <deque>
@@ -97,29 +98,23 @@ class RendererActor final : public Actor {
       rt.ask_director(wire::Op::tile, Value::Map{}, [this, &rt](Result<wire::Message> r) {
         --tile_requests_out_;
         if (!r) return rt.fail("the render master refused a tile request: " + r.error().message);
-        const Value* tile = r->body.find("tile");
-        if (!tile) {
+        auto tile = control::decode_tile_reply(r->body, image_.width, image_.height);
+        if (!tile) return rt.fail(tile.error().message);
+        if (!*tile) {
           no_more_tiles_ = true;
           check_finished(rt);
           return;
         }
-        start_tile(*tile, rt);
+        start_tile(**tile, rt);
         ask_for_tiles(rt);
       });
     }
   }
 
-  void start_tile(const Value& tile, Runtime& rt) {
-    auto get = [&](const char* k) {
-      const Value* v = tile.find(k);
-      return v && v->is_int() && v->as_int() >= 0 && v->as_int() <= INT32_MAX ? static_cast<int>(v->as_int()) : -1;
-    };
-    TileRect rect{get("x0"), get("y0"), get("x1"), get("y1")};
-    if (get("id") < 0 || rect.x0 < 0 || rect.y0 < 0 || rect.x1 > image_.width || rect.y1 > image_.height || rect.width() <= 0 ||
-        rect.height() <= 0)
-      return rt.fail("the render master sent a tile outside the image");
+  void start_tile(const control::Tile& tile, Runtime& rt) {
+    const TileRect rect = tile.rect;
     auto job = std::make_shared<TileJob>();
-    job->id = static_cast<uint64_t>(get("id"));
+    job->id = tile.id;
     jobs_.push_back(job);
     if (tracing_) {
       std::erase_if(tracing_tasks_, [](const Task& t) { return t.done(); });
@@ -271,9 +266,8 @@ class RendererActor final : public Actor {
     ++done_acks_out_;
     std::erase(jobs_, job);
     rt.ask_director(wire::Op::tile_done,
-                    map_of("id", job->id,
-                           "pixels", floats_to_bytes(std::span<const float>(
-                                         reinterpret_cast<const float*>(pixels.data()), 3 * pixels.size()))),
+                    control::encode_tile_done(job->id, std::span<const float>(
+                                                           reinterpret_cast<const float*>(pixels.data()), 3 * pixels.size())),
                     [this, &rt](Result<wire::Message> r) {
                       --done_acks_out_;
                       if (!r) log_warn("the render master did not take a tile: " + r.error().message);

@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <filesystem>
 
+#include "actors/codecs/control_codec.hpp"
 #include "actors/runtime/hello.hpp"
 #include "actors/runtime/process.hpp"
 #include "core/log.hpp"
@@ -248,14 +249,14 @@ void Runtime::handle_control(wire::Message& m, Actor& actor) {
       return;
     case MsgType::heartbeat: return;
     case MsgType::peer_down: {
-      const Value* name = m.body.find("name");
-      if (!name || !name->is_string()) return;
+      auto name = control::decode_peer_down(m.body);
+      if (!name) return log_warn("ignored " + name.error().message);
       for (auto& in : connections_.lighting())
-        if (in.pool && in.pool->lost(name->as_string())) {
+        if (in.pool && in.pool->lost(*name)) {
           if (in.pool->live() == 0) fail("lost the last replica of '" + in.name + "'");
           return;
         }
-      actor.on_peer_down(name->as_string(), *this);
+      actor.on_peer_down(*name, *this);
       return;
     }
     case MsgType::peer_moved: return on_peer_moved(m, actor);
@@ -289,16 +290,13 @@ void Runtime::on_config(const wire::Message& m, Actor& actor) {
 }
 
 void Runtime::on_peer_moved(const wire::Message& m, Actor& actor) {
-  const Value *name = m.body.find("name"), *endpoint = m.body.find("endpoint"), *key = m.body.find("key");
-  if (!name || !name->is_string() || !endpoint || !endpoint->is_string())
-    return log_warn("ignored a PEER_MOVED without name and endpoint");
+  auto moved = control::decode_peer_moved(m.body);
+  if (!moved) return log_warn("ignored " + moved.error().message);
   const auto& rows = connections_.rows();
-  if (std::none_of(rows.begin(), rows.end(), [&](const Connections::Row& r) { return r.name == name->as_string(); }))
-    return log_warn("ignored a PEER_MOVED about '" + name->as_string() + "', not an input");
-  if (auto st = connections_.reconnect(name->as_string(), endpoint->as_string(), key && key->is_string() ? key->as_string() : "");
-      !st)
-    return fail(st.error().message);
-  actor.on_peer_moved(name->as_string(), *this);
+  if (std::none_of(rows.begin(), rows.end(), [&](const Connections::Row& r) { return r.name == moved->name; }))
+    return log_warn("ignored a PEER_MOVED about '" + moved->name + "', not an input");
+  if (auto st = connections_.reconnect(moved->name, moved->endpoint, moved->key); !st) return fail(st.error().message);
+  actor.on_peer_moved(moved->name, *this);
 }
 
 void Runtime::ask_input(size_t i, wire::Op op, Value body, wire::RequestClient::Callback callback, int64_t part) {

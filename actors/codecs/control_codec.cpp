@@ -1,0 +1,72 @@
+#include "actors/codecs/control_codec.hpp"
+
+#include <climits>
+
+namespace lf::control {
+namespace {
+
+Error bad(const std::string& what) { return Error{what, ErrorCode::bad_request}; }
+
+const std::string* string_field(const Value& body, const char* key) {
+  const Value* v = body.find(key);
+  return v && v->is_string() ? &v->as_string() : nullptr;
+}
+
+}  // namespace
+
+Value encode_tile_reply(const std::optional<Tile>& tile) {
+  if (!tile) return Value::Map{};
+  const TileRect& r = tile->rect;
+  return Value::Map{{"tile", Value::Map{{"id", tile->id}, {"x0", r.x0}, {"y0", r.y0}, {"x1", r.x1}, {"y1", r.y1}}}};
+}
+
+Result<std::optional<Tile>> decode_tile_reply(const Value& body, int width, int height) {
+  if (!body.is_map()) return bad("a tile reply must be a map");
+  const Value* tile = body.find("tile");
+  if (!tile) return std::optional<Tile>{};
+  auto get = [&](const char* k) {
+    const Value* v = tile->find(k);
+    return v && v->is_int() && v->as_int() >= 0 && v->as_int() <= INT32_MAX ? static_cast<int>(v->as_int()) : -1;
+  };
+  const TileRect rect{get("x0"), get("y0"), get("x1"), get("y1")};
+  if (get("id") < 0 || rect.x0 < 0 || rect.y0 < 0 || rect.x1 > width || rect.y1 > height || rect.width() <= 0 ||
+      rect.height() <= 0)
+    return bad("the render master sent a tile outside the image");
+  return std::optional<Tile>{Tile{static_cast<uint64_t>(get("id")), rect}};
+}
+
+Value encode_tile_done(uint64_t id, std::span<const float> rgb) {
+  return Value::Map{{"id", id}, {"pixels", floats_to_bytes(rgb)}};
+}
+
+Result<TileDone> decode_tile_done(const Value& body) {
+  const Value* id = body.find("id");
+  const Value* pixels = body.find("pixels");
+  TileDone done;
+  if (!id || !id->is_int() || id->as_int() < 0 || !pixels || !pixels->is_bytes() ||
+      !bytes_to_floats(pixels->as_bytes(), done.rgb) || done.rgb.size() % 3 != 0)
+    return bad("tile_done needs id and pixels");
+  done.id = static_cast<uint64_t>(id->as_int());
+  return done;
+}
+
+Value encode_peer_moved(const PeerMoved& moved) {
+  return Value::Map{{"name", moved.name}, {"endpoint", moved.endpoint}, {"key", moved.key}};
+}
+
+Result<PeerMoved> decode_peer_moved(const Value& body) {
+  const std::string *name = string_field(body, "name"), *endpoint = string_field(body, "endpoint");
+  if (!name || !endpoint) return bad("a PEER_MOVED without name and endpoint");
+  const std::string* key = string_field(body, "key");
+  return PeerMoved{*name, *endpoint, key ? *key : std::string()};
+}
+
+Value encode_peer_down(const std::string& name) { return Value::Map{{"name", name}}; }
+
+Result<std::string> decode_peer_down(const Value& body) {
+  const std::string* name = string_field(body, "name");
+  if (!name) return bad("a PEER_DOWN without a name");
+  return *name;
+}
+
+}  // namespace lf::control

@@ -1,0 +1,45 @@
+#pragma once
+// The director's tile and peer bodies (docs/PROTOCOL.md), defined once for the director's parts, the runtime and
+// the renderer; decoders check every field and its range, and an error says what is wrong.
+//   tile (renderer -> director): {}
+//     reply: { tile: {id, x0, y0, x1, y1} } (half-open, inside the image) | {} when no tile is left
+//   tile_done (renderer -> director): { id, pixels: f32[3wh] }          reply: {}
+//   PEER_MOVED (director -> actor): { name, endpoint, key }  (key "" without CURVE or over same-host IPC)
+//   PEER_DOWN (director -> actor):  { name }
+#include <cstdint>
+#include <optional>
+#include <span>
+#include <string>
+#include <vector>
+
+#include "core/result.hpp"
+#include "core/value.hpp"
+#include "render/tile_kernel.hpp"
+
+namespace lf::control {
+
+struct Tile {
+  uint64_t id = 0;
+  TileRect rect;
+};
+Value encode_tile_reply(const std::optional<Tile>& tile);
+// nullopt: no tile is left. An error for a tile outside a `width` x `height` image or an empty one.
+Result<std::optional<Tile>> decode_tile_reply(const Value& body, int width, int height);
+
+struct TileDone {
+  uint64_t id = 0;
+  std::vector<float> rgb;  // 3 per pixel, rows of the tile top first
+};
+Value encode_tile_done(uint64_t id, std::span<const float> rgb);
+Result<TileDone> decode_tile_done(const Value& body);
+
+struct PeerMoved {
+  std::string name, endpoint, key;
+};
+Value encode_peer_moved(const PeerMoved& moved);
+Result<PeerMoved> decode_peer_moved(const Value& body);
+
+Value encode_peer_down(const std::string& name);
+Result<std::string> decode_peer_down(const Value& body);
+
+}  // namespace lf::control

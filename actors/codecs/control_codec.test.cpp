@@ -1,0 +1,61 @@
+// The director's tile and peer bodies: each round-trips, and each decoder refuses what is malformed with a message.
+#include "actors/codecs/control_codec.hpp"
+
+#include <gtest/gtest.h>
+
+namespace lf::control {
+namespace {
+
+TEST(ControlCodec, TilesRoundTripAndStayInsideTheImage) {
+  const Tile tile{7, TileRect{32, 0, 64, 16}};
+  auto back = decode_tile_reply(encode_tile_reply(tile), 64, 48);
+  ASSERT_TRUE(back.ok()) << back.error().message;
+  ASSERT_TRUE(back->has_value());
+  EXPECT_EQ((*back)->id, 7u);
+  EXPECT_EQ((*back)->rect.x0, 32);
+  EXPECT_EQ((*back)->rect.y1, 16);
+  auto none = decode_tile_reply(encode_tile_reply(std::nullopt), 64, 48);
+  ASSERT_TRUE(none.ok());
+  EXPECT_FALSE(none->has_value()) << "no tile left";
+  auto outside = decode_tile_reply(encode_tile_reply(tile), 48, 48);
+  ASSERT_FALSE(outside.ok());
+  EXPECT_EQ(outside.error().message, "the render master sent a tile outside the image");
+  EXPECT_FALSE(decode_tile_reply(encode_tile_reply(Tile{1, TileRect{8, 8, 8, 16}}), 64, 48).ok()) << "empty";
+  EXPECT_FALSE(decode_tile_reply(Value::Map{{"tile", Value::Map{{"id", -1}}}}, 64, 48).ok());
+  EXPECT_FALSE(decode_tile_reply(Value("tile"), 64, 48).ok());
+}
+
+TEST(ControlCodec, TileDoneCarriesItsPixels) {
+  const std::vector<float> rgb{0.1f, 0.2f, 0.3f, 1, 2, 3};
+  auto back = decode_tile_done(encode_tile_done(9, rgb));
+  ASSERT_TRUE(back.ok());
+  EXPECT_EQ(back->id, 9u);
+  EXPECT_EQ(back->rgb, rgb);
+  auto partial = decode_tile_done(encode_tile_done(9, std::span<const float>(rgb).first(4)));
+  ASSERT_FALSE(partial.ok()) << "pixels come in threes";
+  EXPECT_EQ(partial.error().code, ErrorCode::bad_request);
+  EXPECT_EQ(partial.error().message, "tile_done needs id and pixels");
+  EXPECT_FALSE(decode_tile_done(Value::Map{{"id", 1}}).ok());
+  EXPECT_FALSE(decode_tile_done(Value::Map{{"id", "one"}, {"pixels", floats_to_bytes(rgb)}}).ok());
+}
+
+TEST(ControlCodec, PeerMessagesRoundTrip) {
+  auto moved = decode_peer_moved(encode_peer_moved({"ring.0.1", "tcp://10.0.0.2:4000", "KEY"}));
+  ASSERT_TRUE(moved.ok());
+  EXPECT_EQ(moved->name, "ring.0.1");
+  EXPECT_EQ(moved->endpoint, "tcp://10.0.0.2:4000");
+  EXPECT_EQ(moved->key, "KEY");
+  auto keyless = decode_peer_moved(Value::Map{{"name", "a"}, {"endpoint", "ipc:///x"}});
+  ASSERT_TRUE(keyless.ok());
+  EXPECT_EQ(keyless->key, "");
+  auto bad = decode_peer_moved(Value::Map{{"name", "a"}});
+  ASSERT_FALSE(bad.ok());
+  EXPECT_EQ(bad.error().message, "a PEER_MOVED without name and endpoint");
+  auto down = decode_peer_down(encode_peer_down("direct.1"));
+  ASSERT_TRUE(down.ok());
+  EXPECT_EQ(*down, "direct.1");
+  EXPECT_FALSE(decode_peer_down(Value::Map{{"name", 3}}).ok());
+}
+
+}  // namespace
+}  // namespace lf::control
