@@ -122,7 +122,7 @@ Result<int> replicate(FarmSpec& spec, const PoolSpec& pool) {
   if (spec.find(wanted) >= 0) return make_error("multiplexer: name '" + wanted + "' is already taken");
   ActorSpec m;
   m.name = wanted;
-  m.kind = kMultiplexerKind;
+  m.kind = kMultiplexer.name;
   m.params = pool.params.to_map();
   m.inputs = roots;
   m.host = spread(pool.hosts, 0);
@@ -137,7 +137,7 @@ void add_renderers(FarmSpec& spec, int count, int lighting, const RendererParams
   for (int i = 0; i < count; ++i) {
     ActorSpec a;
     a.name = "renderer-" + std::to_string(i);
-    a.kind = kRendererKind;
+    a.kind = kRenderer.name;
     a.params = params.to_map();
     a.inputs = {lighting};
     a.host = spread(hosts, static_cast<size_t>(i));
@@ -151,7 +151,7 @@ Status add_partition(FarmSpec& spec, int parts, bool colocate, const std::vector
   if (spec.partition_parts > 0) return make_error("partition is declared twice");
   for (int i = 0; i < parts; ++i) {
     ActorSpec g;
-    g.kind = kGeometryKind;
+    g.kind = kGeometry.name;
     g.name = "geometry." + std::to_string(i);
     if (spec.find(g.name) >= 0) return make_error("partition: name '" + g.name + "' is already taken");
     g.params = Value::Map{{"part", static_cast<int64_t>(i)}, {"parts", static_cast<int64_t>(parts)}};
@@ -172,7 +172,7 @@ Result<int> expand_ring(FarmSpec& spec, const radiosity::RingConfig& config, con
   const int nodes = config.layout.nodes();
   for (int i = 0; i < nodes; ++i) {
     ActorSpec n;
-    n.kind = kRingNodeKind;
+    n.kind = kRingNode.name;
     n.name = name + "." + std::to_string(config.layout.ring_of(i)) + "." + std::to_string(config.layout.position_of(i));
     if (spec.find(n.name) >= 0) return make_error("radiosity: name '" + n.name + "' is already taken");
     n.params = params;

@@ -12,6 +12,18 @@ int FarmSpec::pool_of(int i) const {
   return -1;
 }
 
+ActorRole ActorSpec::role() const {
+  if (runtime.count("cmd")) return ActorRole::plugin;
+  const auto k = find_actor_kind(kind);
+  return k ? k->role : ActorRole::lightop;  // an unknown kind is refused where it is declared
+}
+
+bool ActorSpec::loads_scene() const {
+  if (runtime.count("cmd")) return false;
+  const auto k = find_actor_kind(kind);
+  return !k || k->loads_scene;
+}
+
 std::vector<std::string> FarmSpec::renderer_names() const {
   std::vector<std::string> names;
   for (const auto& a : actors)

@@ -7,6 +7,7 @@
 
 #include "core/specs.hpp"
 #include "core/value.hpp"
+#include "farm/actor_kinds.hpp"
 
 namespace lf {
 
@@ -23,17 +24,10 @@ struct HostSpec {
   bool remote() const { return launcher != "local"; }
 };
 
-// Actor kinds the farm itself provides; every other kind is a LightOp (render/lightop_registry.hpp) or "exec".
-inline constexpr const char* kRendererKind = "renderer";
-inline constexpr const char* kMultiplexerKind = "multiplexer";
-inline constexpr const char* kRingNodeKind = "radiosity_node";
-inline constexpr const char* kExecKind = "exec";
-inline constexpr const char* kGeometryKind = "geometry";
-
 // One actor process. Renderers are expanded from `renderers { count = N }` into N specs.
 struct ActorSpec {
   std::string name;       // unique in the farm, e.g. "direct" or "renderer-1"
-  std::string kind;       // "renderer", "multiplexer", "radiosity_node", "exec" or a LightOp kind such as "direct"
+  std::string kind;       // an actor kind (farm/actor_kinds.hpp): "renderer", "multiplexer", ... or a LightOp kind
   Value::Map params;      // the script's parameters, minus wiring keys
   Value::Map runtime;     // how to run it, not the algorithm: {cmd, cwd} for exec actors
   Value::Map debug;       // test knobs, never needed in production: {slowdown = factor} (see docs/lua-api.md)
@@ -44,16 +38,14 @@ struct ActorSpec {
   // graph, with no process of its own. Set by settle_pool_dispatch (farm/builders.hpp).
   bool dispatched_by_clients = false;
   bool has_process() const { return !dispatched_by_clients; }
-  bool is_renderer() const { return kind == kRendererKind; }
-  bool is_multiplexer() const { return kind == kMultiplexerKind; }
-  bool is_ring_node() const { return kind == kRingNodeKind; }
-  bool is_geometry() const { return kind == kGeometryKind; }
-  // Renderers and built-in LightOps load the farm's scene and build its BVH (multiplexers, ring nodes and exec
-  // actors do not, or not that way): what a host agent can share among them.
-  // (A geometry actor loads the scene but builds a BVH of its own part only.)
-  bool loads_scene() const {
-    return !is_multiplexer() && !is_ring_node() && !is_geometry() && kind != kExecKind && !runtime.count("cmd");
-  }
+  // Its kind's role; a program run by its own command (runtime.cmd) is a plug-in whatever it is called.
+  ActorRole role() const;
+  bool is_renderer() const { return role() == ActorRole::renderer; }
+  bool is_multiplexer() const { return role() == ActorRole::multiplexer; }
+  bool is_ring_node() const { return role() == ActorRole::ring_node; }
+  bool is_geometry() const { return role() == ActorRole::geometry; }
+  // Whether its process loads the farm's scene and builds its BVH (ActorKind::loads_scene).
+  bool loads_scene() const;
 };
 
 struct FarmSpec {

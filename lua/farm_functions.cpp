@@ -80,7 +80,7 @@ int l_lightop_exec(lua_State* L) {
   Builder& b = builder(L);
   luaL_checktype(L, 1, LUA_TTABLE);
   ActorSpec a;
-  a.kind = "exec";
+  a.kind = kPlugin.name;
   a.loc = caller_loc(L);
   lua_getfield(L, 1, "cmd");
   if (!lua_istable(L, -1) || luaL_len(L, -1) < 1)
@@ -265,7 +265,7 @@ int l_param(lua_State* L) {
 }  // namespace
 
 void register_farm_functions(lua_State* L, Builder& b) {
-  const luaL_Reg functions[] = {{"host", l_host},           {"slurm_hosts", l_slurm_hosts}, {"multiplexer", l_multiplexer},
+  const luaL_Reg functions[] = {{"host", l_host},           {"slurm_hosts", l_slurm_hosts}, {"pool", l_multiplexer}, {"multiplexer", l_multiplexer},
                                 {"renderers", l_renderers}, {"radiosity", l_radiosity},     {"partition", l_partition},
                                 {"farm", l_farm},           {"param", l_param}};
   for (const luaL_Reg& f : functions) {

@@ -116,6 +116,26 @@ TEST_F(ScriptTest, TheSamplerIsIndependentOrSobol) {
             "farm.lua:1: image: parameter 'sampler' must be one of independent, sobol, got 'halton'");
 }
 
+// pool { } is the script's word for a set of replicas; multiplexer { } is the same function under its older name.
+TEST_F(ScriptTest, PoolAndMultiplexerDeclareTheSamePool) {
+  auto farm_with = [&](const std::string& word) {
+    return evaluate_script_text((dir / "farm.lua").string(),
+                                "scene { builtin = \"cornell\" }\n"
+                                "local d = " + word + " { lightop \"direct\" {}, replicas = 3, strategy = \"round_robin\" }\n"
+                                "renderers { lighting = d }\n");
+  };
+  auto pool = farm_with("pool"), mux = farm_with("multiplexer");
+  ASSERT_TRUE(pool.ok()) << pool.error().message;
+  ASSERT_TRUE(mux.ok()) << mux.error().message;
+  ASSERT_EQ(pool->actors.size(), mux->actors.size());
+  for (size_t i = 0; i < pool->actors.size(); ++i) {
+    EXPECT_EQ(pool->actors[i].name, mux->actors[i].name);
+    EXPECT_EQ(pool->actors[i].kind, mux->actors[i].kind);
+    EXPECT_EQ(pool->actors[i].params, mux->actors[i].params);
+  }
+  EXPECT_EQ(pool->actors.size(), 5u);  // direct.0-2, the pool, a renderer
+}
+
 TEST_F(ScriptTest, PoolsOfPoolsCannotMultiplyIntoAHugeFarm) {
   // Found by fuzzing: three nested pools of 64 would be 262,144 actors, and building them took seconds.
   EXPECT_EQ(error_of("scene { builtin = \"cornell\" }\n"

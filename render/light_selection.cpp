@@ -39,9 +39,17 @@ LightSelectionOptions light_selection_options(const ParamTable& p, uint64_t seed
   return o;
 }
 
+LightSampling read_light_sampling(const ParamTable& p) {
+  const std::string s = p.get_string("light_sampling", "tree", {"tree", "power", "learned"});
+  return s == "learned" ? LightSampling::learned : s == "power" ? LightSampling::power : LightSampling::tree;
+}
+
 bool learns_lights(const Value::Map& params) {
-  const auto it = params.find("light_sampling");
-  return it != params.end() && it->second.is_string() && it->second.as_string() == "learned";
+  try {
+    return read_light_sampling(ParamTable(params, "")) == LightSampling::learned;
+  } catch (const ParamError&) {
+    return false;  // a bad value is the op's to refuse, with its name
+  }
 }
 
 void LightSelection::add_stats(Value::Map& m) const {

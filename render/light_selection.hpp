@@ -32,6 +32,10 @@ struct LightSelectionOptions {
 
 // The options from an op's parameters (`learned_cell`, `learned_samples`, `learned_stride`, `learned_share`).
 LightSelectionOptions light_selection_options(const ParamTable& p, uint64_t seed);
+// How an op picks the light to sample (its `light_sampling`): by the light tree (power, distance, orientation), by
+// power alone, or partly from the lights learned before rendering. Read here for every op that has it.
+enum class LightSampling { tree, power, learned };
+LightSampling read_light_sampling(const ParamTable& p);
 // Whether an op with these parameters learns lights (light_sampling = "learned"): replicas of such a `direct` or
 // `pathtrace` pool share the learning (LightOpKind::shares_setup_with).
 bool learns_lights(const Value::Map& params);

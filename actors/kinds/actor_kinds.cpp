@@ -12,17 +12,18 @@
 namespace lf {
 
 std::unique_ptr<Actor> make_actor(const std::string& kind) {
-  if (kind == kRendererKind) return make_renderer_actor();
-  if (kind == kMultiplexerKind) return make_multiplexer_actor();
-  if (kind == kRingNodeKind) return make_ring_node_actor();
-  if (kind == kGeometryKind) return make_geometry_actor();
-  // Only LightOps can be pool replicas, the only actors a debug slowdown applies to.
-  return with_debug_slowdown(make_lightop_actor(kind));
-}
-
-std::string actor_kind_list() {
-  return std::string(kRendererKind) + ", " + kMultiplexerKind + ", " + kRingNodeKind + ", " + kGeometryKind + ", " +
-         lightop_kind_list();
+  const auto k = find_actor_kind(kind);
+  if (!k) return nullptr;
+  switch (k->role) {
+    case ActorRole::renderer: return make_renderer_actor();
+    case ActorRole::multiplexer: return make_multiplexer_actor();
+    case ActorRole::ring_node: return make_ring_node_actor();
+    case ActorRole::geometry: return make_geometry_actor();
+    case ActorRole::plugin: return nullptr;  // a program of its own, never hosted here
+    // Only LightOps can be pool replicas, the only actors a debug slowdown applies to.
+    case ActorRole::lightop: return with_debug_slowdown(make_lightop_actor(kind));
+  }
+  return nullptr;
 }
 
 }  // namespace lf

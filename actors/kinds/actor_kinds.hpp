@@ -5,10 +5,11 @@
 #include <string>
 
 #include "actors/runtime/runtime.hpp"
+#include "farm/actor_kinds.hpp"
 
 namespace lf {
 
-std::unique_ptr<Actor> make_actor(const std::string& kind);  // nullptr for an unknown kind
-std::string actor_kind_list();
+// The Actor of each role in farm/actor_kinds.hpp; nullptr for an unknown kind (actor_kind_list() names the known).
+std::unique_ptr<Actor> make_actor(const std::string& kind);
 
 }  // namespace lf

@@ -43,7 +43,10 @@ class Combine final : public LightOp {
 }  // namespace
 
 extern const LightOpKind combine_kind{
-    "combine", "the weighted sum of its inputs", 1, -1,
-    [](const ParamTable& p) -> std::unique_ptr<LightOp> { return std::make_unique<Combine>(p); }};
+    .name = "combine",
+    .summary = "the weighted sum of its inputs",
+    .min_inputs = 1,
+    .max_inputs = -1,
+    .create = [](const ParamTable& p) -> std::unique_ptr<LightOp> { return std::make_unique<Combine>(p); }};
 
 }  // namespace lf

@@ -20,7 +20,7 @@ class DirectLight final : public LightOp {
  public:
   explicit DirectLight(const ParamTable& p)
       : light_samples_(static_cast<int>(p.get_int("light_samples", 1, 1, 1 << 20))),
-        light_sampling_(p.get_string("light_sampling", "tree", {"tree", "power", "learned"})),
+        light_sampling_(read_light_sampling(p)),
         light_point_(p.get_string("light_point", "area", {"area", "solid_angle"}) == "solid_angle" ? LightPoint::solid_angle
                                                                                                 : LightPoint::area),
         mis_(p.get_bool("mis", false)),
@@ -29,11 +29,11 @@ class DirectLight final : public LightOp {
 
   Task setup(SceneContext ctx, Inputs&) override {
     ctx_ = ctx;
-    if (light_sampling_ == "learned") co_await LightSelection::build(ctx, selection_options_, selection_, "direct");
+    if (light_sampling_ == LightSampling::learned) co_await LightSelection::build(ctx, selection_options_, selection_, "direct");
   }
 
   Value stats() const override {
-    if (light_sampling_ != "learned") return Value();
+    if (light_sampling_ != LightSampling::learned) return Value();
     Value::Map m;
     selection_.add_stats(m);
     return m;
@@ -51,15 +51,15 @@ class DirectLight final : public LightOp {
     o.stream = streams::direct ^ (seed_ << 8);
     o.light_only_on_diffuse = !mis_;
     o.dark_on_specular = true;
-    o.light_tree = light_sampling_ != "power";
-    o.light_selection = light_sampling_ == "learned" ? &selection_ : nullptr;
+    o.light_tree = light_sampling_ != LightSampling::power;
+    o.light_selection = light_sampling_ == LightSampling::learned ? &selection_ : nullptr;
     o.light_point = light_point_;
     co_await trace_paths(ctx_, points, radiance, o);
   }
 
  private:
   int light_samples_;
-  std::string light_sampling_;
+  LightSampling light_sampling_;
   LightPoint light_point_;
   bool mis_;
   uint64_t seed_;
@@ -71,8 +71,12 @@ class DirectLight final : public LightOp {
 }  // namespace
 
 extern const LightOpKind direct_kind{
-    "direct", "direct light from area lights: light sampling, with MIS on glossy surfaces", 0, 0,
-    [](const ParamTable& p) -> std::unique_ptr<LightOp> { return std::make_unique<DirectLight>(p); },
-    /*shares_setup=*/false, /*traces_through_context=*/true, /*shares_setup_with=*/learns_lights};
+    .name = "direct",
+    .summary = "direct light from area lights: light sampling, with MIS on glossy surfaces",
+    .min_inputs = 0,
+    .max_inputs = 0,
+    .create = [](const ParamTable& p) -> std::unique_ptr<LightOp> { return std::make_unique<DirectLight>(p); },
+    .traces_through_context = true,
+    .shares_setup_with = learns_lights};
 
 }  // namespace lf

@@ -28,7 +28,10 @@ class Emission final : public LightOp {
 }  // namespace
 
 extern const LightOpKind emission_kind{
-    "emission", "the light the point itself emits", 0, 0,
-    [](const ParamTable& p) -> std::unique_ptr<LightOp> { return std::make_unique<Emission>(p); }};
+    .name = "emission",
+    .summary = "the light the point itself emits",
+    .min_inputs = 0,
+    .max_inputs = 0,
+    .create = [](const ParamTable& p) -> std::unique_ptr<LightOp> { return std::make_unique<Emission>(p); }};
 
 }  // namespace lf

@@ -97,8 +97,11 @@ class Glossy final : public LightOp {
 }  // namespace
 
 extern const LightOpKind glossy_kind{
-    "glossy", "indirect light reflected by glossy lobes, asking its input where each lobe sample lands", 1, 1,
-    [](const ParamTable& p) -> std::unique_ptr<LightOp> { return std::make_unique<Glossy>(p); },
-    /*shares_setup=*/false, /*traces_through_context=*/true};
+    .name = "glossy",
+    .summary = "indirect light reflected by glossy lobes, asking its input where each lobe sample lands",
+    .min_inputs = 1,
+    .max_inputs = 1,
+    .create = [](const ParamTable& p) -> std::unique_ptr<LightOp> { return std::make_unique<Glossy>(p); },
+    .traces_through_context = true};
 
 }  // namespace lf

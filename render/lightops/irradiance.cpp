@@ -363,7 +363,11 @@ class Irradiance final : public LightOp {
 }  // namespace
 
 extern const LightOpKind irradiance_kind{
-    "irradiance", "Ward irradiance caching with irradiance gradients over its input's light", 1, 1,
-    [](const ParamTable& p) -> std::unique_ptr<LightOp> { return std::make_unique<Irradiance>(p); }, true};
+    .name = "irradiance",
+    .summary = "Ward irradiance caching with irradiance gradients over its input's light",
+    .min_inputs = 1,
+    .max_inputs = 1,
+    .create = [](const ParamTable& p) -> std::unique_ptr<LightOp> { return std::make_unique<Irradiance>(p); },
+    .shares_setup = true};
 
 }  // namespace lf

@@ -23,9 +23,9 @@ class PathTrace final : public LightOp {
                                                                                              : PathOptions::Roulette::throughput;
     options_.rr_threshold = static_cast<float>(p.get_float("rr_threshold", options_.rr_threshold, 1e-6, 1));
     options_.samples = static_cast<int>(p.get_int("samples", 1, 1, 1 << 16));
-    const std::string light_sampling = p.get_string("light_sampling", "tree", {"tree", "power", "learned"});
-    options_.light_tree = light_sampling != "power";
-    learned_ = light_sampling == "learned";
+    const LightSampling light_sampling = read_light_sampling(p);
+    options_.light_tree = light_sampling != LightSampling::power;
+    learned_ = light_sampling == LightSampling::learned;
     selection_options_ = light_selection_options(p, static_cast<uint64_t>(p.get_int("seed", 0, 0, INT32_MAX)));
     options_.light_point = p.get_string("light_point", "area", {"area", "solid_angle"}) == "solid_angle"
                                ? LightPoint::solid_angle
@@ -142,8 +142,12 @@ class PathTrace final : public LightOp {
 }  // namespace
 
 extern const LightOpKind pathtrace_kind{
-    "pathtrace", "unbiased path tracing with next-event estimation, MIS and Russian roulette", 0, 0,
-    [](const ParamTable& p) -> std::unique_ptr<LightOp> { return std::make_unique<PathTrace>(p); },
-    /*shares_setup=*/false, /*traces_through_context=*/true, /*shares_setup_with=*/learns_lights};
+    .name = "pathtrace",
+    .summary = "unbiased path tracing with next-event estimation, MIS and Russian roulette",
+    .min_inputs = 0,
+    .max_inputs = 0,
+    .create = [](const ParamTable& p) -> std::unique_ptr<LightOp> { return std::make_unique<PathTrace>(p); },
+    .traces_through_context = true,
+    .shares_setup_with = learns_lights};
 
 }  // namespace lf

@@ -338,7 +338,11 @@ class PhotonMap final : public LightOp {
 }  // namespace
 
 extern const LightOpKind photonmap_kind{
-    "photonmap", "caustics from a caustic photon map (k nearest photons, cone filter)", 0, 0,
-    [](const ParamTable& p) -> std::unique_ptr<LightOp> { return std::make_unique<PhotonMap>(p); }, true};
+    .name = "photonmap",
+    .summary = "caustics from a caustic photon map (k nearest photons, cone filter)",
+    .min_inputs = 0,
+    .max_inputs = 0,
+    .create = [](const ParamTable& p) -> std::unique_ptr<LightOp> { return std::make_unique<PhotonMap>(p); },
+    .shares_setup = true};
 
 }  // namespace lf

@@ -73,7 +73,10 @@ class Radiosity final : public LightOp {
 }  // namespace
 
 extern const LightOpKind radiosity_kind{
-    "radiosity", "the converged solution of the farm's radiosity ring, interpolated", 0, 0,
-    [](const ParamTable& p) -> std::unique_ptr<LightOp> { return std::make_unique<Radiosity>(p); }};
+    .name = "radiosity",
+    .summary = "the converged solution of the farm's radiosity ring, interpolated",
+    .min_inputs = 0,
+    .max_inputs = 0,
+    .create = [](const ParamTable& p) -> std::unique_ptr<LightOp> { return std::make_unique<Radiosity>(p); }};
 
 }  // namespace lf

@@ -153,7 +153,10 @@ class Specular final : public LightOp {
 }  // namespace
 
 extern const LightOpKind specular_kind{
-    "specular", "light along mirror and glass chains, asking its input where a chain lands", 1, 1,
-    [](const ParamTable& p) -> std::unique_ptr<LightOp> { return std::make_unique<Specular>(p); }};
+    .name = "specular",
+    .summary = "light along mirror and glass chains, asking its input where a chain lands",
+    .min_inputs = 1,
+    .max_inputs = 1,
+    .create = [](const ParamTable& p) -> std::unique_ptr<LightOp> { return std::make_unique<Specular>(p); }};
 
 }  // namespace lf
