@@ -37,14 +37,19 @@ void ControlLoop::turn(long timeout_ms) {
     for (int i = 0; i < 5 && supervisor_.may_still_speak(exit->pid) && !last.wait(10)[0]; ++i) {
     }
     read_messages();
-    check(supervisor_.on_exit(*exit));
+    judged(supervisor_.on_exit(*exit));
   }
-  check(supervisor_.check_heartbeats(Clock::now()));
+  judged(supervisor_.check_heartbeats(Clock::now()));
   supervisor_.send_heartbeats(Clock::now());
 }
 
 void ControlLoop::read_messages() {
-  while (auto in = control_.socket().receive()) check(supervisor_.on_message(in->peer, in->message));
+  while (auto in = control_.socket().receive()) judged(supervisor_.on_message(in->peer, in->message));
+}
+
+void ControlLoop::judged(const Status& st) {
+  check(st);
+  for (SupervisorEvent& e : supervisor_.take_events()) route_(e);
 }
 
 void ControlLoop::notice_outside_stop(bool slept_through) {

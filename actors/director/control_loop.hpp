@@ -5,6 +5,8 @@
 // outside (SIGSTOP, a debugger), which it learns of only when it runs again. The time spent stopped must not count
 // as the actors' silence; a stop from outside longer than the heartbeat timeout ends the farm saying so, since the
 // actors took the director for dead and are going.
+#include <functional>
+
 #include "actors/director/control_channel.hpp"
 #include "actors/director/launcher.hpp"
 #include "actors/director/supervisor.hpp"
@@ -13,13 +15,16 @@ namespace lf {
 
 class ControlLoop {
  public:
-  ControlLoop(const FarmSpec& spec, ControlChannel& control, Supervisor& supervisor, Launchers& launchers)
-      : spec_(spec), control_(control), supervisor_(supervisor), launchers_(launchers) {}
+  using Route = std::function<void(SupervisorEvent&)>;
+  // `route`: where the supervisor's events go, each as soon as the supervisor has judged what produced it.
+  ControlLoop(const FarmSpec& spec, ControlChannel& control, Supervisor& supervisor, Launchers& launchers, Route route)
+      : spec_(spec), control_(control), supervisor_(supervisor), launchers_(launchers), route_(std::move(route)) {}
   // Waits up to `timeout_ms` and handles what came. Throws FarmFailure (a signal, an actor's failure, a long stop).
   void turn(long timeout_ms);
 
  private:
   void read_messages();
+  void judged(const Status& st);  // check(st), then route what the supervisor said
   void suspend_farm();
   // `slept_through`: a wait just returned far later than its timeout (the SIGCONT handler may run on another
   // thread and set its flag a moment after this one looked; the overrun says the same without that race).
@@ -29,6 +34,7 @@ class ControlLoop {
   ControlChannel& control_;
   Supervisor& supervisor_;
   Launchers& launchers_;
+  Route route_;
   Clock::time_point last_awake_ = Clock::now();  // the last time notice_outside_stop() ran
 };
 

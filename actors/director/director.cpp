@@ -7,6 +7,7 @@
 #include <memory>
 #include <thread>
 
+#include "actors/codecs/control_codec.hpp"
 #include "actors/director/actor_configs.hpp"
 #include "actors/director/control_channel.hpp"
 #include "actors/director/control_loop.hpp"
@@ -39,21 +40,10 @@ class Director {
       : spec_(spec),
         options_(options),
         launchers_(launchers),
-        supervisor_(spec, launchers_, control_,
-                    Supervisor::Events{[this](ActorRecord& a, wire::Message& m) {
-                                         return services_.request(a.name(), m, control_);
-                                       },
-                                       [this](ActorRecord& a, const std::string& why) {
-                                         return services_.lost(a.name(), why, control_);
-                                       },
-                                       [this](const ActorRecord& a) { return services_.needs_restart(a.name()); },
-                                       [this](ActorRecord& a) { return configure_actor(a); },
-                                       [this](ActorRecord& a) { return rejoin(a); },
-                                       [this](const ActorRecord& a, const std::string& what, uint64_t done,
-                                              uint64_t total) { show_progress(a, what, done, total); }}),
+        supervisor_(spec, launchers_, control_, [this](const std::string& a) { return services_.needs_restart(a); }),
         tiles_(spec.image, spec.renderer_names(), options.progress_on_terminal, options.quiet),
         ring_(spec, exchange_, options.quiet, options.progress_on_terminal),
-        loop_(spec, control_, supervisor_, launchers_),
+        loop_(spec, control_, supervisor_, launchers_, [this](SupervisorEvent& e) { route(e); }),
         step_progress_(options.quiet) {}
 
   int run() {
@@ -104,7 +94,7 @@ class Director {
     stage(Stage::hello, [&] { wait_all(30.0, [](const ActorRecord& a) { return a.said_hello; }); });
     stage(Stage::configure, [&] {
       for (auto& [name, a] : supervisor_.actors())
-        if (!a.lost && a.spec->has_process()) check(configure_actor(a));
+        if (!a.lost && a.spec->has_process()) configure_actor(a);
       wait_all(60.0, [](const ActorRecord& a) { return a.ready == Phase::configure; });
     });
     stage(Stage::setup, [&] { run_phase(Phase::setup); });
@@ -141,16 +131,26 @@ class Director {
     control_endpoint_ = *endpoint;
   }
 
-  Status configure_actor(ActorRecord& a) {
+  void configure_actor(ActorRecord& a) {
     const ActorConfig config = ConfigBuilder(spec_, deployment_).build(a, supervisor_.actors());
     control_.send(a.name(), wire::make(MsgType::config, "director", config.to_value()));
     a.configured = true;
-    return Ok{};
   }
 
-  void show_progress(const ActorRecord& a, const std::string& what, uint64_t done, uint64_t total) {
-    if (monitor_) monitor_->on_progress(a.name(), what, done, total);
-    step_progress_.report(a.name(), what, done, total, tiles_.drawing_progress());
+  // All the supervisor says goes on from here: requests and losses to the services, PEER_DOWN to a lost replica's
+  // dispatchers, a restarted actor's CONFIG and return, progress to the terminal and the monitor.
+  void route(SupervisorEvent& e) {
+    using Kind = SupervisorEvent::Kind;
+    switch (e.kind) {
+      case Kind::request: return check(services_.request(e.actor, e.message, control_));
+      case Kind::lost: return check(services_.lost(e.actor, e.why, control_));
+      case Kind::peer_down: return control_.tell(e.to, MsgType::peer_down, control::encode_peer_down(e.actor));
+      case Kind::hello_again: return configure_actor(supervisor_.actors().at(e.actor));
+      case Kind::configured_again: return check(rejoin(supervisor_.actors().at(e.actor)));
+      case Kind::progress:
+        if (monitor_) monitor_->on_progress(e.actor, e.what, e.done, e.total);
+        return step_progress_.report(e.actor, e.what, e.done, e.total, tiles_.drawing_progress());
+    }
   }
 
   // A restarted actor is configured: every configured actor that has it as an input learns where it listens now,

@@ -1,4 +1,3 @@
-#include "actors/codecs/control_codec.hpp"
 #include "actors/director/supervisor.hpp"
 
 #include <signal.h>
@@ -19,8 +18,9 @@ namespace {
 double seconds_between(Clock::time_point a, Clock::time_point b) { return std::chrono::duration<double>(b - a).count(); }
 }  // namespace
 
-Supervisor::Supervisor(const FarmSpec& spec, Launchers& launchers, Outbox& out, Events events)
-    : spec_(spec), launchers_(launchers), out_(out), events_(std::move(events)) {
+Supervisor::Supervisor(const FarmSpec& spec, Launchers& launchers, Outbox& out,
+                       std::function<bool(const std::string&)> needs_restart)
+    : spec_(spec), launchers_(launchers), out_(out), needs_restart_(std::move(needs_restart)) {
   for (size_t i = 0; i < spec.actors.size(); ++i) {
     ActorRecord r;
     r.spec = &spec.actors[i];
@@ -140,7 +140,7 @@ Status Supervisor::on_message(const std::string& peer, Result<wire::Message>& me
       a.endpoint = hello->endpoint;
       a.local_endpoint = hello->local_endpoint;
       a.said_hello = true;
-      if (a.rejoining) return events_.hello_again(a);
+      if (a.rejoining) events_.push_back({.kind = SupervisorEvent::Kind::hello_again, .actor = a.name()});
       return Ok{};
     }
     case MsgType::ready:
@@ -148,7 +148,7 @@ Status Supervisor::on_message(const std::string& peer, Result<wire::Message>& me
         a.ready = *phase;
         if (a.rejoining && *phase == wire::Phase::configure) {
           a.rejoining = false;
-          return events_.configured_again(a);
+          events_.push_back({.kind = SupervisorEvent::Kind::configured_again, .actor = a.name()});
         }
       } else {
         log_warn("'" + peer + "' said READY for '" + m.header.op + "', which is not a phase");
@@ -161,8 +161,11 @@ Status Supervisor::on_message(const std::string& peer, Result<wire::Message>& me
       const Value *what = m.body.find("what"), *done = m.body.find("done"), *total = m.body.find("total");
       if (what && what->is_string() && done && done->is_int() && total && total->is_int() && done->as_int() >= 0 &&
           total->as_int() > 0 && done->as_int() <= total->as_int() && what->as_string().size() <= 64) {
-        if (events_.progress)
-          events_.progress(a, what->as_string(), static_cast<uint64_t>(done->as_int()), static_cast<uint64_t>(total->as_int()));
+        events_.push_back({.kind = SupervisorEvent::Kind::progress,
+                           .actor = a.name(),
+                           .what = what->as_string(),
+                           .done = static_cast<uint64_t>(done->as_int()),
+                           .total = static_cast<uint64_t>(total->as_int())});
       } else {
         strangers_.warn("'" + peer + "' sent a malformed PROGRESS");
       }
@@ -170,7 +173,9 @@ Status Supervisor::on_message(const std::string& peer, Result<wire::Message>& me
     }
     case MsgType::bye: a.said_bye = true; return Ok{};
     case MsgType::heartbeat: return Ok{};
-    case MsgType::request: return events_.request(a, m);
+    case MsgType::request:
+      events_.push_back({.kind = SupervisorEvent::Kind::request, .actor = a.name(), .message = std::move(m)});
+      return Ok{};
     default:
       log_warn("ignored a " + std::string(wire::type_name(m.header.type)) + " from '" + peer + "'");
       return Ok{};
@@ -220,7 +225,7 @@ bool Supervisor::restartable(const ActorRecord& a) const {
 }
 
 Status Supervisor::restart(ActorRecord& a, const std::string& why) {
-  if (!events_.needs_restart || !events_.needs_restart(a)) {
+  if (!needs_restart_ || !needs_restart_(a.name())) {
     a.lost = true;
     a.loss = why;
     log_warn("ring node '" + a.name() + "' " + why + " after the ring's solution was complete; it is not needed any more",
@@ -244,7 +249,8 @@ Status Supervisor::restart(ActorRecord& a, const std::string& why) {
   // Before its CONFIG the new process simply joins like everyone else; after it, it rejoins a farm under way.
   if (!was_configured) return Ok{};
   a.rejoining = true;
-  return events_.lost(a, why);
+  events_.push_back({.kind = SupervisorEvent::Kind::lost, .actor = a.name(), .why = why});
+  return Ok{};
 }
 
 Status Supervisor::lose(ActorRecord& a, const std::string& why) {
@@ -259,7 +265,8 @@ Status Supervisor::lose(ActorRecord& a, const std::string& why) {
       all += (all.empty() ? "" : ", ") + n + " " + other.loss;
     }
     if (!any_left) return make_error("every renderer was lost: " + all);
-    return events_.lost(a, why);
+    events_.push_back({.kind = SupervisorEvent::Kind::lost, .actor = a.name(), .why = why});
+    return Ok{};
   }
   ActorRecord& pool = actors_.at(spec_.actors[static_cast<size_t>(spec_.pool_of(a.index))].name);
   std::string replicas;
@@ -285,20 +292,22 @@ Status Supervisor::lose(ActorRecord& a, const std::string& why) {
     }
     return make_error("lost the last replica of '" + pool.name() + "': " + replicas);
   }
-  if (auto st = events_.lost(a, why); !st) return st;
+  events_.push_back({.kind = SupervisorEvent::Kind::lost, .actor = a.name(), .why = why});
   log_warn("replica '" + a.name() + "' " + why + "; '" + pool.name() + "' sends its work to the others", LogKind::loss);
-  // Whoever dispatches to the pool hears of it: its multiplexer, or each of its clients. One not yet configured
-  // hears nothing: its CONFIG will leave the replica out.
-  const wire::Message down = wire::make(MsgType::peer_down, "director", control::encode_peer_down(a.name()));
+  // Whoever dispatches to the pool hears of it, after the services: its multiplexer, or each of its clients. One
+  // not yet configured hears nothing: its CONFIG will leave the replica out.
+  auto tell = [&](const std::string& to) {
+    events_.push_back({.kind = SupervisorEvent::Kind::peer_down, .actor = a.name(), .to = to});
+  };
   if (pool.spec->has_process()) {
-    if (pool.configured) send(pool.name(), down);
+    if (pool.configured) tell(pool.name());
     return Ok{};
   }
   for (auto& [name, client] : actors_) {
     const auto& inputs = client.spec->inputs;
     if (client.configured && !client.lost && !client.exited &&
         std::find(inputs.begin(), inputs.end(), pool.index) != inputs.end())
-      send(name, down);
+      tell(name);
   }
   return Ok{};
 }

@@ -20,6 +20,7 @@
 #include <functional>
 #include <map>
 #include <optional>
+#include <utility>
 #include <string>
 #include <vector>
 
@@ -58,23 +59,36 @@ struct ActorRecord {
   const std::string& name() const { return spec->name; }
 };
 
+// What the supervisor hands the director, in the order it happened (as radiosity/ring_protocol returns actions):
+// the director routes each in one place (Director::route).
+struct SupervisorEvent {
+  enum class Kind {
+    request,           // a REQUEST for a director service: `message`
+    lost,              // `actor` was lost (`why`) and the farm goes on: the services take back its work
+    peer_down,         // then, for a pool's replica: tell `to`, who dispatches to the pool, that `actor` is gone
+    hello_again,       // a restarted actor said HELLO: it needs its CONFIG
+    configured_again,  // ... and READY configure: it rejoins the phase under way
+    progress,          // PROGRESS from `actor`: `what` is `done` of `total`
+  };
+  Kind kind = Kind::request;
+  std::string actor;
+  wire::Message message;  // request
+  std::string why;        // lost
+  std::string to;         // peer_down
+  std::string what;       // progress
+  uint64_t done = 0, total = 0;
+};
+
 class Supervisor {
  public:
-  // What the supervisor hands to the director: requests for the services, and losses for them to recover from.
-  struct Events {
-    std::function<Status(ActorRecord&, wire::Message&)> request;
-    std::function<Status(ActorRecord&, const std::string& why)> lost;
-    // Whether a ring node's loss leaves work undone (then it is restarted; otherwise just lost).
-    std::function<bool(const ActorRecord&)> needs_restart;
-    // A restarted actor said HELLO (it needs its CONFIG), and then READY configure (it can rejoin the phase).
-    std::function<Status(ActorRecord&)> hello_again;
-    std::function<Status(ActorRecord&)> configured_again;
-    // PROGRESS from an actor: `what` is `done` of `total`.
-    std::function<void(const ActorRecord&, const std::string& what, uint64_t done, uint64_t total)> progress;
-  };
   static constexpr int kMaxRestarts = 3;
 
-  Supervisor(const FarmSpec& spec, Launchers& launchers, Outbox& out, Events events);
+  // `needs_restart(actor)`: whether a lost ring node's work exists nowhere else (then it is restarted; otherwise
+  // just lost). A question the supervisor asks while it judges an exit, so not an event.
+  Supervisor(const FarmSpec& spec, Launchers& launchers, Outbox& out,
+             std::function<bool(const std::string& actor)> needs_restart = {});
+  // The events since the last call, oldest first.
+  std::vector<SupervisorEvent> take_events() { return std::exchange(events_, {}); }
 
   // Starts every actor (`lightfarm actor ...`, or an exec actor's own command) pointed at `director_endpoint`.
   // With `local_address` (a farm that spans hosts), every actor also gets `--bind tcp://ADDRESS:*`: its host's
@@ -129,7 +143,8 @@ class Supervisor {
   const FarmSpec& spec_;
   Launchers& launchers_;
   Outbox& out_;
-  Events events_;
+  std::function<bool(const std::string&)> needs_restart_;
+  std::vector<SupervisorEvent> events_;
   std::map<std::string, ActorRecord> actors_;
   // How launch() started actors, for restarts.
   std::string director_endpoint_, local_address_;
