@@ -17,7 +17,7 @@
 #include "actors/kinds/actor_kinds.hpp"
 #include "actors/check/check_actor.hpp"
 #include "actors/director/director.hpp"
-#include "actors/director/host_launcher.hpp"
+#include "actors/launchers/host_launcher.hpp"
 #include "actors/runtime/host_agent.hpp"
 #include "actors/runtime/runtime.hpp"
 #include "core/log.hpp"

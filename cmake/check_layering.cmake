@@ -18,6 +18,24 @@ if(violations)
 endif()
 message(STATUS "layering ok: render/ and radiosity/ include no network code")
 
+# The director's parts below it (how actors start, the monitor's server) know nothing of the director.
+set(upward "")
+foreach(dir actors/launchers actors/monitor actors/runtime actors/codecs)
+  file(GLOB_RECURSE files "${SOURCE_DIR}/${dir}/*.cpp" "${SOURCE_DIR}/${dir}/*.hpp")
+  foreach(f IN LISTS files)
+    file(STRINGS "${f}" lines REGEX "^[ \t]*#[ \t]*include[ \t]*\"actors/director/")
+    foreach(line IN LISTS lines)
+      file(RELATIVE_PATH rel "${SOURCE_DIR}" "${f}")
+      list(APPEND upward "${rel}: ${line}")
+    endforeach()
+  endforeach()
+endforeach()
+if(upward)
+  list(JOIN upward "\n  " text)
+  message(FATAL_ERROR "a part below the director includes it:\n  ${text}")
+endif()
+message(STATUS "layering ok: launchers, monitor, runtime and codecs do not include the director")
+
 # Operations and phases are types (transport/protocol.hpp); their wire names live in one table
 # (transport/message.cpp). Nothing else compares a string against one of them.
 set(names "shade|tile|tile_done|all_gather|fetch|ring\\.[a-z]+|configure|setup|render|finish")

@@ -13,7 +13,7 @@ namespace lf {
 
 struct HostSpec {
   std::string name = "local";
-  std::string launcher = "local";  // which Launcher starts this host's actors (actors/director/launcher.hpp)
+  std::string launcher = "local";  // which Launcher starts this host's actors (actors/launchers/launcher.hpp)
   std::string address = "127.0.0.1";  // where its actors listen, and (ssh) where to reach it
   // ssh hosts:
   std::string user;        // login name; empty: ssh's default

@@ -25,7 +25,7 @@
 #include <cstdio>
 #include <thread>
 
-#include "actors/director/local_launcher.hpp"
+#include "actors/launchers/local_launcher.hpp"
 #include "actors/runtime/actor_config.hpp"
 #include "actors/runtime/hello.hpp"
 #include "core/log.hpp"

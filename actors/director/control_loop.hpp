@@ -8,7 +8,7 @@
 #include <functional>
 
 #include "actors/director/control_channel.hpp"
-#include "actors/director/launcher.hpp"
+#include "actors/launchers/launcher.hpp"
 #include "actors/director/supervisor.hpp"
 
 namespace lf {

@@ -9,7 +9,7 @@
 #include <string>
 #include <vector>
 
-#include "actors/director/launcher.hpp"
+#include "actors/launchers/launcher.hpp"
 #include "farm/farm_spec.hpp"
 #include "render/partition.hpp"
 #include "render/scene.hpp"

@@ -14,7 +14,7 @@
 #include "actors/director/deployment.hpp"
 #include "actors/director/exchange_service.hpp"
 #include "actors/director/farm_failure.hpp"
-#include "actors/director/local_launcher.hpp"
+#include "actors/launchers/local_launcher.hpp"
 #include "actors/director/monitor_feed.hpp"
 #include "actors/director/progress.hpp"
 #include "actors/director/report.hpp"

@@ -16,7 +16,7 @@ struct RunOptions {
   bool progress_on_terminal = false;  // a live bar on stderr; otherwise plain lines
   std::string stats_json;             // write figures here as JSON, if set
   bool quiet = false;                 // no tables (benchmarks)
-  std::string monitor;                // "[ADDR:]PORT": serve the live monitor there (actors/director/monitor.hpp)
+  std::string monitor;                // "[ADDR:]PORT": serve the live monitor there (actors/monitor/monitor.hpp)
   double monitor_hold = 0;            // seconds the monitor stays up after the frame
 };
 

@@ -14,7 +14,7 @@
 #include <set>
 #include <thread>
 
-#include "actors/director/launcher.hpp"
+#include "actors/launchers/launcher.hpp"
 #include "actors/kinds/actor_kinds.hpp"
 #include "actors/runtime/runtime.hpp"
 #include "farm/builders.hpp"

@@ -12,7 +12,7 @@
 #include <utility>
 #include <vector>
 
-#include "actors/director/monitor.hpp"
+#include "actors/monitor/monitor.hpp"
 #include "actors/director/ring_service.hpp"
 #include "actors/director/supervisor.hpp"
 #include "actors/director/tile_service.hpp"

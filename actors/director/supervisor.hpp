@@ -24,7 +24,7 @@
 #include <string>
 #include <vector>
 
-#include "actors/director/launcher.hpp"
+#include "actors/launchers/launcher.hpp"
 #include "actors/director/service.hpp"
 #include "actors/director/stage.hpp"
 #include "core/log.hpp"

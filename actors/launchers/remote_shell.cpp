@@ -1,4 +1,4 @@
-#include "actors/director/remote_shell.hpp"
+#include "actors/launchers/remote_shell.hpp"
 
 #include <fcntl.h>
 #include <signal.h>

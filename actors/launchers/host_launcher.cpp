@@ -1,4 +1,4 @@
-#include "actors/director/host_launcher.hpp"
+#include "actors/launchers/host_launcher.hpp"
 
 #include <fcntl.h>
 #include <poll.h>
@@ -13,7 +13,7 @@
 #include <cstring>
 #include <thread>
 
-#include "actors/director/local_launcher.hpp"
+#include "actors/launchers/local_launcher.hpp"
 #include "actors/runtime/runtime.hpp"
 #include "core/log.hpp"
 

@@ -1,6 +1,6 @@
-#include "actors/director/local_launcher.hpp"
-#include "actors/director/slurm_launcher.hpp"
-#include "actors/director/ssh_launcher.hpp"
+#include "actors/launchers/local_launcher.hpp"
+#include "actors/launchers/slurm_launcher.hpp"
+#include "actors/launchers/ssh_launcher.hpp"
 
 #include <fcntl.h>
 #include <signal.h>

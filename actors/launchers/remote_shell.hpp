@@ -1,10 +1,10 @@
 #pragma once
 // What the remote launchers (ssh, slurm) share: running a command with its output captured, and shipping a scene
-// into a host's cache. (Their actors start through a host launcher: actors/director/host_launcher.hpp.)
+// into a host's cache. (Their actors start through a host launcher: actors/launchers/host_launcher.hpp.)
 #include <string>
 #include <vector>
 
-#include "actors/director/launcher.hpp"
+#include "actors/launchers/launcher.hpp"
 
 namespace lf {
 

@@ -1,10 +1,10 @@
-#include "actors/director/slurm_launcher.hpp"
+#include "actors/launchers/slurm_launcher.hpp"
 
 #include <sys/wait.h>
 
 #include <cstdlib>
 
-#include "actors/director/remote_shell.hpp"
+#include "actors/launchers/remote_shell.hpp"
 
 namespace lf {
 

@@ -5,13 +5,13 @@
 // prepare() connects and checks the host within a bounded time: an unreachable host, a refused key or a missing
 // remote binary is an error naming the host with ssh's own words. The first start() then opens one more session,
 //   ssh HOST exec LIGHTFARM host-launcher
-// and every actor of the host is started through it (actors/director/host_launcher.hpp): one session per host, not
+// and every actor of the host is started through it (actors/launchers/host_launcher.hpp): one session per host, not
 // one per actor. When the session's stdin reaches EOF (the director is gone, or the session was cut and ssh gave
 // up), the host launcher sends its actors SIGTERM and then SIGKILL: a remote actor never outlives its farm.
 #include <string>
 
-#include "actors/director/host_launcher.hpp"
-#include "actors/director/local_launcher.hpp"
+#include "actors/launchers/host_launcher.hpp"
+#include "actors/launchers/local_launcher.hpp"
 
 namespace lf {
 

@@ -5,7 +5,7 @@
 #include <map>
 #include <set>
 
-#include "actors/director/launcher.hpp"
+#include "actors/launchers/launcher.hpp"
 
 namespace lf {
 

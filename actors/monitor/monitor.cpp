@@ -1,4 +1,4 @@
-#include "actors/director/monitor.hpp"
+#include "actors/monitor/monitor.hpp"
 
 #include <httplib.h>
 #include <openssl/evp.h>

@@ -1,5 +1,5 @@
-#include "actors/director/ssh_launcher.hpp"
-#include "actors/director/remote_shell.hpp"
+#include "actors/launchers/ssh_launcher.hpp"
+#include "actors/launchers/remote_shell.hpp"
 #include "core/private_dir.hpp"
 
 #include <fcntl.h>

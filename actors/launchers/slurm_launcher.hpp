@@ -1,12 +1,12 @@
 #pragma once
 // SlurmLauncher: inside an allocation (salloc, sbatch), starts a host's actors through one job step on that node,
-// `srun --overlap ... lightfarm host-launcher` (actors/director/host_launcher.hpp), which starts each actor as the
+// `srun --overlap ... lightfarm host-launcher` (actors/launchers/host_launcher.hpp), which starts each actor as the
 // director asks on the step's stdin and stops them all when that stdin ends. The first use checks the allocation and
 // that lightfarm is on the node.
 #include <string>
 
-#include "actors/director/host_launcher.hpp"
-#include "actors/director/local_launcher.hpp"
+#include "actors/launchers/host_launcher.hpp"
+#include "actors/launchers/local_launcher.hpp"
 
 namespace lf {
 

@@ -26,7 +26,7 @@
 #include <string>
 #include <vector>
 
-#include "actors/director/launcher.hpp"
+#include "actors/launchers/launcher.hpp"
 
 namespace lf {
 

@@ -1,7 +1,7 @@
 // The monitor's preview stream: a stream gets the whole image first, then only the blocks that changed since the
 // version it holds, and applying them gives the image exactly; a stream that joins late, and /api/preview, get the
 // whole image.
-#include "actors/director/monitor.hpp"
+#include "actors/monitor/monitor.hpp"
 
 #include <gtest/gtest.h>
 #include <httplib.h>

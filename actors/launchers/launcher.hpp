@@ -57,7 +57,7 @@ class Launcher {
   virtual std::optional<ExitReport> reap_one() = 0;
   virtual void kill(pid_t pid, int signal) = 0;
   // The actor's process as its host knows it ("pid 4711", "pid 4711 on h1"), for messages and tables: a remote
-  // launcher's pids here are handles (actors/director/host_launcher.hpp).
+  // launcher's pids here are handles (actors/launchers/host_launcher.hpp).
   virtual std::string where(pid_t pid) const { return "pid " + std::to_string(pid); }
   // Its pid on its host (0 while not yet known).
   virtual pid_t host_pid(pid_t pid) const { return pid; }

@@ -1,7 +1,7 @@
 // The host launcher's line protocol, and a HostSession whose transport is this machine's own `lightfarm
 // host-launcher` (no ssh): actors start through it, report their exits with their status, are killed on request,
 // and nothing they started outlives the session.
-#include "actors/director/host_launcher.hpp"
+#include "actors/launchers/host_launcher.hpp"
 
 #include <gtest/gtest.h>
 #include <signal.h>

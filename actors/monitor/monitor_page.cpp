@@ -2,7 +2,7 @@
 // It listens to /events, draws the lighting network (a band per host, columns by depth from the renderers), the
 // actors' figures, the image as tiles land, the phases, setup steps and the log.
 // Elements carry data-* attributes (actor, state, tiles) so that tests read the page as a browser shows it.
-#include "actors/director/monitor.hpp"
+#include "actors/monitor/monitor.hpp"
 
 namespace lf {
 
