@@ -6,9 +6,9 @@
 #include <vector>
 
 #include "core/value.hpp"
-#include "render/camera.hpp"
-#include "render/lightop_registry.hpp"
-#include "render/tile_kernel.hpp"
+#include "render/tracing/camera.hpp"
+#include "render/lightops/lightop_registry.hpp"
+#include "render/shading/tile_kernel.hpp"
 
 namespace bench {
 

@@ -16,7 +16,7 @@
 
 #include "bench/bench_util.hpp"
 #include "core/value.hpp"
-#include "render/image.hpp"
+#include "render/images/image.hpp"
 #include "tests/process_harness.hpp"
 
 namespace {

@@ -18,7 +18,7 @@
 #include "bench/bench_util.hpp"
 #include "bench/image_error.hpp"
 #include "core/value.hpp"
-#include "render/scene.hpp"
+#include "render/scene/scene.hpp"
 
 int main(int argc, char** argv) {
   int width = 160, reference_spp = 1024;

@@ -23,9 +23,9 @@
 
 #include "bench/bench_util.hpp"
 #include "core/value.hpp"
-#include "render/camera.hpp"
-#include "render/lightop_registry.hpp"
-#include "render/tile_kernel.hpp"
+#include "render/tracing/camera.hpp"
+#include "render/lightops/lightop_registry.hpp"
+#include "render/shading/tile_kernel.hpp"
 
 using Clock = std::chrono::steady_clock;
 

@@ -6,7 +6,7 @@
 #include <vector>
 
 #include "bench/bench_util.hpp"
-#include "render/image.hpp"
+#include "render/images/image.hpp"
 
 namespace bench {
 

@@ -7,7 +7,7 @@
 //
 // A third variant draws the point on the chosen triangle by its solid angle (light_point = "solid_angle"); a
 // fourth mixes the tree with lights learned where the camera looks (light_sampling = "learned",
-// render/light_selection.hpp).
+// render/lights/light_selection.hpp).
 //
 //   build/bench/lights_bench [--json FILE] [--runs N] [--reference FILE.exr] [--reference-spp N] [--width W]
 #include <cmath>
@@ -16,7 +16,7 @@
 #include <string>
 
 #include "bench/bench_util.hpp"
-#include "render/image.hpp"
+#include "render/images/image.hpp"
 
 namespace {
 

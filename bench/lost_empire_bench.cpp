@@ -35,7 +35,7 @@
 
 #include "bench/bench_util.hpp"
 #include "core/value.hpp"
-#include "render/image.hpp"
+#include "render/images/image.hpp"
 
 namespace {
 

@@ -14,7 +14,7 @@
 
 #include "bench/bench_util.hpp"
 #include "core/value.hpp"
-#include "render/image.hpp"
+#include "render/images/image.hpp"
 
 
 int main(int argc, char** argv) {

@@ -17,9 +17,9 @@
 #include "bench/bench_util.hpp"
 #include "core/value.hpp"
 #include "bench/image_error.hpp"
-#include "render/camera.hpp"
-#include "render/lightop_registry.hpp"
-#include "render/tile_kernel.hpp"
+#include "render/tracing/camera.hpp"
+#include "render/lightops/lightop_registry.hpp"
+#include "render/shading/tile_kernel.hpp"
 
 namespace {
 

@@ -15,9 +15,9 @@
 
 #include "bench/bench_util.hpp"
 #include "core/value.hpp"
-#include "render/scene_file.hpp"
-#include "render/scene_image.hpp"
-#include "render/tracer.hpp"
+#include "render/scene/scene_file.hpp"
+#include "render/scene/scene_image.hpp"
+#include "render/tracing/tracer.hpp"
 
 namespace {
 

@@ -1,10 +1,10 @@
-// Tracing a partitioned scene in one process (render/partition.hpp) on Lost Empire (../shared/scenes):
+// Tracing a partitioned scene in one process (render/tracing/partition.hpp) on Lost Empire (../shared/scenes):
 // rays per second of the whole scene's BVH with ties left to Embree and with them settled by the rule (what every
 // farm now pays for images that do not depend on the BVH), and of the scene split into 2, 3 and 5 parts traced
 // part by part; for each split, each part's share of the ray visits (imbalance = max / mean, the issue's <= 1.2
 // goal for the cost-based split) and visits per ray. The rays: the camera's at 320x240 from inside the city, and as
 // many diffuse bounce rays from the points it sees (cosine-distributed), the mix an indirect-lighting farm traces.
-// Parts are split by probe rays and rebalanced by their visits (render/partition.hpp: partition_by_probes); the
+// Parts are split by probe rays and rebalanced by their visits (render/tracing/partition.hpp: partition_by_probes); the
 // area-and-count split's imbalance is shown beside.
 // --runs times, interleaved; medians with min and max. Writes bench-trace.json.
 //
@@ -18,9 +18,9 @@
 
 #include "bench/bench_util.hpp"
 #include "core/value.hpp"
-#include "render/camera.hpp"
-#include "render/partition.hpp"
-#include "render/tracer.hpp"
+#include "render/tracing/camera.hpp"
+#include "render/tracing/partition.hpp"
+#include "render/tracing/tracer.hpp"
 
 namespace {
 

@@ -23,7 +23,7 @@
 #include "core/log.hpp"
 #include "farm/builders.hpp"
 #include "lua/script.hpp"
-#include "render/scene_report.hpp"
+#include "render/scene/scene_report.hpp"
 #include "transport/protocol.hpp"
 
 namespace {

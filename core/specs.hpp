@@ -25,7 +25,7 @@ struct SceneSpec {
                         // {point, intensity}
   Value::Array materials;  // the script's changes to named materials: {name, emission?, kd?, ks?, ns?, ior?, type?}
   // Set by the director for its actors: the scene, lights included, as shipped to the actor's host
-  // (render/scene_file.hpp); an actor then reads that and never the OBJ file.
+  // (render/scene/scene_file.hpp); an actor then reads that and never the OBJ file.
   std::string cache;  // its path on the actor's host
   std::string hash;   // its content hash
   SourceLoc loc;
@@ -57,7 +57,7 @@ struct ImageSpec {
   int shaded_per_pixel() const { return shade_spp > 0 && shade_spp < spp ? shade_spp : spp; }
   // Adaptive sampling (0: off): a pixel whose lighting is still noisy after its shade_spp samples (the standard
   // error of their mean above adaptive_threshold of display white at `exposure`) gets more of its spp samples
-  // shaded, in doublings of shade_spp, up to adaptive_spp (render/tile_kernel.hpp, adaptive_shaded_counts).
+  // shaded, in doublings of shade_spp, up to adaptive_spp (render/shading/tile_kernel.hpp, adaptive_shaded_counts).
   int adaptive_spp = 0;
   double adaptive_threshold = 0.05;
   int tile = 32;
@@ -67,7 +67,7 @@ struct ImageSpec {
   double exposure = 0;
   std::string tonemap = "clamp";
   // The numbers camera, direct light and path tracing draw: "independent" (PCG32) or "sobol" (Owen-scrambled
-  // Sobol points, render/sampler.hpp).
+  // Sobol points, render/shading/sampler.hpp).
   std::string sampler = "sobol";
   // image { } with its ranges, defaults and rules (shade_spp at most spp; adaptive sampling needs shade_spp of 2 or
   // more below spp): how a script is read and how an actor reads CONFIG back. Throws ParamError.

@@ -1,6 +1,6 @@
 #include "farm/actor_kinds.hpp"
 
-#include "render/lightop_registry.hpp"
+#include "render/lightops/lightop_registry.hpp"
 
 namespace lf {
 

@@ -1,7 +1,7 @@
 #pragma once
 // The kinds of actor a farm holds, in one table: what a kind is called (in scripts' graphs, CONFIG, the actor
 // table and `lightfarm actor --kind`), the role it plays, and whether its process loads the farm's scene. The
-// farm's own kinds are listed here; every LightOp kind (render/lightop_registry.hpp) is an actor kind of role
+// farm's own kinds are listed here; every LightOp kind (render/lightops/lightop_registry.hpp) is an actor kind of role
 // lightop. actors/kinds/actor_kinds.cpp makes the Actor of each role.
 #include <optional>
 #include <string>

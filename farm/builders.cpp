@@ -7,7 +7,7 @@
 #include <string_view>
 
 #include "farm/light_path_check.hpp"
-#include "render/lightop_registry.hpp"
+#include "render/lightops/lightop_registry.hpp"
 
 namespace lf {
 

@@ -49,7 +49,7 @@ void add_renderers(FarmSpec& spec, int count, int lighting, const RendererParams
 // input and `params` plus its own `node` number, then the `radiosity` LightOp named NAME that shades with their
 // solution. Returns the LightOp's index.
 // partition { parts = N }: N `geometry` actors, "geometry.0" ... (spread over `hosts` as renderers are), each holding
-// one part of the scene (render/partition.hpp).
+// one part of the scene (render/tracing/partition.hpp).
 Status add_partition(FarmSpec& spec, int parts, bool colocate, const std::vector<std::string>& hosts,
                      const SourceLoc& loc);
 

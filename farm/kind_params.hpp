@@ -1,7 +1,7 @@
 #pragma once
 // The parameters of the actor kinds the farm provides, defined once: the Lua binding reads a script's table with
 // these (an error names the script line), the director sends the result in CONFIG, and the actor reads it back with
-// the same function into the same struct. LightOps define theirs in their own classes (render/lightop_registry.hpp)
+// the same function into the same struct. LightOps define theirs in their own classes (render/lightops/lightop_registry.hpp)
 // and ring nodes in radiosity/config.hpp.
 #include <cstdint>
 #include <string>

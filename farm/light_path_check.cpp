@@ -4,7 +4,7 @@
 #include <functional>
 #include <optional>
 
-#include "render/lightop_registry.hpp"
+#include "render/lightops/lightop_registry.hpp"
 
 namespace lf {
 

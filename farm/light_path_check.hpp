@@ -1,7 +1,7 @@
 #pragma once
 // Path-space accounting: does the lighting network count every light path that reaches the camera in this scene
 // exactly once? Each LightOp says which paths its answer counts given its inputs' (LightOp::paths, in Heckbert's
-// notation: render/light_paths.hpp); this composes them along the farm's graph, from the ops without inputs to the
+// notation: render/shading/light_paths.hpp); this composes them along the farm's graph, from the ops without inputs to the
 // one the renderers ask, and compares the result with the paths the scene's materials allow: a letter for each lobe
 // some material has (D: diffuse reflectance, G: a glossy Phong lobe, S: mirror or glass).
 //
@@ -15,7 +15,7 @@
 #include <vector>
 
 #include "farm/farm_spec.hpp"
-#include "render/light_paths.hpp"
+#include "render/shading/light_paths.hpp"
 
 namespace lf {
 

@@ -5,7 +5,7 @@
 #include <algorithm>
 #include <cstdlib>
 
-#include "render/scene.hpp"
+#include "render/scene/scene.hpp"
 
 namespace lf {
 

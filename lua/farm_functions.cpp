@@ -7,7 +7,7 @@
 #include "farm/spec_readers.hpp"
 #include "lua/binding.hpp"
 #include "radiosity/config.hpp"
-#include "render/lightop_registry.hpp"
+#include "render/lightops/lightop_registry.hpp"
 
 namespace lf::lua_binding {
 namespace {
@@ -217,7 +217,7 @@ int l_farm(lua_State* L) {
 }
 
 // partition { parts = N, colocate = false, host = h | {h1, h2, ...} }: the scene split by space into N parts, each held
-// by a `geometry` actor; `direct` and `pathtrace` then trace their rays through the parts (render/partition.hpp).
+// by a `geometry` actor; `direct` and `pathtrace` then trace their rays through the parts (render/tracing/partition.hpp).
 // colocate: a pool's replica j of such an op holds part j mod N too and is sent the points that lie there.
 int l_partition(lua_State* L) {
   Builder& b = builder(L);

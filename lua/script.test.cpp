@@ -1,8 +1,8 @@
 #include "lua/script.hpp"
 #include "farm/builders.hpp"
 #include "farm/light_path_check.hpp"
-#include "render/scene_report.hpp"
-#include "render/lightop_registry.hpp"
+#include "render/scene/scene_report.hpp"
+#include "render/lightops/lightop_registry.hpp"
 
 #include <gtest/gtest.h>
 

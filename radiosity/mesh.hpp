@@ -6,7 +6,7 @@
 
 #include "core/result.hpp"
 #include "radiosity/geometry.hpp"
-#include "render/scene.hpp"
+#include "render/scene/scene.hpp"
 
 namespace lf::radiosity {
 

@@ -7,7 +7,7 @@
 #include "core/result.hpp"
 #include "radiosity/mesh.hpp"
 #include "radiosity/solver.hpp"
-#include "render/radiosity_field.hpp"
+#include "render/caches/radiosity_field.hpp"
 
 namespace lf::radiosity {
 

@@ -8,7 +8,7 @@
 #include <map>
 #include <random>
 
-#include "render/scene.hpp"
+#include "render/scene/scene.hpp"
 
 namespace lf::radiosity {
 namespace {

@@ -4,7 +4,7 @@
 #include <cmath>
 #include <stdexcept>
 
-#include "render/tracer.hpp"
+#include "render/tracing/tracer.hpp"
 
 namespace lf::radiosity {
 

@@ -7,7 +7,7 @@
 #include <string>
 #include <string_view>
 
-#include "render/scene.hpp"
+#include "render/scene/scene.hpp"
 
 namespace lf::bytes {
 

@@ -9,9 +9,9 @@
 #include <string>
 #include <vector>
 
-#include "render/lightop.hpp"
-#include "render/lightop_registry.hpp"
-#include "render/scene.hpp"
+#include "render/lightops/lightop.hpp"
+#include "render/lightops/lightop_registry.hpp"
+#include "render/scene/scene.hpp"
 
 namespace lf::test {
 

@@ -7,7 +7,7 @@
 #include <sstream>
 #include <thread>
 
-#include "render/image.hpp"
+#include "render/images/image.hpp"
 #include "tests/farm_harness.hpp"
 
 namespace lf::test {

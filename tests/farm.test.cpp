@@ -8,11 +8,11 @@
 #include <cstring>
 #include <map>
 
-#include "render/camera.hpp"
-#include "render/image.hpp"
-#include "render/lightop_registry.hpp"
-#include "render/scene.hpp"
-#include "render/tracer.hpp"
+#include "render/tracing/camera.hpp"
+#include "render/images/image.hpp"
+#include "render/lightops/lightop_registry.hpp"
+#include "render/scene/scene.hpp"
+#include "render/tracing/tracer.hpp"
 #include "tests/farm_harness.hpp"
 
 namespace lf::test {

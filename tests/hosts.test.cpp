@@ -8,7 +8,7 @@
 #include <cstring>
 #include <map>
 
-#include "render/image.hpp"
+#include "render/images/image.hpp"
 #include "tests/farm_harness.hpp"
 
 namespace lf::test {

@@ -8,7 +8,7 @@
 #include <regex>
 #include <thread>
 
-#include "render/image.hpp"
+#include "render/images/image.hpp"
 #include "tests/farm_harness.hpp"
 
 namespace lf::test {

@@ -5,10 +5,10 @@
 #include <fstream>
 #include <iterator>
 
-#include "render/camera.hpp"
-#include "render/image.hpp"
-#include "render/scene.hpp"
-#include "render/tracer.hpp"
+#include "render/tracing/camera.hpp"
+#include "render/images/image.hpp"
+#include "render/scene/scene.hpp"
+#include "render/tracing/tracer.hpp"
 #include "tests/farm_harness.hpp"
 
 namespace lf::test {

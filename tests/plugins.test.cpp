@@ -5,7 +5,7 @@
 
 #include <cstdlib>
 
-#include "render/image.hpp"
+#include "render/images/image.hpp"
 #include "tests/farm_harness.hpp"
 
 namespace lf::test {

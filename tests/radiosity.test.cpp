@@ -10,7 +10,7 @@
 
 #include "radiosity/config.hpp"
 #include "radiosity/ply.hpp"
-#include "render/image.hpp"
+#include "render/images/image.hpp"
 #include "tests/farm_harness.hpp"
 
 namespace lf::test {

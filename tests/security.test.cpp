@@ -9,7 +9,7 @@
 #include <set>
 #include <sstream>
 
-#include "render/image.hpp"
+#include "render/images/image.hpp"
 #include "tests/farm_harness.hpp"
 
 namespace lf::test {

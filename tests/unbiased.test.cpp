@@ -10,7 +10,7 @@
 #include <regex>
 #include <sstream>
 
-#include "render/image.hpp"
+#include "render/images/image.hpp"
 #include "tests/farm_harness.hpp"
 
 namespace lf::test {

@@ -30,8 +30,8 @@
 #include "actors/runtime/hello.hpp"
 #include "core/log.hpp"
 #include "actors/codecs/shade_codec.hpp"
-#include "render/camera.hpp"
-#include "render/tile_kernel.hpp"
+#include "render/tracing/camera.hpp"
+#include "render/shading/tile_kernel.hpp"
 #include "transport/socket.hpp"
 
 namespace lf {

@@ -14,7 +14,7 @@
 
 #include "core/result.hpp"
 #include "core/value.hpp"
-#include "render/tile_kernel.hpp"
+#include "render/shading/tile_kernel.hpp"
 
 namespace lf::control {
 

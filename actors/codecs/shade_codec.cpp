@@ -3,7 +3,7 @@
 #include <cstring>
 #include <map>
 
-#include "render/surface.hpp"
+#include "render/scene/surface.hpp"
 
 namespace lf {
 

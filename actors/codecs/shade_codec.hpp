@@ -14,8 +14,8 @@
 
 #include "core/result.hpp"
 #include "core/value.hpp"
-#include "render/lightop.hpp"
-#include "render/tile_kernel.hpp"
+#include "render/lightops/lightop.hpp"
+#include "render/shading/tile_kernel.hpp"
 
 namespace lf {
 

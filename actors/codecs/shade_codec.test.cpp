@@ -4,7 +4,7 @@
 
 #include <cstring>
 
-#include "render/surface.hpp"
+#include "render/scene/surface.hpp"
 #include "transport/message.hpp"
 
 namespace lf {

@@ -1,17 +1,17 @@
 #pragma once
 // The "trace" operation's bodies (docs/PROTOCOL.md), between an actor that traces through a partitioned scene and a
-// geometry actor holding one part (render/partition.hpp):
+// geometry actor holding one part (render/tracing/partition.hpp):
 //   request: { n: count, r: f32[8n] (per ray: origin xyz, direction xyz, tnear, tfar), any: bool }
 //   reply:   any = false: { n, tri: u32[n] (0xffffffff: no hit in this part), t: f32[n] }
 //            any = true:  { n, hit: u8[n] (1: something of this part lies on the ray) }
-// The answer is the part's own: the asker visits the parts along each ray and settles ties (render/tied_hits.hpp).
+// The answer is the part's own: the asker visits the parts along each ray and settles ties (render/tracing/tied_hits.hpp).
 #include <cstdint>
 #include <span>
 #include <vector>
 
 #include "core/result.hpp"
 #include "core/value.hpp"
-#include "render/tracer.hpp"
+#include "render/tracing/tracer.hpp"
 
 namespace lf {
 

@@ -5,7 +5,7 @@
 #include "actors/codecs/control_codec.hpp"
 #include "farm/builders.hpp"
 #include "farm/kind_params.hpp"
-#include "render/lightop_registry.hpp"
+#include "render/lightops/lightop_registry.hpp"
 
 namespace lf {
 

@@ -9,9 +9,9 @@
 #include "actors/director/farm_failure.hpp"
 #include "core/log.hpp"
 #include "farm/light_path_check.hpp"
-#include "render/camera.hpp"
-#include "render/light_checks.hpp"
-#include "render/scene_file.hpp"
+#include "render/tracing/camera.hpp"
+#include "render/lights/light_checks.hpp"
+#include "render/scene/scene_file.hpp"
 #include "transport/socket.hpp"
 
 namespace lf {
@@ -147,7 +147,7 @@ Deployment Deployer::finish(const Scene& scene) {
 }
 
 // partition { parts = N }: the split the geometry actors hold, weighted by probe rays from the farm's camera
-// (render/partition.hpp), made once here so that every actor agrees on it.
+// (render/tracing/partition.hpp), made once here so that every actor agrees on it.
 void Deployer::split_scene(const Scene& scene) {
   const auto start = Clock::now();
   RayTracer whole(scene);

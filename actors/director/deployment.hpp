@@ -11,8 +11,8 @@
 
 #include "actors/launchers/launcher.hpp"
 #include "farm/farm_spec.hpp"
-#include "render/partition.hpp"
-#include "render/scene.hpp"
+#include "render/tracing/partition.hpp"
+#include "render/scene/scene.hpp"
 #include "transport/security.hpp"
 
 namespace lf {

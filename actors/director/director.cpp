@@ -25,7 +25,7 @@
 #include "actors/runtime/runtime.hpp"
 #include "core/log.hpp"
 #include "core/private_dir.hpp"
-#include "render/image.hpp"
+#include "render/images/image.hpp"
 
 namespace lf {
 namespace {

@@ -18,7 +18,7 @@
 #include "actors/kinds/actor_kinds.hpp"
 #include "actors/runtime/runtime.hpp"
 #include "farm/builders.hpp"
-#include "render/image.hpp"
+#include "render/images/image.hpp"
 
 namespace lf {
 namespace {

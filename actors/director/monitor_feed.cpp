@@ -6,7 +6,7 @@
 
 #include "actors/runtime/runtime.hpp"
 #include "farm/builders.hpp"
-#include "render/image.hpp"
+#include "render/images/image.hpp"
 
 namespace lf {
 

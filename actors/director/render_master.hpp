@@ -9,8 +9,8 @@
 #include <string>
 #include <vector>
 
-#include "render/image.hpp"
-#include "render/tile_kernel.hpp"
+#include "render/images/image.hpp"
+#include "render/shading/tile_kernel.hpp"
 
 namespace lf {
 

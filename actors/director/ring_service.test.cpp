@@ -9,7 +9,7 @@
 #include "actors/director/service_test_support.hpp"
 #include "farm/builders.hpp"
 #include "radiosity/ply.hpp"
-#include "render/scene.hpp"
+#include "render/scene/scene.hpp"
 
 namespace lf {
 namespace {

@@ -8,7 +8,7 @@
 #include "actors/runtime/hello.hpp"
 #include "actors/runtime/runtime.hpp"
 #include "core/log.hpp"
-#include "render/lightop_registry.hpp"
+#include "render/lightops/lightop_registry.hpp"
 
 namespace lf {
 

@@ -7,7 +7,7 @@
 #include "actors/kinds/ring_node_actor.hpp"
 #include "actors/kinds/slowdown.hpp"
 #include "farm/farm_spec.hpp"
-#include "render/lightop_registry.hpp"
+#include "render/lightops/lightop_registry.hpp"
 
 namespace lf {
 

@@ -1,4 +1,4 @@
-// geometry: one part of a partitioned scene (partition { parts = N }; render/partition.hpp), the data-parallel half
+// geometry: one part of a partitioned scene (partition { parts = N }; render/tracing/partition.hpp), the data-parallel half
 // of Jansen & Reinhard: rays come to the part that holds the triangles.
 //
 // Accepts on the data socket:
@@ -10,8 +10,8 @@
 #include "actors/kinds/geometry_actor.hpp"
 
 #include "actors/codecs/trace_codec.hpp"
-#include "render/loaded_scene.hpp"
-#include "render/tracer.hpp"
+#include "render/scene/loaded_scene.hpp"
+#include "render/tracing/tracer.hpp"
 
 namespace lf {
 namespace {

@@ -17,9 +17,9 @@
 #include "actors/runtime/remote_tracing.hpp"
 #include "farm/kind_params.hpp"
 #include "core/log.hpp"
-#include "render/camera.hpp"
-#include "render/loaded_scene.hpp"
-#include "render/tile_kernel.hpp"
+#include "render/tracing/camera.hpp"
+#include "render/scene/loaded_scene.hpp"
+#include "render/shading/tile_kernel.hpp"
 
 namespace lf {
 namespace {

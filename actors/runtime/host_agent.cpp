@@ -21,7 +21,7 @@
 
 #include "actors/runtime/runtime.hpp"
 #include "core/log.hpp"
-#include "render/loaded_scene.hpp"
+#include "render/scene/loaded_scene.hpp"
 
 namespace lf {
 

@@ -19,9 +19,9 @@
 #include "actors/codecs/shade_codec.hpp"
 #include "actors/runtime/remote_tracing.hpp"
 #include "core/log.hpp"
-#include "render/loaded_scene.hpp"
-#include "render/lightop_registry.hpp"
-#include "render/tile_kernel.hpp"
+#include "render/scene/loaded_scene.hpp"
+#include "render/lightops/lightop_registry.hpp"
+#include "render/shading/tile_kernel.hpp"
 
 namespace lf {
 namespace {

@@ -5,8 +5,8 @@
 #include "actors/runtime/inproc_actor.hpp"
 #include "actors/runtime/lightop_actor.hpp"
 #include "actors/codecs/shade_codec.hpp"
-#include "render/lightop_registry.hpp"
-#include "render/sampler.hpp"
+#include "render/lightops/lightop_registry.hpp"
+#include "render/shading/sampler.hpp"
 
 namespace lf {
 namespace {

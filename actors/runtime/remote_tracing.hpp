@@ -1,5 +1,5 @@
 #pragma once
-// Tracing through a partitioned scene's geometry actors (partition { parts = N }; render/partition.hpp): the
+// Tracing through a partitioned scene's geometry actors (partition { parts = N }; render/tracing/partition.hpp): the
 // Tracing a LightOp co_awaits in a farm whose scene is split. Each ray visits the parts whose boxes its path
 // crosses, nearest first, in rounds: per round one batched `trace` request per part (actors/codecs/trace_codec.hpp),
 // until its hit is nearer than the next part's box. Then ties between coplanar faces are settled as the whole
@@ -11,9 +11,9 @@
 #include "actors/runtime/actor_config.hpp"
 #include "actors/runtime/runtime.hpp"
 #include "core/value.hpp"
-#include "render/tied_hits.hpp"
-#include "render/lightop.hpp"
-#include "render/partition.hpp"
+#include "render/tracing/tied_hits.hpp"
+#include "render/lightops/lightop.hpp"
+#include "render/tracing/partition.hpp"
 
 namespace lf {
 
@@ -49,7 +49,7 @@ class RemoteTracing final : public Tracing {
  private:
   Runtime& rt_;
   const Scene& scene_;
-  std::vector<Bounds> boxes_;  // padded (render/partition.hpp)
+  std::vector<Bounds> boxes_;  // padded (render/tracing/partition.hpp)
   TiedHits ties_;
   size_t batch_;
   size_t local_part_ = SIZE_MAX;

@@ -10,7 +10,7 @@
 #include "actors/runtime/process.hpp"
 #include "core/log.hpp"
 #include "core/private_dir.hpp"
-#include "render/loaded_scene.hpp"
+#include "render/scene/loaded_scene.hpp"
 
 namespace lf {
 

@@ -1,6 +1,6 @@
 #include "actors/runtime/scheduler.hpp"
 
-#include "render/sampler.hpp"
+#include "render/shading/sampler.hpp"
 
 namespace lf {
 

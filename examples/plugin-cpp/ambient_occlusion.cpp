@@ -5,7 +5,7 @@
 // the Embree tracer the SDK hands to every LightOp, and draws its random numbers from the point's sample key, so
 // its image is the same on any farm layout.
 #include <actors/runtime/sdk.hpp>
-#include <render/sampler.hpp>
+#include <render/shading/sampler.hpp>
 
 #include <cmath>
 

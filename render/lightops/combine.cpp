@@ -1,6 +1,6 @@
 // combine: the weighted sum of its inputs, asked concurrently — e.g. combine { direct, caustics, indirect }.
 // Parameters: weights = {w1, w2, ...} (default: all 1; one per input).
-#include "render/lightop_registry.hpp"
+#include "render/lightops/lightop_registry.hpp"
 
 namespace lf {
 namespace {

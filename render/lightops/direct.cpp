@@ -1,17 +1,17 @@
 // direct: light arriving straight from the area lights.
 //
 // `light_samples` samples per point. Each draws a light through the scene's light tree (by what each light can give
-// the point: power, distance, orientation; render/light_tree.hpp), or with `light_sampling = "power"` by power
+// the point: power, distance, orientation; render/lights/light_tree.hpp), or with `light_sampling = "power"` by power
 // alone, or with `light_sampling = "learned"` partly from the lights found before rendering to light the point's
-// cell where the camera looks (render/light_selection.hpp); then a uniform point on it, and a shadow ray. On glossy
+// cell where the camera looks (render/lights/light_selection.hpp); then a uniform point on it, and a shadow ray. On glossy
 // surfaces it also samples the BSDF, and the two are combined by multiple importance sampling
-// (render/path_kernel.cpp with one vertex). On diffuse surfaces light sampling alone is used unless `mis = true`:
+// (render/shading/path_kernel.cpp with one vertex). On diffuse surfaces light sampling alone is used unless `mis = true`:
 // then they get the BSDF sample too, which tames points close to a light (a uniform point on a light seen under a
 // wide angle has a 1/d^2 weight; a cosine direction does not). Emitters emit on the side their winding faces.
 // Mirrors and glass get nothing here: that is `specular`'s job.
-#include "render/lightop_registry.hpp"
-#include "render/path_kernel.hpp"
-#include "render/sampler.hpp"
+#include "render/lightops/lightop_registry.hpp"
+#include "render/shading/path_kernel.hpp"
+#include "render/shading/sampler.hpp"
 
 namespace lf {
 namespace {

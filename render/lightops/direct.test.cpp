@@ -4,8 +4,8 @@
 
 #include <cmath>
 
-#include "render/lightop_registry.hpp"
-#include "render/sampler.hpp"
+#include "render/lightops/lightop_registry.hpp"
+#include "render/shading/sampler.hpp"
 #include "render/test_support.hpp"
 
 namespace lf {

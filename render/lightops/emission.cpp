@@ -1,7 +1,7 @@
 // emission: the light a point itself emits towards wo (Ke on an emitter's front side, else nothing). The renderer
 // adds emission the camera sees; inside a network, e.g. at the end of a mirror chain, this is how a LightOp asks
 // "is this a light?". No inputs, no parameters.
-#include "render/lightop_registry.hpp"
+#include "render/lightops/lightop_registry.hpp"
 
 namespace lf {
 namespace {

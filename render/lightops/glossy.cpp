@@ -8,10 +8,10 @@
 // what its input says leaves the landing, i.e. light that has scattered at least once more. The two split the
 // lobe's light by path (L G for direct, L ... X G for this op), not by estimator, so neither needs the other's
 // densities. The diffuse part of the same material is the caches' or the path tracer's (irradiance: L ... D).
-#include "render/bsdf.hpp"
-#include "render/lightop_registry.hpp"
-#include "render/sampler.hpp"
-#include "render/surface.hpp"
+#include "render/shading/bsdf.hpp"
+#include "render/lightops/lightop_registry.hpp"
+#include "render/shading/sampler.hpp"
+#include "render/scene/surface.hpp"
 
 namespace lf {
 namespace {

@@ -4,9 +4,9 @@
 
 #include <cmath>
 
-#include "render/bsdf.hpp"
-#include "render/lightop_registry.hpp"
-#include "render/sampler.hpp"
+#include "render/shading/bsdf.hpp"
+#include "render/lightops/lightop_registry.hpp"
+#include "render/shading/sampler.hpp"
 #include "render/test_support.hpp"
 
 namespace lf {

@@ -16,11 +16,11 @@
 // Output: Kd / pi * E (the diffuse part); nothing on mirrors and glass.
 #include <algorithm>
 
-#include "render/bsdf.hpp"
-#include "render/surface.hpp"
-#include "render/irradiance_cache.hpp"
-#include "render/lightop_registry.hpp"
-#include "render/sampler.hpp"
+#include "render/shading/bsdf.hpp"
+#include "render/scene/surface.hpp"
+#include "render/caches/irradiance_cache.hpp"
+#include "render/lightops/lightop_registry.hpp"
+#include "render/shading/sampler.hpp"
 
 namespace lf {
 namespace {

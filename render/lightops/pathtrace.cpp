@@ -1,10 +1,10 @@
 // pathtrace: an unbiased path tracer — next-event estimation with multiple importance sampling at every vertex,
-// BSDF sampling through diffuse, glossy, mirror and glass surfaces, Russian roulette (render/path_kernel.cpp).
+// BSDF sampling through diffuse, glossy, mirror and glass surfaces, Russian roulette (render/shading/path_kernel.cpp).
 // The reference the other LightOps are checked against. No inputs.
-#include "render/lightop_registry.hpp"
-#include "render/path_kernel.hpp"
-#include "render/sampler.hpp"
-#include "render/surface.hpp"
+#include "render/lightops/lightop_registry.hpp"
+#include "render/shading/path_kernel.hpp"
+#include "render/shading/sampler.hpp"
+#include "render/scene/surface.hpp"
 
 namespace lf {
 namespace {

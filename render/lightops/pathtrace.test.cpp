@@ -3,12 +3,12 @@
 
 #include <cmath>
 
-#include "render/bsdf.hpp"
-#include "render/camera.hpp"
-#include "render/lightop_registry.hpp"
-#include "render/sampler.hpp"
+#include "render/shading/bsdf.hpp"
+#include "render/tracing/camera.hpp"
+#include "render/lightops/lightop_registry.hpp"
+#include "render/shading/sampler.hpp"
 #include "render/test_support.hpp"
-#include "render/tile_kernel.hpp"
+#include "render/shading/tile_kernel.hpp"
 
 namespace lf {
 namespace {

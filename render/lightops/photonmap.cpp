@@ -18,11 +18,11 @@
 #include <chrono>
 #include <cstring>
 
-#include "render/bsdf.hpp"
-#include "render/surface.hpp"
-#include "render/light_sampling.hpp"
-#include "render/lightop_registry.hpp"
-#include "render/sampler.hpp"
+#include "render/shading/bsdf.hpp"
+#include "render/scene/surface.hpp"
+#include "render/lights/light_sampling.hpp"
+#include "render/lightops/lightop_registry.hpp"
+#include "render/shading/sampler.hpp"
 
 namespace lf {
 namespace {

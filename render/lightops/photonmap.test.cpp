@@ -1,8 +1,8 @@
 // photonmap against a closed form, and replicas against a single op.
 #include <gtest/gtest.h>
 
-#include "render/lightop_registry.hpp"
-#include "render/sampler.hpp"
+#include "render/lightops/lightop_registry.hpp"
+#include "render/shading/sampler.hpp"
 #include "render/test_support.hpp"
 
 namespace lf {

@@ -4,8 +4,8 @@
 // irradiance { input = radiosity } as a final gather. No inputs, no parameters.
 #include <algorithm>
 
-#include "render/lightop_registry.hpp"
-#include "render/radiosity_field.hpp"
+#include "render/lightops/lightop_registry.hpp"
+#include "render/caches/radiosity_field.hpp"
 
 namespace lf {
 namespace {

@@ -12,10 +12,10 @@
 //
 // `emitters = false`: chains add nothing for the emitters they meet (L S+), for a network in which another op counts
 // that light, e.g. a cache whose hemisphere sees mirrors beside a caustic photon map that holds L S+ D.
-#include "render/bsdf.hpp"
-#include "render/surface.hpp"
-#include "render/lightop_registry.hpp"
-#include "render/sampler.hpp"
+#include "render/shading/bsdf.hpp"
+#include "render/scene/surface.hpp"
+#include "render/lightops/lightop_registry.hpp"
+#include "render/shading/sampler.hpp"
 
 namespace lf {
 namespace {

@@ -1,9 +1,9 @@
 // specular against closed forms.
 #include <gtest/gtest.h>
 
-#include "render/bsdf.hpp"
-#include "render/lightop_registry.hpp"
-#include "render/sampler.hpp"
+#include "render/shading/bsdf.hpp"
+#include "render/lightops/lightop_registry.hpp"
+#include "render/shading/sampler.hpp"
 
 namespace lf {
 namespace {

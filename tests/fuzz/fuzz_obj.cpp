@@ -6,7 +6,7 @@
 #include <cstdint>
 #include <string>
 
-#include "render/scene.hpp"
+#include "render/scene/scene.hpp"
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   const std::string bytes(reinterpret_cast<const char*>(data), size);

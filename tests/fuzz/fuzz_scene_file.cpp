@@ -8,8 +8,8 @@
 #include <fstream>
 #include <string>
 
-#include "render/scene_file.hpp"
-#include "render/scene_image.hpp"
+#include "render/scene/scene_file.hpp"
+#include "render/scene/scene_image.hpp"
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   const std::string bytes(reinterpret_cast<const char*>(data), size);

@@ -10,8 +10,8 @@
 #include "actors/codecs/shade_codec.hpp"
 #include "actors/runtime/actor_config.hpp"
 #include "actors/runtime/hello.hpp"
-#include "render/scene_file.hpp"
-#include "render/scene_image.hpp"
+#include "render/scene/scene_file.hpp"
+#include "render/scene/scene_image.hpp"
 #include "transport/message.hpp"
 
 namespace fs = std::filesystem;

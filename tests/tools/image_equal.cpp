@@ -4,7 +4,7 @@
 #include <cstdio>
 #include <cstring>
 
-#include "render/image.hpp"
+#include "render/images/image.hpp"
 
 int main(int argc, char** argv) {
   if (argc != 3) {

@@ -1,0 +1,87 @@
+#pragma once
+// LightSelection: which lights a shading point should sample, learned where the camera looks. The light tree
+// (render/lights/light_tree.hpp) weighs a light by power, distance and orientation; it cannot know whether the light is
+// hidden. In an interior lit by many small lights most of them are: on Lost Empire 70 % of the tree's shadow rays
+// from camera points are blocked. So before rendering, the first hits of camera rays through a grid of pixel
+// centres are put in cells (a cube of the scene plus the axis the surface faces), each cell draws light samples
+// through the tree from its points, shadow rays included, and keeps how much each light gave it. At a point in a
+// learned cell a light is then drawn from the cell's distribution with probability `share`, else through the tree:
+// the tree's share keeps every light that can reach the point drawable, so the estimate stays unbiased wherever the
+// few samples of the pre-pass missed a light, and the density of the mixture is what multiple importance sampling
+// weighs against. Outside learned cells (points the camera does not see) the tree alone is used.
+//
+// Determinism: a pure function of the scene, the camera, the image size and the options: the candidate points in
+// pixel order, the cells by key, every sample seeded by its cell and index. Every process that builds it builds the
+// same thing, so images do not depend on the farm's layout.
+#include <cstdint>
+#include <unordered_map>
+#include <vector>
+
+#include "render/lightops/lightop.hpp"
+#include "render/math.hpp"
+
+namespace lf {
+
+struct LightSelectionOptions {
+  float cell = 0.02f;           // a cell's edge, as a share of the scene's diagonal
+  int samples = 4096;           // light samples per cell in the pre-pass
+  int stride = 2;               // camera points at every stride-th pixel in x and y
+  float share = 0.5f;           // chance a point in a learned cell draws from the cell's lights
+  uint64_t seed = 0;
+};
+
+// The options from an op's parameters (`learned_cell`, `learned_samples`, `learned_stride`, `learned_share`).
+LightSelectionOptions light_selection_options(const ParamTable& p, uint64_t seed);
+// How an op picks the light to sample (its `light_sampling`): by the light tree (power, distance, orientation), by
+// power alone, or partly from the lights learned before rendering. Read here for every op that has it.
+enum class LightSampling { tree, power, learned };
+LightSampling read_light_sampling(const ParamTable& p);
+// Whether an op with these parameters learns lights (light_sampling = "learned"): replicas of such a `direct` or
+// `pathtrace` pool share the learning (LightOpKind::shares_setup_with).
+bool learns_lights(const Value::Map& params);
+
+class LightSelection {
+ public:
+  // Learns the cells (traces through ctx, so a partitioned farm works too). Needs ctx.camera: without one, a
+  // LightOpError names `op` (the LightOp asking) and says so. Replicas of a pool (ctx.replica_count > 1) each learn
+  // every replica_count-th cell and exchange what they learned (ctx.exchange): every replica ends up with what one
+  // process learning alone would have, bit for bit, in 1/replica_count of the time.
+  static Task build(const SceneContext& ctx, const LightSelectionOptions& options, LightSelection& out,
+                    const char* op = "light_selection");
+
+  // The learned cell of a point at x facing n, or -1.
+  int32_t cell_of(Vec3 x, Vec3 n) const;
+  // Picks one of cell's lights with u in [0, 1): its index in Scene's light numbering and the chance the cell's
+  // distribution gives it; `remainder` as LightTree::pick.
+  void pick(int32_t cell, float u, size_t& light, float& probability, float* remainder) const;
+  // The chance cell's distribution gives light (0 for one it never saw).
+  float probability(int32_t cell, size_t light) const;
+  float share() const { return share_; }
+  // The chance of light at a point in `cell` under the mixture: the cell's distribution with chance share(), the
+  // tree (which gives the light p_tree) otherwise.
+  float mixture(int32_t cell, size_t light, float p_tree) const {
+    return share_ * probability(cell, light) + (1 - share_) * p_tree;
+  }
+
+  size_t cell_count() const { return cells_.size(); }
+  size_t entry_count() const { return lights_.size(); }
+  // Pre-pass figures for STATS: its shadow rays and how many were blocked.
+  uint64_t shadow_rays() const { return shadow_rays_; }
+  uint64_t blocked_rays() const { return blocked_rays_; }
+  // Those figures as STATS entries (learned_cells, learned_lights_per_cell, learned_blocked).
+  void add_stats(Value::Map& m) const;
+
+ private:
+  uint64_t key_of(Vec3 x, Vec3 n) const;
+  struct Cell {
+    uint32_t first = 0, count = 0;  // its lights in lights_ / cdf_, sorted by light
+  };
+  float inverse_size_ = 1, share_ = 0.5f;
+  std::unordered_map<uint64_t, int32_t> index_;
+  std::vector<Cell> cells_;
+  std::vector<uint32_t> lights_;
+  std::vector<float> probability_, cdf_;  // per entry: its chance, and the running sum up to and including it
+  uint64_t shadow_rays_ = 0, blocked_rays_ = 0;
+};
+
+}  // namespace lf

@@ -1,0 +1,255 @@
+#pragma once
+// Scene: triangles with materials, and the emitters among them. Built from a built-in scene (builtin_scenes.cpp) or
+// an OBJ+MTL file via tinyobjloader (obj_scene.cpp), plus the lights a script adds (script_lights.cpp).
+#include <algorithm>
+#include <array>
+#include <cstdint>
+#include <limits>
+#include <memory>
+#include <span>
+#include <string>
+#include <vector>
+
+#include "core/specs.hpp"
+#include "core/result.hpp"
+#include "render/lights/emitter_cutouts.hpp"
+#include "render/lights/light_tree.hpp"
+#include "render/math.hpp"
+
+namespace tinyobj {
+class ObjReader;
+}  // namespace tinyobj
+
+namespace lf {
+
+struct Material {
+  enum class Type { diffuse, glossy, mirror, glass };
+  std::string name;
+  RGB kd;  // diffuse reflectance
+  RGB ke;  // emitted radiance; non-zero makes every triangle of this material an area light
+  Type type = Type::diffuse;
+  RGB ks;         // glossy: Phong lobe reflectance; mirror: reflectance
+  float ns = 0;   // glossy: Phong exponent
+  float ior = 1.5f;  // glass: index of refraction
+  RGB kr;            // diffuse and glossy: a perfect mirror term beside their lobes (MTL illum 3 with Kd)
+  RGB tf{1, 1, 1};   // glass: what light entering it keeps, per channel (MTL Tf)
+  // Textures (indices into Scene::textures(), -1 for none). kd_map replaces kd where the triangle has texture
+  // coordinates; alpha_map cuts the surface out where its coverage is below one half (docs/decisions.md).
+  int32_t kd_map = -1;
+  int32_t alpha_map = -1;
+  bool emissive() const { return !is_black(ke); }
+  bool specular() const { return type == Type::mirror || type == Type::glass; }
+  // A diffuse or glossy surface that also reflects like a mirror (kr): its mirror term is the `specular` op's.
+  bool has_mirror_term() const { return !specular() && !is_black(kr); }
+};
+
+// The MTL illum model and coefficients as a Material (docs/lua-api.md, "Materials"): illum 5, and 3 without Kd, are
+// mirrors (Ks); 3 with Kd keeps Kd and adds Ks as a mirror term, shared with a Phong lobe where Ns > 0; 4, 6, 7 and
+// 9 are glass (Ni, tinted by Tf where the file gives one); 2 with Ks > 0 and Ns > 0 glossy; anything else diffuse.
+// Kd + Ks is scaled to at most 1 per channel so that no surface creates energy.
+Material material_from_mtl(std::string name, RGB kd, RGB ks, RGB ke, float ns, float ni, int illum, RGB tf = {});
+
+struct Bounds {
+  Vec3 lo, hi;
+  float diagonal() const { return length(hi - lo); }
+};
+// The box around `points` (not empty).
+Bounds bounds_of(std::span<const Vec3> points);
+
+// A texture as the scene keeps it: 8-bit texels, row-major, top row first (as image files store them), as a mip
+// pyramid: the full image, then each level half the size of the one before (2x2 box filter, in linear values),
+// down to 1x1, one after another. A map_Kd keeps 3 channels (sRGB-encoded colour), a map_d 1 (linear coverage).
+struct Texture {
+  std::string path;  // as the MTL named it
+  uint32_t width = 0, height = 0, channels = 0;  // of the full image (level 0)
+  std::span<const uint8_t> texels;  // every level: pyramid_bytes(width, height, channels)
+  std::vector<uint8_t> owned;       // the texels, unless they live in a mapped scene image
+  // Channel c at texture coordinates uv, bilinear and repeating, at level of detail `lod` (0: the full image;
+  // between levels, trilinear); colour channels decoded from sRGB to linear.
+  float sample(Vec2 uv, uint32_t c, float lod = 0) const;
+  // Channel c of the full image's texel (x, y), repeating, decoded as sample() decodes it; y = 0 is the top row.
+  float texel(int64_t x, int64_t y, uint32_t c) const;
+  static uint64_t pyramid_bytes(uint32_t width, uint32_t height, uint32_t channels);
+  // Fills `owned` beyond level 0 (which it must hold) with the smaller levels.
+  void build_pyramid();
+};
+
+// What a triangle may carry beyond its corners: OBJ vertex normals and texture coordinates, per corner.
+struct CornerAttributes {
+  const Vec3* normals = nullptr;  // 3, or none
+  const Vec2* uvs = nullptr;      // 3, or none
+};
+
+struct PointLight {
+  Vec3 position;
+  RGB intensity;  // W/sr per channel
+};
+
+struct ObjCatalogue {
+  struct Texture {
+    std::string material, slot, path;  // slot: the MTL statement (map_Kd, map_d, ...); path as found
+    bool found = false;
+  };
+  std::vector<std::string> material_names;
+  std::vector<Texture> textures;
+  std::vector<std::string> warnings;
+};
+
+class Scene {
+ public:
+  Scene() = default;
+  // Moving keeps the per-triangle views valid (a vector's move keeps its buffer); a copy would not, so none.
+  Scene(Scene&&) = default;
+  Scene& operator=(Scene&&) = default;
+  Scene(const Scene&) = delete;
+  Scene& operator=(const Scene&) = delete;
+
+  uint32_t add_material(Material m);
+  // Adds a planar quad a-b-c-d as two triangles; its front (emitting) side is the one (b-a)x(c-a) points to.
+  void add_quad(Vec3 a, Vec3 b, Vec3 c, Vec3 d, uint32_t material);
+  void add_triangle(Vec3 a, Vec3 b, Vec3 c, uint32_t material, CornerAttributes extra = {});
+  uint32_t add_texture(Texture t);
+  // For the binary forms: every triangle's corner normals and texture coordinates (3 each, or none) exactly as
+  // stored, after the triangles.
+  void restore_corners(std::vector<Vec3> normals, std::vector<Vec2> uvs);
+  // A sphere as a subdivided icosahedron (20 * 4^subdivisions triangles), wound outwards.
+  void add_sphere(Vec3 center, float radius, int subdivisions, uint32_t material);
+  void add_point_light(Vec3 position, RGB intensity) { point_lights_.push_back({position, intensity}); }
+  // Adds the lights a script declares (SceneSpec::lights); an error names what is wrong with one.
+  Status add_script_lights(const Value::Array& lights);
+  // Applies the script's changes to named materials (SceneSpec::materials): emission, kd, ks, ns, ior, type. An
+  // unknown name, or kd + ks above 1 (a surface that creates energy), is an error naming the material.
+  Status apply_material_overrides(const Value::Array& overrides);
+  // Builds the light distribution. An error if the scene has no triangles or no light.
+  Status finalize(const std::string& what);
+
+  size_t triangle_count() const { return material_view_.size(); }
+  std::span<const Vec3> vertices() const { return vertex_view_; }
+  std::span<const std::array<uint32_t, 3>> triangles() const { return triangle_view_; }
+  const Material& material(uint32_t id) const { return materials_[id]; }
+  const std::vector<Material>& materials() const { return materials_; }
+  uint32_t material_of(uint32_t triangle) const { return material_view_[triangle]; }
+  Vec3 vertex(uint32_t triangle, int corner) const { return vertex_view_[triangle_view_[triangle][corner]]; }
+  Vec3 normal(uint32_t triangle) const { return normal_view_[triangle]; }  // unit, from the winding
+  float area(uint32_t triangle) const { return area_view_[triangle]; }
+  // Surface detail at a point of a triangle, given by its barycentrics b (weights of corners 0, 1, 2; see
+  // barycentrics()). Without vertex normals the shading normal is the geometric one; without a texture (or
+  // texture coordinates) the albedo is the material's kd.
+  Vec3 barycentrics(uint32_t triangle, Vec3 p) const;
+  Vec3 shading_normal(uint32_t triangle, Vec3 b) const;  // unit, on the winding's side
+  Vec2 uv(uint32_t triangle, Vec3 b) const;
+  // `footprint`: how wide a pixel is at the point, in scene units (0: the texture's full resolution). The texture
+  // is filtered to that width (its mip level), so a pixel's few samples see the mean colour it covers.
+  RGB albedo(uint32_t triangle, Vec3 b, float footprint = 0) const;
+  // Whether the surface is there at barycentrics b (false where an alpha map cuts it out).
+  bool opaque(uint32_t triangle, Vec3 b) const;
+  // Whether any material is cut out by an alpha map (the tracer then filters its hits).
+  bool has_cutouts() const;
+  // The share of a triangle's area that is not cut out (1 without an alpha map), from a fixed grid of points.
+  float opaque_fraction(uint32_t triangle) const;
+  // Emitted flux of emitter triangle t: pi * area * mean(Le) * opaque_fraction.
+  float emitted_power(uint32_t triangle) const;
+  bool has_shading_normals() const { return !corner_normal_view_.empty(); }
+  Vec3 corner_normal(uint32_t triangle, int corner) const { return corner_normal_view_[3 * size_t{triangle} + corner]; }
+  Vec2 corner_uv(uint32_t triangle, int corner) const { return corner_uv_view_[3 * size_t{triangle} + corner]; }
+  bool has_uvs() const { return !corner_uv_view_.empty(); }
+  const std::vector<Texture>& textures() const { return textures_; }
+
+  // True when the per-triangle arrays live in a memory-mapped scene image that other processes on this host
+  // share (render/scene/scene_image.hpp); the vertex array is then padded for Embree's 16-byte loads.
+  bool shares_storage() const { return storage_ != nullptr; }
+
+  // Lights: emitter triangles, then point lights, chosen with probability proportional to emitted flux.
+  const std::vector<uint32_t>& emitters() const { return emitters_; }
+  const std::vector<PointLight>& point_lights() const { return point_lights_; }
+  // Picks a light for u in [0,1); an index below emitters().size() is a triangle, above it a point light.
+  // With `remainder`: where u fell within that light's share of [0, 1), rescaled to [0, 1) (LightTree::pick).
+  size_t pick_emitter(float u, float& probability, float* remainder = nullptr) const;
+  // Probability that pick_emitter chooses triangle t (0 for non-emitters).
+  float emitter_probability_of_triangle(uint32_t t) const { return light_pdf_view_[t]; }
+  // The lights by what each can give a point (render/lights/light_tree.hpp), in the same numbering (after finalize()).
+  const LightTree& light_tree() const { return *light_tree_; }
+  // Where light samples on cut-out emitters are drawn (render/lights/emitter_cutouts.hpp).
+  const EmitterCutouts& emitter_cutouts() const { return *emitter_cutouts_; }
+  // The index of emitter triangle t in emitters() (t must be an emitter).
+  size_t emitter_index_of(uint32_t t) const;
+
+  // The box around every vertex (after finalize()).
+  const Bounds& bounds() const { return bounds_; }
+  // A distance small against the scene's size: the ray offset for points that name no triangle, and a scale for
+  // tolerances that are not about floating-point error (a photon map's default radius, radiosity's gather).
+  float epsilon() const { return epsilon_; }
+  // Where a ray that leaves point p of `triangle` on the side of unit normal `side` (the face's normal, or its
+  // opposite for a ray through the face) starts: kRayOffsetUlps units of float precision of the coordinates
+  // involved above the face's plane. The height is measured from the plane itself, so the origin is on the right
+  // side whatever rounding p carries (a point found as origin + t * direction is off the plane by that ray's
+  // error), and it scales with the coordinates, not with the scene, so small things in a large scene are not
+  // pushed apart. `triangle` = UINT32_MAX (a point that names none): p + side * epsilon().
+  Vec3 ray_origin(uint32_t triangle, Vec3 p, Vec3 side) const {
+    if (triangle == UINT32_MAX) return p + side * epsilon_;
+    const Vec3 a = vertex(triangle, 0);
+    const float scale = std::max(largest_coordinate(p), largest_coordinate(a));
+    // p's distance from the plane, off by about one unit of scale's precision: well inside the margin.
+    const float height = dot(side, p - a);
+    return p + side * (kRayOffsetUlps * std::numeric_limits<float>::epsilon() * scale - height);
+  }
+  // Embree's float test of an origin against a triangle is off by a few units of the precision of the coordinates
+  // involved (differences of coordinates, the face normal from a cross product, which thin triangles make less
+  // precise); 128 leaves a wide margin and is still 1e-5 of them.
+  static constexpr float kRayOffsetUlps = 128;
+
+  static Result<Scene> builtin(const std::string& name);
+  static Result<Scene> load_obj(const std::string& path);
+  // Without finalize(), so that script lights can still be added.
+  static Result<Scene> builtin_unlit(const std::string& name);
+  static Result<Scene> load_obj_unlit(const std::string& path);
+  // The same from an OBJ's and its MTL's text, without textures; `label` names it in messages (the OBJ fuzzer).
+  static Result<Scene> parse_obj_unlit(const std::string& obj_text, const std::string& mtl_text,
+                                       const std::string& label);
+  static Result<Scene> load(const SceneSpec& spec);
+  // What an OBJ file's text says apart from its geometry: its libraries' material names (for script checks) and
+  // warnings naming file and line (a missing library, a usemtl of an unknown material). Reads no geometry.
+  static Result<ObjCatalogue> catalogue_obj(const std::string& path);
+  static const std::vector<std::string>& builtin_names();
+
+ private:
+  friend class SceneImage;
+  // What tinyobjloader read, as one of our scenes; `path` names it in messages, textures are read from
+  // `texture_dir` (none when it is empty).
+  static Result<Scene> from_obj_reader(const tinyobj::ObjReader& reader, const std::string& path,
+                                       const std::string& texture_dir);
+  // Points the per-triangle views at the vectors below (a scene being built, or loaded the ordinary way).
+  void view_owned_arrays();
+
+  // Per-triangle arrays while building; a mapped scene leaves them empty and views its image instead.
+  std::vector<Vec3> vertices_;
+  std::vector<std::array<uint32_t, 3>> triangles_;
+  std::vector<uint32_t> material_of_;
+  std::vector<Vec3> normals_;
+  std::vector<float> areas_;
+  std::vector<Vec3> corner_normals_;  // 3 per triangle, or none
+  std::vector<Vec2> corner_uvs_;      // 3 per triangle, or none
+  std::vector<Texture> textures_;
+  std::vector<Material> materials_;
+  std::vector<uint32_t> emitters_;
+  std::vector<PointLight> point_lights_;
+  std::vector<float> emitter_cdf_;
+  std::vector<float> emitter_pdf_;
+  std::vector<float> triangle_light_pdf_;
+  std::span<const Vec3> vertex_view_;
+  std::span<const std::array<uint32_t, 3>> triangle_view_;
+  std::span<const uint32_t> material_view_;
+  std::span<const Vec3> normal_view_;
+  std::span<const float> area_view_;
+  std::span<const float> light_pdf_view_;
+  std::span<const Vec3> corner_normal_view_;
+  std::span<const Vec2> corner_uv_view_;
+  std::shared_ptr<const LightTree> light_tree_;
+  std::shared_ptr<const EmitterCutouts> emitter_cutouts_;
+  std::shared_ptr<const void> storage_;  // the mapping the views point into, when mapped
+  std::vector<std::string> ambient_only_;  // OBJ materials with Ka but no Ke: named if the scene ends up unlit
+  Bounds bounds_;
+  float epsilon_ = 1e-4f;
+};
+
+}  // namespace lf

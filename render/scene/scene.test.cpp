@@ -1,0 +1,216 @@
+#include "render/scene/scene.hpp"
+#include "render/scene/scene_file.hpp"
+
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <unistd.h>
+
+namespace lf {
+
+static const std::string kShared = std::string(LIGHTFARM_SOURCE_DIR) + "/../shared/scenes/cornell_box_mcguire/";
+
+#define REQUIRE_SHARED_SCENES()                                                          \
+  if (!std::filesystem::is_directory(kShared)) GTEST_SKIP() << "no " << kShared << " here"
+
+TEST(Scene, BuiltinCornellBoxHasItsGeometryAndOneDownwardLight) {
+  auto s = Scene::builtin("cornell");
+  ASSERT_TRUE(s.ok()) << s.error().message;
+  EXPECT_EQ(s->triangle_count(), 38u);  // 5 walls, a ceiling in 4 pieces, the light, 10 block faces
+  ASSERT_EQ(s->emitters().size(), 2u);
+  for (uint32_t t : s->emitters()) {
+    EXPECT_FLOAT_EQ(s->normal(t).y, -1.0f);
+    EXPECT_EQ(s->material(s->material_of(t)).name, "light");
+  }
+  float area = s->area(s->emitters()[0]) + s->area(s->emitters()[1]);
+  EXPECT_NEAR(area, 130.0f * 105.0f, 1e-2f);
+}
+
+TEST(Scene, CornellGlassHasAClosedGlassSphereAndAMirrorBlock) {
+  auto s = Scene::builtin("cornell_glass");
+  ASSERT_TRUE(s.ok()) << s.error().message;
+  size_t glass = 0, mirror = 0;
+  double glass_area = 0;
+  for (uint32_t t = 0; t < s->triangle_count(); ++t) {
+    const Material& m = s->material(s->material_of(t));
+    if (m.type == Material::Type::glass) {
+      ++glass;
+      glass_area += s->area(t);
+      // Outward winding: the normal points away from the centre.
+      Vec3 c = (s->vertex(t, 0) + s->vertex(t, 1) + s->vertex(t, 2)) / 3.0f;
+      EXPECT_GT(dot(s->normal(t), c - Vec3{185, 90, 169}), 0.0f);
+    }
+    mirror += m.type == Material::Type::mirror;
+  }
+  EXPECT_EQ(glass, 20u * 256u);
+  EXPECT_NEAR(glass_area / (4 * M_PI * 90 * 90), 1.0, 0.01);  // a level-4 icosphere is within 1 % of the sphere
+  EXPECT_EQ(mirror, 10u);
+}
+
+TEST(Scene, UnknownBuiltinNamesTheKnownOnes) {
+  auto s = Scene::builtin("kitchen");
+  ASSERT_FALSE(s.ok());
+  EXPECT_EQ(s.error().message, "unknown built-in scene 'kitchen' (built-in scenes: cornell, cornell_glass, room)");
+}
+
+TEST(Scene, MissingFileIsAClearError) {
+  auto s = Scene::load_obj("/nonexistent/room.obj");
+  ASSERT_FALSE(s.ok());
+  EXPECT_EQ(s.error().message, "scene file '/nonexistent/room.obj' not found");
+}
+
+TEST(Scene, McGuireOriginalLoadsDespiteTabsAndDuplicateFaces) {
+  REQUIRE_SHARED_SCENES();
+  auto s = Scene::load_obj(kShared + "CornellBox-Original.obj");
+  ASSERT_TRUE(s.ok()) << s.error().message;
+  EXPECT_GE(s->triangle_count(), 30u);
+  ASSERT_FALSE(s->emitters().empty());
+  for (uint32_t t : s->emitters()) {
+    EXPECT_LT(s->normal(t).y, -0.99f);  // the light faces down into the box
+    EXPECT_EQ(s->material(s->material_of(t)).ke, (RGB{17, 12, 4}));
+  }
+}
+
+TEST(Scene, AnObjFromMemoryIsTheSameSceneAsFromItsFile) {
+  REQUIRE_SHARED_SCENES();
+  std::ifstream obj(kShared + "CornellBox-Original.obj"), mtl(kShared + "CornellBox-Original.mtl");
+  std::stringstream obj_text, mtl_text;
+  obj_text << obj.rdbuf();
+  mtl_text << mtl.rdbuf();
+  auto from_file = Scene::load_obj_unlit(kShared + "CornellBox-Original.obj");
+  auto from_text = Scene::parse_obj_unlit(obj_text.str(), mtl_text.str(), "box.obj");
+  ASSERT_TRUE(from_file.ok() && from_text.ok());
+  ASSERT_EQ(from_text->triangle_count(), from_file->triangle_count());
+  ASSERT_EQ(from_text->materials().size(), from_file->materials().size());
+  for (uint32_t t = 0; t < from_file->triangle_count(); ++t) {
+    EXPECT_EQ(from_text->material_of(t), from_file->material_of(t));
+    for (int c = 0; c < 3; ++c) EXPECT_EQ(from_text->vertex(t, c), from_file->vertex(t, c));
+  }
+  auto bad = Scene::parse_obj_unlit("f 1 2 3\n", "", "broken.obj");
+  ASSERT_FALSE(bad.ok());
+  EXPECT_EQ(bad.error().message, "scene file 'broken.obj': a face refers to a vertex that does not exist");
+}
+
+// MTL as exporters mean it: illum 3 with Kd keeps it beside the mirror, Tf tints glass; both survive the compact
+// form that ships a scene to hosts.
+TEST(Scene, Illum3AndTfReachTheMaterialAndTheShippedScene) {
+  const std::string obj = "mtllib x.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nusemtl coat\nf 1 2 3\nusemtl tint\nf 1 2 3\nusemtl lamp\nf 1 2 3\n";
+  const std::string mtl = "newmtl lamp\nKe 1 1 1\nnewmtl coat\nillum 3\nKd 0.5 0.4 0.3\nKs 0.4 0.4 0.4\nNs 80\n"
+                          "newmtl tint\nillum 7\nNi 1.4\nTf 0.3 0.6 0.9\n";
+  auto s = Scene::parse_obj_unlit(obj, mtl, "x.obj");
+  ASSERT_TRUE(s.ok()) << s.error().message;
+  const Material& coat = s->material(s->material_of(0));
+  EXPECT_EQ(coat.type, Material::Type::glossy);
+  EXPECT_FLOAT_EQ(coat.kd.y, 0.4f);
+  EXPECT_FLOAT_EQ(coat.ks.x, 0.2f);
+  EXPECT_FLOAT_EQ(coat.kr.x, 0.2f);
+  EXPECT_FLOAT_EQ(coat.ns, 80);
+  const Material& tint = s->material(s->material_of(1));
+  EXPECT_EQ(tint.type, Material::Type::glass);
+  EXPECT_FLOAT_EQ(tint.tf.y, 0.6f);
+  auto shipped = scene_from_bytes(scene_to_bytes(*s), "x.lfscene");
+  ASSERT_TRUE(shipped.ok()) << shipped.error().message;
+  EXPECT_FLOAT_EQ(shipped->material(shipped->material_of(0)).kr.z, 0.2f);
+  EXPECT_FLOAT_EQ(shipped->material(shipped->material_of(1)).tf.z, 0.9f);
+}
+
+TEST(Scene, McGuireEmptyCOReadsTheIndentedMaterial) {
+  REQUIRE_SHARED_SCENES();
+  auto s = Scene::load_obj(kShared + "CornellBox-Empty-CO.obj");
+  ASSERT_TRUE(s.ok()) << s.error().message;
+  EXPECT_FALSE(s->emitters().empty());
+}
+
+TEST(Scene, SceneWithoutEmittersIsAnErrorThatSaysSo) {
+  REQUIRE_SHARED_SCENES();
+  auto s = Scene::load_obj(kShared + "CornellBox-Glossy.obj");
+  ASSERT_FALSE(s.ok());
+  EXPECT_NE(s.error().message.find("has no light (no material with Ke > 0, and the script adds none)"),
+            std::string::npos)
+      << s.error().message;
+}
+
+TEST(Scene, ScriptLightsLightASceneWithoutEmitters) {
+  REQUIRE_SHARED_SCENES();
+  SceneSpec spec;
+  spec.file = kShared + "CornellBox-Glossy.obj";
+  spec.lights = Value::Array{Value::Map{
+      {"quad", Value::Array{Value::Array{-0.2, 1.58, 0.2}, Value::Array{-0.2, 1.58, -0.2}, Value::Array{0.2, 1.58, -0.2},
+                            Value::Array{0.2, 1.58, 0.2}}},
+      {"radiance", Value::Array{17, 12, 4}}}};
+  auto s = Scene::load(spec);
+  ASSERT_TRUE(s.ok()) << s.error().message;
+  ASSERT_EQ(s->emitters().size(), 2u);
+  EXPECT_LT(s->normal(s->emitters()[0]).y, -0.99f);  // faces down into the box
+  size_t glossy = 0;
+  for (const auto& m : s->materials()) glossy += m.type == Material::Type::glossy;
+  EXPECT_GT(glossy, 0u) << "the Glossy box's MTL has glossy materials";
+}
+
+TEST(Scene, EveryMcGuireSceneWithALightLoads) {
+  REQUIRE_SHARED_SCENES();
+  for (const char* name : {"CornellBox-Mirror", "CornellBox-Sphere", "CornellBox-Water", "CornellBox-Empty-RG",
+                           "CornellBox-Empty-Squashed", "CornellBox-Empty-White"}) {
+    auto s = Scene::load_obj(kShared + name + ".obj");
+    ASSERT_TRUE(s.ok()) << name << ": " << s.error().message;
+    EXPECT_FALSE(s->emitters().empty()) << name;
+  }
+}
+
+}  // namespace lf
+
+namespace lf {
+TEST(Scene, BoundsHoldEveryVertexAndGiveTheDiagonal) {
+  auto s = Scene::builtin("cornell");
+  ASSERT_TRUE(s.ok());
+  const Bounds& b = s->bounds();
+  for (const Vec3& v : s->vertices())
+    for (int c = 0; c < 3; ++c) {
+      EXPECT_LE(b.lo[c], v[c]);
+      EXPECT_GE(b.hi[c], v[c]);
+    }
+  // The published box: 556 x 548.8 x 559.2 mm.
+  EXPECT_NEAR(b.diagonal(), std::sqrt(556.0f * 556.0f + 548.8f * 548.8f + 559.2f * 559.2f), 1.0f);
+}
+}  // namespace lf
+
+namespace lf {
+
+// Diagnostics of an OBJ's text, each naming file and line; a hint when an unlit scene has Ka where Ke was meant;
+// a bent light quad is an error.
+TEST(Scene, ObjDiagnosticsNameFileAndLine) {
+  const auto dir = std::filesystem::temp_directory_path() / ("lightfarm-diag-" + std::to_string(::getpid()));
+  std::filesystem::create_directories(dir);
+  const std::string a = (dir / "a.obj").string(), b = (dir / "b.obj").string();
+  std::ofstream(a) << "mtllib missing.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nusemtl nothing\nf 1 2 3\n";
+  std::ofstream(b) << "mtllib b.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nusemtl nothere\nf 1 2 3\nusemtl glow\nf 1 2 3\n"
+                      "usemtl nothere\nf 1 2 3\n";
+  std::ofstream(dir / "b.mtl") << "newmtl glow\nKd 0.5 0.5 0.5\nKa 5 5 5\n";
+  auto ca = Scene::catalogue_obj(a);
+  ASSERT_TRUE(ca.ok());
+  EXPECT_EQ(ca->warnings, (std::vector<std::string>{
+                              a + ":1: material library 'missing.mtl' not found beside the OBJ; its faces get a grey default",
+                              a + ":5: usemtl 'nothing' names no material of its libraries; those faces get a grey default"}));
+  auto cb = Scene::catalogue_obj(b);
+  ASSERT_TRUE(cb.ok());
+  EXPECT_EQ(cb->material_names, std::vector<std::string>{"glow"});
+  EXPECT_EQ(cb->warnings, std::vector<std::string>{
+                              b + ":5: usemtl 'nothere' names no material of its libraries; those faces get a grey default"});
+  auto unlit = Scene::load_obj(b);
+  ASSERT_FALSE(unlit.ok());
+  EXPECT_EQ(unlit.error().message, "scene file '" + b + "': the scene has no light (no material with Ke > 0, and the "
+                                   "script adds none); glow has Ka but no Ke: did you mean Ke?");
+  std::filesystem::remove_all(dir);
+
+  Scene s;
+  auto bent = s.add_script_lights(Value::Array{Value::Map{
+      {"quad", Value::Array{Value::Array{0.0, 0.0, 0.0}, Value::Array{1.0, 0.0, 0.0}, Value::Array{1.0, 1.0, 0.5},
+                            Value::Array{0.0, 1.0, 0.0}}},
+      {"radiance", Value::Array{1.0, 1.0, 1.0}}}});
+  ASSERT_FALSE(bent.ok());
+  EXPECT_EQ(bent.error().message.rfind("light 1: the quad is not planar (its 4th corner is ", 0), 0u) << bent.error().message;
+}
+
+}  // namespace lf

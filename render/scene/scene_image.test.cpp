@@ -1,0 +1,197 @@
+// The host-shared scene image: a mapped image is the same scene bit for bit and traces the same hits; actors that
+// start together make it once and map one file; damaged images are refused with a message and remade.
+#include "render/scene/scene_image.hpp"
+
+#include <gtest/gtest.h>
+#include <sys/stat.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <random>
+
+#include "render/scene/scene_file.hpp"
+#include "render/tracing/tracer.hpp"
+
+namespace lf {
+namespace {
+
+namespace fs = std::filesystem;
+
+template <class T>
+bool same_bits(const T& a, const T& b) {
+  return std::memcmp(&a, &b, sizeof(T)) == 0;
+}
+
+Scene glass_with_point_light() {
+  auto s = Scene::builtin_unlit("cornell_glass");
+  s->add_point_light({0.1f, 1.2f, 0.3f}, {4, 5, 6});
+  EXPECT_TRUE(s->finalize("test").ok());
+  return std::move(*s);
+}
+
+struct ImageDir : ::testing::Test {
+  fs::path dir = fs::temp_directory_path() / ("lightfarm-image-" + std::to_string(::getpid()));
+  void SetUp() override { fs::create_directories(dir); }
+  void TearDown() override { fs::remove_all(dir); }
+  // Writes the shipped form of `s` as the director would, returning its hash.
+  std::string ship(const Scene& s, const fs::path& path) {
+    const std::string bytes = scene_to_bytes(s);
+    std::ofstream(path, std::ios::binary) << bytes;
+    return content_hash(bytes);
+  }
+};
+
+TEST_F(ImageDir, AMappedImageIsTheSameSceneBitForBit) {
+  const Scene s = glass_with_point_light();
+  const auto path = dir / "glass.image";
+  std::ofstream(path, std::ios::binary) << SceneImage::encode(s, "0123456789abcdef");
+  auto m = SceneImage::map(path.string(), "0123456789abcdef", "x");
+  ASSERT_TRUE(m.ok()) << m.error().message;
+  EXPECT_TRUE(m->shares_storage());
+  EXPECT_FALSE(s.shares_storage());
+  ASSERT_EQ(m->triangle_count(), s.triangle_count());
+  ASSERT_EQ(m->vertices().size(), s.vertices().size());
+  for (uint32_t t = 0; t < s.triangle_count(); ++t) {
+    for (int c = 0; c < 3; ++c) EXPECT_TRUE(same_bits(m->vertex(t, c), s.vertex(t, c)));
+    EXPECT_TRUE(same_bits(m->normal(t), s.normal(t)));
+    EXPECT_TRUE(same_bits(m->area(t), s.area(t)));
+    EXPECT_TRUE(same_bits(m->emitter_probability_of_triangle(t), s.emitter_probability_of_triangle(t)));
+    EXPECT_EQ(m->material_of(t), s.material_of(t));
+  }
+  ASSERT_EQ(m->materials().size(), s.materials().size());
+  for (size_t i = 0; i < s.materials().size(); ++i) {
+    EXPECT_EQ(m->materials()[i].name, s.materials()[i].name);
+    EXPECT_EQ(m->materials()[i].type, s.materials()[i].type);
+    EXPECT_TRUE(same_bits(m->materials()[i].kd, s.materials()[i].kd));
+  }
+  EXPECT_EQ(m->emitters(), s.emitters());
+  ASSERT_EQ(m->point_lights().size(), 1u);
+  EXPECT_TRUE(same_bits(m->point_lights()[0].position, s.point_lights()[0].position));
+  for (float u : {0.0f, 0.3f, 0.77f, 0.999f}) {
+    float pa = 0, pb = 0;
+    EXPECT_EQ(m->pick_emitter(u, pa), s.pick_emitter(u, pb));
+    EXPECT_TRUE(same_bits(pa, pb));
+  }
+  EXPECT_TRUE(same_bits(m->bounds().lo, s.bounds().lo));
+  EXPECT_TRUE(same_bits(m->bounds().hi, s.bounds().hi));
+  EXPECT_TRUE(same_bits(m->epsilon(), s.epsilon()));
+  // Re-encoding the mapped scene gives the same image.
+  EXPECT_EQ(SceneImage::encode(*m, "0123456789abcdef"), SceneImage::encode(s, "0123456789abcdef"));
+}
+
+TEST_F(ImageDir, EmbreeOverTheMappedArraysFindsTheSameHits) {
+  const Scene s = glass_with_point_light();
+  const auto path = dir / "glass.image";
+  std::ofstream(path, std::ios::binary) << SceneImage::encode(s, "0123456789abcdef");
+  auto m = SceneImage::map(path.string(), "0123456789abcdef", "x");
+  ASSERT_TRUE(m.ok());
+  RayTracer own(s), shared(*m);
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<float> u(-1, 1);
+  std::vector<Ray> rays(20000);
+  for (auto& r : rays) {
+    r.origin = {0.5f * u(rng), 1 + 0.5f * u(rng), 0.5f * u(rng)};
+    r.direction = normalize(Vec3{u(rng), u(rng), u(rng)});
+    r.tnear = 0;
+    r.tfar = 1e30f;
+  }
+  std::vector<Hit> a(rays.size()), b(rays.size());
+  own.intersect(rays, a);
+  shared.intersect(rays, b);
+  size_t hits = 0;
+  for (size_t i = 0; i < rays.size(); ++i) {
+    EXPECT_EQ(a[i].triangle, b[i].triangle);
+    EXPECT_TRUE(same_bits(a[i].t, b[i].t));
+    hits += a[i].valid();
+  }
+  EXPECT_GT(hits, rays.size() / 4);  // the box is open at the front
+}
+
+TEST_F(ImageDir, ActorsStartingTogetherMakeTheImageOnceAndMapOneFile) {
+  const Scene s = glass_with_point_light();
+  const auto shipped = dir / "scene";
+  const std::string hash = ship(s, shipped);
+  // Four processes at once, as the actors of one host start.
+  std::vector<pid_t> children;
+  for (int i = 0; i < 4; ++i) {
+    const pid_t pid = ::fork();
+    ASSERT_GE(pid, 0);
+    if (pid == 0) {
+      auto scene = load_shared_scene(shipped.string(), hash, "x");
+      ::_exit(scene.ok() && scene->shares_storage() && scene->triangle_count() == s.triangle_count() ? 0 : 1);
+    }
+    children.push_back(pid);
+  }
+  for (pid_t pid : children) {
+    int status = 0;
+    ASSERT_EQ(::waitpid(pid, &status, 0), pid);
+    EXPECT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 0);
+  }
+  // One image, no temporary left behind, and a later actor maps that same file.
+  std::vector<std::string> names;
+  for (const auto& e : fs::directory_iterator(dir)) names.push_back(e.path().filename().string());
+  std::sort(names.begin(), names.end());
+  EXPECT_EQ(names, (std::vector<std::string>{"scene", "scene.image", "scene.lock"}));
+  struct stat before {};
+  ASSERT_EQ(::stat((dir / "scene.image").c_str(), &before), 0);
+  auto later = load_shared_scene(shipped.string(), hash, "x");
+  ASSERT_TRUE(later.ok());
+  EXPECT_TRUE(later->shares_storage());
+  struct stat after {};
+  ASSERT_EQ(::stat((dir / "scene.image").c_str(), &after), 0);
+  EXPECT_EQ(before.st_ino, after.st_ino);
+}
+
+TEST_F(ImageDir, DamagedImagesAreRefusedAndRemade) {
+  const Scene s = glass_with_point_light();
+  const auto shipped = dir / "scene";
+  const std::string hash = ship(s, shipped);
+  ASSERT_TRUE(load_shared_scene(shipped.string(), hash, "x").ok());
+  const auto image = dir / "scene.image";
+  std::string good;
+  {
+    std::ifstream in(image, std::ios::binary);
+    good.assign(std::istreambuf_iterator<char>(in), {});
+  }
+  auto refused = [&](const std::string& bytes, const std::string& expect) {
+    std::ofstream(image, std::ios::binary | std::ios::trunc) << bytes;
+    auto m = SceneImage::map(image.string(), hash, "x");
+    ASSERT_FALSE(m.ok()) << expect;
+    EXPECT_NE(m.error().message.find(expect), std::string::npos) << m.error().message;
+  };
+  refused(good.substr(0, good.size() / 2), "is damaged");
+  refused(good.substr(0, 10), "shorter than its header");
+  std::string wrong_version = good;
+  wrong_version[12] = 9;
+  refused(wrong_version, "not an image of this version");
+  // A vertex index far outside the vertex array: the first triangle's first corner.
+  std::string bad_index = good;
+  uint64_t triangles_at = 0;
+  // magic, byte order, version, hash, 2 counts of 8 bytes, 6 of 4, the texel bytes, bounds and epsilon, 4 bytes
+  // of padding, then the offsets: the second is the triangles'.
+  std::memcpy(&triangles_at, good.data() + 8 + 4 + 4 + 16 + 8 + 8 + 4 * 6 + 8 + 4 * 7 + 4 + 8, 8);
+  ASSERT_LT(triangles_at, good.size());
+  const uint32_t huge = 0x7fffffff;
+  std::memcpy(bad_index.data() + triangles_at, &huge, 4);
+  refused(bad_index, "a vertex index");
+  EXPECT_FALSE(SceneImage::map(image.string(), "fedcba9876543210", "x").ok());  // made for another scene
+
+  // load_shared_scene remakes a damaged image rather than failing the actor.
+  std::ofstream(image, std::ios::binary | std::ios::trunc) << good.substr(0, 100);
+  auto remade = load_shared_scene(shipped.string(), hash, "x");
+  ASSERT_TRUE(remade.ok()) << remade.error().message;
+  EXPECT_TRUE(remade->shares_storage());
+  EXPECT_EQ(fs::file_size(image), good.size());
+  // A shipped file that does not match its hash is still refused.
+  fs::remove(image);
+  std::ofstream(shipped, std::ios::binary | std::ios::app) << "x";
+  auto forged = load_shared_scene(shipped.string(), hash, "x");
+  ASSERT_FALSE(forged.ok());
+  EXPECT_NE(forged.error().message.find("does not match its hash"), std::string::npos);
+}
+
+}  // namespace
+}  // namespace lf

@@ -1,0 +1,203 @@
+#include "render/scene/scene_report.hpp"
+
+#include <cmath>
+#include <cstdio>
+#include <map>
+
+#include "render/tracing/camera.hpp"
+#include "render/lights/light_checks.hpp"
+#include "render/scene/scene.hpp"
+#include "render/tracing/tracer.hpp"
+
+namespace lf {
+
+namespace {
+
+std::string format(const char* fmt, double a, double b = 0, double c = 0) {
+  char buf[128];
+  std::snprintf(buf, sizeof buf, fmt, a, b, c);
+  return buf;
+}
+std::string vec(Vec3 v) { return format("{%.4g, %.4g, %.4g}", v.x, v.y, v.z); }
+
+const char* kind_name(Material::Type t) {
+  switch (t) {
+    case Material::Type::diffuse: return "diffuse";
+    case Material::Type::glossy: return "glossy";
+    case Material::Type::mirror: return "mirror";
+    case Material::Type::glass: return "glass";
+  }
+  return "?";
+}
+
+// Where to look from: the side of the scene whose visible surfaces face its light. From 8 directions around the
+// bounding sphere (a little above it, +z first), a coarse 32 x 24 view counts the camera rays whose first hit is on
+// the side of its surface that faces the emitters' centre (with no emitters: every hit); the first best wins. A
+// fixed +z view looked at the back of a backdrop whose lamp and test object were on its -z side: an image of zeros.
+Vec3 suggested_eye(const Scene& s, Vec3 centre, float distance) {
+  const auto eye_at = [&](int k) {
+    const float az = static_cast<float>(k) * kPi / 4;
+    return centre + normalize(Vec3{std::sin(az), 0.35f, std::cos(az)}) * distance;
+  };
+  Vec3 light{};
+  double weight = 0;
+  for (uint32_t t : s.emitters()) {
+    const float a = s.area(t);
+    light += (s.vertex(t, 0) + s.vertex(t, 1) + s.vertex(t, 2)) * (a / 3.0f);
+    weight += a;
+  }
+  for (const auto& p : s.point_lights()) {
+    light += p.position;
+    weight += 1;
+  }
+  const bool lit = weight > 0;
+  if (lit) light = light * static_cast<float>(1.0 / weight);
+  const RayTracer tracer(s);
+  int best = 0;
+  size_t best_score = 0;
+  constexpr int kWidth = 32, kHeight = 24;
+  for (int k = 0; k < 8; ++k) {
+    const Vec3 eye = eye_at(k);
+    CameraSpec spec;
+    spec.eye = {eye.x, eye.y, eye.z};
+    spec.at = {centre.x, centre.y, centre.z};
+    spec.fov = 45;
+    const Camera camera(spec, kWidth, kHeight);
+    std::vector<Ray> rays;
+    for (int y = 0; y < kHeight; ++y)
+      for (int x = 0; x < kWidth; ++x) rays.push_back(camera.ray(static_cast<float>(x) + 0.5f, static_cast<float>(y) + 0.5f));
+    std::vector<Hit> hits(rays.size());
+    tracer.intersect(rays, hits);
+    size_t score = 0;
+    for (size_t r = 0; r < rays.size(); ++r) {
+      if (!hits[r].valid()) continue;
+      const Vec3 p = rays[r].origin + rays[r].direction * hits[r].t;
+      Vec3 n = s.normal(hits[r].triangle);
+      if (dot(n, rays[r].direction) > 0) n = -n;  // the side the camera sees
+      score += !lit || dot(n, light - p) > 0;
+    }
+    if (score > best_score) best = k, best_score = score;
+  }
+  return eye_at(best);
+}
+
+}  // namespace
+
+std::string complete_network_for(const Lobes& lobes) {
+  const bool glossy = lobes.contains(Lobe::glossy), mirrors = lobes.contains(Lobe::specular);
+  std::string s = "local paths    = lightop \"pathtrace\" {}                       -- what leaves the surfaces the ops below see\n"
+                  "local direct   = lightop \"direct\" {}                          -- L(D|G)\n"
+                  "local indirect = lightop \"irradiance\" { input = paths }       -- L(D|G|S)+D\n";
+  std::string parts = "direct, indirect";
+  if (glossy) {
+    s += "local shiny    = lightop \"glossy\" { input = paths }           -- L(D|G|S)+G\n";
+    parts += ", shiny";
+  }
+  if (mirrors) {
+    s += "local chains   = lightop \"specular\" { input = lightop \"combine\" { inputs = { " + parts +
+         " } } }  -- L(D|G|S)*S\n";
+    parts += ", chains";
+  }
+  return s + "renderers { lighting = lightop \"combine\" { inputs = { " + parts + " } } }\n";
+}
+
+Result<std::string> describe_scene(const std::string& obj_path) {
+  auto catalogue = Scene::catalogue_obj(obj_path);
+  if (!catalogue) return catalogue.error();
+  auto scene = Scene::load_obj_unlit(obj_path);
+  if (!scene) return scene.error();
+  if (scene->triangle_count() == 0) return make_error("scene file '" + obj_path + "' has no triangles");
+  // With emitters of its own, how much of each one's flux meets nothing (light_checks.hpp).
+  std::map<std::string, double> escaping;
+  if (scene->finalize(obj_path).ok())
+    for (const auto& e : light_escapes(*scene)) escaping[e.light] = e.escaping;
+  const Scene& s = *scene;
+
+  const Bounds bounds = bounds_of(s.vertices());
+  const Vec3 lo = bounds.lo, hi = bounds.hi;
+  struct Use {
+    size_t faces = 0;
+    double area = 0;
+  };
+  std::map<uint32_t, Use> used;
+  for (uint32_t t = 0; t < s.triangle_count(); ++t) {
+    Use& u = used[s.material_of(t)];
+    ++u.faces;
+    u.area += s.area(t);
+  }
+
+  std::string out = "scene file " + obj_path + "\n";
+  out += "  triangles  " + std::to_string(s.triangle_count()) + "\n";
+  out += "  bounds     " + vec(lo) + " to " + vec(hi) + format(", diagonal %.4g\n", bounds.diagonal());
+  out += "  materials  " + std::to_string(s.materials().size() - 1) + " (+ a grey default for faces without one)\n";
+  double total_flux = 0;
+  size_t emitting_faces = 0;
+  for (uint32_t m = 0; m < s.materials().size(); ++m) {
+    const Material& mat = s.material(m);
+    const auto it = used.find(m);
+    if (mat.name == "(default)" && it == used.end()) continue;
+    std::string line = "    " + mat.name + "  " + kind_name(mat.type) + "  kd " + vec(mat.kd);
+    if (mat.type != Material::Type::diffuse) line += "  ks " + vec(mat.ks);
+    line += "  faces " + std::to_string(it == used.end() ? 0 : it->second.faces);
+    if (mat.emissive() && it != used.end()) {
+      const double flux = kPi * it->second.area * average(mat.ke);  // one-sided Lambertian emitter
+      total_flux += flux;
+      emitting_faces += it->second.faces;
+      line += "  emits " + vec(mat.ke) + format("  flux %.4g", flux);
+      if (auto e = escaping.find("material '" + mat.name + "'"); e != escaping.end())
+        line += format("  escaping %.0f%%", 100 * e->second);
+    }
+    out += line + "\n";
+  }
+  out += emitting_faces ? "  emitters   " + std::to_string(emitting_faces) + " triangles" + format(", flux %.4g\n", total_flux)
+                        : "  emitters   none: add light { } or material \"Name\" { emission = {r, g, b} } in the script\n";
+  // One line per texture file: which statements use it, for how many materials, and whether it is there.
+  struct TextureUse {
+    std::map<std::string, int> slots;
+    bool found = false;
+  };
+  std::map<std::string, TextureUse> files;
+  for (const auto& t : catalogue->textures) {
+    ++files[t.path].slots[t.slot];
+    files[t.path].found = t.found;
+  }
+  size_t missing = 0;
+  for (const auto& [path, u] : files) missing += !u.found;
+  out += "  textures   " + std::to_string(files.size()) + " file" + (files.size() == 1 ? "" : "s") +
+         (missing ? " (" + std::to_string(missing) + " missing)" : "") + "\n";
+  for (const auto& [path, u] : files) {
+    std::string slots;
+    for (const auto& [slot, n] : u.slots) slots += (slots.empty() ? "" : ", ") + slot + " of " + std::to_string(n);
+    out += "    " + path + "  " + slots + (u.found ? "" : "  (missing)") + "\n";
+  }
+  for (const auto& w : catalogue->warnings) out += "  warning    " + w + "\n";
+
+  // A camera that frames the bounding sphere, a little above it, with a 45-degree field of view, from the side
+  // whose surfaces face the light.
+  const Vec3 centre = (lo + hi) * 0.5f;
+  const float radius = 0.5f * bounds.diagonal();
+  const float distance = radius / std::sin(0.5f * 45.0f * kPi / 180.0f);  // the sphere fits the view cone
+  const Vec3 eye = suggested_eye(s, centre, distance);
+  out += "  camera     camera { eye = " + vec(eye) + ", at = " + vec(centre) + ", fov = 45 }\n";
+
+  // The lobes its materials have, and a network that counts every light path on them once (docs/lua-api.md,
+  // "Light paths"); the farm checks whichever network the script wires against the same lobes.
+  const SceneLobes lobes = scene_lobes(*scene);
+  std::string present;
+  static const char* kLobeNames[] = {"D (diffuse)", "G (glossy)", "S (mirror, glass)"};
+  for (int l = 0; l < kLobeCount; ++l)
+    if (lobes.lobes.has[l])
+      present += (present.empty() ? "" : ", ") + std::string(kLobeNames[l]) + " on " +
+                 std::to_string(lobes.materials[l].size()) + " material" + (lobes.materials[l].size() == 1 ? "" : "s");
+  out += "  lobes      " + (present.empty() ? std::string("none") : present) + "\n";
+  out += "  network    every light path on these lobes once:\n";
+  const std::string network = complete_network_for(lobes.lobes);
+  for (size_t at = 0; at < network.size();) {
+    const size_t end = network.find('\n', at);
+    out += "    " + network.substr(at, end - at) + "\n";
+    at = end + 1;
+  }
+  return out;
+}
+
+}  // namespace lf

@@ -1,0 +1,17 @@
+#pragma once
+// `lightfarm scene FILE.obj`: what a lighting TD wants to know before writing a farm script — triangles, bounds,
+// materials with their kinds and face counts, emitters and their flux, textures found or missing, the OBJ's
+// warnings, a camera that frames the whole scene, the lobes its materials have and a network for them.
+#include <string>
+
+#include "core/result.hpp"
+#include "render/shading/light_paths.hpp"
+
+namespace lf {
+
+Result<std::string> describe_scene(const std::string& obj_path);
+
+// Lua for a network that counts every light path on these lobes once (docs/lua-api.md, "Light paths").
+std::string complete_network_for(const Lobes& lobes);
+
+}  // namespace lf

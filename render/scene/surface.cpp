@@ -1,0 +1,214 @@
+// Surface detail of a scene's triangles: barycentrics, interpolated vertex normals, texture coordinates, and the
+// textures they look up (albedo, alpha cut-outs).
+#include <algorithm>
+#include <array>
+#include <cmath>
+
+#include "render/scene/scene.hpp"
+
+namespace lf {
+
+namespace {
+
+// 8-bit sRGB to linear, once.
+const std::array<float, 256>& srgb_to_linear() {
+  static const std::array<float, 256> table = [] {
+    std::array<float, 256> t{};
+    for (int i = 0; i < 256; ++i) {
+      const float v = static_cast<float>(i) / 255.0f;
+      t[static_cast<size_t>(i)] = v <= 0.04045f ? v / 12.92f : std::pow((v + 0.055f) / 1.055f, 2.4f);
+    }
+    return t;
+  }();
+  return table;
+}
+
+// Wraps a texel index into [0, n) (textures repeat, as OBJ coordinates outside [0, 1] expect).
+uint32_t wrap(int64_t i, uint32_t n) {
+  const int64_t m = i % static_cast<int64_t>(n);
+  return static_cast<uint32_t>(m < 0 ? m + n : m);
+}
+
+}  // namespace
+
+uint64_t Texture::pyramid_bytes(uint32_t w, uint32_t h, uint32_t c) {
+  uint64_t total = 0;
+  while (true) {
+    total += uint64_t{w} * h * c;
+    if (w == 1 && h == 1) return total;
+    w = std::max(1u, w / 2);
+    h = std::max(1u, h / 2);
+  }
+}
+
+void Texture::build_pyramid() {
+  const uint64_t base = uint64_t{width} * height * channels;
+  owned.resize(base);
+  owned.reserve(pyramid_bytes(width, height, channels));
+  const bool colour = channels == 3;
+  auto encode = [&](float l) {
+    const float v = colour ? (l <= 0.0031308f ? 12.92f * l : 1.055f * std::pow(l, 1.0f / 2.4f) - 0.055f) : l;
+    return static_cast<uint8_t>(std::lround(std::clamp(v, 0.0f, 1.0f) * 255.0f));
+  };
+  uint32_t w = width, h = height;
+  size_t at = 0;  // where the level being halved starts
+  while (w > 1 || h > 1) {
+    const uint32_t nw = std::max(1u, w / 2), nh = std::max(1u, h / 2);
+    const size_t next = owned.size();
+    owned.resize(next + size_t{nw} * nh * channels);
+    for (uint32_t y = 0; y < nh; ++y)
+      for (uint32_t x = 0; x < nw; ++x)
+        for (uint32_t c = 0; c < channels; ++c) {
+          // The 2x2 texels below (one row or column where the level above has an odd or unit size).
+          float sum = 0;
+          int n = 0;
+          for (uint32_t dy = 0; dy < 2 && 2 * y + dy < h; ++dy)
+            for (uint32_t dx = 0; dx < 2 && 2 * x + dx < w; ++dx) {
+              const uint8_t v = owned[at + (size_t{2 * y + dy} * w + 2 * x + dx) * channels + c];
+              sum += colour ? srgb_to_linear()[v] : static_cast<float>(v) / 255.0f;
+              ++n;
+            }
+          owned[next + (size_t{y} * nw + x) * channels + c] = encode(sum / static_cast<float>(n));
+        }
+    at = next;
+    w = nw;
+    h = nh;
+  }
+  texels = owned;
+}
+
+namespace {
+
+// Channel c of one level (w x h texels at `texels`), bilinear and repeating.
+float bilinear(const uint8_t* texels, uint32_t w, uint32_t h, uint32_t channels, Vec2 uv, uint32_t c) {
+  // Texel centres sit at half-integers; v = 0 is the bottom row, and files store the top row first.
+  const float x = uv.u * static_cast<float>(w) - 0.5f;
+  const float y = (1.0f - uv.v) * static_cast<float>(h) - 0.5f;
+  if (!std::isfinite(x) || !std::isfinite(y)) return 0.0f;
+  const float fx = std::floor(x), fy = std::floor(y);
+  const float ax = x - fx, ay = y - fy;
+  // Far-off coordinates are reduced first so that the integer conversion cannot overflow.
+  const auto ix = static_cast<int64_t>(std::fmod(fx, static_cast<float>(w) * 1024.0f));
+  const auto iy = static_cast<int64_t>(std::fmod(fy, static_cast<float>(h) * 1024.0f));
+  const uint32_t x0 = wrap(ix, w), x1 = wrap(ix + 1, w), y0 = wrap(iy, h), y1 = wrap(iy + 1, h);
+  const bool colour = channels == 3;
+  auto texel = [&](uint32_t tx, uint32_t ty) {
+    const uint8_t v = texels[(static_cast<size_t>(ty) * w + tx) * channels + c];
+    return colour ? srgb_to_linear()[v] : static_cast<float>(v) / 255.0f;
+  };
+  return (texel(x0, y0) * (1 - ax) + texel(x1, y0) * ax) * (1 - ay) + (texel(x0, y1) * (1 - ax) + texel(x1, y1) * ax) * ay;
+}
+
+}  // namespace
+
+float Texture::texel(int64_t x, int64_t y, uint32_t c) const {
+  if (width == 0 || height == 0 || c >= channels) return 1.0f;
+  // Most lookups are inside the image: the wrap's division only for those that are not.
+  const uint32_t tx = x >= 0 && x < width ? static_cast<uint32_t>(x) : wrap(x, width);
+  const uint32_t ty = y >= 0 && y < height ? static_cast<uint32_t>(y) : wrap(y, height);
+  const uint8_t v = texels[(static_cast<size_t>(ty) * width + tx) * channels + c];
+  return channels == 3 ? srgb_to_linear()[v] : static_cast<float>(v) / 255.0f;
+}
+
+float Texture::sample(Vec2 uv, uint32_t c, float lod) const {
+  if (width == 0 || height == 0 || c >= channels) return 1.0f;
+  if (!(lod > 0)) return bilinear(texels.data(), width, height, channels, uv, c);
+  // Walk down to the level below `lod`, then blend it with the next.
+  const int below = static_cast<int>(std::min(lod, 30.0f));
+  const float blend = std::min(lod, 30.0f) - static_cast<float>(below);
+  uint32_t w = width, h = height;
+  size_t at = 0;
+  for (int l = 0; l < below && (w > 1 || h > 1); ++l) {
+    at += size_t{w} * h * channels;
+    w = std::max(1u, w / 2);
+    h = std::max(1u, h / 2);
+  }
+  const float fine = bilinear(texels.data() + at, w, h, channels, uv, c);
+  if (blend <= 0 || (w == 1 && h == 1)) return fine;
+  const size_t next = at + size_t{w} * h * channels;
+  const float coarse = bilinear(texels.data() + next, std::max(1u, w / 2), std::max(1u, h / 2), channels, uv, c);
+  return fine * (1 - blend) + coarse * blend;
+}
+
+Vec3 Scene::barycentrics(uint32_t t, Vec3 p) const {
+  const Vec3 a = vertex(t, 0), e1 = vertex(t, 1) - a, e2 = vertex(t, 2) - a, d = p - a;
+  const float d11 = dot(e1, e1), d12 = dot(e1, e2), d22 = dot(e2, e2), d1 = dot(d, e1), d2 = dot(d, e2);
+  const float det = d11 * d22 - d12 * d12;
+  if (!(det > 0)) return {1, 0, 0};
+  // Clamped to the triangle: a point offset a little off it still gets its nearest detail.
+  const float b1 = std::clamp((d22 * d1 - d12 * d2) / det, 0.0f, 1.0f);
+  const float b2 = std::clamp((d11 * d2 - d12 * d1) / det, 0.0f, 1.0f - b1);
+  return {1 - b1 - b2, b1, b2};
+}
+
+Vec3 Scene::shading_normal(uint32_t t, Vec3 b) const {
+  if (corner_normal_view_.empty()) return normal(t);
+  const Vec3* n = &corner_normal_view_[3 * static_cast<size_t>(t)];
+  Vec3 s = n[0] * b.x + n[1] * b.y + n[2] * b.z;
+  const float l = length(s);
+  if (!(l > 1e-6f)) return normal(t);
+  s = s / l;
+  // Vertex normals wound against the face (a mirrored export) still mean the face's side.
+  return dot(s, normal(t)) < 0 ? -s : s;
+}
+
+Vec2 Scene::uv(uint32_t t, Vec3 b) const {
+  if (corner_uv_view_.empty()) return {};
+  const Vec2* c = &corner_uv_view_[3 * static_cast<size_t>(t)];
+  return {c[0].u * b.x + c[1].u * b.y + c[2].u * b.z, c[0].v * b.x + c[1].v * b.y + c[2].v * b.z};
+}
+
+RGB Scene::albedo(uint32_t t, Vec3 b, float footprint) const {
+  const Material& m = materials_[material_view_[t]];
+  if (m.kd_map < 0 || corner_uv_view_.empty()) return m.kd;
+  const Texture& tex = textures_[static_cast<size_t>(m.kd_map)];
+  const Vec2 at = uv(t, b);
+  if (!std::isfinite(at.u) || !std::isfinite(at.v)) return m.kd;  // a face without texture coordinates
+  float lod = 0;
+  if (footprint > 0) {
+    // Texels per scene unit on this triangle: the square root of its texel area over its area.
+    const Vec2* c = &corner_uv_view_[3 * static_cast<size_t>(t)];
+    const float uv_area = 0.5f * std::abs((c[1].u - c[0].u) * (c[2].v - c[0].v) - (c[2].u - c[0].u) * (c[1].v - c[0].v));
+    const float density = std::sqrt(uv_area * static_cast<float>(tex.width) * static_cast<float>(tex.height) / area(t));
+    const float texels = footprint * density;
+    if (texels > 1 && std::isfinite(texels)) lod = std::log2(texels);
+  }
+  return {tex.sample(at, 0, lod), tex.sample(at, 1, lod), tex.sample(at, 2, lod)};
+}
+
+bool Scene::opaque(uint32_t t, Vec3 b) const {
+  const Material& m = materials_[material_view_[t]];
+  if (m.alpha_map < 0 || corner_uv_view_.empty()) return true;
+  const Vec2 at = uv(t, b);
+  if (!std::isfinite(at.u) || !std::isfinite(at.v)) return true;
+  return textures_[static_cast<size_t>(m.alpha_map)].sample(at, 0) >= 0.5f;
+}
+
+bool Scene::has_cutouts() const {
+  if (corner_uv_view_.empty()) return false;
+  return std::any_of(materials_.begin(), materials_.end(), [](const Material& m) { return m.alpha_map >= 0; });
+}
+
+float Scene::opaque_fraction(uint32_t t) const {
+  const Material& m = materials_[material_view_[t]];
+  if (m.alpha_map < 0 || corner_uv_view_.empty()) return 1.0f;
+  // The centres of a 16 x 16 split of the triangle into 256 equal sub-triangles (both orientations).
+  constexpr int kSplit = 16;
+  int inside = 0;
+  for (int i = 0; i < kSplit; ++i)
+    for (int j = 0; i + j < kSplit; ++j) {
+      const float b1 = (static_cast<float>(i) + 1.0f / 3) / kSplit, b2 = (static_cast<float>(j) + 1.0f / 3) / kSplit;
+      inside += opaque(t, {1 - b1 - b2, b1, b2}) ? 1 : 0;
+      if (i + j + 1 < kSplit) {
+        const float c1 = (static_cast<float>(i) + 2.0f / 3) / kSplit, c2 = (static_cast<float>(j) + 2.0f / 3) / kSplit;
+        inside += opaque(t, {1 - c1 - c2, c1, c2}) ? 1 : 0;
+      }
+    }
+  return static_cast<float>(inside) / (kSplit * kSplit);
+}
+
+float Scene::emitted_power(uint32_t t) const {
+  return area(t) * average(materials_[material_view_[t]].ke) * kPi * opaque_fraction(t);
+}
+
+}  // namespace lf

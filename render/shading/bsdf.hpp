@@ -1,0 +1,71 @@
+#pragma once
+// Scattering at a surface point: diffuse (Lambert), glossy (Lambert + a normalized Phong lobe), either with a
+// perfect mirror term beside, perfect mirror, and dielectric glass with Fresnel. Directions point away from the
+// surface; `n` is the unit normal on the side of wo. eval() returns f(wo, wi) without the cosine; sample() returns wi
+// with weight f * |cos| / pdf.
+#include <algorithm>
+#include <optional>
+
+#include "render/math.hpp"
+#include "render/scene/scene.hpp"
+
+namespace lf {
+
+class Bsdf {
+ public:
+  explicit Bsdf(const Material& m) : m_(m), kd_(m.kd) {}
+  // With the diffuse reflectance at the point (a texture's), kept to at most 1 - ks per channel.
+  Bsdf(const Material& m, RGB albedo)
+      : m_(m),
+        kd_{std::min(albedo.x, 1 - m.ks.x - m.kr.x), std::min(albedo.y, 1 - m.ks.y - m.kr.y),
+            std::min(albedo.z, 1 - m.ks.z - m.kr.z)} {}
+
+  // Mirror and glass scatter into single directions: light sampling cannot reach them, only sample() can.
+  bool is_delta() const { return m_.type == Material::Type::mirror || m_.type == Material::Type::glass; }
+  RGB eval(Vec3 n, Vec3 wo, Vec3 wi) const;
+  float pdf(Vec3 n, Vec3 wo, Vec3 wi) const;
+
+  struct Sample {
+    Vec3 wi;
+    RGB weight;      // f * |cos(wi)| / pdf
+    float pdf;       // of wi (meaningless for delta lobes)
+    bool delta;
+    bool diffuse_lobe = false;  // sample_by_lobe() chose the Lambert lobe
+  };
+  // `entering`: wo is on the outside of the surface (for glass: which way refraction bends).
+  std::optional<Sample> sample(Vec3 n, Vec3 wo, bool entering, float u0, float u1, float u2) const;
+
+  // A glossy material's Phong lobe alone: whether it has one, and a direction drawn in proportion to it, weighted
+  // by that lobe's f * cos / pdf (the diffuse part left out: the `glossy` LightOp's share of the BSDF).
+  bool has_glossy_lobe() const { return m_.type == Material::Type::glossy && !is_black(m_.ks); }
+  std::optional<Sample> sample_glossy(Vec3 n, Vec3 wo, float u1, float u2) const;
+  // A glossy surface's lobes one at a time (the directional cache answers its diffuse lobe's rays): the mirror term,
+  // the Lambert lobe or the Phong lobe, chosen as sample() chooses; the weight is that lobe's f * cos over the
+  // chance of choosing it times its density, `pdf` that product (for MIS with light samples of the same lobe).
+  std::optional<Sample> sample_by_lobe(Vec3 n, Vec3 wo, float u0, float u1, float u2) const;
+  // The parts of eval() and the densities sample_by_lobe() draws them with, for light samples' MIS per lobe.
+  RGB eval_diffuse(Vec3 n, Vec3 wo, Vec3 wi) const;
+  RGB eval_glossy(Vec3 n, Vec3 wo, Vec3 wi) const;
+  float pdf_diffuse(Vec3 n, Vec3 wo, Vec3 wi) const;
+  float pdf_glossy(Vec3 n, Vec3 wo, Vec3 wi) const;
+  // A diffuse or glossy surface's mirror term alone (Material::kr), weighted by kr: the `specular` op's share.
+  std::optional<Sample> sample_mirror_term(Vec3 n, Vec3 wo) const;
+
+ private:
+  float diffuse_probability() const;
+  // The chance sample() takes a surface's mirror term (0 without one), in proportion to its reflectance.
+  float mirror_probability() const;
+  const Material& m_;
+  RGB kd_;
+};
+
+// Fresnel reflectance of a dielectric interface for unpolarized light; cos_i > 0, eta = n_transmitted / n_incident.
+float fresnel_dielectric(float cos_i, float eta);
+Vec3 reflect(Vec3 wo, Vec3 n);
+// Refracted direction, or nullopt on total internal reflection.
+std::optional<Vec3> refract(Vec3 wo, Vec3 n, float eta);
+// Orthonormal basis around n (Duff et al.).
+void basis(Vec3 n, Vec3& t, Vec3& s);
+Vec3 cosine_hemisphere(Vec3 n, float u, float v);
+
+}  // namespace lf

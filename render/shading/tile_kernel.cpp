@@ -1,0 +1,249 @@
+#include "render/shading/tile_kernel.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+#include "render/shading/sampler.hpp"
+#include "render/scene/surface.hpp"
+
+namespace lf {
+
+std::vector<TileRect> make_tiles(int width, int height, int tile_size) {
+  std::vector<TileRect> tiles;
+  for (int y = 0; y < height; y += tile_size)
+    for (int x = 0; x < width; x += tile_size)
+      tiles.push_back({x, y, std::min(x + tile_size, width), std::min(y + tile_size, height)});
+  return tiles;
+}
+
+void tile_camera_rays(const Camera& camera, const ImageSpec& image, const TileRect& rect, std::vector<Ray>& rays,
+                      std::vector<uint64_t>& keys) {
+  const size_t samples = static_cast<size_t>(rect.pixel_count()) * image.spp;
+  rays.resize(samples);
+  keys.resize(samples);
+  const SamplerKind kind = sampler_of(image);
+  size_t s = 0;
+  for (int y = rect.y0; y < rect.y1; ++y)
+    for (int x = rect.x0; x < rect.x1; ++x) {
+      for (int k = 0; k < image.spp; ++k, ++s) {
+        keys[s] = tile_sample_key(kind, image.width, rect, image.spp, static_cast<uint32_t>(s));
+        const Uniform2 jitter = Sampler(kind, keys[s], streams::camera).uniform2();
+        rays[s] = camera.ray(static_cast<float>(x) + jitter.u, static_cast<float>(y) + jitter.v);
+      }
+    }
+}
+
+void tile_points(const Scene& scene, const Camera& camera, const ImageSpec& image, const TileRect& rect,
+                 std::span<const Ray> rays, std::span<const Hit> hits, std::span<const uint64_t> keys, TileWork& work) {
+  tile_points(scene, camera, image, rect, rays, hits, keys, {}, work);
+}
+
+void tile_points(const Scene& scene, const Camera& camera, const ImageSpec& image, const TileRect& rect,
+                 std::span<const Ray> rays, std::span<const Hit> hits, std::span<const uint64_t> keys,
+                 std::span<const uint32_t> more_shaded, TileWork& work) {
+  const size_t samples = rays.size();
+  work.rect = rect;
+  work.spp = image.spp;
+  work.shaded = image.shade_spp;
+  const size_t per_pixel = static_cast<size_t>(image.spp), shaded = static_cast<size_t>(image.shaded_per_pixel());
+  work.points.clear();
+  work.points.reserve(samples);
+  work.sample_of_point.clear();
+  work.distance.clear();
+  work.eye = camera.eye();
+  work.emitted.assign(samples, RGB{});
+  work.rebuildable = true;  // every point below is pushed as surface_at, point_on_ray and tile_sample_key give it
+  work.sampler = sampler_of(image);
+  work.image_width = image.width;
+  for (size_t i = 0; i < samples; ++i) {
+    if (!hits[i].valid()) continue;
+    const uint32_t tri = hits[i].triangle;
+    const Vec3 wo = -rays[i].direction;
+    const Material& m = scene.material(scene.material_of(tri));
+    if (!more_shaded.empty()) {  // the samples from `shaded` up to the pixel's own count, and only those
+      const size_t k = i % per_pixel;
+      if (k < shaded || k >= more_shaded[i / per_pixel]) continue;
+    } else if (i % per_pixel >= shaded) {  // seen, not shaded: only its emission counts (surface_at's front)
+      if (m.emissive() && dot(scene.normal(tri), wo) > 0) work.emitted[i] = m.ke;
+      continue;
+    }
+    const Vec3 p = point_on_ray(rays[i].origin, wo, hits[i].t);
+    const SurfacePoint sp = surface_at(scene, tri, p, wo);
+    if (sp.front && m.emissive()) work.emitted[i] = m.ke;
+    work.points.push_back(p, sp.ns, wo, scene.material_of(tri), keys[i], tri);
+    work.sample_of_point.push_back(static_cast<uint32_t>(i));
+    work.distance.push_back(hits[i].t);
+  }
+}
+
+void trace_tile(const Scene& scene, const RayTracer& tracer, const Camera& camera, const ImageSpec& image,
+                const TileRect& rect, TileWork& work) {
+  thread_local std::vector<Ray> rays;
+  thread_local std::vector<Hit> hits;
+  thread_local std::vector<uint64_t> keys;
+  tile_camera_rays(camera, image, rect, rays, keys);
+  hits.resize(rays.size());
+  // One coherent stream (SIMD packets), the same batch on any layout; a ray's hit is the same as traced alone
+  // (partition.test: CameraRaysInPacketsHitWhatTheyHitOneByOne), which camera rays through a partitioned scene are.
+  tracer.intersect(rays, hits, /*coherent=*/true);
+  tile_points(scene, camera, image, rect, rays, hits, keys, work);
+}
+
+void trace_more_samples(const Scene& scene, const RayTracer& tracer, const Camera& camera, const ImageSpec& image,
+                        const TileRect& rect, std::span<const uint32_t> shaded_of_pixel, TileWork& work) {
+  std::vector<Ray> rays;
+  std::vector<uint64_t> keys;
+  tile_camera_rays(camera, image, rect, rays, keys);
+  const size_t per_pixel = static_cast<size_t>(image.spp), shaded = static_cast<size_t>(image.shaded_per_pixel());
+  std::vector<uint32_t> wanted;
+  for (size_t i = 0; i < rays.size(); ++i)
+    if (const size_t k = i % per_pixel; k >= shaded && k < shaded_of_pixel[i / per_pixel])
+      wanted.push_back(static_cast<uint32_t>(i));
+  std::vector<Ray> some(wanted.size());
+  std::vector<Hit> some_hits(wanted.size());
+  for (size_t j = 0; j < wanted.size(); ++j) some[j] = rays[wanted[j]];
+  tracer.intersect(some, some_hits, /*coherent=*/true);
+  std::vector<Hit> hits(rays.size());
+  for (size_t j = 0; j < wanted.size(); ++j) hits[wanted[j]] = some_hits[j];
+  tile_points(scene, camera, image, rect, rays, hits, keys, shaded_of_pixel, work);
+}
+
+std::vector<uint32_t> adaptive_shaded_counts(const ImageSpec& image, const TileWork& work, std::span<const RGB> radiance) {
+  const size_t spp = static_cast<size_t>(work.spp), pixels = work.emitted.size() / spp;
+  const int shaded = image.shaded_per_pixel();
+  std::vector<double> sum(pixels, 0.0), sum_sq(pixels, 0.0);
+  for (size_t j = 0; j < work.sample_of_point.size(); ++j) {
+    const double v = average(radiance[j]);
+    const size_t p = work.sample_of_point[j] / spp;
+    sum[p] += v;
+    sum_sq[p] += v * v;
+  }
+  std::vector<uint32_t> counts(pixels, static_cast<uint32_t>(shaded));
+  const double n = shaded;
+  // The noise allowed, in radiance: adaptive_threshold of display white at the image's exposure.
+  const double allowed = image.adaptive_threshold / std::exp2(image.exposure);
+  for (size_t p = 0; p < pixels; ++p) {
+    const double mean = sum[p] / n;
+    // The standard error of the lighting's mean, from the sample variance (samples that hit nothing are zeros).
+    const double variance = std::max(0.0, (sum_sq[p] - n * mean * mean) / (n - 1));
+    const double error = std::sqrt(variance / n);
+    if (!(error > allowed)) continue;
+    // Enough samples to bring the error to the threshold, as a doubling of shade_spp (a prefix of the pixel's
+    // samples whose length is a power of two times shade_spp stays stratified), at most adaptive_spp.
+    const double wanted = allowed > 0 ? n * (error / allowed) * (error / allowed) : 1e30;
+    int count = shaded;
+    while (count < image.adaptive_spp && count < wanted) count *= 2;
+    counts[p] = static_cast<uint32_t>(std::min(count, image.adaptive_spp));
+  }
+  return counts;
+}
+
+void resolve_adaptive_tile(const TileWork& first, std::span<const RGB> first_radiance, const TileWork& more,
+                           std::span<const RGB> more_radiance, std::span<const uint32_t> shaded_of_pixel,
+                           std::vector<RGB>& pixels) {
+  const size_t spp = static_cast<size_t>(first.spp), count = first.emitted.size() / spp;
+  pixels.assign(count, RGB{});
+  std::vector<RGB> lit(count);
+  for (size_t j = 0; j < first.sample_of_point.size(); ++j) lit[first.sample_of_point[j] / spp] += first_radiance[j];
+  for (size_t j = 0; j < more.sample_of_point.size(); ++j) lit[more.sample_of_point[j] / spp] += more_radiance[j];
+  const float inv = 1.0f / static_cast<float>(spp);
+  for (size_t p = 0; p < count; ++p) {
+    RGB seen{};
+    for (size_t k = 0; k < spp; ++k) seen += first.emitted[p * spp + k];
+    pixels[p] = seen * inv + lit[p] * (1.0f / static_cast<float>(shaded_of_pixel[p]));
+  }
+}
+
+void reorder_points(const TileWork& work, std::span<const uint32_t> order, TileWork& out) {
+  out = TileWork{};
+  out.rect = work.rect;
+  out.spp = work.spp;
+  out.shaded = work.shaded;
+  out.eye = work.eye;
+  out.emitted = work.emitted;
+  out.rebuildable = work.rebuildable;
+  out.sampler = work.sampler;
+  out.image_width = work.image_width;
+  out.points.reserve(order.size());
+  const ShadingPoints& w = work.points;
+  for (uint32_t i : order) {
+    if (w.triangle.empty()) out.points.push_back(w.position[i], w.normal[i], w.wo[i], w.material[i], w.key[i]);
+    else out.points.push_back(w.position[i], w.normal[i], w.wo[i], w.material[i], w.key[i], w.triangle[i]);
+    out.sample_of_point.push_back(work.sample_of_point[i]);
+    if (!work.distance.empty()) out.distance.push_back(work.distance[i]);
+  }
+}
+
+Vec3 point_on_ray(Vec3 origin, Vec3 wo, float t) { return origin + (-wo) * t; }
+
+uint64_t tile_sample_key(SamplerKind kind, int64_t image_width, const TileRect& rect, int spp, uint32_t sample) {
+  const uint64_t per_pixel = static_cast<uint64_t>(spp), local = sample / per_pixel;
+  const uint64_t w = static_cast<uint64_t>(rect.width());
+  const uint64_t x = static_cast<uint64_t>(rect.x0) + local % w, y = static_cast<uint64_t>(rect.y0) + local / w;
+  return pixel_sample_key(kind, y * static_cast<uint64_t>(image_width) + x, sample % per_pixel);
+}
+
+void fold_by_pixel(std::span<const RGB> radiance, std::span<const uint32_t> samples, int spp, std::vector<RGB>& sums) {
+  const uint32_t per_pixel = static_cast<uint32_t>(spp);
+  for (size_t j = 0; j < samples.size();) {
+    const uint32_t pixel = samples[j] / per_pixel;
+    RGB sum{};
+    for (; j < samples.size() && samples[j] / per_pixel == pixel; ++j) sum += radiance[j];
+    sums.push_back(sum);
+  }
+}
+
+size_t pixel_runs(std::span<const uint32_t> samples, int spp) {
+  const uint32_t per_pixel = static_cast<uint32_t>(spp);
+  size_t runs = 0;
+  for (size_t j = 0; j < samples.size(); ++j) runs += j == 0 || samples[j] / per_pixel != samples[j - 1] / per_pixel;
+  return runs;
+}
+
+void resolve_tile(const TileWork& work, std::span<const RGB> radiance, std::vector<RGB>& pixels) {
+  resolve_tile(work, radiance, {}, {}, pixels);
+}
+
+bool pixel_sees_emitter(const TileWork& work, size_t pixel) {
+  const size_t spp = static_cast<size_t>(work.spp);
+  for (size_t k = pixel * spp; k < (pixel + 1) * spp; ++k)
+    if (work.emitted[k].x != 0 || work.emitted[k].y != 0 || work.emitted[k].z != 0) return true;
+  return false;
+}
+
+void resolve_tile(const TileWork& work, std::span<const RGB> radiance, std::span<const RGB> pixel_radiance,
+                  std::span<const uint8_t> folded, std::vector<RGB>& pixels) {
+  const size_t samples = work.emitted.size();
+  const size_t spp = static_cast<size_t>(work.spp);
+  pixels.assign(samples / spp, RGB{});
+  const float inv = 1.0f / static_cast<float>(spp);
+  if (work.shaded > 0 && work.shaded < work.spp) {
+    // Emission over all samples, lighting over the shaded ones (ImageSpec::shade_spp).
+    const float inv_shaded = 1.0f / static_cast<float>(work.shaded);
+    std::vector<RGB> lit(pixels.size());
+    for (size_t j = 0; j < work.sample_of_point.size(); ++j)
+      if (folded.empty() || !folded[work.sample_of_point[j] / static_cast<uint32_t>(work.spp)])
+        lit[work.sample_of_point[j] / spp] += radiance[j];
+    for (size_t p = 0; p < pixels.size(); ++p) {
+      RGB seen{};
+      for (size_t k = 0; k < spp; ++k) seen += work.emitted[p * spp + k];
+      pixels[p] = seen * inv + (!folded.empty() && folded[p] ? pixel_radiance[p] : lit[p]) * inv_shaded;
+    }
+    return;
+  }
+  std::vector<RGB> per_sample(work.emitted);
+  for (size_t j = 0; j < work.sample_of_point.size(); ++j)
+    if (folded.empty() || !folded[work.sample_of_point[j] / static_cast<uint32_t>(work.spp)])
+      per_sample[work.sample_of_point[j]] += radiance[j];
+  for (size_t p = 0; p < pixels.size(); ++p) {
+    if (!folded.empty() && folded[p]) {
+      pixels[p] = pixel_radiance[p] * inv;
+      continue;
+    }
+    RGB sum{};
+    for (size_t k = 0; k < spp; ++k) sum += per_sample[p * spp + k];
+    pixels[p] = sum * inv;
+  }
+}
+
+}  // namespace lf

@@ -1,0 +1,191 @@
+#include "render/tracing/tracer.hpp"
+
+#include "render/tracing/tied_hits.hpp"
+
+#include <algorithm>
+#include <embree3/rtcore.h>
+#include <malloc.h>
+
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+namespace lf {
+
+namespace {
+
+// What the alpha filter needs: the scene, and which scene triangle each of Embree's primitives is.
+struct Primitives {
+  const Scene* scene = nullptr;
+  std::vector<uint32_t> subset;  // Embree's primitive i is scene triangle subset[i]; empty: the whole scene
+  uint32_t triangle_of(unsigned prim) const { return subset.empty() ? prim : subset[prim]; }
+};
+
+void skip_cut_out(const RTCFilterFunctionNArguments* args) {
+  const auto* prims = static_cast<const Primitives*>(args->geometryUserPtr);
+  for (unsigned i = 0; i < args->N; ++i) {
+    if (args->valid[i] != -1) continue;
+    const float u = RTCHitN_u(args->hit, args->N, i), v = RTCHitN_v(args->hit, args->N, i);
+    if (!prims->scene->opaque(prims->triangle_of(RTCHitN_primID(args->hit, args->N, i)), {1 - u - v, u, v}))
+      args->valid[i] = 0;
+  }
+}
+
+}  // namespace
+
+struct RayTracer::Impl {
+  RTCDevice device = nullptr;
+  RTCScene scene = nullptr;
+  Primitives prims;
+  std::unique_ptr<TiedHits> ties;  // the whole scene's; a part's tracer leaves ties to its caller
+  ~Impl() {
+    if (scene) rtcReleaseScene(scene);
+    if (device) rtcReleaseDevice(device);
+  }
+};
+
+RayTracer::RayTracer(const Scene& scene) : RayTracer(scene, std::vector<uint32_t>{}) {}
+
+RayTracer::RayTracer(const Scene& scene, std::vector<uint32_t> triangles)
+    : impl_(std::make_unique<Impl>()), scene_(scene) {
+  impl_->prims.scene = &scene;
+  impl_->prims.subset = std::move(triangles);
+  const bool whole = impl_->prims.subset.empty();
+  // One thread per actor: parallelism comes from processes (and Embree's own pool would fight them for cores).
+  impl_->device = rtcNewDevice("threads=1");
+  if (!impl_->device) throw std::runtime_error("Embree: cannot create a device");
+  impl_->scene = rtcNewScene(impl_->device);
+  RTCGeometry geom = rtcNewGeometry(impl_->device, RTC_GEOMETRY_TYPE_TRIANGLE);
+  if (whole && scene.shares_storage()) {
+    // The scene image is mapped by every actor of this host; Embree reads it in place (padded for its loads).
+    rtcSetSharedGeometryBuffer(geom, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, scene.vertices().data(), 0,
+                               sizeof(Vec3), scene.vertices().size());
+    rtcSetSharedGeometryBuffer(geom, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, scene.triangles().data(), 0,
+                               3 * sizeof(unsigned), scene.triangles().size());
+  } else if (whole) {
+    auto* vb = static_cast<float*>(rtcSetNewGeometryBuffer(geom, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3,
+                                                           3 * sizeof(float), scene.vertices().size()));
+    for (size_t i = 0; i < scene.vertices().size(); ++i) {
+      vb[3 * i] = scene.vertices()[i].x;
+      vb[3 * i + 1] = scene.vertices()[i].y;
+      vb[3 * i + 2] = scene.vertices()[i].z;
+    }
+    auto* ib = static_cast<unsigned*>(rtcSetNewGeometryBuffer(geom, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3,
+                                                              3 * sizeof(unsigned), scene.triangles().size()));
+    for (size_t i = 0; i < scene.triangles().size(); ++i)
+      for (int c = 0; c < 3; ++c) ib[3 * i + c] = scene.triangles()[i][c];
+  } else {
+    // A part: its triangles' own vertices only, renumbered, each corner in its scene order (same float values, same
+    // corners in the same order: the same intersection arithmetic as in the whole scene).
+    const auto& subset = impl_->prims.subset;
+    std::vector<uint32_t> renumbered(scene.vertices().size(), UINT32_MAX);
+    std::vector<uint32_t> used;
+    for (uint32_t t : subset)
+      for (uint32_t v : scene.triangles()[t])
+        if (renumbered[v] == UINT32_MAX) {
+          renumbered[v] = static_cast<uint32_t>(used.size());
+          used.push_back(v);
+        }
+    auto* vb = static_cast<float*>(rtcSetNewGeometryBuffer(geom, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3,
+                                                           3 * sizeof(float), used.size()));
+    for (size_t i = 0; i < used.size(); ++i) {
+      const Vec3 v = scene.vertices()[used[i]];
+      vb[3 * i] = v.x;
+      vb[3 * i + 1] = v.y;
+      vb[3 * i + 2] = v.z;
+    }
+    auto* ib = static_cast<unsigned*>(rtcSetNewGeometryBuffer(geom, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3,
+                                                              3 * sizeof(unsigned), subset.size()));
+    for (size_t i = 0; i < subset.size(); ++i)
+      for (int c = 0; c < 3; ++c) ib[3 * i + c] = renumbered[scene.triangles()[subset[i]][c]];
+  }
+  if (scene.has_cutouts()) {
+    // Alpha cut-outs: a hit where the alpha map says the surface is not there is no hit, for every kind of ray.
+    rtcSetGeometryUserData(geom, &impl_->prims);
+    rtcSetGeometryIntersectFilterFunction(geom, &skip_cut_out);
+    rtcSetGeometryOccludedFilterFunction(geom, &skip_cut_out);
+  }
+  rtcCommitGeometry(geom);
+  rtcAttachGeometry(impl_->scene, geom);
+  rtcReleaseGeometry(geom);
+  rtcCommitScene(impl_->scene);
+  if (rtcGetDeviceError(impl_->device) != RTC_ERROR_NONE) throw std::runtime_error("Embree: cannot build the scene");
+  if (whole) impl_->ties = std::make_unique<TiedHits>(scene);
+  // The build's temporaries (half again the BVH's size) stay in the heap after they are freed; give them back,
+  // since every actor of a host holds its own BVH.
+  ::malloc_trim(0);
+}
+
+RayTracer::~RayTracer() = default;
+
+static void fill(RTCRay& r, const Ray& ray) {
+  r.org_x = ray.origin.x;
+  r.org_y = ray.origin.y;
+  r.org_z = ray.origin.z;
+  r.dir_x = ray.direction.x;
+  r.dir_y = ray.direction.y;
+  r.dir_z = ray.direction.z;
+  r.tnear = ray.tnear;
+  r.tfar = ray.tfar;
+  r.time = 0;
+  r.mask = 0xffffffffu;
+  r.id = 0;
+  r.flags = 0;
+}
+
+// Rays given to Embree in one stream call at most.
+constexpr size_t kStreamPiece = size_t{1} << 20;
+
+// The rays and Embree's answers of this thread's last intersect_unsettled (settling reads its barycentrics).
+static std::vector<RTCRayHit>& rayhit_buffer() {
+  thread_local std::vector<RTCRayHit> buffer;
+  return buffer;
+}
+
+void RayTracer::intersect(std::span<const Ray> rays, std::span<Hit> hits, bool coherent) const {
+  intersect_unsettled(rays, hits, coherent);
+  if (!impl_->ties) return;
+  const std::vector<RTCRayHit>& answers = rayhit_buffer();
+  for (size_t i = 0; i < rays.size(); ++i) hits[i] = impl_->ties->settle(rays[i], hits[i], answers[i].hit.u, answers[i].hit.v);
+}
+
+void RayTracer::intersect_unsettled(std::span<const Ray> rays, std::span<Hit> hits, bool coherent) const {
+  std::vector<RTCRayHit>& buffer = rayhit_buffer();
+  buffer.resize(rays.size());
+  for (size_t i = 0; i < rays.size(); ++i) {
+    fill(buffer[i].ray, rays[i]);
+    buffer[i].hit.geomID = RTC_INVALID_GEOMETRY_ID;
+    buffer[i].hit.primID = RTC_INVALID_GEOMETRY_ID;
+    buffer[i].hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
+  }
+  RTCIntersectContext context;
+  rtcInitIntersectContext(&context);
+  context.flags = coherent ? RTC_INTERSECT_CONTEXT_FLAG_COHERENT : RTC_INTERSECT_CONTEXT_FLAG_INCOHERENT;
+  // In pieces: one stream of 40 M rays (3.2 GB of RTCRayHit: an eight-cache network's own values in one process)
+  // crashed inside rtcIntersect1M.
+  for (size_t first = 0; first < rays.size(); first += kStreamPiece)
+    rtcIntersect1M(impl_->scene, &context, buffer.data() + first,
+                   static_cast<unsigned>(std::min(kStreamPiece, rays.size() - first)), sizeof(RTCRayHit));
+  for (size_t i = 0; i < rays.size(); ++i) {
+    if (buffer[i].hit.geomID == RTC_INVALID_GEOMETRY_ID) {
+      hits[i] = Hit{};
+    } else {
+      hits[i] = Hit{impl_->prims.triangle_of(buffer[i].hit.primID), buffer[i].ray.tfar};
+    }
+  }
+}
+
+void RayTracer::occluded(std::span<const Ray> rays, std::span<uint8_t> occluded) const {
+  thread_local std::vector<RTCRay> buffer;
+  buffer.resize(rays.size());
+  for (size_t i = 0; i < rays.size(); ++i) fill(buffer[i], rays[i]);
+  RTCIntersectContext context;
+  rtcInitIntersectContext(&context);
+  for (size_t first = 0; first < rays.size(); first += kStreamPiece)
+    rtcOccluded1M(impl_->scene, &context, buffer.data() + first,
+                  static_cast<unsigned>(std::min(kStreamPiece, rays.size() - first)), sizeof(RTCRay));
+  // Embree marks an occluded ray by setting tfar to -inf.
+  for (size_t i = 0; i < rays.size(); ++i) occluded[i] = buffer[i].tfar < 0 ? 1 : 0;
+}
+
+}  // namespace lf
