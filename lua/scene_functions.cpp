@@ -21,33 +21,31 @@ int l_scene(lua_State* L) {
   return 0;
 }
 
+// A table a script gives once (camera, image), read by `read` into `into`.
+template <class Spec>
+int declare_once(lua_State* L, bool& declared, const char* name, Spec& into, Spec (*read)(const ParamTable&)) {
+  if (declared) luaL_error(L, "%s is declared twice", name);
+  ParamTable p = table_params(L, 1, name);
+  with_params(L, [&] {
+    into = read(p);
+    p.report_unused();
+  });
+  declared = true;
+  return 0;
+}
+
 // camera { eye = {x,y,z}, at = {x,y,z}, up = {0,1,0}, fov = 39.3 }
 int l_camera(lua_State* L) {
   Builder& b = builder(L);
-  if (b.have_camera) luaL_error(L, "camera is declared twice");
-  ParamTable p = table_params(L, 1, "camera");
-  with_params(L, [&] {
-    b.spec.camera = CameraSpec::read(p);
-    p.report_unused();
-  });
-  b.have_camera = true;
-  return 0;
+  return declare_once(L, b.have_camera, "camera", b.spec.camera, &CameraSpec::read);
 }
 
 // image { width = 512, height = 512, spp = 16, shade_spp = 16, adaptive_spp = 64, adaptive_threshold = 0.05,
 //         tile = 16, output = "cornell.png", exposure = 0, tonemap = "clamp", sampler = "sobol" }
 int l_image(lua_State* L) {
   Builder& b = builder(L);
-  if (b.have_image) luaL_error(L, "image is declared twice");
-  ParamTable p = table_params(L, 1, "image");
-  with_params(L, [&] {
-    b.spec.image = ImageSpec::read(p);
-    p.report_unused();
-  });
-  b.have_image = true;
-  return 0;
+  return declare_once(L, b.have_image, "image", b.spec.image, &ImageSpec::read);
 }
-
 
 // light { quad = {c1, c2, c3, c4}, radiance = {r,g,b} } | light { sphere = {x,y,z}, radius = r, radiance = ... }
 // | light { point = {x,y,z}, intensity = {r,g,b} }: a light added to the scene (any number of them). A quad emits

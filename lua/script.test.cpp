@@ -181,6 +181,9 @@ TEST_F(ScriptTest, BadParametersNameLineAndParameter) {
   EXPECT_EQ(error_of("local d = lightop \"direct\" { light_samples = -1 }\n"),
             "farm.lua:1: lightop 'direct': parameter 'light_samples' must be in [1, 1048576], got -1");
   EXPECT_EQ(error_of("image { width = 0 }\n"), "farm.lua:1: image: parameter 'width' must be in [1, 16384], got 0");
+  EXPECT_EQ(error_of("image { width = 8 }\nimage { width = 9 }\n"), "farm.lua:2: image is declared twice");
+  EXPECT_EQ(error_of("camera { fov = 30 }\ncamera { fov = 40 }\n"), "farm.lua:2: camera is declared twice");
+  EXPECT_EQ(error_of("camera { eye = {1, 1, 1}, at = {1, 1, 1} }\n"), "farm.lua:1: camera: eye and at are the same point");
   EXPECT_EQ(error_of("\nimage { tonemap = \"filmic\" }\n").rfind("farm.lua:2: image: parameter 'tonemap' must be one of", 0), 0u)
       << error_of("\nimage { tonemap = \"filmic\" }\n");
   EXPECT_EQ(error_of("image { exposure = 40 }\n"), "farm.lua:1: image: parameter 'exposure' must be in [-20, 20], got 40");
