@@ -283,7 +283,7 @@ class RendererActor final : public Actor {
     size_t more = 0;
     for (uint32_t c : counts) {
       more += c - static_cast<size_t>(shaded);
-      adaptive_pixels_ += c > shaded;
+      adaptive_pixels_ += c > static_cast<uint32_t>(shaded);
     }
     if (more == 0) return false;
     adaptive_samples_ += more;
