@@ -26,15 +26,15 @@ namespace {
 namespace fs = std::filesystem;
 
 // Starts `lightfarm actor --kind K --name N --director EP` as Runtime(args).run(make_actor(K)) on a thread. A pid is
-// a handle; an actor's exit is its thread's end. Threads cannot be killed: a test that needs a kill fails instead
-// of hanging (stop_all waits, then reports the threads still running).
+// a handle; an actor's exit is its thread's end; a kill is Runtime::stop (its run ends at its next turn, 143).
 class ThreadLauncher final : public Launcher {
  public:
   std::set<std::string> refuse_kinds;  // start() fails for these, as for a program that is not there
   std::set<std::string> fail_kinds;    // these exit with status 3 before they say HELLO
+  std::set<std::string> late_kinds;    // these start 300 ms late (after a failing farm has sent its BYEs)
   std::vector<std::string> started;    // NAME (KIND), in order
   std::vector<pid_t> killed;
-  int still_running_after_stop = 0;
+  int still_running_after_stop = 0;  // threads that ended only when stopped after the grace
 
   ~ThreadLauncher() override {
     for (auto& [pid, r] : running_)
@@ -49,12 +49,20 @@ class ThreadLauncher final : public Launcher {
     if (refuse_kinds.count(args.kind)) return make_error("no such program");
     started.push_back(args.name + " (" + args.kind + ")");
     auto run = std::make_shared<Running>();
-    const bool fail = fail_kinds.count(args.kind) > 0;
-    run->thread = std::thread([args, run, fail] {
+    const bool fail = fail_kinds.count(args.kind) > 0, late = late_kinds.count(args.kind) > 0;
+    run->thread = std::thread([args, run, fail, late] {
+      if (late) std::this_thread::sleep_for(std::chrono::milliseconds(300));
       if (!fail) {
         auto actor = make_actor(args.kind);
         Runtime rt(args);
+        {
+          std::lock_guard<std::mutex> lock(run->mutex);
+          if (run->stop_asked) rt.stop();
+          run->runtime = &rt;
+        }
         run->status = rt.run(*actor);
+        std::lock_guard<std::mutex> lock(run->mutex);
+        run->runtime = nullptr;
       } else {
         run->status = 3;
       }
@@ -73,16 +81,23 @@ class ThreadLauncher final : public Launcher {
       }
     return std::nullopt;
   }
-  void kill(pid_t pid, int) override { killed.push_back(pid); }
+  bool all_ended() const { return running_.empty(); }
+  void kill(pid_t pid, int) override {
+    killed.push_back(pid);
+    if (auto it = running_.find(pid); it != running_.end()) it->second->stop();
+  }
   void stop_all(std::chrono::milliseconds grace) override {
-    const auto until = std::chrono::steady_clock::now() + grace + std::chrono::seconds(5);
+    const auto until = std::chrono::steady_clock::now() + grace;
     while (std::chrono::steady_clock::now() < until) {
       while (reap_one()) {
       }
       if (running_.empty()) return;
       std::this_thread::sleep_for(std::chrono::milliseconds(10));
     }
+    // As a launcher sends SIGTERM after the grace: the rest are stopped, and end.
     still_running_after_stop = static_cast<int>(running_.size());
+    for (auto& [pid, run] : running_) kill(pid, SIGTERM);
+    while (reap_one() || !running_.empty()) std::this_thread::sleep_for(std::chrono::milliseconds(10));
   }
 
  private:
@@ -90,6 +105,14 @@ class ThreadLauncher final : public Launcher {
     std::thread thread;
     std::atomic<bool> done{false};
     int status = 0;
+    std::mutex mutex;              // guards runtime, which lives on the thread's stack
+    Runtime* runtime = nullptr;    // while it runs
+    bool stop_asked = false;
+    void stop() {
+      std::lock_guard<std::mutex> lock(mutex);
+      stop_asked = true;
+      if (runtime) runtime->stop();
+    }
   };
   std::map<pid_t, std::shared_ptr<Running>> running_;
   pid_t next_pid_ = 1000;
@@ -135,7 +158,7 @@ TEST_F(DirectorTest, AFrameRunsThroughEveryStageAndEveryActorEnds) {
   ASSERT_EQ(run(err), 0) << err;
   EXPECT_EQ(threads->started, (std::vector<std::string>{"direct (direct)", "renderer-0 (renderer)", "renderer-1 (renderer)"}));
   EXPECT_TRUE(threads->killed.empty());
-  EXPECT_EQ(threads->still_running_after_stop, 0);
+  EXPECT_EQ(threads->still_running_after_stop, 0);  // every actor ended on its own, after BYE
   auto image = read_image(spec.image.output);
   ASSERT_TRUE(image.ok()) << image.error().message;
   ASSERT_EQ(image->width, 32);
@@ -186,16 +209,18 @@ TEST_F(DirectorTest, AnActorThatCannotStartIsNamedAndTheOthersEnd) {
   std::string err;
   EXPECT_EQ(run(err), 1);
   EXPECT_NE(err.find("cannot start actor 'direct': no such program"), std::string::npos) << err;
-  EXPECT_EQ(threads->still_running_after_stop, 0);
+  EXPECT_TRUE(threads->all_ended());
   EXPECT_FALSE(fs::exists(spec.image.output));
 }
 
 TEST_F(DirectorTest, AnActorThatExitsBeforeHelloIsNamedWithItsStatus) {
   threads->fail_kinds = {"direct"};
+  threads->late_kinds = {"renderer"};  // they say HELLO to a farm that has already failed
   std::string err;
   EXPECT_EQ(run(err), 1);
   EXPECT_NE(err.find("actor 'direct' (pid 1001) exited with status 3 during start-up"), std::string::npos) << err;
-  EXPECT_EQ(threads->still_running_after_stop, 0);
+  EXPECT_TRUE(threads->all_ended());  // those that said HELLO after the BYEs went are stopped
+  EXPECT_EQ(threads->still_running_after_stop, 2);
   EXPECT_FALSE(fs::exists(spec.image.output));
 }
 

@@ -3,6 +3,7 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <csignal>
 #include <filesystem>
 
 #include "actors/codecs/control_codec.hpp"
@@ -387,6 +388,7 @@ int Runtime::run(Actor& actor) {
       log_debug("stopping on signal " + std::to_string(stop_signal()));
       return 128 + stop_signal();
     }
+    if (stop_asked_) return 128 + SIGTERM;
     if (connections_.take_changed()) {
       // Inputs were connected, or one was replaced (PEER_MOVED): the poller is made again around the live sockets.
       poller.clear();

@@ -97,6 +97,9 @@ class Runtime {
   ~Runtime();
   // Runs until the farm ends; returns the process exit status.
   int run(Actor& actor);
+  // Ends run() at its next turn as SIGTERM would (status 143), from any thread: for a runtime hosted on a thread of
+  // another program, which no signal can reach alone (actors/director/director.test.cpp's launcher).
+  void stop() { stop_asked_ = true; }
 
   const std::string& name() const { return args_.name; }
   const std::string& kind() const { return args_.kind; }
@@ -192,6 +195,7 @@ class Runtime {
   std::atomic<double> heartbeat_interval_{1.0};
   bool configured_ = false;
   bool stopping_ = false;
+  std::atomic<bool> stop_asked_{false};
   int exit_status_ = 0;
   std::map<std::string, std::chrono::steady_clock::time_point> progress_sent_;
 };
