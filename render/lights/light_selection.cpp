@@ -243,26 +243,27 @@ Task LightSelection::build(const SceneContext& ctx, const LightSelectionOptions&
     }
   }
   if (replicas > 1) co_await exchange_moments(*ctx.exchange, mine, moment, out.shadow_rays_, out.blocked_rays_);
-  // Each cell's distribution (its lights in index order); a cell whose samples all came back dark learns nothing.
-  for (size_t c = 0; c < cell_ranges.size(); ++c) {
-    double sum = 0;
-    for (auto& [light, m] : moment[c]) sum += (m = std::sqrt(m));
-    if (!(sum > 0)) continue;
-    Cell cell{static_cast<uint32_t>(out.lights_.size()), static_cast<uint32_t>(moment[c].size())};
-    double running = 0;
-    for (const auto& [light, m] : moment[c]) {
-      running += m;
-      out.lights_.push_back(light);
-      out.cdf_.push_back(static_cast<float>(running / sum));
-    }
-    out.cdf_.back() = 1.0f;
-    // Each light's chance as the difference of the sums pick() compares u with, so that it is what pick() does.
-    for (size_t i = cell.first; i < out.cdf_.size(); ++i)
-      out.probability_.push_back(out.cdf_[i] - (i == cell.first ? 0.0f : out.cdf_[i - 1]));
-    out.index_.emplace(keyed[cell_ranges[c].first].first, static_cast<int32_t>(out.cells_.size()));
-    out.cells_.push_back(cell);
-  }
+  for (size_t c = 0; c < cell_ranges.size(); ++c) out.add_cell(keyed[cell_ranges[c].first].first, moment[c]);
   ctx.report("learning lights", mine.size(), std::max<size_t>(mine.size(), 1));
+}
+
+void LightSelection::add_cell(uint64_t key, std::map<uint32_t, double>& moment) {
+  double sum = 0;
+  for (auto& [light, m] : moment) sum += (m = std::sqrt(m));
+  if (!(sum > 0)) return;
+  Cell cell{static_cast<uint32_t>(lights_.size()), static_cast<uint32_t>(moment.size())};
+  double running = 0;
+  for (const auto& [light, m] : moment) {
+    running += m;
+    lights_.push_back(light);
+    cdf_.push_back(static_cast<float>(running / sum));
+  }
+  cdf_.back() = 1.0f;
+  // Each light's chance as the difference of the sums pick() compares u with, so that it is what pick() does.
+  for (size_t i = cell.first; i < cdf_.size(); ++i)
+    probability_.push_back(cdf_[i] - (i == cell.first ? 0.0f : cdf_[i - 1]));
+  index_.emplace(key, static_cast<int32_t>(cells_.size()));
+  cells_.push_back(cell);
 }
 
 }  // namespace lf

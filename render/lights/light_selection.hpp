@@ -14,6 +14,7 @@
 // pixel order, the cells by key, every sample seeded by its cell and index. Every process that builds it builds the
 // same thing, so images do not depend on the farm's layout.
 #include <cstdint>
+#include <map>
 #include <unordered_map>
 #include <vector>
 
@@ -73,6 +74,9 @@ class LightSelection {
 
  private:
   uint64_t key_of(Vec3 x, Vec3 n) const;
+  // The cell `key`'s distribution from each light's second moment (its lights in index order); a cell whose
+  // samples all came back dark learns nothing.
+  void add_cell(uint64_t key, std::map<uint32_t, double>& moment);
   struct Cell {
     uint32_t first = 0, count = 0;  // its lights in lights_ / cdf_, sorted by light
   };
