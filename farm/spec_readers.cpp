@@ -32,6 +32,7 @@ SceneSpec read_scene(const ParamTable& p, const fs::path& script_dir) {
   SceneSpec s;
   s.builtin = p.get_string("builtin", "", Scene::builtin_names());
   s.file = p.get_string("file", "");
+  p.report_unused();
   if (s.builtin.empty() == s.file.empty())
     throw ParamError("scene needs exactly one of builtin = \"cornell\" or file = \"path.obj\"");
   if (!s.file.empty()) {

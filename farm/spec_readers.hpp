@@ -2,7 +2,8 @@
 // What a farm script's tables mean, read without Lua: each of scene { }, host { }, material { }, light { } and
 // farm { } has one reader here over a ParamTable, with its ranges, defaults and the rules between its fields (the
 // image and the camera are read by ImageSpec::read and CameraSpec::read in core/, which CONFIG uses too). A bad
-// value throws ParamError with the message the user sees; the Lua binding adds the script's file and line.
+// value, or a parameter the table does not know, throws ParamError with the message the user sees; the Lua binding
+// adds the script's file and line.
 // Relative paths are taken from `script_dir`, so a farm travels with its files.
 #include <filesystem>
 #include <string>

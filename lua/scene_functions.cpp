@@ -12,7 +12,6 @@ int l_scene(lua_State* L) {
   ParamTable p = table_params(L, 1, "scene");
   with_params(L, [&] {
     SceneSpec read = read_scene(p, b.script_dir);
-    p.report_unused();
     b.spec.scene.builtin = read.builtin;
     b.spec.scene.file = read.file;
   });

@@ -4,7 +4,7 @@
 #include <csignal>
 
 #include "actors/director/farm_failure.hpp"
-#include "actors/runtime/runtime.hpp"
+#include "actors/runtime/process.hpp"
 #include "core/log.hpp"
 
 namespace lf {

@@ -22,7 +22,7 @@
 #include "actors/director/service_router.hpp"
 #include "actors/director/supervisor.hpp"
 #include "actors/director/tile_service.hpp"
-#include "actors/runtime/runtime.hpp"
+#include "actors/runtime/process.hpp"
 #include "core/log.hpp"
 #include "core/private_dir.hpp"
 #include "render/images/image.hpp"

@@ -189,8 +189,9 @@ TEST_F(DirectorTest, TheSameFrameComesOutWhicheverRendererTookWhichTile) {
   auto fake = std::make_unique<ThreadLauncher>();
   again.set("local", std::move(fake));
   testing::internal::CaptureStderr();
-  ASSERT_EQ(run_farm(spec, options, again), 0) << testing::internal::GetCapturedStderr();
-  testing::internal::GetCapturedStderr();
+  const int status = run_farm(spec, options, again);
+  err = testing::internal::GetCapturedStderr();
+  ASSERT_EQ(status, 0) << err;
   auto other = read_image(spec.image.output);
   ASSERT_TRUE(other.ok());
   EXPECT_EQ(one->pixels, other->pixels);

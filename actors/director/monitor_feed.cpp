@@ -4,7 +4,7 @@
 #include <cmath>
 #include <thread>
 
-#include "actors/runtime/runtime.hpp"
+#include "actors/runtime/process.hpp"
 #include "farm/builders.hpp"
 #include "render/images/image.hpp"
 

@@ -14,7 +14,7 @@
 #include <thread>
 
 #include "actors/launchers/local_launcher.hpp"
-#include "actors/runtime/runtime.hpp"
+#include "actors/runtime/process.hpp"
 #include "core/log.hpp"
 
 namespace lf {
