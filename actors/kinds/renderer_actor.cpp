@@ -14,6 +14,7 @@
 #include <deque>
 
 #include "actors/codecs/shade_codec.hpp"
+#include "actors/kinds/tile_plan.hpp"
 #include "actors/runtime/remote_tracing.hpp"
 #include "farm/kind_params.hpp"
 #include "core/log.hpp"
@@ -75,14 +76,9 @@ class RendererActor final : public Actor {
   struct TileJob {
     uint64_t id = 0;
     TileWork work;
-    std::vector<RGB> radiance;        // one value a point, from replies that came that way
-    std::vector<RGB> pixel_radiance;  // a pixel's points' radiance summed (fold_by_pixel), from folded replies
-    std::vector<uint8_t> folded;      // which pixels came folded
-    std::vector<uint32_t> pixel;      // when folding: each point's pixel in the tile (in sending order)
-    // Points sent grouped by part (partition { colocate = true }): the part each camera sample's hit was found in,
-    // and the index in `work` of each point as sent (empty: sent in point order).
-    std::vector<uint32_t> sample_part;
-    std::vector<uint32_t> order;
+    std::vector<uint32_t> sample_part;  // partition { colocate = true }: the part each camera sample's hit is in
+    TilePlan plan;                      // how the points went out, and where their replies go
+    TileRadiance radiance;
     size_t batches_left = 0;
     // Adaptive sampling: the first round's points and radiance while the second round's are out, and each
     // pixel's count of shaded samples (empty: no second round).
@@ -144,124 +140,46 @@ class RendererActor final : public Actor {
 
   void shade_tile(const std::shared_ptr<TileJob>& job, Runtime& rt) {
     rt.stats().points += job->work.points.size();
-    const size_t n = job->work.points.size();
-    // A pool whose replicas hold scene parts themselves (partition { colocate = true }) gets each part's points
-    // apart, to a replica holding it: the tile's points are sent grouped by part (in point order within a part),
-    // and their radiance put back in point order, so the pixels sum it exactly as they would unsent.
-    std::vector<size_t> part_end{n};  // where each group of points ends, in sending order
-    std::vector<int64_t> group_part{-1};
-    TileWork grouped;                  // the tile as sent, when grouped
-    std::vector<uint8_t> split_pixel;  // then: per pixel, whether its points lie in more than one part
-    if (colocate_ && n > 0) group_by_part(*job, grouped, split_pixel, part_end, group_part);
-    const TileWork& work = job->order.empty() ? job->work : grouped;
-    // A built-in LightOp rebuilds positions, normals, materials and keys from the scene and the tile, and can sum a
-    // pixel's radiance itself: a reply then holds a value a pixel, not a point. Batches then end between pixels, and
-    // one with a pixel that sees an emitter is not folded: that pixel's samples are summed with their emission. Nor
-    // is one with a pixel whose points lie in two parts, as it is answered in two replies.
-    // Adaptive sampling reads each point's radiance: nothing is folded.
-    const bool lean = rt.input_is_lean(0), fold = lean && params_.batch > 1 && image_.adaptive_spp == 0;
-    const size_t pixels = static_cast<size_t>(work.rect.pixel_count());
-    job->radiance.assign(n, RGB{});
-    job->pixel_radiance.assign(fold ? pixels : 0, RGB{});
-    job->folded.assign(fold ? pixels : 0, 0);
-    std::vector<uint8_t> unfoldable(fold ? pixels : 0);
-    for (size_t p = 0; p < unfoldable.size(); ++p)
-      unfoldable[p] = pixel_sees_emitter(work, p) || (!split_pixel.empty() && split_pixel[p]);
-    if (n == 0) return finish_tile(job, rt);
-    if (fold) {
-      const uint32_t spp = static_cast<uint32_t>(work.spp);
-      job->pixel.resize(n);
-      for (size_t j = 0; j < n; ++j) job->pixel[j] = work.sample_of_point[j] / spp;
+    // A built-in LightOp (a lean input) rebuilds positions, normals, materials and keys from the scene and the
+    // tile, and can sum a pixel's radiance itself. Adaptive sampling reads each point's radiance: nothing is folded.
+    // A pool whose replicas hold scene parts gets each part's points apart (tile_plan.hpp).
+    const bool lean = rt.input_is_lean(0);
+    job->plan = plan_batches(job->work, job->sample_part,
+                             {.batch = static_cast<size_t>(params_.batch),
+                              .fold = lean && params_.batch > 1 && image_.adaptive_spp == 0,
+                              .parts = colocate_ ? tracing_->parts() : 0});
+    job->radiance = TileRadiance(job->plan);
+    if (job->plan.batches.empty()) return finish_tile(job, rt);
+    TileWork grouped;
+    if (!job->plan.order.empty()) reorder_points(job->work, job->plan.order, grouped);
+    const TileWork& sent = job->plan.order.empty() ? job->work : grouped;
+    job->batches_left = job->plan.batches.size();
+    for (size_t i = 0; i < job->plan.batches.size(); ++i) {
+      const Batch& b = job->plan.batches[i];
+      ++rt.stats().requests;
+      Value body = lean ? encode_camera_request(sent, b.begin, b.end, *scene_, sampler_, image_.width, b.foldable)
+                        : encode_shade_request(sent.points, b.begin, b.end);
+      const bool folded = body.find("fold") != nullptr;
+      rt.ask_input(
+          0, wire::Op::shade, std::move(body),
+          [this, job, i, folded, &rt](Result<wire::Message> r) {
+            if (!r) return rt.fail("lighting failed: " + r.error().message);
+            const Batch& b = job->plan.batches[i];
+            auto radiance = decode_radiance(r->body, job->plan.reply_size(b, folded));
+            if (!radiance) return rt.fail("lighting '" + rt.input_name(0) + "': " + radiance.error().message);
+            scatter_reply(job->plan, b, folded, *radiance, job->radiance);
+            if (--job->batches_left == 0) finish_tile(job, rt);
+          },
+          b.part);
     }
-    const std::vector<uint32_t>& pixel = job->pixel;
-    for (size_t g = 0, begin = 0; g < part_end.size(); ++g) {
-      for (size_t end = begin; begin < part_end[g]; begin = end) {
-        end = std::min(begin + static_cast<size_t>(params_.batch), part_end[g]);
-        while (fold && end < part_end[g] && pixel[end] == pixel[end - 1]) ++end;
-        // The batch's pixels (runs of points), and whether any of them cannot be folded.
-        size_t runs = 0;
-        bool foldable = fold;
-        for (size_t j = begin; fold && j < end; ++j)
-          if (j == begin || pixel[j] != pixel[j - 1]) {
-            ++runs;
-            foldable = foldable && !unfoldable[pixel[j]];
-          }
-        ++job->batches_left;
-        ++rt.stats().requests;
-        Value body = lean ? encode_camera_request(work, begin, end, *scene_, sampler_, image_.width, foldable)
-                          : encode_shade_request(work.points, begin, end);
-        const bool folded = body.find("fold") != nullptr;
-        const size_t values = folded ? runs : end - begin;
-        rt.ask_input(
-            0, wire::Op::shade, std::move(body),
-            [this, job, begin, end, folded, values, &rt](Result<wire::Message> r) {
-              if (!r) return rt.fail("lighting failed: " + r.error().message);
-              auto radiance = decode_radiance(r->body, values);
-              if (!radiance) return rt.fail("lighting '" + rt.input_name(0) + "': " + radiance.error().message);
-              take_radiance(*job, begin, end, folded, *radiance);
-              if (--job->batches_left == 0) finish_tile(job, rt);
-            },
-            group_part[g]);
-      }
-    }
-  }
-
-  // The tile's points regrouped by the part their camera ray's hit was found in (job.sample_part), into `grouped`,
-  // in point order within a part; job.order says where each came from.
-  void group_by_part(TileJob& job, TileWork& grouped, std::vector<uint8_t>& split_pixel, std::vector<size_t>& part_end,
-                     std::vector<int64_t>& group_part) const {
-    const TileWork& work = job.work;
-    const size_t n = work.points.size(), parts = tracing_->parts();
-    std::vector<uint32_t> part(n);
-    std::vector<size_t> count(parts + 1, 0);
-    for (size_t i = 0; i < n; ++i) {
-      part[i] = std::min<uint32_t>(job.sample_part[work.sample_of_point[i]], static_cast<uint32_t>(parts));
-      ++count[part[i]];
-    }
-    std::vector<size_t> next(parts + 1, 0);
-    part_end.clear();
-    group_part.clear();
-    for (size_t k = 0, at = 0; k <= parts; ++k) {
-      next[k] = at;
-      at += count[k];
-      if (count[k] == 0) continue;
-      part_end.push_back(at);
-      group_part.push_back(k < parts ? static_cast<int64_t>(k) : -1);
-    }
-    job.order.resize(n);
-    for (size_t i = 0; i < n; ++i) job.order[next[part[i]]++] = static_cast<uint32_t>(i);
-    reorder_points(work, job.order, grouped);
-    const uint32_t spp = static_cast<uint32_t>(work.spp);
-    // A pixel's points are consecutive in point order; in another part's group they may come back later.
-    std::vector<int64_t> seen_in(static_cast<size_t>(work.rect.pixel_count()), -1);
-    split_pixel.assign(seen_in.size(), 0);
-    for (size_t i = 0; i < n; ++i) {
-      const uint32_t px = work.sample_of_point[i] / spp;
-      if (seen_in[px] >= 0 && seen_in[px] != part[i]) split_pixel[px] = 1;
-      seen_in[px] = part[i];
-    }
-  }
-
-  static void take_radiance(TileJob& job, size_t begin, size_t end, bool folded, const std::vector<RGB>& radiance) {
-    if (!folded) {
-      if (job.order.empty()) std::copy(radiance.begin(), radiance.end(), job.radiance.begin() + static_cast<ptrdiff_t>(begin));
-      else
-        for (size_t j = begin; j < end; ++j) job.radiance[job.order[j]] = radiance[j - begin];
-      return;
-    }
-    const auto& pixel = job.pixel;
-    for (size_t j = begin, run = 0; j < end; ++j)
-      if (j == begin || pixel[j] != pixel[j - 1]) {
-        job.pixel_radiance[pixel[j]] = radiance[run++];
-        job.folded[pixel[j]] = 1;
-      }
   }
 
   void finish_tile(const std::shared_ptr<TileJob>& job, Runtime& rt) {
     if (image_.adaptive_spp > 0 && job->shaded_of_pixel.empty() && shade_more(job, rt)) return;
     std::vector<RGB> pixels;
-    if (job->shaded_of_pixel.empty()) resolve_tile(job->work, job->radiance, job->pixel_radiance, job->folded, pixels);
-    else resolve_adaptive_tile(job->first, job->first_radiance, job->work, job->radiance, job->shaded_of_pixel, pixels);
+    const TileRadiance& r = job->radiance;
+    if (job->shaded_of_pixel.empty()) resolve_tile(job->work, r.point, r.pixel, r.folded, pixels);
+    else resolve_adaptive_tile(job->first, job->first_radiance, job->work, r.point, job->shaded_of_pixel, pixels);
     ++rt.stats().tiles;
     ++done_acks_out_;
     std::erase(jobs_, job);
@@ -278,7 +196,7 @@ class RendererActor final : public Actor {
 
   // Adaptive sampling's second round for a tile whose first is in: true when points went out for it.
   bool shade_more(const std::shared_ptr<TileJob>& job, Runtime& rt) {
-    auto counts = adaptive_shaded_counts(image_, job->work, job->radiance);
+    auto counts = adaptive_shaded_counts(image_, job->work, job->radiance.point);
     const int shaded = image_.shaded_per_pixel();
     size_t more = 0;
     for (uint32_t c : counts) {
@@ -289,7 +207,7 @@ class RendererActor final : public Actor {
     adaptive_samples_ += more;
     job->shaded_of_pixel = std::move(counts);
     job->first = std::move(job->work);
-    job->first_radiance = std::move(job->radiance);
+    job->first_radiance = std::move(job->radiance.point);
     job->work = TileWork{};
     trace_more_samples(*scene_, *tracer_, *camera_, image_, job->first.rect, job->shaded_of_pixel, job->work);
     shade_tile(job, rt);
