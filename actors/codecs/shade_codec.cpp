@@ -3,7 +3,6 @@
 #include <cstring>
 #include <map>
 
-#include "render/scene/surface.hpp"
 
 namespace lf {
 
@@ -13,64 +12,38 @@ static Bytes vec3_bytes(const std::vector<Vec3>& v, size_t begin, size_t end) {
   return floats_to_bytes(std::span<const float>(reinterpret_cast<const float*>(v.data() + begin), 3 * (end - begin)));
 }
 
-// True when every point of [begin, end) carries exactly (bit for bit) the normal and material its triangle gives:
-// what the receiver would derive. Bitwise, so that -0 and +0 are not taken for each other.
-static bool normals_derivable(const ShadingPoints& pts, size_t begin, size_t end, const Scene& scene) {
-  for (size_t i = begin; i < end; ++i) {
-    const Vec3 ns = surface_at(scene, pts.triangle[i], pts.position[i], pts.wo[i]).ns;
-    if (std::memcmp(&ns, &pts.normal[i], sizeof ns) != 0) return false;
-  }
-  return true;
-}
-
-static bool materials_derivable(const ShadingPoints& pts, size_t begin, size_t end, const Scene& scene) {
-  for (size_t i = begin; i < end; ++i)
-    if (pts.material[i] != scene.material_of(pts.triangle[i])) return false;
-  return true;
-}
-
-// The request's arrays for points [begin, end): p and k unless the caller sends them another way; nrm and m unless
-// `derive_from` (the receiver's scene) gives each point's exactly (`known_derivable`: the caller knows it does).
-static Value encode_points(const ShadingPoints& pts, size_t begin, size_t end, const Scene* derive_from,
-                           bool with_positions, bool with_keys, bool known_derivable = false) {
+// The arrays every request carries for points [begin, end), and nrm, m where `fields` says.
+static Value encode_points(const ShadingPoints& pts, size_t begin, size_t end, PointFields fields) {
   Value body = map_of("n", static_cast<int64_t>(end - begin), "wo", vec3_bytes(pts.wo, begin, end));
   Value::Map& map = body.as_map();
-  if (with_positions) map["p"] = vec3_bytes(pts.position, begin, end);
-  if (with_keys) map["k"] = u64_to_bytes(std::span<const uint64_t>(pts.key.data() + begin, end - begin));
-  const bool lean = derive_from && !pts.triangle.empty();
-  if (!lean || (!known_derivable && !normals_derivable(pts, begin, end, *derive_from)))
-    map["nrm"] = vec3_bytes(pts.normal, begin, end);
-  if (!lean || (!known_derivable && !materials_derivable(pts, begin, end, *derive_from)))
-    map["m"] = u32_to_bytes(std::span<const uint32_t>(pts.material.data() + begin, end - begin));
+  if (fields.normal) map["nrm"] = vec3_bytes(pts.normal, begin, end);
+  if (fields.material) map["m"] = u32_to_bytes(std::span<const uint32_t>(pts.material.data() + begin, end - begin));
   if (!pts.triangle.empty())
     map["tri"] = u32_to_bytes(std::span<const uint32_t>(pts.triangle.data() + begin, end - begin));
   return body;
 }
 
-Value encode_shade_request(const ShadingPoints& pts, size_t begin, size_t end, const Scene* derive_from) {
-  return encode_points(pts, begin, end, derive_from, true, true);
+Value encode_shade_request(const ShadingPoints& pts, size_t begin, size_t end, PointFields fields) {
+  Value body = encode_points(pts, begin, end, fields);
+  Value::Map& map = body.as_map();
+  map["p"] = vec3_bytes(pts.position, begin, end);
+  map["k"] = u64_to_bytes(std::span<const uint64_t>(pts.key.data() + begin, end - begin));
+  return body;
 }
 
-Value encode_camera_request(const TileWork& work, size_t begin, size_t end, const Scene& scene, SamplerKind sampler,
-                            int64_t image_width, bool fold) {
+Value encode_tile_request(const TileWork& work, size_t begin, size_t end, PointFields fields, bool fold) {
   const ShadingPoints& pts = work.points;
-  // trace_tile's points are rebuildable by construction; others are checked point by point.
-  const bool trusted = work.rebuildable && work.sampler == sampler && work.image_width == image_width;
-  bool along_rays = work.distance.size() == pts.size();
-  for (size_t i = begin; !trusted && along_rays && i < end; ++i) {
-    const Vec3 p = point_on_ray(work.eye, pts.wo[i], work.distance[i]);
-    along_rays = std::memcmp(&p, &pts.position[i], sizeof p) == 0;
-  }
-  bool tile_keys = work.sample_of_point.size() == pts.size() && work.rect.width() > 0 && work.spp > 0;
-  for (size_t i = begin; !trusted && tile_keys && i < end; ++i)
-    tile_keys = tile_sample_key(sampler, image_width, work.rect, work.spp, work.sample_of_point[i]) == pts.key[i];
-  Value body = encode_points(pts, begin, end, &scene, !along_rays, !tile_keys, trusted && along_rays && tile_keys);
+  Value body = encode_points(pts, begin, end, fields);
   Value::Map& map = body.as_map();
-  if (along_rays) {
+  if (fields.position) {
+    map["p"] = vec3_bytes(pts.position, begin, end);
+  } else {
     map["o"] = floats_to_bytes(std::span<const float>(&work.eye.x, 3));
     map["t"] = floats_to_bytes(std::span<const float>(work.distance.data() + begin, end - begin));
   }
-  if (tile_keys) {
+  if (fields.key) {
+    map["k"] = u64_to_bytes(std::span<const uint64_t>(pts.key.data() + begin, end - begin));
+  } else {
     map["tile"] = Value::Array{int64_t{work.rect.x0}, int64_t{work.rect.y0}, int64_t{work.rect.x1},
                                int64_t{work.rect.y1}, int64_t{work.spp}};
     map["s"] = u32_to_bytes(std::span<const uint32_t>(work.sample_of_point.data() + begin, end - begin));
@@ -94,21 +67,6 @@ static Result<size_t> read_count(const Value& body) {
   const Value* n = body.find("n");
   if (!n || !n->is_int() || n->as_int() < 0) return make_error("'n' (point count) missing or negative");
   return static_cast<size_t>(n->as_int());
-}
-
-// Positions given as distances along camera rays: p = o - wo t (point_on_ray, as the renderer computed them).
-static Status read_positions_along_rays(const Value& body, size_t n, ShadingPoints& pts) {
-  const Value* o = body.find("o");
-  const Value* t = body.find("t");
-  std::vector<float> origin, distance;
-  if (!o || !o->is_bytes() || !bytes_to_floats(o->as_bytes(), origin) || origin.size() != 3)
-    return make_error("shade request has neither 'p' nor a ray origin 'o' of 3 floats");
-  if (!t || !t->is_bytes() || !bytes_to_floats(t->as_bytes(), distance) || distance.size() != n)
-    return make_error("shade request 't' must hold " + std::to_string(n) + " f32 distances");
-  const Vec3 eye{origin[0], origin[1], origin[2]};
-  pts.position.resize(n);
-  for (size_t i = 0; i < n; ++i) pts.position[i] = point_on_ray(eye, pts.wo[i], distance[i]);
-  return Ok{};
 }
 
 // The tile [x0, y0, x1, y1, spp] a request's sample indices refer to; spp within [1, kMaxTileSide].
@@ -140,79 +98,47 @@ Result<std::optional<PixelFold>> decode_pixel_fold(const Value& body) {
   return std::optional<PixelFold>(std::move(out));
 }
 
-// Sample keys given as a tile's sample indices: tile [x0, y0, x1, y1, spp], s[i] < its samples.
-static Status read_tile_keys(const Value& body, size_t n, const PixelKeys& keys, ShadingPoints& pts) {
-  const Value* s = body.find("s");
-  int64_t v[5] = {};
-  if (!read_tile(body, v) || v[0] < 0 || v[1] < 0 || v[0] >= v[2] || v[1] >= v[3] || v[2] > keys.image_width ||
-      v[3] > kMaxTileSide)
-    return make_error("shade request has neither 'k' nor a tile [x0, y0, x1, y1, spp] inside an image " +
-                      std::to_string(keys.image_width) + " pixels wide");
-  std::vector<uint32_t> samples;
-  if (!s || !s->is_bytes() || !bytes_to_u32(s->as_bytes(), samples) || samples.size() != n)
-    return make_error("shade request 's' must hold " + std::to_string(n) + " u32 sample indices");
-  const TileRect rect{static_cast<int>(v[0]), static_cast<int>(v[1]), static_cast<int>(v[2]), static_cast<int>(v[3])};
-  // The tile's samples, in 64 bits (a hostile tile's pixels times its spp may not fit; s is 32 bits anyway).
-  const uint64_t pixels = static_cast<uint64_t>(v[2] - v[0]) * static_cast<uint64_t>(v[3] - v[1]);
-  const uint64_t count = pixels > UINT32_MAX ? UINT64_MAX : pixels * static_cast<uint64_t>(v[4]);
-  pts.key.resize(n);
-  for (size_t i = 0; i < n; ++i) {
-    if (samples[i] >= count)
-      return make_error("shade request: point " + std::to_string(i) + " is sample " + std::to_string(samples[i]) +
-                        " of a tile of " + std::to_string(count));
-    pts.key[i] = tile_sample_key(keys.sampler, keys.image_width, rect, static_cast<int>(v[4]), samples[i]);
-  }
-  return Ok{};
-}
-
-Result<ShadingPoints> decode_shade_request(const Value& body, size_t material_count, size_t triangle_count,
-                                           const Scene* scene, const PixelKeys* keys) {
+Result<ShadeRequest> decode_shade_request(const Value& body) {
   auto n = read_count(body);
   if (!n) return make_error("shade request: " + n.error().message);
-  ShadingPoints pts;
-  const Value* nrm = body.find("nrm");
-  const Value* m = body.find("m");
-  const Value* tri = body.find("tri");
-  // Without the scene (or the triangles), there is nothing to take a left-out normal or material from.
-  const bool derive = scene && tri;
+  ShadeRequest req;
+  req.n = *n;
+  ShadingPoints& pts = req.points;
   if (auto st = read_vec3(body, "wo", *n, pts.wo); !st) return st.error();
   if (body.find("p") || !body.find("o")) {
     if (auto st = read_vec3(body, "p", *n, pts.position); !st) return st.error();
-  } else if (auto st = read_positions_along_rays(body, *n, pts); !st) {
-    return st.error();
+  } else {
+    const Value* o = body.find("o");
+    const Value* t = body.find("t");
+    std::vector<float> origin;
+    if (!o->is_bytes() || !bytes_to_floats(o->as_bytes(), origin) || origin.size() != 3)
+      return make_error("shade request has neither 'p' nor a ray origin 'o' of 3 floats");
+    if (!t || !t->is_bytes() || !bytes_to_floats(t->as_bytes(), req.distance) || req.distance.size() != *n)
+      return make_error("shade request 't' must hold " + std::to_string(*n) + " f32 distances");
+    req.origin = Vec3{origin[0], origin[1], origin[2]};
   }
-  if (nrm || !derive)
+  if (body.find("nrm"))
     if (auto st = read_vec3(body, "nrm", *n, pts.normal); !st) return st.error();
-  if (m || !derive)
-    if (!m || !m->is_bytes() || !bytes_to_u32(m->as_bytes(), pts.material) || pts.material.size() != *n)
+  if (const Value* m = body.find("m"))
+    if (!m->is_bytes() || !bytes_to_u32(m->as_bytes(), pts.material) || pts.material.size() != *n)
       return make_error("shade request 'm' must hold " + std::to_string(*n) + " u32 material ids");
   const Value* k = body.find("k");
-  if (!k && keys && body.find("s")) {
-    if (auto st = read_tile_keys(body, *n, *keys, pts); !st) return st.error();
+  if (const Value* s = body.find("s"); !k && s) {
+    int64_t v[5] = {};
+    if (!read_tile(body, v) || v[0] < 0 || v[1] < 0 || v[0] >= v[2] || v[1] >= v[3] || v[2] > kMaxTileSide ||
+        v[3] > kMaxTileSide)
+      return make_error("shade request has neither 'k' nor a tile [x0, y0, x1, y1, spp]");
+    if (!s->is_bytes() || !bytes_to_u32(s->as_bytes(), req.samples) || req.samples.size() != *n)
+      return make_error("shade request 's' must hold " + std::to_string(*n) + " u32 sample indices");
+    req.tile = TileRect{static_cast<int>(v[0]), static_cast<int>(v[1]), static_cast<int>(v[2]), static_cast<int>(v[3])};
+    req.spp = static_cast<int>(v[4]);
   } else if (!k || !k->is_bytes() || !bytes_to_u64(k->as_bytes(), pts.key) || pts.key.size() != *n) {
     return make_error("shade request 'k' must hold " + std::to_string(*n) + " u64 sample keys");
   }
-  if (tri) {
+  if (const Value* tri = body.find("tri"))
     if (!tri->is_bytes() || !bytes_to_u32(tri->as_bytes(), pts.triangle) || pts.triangle.size() != *n)
       return make_error("shade request 'tri' must hold " + std::to_string(*n) + " u32 triangle ids");
-  }
-  if (derive && (!nrm || !m)) {
-    const size_t triangles = std::min(triangle_count, scene->triangle_count());
-    for (size_t i = 0; i < *n; ++i)
-      if (pts.triangle[i] >= triangles)
-        return make_error("shade request: point " + std::to_string(i) + " is on triangle " +
-                          std::to_string(pts.triangle[i]) + " but the scene has " + std::to_string(triangles));
-    if (!m) {
-      pts.material.resize(*n);
-      for (size_t i = 0; i < *n; ++i) pts.material[i] = scene->material_of(pts.triangle[i]);
-    }
-    if (!nrm) {
-      pts.normal.resize(*n);
-      for (size_t i = 0; i < *n; ++i) pts.normal[i] = surface_at(*scene, pts.triangle[i], pts.position[i], pts.wo[i]).ns;
-    }
-  }
-  if (std::string why = pts.check(material_count, triangle_count); !why.empty()) return make_error("shade request: " + why);
-  return pts;
+  return req;
 }
 
 Result<Value> slice_shade_request(const Value& body, size_t begin, size_t end) {

@@ -2,7 +2,7 @@
 // The "shade" operation's bodies (docs/PROTOCOL.md):
 //   request: { n: count, p: f32[3n], nrm?: f32[3n], wo: f32[3n], m?: u32[n], k: u64[n], tri?: u32[n] }
 //            (little-endian bins). nrm and m may be left out when tri is there and the receiver takes them from
-//            the scene (a "lean" input): they are then surface_at(scene, tri, p, wo).ns and the triangle's material.
+//            the scene (a "lean" input): they are then the triangle's shading normal at p and its material.
 //            A renderer's request to a lean input may also carry o: f32[3] and t: f32[n] instead of p (p = o - wo t)
 //            and tile: [x0, y0, x1, y1, spp] and s: u32[n] instead of k (the tile's s-th sample's key).
 //            Such a request may also say fold: true, and then holds whole pixels (no pixel's points are split
@@ -19,26 +19,33 @@
 
 namespace lf {
 
-// Points [begin, end) as a request body. With `derive_from` (the receiver holds that scene and takes what it can
-// from it), nrm and m are left out where every point's value is exactly the one its triangle gives.
-Value encode_shade_request(const ShadingPoints& points, size_t begin, size_t end, const Scene* derive_from = nullptr);
-// A renderer's points [begin, end) of a tile to a lean input: as encode_shade_request with the scene, and where
-// they are exactly that, positions as distances along the camera rays (o, t) and sample keys as the tile's sample
-// indices (tile, s), which the receiver turns back into the same bits. 24 bytes a point instead of 52. With
-// `fold` (points [begin, end) are whole pixels), the reply is asked for folded by pixel where the keys travel as
-// sample indices: the body then says fold: true.
-Value encode_camera_request(const TileWork& work, size_t begin, size_t end, const Scene& scene, SamplerKind sampler,
-                            int64_t image_width, bool fold = false);
-// How a lean input rebuilds sample keys from a tile's sample indices: the image's width and sampler.
-struct PixelKeys {
-  int64_t image_width = 0;
-  SamplerKind sampler = SamplerKind::independent;
+// Which of a point's fields a request carries. The ones left out the receiver rebuilds from its scene and the
+// tile; which those may be is decided in actors/runtime/lean_points.hpp, not here: this codec only lays out bytes.
+struct PointFields {
+  bool normal = true, material = true;
+  bool position = true;  // else distances along the camera rays from one origin (o, t)
+  bool key = true;       // else the tile's sample indices (tile, s)
 };
-// With `scene`, a request without nrm or m gets them from its triangles; without, both must be there. With
-// `keys`, one may carry tile and s instead of k; o and t instead of p need nothing more.
-Result<ShadingPoints> decode_shade_request(const Value& body, size_t material_count,
-                                           size_t triangle_count = SIZE_MAX, const Scene* scene = nullptr,
-                                           const PixelKeys* keys = nullptr);
+
+// Points [begin, end) as a request body, with their normals and materials where `fields` says (a bare point set
+// has no camera rays or tile: its positions and keys always travel).
+Value encode_shade_request(const ShadingPoints& points, size_t begin, size_t end, PointFields fields = {});
+// A renderer's points [begin, end) of a tile, each field as `fields` says. With `fold` (points [begin, end) are
+// whole pixels) and keys as sample indices, the body says fold: true and the reply is asked for folded by pixel.
+Value encode_tile_request(const TileWork& work, size_t begin, size_t end, PointFields fields, bool fold);
+
+// A request's arrays as they came, each checked to hold n entries: what was left out is empty (or unset).
+struct ShadeRequest {
+  size_t n = 0;
+  ShadingPoints points;          // wo always; position, normal, material, key and triangle where sent
+  std::optional<Vec3> origin;    // positions as distances along camera rays from here (with `distance`)
+  std::vector<float> distance;
+  std::optional<TileRect> tile;  // keys as the sample indices (`samples`) of this tile with `spp` samples a pixel
+  int spp = 0;
+  std::vector<uint32_t> samples;
+};
+Result<ShadeRequest> decode_shade_request(const Value& body);
+
 // What a request asking for a folded reply (fold: true) is folded by: each point's sample index in its tile and
 // the tile's samples per pixel. std::nullopt for a request that wants one value a point.
 struct PixelFold {

@@ -15,6 +15,7 @@
 
 #include "actors/codecs/shade_codec.hpp"
 #include "actors/kinds/tile_plan.hpp"
+#include "actors/runtime/lean_points.hpp"
 #include "actors/runtime/remote_tracing.hpp"
 #include "farm/kind_params.hpp"
 #include "core/log.hpp"
@@ -157,11 +158,12 @@ class RendererActor final : public Actor {
     for (size_t i = 0; i < job->plan.batches.size(); ++i) {
       const Batch& b = job->plan.batches[i];
       ++rt.stats().requests;
-      Value body = lean ? encode_camera_request(sent, b.begin, b.end, *scene_, sampler_, image_.width, b.foldable)
-                        : encode_shade_request(sent.points, b.begin, b.end);
-      const bool folded = body.find("fold") != nullptr;
+      // A lean input gets only what it cannot rebuild; a reply comes folded where the keys travel as samples.
+      const PointFields fields =
+          lean ? fields_to_send(sent, b.begin, b.end, *scene_, sampler_, image_.width) : PointFields{};
+      const bool folded = b.foldable && !fields.key;
       rt.ask_input(
-          0, wire::Op::shade, std::move(body),
+          0, wire::Op::shade, encode_tile_request(sent, b.begin, b.end, fields, folded),
           [this, job, i, folded, &rt](Result<wire::Message> r) {
             if (!r) return rt.fail("lighting failed: " + r.error().message);
             const Batch& b = job->plan.batches[i];

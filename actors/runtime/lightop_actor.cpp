@@ -17,6 +17,7 @@
 #include <map>
 
 #include "actors/codecs/shade_codec.hpp"
+#include "actors/runtime/lean_points.hpp"
 #include "actors/runtime/remote_tracing.hpp"
 #include "core/log.hpp"
 #include "render/scene/loaded_scene.hpp"
@@ -47,7 +48,8 @@ class RemoteInputs final : public Inputs {
         const std::string input_name = rt_.input_name(q.input);
         rt_.ask_input(
             q.input, wire::Op::shade,
-            encode_shade_request(*q.points, begin, end, rt_.input_is_lean(q.input) ? &scene_ : nullptr),
+            encode_shade_request(*q.points, begin, end,
+                                 rt_.input_is_lean(q.input) ? fields_to_send(*q.points, begin, end, scene_) : PointFields{}),
             [state, out, begin, end, input_name](Result<wire::Message> r) {
               if (!r) return state->complete_one(r.error().message);
               auto radiance = decode_radiance(r->body, end - begin);
@@ -275,7 +277,7 @@ class LightOpActor final : public Actor {
     // Requests that arrive before this op's setup finished (another op's setup may ask it, e.g. an irradiance
     // pre-pass) wait in the queue until it has.
     const PixelKeys keys{width_, sampler_};
-    auto points = decode_shade_request(m.body, scene_->materials().size(), scene_->triangle_count(), scene_.get(), &keys);
+    auto points = read_shade_request(m.body, scene_->materials().size(), scene_->triangle_count(), scene_.get(), &keys);
     if (!points) {
       rt.reply_error(peer, m.header.id, ErrorCode::bad_request, points.error().message);
       return;

@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 
 #include "actors/codecs/shade_codec.hpp"
+#include "actors/runtime/lean_points.hpp"
 #include "actors/runtime/inproc_actor.hpp"
 
 namespace lf {
@@ -48,7 +49,7 @@ class Replicas {
         continue;
       }
       EXPECT_TRUE(in->message.ok());
-      auto decoded = decode_shade_request(in->message->body, 1);
+      auto decoded = read_shade_request(in->message->body, 1);
       EXPECT_TRUE(decoded.ok());
       got.push_back({in->peer, in->message->header.id, decoded->size(), decoded->size() ? float(decoded->key[0]) : -1.f});
     }

@@ -8,6 +8,7 @@
 
 #include "actors/codecs/ring_codec.hpp"
 #include "actors/codecs/shade_codec.hpp"
+#include "actors/runtime/lean_points.hpp"
 #include "actors/runtime/actor_config.hpp"
 #include "actors/runtime/hello.hpp"
 #include "transport/message.hpp"
@@ -20,12 +21,13 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   auto body = lf::wire::decode_body(all);
   if (!body) return 0;
   const lf::Value& v = *body;
-  (void)lf::decode_shade_request(v, 8, 64);
+  (void)lf::decode_shade_request(v);
+  (void)lf::read_shade_request(v, 8, 64);
   // A lean request (no nrm or m; o and t for p, tile and s for k) is completed from the scene's triangles and the
   // image: hostile triangle ids, tiles and sample indices must be refused.
   static const lf::Scene cornell = std::move(lf::Scene::builtin("cornell").value());
   static const lf::PixelKeys keys{64, lf::SamplerKind::sobol};
-  (void)lf::decode_shade_request(v, cornell.materials().size(), cornell.triangle_count(), &cornell, &keys);
+  (void)lf::read_shade_request(v, cornell.materials().size(), cornell.triangle_count(), &cornell, &keys);
   (void)lf::slice_shade_request(v, 1, 3);
   if (auto fold = lf::decode_pixel_fold(v); fold && *fold) (void)(*fold)->runs();
   (void)lf::decode_radiance(v, 4);
