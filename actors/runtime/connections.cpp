@@ -58,14 +58,14 @@ Status Connections::connect_config(const ActorConfig& config, const std::string&
   return Ok{};
 }
 
-Status Connections::reconnect(const std::string& name, const std::string& endpoint, const std::string& key) {
+Result<bool> Connections::reconnect(const std::string& name, const std::string& endpoint, const std::string& key) {
   auto row = std::find_if(rows_.begin(), rows_.end(), [&](const Row& r) { return r.name == name; });
-  if (row == rows_.end()) return make_error("'" + name + "' is not an input");
+  if (row == rows_.end()) return false;
   auto client = connect_(name, endpoint, key, row->window);
   if (!client) return client.error();
   row->client = std::move(*client);
   changed_ = true;
-  return Ok{};
+  return true;
 }
 
 }  // namespace lf

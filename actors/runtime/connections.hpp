@@ -42,8 +42,9 @@ class Connections {
   // (their traffic is not counted as crossing the network by the pool's scheduler).
   Status connect_config(const ActorConfig& config, const std::string& own_bind);
   // PEER_MOVED: the row named `name` connects to `endpoint` now (its old socket closes, and with it whatever was
-  // outstanding there). An error for a name that is not in the table or a connection that cannot be made.
-  Status reconnect(const std::string& name, const std::string& endpoint, const std::string& key);
+  // outstanding there). False for a name that is not in the table (nothing changes); an error for a connection
+  // that cannot be made.
+  Result<bool> reconnect(const std::string& name, const std::string& endpoint, const std::string& key);
 
   std::vector<LightingInput>& lighting() { return lighting_; }
   const std::vector<LightingInput>& lighting() const { return lighting_; }

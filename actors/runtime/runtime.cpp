@@ -293,10 +293,9 @@ void Runtime::on_config(const wire::Message& m, Actor& actor) {
 void Runtime::on_peer_moved(const wire::Message& m, Actor& actor) {
   auto moved = control::decode_peer_moved(m.body);
   if (!moved) return log_warn("ignored " + moved.error().message);
-  const auto& rows = connections_.rows();
-  if (std::none_of(rows.begin(), rows.end(), [&](const Connections::Row& r) { return r.name == moved->name; }))
-    return log_warn("ignored a PEER_MOVED about '" + moved->name + "', not an input");
-  if (auto st = connections_.reconnect(moved->name, moved->endpoint, moved->key); !st) return fail(st.error().message);
+  auto reconnected = connections_.reconnect(moved->name, moved->endpoint, moved->key);
+  if (!reconnected) return fail(reconnected.error().message);
+  if (!*reconnected) return log_warn("ignored a PEER_MOVED about '" + moved->name + "', not an input");
   actor.on_peer_moved(moved->name, *this);
 }
 
