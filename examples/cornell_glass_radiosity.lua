@@ -1,4 +1,4 @@
--- cornell_glass with a radiosity final gather (DESIGN §2 and §7): the network of cornell_glass.lua, but its
+-- cornell_glass with a radiosity final gather: the network of cornell_glass.lua, but its
 -- indirect light comes from one irradiance cache over a coarse radiosity solution (all diffuse bounces, shown with
 -- the ambient term) plus the caustic photon map, instead of two caches stacked over direct light (two bounces).
 -- Fewer processes' worth of setup and no missing higher bounces: bench/quality_bench compares the two.

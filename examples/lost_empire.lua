@@ -28,7 +28,7 @@
 --   lightfarm run examples/lost_empire.lua --set seed=1                     (other samples: two seeds give the
 --                                                                            noise without a reference, bench/peer)
 --
--- Data locality (seed 002): `--set parts=3` splits the scene over 3 geometry actors that `direct` and `pathtrace`
+-- Data locality (after Jansen and Reinhard): `--set parts=3` splits the scene over 3 geometry actors that `direct` and `pathtrace`
 -- trace through (the same image), and with lighting=pathtrace `--set directional_cache=true` lets the directional
 -- cache answer most diffuse rays that leave their neighbourhood (the end-of-run figures show how many):
 --   lightfarm run examples/lost_empire.lua --set lighting=pathtrace --set parts=3 --set directional_cache=true
@@ -83,7 +83,8 @@ elseif lighting == "network" then
                                           name = "indirect", seed = seed }
   -- The water is glass: what its refraction and reflection chains land on is lit by the same two ops. The flames
   -- seen in the water are as small as those seen directly: chains that only look for them (a few rays each) give
-  -- them 4x the camera's samples; without them they were the network's largest noise (docs/decisions.md).
+  -- them 4x the camera's samples; without them they were the network's largest noise (bench/RESULTS.md, "Where the
+  -- network's error was").
   -- Direct light is most of the render's work: two replicas, one per core (they learn the lights in halves).
   local lit = direct()
   local direct_replicas = param("direct_replicas", 2)

@@ -1,4 +1,4 @@
--- Progressive refinement radiosity on rings of processes (seed 003): a furnished room solved by 2 rings of 2 nodes,
+-- Progressive refinement radiosity on rings of processes (after Stürzlinger, Schaufler and Volkert): a furnished room solved by 2 rings of 2 nodes,
 -- written as a PLY mesh with per-vertex radiosity, and rendered through the `radiosity` LightOp.
 --   lightfarm run examples/radiosity_room.lua                       -> room.png, room.ply
 --   lightfarm run examples/radiosity_room.lua --set rings=1 --set ring_length=4 --set balance=none

@@ -1,7 +1,7 @@
 // The two formats a farm writes most, with their reference libraries (OpenEXR, libpng), built as a module the
 // director loads to write its image. OpenImageIO (image_oiio.cpp) writes these too, but loading Debian's build of it
 // means some 250 shared libraries and 154k symbol lookups: 0.4-0.6 CPU-seconds of every farm (docs/decisions.md,
-// "Image files without OpenImageIO's load"). This module loads in a few milliseconds; OpenImageIO stays for every
+// "The image module loads beside the render"). This module loads in a few milliseconds; OpenImageIO stays for every
 // other format and for reading.
 //
 // A plain C interface, like image_oiio.cpp, so the module and its loader share no C++ ABI details.

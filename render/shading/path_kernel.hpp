@@ -21,7 +21,7 @@ struct PathOptions {
   // How roulette weighs a path's throughput beta (its largest channel) over rr_threshold, b = beta / rr_threshold:
   // survival min(1, sqrt(b)) ("sqrt", Cycles' rule when rr_threshold is 1), which ends fewer paths that still carry
   // a fair share of the pixel's light, or min(0.95, b) ("throughput"). A path whose throughput is at least
-  // rr_threshold always goes on. docs/decisions.md, "Roulette by the square root" and "Roulette below a quarter".
+  // rr_threshold always goes on. docs/decisions.md, "Roulette below a quarter".
   enum class Roulette : uint8_t { throughput, sqrt } roulette = Roulette::sqrt;
   float rr_threshold = 0.25f;
   int samples = 1;            // paths per point, averaged
