@@ -15,9 +15,16 @@
 
 namespace lf::test {
 
-// Lambert's contour formula: the form factor from a differential area at p with normal n to a polygon,
-// F = 1/(2 pi) sum_i angle(r_i, r_i+1) n . unit(r_i x r_i+1), r_i unit vectors to the corners. In double: for a small
-// polygon far away the angles are tiny and float's acos of a cosine near 1 is off by percents.
+// n points with every field set and told apart by its index: point i at (i, i+1, i+2), material i % 3, key 1000 + i.
+inline ShadingPoints numbered_points(size_t n) {
+  ShadingPoints p;
+  for (size_t i = 0; i < n; ++i) {
+    const float f = static_cast<float>(i);
+    p.push_back({f, f + 1, f + 2}, {0, 1, 0}, {0, 0, 1}, static_cast<uint32_t>(i % 3), 1000 + i);
+  }
+  return p;
+}
+
 // `direct` run in-process on pts (no inputs), `samples` light samples a point drawn as `sampling` says.
 inline std::vector<RGB> shade_direct(const SceneContext& ctx, const ShadingPoints& pts, const std::string& sampling,
                                      int samples) {
@@ -30,6 +37,9 @@ inline std::vector<RGB> shade_direct(const SceneContext& ctx, const ShadingPoint
   return out;
 }
 
+// Lambert's contour formula: the form factor from a differential area at p with normal n to a polygon,
+// F = 1/(2 pi) sum_i angle(r_i, r_i+1) n . unit(r_i x r_i+1), r_i unit vectors to the corners. In double: for a small
+// polygon far away the angles are tiny and float's acos of a cosine near 1 is off by percents.
 inline double form_factor(Vec3 p, Vec3 n, const std::vector<Vec3>& polygon) {
   using D3 = std::array<double, 3>;
   auto unit_to = [&](Vec3 q) {

@@ -4,21 +4,13 @@
 
 #include <cstring>
 
+#include "render/test_support.hpp"
 #include "transport/message.hpp"
 
 namespace lf {
 
-static ShadingPoints sample_points(size_t n) {
-  ShadingPoints p;
-  for (size_t i = 0; i < n; ++i) {
-    float f = static_cast<float>(i);
-    p.push_back({f, f + 1, f + 2}, {0, 1, 0}, {0, 0, 1}, static_cast<uint32_t>(i % 3), 1000 + i);
-  }
-  return p;
-}
-
 TEST(ShadeCodec, RequestRoundTripsASlice) {
-  auto pts = sample_points(10);
+  auto pts = test::numbered_points(10);
   auto back = decode_shade_request(encode_shade_request(pts, 2, 7));
   ASSERT_TRUE(back.ok()) << back.error().message;
   ASSERT_EQ(back->n, 5u);
@@ -30,7 +22,7 @@ TEST(ShadeCodec, RequestRoundTripsASlice) {
 
 // What is left out stays out: the decoder rebuilds nothing (actors/runtime/lean_points.hpp does).
 TEST(ShadeCodec, FieldsLeftOutComeBackEmpty) {
-  ShadingPoints pts = sample_points(6);
+  ShadingPoints pts = test::numbered_points(6);
   for (uint32_t i = 0; i < pts.size(); ++i) pts.triangle.push_back(i);
   auto back = decode_shade_request(encode_shade_request(pts, 1, 5, {.normal = false, .material = false}));
   ASSERT_TRUE(back.ok()) << back.error().message;
@@ -66,20 +58,20 @@ TEST(ShadeCodec, FieldsLeftOutComeBackEmpty) {
 }
 
 TEST(ShadeCodec, InconsistentRequestsAreRefusedWithAReason) {
-  auto body = encode_shade_request(sample_points(4), 0, 4);
+  auto body = encode_shade_request(test::numbered_points(4), 0, 4);
   body.as_map()["n"] = 5;
   EXPECT_EQ(decode_shade_request(body).error().message, "shade request 'wo' holds 48 bytes, expected 60");
-  body = encode_shade_request(sample_points(4), 0, 4);
+  body = encode_shade_request(test::numbered_points(4), 0, 4);
   body.as_map().erase("k");
   EXPECT_EQ(decode_shade_request(body).error().message, "shade request 'k' must hold 4 u64 sample keys");
   body.as_map()["n"] = -1;
   EXPECT_EQ(decode_shade_request(body).error().message, "shade request: 'n' (point count) missing or negative");
-  body = encode_shade_request(sample_points(4), 0, 4);
+  body = encode_shade_request(test::numbered_points(4), 0, 4);
   body.as_map().erase("p");
   EXPECT_EQ(decode_shade_request(body).error().message, "shade request has no 'p' array");
   body.as_map()["o"] = Bytes{"xyz"};
   EXPECT_EQ(decode_shade_request(body).error().message, "shade request has neither 'p' nor a ray origin 'o' of 3 floats");
-  body = encode_shade_request(sample_points(4), 0, 4);
+  body = encode_shade_request(test::numbered_points(4), 0, 4);
   body.as_map().erase("k");
   body.as_map()["s"] = Bytes{"abcd"};
   body.as_map()["tile"] = Value::Array{int64_t{0}, int64_t{0}, int64_t{0}, int64_t{1}, int64_t{1}};
@@ -106,7 +98,7 @@ TEST(ShadeCodec, RadianceCountMustMatch) {
 }
 
 TEST(ShadeCodec, ASliceCutsEveryArrayAndDecodesAsThosePoints) {
-  ShadingPoints pts = sample_points(14);
+  ShadingPoints pts = test::numbered_points(14);
   for (uint32_t i = 0; i < pts.size(); ++i) pts.triangle.push_back(i);
   for (PointFields fields : {PointFields{}, PointFields{.normal = false, .material = false}}) {
     const Value body = encode_shade_request(pts, 0, pts.size(), fields);
@@ -122,7 +114,7 @@ TEST(ShadeCodec, ASliceCutsEveryArrayAndDecodesAsThosePoints) {
 }
 
 TEST(ShadeCodec, AFoldWithoutItsTileOrSamplesIsRefused) {
-  auto pts = sample_points(4);
+  auto pts = test::numbered_points(4);
   Value body = encode_shade_request(pts, 0, 4);
   auto why = [&] {
     auto r = decode_pixel_fold(body);

@@ -5,18 +5,10 @@
 #include <cstring>
 
 #include "render/scene/surface.hpp"
+#include "render/test_support.hpp"
 #include "transport/message.hpp"
 
 namespace lf {
-
-static ShadingPoints sample_points(size_t n) {
-  ShadingPoints p;
-  for (size_t i = 0; i < n; ++i) {
-    float f = static_cast<float>(i);
-    p.push_back({f, f + 1, f + 2}, {0, 1, 0}, {0, 0, 1}, static_cast<uint32_t>(i % 3), 1000 + i);
-  }
-  return p;
-}
 
 // A renderer's request to a lean input: only the fields the receiver cannot rebuild.
 static Value tile_request(const TileWork& work, size_t begin, size_t end, const Scene& scene, SamplerKind sampler,
@@ -114,13 +106,13 @@ TEST(LeanPoints, PointsWhoseNormalOrMaterialTheSceneDoesNotGiveTravelWhole) {
   ASSERT_TRUE(back.ok()) << back.error().message;
   EXPECT_TRUE(same_bits(*back, pts));
   // Points without triangles have nothing to take a normal from.
-  body = encode_shade_request(sample_points(3), 0, 3, fields_to_send(sample_points(3), 0, 3, s));
+  body = encode_shade_request(test::numbered_points(3), 0, 3, fields_to_send(test::numbered_points(3), 0, 3, s));
   EXPECT_NE(body.find("nrm"), nullptr);
   EXPECT_NE(body.find("m"), nullptr);
 }
 
 TEST(LeanPoints, APointOnAMaterialTheReceiverLacksIsRefused) {
-  const Value body = encode_shade_request(sample_points(4), 0, 4);
+  const Value body = encode_shade_request(test::numbered_points(4), 0, 4);
   EXPECT_EQ(read_shade_request(body, 2).error().message, "shade request: point 2 has material 2 but the scene has 2");
   EXPECT_TRUE(read_shade_request(body, 3).ok());
 }
