@@ -1,0 +1,211 @@
+#include "render/shading/microfacet.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+namespace lf {
+namespace {
+
+constexpr float kMinAlpha = 1e-4f;
+
+Vec3 reflect_about(Vec3 w, Vec3 n) { return n * (2 * dot(w, n)) - w; }
+
+RGB mix(RGB a, RGB b, float t) { return a * (1 - t) + b * t; }
+
+Vec3 cosine_local(float u1, float u2) {
+  const float r = std::sqrt(u1), phi = 2 * kPi * u2;
+  return {r * std::cos(phi), r * std::sin(phi), std::sqrt(std::max(0.0f, 1 - u1))};
+}
+
+}  // namespace
+
+TrowbridgeReitz::TrowbridgeReitz(float alpha_x, float alpha_y)
+    : ax_(std::max(alpha_x, kMinAlpha)), ay_(std::max(alpha_y, kMinAlpha)) {}
+
+float TrowbridgeReitz::d(Vec3 wm) const {
+  if (wm.z <= 0) return 0;
+  const float x = wm.x / ax_, y = wm.y / ay_;
+  const float e = x * x + y * y + wm.z * wm.z;
+  return 1 / (kPi * ax_ * ay_ * e * e);
+}
+
+float TrowbridgeReitz::lambda(Vec3 w) const {
+  const float cos2 = w.z * w.z;
+  if (cos2 <= 0) return INFINITY;
+  // alpha^2 tan^2(theta) along w's azimuth.
+  const float a2_tan2 = (w.x * w.x * ax_ * ax_ + w.y * w.y * ay_ * ay_) / cos2;
+  return (std::sqrt(1 + a2_tan2) - 1) / 2;
+}
+
+float TrowbridgeReitz::d_visible(Vec3 w, Vec3 wm) const {
+  if (w.z <= 0) return 0;
+  return g1(w) * std::max(0.0f, dot(w, wm)) * d(wm) / w.z;
+}
+
+Vec3 TrowbridgeReitz::sample_visible_normal(Vec3 w, float u1, float u2) const {
+  // Stretch to the hemisphere configuration, sample the projected half disk, unstretch (Heitz 2018, listing 1).
+  const Vec3 wh = normalize(Vec3{ax_ * w.x, ay_ * w.y, w.z});
+  const float len2 = wh.x * wh.x + wh.y * wh.y;
+  const Vec3 t1 = len2 > 0 ? Vec3{-wh.y, wh.x, 0} / std::sqrt(len2) : Vec3{1, 0, 0};
+  const Vec3 t2 = cross(wh, t1);
+  const float r = std::sqrt(u1), phi = 2 * kPi * u2;
+  const float p1 = r * std::cos(phi);
+  const float s = 0.5f * (1 + wh.z);
+  const float p2 = (1 - s) * std::sqrt(std::max(0.0f, 1 - p1 * p1)) + s * r * std::sin(phi);
+  const Vec3 nh = t1 * p1 + t2 * p2 + wh * std::sqrt(std::max(0.0f, 1 - p1 * p1 - p2 * p2));
+  return normalize(Vec3{ax_ * nh.x, ay_ * nh.y, std::max(1e-7f, nh.z)});
+}
+
+float TrowbridgeReitz::pdf(Vec3 wo, Vec3 wi) const {
+  if (wo.z <= 0 || wi.z <= 0) return 0;
+  const Vec3 wm = normalize(wo + wi);
+  return d_visible(wo, wm) / (4 * dot(wo, wm));
+}
+
+RGB fresnel_schlick(RGB f0, float cos_theta) {
+  const float m = std::clamp(1 - cos_theta, 0.0f, 1.0f);
+  const float m5 = (m * m) * (m * m) * m;
+  return f0 + (RGB{1, 1, 1} - f0) * m5;
+}
+
+namespace {
+
+// E(mu) of GGX reflection with the given Fresnel F0 (1: a perfect conductor) by stratified quadrature of visible
+// normals: the mean of F G / G1 over reflections that stay above the surface.
+float directional_albedo(float mu, float roughness, float f0) {
+  const float alpha = TrowbridgeReitz::alpha_of_roughness(roughness);
+  const TrowbridgeReitz ggx(alpha, alpha);
+  const Vec3 wo{std::sqrt(std::max(0.0f, 1 - mu * mu)), 0, mu};
+  constexpr int kStrata = 16;
+  double sum = 0;
+  for (int i = 0; i < kStrata; ++i)
+    for (int j = 0; j < kStrata; ++j) {
+      const Vec3 wm = ggx.sample_visible_normal(wo, (i + 0.5f) / kStrata, (j + 0.5f) / kStrata);
+      const Vec3 wi = reflect_about(wo, wm);
+      if (wi.z <= 0) continue;
+      const float f = f0 >= 1 ? 1.0f : fresnel_schlick(RGB{f0, f0, f0}, dot(wo, wm)).x;
+      sum += f * ggx.g(wo, wi) / ggx.g1(wo);
+    }
+  return static_cast<float>(sum / (kStrata * kStrata));
+}
+
+constexpr int kN = MicrofacetAlbedo::kSize;
+
+float mu_at(int i) { return (i + 0.5f) / kN; }
+float roughness_at(int r) { return static_cast<float>(r) / (kN - 1); }
+
+// Linear interpolation in a table row of kN values at x scaled to [0, kN - 1].
+float lerp_at(const float* row, float x) {
+  x = std::clamp(x, 0.0f, static_cast<float>(kN - 1));
+  const int i = std::min(static_cast<int>(x), kN - 2);
+  const float t = x - static_cast<float>(i);
+  return row[i] * (1 - t) + row[i + 1] * t;
+}
+
+float table_lookup(const float (&e)[kN][kN], float mu, float roughness) {
+  const float r = std::clamp(roughness, 0.0f, 1.0f) * (kN - 1);
+  const int k = std::min(static_cast<int>(r), kN - 2);
+  const float t = r - static_cast<float>(k);
+  const float x = std::clamp(mu, 0.0f, 1.0f) * kN - 0.5f;  // mu_at(i) = (i + 0.5) / kN
+  return lerp_at(e[k], x) * (1 - t) + lerp_at(e[k + 1], x) * t;
+}
+
+}  // namespace
+
+const MicrofacetAlbedo& MicrofacetAlbedo::table() {
+  static const MicrofacetAlbedo tables = [] {
+    MicrofacetAlbedo t{};
+    for (int kind = 0; kind < 2; ++kind)
+      for (int r = 0; r < kN; ++r) {
+        double average = 0;
+        for (int i = 0; i < kN; ++i) {
+          t.e[kind][r][i] = directional_albedo(mu_at(i), roughness_at(r), kind == 0 ? 1.0f : 0.04f);
+          average += 2.0 * t.e[kind][r][i] * mu_at(i) / kN;  // 2 times the integral of E(mu) mu over [0, 1]
+        }
+        t.average[kind][r] = static_cast<float>(average);
+      }
+    return t;
+  }();
+  return tables;
+}
+
+float MicrofacetAlbedo::conductor(float mu, float roughness) const { return table_lookup(e[0], mu, roughness); }
+float MicrofacetAlbedo::dielectric(float mu, float roughness) const { return table_lookup(e[1], mu, roughness); }
+float MicrofacetAlbedo::conductor_average(float roughness) const {
+  return lerp_at(average[0], std::clamp(roughness, 0.0f, 1.0f) * (kN - 1));
+}
+float MicrofacetAlbedo::dielectric_average(float roughness) const {
+  return lerp_at(average[1], std::clamp(roughness, 0.0f, 1.0f) * (kN - 1));
+}
+
+MetalRoughness::MetalRoughness(RGB base_color, float metallic, float roughness)
+    : base_(base_color),
+      metallic_(std::clamp(metallic, 0.0f, 1.0f)),
+      roughness_(std::clamp(roughness, 0.0f, 1.0f)),
+      ggx_(TrowbridgeReitz::alpha_of_roughness(roughness_), TrowbridgeReitz::alpha_of_roughness(roughness_)) {
+  const MicrofacetAlbedo& table = MicrofacetAlbedo::table();
+  conductor_average_ = table.conductor_average(roughness_);
+  dielectric_average_ = table.dielectric_average(roughness_);
+  // Kulla and Conty's F_ms: the Fresnel term of light that scatters more than once (Schlick's hemispherical
+  // average F0 + (1 - F0) / 21 compounded over the bounces).
+  for (int c = 0; c < 3; ++c) {
+    const float f0 = c == 0 ? base_.x : c == 1 ? base_.y : base_.z;
+    const float f_avg = f0 + (1 - f0) / 21;
+    const float v = f_avg * f_avg * conductor_average_ / (1 - f_avg * (1 - conductor_average_));
+    (c == 0 ? multiple_scattering_fresnel_.x : c == 1 ? multiple_scattering_fresnel_.y : multiple_scattering_fresnel_.z) = v;
+  }
+}
+
+RGB MetalRoughness::eval_specular(Vec3 wo, Vec3 wi) const {
+  if (wo.z <= 0 || wi.z <= 0) return {};
+  const Vec3 wm = normalize(wo + wi);
+  const float cos_h = dot(wo, wm);
+  const RGB f = mix(fresnel_schlick(RGB{0.04f, 0.04f, 0.04f}, cos_h), fresnel_schlick(base_, cos_h), metallic_);
+  return f * (ggx_.d(wm) * ggx_.g(wo, wi) / (4 * wo.z * wi.z));
+}
+
+RGB MetalRoughness::eval_diffuse(Vec3 wo, Vec3 wi) const {
+  if (wo.z <= 0 || wi.z <= 0) return {};
+  const MicrofacetAlbedo& table = MicrofacetAlbedo::table();
+  RGB f{};
+  if (metallic_ > 0 && conductor_average_ < 1) {
+    const float lost = (1 - table.conductor(wo.z, roughness_)) * (1 - table.conductor(wi.z, roughness_));
+    f += multiple_scattering_fresnel_ * (metallic_ * lost / (kPi * (1 - conductor_average_)));
+  }
+  if (metallic_ < 1) {
+    const float passed = (1 - table.dielectric(wo.z, roughness_)) * (1 - table.dielectric(wi.z, roughness_));
+    f += base_ * ((1 - metallic_) * passed / (kPi * (1 - dielectric_average_)));
+  }
+  return f;
+}
+
+// The specular lobe's share of what wo reflects, from each lobe's albedo at wo. A lobe that reflects anything
+// keeps at least 2 % of the samples, so its weights stay bounded.
+float MetalRoughness::specular_probability(Vec3 wo) const {
+  const MicrofacetAlbedo& table = MicrofacetAlbedo::table();
+  const float e_d = table.dielectric(wo.z, roughness_), e_c = table.conductor(wo.z, roughness_);
+  const float spec = (1 - metallic_) * e_d + metallic_ * e_c * average(fresnel_schlick(base_, wo.z));
+  const float diffuse = (1 - metallic_) * average(base_) * (1 - e_d) +
+                        metallic_ * average(multiple_scattering_fresnel_) * (1 - e_c);
+  if (diffuse <= 0) return 1;
+  if (spec <= 0) return 0;
+  return std::clamp(spec / (spec + diffuse), 0.02f, 0.98f);
+}
+
+float MetalRoughness::pdf(Vec3 wo, Vec3 wi) const {
+  if (wo.z <= 0 || wi.z <= 0) return 0;
+  const float ps = specular_probability(wo);
+  return ps * ggx_.pdf(wo, wi) + (1 - ps) * wi.z / kPi;
+}
+
+std::optional<MetalRoughness::Sample> MetalRoughness::sample(Vec3 wo, float u0, float u1, float u2) const {
+  if (wo.z <= 0) return std::nullopt;
+  const Vec3 wi = u0 < specular_probability(wo) ? reflect_about(wo, ggx_.sample_visible_normal(wo, u1, u2))
+                                                 : cosine_local(u1, u2);
+  if (wi.z <= 0) return std::nullopt;
+  const float p = pdf(wo, wi);
+  if (!(p > 0)) return std::nullopt;
+  return Sample{wi, eval(wo, wi) * (wi.z / p), p};
+}
+
+}  // namespace lf
