@@ -36,6 +36,8 @@ CameraSpec CameraSpec::read(const ParamTable& p) {
   c.at = p.get_vec3("at", c.at);
   c.up = p.get_vec3("up", c.up);
   c.fov = p.get_float("fov", c.fov, 0.1, 179.0);
+  c.aperture = p.get_float("aperture", c.aperture, 0.0, 1e30);
+  c.focus_distance = p.get_float("focus_distance", c.focus_distance, 0.0, 1e30);
   const double dx = c.at[0] - c.eye[0], dy = c.at[1] - c.eye[1], dz = c.at[2] - c.eye[2];
   if (dx * dx + dy * dy + dz * dz == 0) throw ParamError("camera: eye and at are the same point");
   const double cx = dy * c.up[2] - dz * c.up[1], cy = dz * c.up[0] - dx * c.up[2], cz = dx * c.up[1] - dy * c.up[0];
@@ -44,7 +46,10 @@ CameraSpec CameraSpec::read(const ParamTable& p) {
 }
 
 Value CameraSpec::to_value() const {
-  return Value::Map{{"eye", vec3(eye)}, {"at", vec3(at)}, {"up", vec3(up)}, {"fov", fov}};
+  Value::Map m{{"eye", vec3(eye)}, {"at", vec3(at)}, {"up", vec3(up)}, {"fov", fov}};
+  if (aperture > 0) m["aperture"] = aperture;
+  if (focus_distance > 0) m["focus_distance"] = focus_distance;
+  return m;
 }
 
 // CONFIG's camera and image are read by the script's own readers: an actor takes nothing a script could not say.

@@ -38,6 +38,10 @@ struct CameraSpec {
   std::array<double, 3> at{278, 273, 0};
   std::array<double, 3> up{0, 1, 0};
   double fov = 39.3;  // vertical, degrees
+  // A thin lens (0: a pinhole): the lens's diameter in scene units, and the distance along the view at which the
+  // image is sharp (0: the distance from eye to at).
+  double aperture = 0;
+  double focus_distance = 0;
   // camera { } with its ranges and rules (eye and at apart, up not along the view): how a script is read and how
   // an actor reads CONFIG back. Throws ParamError.
   static CameraSpec read(const ParamTable& p);

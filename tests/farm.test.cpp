@@ -168,6 +168,48 @@ TEST_F(FarmTest, RendererCountDoesNotChangeAPixel) {
   EXPECT_TRUE(a->pixels == b->pixels) << "images differ between 1 and 3 renderers";
 }
 
+// A thin lens focused just in front of the camera blurs the box: the walls' edges spread out, the light reaching
+// the image is the same, and the image is still the same whatever the number of renderers.
+TEST_F(FarmTest, ALensBlursWhatIsOutOfFocusAndKeepsTheImageLayoutIndependent) {
+  const std::string script = write("lens.lua", R"(
+scene    { builtin = "cornell" }
+camera   { eye = {278, 273, -800}, at = {278, 273, 0}, fov = 39.3, aperture = param("aperture", 0), focus_distance = 300 }
+image    { width = 64, height = 64, spp = 64 }
+farm     { light_paths = "partial" }
+renderers { count = param("renderers", 2), lighting = lightop "direct" { light_samples = 2 } }
+)");
+  auto render = [&](const std::string& out, std::vector<std::string> sets) {
+    std::vector<std::string> args{"run", script, "--output", path(out), "--quiet"};
+    for (const auto& s : sets) args.insert(args.end(), {"--set", s});
+    auto r = run_lightfarm(args);
+    EXPECT_EQ(r.status, 0) << r.err;
+    expect_no_leftovers(r);
+    auto img = read_image(path(out));
+    return img.ok() ? *img : Image(64, 64);
+  };
+  const Image pinhole = render("pinhole.exr", {});
+  const Image one = render("lens1.exr", {"aperture=60", "renderers=1"});
+  const Image three = render("lens3.exr", {"aperture=60", "renderers=3"});
+  EXPECT_TRUE(one.pixels == three.pixels) << "images differ between 1 and 3 renderers";
+  auto mean = [](const Image& img) {
+    double s = 0;
+    for (const RGB& p : img.pixels) s += average(p);
+    return s / static_cast<double>(img.pixels.size());
+  };
+  // How sharp the walls' vertical edges are: the squared steps of the rows' mean profile, taken below the light
+  // (rows 24-40), where averaging rows leaves little noise. A blur spreads each step over many pixels.
+  auto edges = [](const Image& img) {
+    std::vector<double> profile(static_cast<size_t>(img.width), 0);
+    for (int y = 24; y <= 40; ++y)
+      for (int x = 0; x < img.width; ++x) profile[x] += average(img.pixels[y * img.width + x]);
+    double s = 0;
+    for (size_t x = 1; x < profile.size(); ++x) s += (profile[x] - profile[x - 1]) * (profile[x] - profile[x - 1]);
+    return s;
+  };
+  EXPECT_NEAR(mean(one) / mean(pinhole), 1.0, 0.03);
+  EXPECT_LT(edges(one), 0.3 * edges(pinhole)) << edges(one) << " against " << edges(pinhole);
+}
+
 TEST_F(FarmTest, StatsJsonCarriesPhasesAndActors) {
   auto r = render_cornell(path("c.png"), {"--stats-json", path("stats.json")});
   ASSERT_EQ(r.status, 0) << r.err;

@@ -57,9 +57,9 @@ static bool same_bits(const ShadingPoints& a, const ShadingPoints& b) {
 class CornellTiles {
  public:
   const Scene scene = std::move(Scene::builtin("cornell").value());
-  TileWork trace(const ImageSpec& image, TileRect rect) const {
+  TileWork trace(const ImageSpec& image, TileRect rect, const CameraSpec& camera = {}) const {
     TileWork work;
-    trace_tile(scene, tracer_, Camera(CameraSpec{}, image.width, image.height), image, rect, work);
+    trace_tile(scene, tracer_, Camera(camera, image.width, image.height), image, rect, work);
     return work;
   }
 
@@ -163,6 +163,38 @@ TEST(LeanPoints, ACameraRequestCarriesDistancesAndSampleIndicesAndRebuildsTheRen
     EXPECT_EQ(read_shade_request(body, scene.materials().size(), scene.triangle_count(), &scene).error().message,
               "shade request 'k' must hold " + std::to_string(n) + " u64 sample keys");
   }
+}
+
+// Through a thin lens camera rays leave from the lens, not the eye: their points travel with their positions (keys,
+// normals and materials are still left out) and come back bit for bit.
+TEST(LeanPoints, ALensCamerasPointsTravelWithTheirPositions) {
+  const CornellTiles cornell;
+  ImageSpec image;
+  image.width = image.height = 32;
+  image.spp = 3;
+  CameraSpec camera;
+  camera.aperture = 40;  // mm, in a box 555 wide
+  camera.focus_distance = 1000;
+  const TileWork work = cornell.trace(image, TileRect{8, 8, 24, 24}, camera);
+  const size_t n = work.points.size();
+  ASSERT_GT(n, 100u);
+  EXPECT_TRUE(work.distance.empty());
+  const SamplerKind kind = sampler_of(image);
+  const Value body = tile_request(work, 0, n, cornell.scene, kind, image.width);
+  EXPECT_NE(body.find("p"), nullptr);
+  EXPECT_EQ(body.find("o"), nullptr);
+  EXPECT_EQ(body.find("k"), nullptr);
+  EXPECT_EQ(body.find("nrm"), nullptr);
+  const PixelKeys keys{image.width, kind};
+  auto back = read_shade_request(body, cornell.scene.materials().size(), cornell.scene.triangle_count(), &cornell.scene,
+                                 &keys);
+  ASSERT_TRUE(back.ok()) << back.error().message;
+  EXPECT_TRUE(same_bits(*back, work.points));
+  // The lens moves the camera rays' origins: the same tile through a pinhole has other positions.
+  const TileWork pinhole = cornell.trace(image, TileRect{8, 8, 24, 24});
+  EXPECT_FALSE(pinhole.distance.empty());
+  EXPECT_NE(std::memcmp(pinhole.points.position.data(), work.points.position.data(),
+                        std::min(pinhole.points.size(), n) * sizeof(Vec3)), 0);
 }
 
 // trace_tile marks its points rebuildable, and the renderer then skips checking them point by point: the request is

@@ -27,8 +27,15 @@ void tile_camera_rays(const Camera& camera, const ImageSpec& image, const TileRe
     for (int x = rect.x0; x < rect.x1; ++x) {
       for (int k = 0; k < image.spp; ++k, ++s) {
         keys[s] = tile_sample_key(kind, image.width, rect, image.spp, static_cast<uint32_t>(s));
-        const Uniform2 jitter = Sampler(kind, keys[s], streams::camera).uniform2();
-        rays[s] = camera.ray(static_cast<float>(x) + jitter.u, static_cast<float>(y) + jitter.v);
+        Sampler sampler(kind, keys[s], streams::camera);
+        const Uniform2 jitter = sampler.uniform2();
+        const float px = static_cast<float>(x) + jitter.u, py = static_cast<float>(y) + jitter.v;
+        if (camera.has_lens()) {
+          const Uniform2 lens = sampler.uniform2();  // drawn only with a lens: pinhole images keep their numbers
+          rays[s] = camera.ray(px, py, lens.u, lens.v);
+        } else {
+          rays[s] = camera.ray(px, py);
+        }
       }
     }
 }
@@ -72,7 +79,9 @@ void tile_points(const Scene& scene, const Camera& camera, const ImageSpec& imag
     if (sp.front && m.emissive()) work.emitted[i] = m.ke;
     work.points.push_back(p, sp.ns, wo, scene.material_of(tri), keys[i], tri);
     work.sample_of_point.push_back(static_cast<uint32_t>(i));
-    work.distance.push_back(hits[i].t);
+    // Rays through a lens leave from points other than the eye: their points travel as positions, not as
+    // distances from the eye (actors/runtime/lean_points.cpp rebuilds a point only from the eye).
+    if (!camera.has_lens()) work.distance.push_back(hits[i].t);
   }
 }
 

@@ -34,7 +34,7 @@ struct TileWork {
   ShadingPoints points;                 // one per shaded camera sample that hit a surface
   std::vector<uint32_t> sample_of_point;  // which sample (pixel-major, then sample index) each point is
   std::vector<float> distance;          // per point: how far along its camera ray from `eye` it lies
-  Vec3 eye{};                           // where every camera ray starts
+  Vec3 eye{};                           // where every camera ray starts (a pinhole's; through a lens, `distance` is empty)
   std::vector<RGB> emitted;             // per sample: emission the camera sees directly
   // Set by trace_tile: every point is exactly what a lean input rebuilds from the scene and the tile (position by
   // point_on_ray from eye and distance, key by tile_sample_key, normal by surface_at, material by material_of), so

@@ -15,12 +15,48 @@ Camera::Camera(const CameraSpec& spec, int width, int height) : width_(width), h
   up_ = cross(right_, forward_);
   half_height_ = std::tan(static_cast<float>(spec.fov) * kPi / 360.0f);
   half_width_ = half_height_ * static_cast<float>(width) / static_cast<float>(height);
+  lens_radius_ = static_cast<float>(spec.aperture / 2);
+  focus_distance_ = spec.focus_distance > 0 ? static_cast<float>(spec.focus_distance) : length(to_vec(spec.at) - eye_);
 }
 
 Ray Camera::ray(float image_x, float image_y) const {
   float sx = (2.0f * image_x / static_cast<float>(width_) - 1.0f) * half_width_;
   float sy = (1.0f - 2.0f * image_y / static_cast<float>(height_)) * half_height_;
   return Ray{eye_, normalize(forward_ + right_ * sx + up_ * sy)};
+}
+
+}  // namespace lf
+
+namespace lf {
+
+// Shirley and Chiu's concentric map of the unit square onto the unit disk: strata stay compact, so a pixel's
+// stratified lens samples cover the lens evenly.
+static void concentric_disk(float u, float v, float& x, float& y) {
+  const float a = 2 * u - 1, b = 2 * v - 1;
+  if (a == 0 && b == 0) {
+    x = y = 0;
+    return;
+  }
+  float r, phi;
+  if (std::abs(a) > std::abs(b)) {
+    r = a;
+    phi = kPi / 4 * (b / a);
+  } else {
+    r = b;
+    phi = kPi / 2 - kPi / 4 * (a / b);
+  }
+  x = r * std::cos(phi);
+  y = r * std::sin(phi);
+}
+
+Ray Camera::ray(float image_x, float image_y, float lens_u, float lens_v) const {
+  const Ray pinhole = ray(image_x, image_y);
+  if (lens_radius_ <= 0) return pinhole;
+  const Vec3 focus = eye_ + pinhole.direction * (focus_distance_ / dot(pinhole.direction, forward_));
+  float lx, ly;
+  concentric_disk(lens_u, lens_v, lx, ly);
+  const Vec3 origin = eye_ + (right_ * lx + up_ * ly) * lens_radius_;
+  return Ray{origin, normalize(focus - origin)};
 }
 
 }  // namespace lf
