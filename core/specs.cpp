@@ -1,5 +1,7 @@
 #include "core/specs.hpp"
 
+#include <cmath>
+
 namespace lf {
 
 static Value vec3(const std::array<double, 3>& a) { return Value::Array{a[0], a[1], a[2]}; }
@@ -42,6 +44,15 @@ CameraSpec CameraSpec::read(const ParamTable& p) {
   if (dx * dx + dy * dy + dz * dz == 0) throw ParamError("camera: eye and at are the same point");
   const double cx = dy * c.up[2] - dz * c.up[1], cy = dz * c.up[0] - dx * c.up[2], cz = dx * c.up[1] - dy * c.up[0];
   if (cx * cx + cy * cy + cz * cz == 0) throw ParamError("camera: up is parallel to the viewing direction");
+  if (p.has("focus")) {  // a point to keep sharp: its distance along the view
+    if (p.has("focus_distance")) throw ParamError("camera: give focus or focus_distance, not both");
+    const auto f = p.get_vec3("focus", c.at);
+    const double vx = c.at[0] - c.eye[0], vy = c.at[1] - c.eye[1], vz = c.at[2] - c.eye[2];
+    const double along = ((f[0] - c.eye[0]) * vx + (f[1] - c.eye[1]) * vy + (f[2] - c.eye[2]) * vz) /
+                         std::sqrt(vx * vx + vy * vy + vz * vz);
+    if (!(along > 0)) throw ParamError("camera: the focus point is not in front of the camera");
+    c.focus_distance = along;
+  }
   return c;
 }
 

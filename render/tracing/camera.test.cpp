@@ -73,6 +73,18 @@ TEST(Camera, TheSpecReadsTheLensAndRefusesANegativeOne) {
   EXPECT_EQ(CameraSpec{}.to_value().find("aperture"), nullptr) << "a pinhole's CONFIG is what it was";
   ParamTable bad(Value::Map{{"aperture", -1.0}}, "camera");
   EXPECT_THROW(CameraSpec::read(bad), ParamError);
+  // Focus on a point: its distance along the view (the default camera looks down +z from z = -800).
+  ParamTable point(Value::Map{{"aperture", 10.0}, {"focus", Value::Array{100.0, 50.0, 200.0}}}, "camera");
+  EXPECT_DOUBLE_EQ(CameraSpec::read(point).focus_distance, 1000.0);
+  ParamTable behind(Value::Map{{"focus", Value::Array{0.0, 0.0, -900.0}}}, "camera");
+  try {
+    CameraSpec::read(behind);
+    ADD_FAILURE() << "a focus point behind the camera was taken";
+  } catch (const ParamError& e) {
+    EXPECT_STREQ(e.what(), "camera: the focus point is not in front of the camera");
+  }
+  ParamTable both(Value::Map{{"focus", Value::Array{0.0, 0.0, 0.0}}, {"focus_distance", 5.0}}, "camera");
+  EXPECT_THROW(CameraSpec::read(both), ParamError);
 }
 
 }  // namespace
