@@ -14,6 +14,7 @@ static std::string str(const Value& v, const char* key) {
 Value SceneSpec::to_value() const {
   Value::Map m{{"builtin", builtin}, {"file", file}, {"lights", lights}};
   if (!materials.empty()) m["materials"] = materials;
+  if (!shapes.empty()) m["shapes"] = shapes;
   if (!cache.empty()) {
     m["cache"] = cache;
     m["hash"] = hash;
@@ -29,6 +30,7 @@ SceneSpec SceneSpec::from_value(const Value& v) {
   s.hash = str(v, "hash");
   if (const Value* l = v.find("lights"); l && l->is_array()) s.lights = l->as_array();
   if (const Value* m = v.find("materials"); m && m->is_array()) s.materials = m->as_array();
+  if (const Value* g = v.find("shapes"); g && g->is_array()) s.shapes = g->as_array();
   return s;
 }
 

@@ -24,6 +24,8 @@ struct SceneSpec {
   Value::Array lights;  // lights the script adds: {quad = {4 corners}, radiance} | {sphere, radius, radiance} |
                         // {point, intensity}
   Value::Array materials;  // the script's changes to named materials: {name, emission?, kd?, ks?, ns?, ior?, type?}
+  Value::Array shapes;     // geometry the script adds: {name, plane = {x,y,z}, normal?, size?} | {name, sphere, radius},
+                           // each with material? (a scene material's name; else one named after the shape)
   // Set by the director for its actors: the scene, lights included, as shipped to the actor's host
   // (render/scene/scene_file.hpp); an actor then reads that and never the OBJ file.
   std::string cache;  // its path on the actor's host

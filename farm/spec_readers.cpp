@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cstdlib>
+#include <set>
 
 #include "render/scene/scene.hpp"
 
@@ -127,6 +128,45 @@ Value read_light(const Value& light) {
     throw ParamError("light: " + why.substr(why.find(':') + 2));
   }
   return light;
+}
+
+ShapeRead read_shape(const std::string& name, const Value::Map& table, std::vector<std::string>& materials) {
+  const std::string which = "shape '" + name + "'";
+  static const std::set<std::string, std::less<>> kGeometry{"plane", "normal", "size", "sphere", "radius", "material"};
+  Value::Map geometry, look;
+  for (const auto& [key, v] : table) (kGeometry.count(key) ? geometry : look)[key] = v;
+  ParamTable g(geometry, which);
+  if (g.has("plane") == g.has("sphere")) throw ParamError(which + " needs exactly one of plane or sphere");
+  auto vec = [](const std::array<double, 3>& a) { return Value(Value::Array{a[0], a[1], a[2]}); };
+  Value::Map shape{{"name", name}};
+  if (g.has("plane")) {
+    shape["plane"] = vec(g.get_vec3("plane", {0, 0, 0}));
+    const auto n = g.get_vec3("normal", {0, 1, 0});
+    if (n[0] == 0 && n[1] == 0 && n[2] == 0) throw ParamError(which + ": normal must not be {0, 0, 0}");
+    shape["normal"] = vec(n);
+    if (g.has("size")) shape["size"] = g.get_float("size", 1, 1e-9, 1e30);
+  } else {
+    shape["sphere"] = vec(g.get_vec3("sphere", {0, 0, 0}));
+    if (!g.has("radius")) throw ParamError(which + ": a sphere needs a radius");
+    shape["radius"] = g.get_float("radius", 1, 1e-9, 1e30);
+  }
+  const std::string material = g.get_string("material", "");
+  g.report_unused();
+  if (!material.empty()) {
+    if (!look.empty())
+      throw ParamError(which + ": give material = \"" + material + "\" or the material's own parameters (" +
+                       look.begin()->first + ", ...), not both");
+    if (std::find(materials.begin(), materials.end(), material) == materials.end())
+      throw ParamError(which + ": material '" + material + "' is not in the scene");
+    shape["material"] = material;
+    return {Value(std::move(shape)), std::nullopt};
+  }
+  if (std::find(materials.begin(), materials.end(), name) != materials.end())
+    throw ParamError(which + ": the scene already has a material '" + name + "'; name the shape otherwise, or give " +
+                     "material = \"" + name + "\"");
+  materials.push_back(name);
+  if (look.empty()) return {Value(std::move(shape)), std::nullopt};
+  return {Value(std::move(shape)), read_material_change(name, ParamTable(look, which), materials)};
 }
 
 void read_farm_settings(const ParamTable& p, FarmSpec& spec) {

@@ -1,11 +1,12 @@
 #pragma once
-// What a farm script's tables mean, read without Lua: each of scene { }, host { }, material { }, light { } and
-// farm { } has one reader here over a ParamTable, with its ranges, defaults and the rules between its fields (the
+// What a farm script's tables mean, read without Lua: each of scene { }, host { }, material { }, light { }, shape { }
+// and farm { } has one reader here over a ParamTable, with its ranges, defaults and the rules between its fields (the
 // image and the camera are read by ImageSpec::read and CameraSpec::read in core/, which CONFIG uses too). A bad
 // value, or a parameter the table does not know, throws ParamError with the message the user sees; the Lua binding
 // adds the script's file and line.
 // Relative paths are taken from `script_dir`, so a farm travels with its files.
 #include <filesystem>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -28,6 +29,16 @@ Value read_material_change(const std::string& name, const ParamTable& p, const s
 
 // light { quad | sphere + radius | point, radiance | intensity }: the light, checked by the scene's own reader.
 Value read_light(const Value& light);
+
+// shape "name" { plane = {x,y,z}, normal = {0,1,0}, size | sphere = {x,y,z}, radius, and material = "a scene
+// material" or the shape's own material's parameters (those of material { }) }. The shape as the scene adds it,
+// and, when the shape has a material of its own with parameters, that material's change; `materials` (the
+// scene's names so far) gains the shape's own material.
+struct ShapeRead {
+  Value shape;
+  std::optional<Value> material_change;
+};
+ShapeRead read_shape(const std::string& name, const Value::Map& table, std::vector<std::string>& materials);
 
 // farm { heartbeat_timeout, request_timeout, director_address, security, monitor, host_agents, light_paths },
 // over what `spec` holds.

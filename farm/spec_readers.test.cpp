@@ -148,6 +148,34 @@ TEST(LightReader, OneShapeAndNoNegativeLight) {
             std::string::npos);
 }
 
+TEST(ShapeReader, APlaneOrASphereWithAMaterialOfItsOwnOrTheScenes) {
+  std::vector<std::string> names{"white", "red"};
+  const ShapeRead ground = read_shape("ground", Value::Map{{"plane", Value::Array{0, 0, 0}}, {"kd", Value::Array{0.2, 0.2, 0.2}}}, names);
+  EXPECT_EQ(ground.shape.find("name")->as_string(), "ground");
+  EXPECT_EQ(*ground.shape.find("normal"), (Value(Value::Array{0.0, 1.0, 0.0}))) << "up by default";
+  ASSERT_TRUE(ground.material_change.has_value());
+  EXPECT_EQ(ground.material_change->find("name")->as_string(), "ground");
+  EXPECT_EQ(names.back(), "ground") << "later material \"ground\" { } changes find it";
+  const ShapeRead ball = read_shape("ball", Value::Map{{"sphere", Value::Array{0, 1, 0}}, {"radius", 0.5}, {"material", "red"}}, names);
+  EXPECT_EQ(ball.shape.find("material")->as_string(), "red");
+  EXPECT_FALSE(ball.material_change.has_value());
+  const ShapeRead plain = read_shape("plain", Value::Map{{"sphere", Value::Array{0, 1, 0}}, {"radius", 0.5}}, names);
+  EXPECT_FALSE(plain.material_change.has_value()) << "grey, as the scene makes it";
+  auto why = [&](Value::Map table) { return error_of([&] { read_shape("s", table, names); }); };
+  EXPECT_EQ(why({{"radius", 1}}), "shape 's' needs exactly one of plane or sphere");
+  EXPECT_EQ(why({{"plane", Value::Array{0, 0, 0}}, {"sphere", Value::Array{0, 0, 0}}}), "shape 's' needs exactly one of plane or sphere");
+  EXPECT_EQ(why({{"sphere", Value::Array{0, 0, 0}}}), "shape 's': a sphere needs a radius");
+  EXPECT_NE(why({{"sphere", Value::Array{0, 0, 0}}, {"radius", -1}}), "");
+  EXPECT_EQ(why({{"plane", Value::Array{0, 0, 0}}, {"normal", Value::Array{0, 0, 0}}}), "shape 's': normal must not be {0, 0, 0}");
+  EXPECT_EQ(why({{"plane", Value::Array{0, 0, 0}}, {"material", "chrome"}}), "shape 's': material 'chrome' is not in the scene");
+  EXPECT_EQ(why({{"plane", Value::Array{0, 0, 0}}, {"material", "red"}, {"kd", Value::Array{1, 0, 0}}}),
+            "shape 's': give material = \"red\" or the material's own parameters (kd, ...), not both");
+  EXPECT_EQ(error_of([&] { read_shape("red", Value::Map{{"plane", Value::Array{0, 0, 0}}}, names); }),
+            "shape 'red': the scene already has a material 'red'; name the shape otherwise, or give material = \"red\"");
+  EXPECT_NE(why({{"plane", Value::Array{0, 0, 0}}, {"kd", Value::Array{2, 0, 0}}}).find("kd must be between 0 and 1"),
+            std::string::npos);
+}
+
 TEST(FarmSettings, RangesAndChoices) {
   FarmSpec spec;
   read_farm_settings(table({{"heartbeat_timeout", 3}, {"security", "none"}}, "farm"), spec);

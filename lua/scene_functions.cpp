@@ -1,4 +1,4 @@
-// The script functions that say what is rendered: scene, camera, image, light, material. Each reads its table
+// The script functions that say what is rendered: scene, camera, image, light, material, shape. Each reads its table
 // through a reader (core/specs, farm/spec_readers) and adds the script's line to what goes wrong.
 #include "farm/spec_readers.hpp"
 #include "lua/binding.hpp"
@@ -76,11 +76,33 @@ int l_material_table(lua_State* L) {
 
 int l_material(lua_State* L) { return with_name(L, l_material_table); }
 
+// shape "ground" { plane = {x, y, z}, normal = {0, 1, 0}, size = 100, kd = {0.5, 0.5, 0.5} }
+// | shape "ball" { sphere = {x, y, z}, radius = 1, material = "chrome" }: geometry the script adds to the scene,
+// with a material of its own (named after the shape; material { }'s parameters) or one of the scene's.
+int l_shape_table(lua_State* L) {
+  Builder& b = builder(L);
+  const std::string name = luaL_checkstring(L, lua_upvalueindex(2));
+  if (!b.have_scene) luaL_error(L, "shape \"%s\" needs scene { ... } before it", name.c_str());
+  if (!b.material_names) b.material_names = scene_material_names(b.spec.scene);
+  luaL_checktype(L, 1, LUA_TTABLE);
+  const Value table = to_value(L, 1, "shape '" + name + "'");
+  with_params(L, [&] {
+    for (const auto& s : b.spec.scene.shapes)
+      if (s.find("name")->as_string() == name) throw ParamError("shape '" + name + "' is declared twice");
+    ShapeRead read = read_shape(name, table.as_map(), *b.material_names);
+    b.spec.scene.shapes.push_back(std::move(read.shape));
+    if (read.material_change) b.spec.scene.materials.push_back(std::move(*read.material_change));
+  });
+  return 0;
+}
+
+int l_shape(lua_State* L) { return with_name(L, l_shape_table); }
+
 }  // namespace
 
 void register_scene_functions(lua_State* L, Builder& b) {
   const luaL_Reg functions[] = {{"scene", l_scene}, {"camera", l_camera}, {"image", l_image},
-                                {"light", l_light}, {"material", l_material}};
+                                {"light", l_light}, {"material", l_material}, {"shape", l_shape}};
   for (const luaL_Reg& f : functions) {
     lua_pushlightuserdata(L, &b);
     lua_pushcclosure(L, f.func, 1);

@@ -2,7 +2,7 @@
 // back as "farm.lua:12: what is wrong". This file runs a script under its budgets; the functions it sees are in
 // scene_functions.cpp and farm_functions.cpp, what their tables mean in farm/spec_readers.cpp and core/specs.cpp.
 //
-// Globals a script sees: scene, camera, image, light, material, lightop, pool (or multiplexer), radiosity, partition,
+// Globals a script sees: scene, camera, image, light, material, shape, lightop, pool (or multiplexer), radiosity, partition,
 // renderers, host, slurm_hosts, farm, param (and Lua's base, string, table, math and utf8 libraries; no io or os,
 // so a script describes a farm and does nothing else).
 #include "lua/script.hpp"

@@ -6,6 +6,8 @@
 
 #include <gtest/gtest.h>
 
+#include "render/scene/scene.hpp"
+
 #include <map>
 #include <unistd.h>
 
@@ -172,6 +174,39 @@ TEST_F(ScriptTest, MaterialChangesNameTheirLineWhenWrong) {
             0u);
   EXPECT_EQ(error_of("scene { builtin = \"cornell\" }\nmaterial \"red\" { ns = 1 }\nmaterial \"red\" { ns = 2 }\n"),
             "farm.lua:3: material 'red' is changed twice");
+}
+
+TEST_F(ScriptTest, ShapesAddGeometryWithTheirOwnMaterialAndNameTheirLineWhenWrong) {
+  auto spec = evaluate_script(write("s.lua", "scene { builtin = \"cornell\" }\n"
+                                    "shape \"ball\" { sphere = {278, 120, 250}, radius = 110 }\n"
+                                    "shape \"ground\" { plane = {0, 0, 0}, material = \"white\" }\n"
+                                    "shape \"lamp\" { sphere = {100, 400, 250}, radius = 20, emission = {5, 5, 5}, kd = {0, 0, 0} }\n"
+                                    "material \"ball\" { ks = {0.1, 0.1, 0.1}, ns = 30, type = \"glossy\" }\n"
+                                    "renderers { count = 1, lighting = lightop \"pathtrace\" {} }\n"));
+  ASSERT_TRUE(spec.ok()) << spec.error().message;
+  ASSERT_EQ(spec->scene.shapes.size(), 3u);
+  EXPECT_EQ(spec->scene.shapes[1].find("material")->as_string(), "white");
+  ASSERT_EQ(spec->scene.materials.size(), 2u) << "the lamp's own parameters, then the script's change of the ball";
+  auto scene = Scene::load(spec->scene);
+  ASSERT_TRUE(scene.ok()) << scene.error().message;
+  int glossy = 0, lamps = 0;
+  for (const Material& m : scene->materials()) {
+    glossy += m.name == "ball" && m.type == Material::Type::glossy;
+    lamps += m.name == "lamp" && m.emissive();
+  }
+  EXPECT_EQ(glossy, 1);
+  EXPECT_EQ(lamps, 1) << "a shape may glow";
+  EXPECT_EQ(error_of("scene { builtin = \"cornell\" }\nshape \"b\" { sphere = {0, 0, 0}, radius = 1, kd = {1, 0, 0} }\n"
+                     "material \"b\" { ns = 3 }\n"),
+            "farm.lua:3: material 'b' is changed twice");
+  EXPECT_EQ(error_of("shape \"ball\" { sphere = {0, 0, 0}, radius = 1 }\nscene { builtin = \"cornell\" }\n"),
+            "farm.lua:1: shape \"ball\" needs scene { ... } before it");
+  EXPECT_EQ(error_of("scene { builtin = \"cornell\" }\n\nshape \"red\" { plane = {0, 0, 0} }\n"),
+            "farm.lua:3: shape 'red': the scene already has a material 'red'; name the shape otherwise, or give "
+            "material = \"red\"");
+  EXPECT_EQ(error_of("scene { builtin = \"cornell\" }\nshape \"b\" { sphere = {0, 0, 0}, radius = 1 }\n"
+                     "shape \"b\" { sphere = {0, 0, 0}, radius = 2 }\n"),
+            "farm.lua:3: shape 'b' is declared twice");
 }
 
 TEST_F(ScriptTest, BadParametersNameLineAndParameter) {

@@ -210,6 +210,40 @@ renderers { count = param("renderers", 2), lighting = lightop "direct" { light_s
   EXPECT_LT(edges(one), 0.3 * edges(pinhole)) << edges(one) << " against " << edges(pinhole);
 }
 
+// shape { sphere } puts a blue ball on the box's floor: the pixels where it projects turn blue, and every renderer
+// sees it (each actor builds the built-in scene with the script's shapes).
+TEST_F(FarmTest, AScriptsShapeIsInThePicture) {
+  const std::string head = R"(scene { builtin = "cornell" }
+image { width = 64, height = 64, spp = 16 }
+)";
+  const std::string tail = R"(renderers { count = param("renderers", 2), lighting = lightop "pathtrace" {} }
+)";
+  const std::string ball = "shape \"ball\" { sphere = {400, 60, 100}, radius = 60, kd = {0.05, 0.05, 0.8} }\n";
+  auto render = [&](const std::string& name, const std::string& text, std::vector<std::string> sets) {
+    std::vector<std::string> args{"run", write(name + ".lua", text), "--output", path(name + ".exr"), "--quiet"};
+    for (const auto& set : sets) args.insert(args.end(), {"--set", set});
+    auto r = run_lightfarm(args);
+    EXPECT_EQ(r.status, 0) << r.err;
+    expect_no_leftovers(r);
+    auto img = read_image(path(name + ".exr"));
+    return img.ok() ? *img : Image(64, 64);
+  };
+  // The ball stands on the floor in front of the tall block; the camera looks down on its lit top, which
+  // projects to rows 47-50, columns 17-24.
+  auto centre = [](const Image& img) {
+    RGB sum{};
+    for (int y = 47; y <= 50; ++y)
+      for (int x = 17; x <= 24; ++x) sum += img.pixels[y * 64 + x];
+    return sum;
+  };
+  const Image with = render("with", head + ball + tail, {});
+  const Image without = render("without", head + tail, {});
+  const RGB a = centre(with), b = centre(without);
+  // The box's light is orange (radiance 17, 12, 4): its white floor is five times as red as blue there.
+  EXPECT_GT(a.z / a.x, 3 * (b.z / b.x)) << "the ball is blue: " << a.z / a.x << " against " << b.z / b.x;
+  EXPECT_TRUE(render("with1", head + ball + tail, {"renderers=1"}).pixels == with.pixels);
+}
+
 TEST_F(FarmTest, StatsJsonCarriesPhasesAndActors) {
   auto r = render_cornell(path("c.png"), {"--stats-json", path("stats.json")});
   ASSERT_EQ(r.status, 0) << r.err;

@@ -84,7 +84,7 @@ uint32_t Scene::add_texture(Texture t) {
   return static_cast<uint32_t>(textures_.size() - 1);
 }
 
-void Scene::add_sphere(Vec3 center, float radius, int subdivisions, uint32_t material) {
+void Scene::add_sphere(Vec3 center, float radius, int subdivisions, uint32_t material, bool smooth) {
   const float t = (1.0f + std::sqrt(5.0f)) / 2.0f;
   std::vector<Vec3> v{{-1, t, 0}, {1, t, 0},  {-1, -t, 0}, {1, -t, 0}, {0, -1, t}, {0, 1, t},
                       {0, -1, -t}, {0, 1, -t}, {t, 0, -1},  {t, 0, 1},  {-t, 0, -1}, {-t, 0, 1}};
@@ -111,9 +111,11 @@ void Scene::add_sphere(Vec3 center, float radius, int subdivisions, uint32_t mat
     }
     f = std::move(next);
   }
-  for (const auto& tri : f)
-    add_triangle(center + v[static_cast<size_t>(tri[0])] * radius, center + v[static_cast<size_t>(tri[1])] * radius,
-                 center + v[static_cast<size_t>(tri[2])] * radius, material);
+  for (const auto& tri : f) {
+    const Vec3 normals[3] = {v[static_cast<size_t>(tri[0])], v[static_cast<size_t>(tri[1])], v[static_cast<size_t>(tri[2])]};
+    add_triangle(center + normals[0] * radius, center + normals[1] * radius, center + normals[2] * radius, material,
+                 smooth ? CornerAttributes{normals, nullptr} : CornerAttributes{});
+  }
 }
 
 void Scene::add_quad(Vec3 a, Vec3 b, Vec3 c, Vec3 d, uint32_t material) {
@@ -186,6 +188,7 @@ Result<Scene> Scene::load(const SceneSpec& spec) {
     return load_shared_scene(spec.cache, spec.hash, file ? "scene file '" + spec.file + "'" : "the shipped scene");
   auto s = file ? load_obj_unlit(spec.file) : builtin_unlit(spec.builtin.empty() ? "cornell" : spec.builtin);
   if (!s) return s;
+  if (auto st = s->add_script_shapes(spec.shapes); !st) return st.error();
   if (auto st = s->apply_material_overrides(spec.materials); !st) return st.error();
   if (auto st = s->add_script_lights(spec.lights); !st) return st.error();
   const std::string what = file ? "scene file '" + spec.file + "'" : "built-in scene '" + spec.builtin + "'";

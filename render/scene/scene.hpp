@@ -113,9 +113,13 @@ class Scene {
   // stored, after the triangles.
   void restore_corners(std::vector<Vec3> normals, std::vector<Vec2> uvs);
   // A sphere as a subdivided icosahedron (20 * 4^subdivisions triangles), wound outwards.
-  void add_sphere(Vec3 center, float radius, int subdivisions, uint32_t material);
+  // An icosphere; `smooth`: with the sphere's own normals at the corners (shaded round, not faceted).
+  void add_sphere(Vec3 center, float radius, int subdivisions, uint32_t material, bool smooth = false);
   void add_point_light(Vec3 position, RGB intensity) { point_lights_.push_back({position, intensity}); }
   // Adds the lights a script declares (SceneSpec::lights); an error names what is wrong with one.
+  // shape "name" { plane | sphere }: a script's geometry (SceneSpec::shapes), each with a material of its own
+  // (named after the shape, grey until the script's material changes say otherwise) or one of the scene's.
+  Status add_script_shapes(const Value::Array& shapes);
   Status add_script_lights(const Value::Array& lights);
   // Applies the script's changes to named materials (SceneSpec::materials): emission, kd, ks, ns, ior, type. An
   // unknown name, or kd + ks above 1 (a surface that creates energy), is an error naming the material.

@@ -214,3 +214,55 @@ TEST(Scene, ObjDiagnosticsNameFileAndLine) {
 }
 
 }  // namespace lf
+
+namespace lf {
+namespace {
+
+// shape { plane }: a square facing its normal, ten times the scene's extent unless sized; shape { sphere }: a
+// round-shaded icosphere; each with a grey material named after it, or the scene's material it names.
+TEST(Scene, ScriptShapesAddAPlaneAndASphere) {
+  Scene s;
+  const uint32_t red = s.add_material({"red", {0.6f, 0.1f, 0.1f}, {}});
+  s.add_quad({0, 0, 0}, {1, 0, 0}, {1, 0, 1}, {0, 0, 1}, red);  // extent sqrt(2)
+  const size_t before = s.triangle_count();
+  ASSERT_TRUE(s.add_script_shapes(Value::Array{
+                    Value::Map{{"name", "ground"}, {"plane", Value::Array{0.5, -1.0, 0.5}}, {"normal", Value::Array{0.0, 2.0, 0.0}}},
+                    Value::Map{{"name", "ball"}, {"sphere", Value::Array{0.0, 3.0, 0.0}}, {"radius", 0.5}, {"material", "red"}}})
+                  .ok());
+  const uint32_t ground = static_cast<uint32_t>(before);
+  ASSERT_EQ(s.material(s.material_of(ground)).name, "ground");
+  EXPECT_EQ(s.material(s.material_of(ground)).kd, (RGB{0.5f, 0.5f, 0.5f}));
+  const Vec3 n = normalize(cross(s.vertex(ground, 1) - s.vertex(ground, 0), s.vertex(ground, 2) - s.vertex(ground, 0)));
+  EXPECT_NEAR(n.y, 1.0f, 1e-6f) << "it faces its normal";
+  float lo = INFINITY, hi = -INFINITY;
+  for (uint32_t t : {ground, ground + 1})
+    for (int k = 0; k < 3; ++k) {
+      EXPECT_EQ(s.vertex(t, k).y, -1.0f);
+      lo = std::min(lo, s.vertex(t, k).x), hi = std::max(hi, s.vertex(t, k).x);
+    }
+  EXPECT_NEAR(hi - lo, 10 * std::sqrt(2.0f), 1e-4f) << "ten times the scene's extent";
+  EXPECT_NEAR((hi + lo) / 2, 0.5f, 1e-5f);
+  ASSERT_EQ(s.triangle_count(), before + 2 + 20 * 256) << "a level-4 icosphere";
+  const uint32_t ball = ground + 2;
+  EXPECT_EQ(s.material_of(ball), red);
+  for (int k = 0; k < 3; ++k) EXPECT_NEAR(length(s.vertex(ball, k) - Vec3{0, 3, 0}), 0.5f, 1e-5f);
+  int outward = 0;
+  for (uint32_t t = ball; t < s.triangle_count(); ++t) {
+    const Vec3 a = s.vertex(t, 0), b = s.vertex(t, 1), c = s.vertex(t, 2);
+    outward += dot(cross(b - a, c - a), (a + b + c) * (1.0f / 3) - Vec3{0, 3, 0}) > 0;
+  }
+  EXPECT_EQ(outward, 20 * 256) << "every face of the ball faces out";
+  EXPECT_TRUE(s.has_shading_normals()) << "the sphere is shaded round";
+  EXPECT_EQ(s.add_script_shapes(Value::Array{Value::Map{{"name", "x"}, {"sphere", Value::Array{0.0, 0.0, 0.0}}, {"radius", 0.0}}})
+                .error()
+                .message,
+            "shape 'x': sphere needs a centre {x, y, z} and a radius > 0");
+  Scene empty;
+  EXPECT_EQ(empty.add_script_shapes(Value::Array{Value::Map{{"name", "floor"}, {"plane", Value::Array{0.0, 0.0, 0.0}}}})
+                .error()
+                .message,
+            "shape 'floor': plane needs a size > 0 (the scene is empty, so give one)");
+}
+
+}  // namespace
+}  // namespace lf

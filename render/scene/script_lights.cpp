@@ -1,4 +1,4 @@
-// The lights a farm script adds to a scene (light { quad | sphere | point }).
+// The lights and shapes a farm script adds to a scene (light { quad | sphere | point }, shape { plane | sphere }).
 #include "render/scene/scene.hpp"
 
 #include <algorithm>
@@ -52,6 +52,59 @@ Status Scene::add_script_lights(const Value::Array& lights) {
       add_point_light(at, colour);
     } else {
       return make_error(which + ": give quad, sphere or point");
+    }
+  }
+  return Ok{};
+}
+
+// The scene's extent before the script's shapes: a ground plane's default size follows it.
+static float scene_diagonal(const Scene& s) {
+  Vec3 lo{INFINITY, INFINITY, INFINITY}, hi{-INFINITY, -INFINITY, -INFINITY};
+  for (uint32_t t = 0; t < s.triangle_count(); ++t)
+    for (int k = 0; k < 3; ++k) {
+      const Vec3 v = s.vertex(t, k);
+      lo = {std::min(lo.x, v.x), std::min(lo.y, v.y), std::min(lo.z, v.z)};
+      hi = {std::max(hi.x, v.x), std::max(hi.y, v.y), std::max(hi.z, v.z)};
+    }
+  return s.triangle_count() > 0 ? length(hi - lo) : 0.0f;
+}
+
+Status Scene::add_script_shapes(const Value::Array& shapes) {
+  const float diagonal = scene_diagonal(*this);
+  for (const Value& shape : shapes) {
+    const Value* name = shape.find("name");
+    if (!name || !name->is_string()) return make_error("a shape has no name");
+    const std::string which = "shape '" + name->as_string() + "'";
+    uint32_t material = 0;
+    if (const Value* m = shape.find("material"); m && m->is_string()) {
+      bool found = false;
+      for (uint32_t i = 0; i < materials_.size() && !found; ++i)
+        if (materials_[i].name == m->as_string()) material = i, found = true;
+      if (!found) return make_error(which + ": material '" + m->as_string() + "' is not in the scene");
+    } else {
+      material = add_material({name->as_string(), {0.5f, 0.5f, 0.5f}, {}});
+    }
+    Vec3 at;
+    if (const Value* p = shape.find("plane")) {
+      Vec3 n{0, 1, 0};
+      if (!vec3_of(p, at) || (shape.find("normal") && !vec3_of(shape.find("normal"), n)) || !(length(n) > 0))
+        return make_error(which + ": plane needs a point {x, y, z} and a normal {x, y, z} that is not 0");
+      n = normalize(n);
+      const Value* size = shape.find("size");
+      // A ground for what the scene holds: ten times its extent, so its edge is far outside any view of it.
+      const float side = size && size->is_number() ? static_cast<float>(size->as_double()) : 10 * diagonal;
+      if (!(side > 0)) return make_error(which + ": plane needs a size > 0 (the scene is empty, so give one)");
+      const Vec3 u = normalize(cross(n, std::abs(n.y) < 0.9f ? Vec3{0, 1, 0} : Vec3{1, 0, 0})), v = cross(n, u);
+      const float h = side / 2;
+      // Counter-clockwise around n, so that it faces n (it would emit that way).
+      add_quad(at - u * h - v * h, at + u * h - v * h, at + u * h + v * h, at - u * h + v * h, material);
+    } else if (const Value* c = shape.find("sphere")) {
+      const Value* r = shape.find("radius");
+      if (!vec3_of(c, at) || !r || !r->is_number() || !(r->as_double() > 0))
+        return make_error(which + ": sphere needs a centre {x, y, z} and a radius > 0");
+      add_sphere(at, static_cast<float>(r->as_double()), 4, material, /*smooth=*/true);
+    } else {
+      return make_error(which + ": give plane or sphere");
     }
   }
   return Ok{};
