@@ -275,6 +275,11 @@ int main(int argc, char** argv) {
     std::fputs(kUsage, stdout);
     return 0;
   }
+  // `lightfarm COMMAND --help`: the same page (a command's options would otherwise take --help for a value).
+  if (argc >= 3 && (std::strcmp(argv[2], "--help") == 0 || std::strcmp(argv[2], "-h") == 0)) {
+    std::fputs(kUsage, stdout);
+    return 0;
+  }
   if (cmd == "--version") {
     std::printf("lightfarm %s (protocol %u)\n", LIGHTFARM_VERSION, lf::wire::kProtocolVersion);
     return 0;

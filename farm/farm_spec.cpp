@@ -64,4 +64,13 @@ bool FarmSpec::has_remote_hosts() const {
   return false;
 }
 
+std::vector<std::string> FarmSpec::setting_warnings() const {
+  std::vector<std::string> out;
+  if (security == "none" && has_remote_hosts())
+    out.push_back("farm { security = \"none\" }: the links to other hosts are neither authenticated nor encrypted; "
+                  "anyone who can reach them can send the actors work and read what they send (\"curve\" is the "
+                  "default)");
+  return out;
+}
+
 }  // namespace lf

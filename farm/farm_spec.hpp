@@ -87,6 +87,9 @@ struct FarmSpec {
   std::vector<const HostSpec*> hosts_in_use() const;
   // True when some actor runs on a host that is not this machine.
   bool has_remote_hosts() const;
+  // What a user should hear before the farm starts, about settings that work but may not be what they meant
+  // (security off across hosts).
+  std::vector<std::string> setting_warnings() const;
 };
 
 }  // namespace lf

@@ -173,6 +173,12 @@ void read_farm_settings(const ParamTable& p, FarmSpec& spec) {
   spec.heartbeat_timeout = p.get_float("heartbeat_timeout", spec.heartbeat_timeout, 0.5, 3600);
   spec.request_timeout = p.get_float("request_timeout", spec.request_timeout, 0.1, 86400);
   spec.director_address = p.get_string("director_address", spec.director_address);
+  // Actors connect to this address: "every interface" is where a server listens, not a place to reach it.
+  for (const char* any : {"0.0.0.0", "::", "*", "[::]"})
+    if (spec.director_address == any)
+      throw ParamError("farm: director_address '" + spec.director_address +
+                       "' is no address the actors can reach; give this machine's address on the hosts' network "
+                       "(or leave it out: it is found from the route to the first remote host)");
   spec.security = p.get_string("security", spec.security, {"curve", "none"});
   spec.monitor = p.get_string("monitor", spec.monitor);
   spec.host_agents = p.get_bool("host_agents", spec.host_agents);

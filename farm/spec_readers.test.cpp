@@ -185,6 +185,31 @@ TEST(FarmSettings, RangesAndChoices) {
   EXPECT_NE(error_of([&] { read_farm_settings(table({{"heartbeat_timeout", 0.1}}, "farm"), spec); }).find("heartbeat_timeout"),
             std::string::npos);
   EXPECT_NE(error_of([&] { read_farm_settings(table({{"security", "tls"}}, "farm"), spec); }).find("tls"), std::string::npos);
+  EXPECT_EQ(error_of([&] { read_farm_settings(table({{"director_address", "0.0.0.0"}}, "farm"), spec); }),
+            "farm: director_address '0.0.0.0' is no address the actors can reach; give this machine's address on the "
+            "hosts' network (or leave it out: it is found from the route to the first remote host)");
+  EXPECT_NO_THROW(read_farm_settings(table({{"director_address", "10.0.0.1"}}, "farm"), spec));
+}
+
+TEST(FarmSettings, SecurityOffAcrossHostsIsAWarning) {
+  FarmSpec spec;
+  spec.security = "none";
+  EXPECT_TRUE(spec.setting_warnings().empty()) << "one machine: nothing crosses a network";
+  HostSpec remote;
+  remote.name = "h1";
+  remote.launcher = "ssh";
+  remote.address = "10.0.0.2";
+  spec.hosts.push_back(remote);
+  ActorSpec a;
+  a.kind = "renderer";
+  a.name = "renderer-0";
+  a.host = "h1";
+  spec.actors.push_back(a);
+  ASSERT_TRUE(spec.has_remote_hosts());
+  ASSERT_EQ(spec.setting_warnings().size(), 1u);
+  EXPECT_NE(spec.setting_warnings()[0].find("neither authenticated nor encrypted"), std::string::npos);
+  spec.security = "curve";
+  EXPECT_TRUE(spec.setting_warnings().empty());
 }
 
 }  // namespace

@@ -476,6 +476,11 @@ TEST_F(FarmTest, CommandLineBasics) {
   auto help = run_lightfarm({"--help"});
   EXPECT_EQ(help.status, 0);
   EXPECT_NE(help.out.find("lightfarm run SCRIPT"), std::string::npos);
+  for (const char* command : {"run", "check-actor", "actor", "scene"}) {
+    auto command_help = run_lightfarm({command, "--help"});
+    EXPECT_EQ(command_help.status, 0) << command << ": " << command_help.err;
+    EXPECT_NE(command_help.out.find("lightfarm check-actor [--kind KIND]"), std::string::npos) << command;
+  }
   auto version = run_lightfarm({"--version"});
   EXPECT_EQ(version.status, 0);
   EXPECT_NE(version.out.find("protocol 1"), std::string::npos);

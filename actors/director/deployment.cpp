@@ -73,6 +73,7 @@ void warn_about_escaping_light(const FarmSpec& spec, const Scene& scene) {
 
 Deployer::Deployer(const FarmSpec& spec, Launchers& launchers, bool quiet)
     : spec_(spec), launchers_(launchers), quiet_(quiet) {
+  for (const auto& warning : spec_.setting_warnings()) log_warn(warning);
   // ssh's key exchange and the check for lightfarm there take about as long as reading a real scene here.
   if (spec_.has_remote_hosts())
     hosts_connected_ = std::async(std::launch::async, [this] { return launchers_.prepare(spec_.hosts_in_use()); });
