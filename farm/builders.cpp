@@ -273,14 +273,23 @@ std::string to_dot(const FarmSpec& spec) {
   std::string out = "digraph farm {\n  rankdir=LR;\n  node [shape=box, style=rounded];\n";
   auto id = [](const std::string& name) { return "\"" + name + "\""; };
   std::map<std::string, std::vector<std::string>> by_host;
-  const int renderers = spec.renderer_count();
-  bool renderers_drawn = false;
+  // Renderers are drawn as one node a host ("renderer × k" in each host's box), one node in all on one host.
+  std::vector<std::pair<std::string, int>> renderer_hosts;  // host, count, in order of first appearance
+  for (const auto& a : spec.actors)
+    if (a.is_renderer()) {
+      auto it = std::find_if(renderer_hosts.begin(), renderer_hosts.end(), [&](const auto& h) { return h.first == a.host; });
+      if (it == renderer_hosts.end()) renderer_hosts.emplace_back(a.host, 1);
+      else ++it->second;
+    }
+  std::vector<std::string> renderer_nodes;
+  for (const auto& [host, count] : renderer_hosts) {
+    renderer_nodes.push_back(renderer_hosts.size() == 1 ? std::string("renderers") : "renderers@" + host);
+    by_host[host].push_back("    " + id(renderer_nodes.back()) + " [label=\"renderer × " + std::to_string(count) +
+                            "\", shape=box3d];");
+  }
   for (const auto& a : spec.actors) {
     if (a.is_renderer()) {
-      if (renderers_drawn) continue;
-      renderers_drawn = true;
-      by_host[a.host].push_back("    " + id("renderers") + " [label=\"renderer × " + std::to_string(renderers) +
-                                "\", shape=box3d];");
+      continue;
     } else {
       // A pool its clients dispatch to is no process: drawn dashed, labelled "pool".
       const std::string shape = a.dispatched_by_clients ? ", shape=trapezium, style=dashed"
@@ -322,8 +331,7 @@ std::string to_dot(const FarmSpec& spec) {
   }
   // A partitioned scene: the parts answer the rays of the renderers and of the ops that trace through them
   // (dotted: rays, not light).
-  std::vector<std::string> tracers;
-  if (renderers > 0) tracers.push_back("renderers");
+  std::vector<std::string> tracers = renderer_nodes;
   for (const auto& a : spec.actors)
     if (!a.is_renderer() && traces_through_parts(a)) tracers.push_back(a.name);
   for (const auto& g : spec.actors)
@@ -341,9 +349,12 @@ std::string to_dot(const FarmSpec& spec) {
     if (rings > 1) out += "  " + id(name) + " -> " + node_name((r + 1) % rings, p) + " [style=dashed, dir=none];\n";
     if (!ring_op.empty()) out += "  " + id(name) + " -> " + id(ring_op) + " [style=dotted];\n";
   }
-  if (spec.lighting >= 0)
-    out += "  " + id(spec.actors[static_cast<size_t>(spec.lighting)].name) + " -> " + id("renderers") + arrow(spec.lighting);
-  out += "  \"renderers\" -> film;\n}\n";
+  for (const std::string& node : renderer_nodes) {
+    if (spec.lighting >= 0)
+      out += "  " + id(spec.actors[static_cast<size_t>(spec.lighting)].name) + " -> " + id(node) + arrow(spec.lighting);
+    out += "  " + id(node) + " -> film;\n";
+  }
+  out += "}\n";
   return out;
 }
 

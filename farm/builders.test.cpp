@@ -168,5 +168,25 @@ TEST(Builders, DotGroupsByHostAndDrawsRingsWithoutParsingNames) {
   EXPECT_NE(dot.find("\"rad\" -> \"renderers\" [label=\"LD+\"];"), std::string::npos) << dot;
 }
 
+// Renderers spread over hosts are drawn in each host's box, as many as that host runs.
+TEST(Builders, DotDrawsRenderersInTheHostsTheyRunOn) {
+  FarmSpec s;
+  s.hosts.push_back(HostSpec{.name = "h1"});
+  s.hosts.push_back(HostSpec{.name = "h2"});
+  s.actors.push_back(ActorSpec{.name = "direct", .kind = "direct"});
+  s.lighting = 0;
+  add_renderers(s, 3, 0, RendererParams{}, {"h1", "h2"}, {});
+  const std::string dot = to_dot(s);
+  const size_t h1 = dot.find("subgraph \"cluster_h1\""), h2 = dot.find("subgraph \"cluster_h2\"");
+  ASSERT_NE(h1, std::string::npos) << dot;
+  ASSERT_NE(h2, std::string::npos) << dot;
+  const size_t two = dot.find("\"renderers@h1\" [label=\"renderer × 2\""), one = dot.find("\"renderers@h2\" [label=\"renderer × 1\"");
+  ASSERT_NE(two, std::string::npos) << dot;
+  ASSERT_NE(one, std::string::npos) << dot;
+  EXPECT_TRUE(h1 < two && two < h2 && h2 < one) << "each in its host's box: " << dot;
+  EXPECT_NE(dot.find("\"direct\" -> \"renderers@h2\""), std::string::npos) << dot;
+  EXPECT_NE(dot.find("\"renderers@h1\" -> film;"), std::string::npos) << dot;
+}
+
 }  // namespace
 }  // namespace lf
