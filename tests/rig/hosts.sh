@@ -73,6 +73,13 @@ up() {
     echo "hosts.sh: cannot create network namespaces here (needs root with CAP_NET_ADMIN)" >&2
     exit 77
   fi
+  # Some containers let a namespace be made but not entered ("mount --make-rslave /" failed): no rig there either.
+  local entered
+  if ! entered=$(ip netns exec "lfh$id-probe" true 2>&1); then
+    ip netns del "lfh$id-probe" 2>/dev/null || true
+    echo "hosts.sh: cannot enter a network namespace here: $entered" >&2
+    exit 77
+  fi
   ip netns del "lfh$id-probe"
   for i in $(seq 1 "$n"); do namespaces="$namespaces lfh$id-$i"; done
   printf 'bridge=%s\nnamespaces="%s"\n' "$bridge" "$namespaces" > "$dir/state"
