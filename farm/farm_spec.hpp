@@ -19,6 +19,7 @@ struct HostSpec {
   std::string user;        // login name; empty: ssh's default
   int port = 0;            // 0: ssh's default
   std::string ssh_config;  // an ssh_config file (ssh -F); empty: the user's
+  std::string ssh_name;    // what ssh connects to: a Host of the ssh config (its key, user, options); empty: address
   std::string lightfarm;   // the lightfarm binary on the host; empty: this binary's path
   SourceLoc loc;
   bool remote() const { return launcher != "local"; }

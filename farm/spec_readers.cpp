@@ -64,6 +64,7 @@ HostSpec read_host(const std::string& name, const ParamTable& p, const fs::path&
     h.user = p.get_string("user", "");
     h.port = static_cast<int>(p.get_int("port", 0, 0, 65535));
     h.ssh_config = p.get_string("ssh_config", "");
+    h.ssh_name = p.get_string("ssh_name", "");
   }
   p.report_unused();
   if (h.name == "local") throw ParamError("host 'local' is this machine; give another name");

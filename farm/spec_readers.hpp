@@ -20,7 +20,7 @@ SceneSpec read_scene(const ParamTable& p, const std::filesystem::path& script_di
 // The names of the scene's materials (an OBJ's MTL without loading its geometry, or a built-in scene's).
 std::vector<std::string> scene_material_names(const SceneSpec& scene);
 
-// host "name" { launcher, address, user, port, ssh_config, lightfarm }.
+// host "name" { launcher, address, user, port, ssh_config, ssh_name, lightfarm }.
 HostSpec read_host(const std::string& name, const ParamTable& p, const std::filesystem::path& script_dir);
 
 // material "name" { emission, kd, ks, mirror, tf, ns, ior, type }: the change as the scene applies it

@@ -111,6 +111,13 @@ TEST_F(FileReaders, HostsNeedAnAddressAndTheirSshConfig) {
   const HostSpec h = read_host("h1", table({{"launcher", "ssh"}, {"address", "10.0.0.2"}, {"ssh_config", "ssh.conf"}}, "host"), dir);
   EXPECT_EQ(h.ssh_config, (dir / "ssh.conf").string());
   EXPECT_TRUE(h.remote());
+  EXPECT_TRUE(h.ssh_name.empty()) << "reached at its address unless named";
+  EXPECT_EQ(read_host("h1", table({{"launcher", "ssh"}, {"address", "10.0.0.2"}, {"ssh_name", "gpu1"}}, "host"), dir).ssh_name,
+            "gpu1");
+  EXPECT_NE(error_of([&] { read_host("s1", table({{"launcher", "slurm"}, {"address", "10.0.0.3"}, {"ssh_name", "x"}}, "host"), dir); })
+                .find("ssh_name"),
+            std::string::npos)
+      << "only ssh hosts are reached by ssh";
   EXPECT_EQ(read_host("l2", table({}, "host"), dir).address, "127.0.0.1");
   EXPECT_EQ(error_of([&] { read_host("h1", table({{"launcher", "ssh"}}, "host"), dir); }),
             "host 'h1': an ssh host needs address = \"...\" (where its actors listen and ssh reaches it)");

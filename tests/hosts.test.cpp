@@ -193,6 +193,26 @@ namespace {
 // fault-free one. The pool's multiplexer and the other actors live on h1 and here.
 // The frame is long enough (2048 spp, some 10 s) that the cut lands well before its end even on a quiet, fast
 // machine: at 512 spp a 2.7 s frame once finished before the kill reached the host, and nothing was lost.
+// A host known to the user's ssh config by name is reached by that name (ssh_name), so its Host block applies: here
+// only the names carry the key, and the addresses alone are refused.
+TEST_F(HostsTest, AHostIsReachedByItsSshName) {
+  ASSERT_EQ(sh("sed 's/^Host \\(h[0-9]\\) .*/Host \\1/' " + rig + "/ssh_config > " + rig + "/ssh_config_names"), 0);
+  auto script = [&](bool named) {
+    std::string lua = "scene { builtin = \"cornell\" }\nimage { width = 32, height = 32, spp = 1 }\n";
+    lua += "local h1 = host \"h1\" { launcher = \"ssh\", address = \"" + address.at("h1") + "\", ssh_config = \"" + rig +
+           "/ssh_config_names\"" + (named ? ", ssh_name = \"h1\"" : "") + " }\n";
+    lua += "renderers { count = 1, lighting = lightop \"direct\" { host = h1 } }\n";
+    return write(named ? "named.lua" : "unnamed.lua", lua);
+  };
+  auto named = run_lightfarm({"run", script(true), "--output", path("named.exr"), "--quiet"});
+  EXPECT_EQ(named.status, 0) << named.err;
+  expect_nothing_left(named);
+  auto unnamed = run_lightfarm({"run", script(false), "--output", path("unnamed.exr"), "--quiet"});
+  EXPECT_EQ(unnamed.status, 1) << unnamed.err;
+  EXPECT_NE(unnamed.err.find("host 'h1' (" + address.at("h1") + "): ssh failed"), std::string::npos) << unnamed.err;
+  expect_nothing_left(unnamed);
+}
+
 TEST_F(HostsTest, AHostLostMidFrameChangesNoPixel) {
   const auto [local, spread] = pool_scripts("scene { builtin = \"cornell\" }\n"
                                            "image { width = 96, height = 96, spp = 2048, tile = 16 }\n"

@@ -28,7 +28,12 @@ SshLauncher::~SshLauncher() {
   }
 }
 
-std::string SshLauncher::target() const { return host_.user.empty() ? host_.address : host_.user + "@" + host_.address; }
+// A host the user's ssh config names (ssh_name) is reached by that name, so its Host block (key, user, proxy)
+// applies; else by the address its actors listen on.
+std::string SshLauncher::target() const {
+  const std::string& where = host_.ssh_name.empty() ? host_.address : host_.ssh_name;
+  return host_.user.empty() ? where : host_.user + "@" + where;
+}
 
 std::vector<std::string> SshLauncher::ssh_command() const {
   std::vector<std::string> argv{"ssh"};
