@@ -10,6 +10,14 @@
 
 namespace lf {
 
+// A square image of `side` pixels and `spp` samples a pixel, the default sampler.
+static ImageSpec square_image(int side, int spp) {
+  ImageSpec image;
+  image.width = image.height = side;
+  image.spp = spp;
+  return image;
+}
+
 // A renderer's request to a lean input: only the fields the receiver cannot rebuild.
 static Value tile_request(const TileWork& work, size_t begin, size_t end, const Scene& scene, SamplerKind sampler,
                           int64_t image_width, bool fold = false) {
@@ -169,9 +177,7 @@ TEST(LeanPoints, ACameraRequestCarriesDistancesAndSampleIndicesAndRebuildsTheRen
 // normals and materials are still left out) and come back bit for bit.
 TEST(LeanPoints, ALensCamerasPointsTravelWithTheirPositions) {
   const CornellTiles cornell;
-  ImageSpec image;
-  image.width = image.height = 32;
-  image.spp = 3;
+  const ImageSpec image = square_image(32, 3);
   CameraSpec camera;
   camera.aperture = 40;  // mm, in a box 555 wide
   camera.focus_distance = 1000;
@@ -202,9 +208,7 @@ TEST(LeanPoints, ALensCamerasPointsTravelWithTheirPositions) {
 TEST(LeanPoints, ATrustedTileEncodesAsTheCheckedOneAndAChangedPointTravelsWhole) {
   const CornellTiles cornell;
   const Scene& scene = cornell.scene;
-  ImageSpec image;
-  image.width = image.height = 32;
-  image.spp = 2;
+  const ImageSpec image = square_image(32, 2);
   const TileWork work = cornell.trace(image, TileRect{8, 8, 24, 24});
   ASSERT_TRUE(work.rebuildable);
   const size_t n = work.points.size();
@@ -228,9 +232,7 @@ TEST(LeanPoints, ATrustedTileEncodesAsTheCheckedOneAndAChangedPointTravelsWhole)
 TEST(LeanPoints, ACameraRequestWithABadTileOrSampleIsRefused) {
   const CornellTiles cornell;
   const Scene& scene = cornell.scene;
-  ImageSpec image;
-  image.width = image.height = 32;
-  image.spp = 2;
+  ImageSpec image = square_image(32, 2);
   image.sampler = "independent";
   const TileWork work = cornell.trace(image, TileRect{0, 0, 16, 16});
   const PixelKeys keys{image.width, SamplerKind::independent};
@@ -257,9 +259,7 @@ TEST(LeanPoints, ACameraRequestWithABadTileOrSampleIsRefused) {
 TEST(LeanPoints, AFoldedReplyHoldsEachPixelsRadianceSummedAndResolvesToTheSamePixels) {
   const CornellTiles cornell;
   const Scene& scene = cornell.scene;
-  ImageSpec image;
-  image.width = image.height = 48;
-  image.spp = 5;
+  const ImageSpec image = square_image(48, 5);
   // The whole image as one tile: it sees the light, and its corners look past the box's open side (some pixels
   // have fewer points than samples).
   const TileWork work = cornell.trace(image, TileRect{0, 0, 48, 48});
