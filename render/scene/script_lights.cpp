@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <optional>
 
 namespace lf {
 
@@ -58,19 +59,21 @@ Status Scene::add_script_lights(const Value::Array& lights) {
 }
 
 // The scene's extent before the script's shapes: a ground plane's default size follows it.
-static float scene_diagonal(const Scene& s) {
+static float scene_diagonal(const Scene& s, size_t triangles) {
   Vec3 lo{INFINITY, INFINITY, INFINITY}, hi{-INFINITY, -INFINITY, -INFINITY};
-  for (uint32_t t = 0; t < s.triangle_count(); ++t)
+  for (uint32_t t = 0; t < triangles; ++t)
     for (int k = 0; k < 3; ++k) {
       const Vec3 v = s.vertex(t, k);
       lo = {std::min(lo.x, v.x), std::min(lo.y, v.y), std::min(lo.z, v.z)};
       hi = {std::max(hi.x, v.x), std::max(hi.y, v.y), std::max(hi.z, v.z)};
     }
-  return s.triangle_count() > 0 ? length(hi - lo) : 0.0f;
+  return triangles > 0 ? length(hi - lo) : 0.0f;
 }
 
 Status Scene::add_script_shapes(const Value::Array& shapes) {
-  const float diagonal = scene_diagonal(*this);
+  // Measured once, and only for a plane that needs it: every scene load passes here, most with no shapes.
+  std::optional<float> diagonal;
+  const size_t scene_triangles = triangle_count();
   for (const Value& shape : shapes) {
     const Value* name = shape.find("name");
     if (!name || !name->is_string()) return make_error("a shape has no name");
@@ -92,7 +95,8 @@ Status Scene::add_script_shapes(const Value::Array& shapes) {
       n = normalize(n);
       const Value* size = shape.find("size");
       // A ground for what the scene holds: ten times its extent, so its edge is far outside any view of it.
-      const float side = size && size->is_number() ? static_cast<float>(size->as_double()) : 10 * diagonal;
+      if (!(size && size->is_number()) && !diagonal) diagonal = scene_diagonal(*this, scene_triangles);
+      const float side = size && size->is_number() ? static_cast<float>(size->as_double()) : 10 * *diagonal;
       if (!(side > 0)) return make_error(which + ": plane needs a size > 0 (the scene is empty, so give one)");
       const Vec3 u = normalize(cross(n, std::abs(n.y) < 0.9f ? Vec3{0, 1, 0} : Vec3{1, 0, 0})), v = cross(n, u);
       const float h = side / 2;

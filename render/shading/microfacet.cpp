@@ -148,12 +148,11 @@ MetalRoughness::MetalRoughness(RGB base_color, float metallic, float roughness)
   dielectric_average_ = table.dielectric_average(roughness_);
   // Kulla and Conty's F_ms: the Fresnel term of light that scatters more than once (Schlick's hemispherical
   // average F0 + (1 - F0) / 21 compounded over the bounces).
-  for (int c = 0; c < 3; ++c) {
-    const float f0 = c == 0 ? base_.x : c == 1 ? base_.y : base_.z;
+  auto f_ms = [&](float f0) {
     const float f_avg = f0 + (1 - f0) / 21;
-    const float v = f_avg * f_avg * conductor_average_ / (1 - f_avg * (1 - conductor_average_));
-    (c == 0 ? multiple_scattering_fresnel_.x : c == 1 ? multiple_scattering_fresnel_.y : multiple_scattering_fresnel_.z) = v;
-  }
+    return f_avg * f_avg * conductor_average_ / (1 - f_avg * (1 - conductor_average_));
+  };
+  multiple_scattering_fresnel_ = {f_ms(base_.x), f_ms(base_.y), f_ms(base_.z)};
 }
 
 RGB MetalRoughness::eval_specular(Vec3 wo, Vec3 wi) const {
@@ -194,16 +193,19 @@ float MetalRoughness::specular_probability(Vec3 wo) const {
 
 float MetalRoughness::pdf(Vec3 wo, Vec3 wi) const {
   if (wo.z <= 0 || wi.z <= 0) return 0;
-  const float ps = specular_probability(wo);
-  return ps * ggx_.pdf(wo, wi) + (1 - ps) * wi.z / kPi;
+  return mixture_pdf(wo, wi, specular_probability(wo));
+}
+
+float MetalRoughness::mixture_pdf(Vec3 wo, Vec3 wi, float specular_share) const {
+  return specular_share * ggx_.pdf(wo, wi) + (1 - specular_share) * wi.z / kPi;
 }
 
 std::optional<MetalRoughness::Sample> MetalRoughness::sample(Vec3 wo, float u0, float u1, float u2) const {
   if (wo.z <= 0) return std::nullopt;
-  const Vec3 wi = u0 < specular_probability(wo) ? reflect_about(wo, ggx_.sample_visible_normal(wo, u1, u2))
-                                                 : cosine_local(u1, u2);
+  const float ps = specular_probability(wo);  // once: two table lookups and a Fresnel term
+  const Vec3 wi = u0 < ps ? reflect_about(wo, ggx_.sample_visible_normal(wo, u1, u2)) : cosine_local(u1, u2);
   if (wi.z <= 0) return std::nullopt;
-  const float p = pdf(wo, wi);
+  const float p = mixture_pdf(wo, wi, ps);
   if (!(p > 0)) return std::nullopt;
   return Sample{wi, eval(wo, wi) * (wi.z / p), p};
 }

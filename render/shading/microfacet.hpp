@@ -86,6 +86,7 @@ class MetalRoughness {
 
  private:
   float specular_probability(Vec3 wo) const;
+  float mixture_pdf(Vec3 wo, Vec3 wi, float specular_share) const;
   RGB base_;
   float metallic_, roughness_;
   TrowbridgeReitz ggx_;
