@@ -9,7 +9,8 @@
 --                irradiance cache placed where the camera looks whose hemisphere rays are shaded by one path
 --                each (all further bounces), plus the chains through the water (specular). The cache's records
 --                interpolate the indirect light smoothly; the path tracer's noise is averaged inside each record's
---                12 x 32 hemisphere rays.
+--                hemisphere rays, about 12 per lit sample a pixel (theta = 0, phi = 0: derived from the image,
+--                docs/lua-api.md, "One knob for time against quality").
 --   "pathtrace"  the same light by path tracing alone (the reference bench/lost_empire_bench measures against)
 --   "emission"   the lights alone, as the camera sees them (the benchmark's mask of pixels that see a light)
 --
@@ -79,7 +80,7 @@ elseif lighting == "network" then
   local indirect = lightop "irradiance" { input = paths, a = param("a", 0.2), stride = param("stride", 8),
                                           finest = param("finest", 2), own_rays = param("own_rays", 8),
                                           relax = param("relax", 1), nearest = param("nearest", 1.5),
-                                          theta = param("theta", 12), phi = param("phi", 32),
+                                          theta = param("theta", 0), phi = param("phi", 0),
                                           name = "indirect", seed = seed }
   -- The water is glass: what its refraction and reflection chains land on is lit by the same two ops. The flames
   -- seen in the water are as small as those seen directly: chains that only look for them (a few rays each) give

@@ -229,6 +229,7 @@ class LightOpActor final : public Actor {
     width_ = config.image.width;
     height_ = config.image.height;
     sampler_ = sampler_of(config.image);
+    lit_samples_ = config.image.shaded_per_pixel();
     inputs_ = std::make_unique<RemoteInputs>(rt, 4096, *scene_);
     if (config.pool) {
       replica_index_ = static_cast<int>(config.pool->index);
@@ -256,6 +257,7 @@ class LightOpActor final : public Actor {
       ctx.camera = camera_.get();
       ctx.width = width_;
       ctx.height = height_;
+      ctx.lit_samples = lit_samples_;
       ctx.sampler = sampler_;
       ctx.tracing = tracing_.get();
       ctx.progress = [&rt](const char* what, uint64_t done, uint64_t total) { rt.report_progress(what, done, total); };
@@ -370,6 +372,7 @@ class LightOpActor final : public Actor {
   std::shared_ptr<const Scene> scene_;
   std::shared_ptr<const RayTracer> tracer_;
   SamplerKind sampler_ = SamplerKind::independent;
+  int lit_samples_ = 0;
   std::unique_ptr<Camera> camera_;
   int width_ = 0, height_ = 0;
   std::unique_ptr<RemoteInputs> inputs_;

@@ -204,6 +204,9 @@ struct SceneContext {
   // The farm's camera and image size, for ops that place work where the camera looks (null in some tests).
   const Camera* camera = nullptr;
   int width = 0, height = 0;
+  // The image's lit (shaded) samples a pixel, the farm's quality knob: what settings left unset are derived from
+  // (derived_settings.hpp). 0 where there is no image (some tests): taken as 16.
+  int lit_samples = 0;
   // How camera samples and the ops that follow them draw their numbers (image { sampler }): a point's key is that
   // sampler's (sampler.hpp).
   SamplerKind sampler = SamplerKind::sobol;
