@@ -100,10 +100,13 @@ Value read_material_change(const std::string& name, const ParamTable& p, const s
     change[key] = Value::Array{c[0], c[1], c[2]};
   };
   colour("emission", 1e6);
-  for (const char* key : {"kd", "ks", "mirror", "tf"}) colour(key, 1);
+  for (const char* key : {"kd", "ks", "mirror", "tf", "base_color"}) colour(key, 1);
   if (p.has("ns")) change["ns"] = p.get_float("ns", 0, 0, 1e6);
   if (p.has("ior")) change["ior"] = p.get_float("ior", 1.5, 1, 3);
-  if (p.has("type")) change["type"] = p.get_string("type", "diffuse", {"diffuse", "glossy", "mirror", "glass"});
+  for (const char* key : {"metallic", "roughness"})
+    if (p.has(key)) change[key] = p.get_float(key, 0, 0, 1);
+  if (p.has("type"))
+    change["type"] = p.get_string("type", "diffuse", {"diffuse", "glossy", "mirror", "glass", "metal_rough"});
   p.report_unused();
   // The scene's own check (kd + ks + mirror at most 1) with the words it would use later.
   Scene probe;

@@ -2,6 +2,8 @@
 // image and camera as an actor reads them back from CONFIG.
 #include "farm/spec_readers.hpp"
 
+#include "render/scene/scene.hpp"
+
 #include <gtest/gtest.h>
 
 #include <fstream>
@@ -143,6 +145,29 @@ TEST(MaterialReader, ChangesAreCheckedAgainstTheSceneAndItsRules) {
             }),
             "")
       << "kd + ks above 1 would make light";
+}
+
+// glTF's model from the script: metallic, roughness or base_color make a material metal_rough; the lobes of the
+// other models do not mix with it, and each parameter keeps to its range.
+TEST(MaterialReader, MetalRoughFromItsParameters) {
+  const std::vector<std::string> names{"ball"};
+  const Value change = read_material_change(
+      "ball", table({{"metallic", 1}, {"roughness", 0.25}, {"base_color", Value::Array{0.9, 0.7, 0.3}}}, "m"), names);
+  Scene probe;
+  probe.add_material({"ball", {0.5f, 0.5f, 0.5f}, {}, Material::Type::glossy, {0.3f, 0.3f, 0.3f}, 20});
+  ASSERT_TRUE(probe.apply_material_overrides(Value::Array{change}).ok());
+  const Material& m = probe.material(0);
+  EXPECT_EQ(m.type, Material::Type::metal_rough);
+  EXPECT_EQ(m.metallic, 1.0f);
+  EXPECT_EQ(m.roughness, 0.25f);
+  EXPECT_EQ(m.kd, (RGB{0.9f, 0.7f, 0.3f}));
+  EXPECT_TRUE(is_black(m.ks)) << "the Phong lobe it replaces is gone";
+  EXPECT_EQ(error_of([&] { read_material_change("ball", table({{"roughness", 1.5}}, "m"), names); }),
+            "m: parameter 'roughness' must be in [0, 1], got 1.5");
+  EXPECT_EQ(error_of([&] { read_material_change("ball", table({{"type", "glossy"}, {"metallic", 1}}, "m"), names); }),
+            "material 'ball': metallic, roughness and base_color belong to type \"metal_rough\"");
+  EXPECT_EQ(error_of([&] { read_material_change("ball", table({{"roughness", 0.5}, {"ks", Value::Array{0.1, 0.1, 0.1}}}, "m"), names); }),
+            "material 'ball': a metal_rough material takes base_color, metallic and roughness, not kd, ks, ns or mirror");
 }
 
 TEST(LightReader, OneShapeAndNoNegativeLight) {

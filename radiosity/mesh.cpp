@@ -67,7 +67,8 @@ Result<Mesh> build_mesh(const Scene& scene, const MeshSettings& settings) {
       Patch p;
       p.polygon = piece;
       p.surface = s;
-      p.reflectance = material.kd;
+      // A metal_rough base is no Lambert lobe: the solution leaves it to the `glossy` op.
+      p.reflectance = material.type == Material::Type::metal_rough ? RGB{} : material.kd;
       p.emission = material.ke * kPi;
       p.element_tiles = tiles_for(piece.max_edge(), element_size);
       mesh.patches.push_back(p);

@@ -55,7 +55,8 @@ class Reader {
 };
 
 // A material as both binary forms store it: u32 name length, name, f32 kd[3] ke[3] ks[3], f32 ns, f32 ior, u8 type,
-// i32 kd_map, i32 alpha_map (-1: none; the reader of the whole form checks them against its texture count).
+// i32 kd_map, i32 alpha_map (-1: none; the reader of the whole form checks them against its texture count), f32 kr[3]
+// tf[3], f32 metallic, f32 roughness.
 inline void put_material(std::string& out, const Material& m) {
   put(out, static_cast<uint32_t>(m.name.size()));
   out += m.name;
@@ -69,20 +70,23 @@ inline void put_material(std::string& out, const Material& m) {
   put(out, m.alpha_map);
   put_rgb(out, m.kr);
   put_rgb(out, m.tf);
+  put(out, m.metallic);
+  put(out, m.roughness);
 }
 inline bool read_material(Reader& r, Material& m) {
   uint32_t len = 0;
   uint8_t type = 0;
   if (!r.u32(len) || !r.str(m.name, len)) return false;
-  if (!r.vec(m.kd) || !r.vec(m.ke) || !r.vec(m.ks) || !r.f32(m.ns) || !r.f32(m.ior) || !r.u8(type) || type > 3)
+  if (!r.vec(m.kd) || !r.vec(m.ke) || !r.vec(m.ks) || !r.f32(m.ns) || !r.f32(m.ior) || !r.u8(type) ||
+      type > static_cast<uint8_t>(Material::Type::metal_rough))
     return false;
   m.type = static_cast<Material::Type>(type);
   uint32_t kd_map = 0, alpha_map = 0;
   if (!r.u32(kd_map) || !r.u32(alpha_map)) return false;
   m.kd_map = static_cast<int32_t>(kd_map);
   m.alpha_map = static_cast<int32_t>(alpha_map);
-  if (!r.vec(m.kr) || !r.vec(m.tf)) return false;
-  return m.kd_map >= -1 && m.alpha_map >= -1;
+  if (!r.vec(m.kr) || !r.vec(m.tf) || !r.f32(m.metallic) || !r.f32(m.roughness)) return false;
+  return m.kd_map >= -1 && m.alpha_map >= -1 && m.metallic >= 0 && m.metallic <= 1 && m.roughness >= 0 && m.roughness <= 1;
 }
 
 }  // namespace lf::bytes

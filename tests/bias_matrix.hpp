@@ -19,8 +19,8 @@ struct Scene {
 };
 
 // Diffuse (the Cornell box), mirror and glass (cornell_glass), glossy (McGuire's CornellBox-Glossy: a glossy sphere
-// and box), glossy everywhere (its walls, floor and ceiling given a Phong lobe from the script), and a floor both
-// diffuse and a mirror. `mcguire`: the folder holding CornellBox-Glossy.obj.
+// and box), glossy everywhere (its walls, floor and ceiling given a Phong lobe from the script), a floor both
+// diffuse and a mirror, and glTF's metal-roughness model on the sphere, the box and the floor. `mcguire`: the folder holding CornellBox-Glossy.obj.
 inline std::vector<Scene> scenes(const std::string& mcguire) {
   const std::string cornell_camera = "camera { eye = {278, 273, -800}, at = {278, 273, 0}, fov = 39.3 }\n";
   const std::string glossy = "scene { file = \"" + mcguire + "CornellBox-Glossy.obj\" }\n"
@@ -33,11 +33,17 @@ inline std::vector<Scene> scenes(const std::string& mcguire) {
   // A floor that is diffuse and a mirror at once (MTL illum 3 with Kd): direct light and the caches take its Kd, the
   // specular op its mirror term, a photon map follows that term too.
   const std::string mirror_floor = glossy + "material \"floor\" { kd = {0.4, 0.4, 0.4}, mirror = {0.4, 0.4, 0.4} }\n";
+  // glTF's microfacet model: a rough gold sphere, a blue dielectric box and a shiny grey floor.
+  const std::string microfacet = glossy +
+                                 "material \"sphere\" { metallic = 1, roughness = 0.3, base_color = {0.95, 0.8, 0.5} }\n"
+                                 "material \"shortBox\" { metallic = 0, roughness = 0.5, base_color = {0.2, 0.4, 0.8} }\n"
+                                 "material \"floor\" { metallic = 0, roughness = 0.2, base_color = {0.7, 0.7, 0.7} }\n";
   return {{"cornell", "scene { builtin = \"cornell\" }\n" + cornell_camera},
           {"cornell_glass", "scene { builtin = \"cornell_glass\" }\n" + cornell_camera},
           {"glossy", glossy},
           {"glossy_walls", shiny_walls},
-          {"mirror_floor", mirror_floor}};
+          {"mirror_floor", mirror_floor},
+          {"microfacet", microfacet}};
 }
 
 // A shipped network that says it computes all the light, and what it is run with besides the frame's size.

@@ -1,4 +1,5 @@
-// glossy: indirect light reflected by a glossy lobe. At a point whose material has one (a Phong lobe, Ks > 0),
+// glossy: indirect light reflected by a glossy lobe. At a point whose material has one (a Phong lobe, Ks > 0, or a
+// metal_rough material's whole microfacet BSDF),
 // `samples` directions drawn in proportion to that lobe; where each lands, the input is asked (in one batch) for
 // the light leaving that surface back towards the point. The answer is the lobe's share of the reflected light:
 // ks (ns + 2) / (ns + 1) cos(wi) times what arrives, averaged. One input.
@@ -45,7 +46,10 @@ class Glossy final : public LightOp {
     std::vector<uint32_t> sample_of;
     for (size_t i = 0; i < points.size(); ++i) {
       radiance[i] = RGB{};
-      const Bsdf bsdf(scene.material(points.material[i]));
+      const Material& m = scene.material(points.material[i]);
+      const bool microfacet = m.type == Material::Type::metal_rough;
+      // A microfacet material's base colour may be a texture's; a Phong lobe needs no albedo.
+      const Bsdf bsdf = microfacet ? Bsdf(m, points.albedo(i, scene, ctx_.pixel_footprint(points.position[i]))) : Bsdf(m);
       if (!bsdf.has_glossy_lobe()) continue;
       ++points_;
       const Vec3 ng = points.face_normal(i, scene);
@@ -54,7 +58,10 @@ class Glossy final : public LightOp {
         Sampler sampler(ctx_.sampler, points.key[i], streams::glossy ^ (seed_ << 8), static_cast<uint32_t>(s),
                         static_cast<uint32_t>(samples_));
         const Uniform2 u = sampler.uniform2();
-        auto sample = bsdf.sample_glossy(points.normal[i], points.wo[i], u.u, u.v);
+        // The microfacet model's choice between its parts takes one more number (after the pair, so a Phong
+        // lobe's directions stay what they were).
+        const float part = microfacet ? sampler.uniform() : 0.5f;
+        auto sample = bsdf.sample_glossy(points.normal[i], points.wo[i], u.u, u.v, part);
         // A reflection the shading normal allows below the face would leave through the surface: no light.
         if (!sample || dot(sample->wi, ng) <= 0) continue;
         rays.push_back(Ray{origin, sample->wi});

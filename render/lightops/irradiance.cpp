@@ -114,7 +114,7 @@ class Irradiance final : public LightOp {
     for (size_t i = 0; i < points.size(); ++i) {
       radiance[i] = RGB{};
       const Material& m = scene.material(points.material[i]);
-      if (m.specular() || is_black(m.kd)) continue;
+      if (!m.has_lambert_lobe()) continue;
       // The records valid under a, else (with `relax`) under 2a and 4a: a point the cache barely misses then uses its
       // nearest records (deterministically: the cache does not change while rendering) instead of paying for its
       // own value. Such points lie mostly near what occludes them, where the records farther off are brighter.
@@ -162,7 +162,7 @@ class Irradiance final : public LightOp {
     double total = 0;
     for (uint32_t t = 0; t < scene.triangle_count(); ++t) {
       const Material& m = scene.material(scene.material_of(t));
-      if (m.specular() || is_black(m.kd)) continue;
+      if (!m.has_lambert_lobe()) continue;
       total += scene.area(t);
       tris.push_back(t);
       cdf.push_back(total);
@@ -219,7 +219,7 @@ class Irradiance final : public LightOp {
         const Vec3 n = sp.ng;
         const Material& m = scene.material(scene.material_of(t));
         if (!m.specular()) {
-          if (!is_black(m.kd)) found.emplace_back(ids[i], Candidate{p, sp.ns, sp.ng, splitmix64(ids[i] ^ 0xca3e5a), t});
+          if (m.has_lambert_lobe()) found.emplace_back(ids[i], Candidate{p, sp.ns, sp.ng, splitmix64(ids[i] ^ 0xca3e5a), t});
           continue;
         }
         Vec3 dir = reflect(wo, n);
@@ -270,7 +270,7 @@ class Irradiance final : public LightOp {
       if (!hits[r].valid()) continue;
       const uint32_t t = hits[r].triangle;
       const Material& m = scene.material(scene.material_of(t));
-      if (m.specular() || is_black(m.kd)) continue;
+      if (!m.has_lambert_lobe()) continue;
       const Vec3 x = rays[r].origin + rays[r].direction * hits[r].t;
       const SurfacePoint sp = surface_at(scene, t, x, -rays[r].direction);
       out.push_back(Candidate{x, sp.ns, sp.ng, splitmix64(seen[r / static_cast<size_t>(per)].key ^ (0x0e70000ull + r)), t});

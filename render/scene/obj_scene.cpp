@@ -96,6 +96,27 @@ Result<Scene> Scene::parse_obj_unlit(const std::string& obj_text, const std::str
   return from_obj_reader(reader, label, "");
 }
 
+namespace {
+
+// MTL's PBR extension (Pr, Pm; Blender's exporter writes them): glTF's metal-roughness model with Kd (and map_Kd) as
+// the base colour, in place of the illum model's lobes. tinyobjloader reads an absent Pr or Pm as 0, so a material
+// with both 0 and no maps stays the illum model's; glass stays glass (no rough glass yet).
+void with_mtl_pbr(Material& mat, const tinyobj::material_t& m, const std::string& path) {
+  const bool pbr = m.roughness > 0 || m.metallic > 0 || !m.roughness_texname.empty() || !m.metallic_texname.empty();
+  if (!pbr || mat.type == Material::Type::glass) return;
+  mat.type = Material::Type::metal_rough;
+  mat.kd = {std::clamp(m.diffuse[0], 0.0f, 1.0f), std::clamp(m.diffuse[1], 0.0f, 1.0f), std::clamp(m.diffuse[2], 0.0f, 1.0f)};
+  mat.metallic = std::clamp(static_cast<float>(m.metallic), 0.0f, 1.0f);
+  mat.roughness = std::clamp(static_cast<float>(m.roughness), 0.0f, 1.0f);
+  mat.ks = mat.kr = {};
+  mat.ns = 0;
+  if (!m.roughness_texname.empty() || !m.metallic_texname.empty())
+    log_warn("scene file '" + path + "': material '" + m.name + "': map_Pr and map_Pm are not read; its Pr " +
+             std::to_string(mat.roughness) + " and Pm " + std::to_string(mat.metallic) + " hold everywhere");
+}
+
+}  // namespace
+
 Result<Scene> Scene::from_obj_reader(const tinyobj::ObjReader& reader, const std::string& path,
                                      const std::string& texture_dir) {
   const auto& attrib = reader.GetAttrib();
@@ -105,10 +126,12 @@ Result<Scene> Scene::from_obj_reader(const tinyobj::ObjReader& reader, const std
     const bool ambient = m.ambient[0] > 0 || m.ambient[1] > 0 || m.ambient[2] > 0;
     const bool emits = m.emission[0] > 0 || m.emission[1] > 0 || m.emission[2] > 0;
     if (ambient && !emits) s.ambient_only_.push_back(m.name);
-    s.add_material(material_from_mtl(m.name, {m.diffuse[0], m.diffuse[1], m.diffuse[2]},
+    Material mat = material_from_mtl(m.name, {m.diffuse[0], m.diffuse[1], m.diffuse[2]},
                                      {m.specular[0], m.specular[1], m.specular[2]},
                                      {m.emission[0], m.emission[1], m.emission[2]}, m.shininess, m.ior, m.illum,
-                                     {m.transmittance[0], m.transmittance[1], m.transmittance[2]}));
+                                     {m.transmittance[0], m.transmittance[1], m.transmittance[2]});
+    with_mtl_pbr(mat, m, path);
+    s.add_material(std::move(mat));
   }
   // Textures, each file read once per use (a colour map keeps RGB, an alpha map one channel). One that cannot be
   // read leaves its material flat, with a warning.

@@ -23,7 +23,9 @@ class ObjReader;
 namespace lf {
 
 struct Material {
-  enum class Type { diffuse, glossy, mirror, glass };
+  // metal_rough: glTF's metal-roughness model on a GGX microfacet distribution (render/shading/microfacet.hpp),
+  // with kd (and kd_map) its base colour.
+  enum class Type { diffuse, glossy, mirror, glass, metal_rough };
   std::string name;
   RGB kd;  // diffuse reflectance
   RGB ke;  // emitted radiance; non-zero makes every triangle of this material an area light
@@ -33,6 +35,7 @@ struct Material {
   float ior = 1.5f;  // glass: index of refraction
   RGB kr;            // diffuse and glossy: a perfect mirror term beside their lobes (MTL illum 3 with Kd)
   RGB tf{1, 1, 1};   // glass: what light entering it keeps, per channel (MTL Tf)
+  float metallic = 0, roughness = 0.5f;  // metal_rough: glTF's metallicFactor and roughnessFactor (0 to 1)
   // Textures (indices into Scene::textures(), -1 for none). kd_map replaces kd where the triangle has texture
   // coordinates; alpha_map cuts the surface out where its coverage is below one half (docs/decisions.md).
   int32_t kd_map = -1;
@@ -41,6 +44,10 @@ struct Material {
   bool specular() const { return type == Type::mirror || type == Type::glass; }
   // A diffuse or glossy surface that also reflects like a mirror (kr): its mirror term is the `specular` op's.
   bool has_mirror_term() const { return !specular() && !is_black(kr); }
+  // A Lambert lobe of its own (diffuse and glossy materials with kd): what the diffuse caches serve. A metal_rough
+  // material's base is not one: its share under the coating depends on both directions, so its whole BSDF is a
+  // glossy lobe, the `glossy` op's (docs/decisions.md, "Microfacet materials").
+  bool has_lambert_lobe() const { return (type == Type::diffuse || type == Type::glossy) && !is_black(kd); }
 };
 
 // The MTL illum model and coefficients as a Material (docs/lua-api.md, "Materials"): illum 5, and 3 without Kd, are

@@ -116,6 +116,30 @@ TEST(Scene, Illum3AndTfReachTheMaterialAndTheShippedScene) {
   EXPECT_FLOAT_EQ(shipped->material(shipped->material_of(1)).tf.z, 0.9f);
 }
 
+// MTL's PBR extension: Pr and Pm make glTF's metal-roughness model on the Kd base (its Ks lobe gone); without them a
+// material keeps its illum model, and glass stays glass.
+TEST(Scene, MtlPbrFieldsMakeAMetalRoughMaterial) {
+  const std::string obj = "mtllib x.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nusemtl gold\nf 1 2 3\nusemtl plastic\nf 1 2 3\n"
+                          "usemtl plain\nf 1 2 3\nusemtl lamp\nf 1 2 3\n";
+  const std::string mtl = "newmtl lamp\nKe 1 1 1\nnewmtl gold\nKd 0.9 0.7 0.3\nKs 0.5 0.5 0.5\nNs 200\nillum 2\nPr 0.25\nPm 1\n"
+                          "newmtl plastic\nKd 0.2 0.3 0.8\nPr 0.6\nnewmtl plain\nKd 0.5 0.5 0.5\n";
+  auto s = Scene::parse_obj_unlit(obj, mtl, "x.obj");
+  ASSERT_TRUE(s.ok()) << s.error().message;
+  const Material& gold = s->material(s->material_of(0));
+  EXPECT_EQ(gold.type, Material::Type::metal_rough);
+  EXPECT_FLOAT_EQ(gold.metallic, 1);
+  EXPECT_FLOAT_EQ(gold.roughness, 0.25f);
+  EXPECT_FLOAT_EQ(gold.kd.x, 0.9f) << "the base colour, not scaled against the Ks the model replaces";
+  EXPECT_TRUE(is_black(gold.ks));
+  const Material& plastic = s->material(s->material_of(1));
+  EXPECT_EQ(plastic.type, Material::Type::metal_rough);
+  EXPECT_FLOAT_EQ(plastic.metallic, 0);
+  EXPECT_EQ(s->material(s->material_of(2)).type, Material::Type::diffuse);
+  auto shipped = scene_from_bytes(scene_to_bytes(*s), "x.lfscene");
+  ASSERT_TRUE(shipped.ok()) << shipped.error().message;
+  EXPECT_FLOAT_EQ(shipped->material(shipped->material_of(0)).roughness, 0.25f);
+}
+
 TEST(Scene, McGuireEmptyCOReadsTheIndentedMaterial) {
   REQUIRE_SHARED_SCENES();
   auto s = Scene::load_obj(kShared + "CornellBox-Empty-CO.obj");

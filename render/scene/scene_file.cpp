@@ -15,7 +15,7 @@ namespace lf {
 
 namespace {
 
-constexpr std::string_view kMagic = "LFSCENE3";
+constexpr std::string_view kMagic = "LFSCENE4";  // 4: materials carry metallic and roughness
 using bytes::put;
 using bytes::put_rgb;
 using bytes::Reader;
@@ -74,7 +74,7 @@ std::string scene_to_bytes(const Scene& scene) {
 }
 
 Result<Scene> scene_from_bytes(std::string_view bytes, const std::string& what) {
-  if (bytes.substr(0, kMagic.size()) != kMagic) return make_error(what + ": not a lightfarm scene (no LFSCENE3)");
+  if (bytes.substr(0, kMagic.size()) != kMagic) return make_error(what + ": not a lightfarm scene (no LFSCENE4)");
   Reader r(bytes.substr(kMagic.size()));
   auto bad = [&] { return make_error(what + ": the scene's bytes are truncated or inconsistent"); };
   Scene s;

@@ -15,6 +15,11 @@ TEST(SceneFile, RoundTripsTheWholeSceneBitForBit) {
   auto s = Scene::builtin_unlit("cornell_glass");
   ASSERT_TRUE(s.ok());
   s->add_point_light({1, 2, 3}, {4, 5, 6});
+  Material ball{"ball", {0.8f, 0.5f, 0.2f}, {}};
+  ball.type = Material::Type::metal_rough;
+  ball.metallic = 0.75f;
+  ball.roughness = 0.125f;
+  s->add_sphere({0.5f, 0.5f, 0.5f}, 0.1f, 1, s->add_material(ball), true);
   ASSERT_TRUE(s->finalize("test").ok());
   const std::string bytes = scene_to_bytes(*s);
   auto back = scene_from_bytes(bytes, "shipped");
@@ -33,6 +38,8 @@ TEST(SceneFile, RoundTripsTheWholeSceneBitForBit) {
     EXPECT_EQ(back->materials()[m].name, s->materials()[m].name);
     EXPECT_EQ(back->materials()[m].type, s->materials()[m].type);
     EXPECT_EQ(back->materials()[m].ke, s->materials()[m].ke);
+    EXPECT_EQ(back->materials()[m].metallic, s->materials()[m].metallic);
+    EXPECT_EQ(back->materials()[m].roughness, s->materials()[m].roughness);
   }
   ASSERT_EQ(back->point_lights().size(), 1u);
   EXPECT_EQ(back->point_lights()[0].intensity, (RGB{4, 5, 6}));
@@ -46,8 +53,8 @@ TEST(SceneFile, RefusesShortInconsistentAndHostileBytes) {
   const std::string bytes = scene_to_bytes(*s);
   for (size_t cut : {size_t{0}, size_t{5}, size_t{9}, bytes.size() / 2, bytes.size() - 1})
     EXPECT_FALSE(scene_from_bytes(std::string_view(bytes).substr(0, cut), "x").ok()) << cut;
-  EXPECT_EQ(scene_from_bytes("LFSCENE0", "x").error().message, "x: not a lightfarm scene (no LFSCENE3)");
-  std::string hostile = "LFSCENE3";
+  EXPECT_EQ(scene_from_bytes("LFSCENE0", "x").error().message, "x: not a lightfarm scene (no LFSCENE4)");
+  std::string hostile = "LFSCENE4";
   hostile += std::string("\xff\xff\xff\x7f", 4);  // two billion textures in a few bytes
   EXPECT_EQ(scene_from_bytes(hostile, "x").error().message, "x: the scene's bytes are truncated or inconsistent");
   EXPECT_FALSE(scene_from_bytes(bytes + "extra", "x").ok());

@@ -19,7 +19,7 @@ namespace {
 
 constexpr char kMagic[8] = {'L', 'F', 'I', 'M', 'A', 'G', 'E', '2'};
 constexpr uint32_t kByteOrderMark = 0x01020304;
-constexpr uint32_t kVersion = 3;  // 3: materials carry kr and tf
+constexpr uint32_t kVersion = 4;  // 3: materials carry kr and tf; 4: metallic and roughness
 constexpr size_t kAlign = 64;
 constexpr size_t kVertexSlack = 16;
 

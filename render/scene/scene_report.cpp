@@ -26,6 +26,7 @@ const char* kind_name(Material::Type t) {
     case Material::Type::glossy: return "glossy";
     case Material::Type::mirror: return "mirror";
     case Material::Type::glass: return "glass";
+    case Material::Type::metal_rough: return "metal_rough";
   }
   return "?";
 }
@@ -137,7 +138,10 @@ Result<std::string> describe_scene(const std::string& obj_path) {
     const auto it = used.find(m);
     if (mat.name == "(default)" && it == used.end()) continue;
     std::string line = "    " + mat.name + "  " + kind_name(mat.type) + "  kd " + vec(mat.kd);
-    if (mat.type != Material::Type::diffuse) line += "  ks " + vec(mat.ks);
+    if (mat.type == Material::Type::metal_rough)
+      line += format("  metallic %.3g  roughness %.3g", mat.metallic, mat.roughness);
+    else if (mat.type != Material::Type::diffuse)
+      line += "  ks " + vec(mat.ks);
     line += "  faces " + std::to_string(it == used.end() ? 0 : it->second.faces);
     if (mat.emissive() && it != used.end()) {
       const double flux = kPi * it->second.area * average(mat.ke);  // one-sided Lambertian emitter

@@ -143,7 +143,34 @@ Status Scene::apply_material_overrides(const Value::Array& overrides) {
       else if (t == "glossy") m->type = Material::Type::glossy;
       else if (t == "mirror") m->type = Material::Type::mirror;
       else if (t == "glass") m->type = Material::Type::glass;
+      else if (t == "metal_rough") m->type = Material::Type::metal_rough;
       else return make_error(which + ": unknown type '" + t + "'");
+    }
+    // The microfacet model's parameters make a material metal_rough where no type is given; its base colour is kd
+    // (the material's own colour and texture unless base_color replaces them).
+    const bool microfacet_params = o.find("metallic") || o.find("roughness") || o.find("base_color");
+    if (microfacet_params) {
+      if (o.find("type") && m->type != Material::Type::metal_rough)
+        return make_error(which + ": metallic, roughness and base_color belong to type \"metal_rough\"");
+      m->type = Material::Type::metal_rough;
+    }
+    if (m->type == Material::Type::metal_rough) {
+      if (o.find("ks") || o.find("ns") || o.find("mirror") || o.find("kd"))
+        return make_error(which + ": a metal_rough material takes base_color, metallic and roughness, not kd, ks, ns "
+                                  "or mirror");
+      if (o.find("base_color")) {
+        if (!colour("base_color", m->kd)) return make_error(which + ": base_color must be {r, g, b}");
+        m->kd_map = -1;
+      }
+      for (auto [key, field] : {std::pair<const char*, float*>{"metallic", &m->metallic}, {"roughness", &m->roughness}})
+        if (const Value* v = o.find(key); v && v->is_number()) {
+          const double x = v->as_double();
+          if (!(x >= 0 && x <= 1)) return make_error(which + ": " + key + " must be between 0 and 1");
+          *field = static_cast<float>(x);
+        }
+      m->ks = {};  // the lobes of the model it replaces
+      m->kr = {};
+      m->ns = 0;
     }
     if (m->specular()) m->kr = {};  // a mirror's reflectance is ks, and glass has none beside its Fresnel
     const RGB sum = m->kd + m->ks + m->kr;

@@ -48,7 +48,37 @@ static Vec3 phong_direction(Vec3 r, float ns, float u1, float u2) {
   return normalize(t * (sin_a * std::cos(phi)) + s * (sin_a * std::sin(phi)) + r * cos_a);
 }
 
-std::optional<Bsdf::Sample> Bsdf::sample_glossy(Vec3 n, Vec3 wo, float u1, float u2) const {
+namespace {
+struct Frame {
+  Vec3 t, s, n;
+  explicit Frame(Vec3 normal) : n(normal) { basis(normal, t, s); }
+  Vec3 local(Vec3 v) const { return {dot(v, t), dot(v, s), dot(v, n)}; }
+  Vec3 world(Vec3 v) const { return t * v.x + s * v.y + n * v.z; }
+};
+}  // namespace
+
+RGB Bsdf::eval_microfacet(Vec3 n, Vec3 wo, Vec3 wi) const {
+  if (dot(n, wi) <= 0 || dot(n, wo) <= 0) return {};
+  const Frame f(n);
+  return microfacet_->eval(f.local(wo), f.local(wi));
+}
+
+float Bsdf::pdf_microfacet(Vec3 n, Vec3 wo, Vec3 wi) const {
+  if (dot(n, wi) <= 0 || dot(n, wo) <= 0) return 0;
+  const Frame f(n);
+  return microfacet_->pdf(f.local(wo), f.local(wi));
+}
+
+std::optional<Bsdf::Sample> Bsdf::sample_microfacet(Vec3 n, Vec3 wo, float u0, float u1, float u2) const {
+  if (dot(n, wo) <= 0) return std::nullopt;
+  const Frame f(n);
+  const auto s = microfacet_->sample(f.local(wo), u0, u1, u2);
+  if (!s || !(s->pdf > 0)) return std::nullopt;
+  return Sample{normalize(f.world(s->wi)), s->weight, s->pdf, false};
+}
+
+std::optional<Bsdf::Sample> Bsdf::sample_glossy(Vec3 n, Vec3 wo, float u1, float u2, float u0) const {
+  if (microfacet_) return sample_microfacet(n, wo, u0, u1, u2);
   if (!has_glossy_lobe() || dot(n, wo) <= 0) return std::nullopt;
   const Vec3 wi = phong_direction(reflect(wo, n), m_.ns, u1, u2);
   const float cos_i = dot(n, wi);
@@ -70,22 +100,24 @@ static float phong(float ns, float cos_alpha) {
 }
 
 RGB Bsdf::eval_diffuse(Vec3 n, Vec3 wo, Vec3 wi) const {
-  if (is_delta() || dot(n, wi) <= 0 || dot(n, wo) <= 0) return {};
+  if (is_delta() || microfacet_ || dot(n, wi) <= 0 || dot(n, wo) <= 0) return {};
   return kd_ * (1.0f / kPi);
 }
 
 RGB Bsdf::eval_glossy(Vec3 n, Vec3 wo, Vec3 wi) const {
+  if (microfacet_) return eval_microfacet(n, wo, wi);
   if (!has_glossy_lobe() || dot(n, wi) <= 0 || dot(n, wo) <= 0) return {};
   return m_.ks * phong(m_.ns, dot(reflect(wo, n), wi));
 }
 
 float Bsdf::pdf_diffuse(Vec3 n, Vec3 wo, Vec3 wi) const {
-  if (is_delta() || dot(n, wi) <= 0 || dot(n, wo) <= 0) return 0;
+  if (is_delta() || microfacet_ || dot(n, wi) <= 0 || dot(n, wo) <= 0) return 0;
   const float pd = m_.type == Material::Type::glossy ? diffuse_probability() : 1.0f;
   return (1.0f - mirror_probability()) * pd * dot(n, wi) / kPi;
 }
 
 float Bsdf::pdf_glossy(Vec3 n, Vec3 wo, Vec3 wi) const {
+  if (microfacet_) return pdf_microfacet(n, wo, wi);
   if (m_.type != Material::Type::glossy || dot(n, wi) <= 0 || dot(n, wo) <= 0) return 0;
   const float ca = dot(reflect(wo, n), wi);
   const float lobe = ca > 0 ? (m_.ns + 1.0f) / (2.0f * kPi) * std::pow(ca, m_.ns) : 0.0f;
@@ -123,6 +155,7 @@ float Bsdf::diffuse_probability() const {
 
 
 RGB Bsdf::eval(Vec3 n, Vec3 wo, Vec3 wi) const {
+  if (microfacet_) return eval_microfacet(n, wo, wi);
   if (is_delta() || dot(n, wi) <= 0 || dot(n, wo) <= 0) return {};
   RGB f = kd_ * (1.0f / kPi);
   if (m_.type == Material::Type::glossy) f += m_.ks * phong(m_.ns, dot(reflect(wo, n), wi));
@@ -130,6 +163,7 @@ RGB Bsdf::eval(Vec3 n, Vec3 wo, Vec3 wi) const {
 }
 
 float Bsdf::pdf(Vec3 n, Vec3 wo, Vec3 wi) const {
+  if (microfacet_) return pdf_microfacet(n, wo, wi);
   if (is_delta() || dot(n, wi) <= 0 || dot(n, wo) <= 0) return 0;
   const float diffuse = dot(n, wi) / kPi;
   // sample() reaches the other lobes only when it does not take the mirror term.
@@ -155,6 +189,8 @@ std::optional<Bsdf::Sample> Bsdf::sample(Vec3 n, Vec3 wo, bool entering, float u
       // Light is filtered once, where it enters (a closed object tints what passes through it once).
       return Sample{*t, entering ? m_.tf : RGB{1, 1, 1}, 1.0f - f, true};
     }
+    case Material::Type::metal_rough:
+      return sample_microfacet(n, wo, u0, u1, u2);
     default: break;
   }
   if (dot(n, wo) <= 0) return std::nullopt;

@@ -8,17 +8,21 @@
 
 #include "render/math.hpp"
 #include "render/scene/scene.hpp"
+#include "render/shading/microfacet.hpp"
 
 namespace lf {
 
 class Bsdf {
  public:
-  explicit Bsdf(const Material& m) : m_(m), kd_(m.kd) {}
-  // With the diffuse reflectance at the point (a texture's), kept to at most 1 - ks per channel.
+  explicit Bsdf(const Material& m) : m_(m), kd_(m.kd) { with_microfacet(); }
+  // With the diffuse reflectance (a metal_rough material's base colour) at the point (a texture's), kept to at most
+  // 1 - ks per channel.
   Bsdf(const Material& m, RGB albedo)
       : m_(m),
         kd_{std::min(albedo.x, 1 - m.ks.x - m.kr.x), std::min(albedo.y, 1 - m.ks.y - m.kr.y),
-            std::min(albedo.z, 1 - m.ks.z - m.kr.z)} {}
+            std::min(albedo.z, 1 - m.ks.z - m.kr.z)} {
+    with_microfacet();
+  }
 
   // Mirror and glass scatter into single directions: light sampling cannot reach them, only sample() can.
   bool is_delta() const { return m_.type == Material::Type::mirror || m_.type == Material::Type::glass; }
@@ -37,8 +41,9 @@ class Bsdf {
 
   // A glossy material's Phong lobe alone: whether it has one, and a direction drawn in proportion to it, weighted
   // by that lobe's f * cos / pdf (the diffuse part left out: the `glossy` LightOp's share of the BSDF).
-  bool has_glossy_lobe() const { return m_.type == Material::Type::glossy && !is_black(m_.ks); }
-  std::optional<Sample> sample_glossy(Vec3 n, Vec3 wo, float u1, float u2) const;
+  // A metal_rough material's whole BSDF is its glossy lobe; u0 chooses between its parts (a Phong lobe needs none).
+  bool has_glossy_lobe() const { return microfacet_ || (m_.type == Material::Type::glossy && !is_black(m_.ks)); }
+  std::optional<Sample> sample_glossy(Vec3 n, Vec3 wo, float u1, float u2, float u0 = 0.5f) const;
   // A glossy surface's lobes one at a time (the directional cache answers its diffuse lobe's rays): the mirror term,
   // the Lambert lobe or the Phong lobe, chosen as sample() chooses; the weight is that lobe's f * cos over the
   // chance of choosing it times its density, `pdf` that product (for MIS with light samples of the same lobe).
@@ -55,8 +60,16 @@ class Bsdf {
   float diffuse_probability() const;
   // The chance sample() takes a surface's mirror term (0 without one), in proportion to its reflectance.
   float mirror_probability() const;
+  void with_microfacet() {
+    if (m_.type == Material::Type::metal_rough) microfacet_.emplace(kd_, m_.metallic, m_.roughness);
+  }
+  // The microfacet model in the frame around n (z = n), for a metal_rough material.
+  RGB eval_microfacet(Vec3 n, Vec3 wo, Vec3 wi) const;
+  float pdf_microfacet(Vec3 n, Vec3 wo, Vec3 wi) const;
+  std::optional<Sample> sample_microfacet(Vec3 n, Vec3 wo, float u0, float u1, float u2) const;
   const Material& m_;
   RGB kd_;
+  std::optional<MetalRoughness> microfacet_;
 };
 
 // Fresnel reflectance of a dielectric interface for unpolarized light; cos_i > 0, eta = n_transmitted / n_incident.

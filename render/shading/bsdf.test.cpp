@@ -70,6 +70,51 @@ TEST(Bsdf, GlossyEvalPdfAndSampleAgree) {
   }
 }
 
+// A metal_rough material is glTF's model on any shading normal: the same values as the model in its own frame, sample
+// weights f cos / pdf, its directional albedo (all of it the glossy lobe's, none the Lambert lobe's) within 1, and
+// a base colour from a texture used as given.
+TEST(Bsdf, MetalRoughIsTheMicrofacetModelAroundTheNormal) {
+  Material m{"ball", {0.9f, 0.6f, 0.3f}, {}};
+  m.type = Material::Type::metal_rough;
+  m.metallic = 0.5f;
+  m.roughness = 0.4f;
+  const Vec3 n = normalize(Vec3{0.3f, -0.5f, 0.8f});
+  Vec3 t, s;
+  basis(n, t, s);
+  const MetalRoughness model({0.9f, 0.6f, 0.3f}, 0.5f, 0.4f);
+  const Bsdf b(m);
+  EXPECT_FALSE(b.is_delta());
+  EXPECT_TRUE(b.has_glossy_lobe());
+  Rng rng(5, 5);
+  for (float theta : {10.0f, 60.0f, 80.0f}) {
+    const Vec3 local_wo = direction(theta), wo = t * local_wo.x + s * local_wo.y + n * local_wo.z;
+    double albedo = 0;
+    const int count = 100000;
+    for (int i = 0; i < count; ++i) {
+      const Vec3 local_wi = uniform_hemisphere(kN, rng.uniform(), rng.uniform());
+      const Vec3 wi = t * local_wi.x + s * local_wi.y + n * local_wi.z;
+      const RGB f = b.eval(n, wo, wi), expected = model.eval(local_wo, local_wi);
+      ASSERT_NEAR(f.y, expected.y, 1e-4f * std::max(1.0f, expected.y));
+      EXPECT_EQ(b.eval_glossy(n, wo, wi), f);
+      EXPECT_TRUE(is_black(b.eval_diffuse(n, wo, wi)));
+      EXPECT_EQ(b.pdf_diffuse(n, wo, wi), 0.0f);
+      EXPECT_NEAR(b.pdf(n, wo, wi), model.pdf(local_wo, local_wi), 1e-4f * std::max(1.0f, b.pdf(n, wo, wi)));
+      if (auto smp = b.sample(n, wo, true, rng.uniform(), rng.uniform(), rng.uniform())) {
+        const RGB expect = b.eval(n, wo, smp->wi) * (dot(n, smp->wi) / smp->pdf);
+        ASSERT_NEAR(smp->weight.x, expect.x, 1e-3f * std::max(1.0f, expect.x));
+        albedo += smp->weight.y;
+      }
+      if (auto g = b.sample_glossy(n, wo, rng.uniform(), rng.uniform(), rng.uniform()))
+        EXPECT_NEAR(g->pdf, b.pdf_glossy(n, wo, g->wi), 1e-3f * g->pdf);
+    }
+    EXPECT_LE(albedo / count, 1.0) << theta;
+    EXPECT_GT(albedo / count, 0.4) << theta;
+  }
+  // A texture's colour is the base colour.
+  const Bsdf white(m, RGB{1, 1, 1}), dark(m, RGB{0.1f, 0.1f, 0.1f});
+  EXPECT_GT(white.eval(n, n, n).y, dark.eval(n, n, n).y);
+}
+
 TEST(Bsdf, MirrorReflectsAboutTheNormal) {
   Material m = material_from_mtl("m", {}, {0.9f, 0.9f, 0.9f}, {}, 1000, 1, 5);
   ASSERT_EQ(m.type, Material::Type::mirror);

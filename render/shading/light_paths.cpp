@@ -18,8 +18,8 @@ SceneLobes scene_lobes(const Scene& scene) {
     const Material& m = scene.material(static_cast<uint32_t>(id));
     out.emits = out.emits || m.emissive();
     const bool has[kLobeCount] = {
-        !m.specular() && (!is_black(m.kd) || m.kd_map >= 0),
-        m.type == Material::Type::glossy && !is_black(m.ks),
+        (m.type == Material::Type::diffuse || m.type == Material::Type::glossy) && (!is_black(m.kd) || m.kd_map >= 0),
+        (m.type == Material::Type::glossy && !is_black(m.ks)) || m.type == Material::Type::metal_rough,
         m.type == Material::Type::glass || (m.type == Material::Type::mirror && !is_black(m.ks)) || m.has_mirror_term(),
     };
     for (int l = 0; l < kLobeCount; ++l)

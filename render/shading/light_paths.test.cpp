@@ -1,6 +1,8 @@
 // Light path sets: composition as the ops state it, counts, and the summaries `lightfarm graph` draws.
 #include "render/shading/light_paths.hpp"
 
+#include "render/scene/scene.hpp"
+
 #include <gtest/gtest.h>
 
 namespace lf {
@@ -42,6 +44,22 @@ TEST(LightPaths, ChainsKeepWhatEndsOnTheirLandingLobes) {
   // ending_in drops paths that end on other lobes, and the lone L unless asked.
   EXPECT_EQ(LightPaths::every(0, 2).ending_in(Lobes::of({Lobe::specular}), false).counted(),
             (std::vector<std::string>{"LS", "LDS", "LGS", "LSS"}));
+}
+
+// A scene's lobes by material: a metal_rough material's whole BSDF is a glossy lobe (its base under the coating is
+// no Lambert lobe the caches could serve), so only ops that follow glossy lobes reach it.
+TEST(LightPaths, AMetalRoughMaterialIsOneGlossyLobe) {
+  Scene s;
+  Material ball{"ball", {0.8f, 0.8f, 0.8f}, {}};
+  ball.type = Material::Type::metal_rough;
+  s.add_quad({0, 0, 0}, {1, 0, 0}, {1, 0, 1}, {0, 0, 1}, s.add_material(ball));
+  s.add_quad({0, 1, 0}, {0, 1, 1}, {1, 1, 1}, {1, 1, 0}, s.add_material({"lamp", {}, {1, 1, 1}}));
+  ASSERT_TRUE(s.finalize("lobes").ok());
+  const SceneLobes found = scene_lobes(s);
+  EXPECT_EQ(found.materials[static_cast<int>(Lobe::glossy)], (std::vector<std::string>{"ball"}));
+  EXPECT_TRUE(found.materials[static_cast<int>(Lobe::diffuse)].empty());
+  EXPECT_TRUE(found.materials[static_cast<int>(Lobe::specular)].empty());
+  EXPECT_FALSE(ball.has_lambert_lobe());
 }
 
 TEST(LightPaths, SummariesNameTheShapes) {
