@@ -34,8 +34,8 @@ SceneSpec SceneSpec::from_value(const Value& v) {
   return s;
 }
 
-CameraSpec CameraSpec::read(const ParamTable& p) {
-  CameraSpec c;
+CameraSpec CameraSpec::read(const ParamTable& p, const CameraSpec& defaults) {
+  CameraSpec c = defaults;
   c.eye = p.get_vec3("eye", c.eye);
   c.at = p.get_vec3("at", c.at);
   c.up = p.get_vec3("up", c.up);

@@ -20,7 +20,7 @@ struct SourceLoc {
 
 struct SceneSpec {
   std::string builtin;  // e.g. "cornell"; empty when file is set
-  std::string file;     // absolute path of an OBJ file
+  std::string file;     // absolute path of an OBJ or glTF file
   Value::Array lights;  // lights the script adds: {quad = {4 corners}, radiance} | {sphere, radius, radiance} |
                         // {point, intensity}
   Value::Array materials;  // the script's changes to named materials: {name, emission?, kd?, ks?, ns?, ior?, type?}
@@ -46,7 +46,9 @@ struct CameraSpec {
   double focus_distance = 0;
   // camera { } with its ranges and rules (eye and at apart, up not along the view): how a script is read and how
   // an actor reads CONFIG back. Throws ParamError.
-  static CameraSpec read(const ParamTable& p);
+  static CameraSpec read(const ParamTable& p) { return read(p, CameraSpec{}); }
+  // The same over other defaults (a scene file's camera, which the table's own keys then change).
+  static CameraSpec read(const ParamTable& p, const CameraSpec& defaults);
   Value to_value() const;
   static Result<CameraSpec> from_value(const Value& v);
 };

@@ -47,7 +47,7 @@ SceneSpec read_scene(const ParamTable& p, const fs::path& script_dir) {
 std::vector<std::string> scene_material_names(const SceneSpec& scene) {
   std::vector<std::string> names;
   if (!scene.file.empty()) {
-    if (auto listed = Scene::catalogue_obj(scene.file)) names = listed->material_names;
+    if (auto listed = Scene::catalogue_file(scene.file)) names = listed->material_names;
   } else if (auto s = Scene::builtin_unlit(scene.builtin)) {
     for (const auto& m : s->materials()) names.push_back(m.name);
   }
@@ -80,6 +80,34 @@ HostSpec read_host(const std::string& name, const ParamTable& p, const fs::path&
     h.ssh_config = found;
   }
   return h;
+}
+
+CameraSpec read_camera(const ParamTable& p, const SceneSpec& scene) {
+  if (!p.has("gltf")) return CameraSpec::read(p);
+  if (scene.file.empty() || !Scene::is_gltf_path(scene.file))
+    throw ParamError("camera: gltf names a camera of the scene file, so it needs scene { file = \"x.gltf\" or \"x.glb\" } "
+                     "before it");
+  auto catalogue = Scene::catalogue_gltf(scene.file);
+  if (!catalogue) throw ParamError("camera: " + catalogue.error().message);
+  const auto& cameras = catalogue->cameras;
+  std::string known;
+  for (size_t i = 0; i < cameras.size(); ++i) known += (i ? ", " : "") + cameras[i].name;
+  if (known.empty()) known = "none";
+  const Value& which = p.values().at("gltf");
+  const ObjCatalogue::FileCamera* found = nullptr;
+  if (which.is_string()) {
+    const std::string name = p.get_string("gltf", "");
+    for (const auto& c : cameras)
+      if (c.name == name) found = &c;
+    if (!found) throw ParamError("camera: the scene file has no camera '" + which.as_string() + "' (its cameras: " + known + ")");
+  } else {
+    const auto index = p.get_int("gltf", 0, 0, 1 << 20);
+    if (static_cast<size_t>(index) >= cameras.size())
+      throw ParamError("camera: the scene file has " + std::to_string(cameras.size()) + " camera(s), so no camera " +
+                       std::to_string(index) + " (its cameras: " + known + ")");
+    found = &cameras[static_cast<size_t>(index)];
+  }
+  return CameraSpec::read(p, found->view);
 }
 
 Value read_material_change(const std::string& name, const ParamTable& p, const std::vector<std::string>& names) {

@@ -25,6 +25,10 @@ HostSpec read_host(const std::string& name, const ParamTable& p, const std::file
 
 // material "name" { emission, kd, ks, mirror, tf, ns, ior, type }: the change as the scene applies it
 // ({name, ...}), checked against `scene_materials` and by the scene's own rules (kd + ks + mirror at most 1).
+// camera { gltf = "Name" | index, ... }: a glTF scene file's perspective camera (by its node's name, or its place
+// among the file's cameras from 0), which the table's other keys then change; without `gltf`, CameraSpec::read.
+CameraSpec read_camera(const ParamTable& p, const SceneSpec& scene);
+
 Value read_material_change(const std::string& name, const ParamTable& p, const std::vector<std::string>& scene_materials);
 
 // light { quad | sphere + radius | point, radiance | intensity }: the light, checked by the scene's own reader.

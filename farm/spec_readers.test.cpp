@@ -170,6 +170,30 @@ TEST(MaterialReader, MetalRoughFromItsParameters) {
             "material 'ball': a metal_rough material takes base_color, metallic and roughness, not kd, ks, ns or mirror");
 }
 
+// camera { gltf = ... }: the scene file's camera by name or index, which the table's keys then change; without a
+// glTF scene before it, or naming no camera of the file, an error that says what there is.
+TEST(CameraReader, AGltfFilesCameraByNameOrIndex) {
+  SceneSpec scene;
+  scene.file = std::string(LIGHTFARM_SOURCE_DIR) + "/../shared/scenes/gltf/balls.glb";
+  if (!std::ifstream(scene.file)) GTEST_SKIP() << "no " << scene.file;
+  // Blender's camera at (0, -5.5, 2.6), z up, is (0, 2.6, 5.5) in the file (y up); its 40 degrees across 16:9 are
+  // yfov 0.404 rad.
+  const CameraSpec named = read_camera(table({{"gltf", "Camera"}}, "camera"), scene);
+  EXPECT_NEAR(named.eye[1], 2.6, 1e-4);
+  EXPECT_NEAR(named.eye[2], 5.5, 1e-4);
+  EXPECT_NEAR(named.fov, 0.404 * 180 / 3.14159265, 0.1);
+  EXPECT_LT(named.at[2], named.eye[2]) << "it looks into the scene, down its -z";
+  const CameraSpec first = read_camera(table({{"gltf", 0}, {"fov", 30}}, "camera"), scene);
+  EXPECT_EQ(first.eye, named.eye);
+  EXPECT_EQ(first.fov, 30) << "the table's own keys change the file's camera";
+  EXPECT_EQ(error_of([&] { read_camera(table({{"gltf", "Cam"}}, "camera"), scene); }),
+            "camera: the scene file has no camera 'Cam' (its cameras: Camera)");
+  EXPECT_EQ(error_of([&] { read_camera(table({{"gltf", 1}}, "camera"), scene); }),
+            "camera: the scene file has 1 camera(s), so no camera 1 (its cameras: Camera)");
+  EXPECT_NE(error_of([&] { read_camera(table({{"gltf", "Camera"}}, "camera"), SceneSpec{}); }).find("needs scene { file"),
+            std::string::npos);
+}
+
 TEST(LightReader, OneShapeAndNoNegativeLight) {
   EXPECT_NO_THROW(read_light(Value::Map{{"point", Value::Array{0, 1, 0}}, {"intensity", Value::Array{1, 1, 1}}}));
   EXPECT_EQ(error_of([] { read_light(Value::Map{{"point", Value::Array{0, 1, 0}}, {"sphere", Value::Array{0, 0, 0}}}); }),

@@ -21,8 +21,8 @@ int l_scene(lua_State* L) {
 }
 
 // A table a script gives once (camera, image), read by `read` into `into`.
-template <class Spec>
-int declare_once(lua_State* L, bool& declared, const char* name, Spec& into, Spec (*read)(const ParamTable&)) {
+template <class Spec, class Read>
+int declare_once(lua_State* L, bool& declared, const char* name, Spec& into, Read read) {
   if (declared) luaL_error(L, "%s is declared twice", name);
   ParamTable p = table_params(L, 1, name);
   with_params(L, [&] {
@@ -33,17 +33,18 @@ int declare_once(lua_State* L, bool& declared, const char* name, Spec& into, Spe
   return 0;
 }
 
-// camera { eye = {x,y,z}, at = {x,y,z}, up = {0,1,0}, fov = 39.3 }
+// camera { eye = {x,y,z}, at = {x,y,z}, up = {0,1,0}, fov = 39.3 } | camera { gltf = "Camera", ... }
 int l_camera(lua_State* L) {
   Builder& b = builder(L);
-  return declare_once(L, b.have_camera, "camera", b.spec.camera, &CameraSpec::read);
+  return declare_once(L, b.have_camera, "camera", b.spec.camera,
+                      [&b](const ParamTable& p) { return read_camera(p, b.spec.scene); });
 }
 
 // image { width = 512, height = 512, spp = 16, shade_spp = 16, adaptive_spp = 64, adaptive_threshold = 0.05,
 //         tile = 16, output = "cornell.png", exposure = 0, tonemap = "clamp", sampler = "sobol" }
 int l_image(lua_State* L) {
   Builder& b = builder(L);
-  return declare_once(L, b.have_image, "image", b.spec.image, &ImageSpec::read);
+  return declare_once(L, b.have_image, "image", b.spec.image, [](const ParamTable& p) { return ImageSpec::read(p); });
 }
 
 // light { quad = {c1, c2, c3, c4}, radiance = {r,g,b} } | light { sphere = {x,y,z}, radius = r, radiance = ... }

@@ -44,7 +44,7 @@ Value Deployment::scene_figures() const {
 
 Scene load_checked_scene(const FarmSpec& spec, bool quiet) {
   if (!spec.scene.file.empty())
-    if (auto catalogue = Scene::catalogue_obj(spec.scene.file))
+    if (auto catalogue = Scene::catalogue_file(spec.scene.file))
       for (const auto& warning : catalogue->warnings) log_warn(warning);
   const auto load_start = Clock::now();
   auto scene = Scene::load(spec.scene);

@@ -186,7 +186,7 @@ Result<Scene> Scene::from_obj_reader(const tinyobj::ObjReader& reader, const std
   };
   for (size_t i = 0; i < materials.size(); ++i) {
     Material& m = s.materials_[i];
-    if (m.type == Material::Type::diffuse || m.type == Material::Type::glossy)
+    if (m.type == Material::Type::diffuse || m.type == Material::Type::glossy || m.type == Material::Type::metal_rough)
       m.kd_map = texture(materials[i].diffuse_texname, false, m.name);
     m.alpha_map = texture(materials[i].alpha_texname, true, m.name);
   }

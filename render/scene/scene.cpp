@@ -186,7 +186,7 @@ Result<Scene> Scene::load(const SceneSpec& spec) {
   const bool file = !spec.file.empty();
   if (!spec.cache.empty())
     return load_shared_scene(spec.cache, spec.hash, file ? "scene file '" + spec.file + "'" : "the shipped scene");
-  auto s = file ? load_obj_unlit(spec.file) : builtin_unlit(spec.builtin.empty() ? "cornell" : spec.builtin);
+  auto s = file ? load_file_unlit(spec.file) : builtin_unlit(spec.builtin.empty() ? "cornell" : spec.builtin);
   if (!s) return s;
   if (auto st = s->add_script_shapes(spec.shapes); !st) return st.error();
   if (auto st = s->apply_material_overrides(spec.materials); !st) return st.error();

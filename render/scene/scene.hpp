@@ -99,6 +99,12 @@ struct ObjCatalogue {
   };
   std::vector<std::string> material_names;
   std::vector<Texture> textures;
+  // A glTF file's perspective cameras, in node order: name (as the node or the camera names it) and view.
+  struct FileCamera {
+    std::string name;
+    CameraSpec view;
+  };
+  std::vector<FileCamera> cameras;
   std::vector<std::string> warnings;
 };
 
@@ -222,6 +228,20 @@ class Scene {
   // warnings naming file and line (a missing library, a usemtl of an unknown material). Reads no geometry.
   static Result<ObjCatalogue> catalogue_obj(const std::string& path);
   static const std::vector<std::string>& builtin_names();
+  // glTF 2.0 (.gltf, .glb; render/scene/gltf_scene.cpp): the default scene, without finalize(); its catalogue (the
+  // materials' names as the scene gives them, tinygltf's warnings). An OBJ otherwise.
+  static bool is_gltf_path(const std::string& path);
+  static Result<Scene> load_gltf_unlit(const std::string& path);
+  // The same from a file's bytes in memory (the glTF fuzzer); `path` names it in messages.
+  static Result<Scene> parse_gltf_unlit(const std::string& path, const std::string* bytes);
+  static Result<ObjCatalogue> catalogue_gltf(const std::string& path);
+  // A scene file of either kind, by its extension.
+  static Result<Scene> load_file_unlit(const std::string& path) {
+    return is_gltf_path(path) ? load_gltf_unlit(path) : load_obj_unlit(path);
+  }
+  static Result<ObjCatalogue> catalogue_file(const std::string& path) {
+    return is_gltf_path(path) ? catalogue_gltf(path) : catalogue_obj(path);
+  }
 
  private:
   friend class SceneImage;

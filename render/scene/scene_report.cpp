@@ -103,9 +103,9 @@ std::string complete_network_for(const Lobes& lobes) {
 }
 
 Result<std::string> describe_scene(const std::string& obj_path) {
-  auto catalogue = Scene::catalogue_obj(obj_path);
+  auto catalogue = Scene::catalogue_file(obj_path);
   if (!catalogue) return catalogue.error();
-  auto scene = Scene::load_obj_unlit(obj_path);
+  auto scene = Scene::load_file_unlit(obj_path);
   if (!scene) return scene.error();
   if (scene->triangle_count() == 0) return make_error("scene file '" + obj_path + "' has no triangles");
   // With emitters of its own, how much of each one's flux meets nothing (light_checks.hpp).

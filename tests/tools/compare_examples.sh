@@ -23,6 +23,7 @@ cases=(
   "cornell_glass_radiosity.lua|width=96 height=96 spp=2 photons=50000"
   "radiosity_room.lua|width=96 height=72 spp=2 iterations=60"
   "plugin-python/tinted_cornell.lua|"
+  "material_balls.lua|width=96 height=54 spp=4"
 )
 
 failed=0

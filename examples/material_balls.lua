@@ -1,0 +1,28 @@
+-- glTF's metal-roughness materials: the material-ball grid Blender's own glTF exporter wrote (../shared/scenes/gltf/
+-- balls.glb: blue dielectric balls in front, gold metal balls behind, roughness 0.05 / 0.3 / 0.6 / 0.9 from left
+-- to right, on a rough grey floor). The file's panel faces away from the balls and its sun is not read yet
+-- (docs/lua-api.md, "glTF 2.0"), so the script hangs a softbox above them.
+--
+--   lightfarm run examples/material_balls.lua                          -> material_balls.png
+--   lightfarm run examples/material_balls.lua --set lighting=pathtrace (the same light by path tracing alone)
+--
+-- Every glTF material is one glossy lobe for the light-path check: `direct` gives it its direct light and `glossy`
+-- the rest, asking the bounce paths where each lobe sample lands; the irradiance cache has nothing to cache here.
+
+scene  { file = "../../shared/scenes/gltf/balls.glb" }
+light  { quad = {{-1.5, 4, -0.5}, {1.5, 4, -0.5}, {1.5, 4, 2.5}, {-1.5, 4, 2.5}}, radiance = {6, 6, 6} }
+-- The file's own camera, "Camera": from (0, 2.6, 5.5) down at the grid, 23 degrees vertically for 16:9.
+camera { gltf = "Camera" }
+image  { width = param("width", 640), height = param("height", 360), spp = param("spp", 64),
+         output = param("output", "material_balls.png") }
+
+local lighting = param("lighting", "network")
+if lighting == "network" then
+  local paths = lightop "pathtrace" { name = "bounces" }
+  renderers { count = param("renderers", 2),
+              lighting = lightop "combine" { inputs = { lightop "direct" {}, lightop "glossy" { input = paths } } } }
+elseif lighting == "pathtrace" then
+  renderers { count = param("renderers", 2), lighting = multiplexer { lightop "pathtrace" {}, replicas = 2 } }
+else
+  error("lighting must be \"network\" or \"pathtrace\", not \"" .. tostring(lighting) .. "\"")
+end

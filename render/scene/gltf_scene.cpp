@@ -1,0 +1,485 @@
+// glTF 2.0 scenes (.gltf, .glb) through tinygltf: the default scene's node tree with its transforms, triangle
+// primitives with normals and texture coordinates, metal-roughness materials with their base colour textures and
+// emission, and KHR_lights_punctual point lights. What is not supported yet is a warning that names the file and the
+// element (docs/lua-api.md, "Materials").
+#include <tiny_gltf.h>
+
+#include <algorithm>
+#include <cctype>
+#include <cmath>
+#include <cstring>
+#include <filesystem>
+#include <functional>
+#include <optional>
+#include <set>
+
+#include "core/log.hpp"
+#include "render/scene/scene.hpp"
+
+namespace lf {
+
+namespace {
+
+struct Mat4 {
+  double m[16] = {1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1};  // column-major, as glTF stores it
+  Mat4 operator*(const Mat4& o) const {
+    Mat4 r;
+    for (int c = 0; c < 4; ++c)
+      for (int row = 0; row < 4; ++row) {
+        double s = 0;
+        for (int k = 0; k < 4; ++k) s += m[k * 4 + row] * o.m[c * 4 + k];
+        r.m[c * 4 + row] = s;
+      }
+    return r;
+  }
+  Vec3 point(Vec3 p) const {
+    return {static_cast<float>(m[0] * p.x + m[4] * p.y + m[8] * p.z + m[12]),
+            static_cast<float>(m[1] * p.x + m[5] * p.y + m[9] * p.z + m[13]),
+            static_cast<float>(m[2] * p.x + m[6] * p.y + m[10] * p.z + m[14])};
+  }
+  Vec3 vector(Vec3 v) const {
+    return {static_cast<float>(m[0] * v.x + m[4] * v.y + m[8] * v.z), static_cast<float>(m[1] * v.x + m[5] * v.y + m[9] * v.z),
+            static_cast<float>(m[2] * v.x + m[6] * v.y + m[10] * v.z)};
+  }
+  double determinant3() const {
+    return m[0] * (m[5] * m[10] - m[9] * m[6]) - m[4] * (m[1] * m[10] - m[9] * m[2]) + m[8] * (m[1] * m[6] - m[5] * m[2]);
+  }
+  // Normals go through the inverse transpose of the upper 3x3 (its cofactors, up to a positive scale).
+  Vec3 normal(Vec3 n) const {
+    const double c00 = m[5] * m[10] - m[9] * m[6], c01 = m[8] * m[6] - m[4] * m[10], c02 = m[4] * m[9] - m[8] * m[5];
+    const double c10 = m[9] * m[2] - m[1] * m[10], c11 = m[0] * m[10] - m[8] * m[2], c12 = m[8] * m[1] - m[0] * m[9];
+    const double c20 = m[1] * m[6] - m[5] * m[2], c21 = m[4] * m[2] - m[0] * m[6], c22 = m[0] * m[5] - m[4] * m[1];
+    const double s = determinant3() < 0 ? -1 : 1;
+    return normalize(Vec3{static_cast<float>(s * (c00 * n.x + c01 * n.y + c02 * n.z)),
+                          static_cast<float>(s * (c10 * n.x + c11 * n.y + c12 * n.z)),
+                          static_cast<float>(s * (c20 * n.x + c21 * n.y + c22 * n.z))});
+  }
+};
+
+Mat4 local_transform(const tinygltf::Node& node) {
+  Mat4 t;
+  if (node.matrix.size() == 16) {
+    std::copy(node.matrix.begin(), node.matrix.end(), t.m);
+    return t;
+  }
+  Mat4 translate, rotate, scale;
+  if (node.translation.size() == 3)
+    for (int i = 0; i < 3; ++i) translate.m[12 + i] = node.translation[static_cast<size_t>(i)];
+  if (node.rotation.size() == 4) {
+    const double x = node.rotation[0], y = node.rotation[1], z = node.rotation[2], w = node.rotation[3];
+    const double r[9] = {1 - 2 * (y * y + z * z), 2 * (x * y + z * w),     2 * (x * z - y * w),
+                         2 * (x * y - z * w),     1 - 2 * (x * x + z * z), 2 * (y * z + x * w),
+                         2 * (x * z + y * w),     2 * (y * z - x * w),     1 - 2 * (x * x + y * y)};
+    for (int c = 0; c < 3; ++c)
+      for (int row = 0; row < 3; ++row) rotate.m[c * 4 + row] = r[c * 3 + row];
+  }
+  if (node.scale.size() == 3)
+    for (int i = 0; i < 3; ++i) scale.m[i * 5] = node.scale[static_cast<size_t>(i)];
+  return translate * rotate * scale;
+}
+
+// An accessor's elements as floats (`width` components each), checked against its buffer: an accessor that reaches
+// past its buffer, or of a type this reader does not take, is an error.
+class AccessorReader {
+ public:
+  AccessorReader(const tinygltf::Model& model, std::string where) : model_(model), where_(std::move(where)) {}
+
+  Result<std::vector<float>> floats(int index, int width, const std::string& what) const {
+    auto view = checked(index, width, what);
+    if (!view) return view.error();
+    const tinygltf::Accessor& a = model_.accessors[static_cast<size_t>(index)];
+    std::vector<float> out(a.count * static_cast<size_t>(width));
+    for (size_t e = 0; e < a.count; ++e)
+      for (int c = 0; c < width; ++c) {
+        const uint8_t* at = view->data + e * view->stride + static_cast<size_t>(c) * view->component;
+        float v = 0;
+        switch (a.componentType) {
+          case TINYGLTF_COMPONENT_TYPE_FLOAT: std::memcpy(&v, at, 4); break;
+          case TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE: v = *at / 255.0f; break;
+          case TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT: {
+            uint16_t u;
+            std::memcpy(&u, at, 2);
+            v = u / 65535.0f;
+            break;
+          }
+          default: return make_error(where_ + ": " + what + " has components of a type glTF does not allow there");
+        }
+        out[e * static_cast<size_t>(width) + static_cast<size_t>(c)] = v;
+      }
+    return out;
+  }
+
+  Result<std::vector<uint32_t>> indices(int index, size_t vertex_count, const std::string& what) const {
+    auto view = checked(index, 1, what);
+    if (!view) return view.error();
+    const tinygltf::Accessor& a = model_.accessors[static_cast<size_t>(index)];
+    std::vector<uint32_t> out(a.count);
+    for (size_t e = 0; e < a.count; ++e) {
+      const uint8_t* at = view->data + e * view->stride;
+      uint32_t v = 0;
+      if (a.componentType == TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE) {
+        v = *at;
+      } else if (a.componentType == TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT) {
+        uint16_t u;
+        std::memcpy(&u, at, 2);
+        v = u;
+      } else if (a.componentType == TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT) {
+        std::memcpy(&v, at, 4);
+      } else {
+        return make_error(where_ + ": " + what + " are not unsigned integers");
+      }
+      if (v >= vertex_count) return make_error(where_ + ": " + what + " name a vertex that does not exist");
+      out[e] = v;
+    }
+    return out;
+  }
+
+ private:
+  struct View {
+    const uint8_t* data;
+    size_t stride, component;
+  };
+  Result<View> checked(int index, int width, const std::string& what) const {
+    if (index < 0 || static_cast<size_t>(index) >= model_.accessors.size())
+      return make_error(where_ + ": " + what + " name an accessor that does not exist");
+    const tinygltf::Accessor& a = model_.accessors[static_cast<size_t>(index)];
+    const int components = tinygltf::GetNumComponentsInType(static_cast<uint32_t>(a.type));
+    const int size = tinygltf::GetComponentSizeInBytes(static_cast<uint32_t>(a.componentType));
+    if (components != width || size <= 0) return make_error(where_ + ": " + what + " have the wrong type");
+    if (a.sparse.isSparse) return make_error(where_ + ": " + what + " are sparse, which this reader does not take");
+    if (a.bufferView < 0 || static_cast<size_t>(a.bufferView) >= model_.bufferViews.size())
+      return make_error(where_ + ": " + what + " have no buffer view");
+    const tinygltf::BufferView& v = model_.bufferViews[static_cast<size_t>(a.bufferView)];
+    if (v.buffer < 0 || static_cast<size_t>(v.buffer) >= model_.buffers.size())
+      return make_error(where_ + ": " + what + "' buffer view names no buffer");
+    const auto& bytes = model_.buffers[static_cast<size_t>(v.buffer)].data;
+    const size_t element = static_cast<size_t>(components) * static_cast<size_t>(size);
+    const size_t stride = v.byteStride ? v.byteStride : element;
+    // The view lies within its buffer, and the accessor's last element within the view.
+    bool fits = stride >= element && v.byteOffset <= bytes.size() && v.byteLength <= bytes.size() - v.byteOffset &&
+                a.byteOffset <= v.byteLength;
+    if (fits && a.count > 0) {
+      const size_t room = v.byteLength - a.byteOffset;
+      fits = element <= room && a.count - 1 <= (room - element) / stride;
+    }
+    if (!fits) return make_error(where_ + ": " + what + " reach past their buffer");
+    return View{bytes.data() + v.byteOffset + a.byteOffset, stride, static_cast<size_t>(size)};
+  }
+  const tinygltf::Model& model_;
+  std::string where_;
+};
+
+std::string material_name(const tinygltf::Material& m, size_t index) {
+  return m.name.empty() ? "material" + std::to_string(index) : m.name;
+}
+
+// The names glTF's materials get in the scene: theirs, or "materialN"; a name used twice gets its index appended.
+std::vector<std::string> material_names(const tinygltf::Model& model) {
+  std::vector<std::string> names;
+  std::set<std::string> used;
+  for (size_t i = 0; i < model.materials.size(); ++i) {
+    std::string name = material_name(model.materials[i], i);
+    if (!used.insert(name).second) {
+      name.append(".").append(std::to_string(i));
+      used.insert(name);
+    }
+    names.push_back(name);
+  }
+  return names;
+}
+
+// From a file, or (`bytes` given) from memory with `path` naming it and its folder the one external buffers and
+// images are read from.
+Result<tinygltf::Model> read_model(const std::string& path, std::vector<std::string>& warnings,
+                                   const std::string* bytes = nullptr) {
+  std::error_code ec;
+  if (!bytes && !std::filesystem::is_regular_file(path, ec)) return make_error("scene file '" + path + "' not found");
+  tinygltf::Model model;
+  tinygltf::TinyGLTF loader;
+  std::string error, warning;
+  bool ok = false;
+  if (bytes) {
+    const std::string dir = std::filesystem::path(path).parent_path().string();
+    ok = bytes->rfind("glTF", 0) == 0
+             ? loader.LoadBinaryFromMemory(&model, &error, &warning, reinterpret_cast<const unsigned char*>(bytes->data()),
+                                           static_cast<unsigned int>(bytes->size()), dir)
+             : loader.LoadASCIIFromString(&model, &error, &warning, bytes->data(), static_cast<unsigned int>(bytes->size()), dir);
+  } else {
+    ok = std::filesystem::path(path).extension() == ".glb" ? loader.LoadBinaryFromFile(&model, &error, &warning, path)
+                                                           : loader.LoadASCIIFromFile(&model, &error, &warning, path);
+  }
+  // tinygltf ends its messages with a newline.
+  while (!warning.empty() && std::isspace(static_cast<unsigned char>(warning.back()))) warning.pop_back();
+  while (!error.empty() && std::isspace(static_cast<unsigned char>(error.back()))) error.pop_back();
+  if (!warning.empty()) warnings.push_back("scene file '" + path + "': " + warning);
+  if (!ok) return make_error("scene file '" + path + "': not a glTF file tinygltf can read (" + error + ")");
+  return model;
+}
+
+// A base colour texture as the scene keeps it: RGB, sRGB-encoded, with the material's base colour factor (which
+// glTF multiplies in linear values) applied to its texels.
+std::optional<Texture> base_color_texture(const tinygltf::Image& image, RGB factor, const std::string& name) {
+  if (image.width <= 0 || image.height <= 0 || image.bits != 8 || image.component < 3 ||
+      image.image.size() < static_cast<size_t>(image.width) * static_cast<size_t>(image.height) * static_cast<size_t>(image.component))
+    return std::nullopt;
+  Texture t;
+  t.path = name;
+  t.width = static_cast<uint32_t>(image.width);
+  t.height = static_cast<uint32_t>(image.height);
+  t.channels = 3;
+  const size_t n = static_cast<size_t>(t.width) * t.height, from = static_cast<size_t>(image.component);
+  t.owned.resize(n * 3);
+  const bool scaled = factor.x != 1 || factor.y != 1 || factor.z != 1;
+  auto to_linear = [](float e) { return e <= 0.04045f ? e / 12.92f : std::pow((e + 0.055f) / 1.055f, 2.4f); };
+  auto to_srgb = [](float l) { return l <= 0.0031308f ? 12.92f * l : 1.055f * std::pow(l, 1.0f / 2.4f) - 0.055f; };
+  for (size_t i = 0; i < n; ++i)
+    for (size_t c = 0; c < 3; ++c) {
+      uint8_t v = image.image[i * from + c];
+      if (scaled) {
+        const float f = c == 0 ? factor.x : c == 1 ? factor.y : factor.z;
+        v = static_cast<uint8_t>(std::lround(std::clamp(to_srgb(to_linear(v / 255.0f) * f), 0.0f, 1.0f) * 255.0f));
+      }
+      t.owned[i * 3 + c] = v;
+    }
+  t.build_pyramid();
+  return t;
+}
+
+// A cut-out as the scene keeps it (one linear channel, absent below one half) from a base colour texture's alpha
+// times the factor's: scaled so that the material's alphaCutoff falls on one half.
+std::optional<Texture> coverage_texture(const tinygltf::Image& image, float factor, float cutoff, const std::string& name) {
+  if (image.width <= 0 || image.height <= 0 || image.bits != 8 || image.component != 4 ||
+      image.image.size() < static_cast<size_t>(image.width) * static_cast<size_t>(image.height) * 4)
+    return std::nullopt;
+  Texture t;
+  t.path = name + " (alpha)";
+  t.width = static_cast<uint32_t>(image.width);
+  t.height = static_cast<uint32_t>(image.height);
+  t.channels = 1;
+  const size_t n = static_cast<size_t>(t.width) * t.height;
+  t.owned.resize(n);
+  const float scale = factor * 0.5f / std::max(cutoff, 1e-3f);
+  for (size_t i = 0; i < n; ++i)
+    t.owned[i] = static_cast<uint8_t>(std::lround(std::clamp(image.image[i * 4 + 3] * scale, 0.0f, 255.0f)));
+  t.build_pyramid();
+  return t;
+}
+
+}  // namespace
+
+bool Scene::is_gltf_path(const std::string& path) {
+  const std::string ext = std::filesystem::path(path).extension().string();
+  return ext == ".gltf" || ext == ".glb";
+}
+
+Result<ObjCatalogue> Scene::catalogue_gltf(const std::string& path) {
+  ObjCatalogue out;
+  auto model = read_model(path, out.warnings);
+  if (!model) return model.error();
+  out.material_names = material_names(*model);
+  // The default scene's perspective cameras: a glTF camera looks down its node's -z with +y up.
+  std::function<void(int, const Mat4&, int)> visit = [&](int index, const Mat4& parent, int depth) {
+    if (index < 0 || static_cast<size_t>(index) >= model->nodes.size() || depth > 64) return;
+    const tinygltf::Node& node = model->nodes[static_cast<size_t>(index)];
+    const Mat4 world = parent * local_transform(node);
+    if (node.camera >= 0 && static_cast<size_t>(node.camera) < model->cameras.size()) {
+      const tinygltf::Camera& cam = model->cameras[static_cast<size_t>(node.camera)];
+      const Vec3 eye = world.point({0, 0, 0}), ahead = world.vector({0, 0, -1}), up = world.vector({0, 1, 0});
+      if (cam.type == "perspective" && length(ahead) > 0 && length(up) > 0 && cam.perspective.yfov > 0) {
+        const Vec3 at = eye + normalize(ahead);
+        ObjCatalogue::FileCamera c;
+        c.name = !node.name.empty() ? node.name : !cam.name.empty() ? cam.name : "camera" + std::to_string(out.cameras.size());
+        c.view.eye = {eye.x, eye.y, eye.z};
+        c.view.at = {at.x, at.y, at.z};
+        const Vec3 u = normalize(up);
+        c.view.up = {u.x, u.y, u.z};
+        c.view.fov = std::clamp(cam.perspective.yfov * 180.0 / kPi, 0.1, 179.0);
+        out.cameras.push_back(std::move(c));
+      }
+    }
+    for (int child : node.children) visit(child, world, depth + 1);
+  };
+  const int scene_index = model->defaultScene >= 0 ? model->defaultScene : 0;
+  if (static_cast<size_t>(scene_index) < model->scenes.size())
+    for (int root : model->scenes[static_cast<size_t>(scene_index)].nodes) visit(root, Mat4{}, 0);
+  return out;
+}
+
+Result<Scene> Scene::load_gltf_unlit(const std::string& path) { return parse_gltf_unlit(path, nullptr); }
+
+Result<Scene> Scene::parse_gltf_unlit(const std::string& path, const std::string* bytes) {
+  std::vector<std::string> read_warnings;
+  auto loaded = read_model(path, read_warnings, bytes);
+  if (!loaded) return loaded.error();
+  const tinygltf::Model& model = *loaded;
+  const std::string where = "scene file '" + path + "'";
+  std::set<std::string> warned;
+  auto warn = [&](const std::string& what) {
+    if (warned.insert(what).second) log_warn(where + ": " + what);
+  };
+  for (const auto& w : read_warnings) warn(w.substr(where.size() + 2));
+  for (const auto& e : model.extensionsUsed)
+    if (e != "KHR_lights_punctual" && e != "KHR_materials_emissive_strength")
+      warn("extension " + e + " is not supported; what it adds is left out");
+
+  Scene s;
+  const std::vector<std::string> names = material_names(model);
+  for (size_t i = 0; i < model.materials.size(); ++i) {
+    const tinygltf::Material& g = model.materials[i];
+    const auto& pbr = g.pbrMetallicRoughness;
+    Material m{names[i], {}, {}};
+    m.type = Material::Type::metal_rough;
+    RGB factor{1, 1, 1};
+    if (pbr.baseColorFactor.size() == 4)
+      factor = {static_cast<float>(pbr.baseColorFactor[0]), static_cast<float>(pbr.baseColorFactor[1]),
+                static_cast<float>(pbr.baseColorFactor[2])};
+    m.kd = {std::clamp(factor.x, 0.0f, 1.0f), std::clamp(factor.y, 0.0f, 1.0f), std::clamp(factor.z, 0.0f, 1.0f)};
+    m.metallic = std::clamp(static_cast<float>(pbr.metallicFactor), 0.0f, 1.0f);
+    m.roughness = std::clamp(static_cast<float>(pbr.roughnessFactor), 0.0f, 1.0f);
+    float strength = 1;
+    if (auto it = g.extensions.find("KHR_materials_emissive_strength"); it != g.extensions.end())
+      if (it->second.Has("emissiveStrength")) strength = static_cast<float>(it->second.Get("emissiveStrength").GetNumberAsDouble());
+    if (g.emissiveFactor.size() == 3)
+      m.ke = RGB{static_cast<float>(g.emissiveFactor[0]), static_cast<float>(g.emissiveFactor[1]),
+                 static_cast<float>(g.emissiveFactor[2])} * std::max(0.0f, strength);
+    const std::string which = "material '" + m.name + "'";
+    if (const int t = pbr.baseColorTexture.index; t >= 0) {
+      const int source = static_cast<size_t>(t) < model.textures.size() ? model.textures[static_cast<size_t>(t)].source : -1;
+      std::optional<Texture> tex;
+      if (source >= 0 && static_cast<size_t>(source) < model.images.size())
+        tex = base_color_texture(model.images[static_cast<size_t>(source)], m.kd,
+                                 model.images[static_cast<size_t>(source)].name.empty() ? "image" + std::to_string(source)
+                                                                                        : model.images[static_cast<size_t>(source)].name);
+      if (tex) m.kd_map = static_cast<int32_t>(s.add_texture(std::move(*tex)));
+      else warn(which + ": its base colour texture cannot be read (8-bit RGB or RGBA); the material stays flat");
+      if (pbr.baseColorTexture.texCoord != 0) warn(which + ": a texture on TEXCOORD_" + std::to_string(pbr.baseColorTexture.texCoord) + " is read with TEXCOORD_0");
+    }
+    if (pbr.metallicRoughnessTexture.index >= 0) warn(which + ": metallicRoughnessTexture is not read; its factors hold everywhere");
+    if (g.normalTexture.index >= 0) warn(which + ": normalTexture is not read");
+    if (g.emissiveTexture.index >= 0) warn(which + ": emissiveTexture is not read; emissiveFactor holds everywhere");
+    if (g.occlusionTexture.index >= 0) warn(which + ": occlusionTexture is left out (a path tracer computes occlusion)");
+    if (g.alphaMode == "MASK" || g.alphaMode == "BLEND") {
+      // BLEND has no cut-out: the approximation is a cut-out at coverage one half (what lightfarm does with MTL
+      // map_d), so leaves and fences are right and glass-like blending is not.
+      if (g.alphaMode == "BLEND") warn(which + ": alphaMode BLEND is read as MASK with alphaCutoff 0.5");
+      const float cutoff = g.alphaMode == "MASK" ? static_cast<float>(g.alphaCutoff) : 0.5f;
+      const float factor = pbr.baseColorFactor.size() == 4 ? static_cast<float>(pbr.baseColorFactor[3]) : 1.0f;
+      const int t = pbr.baseColorTexture.index;
+      const int source = t >= 0 && static_cast<size_t>(t) < model.textures.size() ? model.textures[static_cast<size_t>(t)].source : -1;
+      std::optional<Texture> cut;
+      if (source >= 0 && static_cast<size_t>(source) < model.images.size())
+        cut = coverage_texture(model.images[static_cast<size_t>(source)], factor, cutoff, "image" + std::to_string(source));
+      if (cut) m.alpha_map = static_cast<int32_t>(s.add_texture(std::move(*cut)));
+      else if (factor < cutoff) warn(which + ": its alpha " + std::to_string(factor) + " is below its cutoff, but without an RGBA base colour texture the surface stays whole");
+    }
+    s.add_material(std::move(m));
+  }
+  const auto fallback = s.add_material({"(default)", {0.5f, 0.5f, 0.5f}, {}});
+
+  const AccessorReader read(model, where);
+  const auto* lights = [&]() -> const tinygltf::Value* {
+    auto it = model.extensions.find("KHR_lights_punctual");
+    return it != model.extensions.end() && it->second.Has("lights") ? &it->second.Get("lights") : nullptr;
+  }();
+  Status status = Ok{};
+  // Depth-first through the default scene's nodes; `depth` bounds a cyclic node graph a hostile file may hold.
+  std::function<void(int, const Mat4&, int)> visit = [&](int index, const Mat4& parent, int depth) {
+    if (!status) return;
+    if (index < 0 || static_cast<size_t>(index) >= model.nodes.size() || depth > 64) {
+      status = make_error(where + ": a node tree that names a node that does not exist, or deeper than 64");
+      return;
+    }
+    const tinygltf::Node& node = model.nodes[static_cast<size_t>(index)];
+    const Mat4 world = parent * local_transform(node);
+    if (auto it = node.extensions.find("KHR_lights_punctual"); it != node.extensions.end() && lights && it->second.Has("light")) {
+      const int li = it->second.Get("light").GetNumberAsInt();
+      if (li >= 0 && static_cast<size_t>(li) < lights->ArrayLen()) {
+        const tinygltf::Value& light = lights->Get(li);
+        const std::string type = light.Has("type") ? light.Get("type").Get<std::string>() : "";
+        const std::string name = light.Has("name") ? light.Get("name").Get<std::string>() : "light" + std::to_string(li);
+        if (type == "point") {
+          RGB colour{1, 1, 1};
+          if (light.Has("color") && light.Get("color").ArrayLen() == 3)
+            colour = {static_cast<float>(light.Get("color").Get(0).GetNumberAsDouble()),
+                      static_cast<float>(light.Get("color").Get(1).GetNumberAsDouble()),
+                      static_cast<float>(light.Get("color").Get(2).GetNumberAsDouble())};
+          const float candela = light.Has("intensity") ? static_cast<float>(light.Get("intensity").GetNumberAsDouble()) : 1.0f;
+          // glTF's point light is photometric (candela); lightfarm's radiometric (W/sr): 683 lm/W.
+          s.add_point_light(world.point({0, 0, 0}), colour * std::max(0.0f, candela / 683.0f));
+        } else {
+          warn("light '" + name + "' (" + type + ") is not supported yet; only point lights are read");
+        }
+      }
+    }
+    if (node.mesh >= 0) {
+      if (static_cast<size_t>(node.mesh) >= model.meshes.size()) {
+        status = make_error(where + ": node '" + node.name + "' names a mesh that does not exist");
+        return;
+      }
+      const tinygltf::Mesh& mesh = model.meshes[static_cast<size_t>(node.mesh)];
+      const bool mirrored = world.determinant3() < 0;  // a mirroring transform turns the winding around
+      for (size_t pi = 0; pi < mesh.primitives.size() && status; ++pi) {
+        const tinygltf::Primitive& prim = mesh.primitives[pi];
+        const std::string what = "mesh '" + mesh.name + "' primitive " + std::to_string(pi);
+        if (prim.mode != TINYGLTF_MODE_TRIANGLES) {
+          warn(what + ": mode " + std::to_string(prim.mode) + " is not triangles; left out");
+          continue;
+        }
+        auto find = [&](const char* key) {
+          auto it = prim.attributes.find(key);
+          return it == prim.attributes.end() ? -1 : it->second;
+        };
+        auto positions = read.floats(find("POSITION"), 3, what + " positions");
+        if (!positions) {
+          status = positions.error();
+          return;
+        }
+        const size_t vertices = positions->size() / 3;
+        std::vector<float> normals, uvs;
+        if (find("NORMAL") >= 0) {
+          auto n = read.floats(find("NORMAL"), 3, what + " normals");
+          if (!n) { status = n.error(); return; }
+          if (n->size() == positions->size()) normals = std::move(*n);
+        }
+        if (find("TEXCOORD_0") >= 0) {
+          auto t = read.floats(find("TEXCOORD_0"), 2, what + " texture coordinates");
+          if (!t) { status = t.error(); return; }
+          if (t->size() / 2 == vertices) uvs = std::move(*t);
+        }
+        std::vector<uint32_t> order;
+        if (prim.indices >= 0) {
+          auto i = read.indices(prim.indices, vertices, what + " indices");
+          if (!i) { status = i.error(); return; }
+          order = std::move(*i);
+        } else {
+          order.resize(vertices);
+          for (uint32_t v = 0; v < vertices; ++v) order[v] = v;
+        }
+        const uint32_t material = prim.material >= 0 && static_cast<size_t>(prim.material) < model.materials.size()
+                                      ? static_cast<uint32_t>(prim.material)
+                                      : fallback;
+        for (size_t f = 0; f + 2 < order.size(); f += 3) {
+          Vec3 p[3], vn[3];
+          Vec2 vt[3];
+          for (int c = 0; c < 3; ++c) {
+            const size_t v = order[f + static_cast<size_t>(mirrored ? 2 - c : c)];
+            p[c] = world.point({(*positions)[3 * v], (*positions)[3 * v + 1], (*positions)[3 * v + 2]});
+            if (!normals.empty()) vn[c] = world.normal({normals[3 * v], normals[3 * v + 1], normals[3 * v + 2]});
+            // glTF's texture coordinates start at the image's top left; the scene's, as OBJ's, at its bottom left.
+            if (!uvs.empty()) vt[c] = {uvs[2 * v], 1.0f - uvs[2 * v + 1]};
+          }
+          s.add_triangle(p[0], p[1], p[2], material, {normals.empty() ? nullptr : vn, uvs.empty() ? nullptr : vt});
+        }
+      }
+    }
+    for (int child : node.children) visit(child, world, depth + 1);
+  };
+  const int scene_index = model.defaultScene >= 0 ? model.defaultScene : 0;
+  if (static_cast<size_t>(scene_index) < model.scenes.size())
+    for (int root : model.scenes[static_cast<size_t>(scene_index)].nodes) visit(root, Mat4{}, 0);
+  if (!status) return status.error();
+  if (s.triangle_count() == 0) return make_error(where + ": its default scene holds no triangles");
+  return s;
+}
+
+}  // namespace lf

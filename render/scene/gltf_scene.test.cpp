@@ -1,0 +1,166 @@
+// glTF 2.0 scenes: a file written here (a node tree with transforms, indexed triangles, normals, texture
+// coordinates, a metal-roughness material, a point light) read back exactly; the Blender-exported material-ball grid
+// from ../shared; and files that lie about their buffers refused with a message, not read past.
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+
+#include "render/scene/scene.hpp"
+
+namespace lf {
+namespace {
+
+namespace fs = std::filesystem;
+
+struct GltfFiles {
+  fs::path dir = fs::temp_directory_path() / ("lightfarm-gltf-" + std::to_string(::getpid()));
+  GltfFiles() { fs::create_directories(dir); }
+  ~GltfFiles() { fs::remove_all(dir); }
+  // A quad of two triangles (u16 indices) with normals and texture coordinates in x.bin; `accessor_count` lets a
+  // test make the positions claim more than the buffer holds.
+  // `material`: the material's JSON; `images`: what follows it at the top level (textures, images, samplers).
+  std::string write(const std::string& nodes, int accessor_count = 4,
+                    const std::string& material = R"({"name": "gold", "pbrMetallicRoughness": {"baseColorFactor": [0.9, 0.6, 0.2, 1], "metallicFactor": 1, "roughnessFactor": 0.25}, "emissiveFactor": [0, 0, 0]})",
+                    const std::string& images = "") const {
+    const float positions[] = {0, 0, 0, 1, 0, 0, 1, 1, 0, 0, 1, 0};
+    const float normals[] = {0, 0, 1, 0, 0, 1, 0, 0, 1, 0, 0, 1};
+    const float uvs[] = {0, 1, 1, 1, 1, 0, 0, 0};
+    const uint16_t indices[] = {0, 1, 2, 0, 2, 3};
+    std::string bin;
+    auto add = [&](const void* p, size_t n) { bin.append(static_cast<const char*>(p), n); };
+    add(positions, sizeof positions);
+    add(normals, sizeof normals);
+    add(uvs, sizeof uvs);
+    add(indices, sizeof indices);
+    std::ofstream(dir / "x.bin", std::ios::binary) << bin;
+    const std::string json = R"({
+  "asset": {"version": "2.0"},
+  "extensionsUsed": ["KHR_lights_punctual"],
+  "extensions": {"KHR_lights_punctual": {"lights": [{"type": "point", "intensity": 683, "color": [1, 0.5, 0.25]}]}},
+  "scene": 0,
+  "scenes": [{"nodes": [0]}],
+  "nodes": )" + nodes + R"(,
+  "meshes": [{"name": "quad", "primitives": [{"attributes": {"POSITION": 0, "NORMAL": 1, "TEXCOORD_0": 2}, "indices": 3, "material": 0}]}],
+  "materials": [)" + material + R"(],)" + images + R"(
+  "buffers": [{"uri": "x.bin", "byteLength": 140}],
+  "bufferViews": [{"buffer": 0, "byteOffset": 0, "byteLength": 48}, {"buffer": 0, "byteOffset": 48, "byteLength": 48},
+                  {"buffer": 0, "byteOffset": 96, "byteLength": 32}, {"buffer": 0, "byteOffset": 128, "byteLength": 12}],
+  "accessors": [{"bufferView": 0, "componentType": 5126, "count": )" + std::to_string(accessor_count) + R"(, "type": "VEC3", "min": [0, 0, 0], "max": [1, 1, 0]},
+                {"bufferView": 1, "componentType": 5126, "count": 4, "type": "VEC3"},
+                {"bufferView": 2, "componentType": 5126, "count": 4, "type": "VEC2"},
+                {"bufferView": 3, "componentType": 5123, "count": 6, "type": "SCALAR"}]
+})";
+    const fs::path path = dir / "x.gltf";
+    std::ofstream(path) << json;
+    return path.string();
+  }
+};
+
+TEST(GltfScene, NodesTransformsMaterialsAndLightsAsTheFileSays) {
+  GltfFiles files;
+  // The root moves everything by (10, 0, 0); its child scales the quad by 2 and holds the light at its origin.
+  const std::string path = files.write(R"([{"translation": [10, 0, 0], "children": [1]},
+      {"scale": [2, 2, 2], "mesh": 0, "extensions": {"KHR_lights_punctual": {"light": 0}}}])");
+  auto s = Scene::load_gltf_unlit(path);
+  ASSERT_TRUE(s.ok()) << s.error().message;
+  ASSERT_EQ(s->triangle_count(), 2u);
+  EXPECT_EQ(s->vertex(0, 0), (Vec3{10, 0, 0}));
+  EXPECT_EQ(s->vertex(0, 1), (Vec3{12, 0, 0}));
+  EXPECT_EQ(s->vertex(1, 2), (Vec3{10, 2, 0}));
+  EXPECT_NEAR(s->normal(0).z, 1, 1e-6) << "counter-clockwise is the front, as in glTF";
+  const Material& gold = s->material(s->material_of(0));
+  EXPECT_EQ(gold.name, "gold");
+  EXPECT_EQ(gold.type, Material::Type::metal_rough);
+  EXPECT_FLOAT_EQ(gold.metallic, 1);
+  EXPECT_FLOAT_EQ(gold.roughness, 0.25f);
+  EXPECT_FLOAT_EQ(gold.kd.y, 0.6f);
+  // glTF's v runs down the image, the scene's (as OBJ's) up: the file's (0, 1) corner is the scene's (0, 0).
+  EXPECT_FLOAT_EQ(s->uv(0, {1, 0, 0}).v, 0);
+  EXPECT_FLOAT_EQ(s->uv(0, {0, 0, 1}).v, 1);
+  // 683 candela of colour (1, 0.5, 0.25) is 1 W/sr of it, at the light's node.
+  ASSERT_EQ(s->point_lights().size(), 1u);
+  EXPECT_EQ(s->point_lights()[0].position, (Vec3{10, 0, 0}));
+  EXPECT_NEAR(s->point_lights()[0].intensity.y, 0.5f, 1e-6f);
+  auto catalogue = Scene::catalogue_file(path);
+  ASSERT_TRUE(catalogue.ok());
+  EXPECT_EQ(catalogue->material_names, (std::vector<std::string>{"gold"}));
+}
+
+TEST(GltfScene, AMirroringTransformKeepsTheFrontFacingOut) {
+  GltfFiles files;
+  auto s = Scene::load_gltf_unlit(files.write(R"([{"scale": [1, 1, -1], "mesh": 0}])"));
+  ASSERT_TRUE(s.ok()) << s.error().message;
+  // The quad faced +z; mirrored in z it faces -z, with its normals.
+  EXPECT_NEAR(s->normal(0).z, -1, 1e-6);
+  EXPECT_NEAR(s->corner_normal(0, 0).z, -1, 1e-6);
+}
+
+// alphaMode MASK cuts the surface where the base colour texture's alpha (times the factor's) is below alphaCutoff:
+// a 4 x 4 TGA whose left half has alpha 0.4 and right half 0.2, cut at 0.3 (a cut at one half would take both).
+TEST(GltfScene, AlphaMaskCutsWhereCoverageIsBelowTheCutoff) {
+  GltfFiles files;
+  std::string tga(18, '\0');
+  tga[2] = 2;                    // uncompressed true colour
+  tga[12] = 4, tga[14] = 4;      // 4 x 4
+  tga[16] = 32, tga[17] = 0x28;  // BGRA, 8 alpha bits, top row first
+  for (int y = 0; y < 4; ++y)
+    for (int x = 0; x < 4; ++x) tga += std::string{'\x80', '\x80', '\x80', static_cast<char>(x < 2 ? 102 : 50)};
+  std::ofstream(files.dir / "leaf.tga", std::ios::binary) << tga;
+  const std::string path = files.write(
+      R"([{"mesh": 0}])", 4,
+      R"({"name": "leaf", "alphaMode": "MASK", "alphaCutoff": 0.3, "pbrMetallicRoughness": {"baseColorTexture": {"index": 0}}})",
+      R"("textures": [{"source": 0}], "images": [{"uri": "leaf.tga"}],)");
+  auto s = Scene::load_gltf_unlit(path);
+  ASSERT_TRUE(s.ok()) << s.error().message;
+  const Material& leaf = s->material(s->material_of(0));
+  ASSERT_GE(leaf.alpha_map, 0);
+  ASSERT_GE(leaf.kd_map, 0);
+  // Triangle 0 runs (0,0) (1,0) (1,1); x < 0.5 is the image's left half.
+  EXPECT_TRUE(s->opaque(0, {0.8f, 0.1f, 0.1f}));
+  EXPECT_FALSE(s->opaque(0, {0.1f, 0.8f, 0.1f}));
+}
+
+TEST(GltfScene, BadFilesAreRefusedWithAMessage) {
+  GltfFiles files;
+  auto past = Scene::load_gltf_unlit(files.write(R"([{"mesh": 0}])", 40));
+  ASSERT_FALSE(past.ok());
+  EXPECT_NE(past.error().message.find("reach past their buffer"), std::string::npos) << past.error().message;
+  auto cycle = Scene::load_gltf_unlit(files.write(R"([{"children": [1]}, {"children": [0], "mesh": 0}])"));
+  ASSERT_FALSE(cycle.ok());
+  auto missing = Scene::load_file_unlit((files.dir / "none.glb").string());
+  ASSERT_FALSE(missing.ok());
+  EXPECT_EQ(missing.error().message, "scene file '" + (files.dir / "none.glb").string() + "' not found");
+  std::ofstream(files.dir / "junk.glb") << "not glTF";
+  auto junk = Scene::load_file_unlit((files.dir / "junk.glb").string());
+  ASSERT_FALSE(junk.ok());
+  EXPECT_NE(junk.error().message.find("not a glTF file"), std::string::npos) << junk.error().message;
+}
+
+// The material-ball grid Blender's own exporter wrote: 8 balls, the floor and an emissive panel, each material as
+// Blender's Principled BSDF had it.
+TEST(GltfScene, ReadsBlendersMaterialBalls) {
+  const std::string path = std::string(LIGHTFARM_SOURCE_DIR) + "/../shared/scenes/gltf/balls.glb";
+  if (!fs::exists(path)) GTEST_SKIP() << "no " << path;
+  auto s = Scene::load_file_unlit(path);
+  ASSERT_TRUE(s.ok()) << s.error().message;
+  EXPECT_EQ(s->triangle_count(), 17668u);
+  int balls = 0;
+  for (const Material& m : s->materials()) {
+    if (m.name.rfind("Ball_m", 0) != 0) continue;
+    ++balls;
+    EXPECT_EQ(m.type, Material::Type::metal_rough);
+    EXPECT_FLOAT_EQ(m.metallic, m.name[6] == '1' ? 1.0f : 0.0f) << m.name;
+    EXPECT_NEAR(m.roughness, std::stof(m.name.substr(9)), 1e-6) << m.name;
+  }
+  EXPECT_EQ(balls, 8);
+  bool panel = false;
+  for (const Material& m : s->materials()) panel = panel || (m.name == "Panel" && m.ke == RGB{12, 11, 10});
+  EXPECT_TRUE(panel);
+  EXPECT_TRUE(s->has_shading_normals()) << "the balls are shaded smooth";
+}
+
+}  // namespace
+}  // namespace lf
