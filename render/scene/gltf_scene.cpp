@@ -189,13 +189,17 @@ std::vector<std::string> material_names(const tinygltf::Model& model) {
 }
 
 // From a file, or (`bytes` given) from memory with `path` naming it and its folder the one external buffers and
-// images are read from.
+// images are read from. `images`: decode them (a catalogue, read while the script runs, needs none).
 Result<tinygltf::Model> read_model(const std::string& path, std::vector<std::string>& warnings,
-                                   const std::string* bytes = nullptr) {
+                                   const std::string* bytes = nullptr, bool images = true) {
   std::error_code ec;
   if (!bytes && !std::filesystem::is_regular_file(path, ec)) return make_error("scene file '" + path + "' not found");
   tinygltf::Model model;
   tinygltf::TinyGLTF loader;
+  if (!images)
+    loader.SetImageLoader([](tinygltf::Image*, const int, std::string*, std::string*, int, int, const unsigned char*, int,
+                             void*) { return true; },
+                          nullptr);
   std::string error, warning;
   bool ok = false;
   if (bytes) {
@@ -274,7 +278,7 @@ bool Scene::is_gltf_path(const std::string& path) {
 
 Result<ObjCatalogue> Scene::catalogue_gltf(const std::string& path) {
   ObjCatalogue out;
-  auto model = read_model(path, out.warnings);
+  auto model = read_model(path, out.warnings, nullptr, /*images=*/false);
   if (!model) return model.error();
   out.material_names = material_names(*model);
   // The default scene's perspective cameras: a glTF camera looks down its node's -z with +y up.
@@ -308,7 +312,7 @@ Result<ObjCatalogue> Scene::catalogue_gltf(const std::string& path) {
 Result<Scene> Scene::load_gltf_unlit(const std::string& path) { return parse_gltf_unlit(path, nullptr); }
 
 Result<Scene> Scene::parse_gltf_unlit(const std::string& path, const std::string* bytes) {
-  std::vector<std::string> read_warnings;
+  std::vector<std::string> read_warnings;  // tinygltf's: the catalogue reports them (catalogue_file)
   auto loaded = read_model(path, read_warnings, bytes);
   if (!loaded) return loaded.error();
   const tinygltf::Model& model = *loaded;
@@ -317,7 +321,6 @@ Result<Scene> Scene::parse_gltf_unlit(const std::string& path, const std::string
   auto warn = [&](const std::string& what) {
     if (warned.insert(what).second) log_warn(where + ": " + what);
   };
-  for (const auto& w : read_warnings) warn(w.substr(where.size() + 2));
   for (const auto& e : model.extensionsUsed)
     if (e != "KHR_lights_punctual" && e != "KHR_materials_emissive_strength")
       warn("extension " + e + " is not supported; what it adds is left out");
