@@ -244,6 +244,33 @@ image { width = 64, height = 64, spp = 16 }
   EXPECT_TRUE(render("with1", head + ball + tail, {"renderers=1"}).pixels == with.pixels);
 }
 
+// A glTF scene goes through the farm like an OBJ: examples/material_balls.lua (Blender's ball grid, the file's
+// camera) shipped to every actor; the gold balls behind come out gold and the blue ones in front blue, and the
+// image is the same with one renderer as with three.
+TEST_F(FarmTest, AGltfSceneRendersThroughTheFarm) {
+  const std::string script = std::string(LIGHTFARM_SOURCE_DIR) + "/examples/material_balls.lua";
+  if (!std::filesystem::exists(std::string(LIGHTFARM_SOURCE_DIR) + "/../shared/scenes/gltf/balls.glb"))
+    GTEST_SKIP() << "no ../shared/scenes/gltf/balls.glb";
+  auto render = [&](const std::string& name, const std::string& renderers) {
+    auto r = run_lightfarm({"run", script, "--output", path(name), "--quiet", "--set", "width=64", "--set", "height=36",
+                            "--set", "spp=4", "--set", "renderers=" + renderers});
+    EXPECT_EQ(r.status, 0) << r.err;
+    expect_no_leftovers(r);
+    auto img = read_image(path(name));
+    return img.ok() ? *img : Image(64, 36);
+  };
+  const Image one = render("one.exr", "1"), three = render("three.exr", "3");
+  EXPECT_TRUE(one.pixels == three.pixels) << "images differ between 1 and 3 renderers";
+  // Rows 8-14 hold the back row (gold, right half rough), rows 20-30 the front row (blue).
+  RGB back{}, front{};
+  for (int x = 8; x < 56; ++x) {
+    for (int y = 8; y <= 14; ++y) back += one.pixels[static_cast<size_t>(y * 64 + x)];
+    for (int y = 20; y <= 30; ++y) front += one.pixels[static_cast<size_t>(y * 64 + x)];
+  }
+  EXPECT_GT(back.x, 1.5f * back.z) << "gold reflects red over blue";
+  EXPECT_GT(front.z, 1.5f * front.x) << "the dielectric balls are blue";
+}
+
 TEST_F(FarmTest, StatsJsonCarriesPhasesAndActors) {
   auto r = render_cornell(path("c.png"), {"--stats-json", path("stats.json")});
   ASSERT_EQ(r.status, 0) << r.err;
