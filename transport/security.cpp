@@ -92,7 +92,9 @@ void Authenticator::serve() {
       if (event.more()) (void)monitors[i - 1].recv(where, zmq::recv_flags::dontwait);
       ++refused_;
       ++unlogged;
-      last_address = "a client of " + where.to_string() + " without CURVE";
+      // The monitor names the endpoint the connection came in on, not its sender (ZeroMQ does not know it before
+      // the handshake); a client that is refused reconnects on its own, so one stranger is counted each time.
+      last_address = "a connection to " + where.to_string() + " that spoke without CURVE, sender unknown";
     }
     if (items[0].revents & ZMQ_POLLIN) {
       // ZAP request: version, request id, domain, address, identity, mechanism, credentials...
@@ -123,7 +125,7 @@ void Authenticator::serve() {
       if (!ok) {
         ++refused_;
         ++unlogged;
-        last_address = frames[3].to_string() + " with an unknown key";
+        last_address = "from " + frames[3].to_string() + " with an unknown key";
       }
     }
     // Refusals are logged at most once a second, with how many there were: a stranger cannot flood the log.
