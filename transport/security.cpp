@@ -64,7 +64,7 @@ void Authenticator::serve() {
   zap.bind("inproc://zeromq.zap.01");
   std::vector<zmq::socket_t> monitors;
   using Clock = std::chrono::steady_clock;
-  auto last_log = Clock::now() - std::chrono::seconds(2);
+  auto first_unlogged = Clock::now();
   uint64_t unlogged = 0;
   std::string last_address;
   while (!stop_) {
@@ -91,7 +91,7 @@ void Authenticator::serve() {
       if (!monitors[i - 1].recv(event, zmq::recv_flags::dontwait)) continue;
       if (event.more()) (void)monitors[i - 1].recv(where, zmq::recv_flags::dontwait);
       ++refused_;
-      ++unlogged;
+      if (unlogged++ == 0) first_unlogged = Clock::now();
       // The monitor names the endpoint the connection came in on, not its sender (ZeroMQ does not know it before
       // the handshake); a client that is refused reconnects on its own, so one stranger is counted each time.
       last_address = "a connection to " + where.to_string() + " that spoke without CURVE, sender unknown";
@@ -124,16 +124,16 @@ void Authenticator::serve() {
       zap.send(zmq::buffer(std::string()), zmq::send_flags::none);
       if (!ok) {
         ++refused_;
-        ++unlogged;
+        if (unlogged++ == 0) first_unlogged = Clock::now();
         last_address = "from " + frames[3].to_string() + " with an unknown key";
       }
     }
-    // Refusals are logged at most once a second, with how many there were: a stranger cannot flood the log.
-    if (unlogged > 0 && Clock::now() - last_log >= std::chrono::seconds(1)) {
+    // Refusals are logged a second after the first one not yet logged, with how many came in that second: one
+    // stranger's first attempt and its reconnects are one line, and a stranger cannot flood the log.
+    if (unlogged > 0 && (Clock::now() - first_unlogged >= std::chrono::seconds(1) || stop_)) {
       log_warn("refused " + std::to_string(unlogged) + " connection" + (unlogged > 1 ? "s" : "") +
                " that did not present a key of this farm (latest: " + last_address + ")");
       unlogged = 0;
-      last_log = Clock::now();
     }
   }
 }
