@@ -41,7 +41,7 @@ usage:
       Load a shipped scene and its BVH once and fork this host's N actors from it (the director runs this).
   lightfarm host-launcher
       Start this host's actors as the director asks on stdin; stop them all at EOF (the director runs this).
-  lightfarm check-actor [--kind KIND] [--timeout SECONDS] [--inputs N] -- COMMAND [ARG]...
+  lightfarm check-actor [--kind KIND] [--timeout SECONDS] [--inputs N] [--security curve|none] -- COMMAND [ARG]...
       Launch COMMAND as an actor and check it against the protocol; PASS/FAIL per check.
   lightfarm scene FILE.obj
       Describe an OBJ scene: triangles, bounds, materials, emitters and their flux, textures, warnings, and a
@@ -231,11 +231,13 @@ int cmd_check_actor(int argc, char** argv) {
     if (a == "--kind") o.kind = argv[++i];
     else if (a == "--timeout") o.timeout = std::atof(argv[++i]);
     else if (a == "--inputs") o.inputs = std::atoi(argv[++i]);
+    else if (a == "--security") o.security = argv[++i];
     else return usage_error("unknown option '" + a + "' (the actor's command goes after --)");
   }
   for (; i < argc; ++i) o.command.push_back(argv[i]);
   if (o.command.empty()) return usage_error("check-actor needs a command after --");
   if (!(o.timeout > 0)) return usage_error("--timeout must be positive");
+  if (o.security != "curve" && o.security != "none") return usage_error("--security must be curve or none");
   return lf::check_actor(o);
 }
 

@@ -77,6 +77,21 @@ TEST_F(PluginTest, BrokenActorsFailCheckActorSayingWhy) {
   }
 }
 
+// check-actor runs an actor as a farm does, with CURVE: one written without it fails hello saying so, naming the
+// actor and the way out, where it used to pass every check and then time out in every farm; --security none checks
+// it as a farm without CURVE would run it.
+TEST_F(PluginTest, CheckActorSpeaksCurveAsFarmsDo) {
+  auto r = run_lightfarm({"check-actor", "--timeout", "2", "--", kBroken, "--mode", "no_curve"});
+  EXPECT_EQ(r.status, 1);
+  EXPECT_NE(r.out.find("FAIL hello      no HELLO: the director's side refused "), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("connection(s) from 'check' that did not speak CURVE"), std::string::npos) << r.out;
+  expect_no_leftovers(r);
+  auto plain = run_lightfarm({"check-actor", "--timeout", "2", "--security", "none", "--", kBroken, "--mode", "no_curve"});
+  EXPECT_EQ(plain.status, 0) << plain.out << plain.err;
+  EXPECT_EQ(count(plain.out, "FAIL "), 0) << plain.out;
+  expect_no_leftovers(plain);
+}
+
 TEST_F(PluginTest, FarmsWithBrokenActorsStopCleanlyNamingTheProblem) {
   struct Case {
     const char* mode;

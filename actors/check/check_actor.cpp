@@ -1,5 +1,7 @@
 // check-actor plays the director (and a renderer, and with --inputs constant-light inputs) for one actor process
-// and drives it through a farm's whole life, checking each step of docs/PROTOCOL.md within the timeout:
+// and drives it through a farm's whole life, checking each step of docs/PROTOCOL.md within the timeout. As a farm
+// does by default, every link speaks CURVE: the actor gets --curve and its keys on standard input (--security none
+// checks it without).
 //   hello      HELLO arrives from the routing id --name, with protocol version 1, float format f32le, the kind
 //              it was given and an endpoint (the same check the director makes)
 //   configure  CONFIG (the built-in Cornell box, the actor's inputs) is answered with READY configure
@@ -32,6 +34,7 @@
 #include "actors/codecs/shade_codec.hpp"
 #include "render/tracing/camera.hpp"
 #include "render/shading/tile_kernel.hpp"
+#include "transport/security.hpp"
 #include "transport/socket.hpp"
 
 namespace lf {
@@ -42,7 +45,15 @@ using wire::MsgType;
 
 class Checker {
  public:
-  explicit Checker(const CheckOptions& o) : options_(o) {}
+  explicit Checker(const CheckOptions& o) : options_(o), curve_(o.security == "curve") {
+    if (!curve_) return;
+    director_keys_ = wire::make_curve_keypair();
+    actor_keys_ = wire::make_curve_keypair();
+    renderer_keys_ = wire::make_curve_keypair();
+    input_keys_ = wire::make_curve_keypair();
+    // The director's side lets in only the actor's key, as a farm's director does.
+    auth_ = std::make_unique<wire::Authenticator>(std::set<std::string>{actor_keys_.public_key});
+  }
 
   int run() {
     prepare_points();
@@ -114,6 +125,10 @@ class Checker {
   bool start(const std::string& name) {
     name_ = name;
     control_ = std::make_unique<wire::Socket>(wire::Socket::Kind::router);
+    if (curve_) {
+      auth_->watch(*control_);
+      control_->make_curve_server(director_keys_.secret_key);
+    }
     auto endpoint = control_->bind("tcp://127.0.0.1:*");
     if (!endpoint) {
       report("launch", endpoint.error().message);
@@ -121,7 +136,16 @@ class Checker {
     }
     std::vector<std::string> argv = options_.command;
     argv.insert(argv.end(), {"--kind", options_.kind, "--name", name, "--director", *endpoint});
-    auto pid = launcher_.start(LaunchRequest{argv, false, {}});
+    LaunchRequest request{argv, false, {}};
+    if (curve_) {
+      // As the director gives them: one line on standard input, the renderer's key the one its data socket admits.
+      argv.push_back("--curve");
+      request.argv = argv;
+      wire::FarmKeys keys{actor_keys_, director_keys_.public_key, {renderer_keys_.public_key}};
+      request.stdin_text = keys.to_line() + "\n";
+    }
+    refused_before_ = curve_ ? auth_->refused() : 0;
+    auto pid = launcher_.start(request);
     if (!pid) {
       report("launch", pid.error().message);
       return false;
@@ -165,6 +189,11 @@ class Checker {
 
   std::string expect_hello() {
     auto m = next_control(options_.timeout);
+    if (!m && curve_ && auth_->refused() > refused_before_)
+      return "no HELLO: the director's side refused " + std::to_string(auth_->refused() - refused_before_) +
+             " connection(s) from '" + name_ + "' that did not speak CURVE with its keys: with --curve an actor reads " +
+             "its keys from the first line of standard input and speaks CURVE on every link (docs/PROTOCOL.md, " +
+             "\"Security\"); --security none checks it without";
     if (!m) return "no HELLO: " + m.error().message;
     if (m->header.type != MsgType::hello) return "expected HELLO, got " + std::string(wire::type_name(m->header.type));
     if (last_peer_ != name_)
@@ -173,6 +202,7 @@ class Checker {
     auto hello = Hello::check(m->body, name_, options_.kind);
     if (!hello) return hello.error().message;
     data_ = std::make_unique<wire::Socket>(wire::Socket::Kind::dealer, "check-renderer");
+    if (curve_) data_->make_curve_client(renderer_keys_.public_key, renderer_keys_.secret_key, actor_keys_.public_key);
     if (auto st = data_->connect(hello->endpoint); !st) return st.error().message;
     return {};
   }
@@ -181,7 +211,7 @@ class Checker {
     ActorConfig config;
     for (int i = 0; i < options_.inputs; ++i) {
       if (!fake_input_) start_fake_input();
-      config.inputs.push_back({"check-input", fake_endpoint_, 4});
+      config.inputs.push_back({"check-input", fake_endpoint_, 4, curve_ ? input_keys_.public_key : std::string()});
     }
     heartbeat_timeout_ = heartbeat_timeout;
     config.scene = SceneSpec{"cornell", "", {}};
@@ -365,6 +395,10 @@ class Checker {
   // A constant-light input: answers every shade request with radiance 0.5.
   void start_fake_input() {
     fake_input_ = std::make_unique<wire::Socket>(wire::Socket::Kind::router);
+    if (curve_) {
+      auth_->watch(*fake_input_);
+      fake_input_->make_curve_server(input_keys_.secret_key);
+    }
     fake_endpoint_ = *fake_input_->bind("tcp://127.0.0.1:*");
   }
   void pump_fake_input() {
@@ -380,6 +414,10 @@ class Checker {
   }
 
   CheckOptions options_;
+  bool curve_;
+  wire::CurveKeys director_keys_, actor_keys_, renderer_keys_, input_keys_;
+  std::unique_ptr<wire::Authenticator> auth_;
+  uint64_t refused_before_ = 0;  // the authenticator's count when this instance started
   LocalLauncher launcher_;
   std::unique_ptr<wire::Socket> control_, data_, fake_input_;
   std::string fake_endpoint_;

@@ -11,6 +11,9 @@ struct CheckOptions {
   std::string kind = "exec";         // passed as --kind
   double timeout = 5.0;              // seconds allowed for each answer
   int inputs = 0;                    // constant-light inputs to offer the actor
+  // As a farm runs it (farm { security }): "curve" passes --curve and the keys on standard input, and every link
+  // speaks CURVE; "none" checks the actor without.
+  std::string security = "curve";
 };
 
 int check_actor(const CheckOptions& options);

@@ -14,6 +14,7 @@ other mode fails check-actor for its one reason only.
   --mode wrong_n              replies with n one more than the points it holds
   --mode no_routing_id        connects to the director without its name as routing id
   --mode crash_at_finish      exits with status 3 on PHASE finish, without STATS or BYE
+  --mode no_curve             takes --curve but speaks without CURVE (an actor written without it)
 """
 import argparse
 import os
@@ -28,7 +29,7 @@ import zmq.utils.z85
 
 HELLO, CONFIG, PHASE, REQUEST, REPLY, ERROR, STATS, HEARTBEAT, BYE, READY, PEER_DOWN = range(1, 12)
 MODES = ["ok", "wrong_version", "silent", "crash", "no_ready_render", "ignore_input", "ignore_sigterm",
-         "silent_on_malformed", "wrong_n", "no_routing_id", "crash_at_finish"]
+         "silent_on_malformed", "wrong_n", "no_routing_id", "crash_at_finish", "no_curve"]
 
 
 def main():
@@ -45,7 +46,7 @@ def main():
     version = 2 if a.mode == "wrong_version" else 1
     ctx = zmq.Context()
     keys = None
-    if a.curve:  # own public, own secret, director public, the farm's keys
+    if a.curve and a.mode != "no_curve":  # own public, own secret, director public, the farm's keys
         words = sys.stdin.readline().split()
         keys = (words[1], words[2], words[3], set(words[4:]))
         zap = ctx.socket(zmq.REP)
