@@ -43,9 +43,9 @@ usage:
       Start this host's actors as the director asks on stdin; stop them all at EOF (the director runs this).
   lightfarm check-actor [--kind KIND] [--timeout SECONDS] [--inputs N] [--security curve|none] -- COMMAND [ARG]...
       Launch COMMAND as an actor and check it against the protocol; PASS/FAIL per check.
-  lightfarm scene FILE.obj
-      Describe an OBJ scene: triangles, bounds, materials, emitters and their flux, textures, warnings, and a
-      camera { } that frames it.
+  lightfarm scene FILE
+      Describe an OBJ or glTF scene: triangles, bounds, materials, emitters and their flux, textures, warnings,
+      and a camera { } that frames it.
   lightfarm --help | --version
 
 options:
