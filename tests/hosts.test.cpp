@@ -10,6 +10,7 @@
 #include <map>
 
 #include "render/images/image.hpp"
+#include "actors/launchers/host_launcher.hpp"
 #include "tests/farm_harness.hpp"
 
 namespace lf::test {
@@ -188,11 +189,6 @@ TEST_F(HostsTest, BadHostsStopTheFarmAtLaunchNamingTheHostAndSshsWords) {
 namespace lf::test {
 namespace {
 
-// A whole host lost mid-frame — its network cut, or everything on it SIGKILLed at once: the heartbeats (or the
-// exits) tell, its renderer's tiles and its replica's packets are redone elsewhere, and the image is the
-// fault-free one. The pool's multiplexer and the other actors live on h1 and here.
-// The frame is long enough (2048 spp, some 10 s) that the cut lands well before its end even on a quiet, fast
-// machine: at 512 spp a 2.7 s frame once finished before the kill reached the host, and nothing was lost.
 // A host known to the user's ssh config by name is reached by that name (ssh_name), so its Host block applies: here
 // only the names carry the key, and the addresses alone are refused.
 TEST_F(HostsTest, AHostIsReachedByItsSshName) {
@@ -213,6 +209,12 @@ TEST_F(HostsTest, AHostIsReachedByItsSshName) {
   expect_nothing_left(unnamed);
 }
 
+// A whole host lost mid-frame — its network cut, or everything on it SIGKILLed at once: the heartbeats (or the
+// exits) tell, its renderer's tiles and its replica's packets are redone elsewhere, and the image is the
+// fault-free one. The pool's multiplexer and the other actors live on h1 and here.
+// The frame is long enough (2048 spp, some 10 s) that the cut lands well before its end even on a quiet, fast
+// machine: at 512 spp a 2.7 s frame once finished before the kill reached the host, and nothing was lost. With the
+// link still cut, the host's launcher stops itself and its actors (the director's pings stopped arriving).
 TEST_F(HostsTest, AHostLostMidFrameChangesNoPixel) {
   const auto [local, spread] = pool_scripts("scene { builtin = \"cornell\" }\n"
                                            "image { width = 96, height = 96, spp = 2048, tile = 16 }\n"
@@ -227,7 +229,20 @@ TEST_F(HostsTest, AHostLostMidFrameChangesNoPixel) {
         << farm.err_so_far();
     ASSERT_EQ(sh(kRig + " " + how + " " + rig + " 2"), 0);
     auto r = farm.wait(120);
-    if (how == "cut") sh(kRig + " mend " + rig + " 2");
+    if (how == "cut") {
+      // Still cut off, the host stops what the farm started there once the director has been silent too long:
+      // nothing of lightfarm's waits on h2 for the link to return.
+      std::string left;
+      EXPECT_TRUE(Farm::eventually(
+          [&] {
+            sh(kRig + " pids " + rig + " | grep '^h2 ' | grep lightfarm > " + path("h2pids") + " 2>&1");
+            left = read_file(path("h2pids"));
+            return left.empty();
+          },
+          kHostSilenceSeconds + 10))
+          << "left on h2 with its link cut:\n" << left;
+      sh(kRig + " mend " + rig + " 2");
+    }
     EXPECT_EQ(r.status, 0) << r.err;
     EXPECT_NE(r.err.find("renderer 'renderer-0'"), std::string::npos) << r.err;
     EXPECT_NE(r.err.find("replica 'direct.1'"), std::string::npos) << r.err;

@@ -108,14 +108,24 @@ int run_host_launcher() {
   std::map<std::string, pid_t> pid_of;
   std::string partial;
   bool director_there = true;
+  bool started_any = false;
+  auto last_heard = std::chrono::steady_clock::now();
   while (director_there && !stop_requested()) {
     pollfd p{STDIN_FILENO, POLLIN, 0};
     ::poll(&p, 1, 50);
     std::vector<std::string> lines;
     director_there = read_lines(STDIN_FILENO, partial, lines);
+    if (!lines.empty()) last_heard = std::chrono::steady_clock::now();
+    if (started_any && std::chrono::steady_clock::now() - last_heard > std::chrono::duration<double>(kHostSilenceSeconds)) {
+      log_warn("the director has said nothing for " + std::to_string(static_cast<int>(kHostSilenceSeconds)) +
+               " s (its link may be cut): stopping this host's actors");
+      break;
+    }
     for (const auto& line : lines) {
       const auto f = split_host_line(line);
+      if (f[0] == "ping") continue;  // the director is there
       if (f[0] == "start" && f.size() >= 7) {
+        started_any = true;
         LaunchRequest r;
         r.cwd = f[2];
         r.stdin_text = f[3];
@@ -287,6 +297,12 @@ void HostSession::transport_ended(int status) {
 }
 
 std::optional<ExitReport> HostSession::reap_one() {
+  // The host launcher stops its actors when the director falls silent; the director's loop calls this many times a
+  // second, so a line a second from here says it is there.
+  if (to_host_ >= 0 && std::chrono::steady_clock::now() - last_ping_ >= std::chrono::seconds(1)) {
+    last_ping_ = std::chrono::steady_clock::now();
+    send_line({"ping"});
+  }
   if (exits_.empty()) {
     read_events();
     if (pid_ > 0) {

@@ -30,8 +30,11 @@
 
 namespace lf {
 
-// The host side: runs until EOF on stdin (or SIGTERM/SIGINT/SIGHUP) and every actor it started is gone.
+// The host side: runs until EOF on stdin (or SIGTERM/SIGINT/SIGHUP) and every actor it started is gone, or, once
+// it has started one, until the director has said nothing (not even its once-a-second "ping") for
+// kHostSilenceSeconds: across a cut link no EOF comes until the link returns (sshd has no keepalive of its own).
 int run_host_launcher();
+inline constexpr double kHostSilenceSeconds = 15;  // as long as the director's ssh waits (ServerAlive 5 s x 3)
 
 // The director side of one host's session.
 class HostSession {
@@ -80,6 +83,7 @@ class HostSession {
   std::deque<ExitReport> exits_;
   std::map<pid_t, pid_t> host_pids_;     // handle -> pid on the host (kept after the exit, for messages)
   int64_t next_id_ = 1;
+  std::chrono::steady_clock::time_point last_ping_{};
 };
 
 // A launcher whose actors start through one HostSession per host (ssh, slurm): the per-actor calls go to the
