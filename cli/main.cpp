@@ -41,7 +41,8 @@ usage:
       Load a shipped scene and its BVH once and fork this host's N actors from it (the director runs this).
   lightfarm host-launcher
       Start this host's actors as the director asks on stdin; stop them all at EOF (the director runs this).
-  lightfarm check-actor [--kind KIND] [--timeout SECONDS] [--inputs N] [--security curve|none] -- COMMAND [ARG]...
+  lightfarm check-actor [--kind KIND] [--timeout SECONDS] [--inputs N] [--security curve|none]
+                        [--heartbeat-timeout SECONDS] -- COMMAND [ARG]...
       Launch COMMAND as an actor and check it against the protocol; PASS/FAIL per check.
   lightfarm scene FILE
       Describe an OBJ or glTF scene: triangles, bounds, materials, emitters and their flux, textures, warnings,
@@ -232,12 +233,14 @@ int cmd_check_actor(int argc, char** argv) {
     else if (a == "--timeout") o.timeout = std::atof(argv[++i]);
     else if (a == "--inputs") o.inputs = std::atoi(argv[++i]);
     else if (a == "--security") o.security = argv[++i];
+    else if (a == "--heartbeat-timeout") o.heartbeat_timeout = std::atof(argv[++i]);
     else return usage_error("unknown option '" + a + "' (the actor's command goes after --)");
   }
   for (; i < argc; ++i) o.command.push_back(argv[i]);
   if (o.command.empty()) return usage_error("check-actor needs a command after --");
   if (!(o.timeout > 0)) return usage_error("--timeout must be positive");
   if (o.security != "curve" && o.security != "none") return usage_error("--security must be curve or none");
+  if (!(o.heartbeat_timeout >= 0.5)) return usage_error("--heartbeat-timeout must be at least 0.5 s");
   return lf::check_actor(o);
 }
 

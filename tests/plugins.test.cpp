@@ -92,6 +92,16 @@ TEST_F(PluginTest, CheckActorSpeaksCurveAsFarmsDo) {
   expect_no_leftovers(plain);
 }
 
+// check-actor keeps a configured actor alive with HEARTBEATs as a director does: a correct actor whose answers take
+// longer in all than its heartbeat timeout (0.35 s a request, a 1 s timeout) passes, where it used to take check-actor's
+// silence for a dead director, exit, and be blamed for it.
+TEST_F(PluginTest, CheckActorKeepsASlowActorAlive) {
+  auto r = run_lightfarm({"check-actor", "--heartbeat-timeout", "1", "--timeout", "3", "--", kBroken, "--mode", "slow"});
+  EXPECT_EQ(r.status, 0) << r.out << r.err;
+  EXPECT_EQ(count(r.out, "PASS "), 10) << r.out;
+  expect_no_leftovers(r);
+}
+
 TEST_F(PluginTest, FarmsWithBrokenActorsStopCleanlyNamingTheProblem) {
   struct Case {
     const char* mode;

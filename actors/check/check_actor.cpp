@@ -59,7 +59,7 @@ class Checker {
     prepare_points();
     if (!start("check")) return finish();
     const bool hello = check("hello", [&] { return expect_hello(); });
-    const bool configured = hello && check("configure", [&] { return configure(10.0); });
+    const bool configured = hello && check("configure", [&] { return configure(options_.heartbeat_timeout); });
     const bool set_up = configured && check("setup", [&] { return phase(wire::Phase::setup); });
     if (set_up) {
       check("render", [&] { return phase(wire::Phase::render); });
@@ -79,7 +79,7 @@ class Checker {
       }
       stop_actor();
       // A third: configured, then SIGTERM.
-      if (start("check-term") && expect_hello().empty() && configure(10.0).empty()) {
+      if (start("check-term") && expect_hello().empty() && configure(options_.heartbeat_timeout).empty()) {
         check("sigterm", [&] { return sigterm(); });
       } else {
         report("sigterm", "could not bring a third instance up to CONFIG");
@@ -156,12 +156,24 @@ class Checker {
   }
 
   void stop_actor() {
+    beating_ = false;
     launcher_.stop_all(std::chrono::milliseconds(200));
     data_.reset();
     control_.reset();
   }
 
-  void send_control(wire::Message m) { control_->send_to(name_, m); }
+  void send_control(wire::Message m) {
+    control_->send_to(name_, m);
+    last_sent_ = Clock::now();
+  }
+
+  // As the director does (Supervisor::send_heartbeats): a HEARTBEAT when the actor has heard nothing for a quarter of
+  // its heartbeat timeout (at most a second), once it is configured, unless the check is the director's silence.
+  void keep_alive() {
+    if (!beating_ || !control_) return;
+    if (std::chrono::duration<double>(Clock::now() - last_sent_).count() >= std::min(1.0, heartbeat_timeout_ / 4))
+      send_control(wire::make(MsgType::heartbeat, "director"));
+  }
 
   // Next control message from the actor, skipping heartbeats unless wanted; or why none came.
   Result<wire::Message> next_control(double seconds, bool want_heartbeat = false) {
@@ -169,6 +181,7 @@ class Checker {
     wire::Poller poller;
     poller.add(*control_);
     while (Clock::now() < deadline) {
+      keep_alive();
       poller.wait(20);
       while (auto in = control_->receive()) {
         if (in->message && in->message->header.type == MsgType::heartbeat && !want_heartbeat) {
@@ -218,6 +231,7 @@ class Checker {
     config.heartbeat_timeout = heartbeat_timeout;
     config.request_timeout = options_.timeout;
     send_control(wire::make(MsgType::config, "director", config.to_value()));
+    beating_ = true;
     return expect_ready(wire::Phase::configure);
   }
 
@@ -283,6 +297,7 @@ class Checker {
     poller.add(*data_);
     while (Clock::now() < deadline) {
       pump_fake_input();
+      keep_alive();
       poller.wait(10);
       if (auto in = data_->receive()) {
         if (!in->message) return make_error("undecodable answer: " + in->message.error().message);
@@ -383,7 +398,8 @@ class Checker {
   }
 
   std::string orphaned(double heartbeat_timeout) {
-    // Say nothing more; the actor must notice and leave.
+    // Say nothing more, not even a HEARTBEAT; the actor must notice and leave.
+    beating_ = false;
     const auto deadline = Clock::now() + std::chrono::duration<double>(heartbeat_timeout + options_.timeout);
     while (Clock::now() < deadline) {
       if (auto e = launcher_.reap_one()) return {};
@@ -427,6 +443,8 @@ class Checker {
   ShadingPoints points_;
   double heartbeat_timeout_ = 10;
   bool saw_heartbeat_ = false;
+  bool beating_ = false;            // send the actor HEARTBEATs (keep_alive)
+  Clock::time_point last_sent_{};   // the last control message to the actor
   std::string last_peer_;     // routing id of the last control message
   uint64_t fake_requests_ = 0;  // requests the fake inputs received
   int failures_ = 0;

@@ -14,6 +14,9 @@ struct CheckOptions {
   // As a farm runs it (farm { security }): "curve" passes --curve and the keys on standard input, and every link
   // speaks CURVE; "none" checks the actor without.
   std::string security = "curve";
+  // The heartbeat_timeout the actor is configured with (farm { heartbeat_timeout }); like the director, check-actor
+  // sends the actor a HEARTBEAT at least four times within it, except where the director's silence is the check.
+  double heartbeat_timeout = 10.0;
 };
 
 int check_actor(const CheckOptions& options);

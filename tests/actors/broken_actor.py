@@ -15,6 +15,8 @@ other mode fails check-actor for its one reason only.
   --mode no_routing_id        connects to the director without its name as routing id
   --mode crash_at_finish      exits with status 3 on PHASE finish, without STATS or BYE
   --mode no_curve             takes --curve but speaks without CURVE (an actor written without it)
+  --mode slow                 conforming, but takes 0.35 s over each shade request (its director must keep
+                              it alive meanwhile with HEARTBEATs)
 """
 import argparse
 import os
@@ -29,7 +31,7 @@ import zmq.utils.z85
 
 HELLO, CONFIG, PHASE, REQUEST, REPLY, ERROR, STATS, HEARTBEAT, BYE, READY, PEER_DOWN = range(1, 12)
 MODES = ["ok", "wrong_version", "silent", "crash", "no_ready_render", "ignore_input", "ignore_sigterm",
-         "silent_on_malformed", "wrong_n", "no_routing_id", "crash_at_finish", "no_curve"]
+         "silent_on_malformed", "wrong_n", "no_routing_id", "crash_at_finish", "no_curve", "slow"]
 
 
 def main():
@@ -145,6 +147,8 @@ def main():
                 refuse(peer, h.get("id", 0), "unknown_op", "serves only 'shade'")
                 continue
             n = body.get("n", 0)
+            if a.mode == "slow":
+                time.sleep(0.35)
             if inputs and a.mode != "ignore_input":
                 rid = next_id[0]
                 next_id[0] += 1
