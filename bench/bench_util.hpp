@@ -30,6 +30,14 @@ inline double median(std::vector<double> v) {
   return v.empty() ? 0 : v[v.size() / 2];
 }
 
+// Wall seconds `fn` takes.
+template <class Fn>
+double seconds_of(Fn&& fn) {
+  const auto t0 = Clock::now();
+  fn();
+  return std::chrono::duration<double>(Clock::now() - t0).count();
+}
+
 // min / median / max of repeated runs, as the benches print and write them.
 struct Spread {
   double min = 0, median = 0, max = 0;

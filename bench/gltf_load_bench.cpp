@@ -18,13 +18,6 @@
 
 namespace {
 
-template <class F>
-double seconds(F&& f) {
-  const auto t0 = bench::Clock::now();
-  f();
-  return std::chrono::duration<double>(bench::Clock::now() - t0).count();
-}
-
 // The scene's triangles as a .glb: one primitive per material, every corner its own vertex (as the scene keeps it).
 bool write_glb(const lf::Scene& s, const std::string& path) {
   tinygltf::Model model;
@@ -126,13 +119,13 @@ int main(int argc, char** argv) {
   uint32_t gltf_triangles = 0;
   for (int r = 0; r < runs; ++r) {
     // Both from the disk's cache: the OBJ's text read and parsed, the .glb read and converted.
-    const double a = seconds([&] {
+    const double a = bench::seconds_of([&] {
       std::ifstream in(obj);
       std::stringstream text;
       text << in.rdbuf();
       (void)lf::Scene::parse_obj_unlit(text.str(), mtl_text.str(), obj);
     });
-    const double b = seconds([&] {
+    const double b = bench::seconds_of([&] {
       auto s = lf::Scene::load_gltf_unlit(glb);
       gltf_triangles = s ? s->triangle_count() : 0;
     });

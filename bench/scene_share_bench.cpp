@@ -21,14 +21,6 @@
 
 namespace {
 
-
-template <class F>
-double seconds(F&& f) {
-  const auto t0 = bench::Clock::now();
-  f();
-  return std::chrono::duration<double>(bench::Clock::now() - t0).count();
-}
-
 // Per actor in a stats JSON text: its kind, start-up and memory (keys come sorted, "kind" before the others).
 struct ActorFigures {
   std::string kind;
@@ -90,14 +82,14 @@ int main(int argc, char** argv) {
 
   std::map<std::string, std::vector<double>> v;
   for (int r = 0; r < runs; ++r) {
-    v["parse_obj_seconds"].push_back(seconds([&] { (void)lf::Scene::load_obj(obj); }));
-    v["read_shipped_private_seconds"].push_back(seconds([&] { (void)lf::load_cached_scene(shipped, hash, "x"); }));
+    v["parse_obj_seconds"].push_back(bench::seconds_of([&] { (void)lf::Scene::load_obj(obj); }));
+    v["read_shipped_private_seconds"].push_back(bench::seconds_of([&] { (void)lf::load_cached_scene(shipped, hash, "x"); }));
     bench::fs::remove(shipped + ".image");
-    v["make_shared_image_seconds"].push_back(seconds([&] { (void)lf::load_shared_scene(shipped, hash, "x"); }));
-    v["map_shared_image_seconds"].push_back(seconds([&] { (void)lf::load_shared_scene(shipped, hash, "x"); }));
+    v["make_shared_image_seconds"].push_back(bench::seconds_of([&] { (void)lf::load_shared_scene(shipped, hash, "x"); }));
+    v["map_shared_image_seconds"].push_back(bench::seconds_of([&] { (void)lf::load_shared_scene(shipped, hash, "x"); }));
     {
       auto mapped = lf::load_shared_scene(shipped, hash, "x");
-      v["build_bvh_seconds"].push_back(seconds([&] { lf::RayTracer tracer(*mapped); }));
+      v["build_bvh_seconds"].push_back(bench::seconds_of([&] { lf::RayTracer tracer(*mapped); }));
     }
 
     // Each farm with its host agent (the default) and without (every actor builds its own BVH), interleaved.

@@ -24,13 +24,6 @@
 
 namespace {
 
-template <class Fn>
-double seconds_of(Fn&& fn) {
-  const auto t0 = bench::Clock::now();
-  fn();
-  return std::chrono::duration<double>(bench::Clock::now() - t0).count();
-}
-
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -57,7 +50,7 @@ int main(int argc, char** argv) {
   for (int y = 0; y < h; ++y)
     for (int x = 0; x < w; ++x) rays.push_back(camera.ray(x + 0.5f, y + 0.5f));
   lf::RayTracer whole(*scene);
-  const double ties_seconds = seconds_of([&] { (void)lf::TiedHits(*scene); });
+  const double ties_seconds = bench::seconds_of([&] { (void)lf::TiedHits(*scene); });
   const size_t tied = lf::TiedHits(*scene).tied_triangles();
   {
     // Bounce rays from what the camera sees: cosine-distributed about the face normal, off the surface by epsilon.
@@ -92,11 +85,11 @@ int main(int argc, char** argv) {
   std::vector<double> unsettled, settled, settle_ratio;
   std::vector<std::vector<double>> parted(3), parted_ratio(3);
   for (int r = 0; r < runs; ++r) {
-    unsettled.push_back(seconds_of([&] { whole.intersect_unsettled(rays, hits); }));
-    settled.push_back(seconds_of([&] { whole.intersect(rays, hits); }));
+    unsettled.push_back(bench::seconds_of([&] { whole.intersect_unsettled(rays, hits); }));
+    settled.push_back(bench::seconds_of([&] { whole.intersect(rays, hits); }));
     settle_ratio.push_back(settled.back() / unsettled.back());
     for (int k = 0; k < 3; ++k) {
-      parted[k].push_back(seconds_of([&] { split[k]->intersect(rays, hits); }));
+      parted[k].push_back(bench::seconds_of([&] { split[k]->intersect(rays, hits); }));
       parted_ratio[k].push_back(parted[k].back() / settled.back());
       if (r == 0) by_area[k]->intersect(rays, hits);  // only its work shares are reported
     }

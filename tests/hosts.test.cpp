@@ -77,17 +77,17 @@ class HostsTest : public FarmFixture {
   // Nothing of the farm is left here, and nothing but sshd runs on any host.
   void expect_nothing_left(const RunResult& r) {
     expect_no_leftovers(r);
+    // A host's sshd session ends when the local ssh master does; on a loaded machine (the full suite) that was seen
+    // to take over 5 s after the master left this host's process table.
     std::string remote;
-    EXPECT_TRUE(Farm::eventually(
-        [&] {
-          sh(kRig + " pids " + rig + " > " + path("pids") + " 2>&1");
-          remote = read_file(path("pids"));
-          return remote.empty();
-        },
-        // A host's sshd session ends when the local ssh master does; on a loaded machine (the full suite) that was
-        // seen to take over 5 s after the master left this host's process table.
-        10.0))
+    EXPECT_TRUE(Farm::eventually([&] { return (remote = running_on_hosts("")).empty(); }, 10.0))
         << "left running on the hosts:\n" << remote;
+  }
+
+  // What runs on the hosts (`rig pids`: "hN PID COMMAND" lines), through `filter` (a shell pipeline, or empty).
+  std::string running_on_hosts(const std::string& filter) {
+    sh(kRig + " pids " + rig + filter + " > " + path("pids") + " 2>&1");
+    return read_file(path("pids"));
   }
 
   // The pool network (2 renderers, 3 `direct` replicas) twice: local.lua all here, spread.lua with the replicas on
@@ -233,13 +233,8 @@ TEST_F(HostsTest, AHostLostMidFrameChangesNoPixel) {
       // Still cut off, the host stops what the farm started there once the director has been silent too long:
       // nothing of lightfarm's waits on h2 for the link to return.
       std::string left;
-      EXPECT_TRUE(Farm::eventually(
-          [&] {
-            sh(kRig + " pids " + rig + " | grep '^h2 ' | grep lightfarm > " + path("h2pids") + " 2>&1");
-            left = read_file(path("h2pids"));
-            return left.empty();
-          },
-          kHostSilenceSeconds + 10))
+      EXPECT_TRUE(Farm::eventually([&] { return (left = running_on_hosts(" | grep '^h2 ' | grep lightfarm")).empty(); },
+                                   kHostSilenceSeconds + 10))
           << "left on h2 with its link cut:\n" << left;
       sh(kRig + " mend " + rig + " 2");
     }
