@@ -1,8 +1,8 @@
 // Loading a big glTF file against the same geometry as OBJ: Lost Empire (225k triangles, ../shared/scenes) as its
-// OBJ, and as a .glb this bench writes with tinygltf from the loaded scene (one mesh per material, positions,
-// normals where the scene has them, texture coordinates, u32 indices; flat-coloured materials, so no texture
-// decoding on either side: the OBJ side is parsed from its text without textures too). Goal (issue 40): the glTF
-// path takes at most the OBJ path's time. Prints min / median / max over --runs, interleaved, and writes JSON.
+// OBJ, and as a .glb this bench writes with tinygltf from the loaded scene (one primitive per material, positions,
+// normals where the scene has them, u32 indices; flat-coloured materials, so no texture decoding on either side:
+// the OBJ side is parsed from its text without textures too). Goal: a user's glTF file loads in no more time than
+// the same geometry as OBJ. Prints min / median / max over --runs, interleaved, and writes JSON.
 //
 //   build/bench/gltf_load_bench [--runs N] [--json FILE]
 #include <tiny_gltf.h>
@@ -45,7 +45,7 @@ bool write_glb(const lf::Scene& s, const std::string& path) {
     return static_cast<int>(model.accessors.size() - 1);
   };
   for (uint32_t m = 0; m < s.materials().size(); ++m) {
-    std::vector<float> p, n, uv;
+    std::vector<float> p, n;
     std::vector<uint32_t> idx;
     for (uint32_t t = 0; t < s.triangle_count(); ++t) {
       if (s.material_of(t) != m) continue;

@@ -43,4 +43,12 @@ inline float largest_coordinate(Vec3 a) {
 
 inline constexpr float kPi = 3.14159265358979323846f;
 
+// The sRGB transfer function (IEC 61966-2-1), on values in [0, 1]: what 8-bit colour files store, and back.
+inline float srgb_encode(float linear) {
+  return linear <= 0.0031308f ? 12.92f * linear : 1.055f * std::pow(linear, 1.0f / 2.4f) - 0.055f;
+}
+inline float srgb_decode(float encoded) {
+  return encoded <= 0.04045f ? encoded / 12.92f : std::pow((encoded + 0.055f) / 1.055f, 2.4f);
+}
+
 }  // namespace lf

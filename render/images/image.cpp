@@ -76,10 +76,7 @@ struct ToneCurve {
 
 float display_value(float linear, const Display& display) { return ToneCurve(display)(linear); }
 
-static float to_srgb(float linear) {
-  linear = std::clamp(linear, 0.0f, 1.0f);
-  return linear <= 0.0031308f ? 12.92f * linear : 1.055f * std::pow(linear, 1.0f / 2.4f) - 0.055f;
-}
+static float to_srgb(float linear) { return srgb_encode(std::clamp(linear, 0.0f, 1.0f)); }
 
 float display_srgb(float linear, const Display& display) { return to_srgb(ToneCurve(display)(linear)); }
 
@@ -257,10 +254,7 @@ Result<Image> read_image(const std::string& path) {
     return make_error("cannot read '" + path + "': " + err);
   Image img(w, h);
   const bool srgb = extension_of(path) != ".exr";
-  auto decode = [&](float v) {
-    if (!srgb) return v;
-    return v <= 0.04045f ? v / 12.92f : std::pow((v + 0.055f) / 1.055f, 2.4f);
-  };
+  auto decode = [&](float v) { return srgb ? srgb_decode(v) : v; };
   for (size_t i = 0; i < img.pixels.size(); ++i)
     img.pixels[i] = {decode(data[3 * i]), decode(data[3 * i + 1]), decode(data[3 * i + 2])};
   std::free(data);

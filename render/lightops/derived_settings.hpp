@@ -4,7 +4,7 @@
 // `spp` (with `shade_spp`) is the one knob that trades time for quality: ops whose estimates are averaged by the
 // pixel's samples (direct light, own values) need no more of their own as it rises, and caches, whose values every
 // sample of a pixel shares, sample their hemispheres in proportion to it, so that a cached value is never the
-// noisiest part of a pixel (docs/lua-api.md, "Settings derived from the scene").
+// noisiest part of a pixel (docs/lua-api.md, "One knob for time against quality").
 #include "render/lightops/lightop.hpp"
 
 namespace lf {

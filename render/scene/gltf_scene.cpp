@@ -44,15 +44,24 @@ struct Mat4 {
   double determinant3() const {
     return m[0] * (m[5] * m[10] - m[9] * m[6]) - m[4] * (m[1] * m[10] - m[9] * m[2]) + m[8] * (m[1] * m[6] - m[5] * m[2]);
   }
-  // Normals go through the inverse transpose of the upper 3x3 (its cofactors, up to a positive scale).
-  Vec3 normal(Vec3 n) const {
-    const double c00 = m[5] * m[10] - m[9] * m[6], c01 = m[8] * m[6] - m[4] * m[10], c02 = m[4] * m[9] - m[8] * m[5];
-    const double c10 = m[9] * m[2] - m[1] * m[10], c11 = m[0] * m[10] - m[8] * m[2], c12 = m[8] * m[1] - m[0] * m[9];
-    const double c20 = m[1] * m[6] - m[5] * m[2], c21 = m[4] * m[2] - m[0] * m[6], c22 = m[0] * m[5] - m[4] * m[1];
-    const double s = determinant3() < 0 ? -1 : 1;
-    return normalize(Vec3{static_cast<float>(s * (c00 * n.x + c01 * n.y + c02 * n.z)),
-                          static_cast<float>(s * (c10 * n.x + c11 * n.y + c12 * n.z)),
-                          static_cast<float>(s * (c20 * n.x + c21 * n.y + c22 * n.z))});
+};
+
+// How a node's transform carries normals: the inverse transpose of its upper 3x3 (its cofactors, signed by the
+// determinant so that they keep pointing out), made once per node.
+struct NormalTransform {
+  double c[9];
+  explicit NormalTransform(const Mat4& t) {
+    const double* m = t.m;
+    const double s = t.determinant3() < 0 ? -1 : 1;
+    const double cof[9] = {m[5] * m[10] - m[9] * m[6], m[8] * m[6] - m[4] * m[10], m[4] * m[9] - m[8] * m[5],
+                           m[9] * m[2] - m[1] * m[10], m[0] * m[10] - m[8] * m[2], m[8] * m[1] - m[0] * m[9],
+                           m[1] * m[6] - m[5] * m[2], m[4] * m[2] - m[0] * m[6], m[0] * m[5] - m[4] * m[1]};
+    for (int i = 0; i < 9; ++i) c[i] = s * cof[i];
+  }
+  Vec3 operator()(Vec3 n) const {
+    return normalize(Vec3{static_cast<float>(c[0] * n.x + c[1] * n.y + c[2] * n.z),
+                          static_cast<float>(c[3] * n.x + c[4] * n.y + c[5] * n.z),
+                          static_cast<float>(c[6] * n.x + c[7] * n.y + c[8] * n.z)});
   }
 };
 
@@ -169,6 +178,39 @@ class AccessorReader {
   std::string where_;
 };
 
+// Depth first through the default scene's node tree, each node with its transform to the world. A node index that
+// does not exist, or a tree deeper than 64 (a cycle, in a hostile file), stops the walk with an error.
+Status for_each_node(const tinygltf::Model& model, const std::string& where,
+                     const std::function<Status(const tinygltf::Node&, const Mat4&)>& visit) {
+  std::function<Status(int, const Mat4&, int)> walk = [&](int index, const Mat4& parent, int depth) -> Status {
+    if (index < 0 || static_cast<size_t>(index) >= model.nodes.size() || depth > 64)
+      return make_error(where + ": a node tree that names a node that does not exist, or deeper than 64");
+    const tinygltf::Node& node = model.nodes[static_cast<size_t>(index)];
+    const Mat4 world = parent * local_transform(node);
+    if (auto st = visit(node, world); !st) return st;
+    for (int child : node.children)
+      if (auto st = walk(child, world, depth + 1); !st) return st;
+    return Ok{};
+  };
+  const int scene_index = model.defaultScene >= 0 ? model.defaultScene : 0;
+  if (static_cast<size_t>(scene_index) < model.scenes.size())
+    for (int root : model.scenes[static_cast<size_t>(scene_index)].nodes)
+      if (auto st = walk(root, Mat4{}, 0); !st) return st;
+  return Ok{};
+}
+
+// The image a material's base colour texture samples, and the name it goes by; null without one.
+const tinygltf::Image* base_color_image(const tinygltf::Model& model, const tinygltf::Material& material,
+                                        std::string& name) {
+  const int t = material.pbrMetallicRoughness.baseColorTexture.index;
+  if (t < 0 || static_cast<size_t>(t) >= model.textures.size()) return nullptr;
+  const int source = model.textures[static_cast<size_t>(t)].source;
+  if (source < 0 || static_cast<size_t>(source) >= model.images.size()) return nullptr;
+  const tinygltf::Image& image = model.images[static_cast<size_t>(source)];
+  name = image.name.empty() ? "image" + std::to_string(source) : image.name;
+  return &image;
+}
+
 std::string material_name(const tinygltf::Material& m, size_t index) {
   return m.name.empty() ? "material" + std::to_string(index) : m.name;
 }
@@ -234,14 +276,12 @@ std::optional<Texture> base_color_texture(const tinygltf::Image& image, RGB fact
   const size_t n = static_cast<size_t>(t.width) * t.height, from = static_cast<size_t>(image.component);
   t.owned.resize(n * 3);
   const bool scaled = factor.x != 1 || factor.y != 1 || factor.z != 1;
-  auto to_linear = [](float e) { return e <= 0.04045f ? e / 12.92f : std::pow((e + 0.055f) / 1.055f, 2.4f); };
-  auto to_srgb = [](float l) { return l <= 0.0031308f ? 12.92f * l : 1.055f * std::pow(l, 1.0f / 2.4f) - 0.055f; };
   for (size_t i = 0; i < n; ++i)
     for (size_t c = 0; c < 3; ++c) {
       uint8_t v = image.image[i * from + c];
       if (scaled) {
         const float f = c == 0 ? factor.x : c == 1 ? factor.y : factor.z;
-        v = static_cast<uint8_t>(std::lround(std::clamp(to_srgb(to_linear(v / 255.0f) * f), 0.0f, 1.0f) * 255.0f));
+        v = static_cast<uint8_t>(std::lround(std::clamp(srgb_encode(srgb_decode(v / 255.0f) * f), 0.0f, 1.0f) * 255.0f));
       }
       t.owned[i * 3 + c] = v;
     }
@@ -281,11 +321,9 @@ Result<ObjCatalogue> Scene::catalogue_gltf(const std::string& path) {
   auto model = read_model(path, out.warnings, nullptr, /*images=*/false);
   if (!model) return model.error();
   out.material_names = material_names(*model);
-  // The default scene's perspective cameras: a glTF camera looks down its node's -z with +y up.
-  std::function<void(int, const Mat4&, int)> visit = [&](int index, const Mat4& parent, int depth) {
-    if (index < 0 || static_cast<size_t>(index) >= model->nodes.size() || depth > 64) return;
-    const tinygltf::Node& node = model->nodes[static_cast<size_t>(index)];
-    const Mat4 world = parent * local_transform(node);
+  // The default scene's perspective cameras: a glTF camera looks down its node's -z with +y up. A broken node
+  // tree ends the list where it breaks (loading the scene says what is wrong).
+  (void)for_each_node(*model, path, [&](const tinygltf::Node& node, const Mat4& world) -> Status {
     if (node.camera >= 0 && static_cast<size_t>(node.camera) < model->cameras.size()) {
       const tinygltf::Camera& cam = model->cameras[static_cast<size_t>(node.camera)];
       const Vec3 eye = world.point({0, 0, 0}), ahead = world.vector({0, 0, -1}), up = world.vector({0, 1, 0});
@@ -301,11 +339,8 @@ Result<ObjCatalogue> Scene::catalogue_gltf(const std::string& path) {
         out.cameras.push_back(std::move(c));
       }
     }
-    for (int child : node.children) visit(child, world, depth + 1);
-  };
-  const int scene_index = model->defaultScene >= 0 ? model->defaultScene : 0;
-  if (static_cast<size_t>(scene_index) < model->scenes.size())
-    for (int root : model->scenes[static_cast<size_t>(scene_index)].nodes) visit(root, Mat4{}, 0);
+    return Ok{};
+  });
   return out;
 }
 
@@ -346,13 +381,11 @@ Result<Scene> Scene::parse_gltf_unlit(const std::string& path, const std::string
       m.ke = RGB{static_cast<float>(g.emissiveFactor[0]), static_cast<float>(g.emissiveFactor[1]),
                  static_cast<float>(g.emissiveFactor[2])} * std::max(0.0f, strength);
     const std::string which = "material '" + m.name + "'";
-    if (const int t = pbr.baseColorTexture.index; t >= 0) {
-      const int source = static_cast<size_t>(t) < model.textures.size() ? model.textures[static_cast<size_t>(t)].source : -1;
+    std::string image_name;
+    const tinygltf::Image* image = base_color_image(model, g, image_name);
+    if (pbr.baseColorTexture.index >= 0) {
       std::optional<Texture> tex;
-      if (source >= 0 && static_cast<size_t>(source) < model.images.size())
-        tex = base_color_texture(model.images[static_cast<size_t>(source)], m.kd,
-                                 model.images[static_cast<size_t>(source)].name.empty() ? "image" + std::to_string(source)
-                                                                                        : model.images[static_cast<size_t>(source)].name);
+      if (image) tex = base_color_texture(*image, m.kd, image_name);
       if (tex) m.kd_map = static_cast<int32_t>(s.add_texture(std::move(*tex)));
       else warn(which + ": its base colour texture cannot be read (8-bit RGB or RGBA); the material stays flat");
       if (pbr.baseColorTexture.texCoord != 0) warn(which + ": a texture on TEXCOORD_" + std::to_string(pbr.baseColorTexture.texCoord) + " is read with TEXCOORD_0");
@@ -367,11 +400,8 @@ Result<Scene> Scene::parse_gltf_unlit(const std::string& path, const std::string
       if (g.alphaMode == "BLEND") warn(which + ": alphaMode BLEND is read as MASK with alphaCutoff 0.5");
       const float cutoff = g.alphaMode == "MASK" ? static_cast<float>(g.alphaCutoff) : 0.5f;
       const float factor = pbr.baseColorFactor.size() == 4 ? static_cast<float>(pbr.baseColorFactor[3]) : 1.0f;
-      const int t = pbr.baseColorTexture.index;
-      const int source = t >= 0 && static_cast<size_t>(t) < model.textures.size() ? model.textures[static_cast<size_t>(t)].source : -1;
       std::optional<Texture> cut;
-      if (source >= 0 && static_cast<size_t>(source) < model.images.size())
-        cut = coverage_texture(model.images[static_cast<size_t>(source)], factor, cutoff, "image" + std::to_string(source));
+      if (image) cut = coverage_texture(*image, factor, cutoff, image_name);
       if (cut) m.alpha_map = static_cast<int32_t>(s.add_texture(std::move(*cut)));
       else if (factor < cutoff) warn(which + ": its alpha " + std::to_string(factor) + " is below its cutoff, but without an RGBA base colour texture the surface stays whole");
     }
@@ -384,16 +414,7 @@ Result<Scene> Scene::parse_gltf_unlit(const std::string& path, const std::string
     auto it = model.extensions.find("KHR_lights_punctual");
     return it != model.extensions.end() && it->second.Has("lights") ? &it->second.Get("lights") : nullptr;
   }();
-  Status status = Ok{};
-  // Depth-first through the default scene's nodes; `depth` bounds a cyclic node graph a hostile file may hold.
-  std::function<void(int, const Mat4&, int)> visit = [&](int index, const Mat4& parent, int depth) {
-    if (!status) return;
-    if (index < 0 || static_cast<size_t>(index) >= model.nodes.size() || depth > 64) {
-      status = make_error(where + ": a node tree that names a node that does not exist, or deeper than 64");
-      return;
-    }
-    const tinygltf::Node& node = model.nodes[static_cast<size_t>(index)];
-    const Mat4 world = parent * local_transform(node);
+  const Status status = for_each_node(model, where, [&](const tinygltf::Node& node, const Mat4& world) -> Status {
     if (auto it = node.extensions.find("KHR_lights_punctual"); it != node.extensions.end() && lights && it->second.Has("light")) {
       const int li = it->second.Get("light").GetNumberAsInt();
       if (li >= 0 && static_cast<size_t>(li) < lights->ArrayLen()) {
@@ -415,13 +436,12 @@ Result<Scene> Scene::parse_gltf_unlit(const std::string& path, const std::string
       }
     }
     if (node.mesh >= 0) {
-      if (static_cast<size_t>(node.mesh) >= model.meshes.size()) {
-        status = make_error(where + ": node '" + node.name + "' names a mesh that does not exist");
-        return;
-      }
+      if (static_cast<size_t>(node.mesh) >= model.meshes.size())
+        return make_error(where + ": node '" + node.name + "' names a mesh that does not exist");
       const tinygltf::Mesh& mesh = model.meshes[static_cast<size_t>(node.mesh)];
       const bool mirrored = world.determinant3() < 0;  // a mirroring transform turns the winding around
-      for (size_t pi = 0; pi < mesh.primitives.size() && status; ++pi) {
+      const NormalTransform normal_of(world);
+      for (size_t pi = 0; pi < mesh.primitives.size(); ++pi) {
         const tinygltf::Primitive& prim = mesh.primitives[pi];
         const std::string what = "mesh '" + mesh.name + "' primitive " + std::to_string(pi);
         if (prim.mode != TINYGLTF_MODE_TRIANGLES) {
@@ -433,26 +453,23 @@ Result<Scene> Scene::parse_gltf_unlit(const std::string& path, const std::string
           return it == prim.attributes.end() ? -1 : it->second;
         };
         auto positions = read.floats(find("POSITION"), 3, what + " positions");
-        if (!positions) {
-          status = positions.error();
-          return;
-        }
+        if (!positions) return positions.error();
         const size_t vertices = positions->size() / 3;
         std::vector<float> normals, uvs;
         if (find("NORMAL") >= 0) {
           auto n = read.floats(find("NORMAL"), 3, what + " normals");
-          if (!n) { status = n.error(); return; }
+          if (!n) return n.error();
           if (n->size() == positions->size()) normals = std::move(*n);
         }
         if (find("TEXCOORD_0") >= 0) {
           auto t = read.floats(find("TEXCOORD_0"), 2, what + " texture coordinates");
-          if (!t) { status = t.error(); return; }
+          if (!t) return t.error();
           if (t->size() / 2 == vertices) uvs = std::move(*t);
         }
         std::vector<uint32_t> order;
         if (prim.indices >= 0) {
           auto i = read.indices(prim.indices, vertices, what + " indices");
-          if (!i) { status = i.error(); return; }
+          if (!i) return i.error();
           order = std::move(*i);
         } else {
           order.resize(vertices);
@@ -467,7 +484,7 @@ Result<Scene> Scene::parse_gltf_unlit(const std::string& path, const std::string
           for (int c = 0; c < 3; ++c) {
             const size_t v = order[f + static_cast<size_t>(mirrored ? 2 - c : c)];
             p[c] = world.point({(*positions)[3 * v], (*positions)[3 * v + 1], (*positions)[3 * v + 2]});
-            if (!normals.empty()) vn[c] = world.normal({normals[3 * v], normals[3 * v + 1], normals[3 * v + 2]});
+            if (!normals.empty()) vn[c] = normal_of({normals[3 * v], normals[3 * v + 1], normals[3 * v + 2]});
             // glTF's texture coordinates start at the image's top left; the scene's, as OBJ's, at its bottom left.
             if (!uvs.empty()) vt[c] = {uvs[2 * v], 1.0f - uvs[2 * v + 1]};
           }
@@ -475,11 +492,8 @@ Result<Scene> Scene::parse_gltf_unlit(const std::string& path, const std::string
         }
       }
     }
-    for (int child : node.children) visit(child, world, depth + 1);
-  };
-  const int scene_index = model.defaultScene >= 0 ? model.defaultScene : 0;
-  if (static_cast<size_t>(scene_index) < model.scenes.size())
-    for (int root : model.scenes[static_cast<size_t>(scene_index)].nodes) visit(root, Mat4{}, 0);
+    return Ok{};
+  });
   if (!status) return status.error();
   if (s.triangle_count() == 0) return make_error(where + ": its default scene holds no triangles");
   return s;

@@ -175,8 +175,7 @@ Result<Scene> Scene::from_obj_reader(const tinyobj::ObjReader& reader, const std
         uint8_t v = px[std::min(c, from == 2 ? 0 : from - 1)];
         if (texels->linear) {  // stored sRGB-encoded, as 8-bit colour files are
           const float l = static_cast<float>(v) / 255.0f;
-          const float e = l <= 0.0031308f ? 12.92f * l : 1.055f * std::pow(l, 1.0f / 2.4f) - 0.055f;
-          v = static_cast<uint8_t>(std::lround(std::clamp(e, 0.0f, 1.0f) * 255.0f));
+          v = static_cast<uint8_t>(std::lround(std::clamp(srgb_encode(l), 0.0f, 1.0f) * 255.0f));
         }
         t.owned[i * 3 + c] = v;
       }

@@ -16,7 +16,7 @@ const std::array<float, 256>& srgb_to_linear() {
     std::array<float, 256> t{};
     for (int i = 0; i < 256; ++i) {
       const float v = static_cast<float>(i) / 255.0f;
-      t[static_cast<size_t>(i)] = v <= 0.04045f ? v / 12.92f : std::pow((v + 0.055f) / 1.055f, 2.4f);
+      t[static_cast<size_t>(i)] = srgb_decode(v);
     }
     return t;
   }();
@@ -47,7 +47,7 @@ void Texture::build_pyramid() {
   owned.reserve(pyramid_bytes(width, height, channels));
   const bool colour = channels == 3;
   auto encode = [&](float l) {
-    const float v = colour ? (l <= 0.0031308f ? 12.92f * l : 1.055f * std::pow(l, 1.0f / 2.4f) - 0.055f) : l;
+    const float v = colour ? srgb_encode(l) : l;
     return static_cast<uint8_t>(std::lround(std::clamp(v, 0.0f, 1.0f) * 255.0f));
   };
   uint32_t w = width, h = height;
