@@ -1,4 +1,4 @@
-// direct: light arriving straight from the area lights.
+// direct: light arriving straight from the lights (area, point, and the environment and sun).
 //
 // `light_samples` samples per point. Each draws a light through the scene's light tree (by what each light can give
 // the point: power, distance, orientation; render/lights/light_tree.hpp), or with `light_sampling = "power"` by power
@@ -7,7 +7,8 @@
 // surfaces it also samples the BSDF, and the two are combined by multiple importance sampling
 // (render/shading/path_kernel.cpp with one vertex). On diffuse surfaces light sampling alone is used unless `mis = true`:
 // then they get the BSDF sample too, which tames points close to a light (a uniform point on a light seen under a
-// wide angle has a 1/d^2 weight; a cosine direction does not). Emitters emit on the side their winding faces.
+// wide angle has a 1/d^2 weight; a cosine direction does not). Left unset, `mis` is true in a scene with an
+// environment (render/lights/environment.hpp), false otherwise. Emitters emit on the side their winding faces.
 // Mirrors and glass get nothing here: that is `specular`'s job.
 #include "render/lightops/lightop_registry.hpp"
 #include "render/shading/path_kernel.hpp"
@@ -23,12 +24,17 @@ class DirectLight final : public LightOp {
         light_sampling_(read_light_sampling(p)),
         light_point_(p.get_string("light_point", "area", {"area", "solid_angle"}) == "solid_angle" ? LightPoint::solid_angle
                                                                                                 : LightPoint::area),
+        mis_set_(p.has("mis")),
         mis_(p.get_bool("mis", false)),
         seed_(static_cast<uint64_t>(p.get_int("seed", 0, 0, INT32_MAX))),
         selection_options_(light_selection_options(p, seed_)) {}
 
   Task setup(SceneContext ctx, Inputs&) override {
     ctx_ = ctx;
+    // Unset, MIS on diffuse surfaces follows the scene: with an environment, light samples drawn by the sky's
+    // brightness go to a sun below a surface's horizon as often as to one above it, and the cosine sample is what
+    // lights the surface then (bench/environment_bench: MIS is never far from the better of the two).
+    if (!mis_set_) mis_ = ctx.scene->environment() && ctx.scene->environment()->emits();
     if (light_sampling_ == LightSampling::learned) co_await LightSelection::build(ctx, selection_options_, selection_, "direct");
   }
 
@@ -61,7 +67,7 @@ class DirectLight final : public LightOp {
   int light_samples_;
   LightSampling light_sampling_;
   LightPoint light_point_;
-  bool mis_;
+  bool mis_set_, mis_;
   uint64_t seed_;
   LightSelectionOptions selection_options_;
   LightSelection selection_;

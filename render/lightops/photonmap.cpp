@@ -259,6 +259,20 @@ class PhotonMap final : public LightOp {
         const LightSample ls = sample_light(scene, rng);
         const float u = rng.uniform(), v = rng.uniform();
         if (is_black(ls.radiance)) continue;  // a cut-out part of an emitter
+        if (ls.at_infinity) {
+          // From the environment: parallel rays through a disc across the scene's bounding sphere, facing the
+          // direction the light comes from; flux Le pi R^2 / p(direction) for a disc of radius R.
+          const Bounds& b = scene.bounds();
+          const Vec3 centre = (b.lo + b.hi) * 0.5f;
+          const float radius = 0.5f * length(b.hi - b.lo) + scene.epsilon();
+          Vec3 t, s2;
+          basis(ls.direction, t, s2);
+          const float r = radius * std::sqrt(u), phi = 2.0f * kPi * v;
+          const Vec3 origin = centre + ls.direction * radius + t * (r * std::cos(phi)) + s2 * (r * std::sin(phi));
+          const RGB flux = ls.radiance * (kPi * radius * radius / (ls.pdf_area * count));
+          flights.push_back(Flight{Ray{origin, -ls.direction}, flux, rng});
+          continue;
+        }
         Vec3 dir;
         if (ls.is_point) {  // uniform over the sphere
           const float z = 1.0f - 2.0f * u, r = std::sqrt(std::max(0.0f, 1.0f - z * z)), phi = 2.0f * kPi * v;

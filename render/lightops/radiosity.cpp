@@ -15,6 +15,11 @@ class Radiosity final : public LightOp {
   explicit Radiosity(const ParamTable&) {}
 
   Task setup(SceneContext ctx, Inputs&) override {
+    // The ring's solution has the scene's emitting triangles as its sources; light from beyond the scene would be
+    // missing from every diffuse bounce it computes, silently.
+    if (const Environment* env = ctx.scene->environment(); env && env->emits())
+      throw LightOpError("radiosity: the scene's environment and sun are not sources of the radiosity solution; light "
+                         "this scene with irradiance caching or pathtrace");
     std::string blob;
     co_await ctx.exchange->fetch("radiosity", &blob);
     auto field = RadiosityField::from_bytes(blob);

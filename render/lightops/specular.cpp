@@ -3,7 +3,7 @@
 // reflection or refraction at glass by Fresnel, `samples` chains per point) until it lands on a non-specular
 // surface, then asks its input, in one batch, for the light leaving that surface back along the chain; where that
 // surface has a mirror term too, the chain also goes on through it. An emitter the chain lands on adds its own
-// emission (the input returns reflected light only). The other lobes of a point are the other ops' job. One input.
+// emission (the input returns reflected light only), and so does the environment where a chain leaves the scene. The other lobes of a point are the other ops' job. One input.
 //
 // `emission_samples` chains per point look only for emitters: a flame seen in a window or in water is as small as
 // one seen directly, and needs as many chains as the camera gives it samples, while what the chain lands on
@@ -104,7 +104,12 @@ class Specular final : public LightOp {
       if (!rays.empty()) ctx_.tracer->intersect(rays, hits);
       active.clear();
       for (size_t r = 0; r < moving.size(); ++r) {
-        if (!hits[r].valid()) continue;
+        if (!hits[r].valid()) {
+          // Out of the scene: the environment is the emitter such a chain meets.
+          if (emitters_ && scene.environment())
+            chains[moving[r]].emitted += chains[moving[r]].weight * scene.environment()->radiance(rays[r].direction);
+          continue;
+        }
         Chain& ch = chains[moving[r]];
         const uint32_t tri = hits[r].triangle;
         const Vec3 wo = -rays[r].direction;

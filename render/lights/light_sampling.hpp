@@ -1,5 +1,5 @@
 #pragma once
-// Sampling a point on the scene's area lights, shared by every LightOp that does next-event estimation.
+// Sampling a point on the scene's area lights (or a direction of its environment), shared by every LightOp that does next-event estimation.
 #include <optional>
 
 #include "render/lights/light_selection.hpp"
@@ -14,10 +14,36 @@ struct LightSample {
   Vec3 point;
   Vec3 normal;      // the emitter's front side (area lights)
   uint32_t triangle;
-  RGB radiance;     // Le for an area light; intensity I for a point light
-  float pdf_area;   // P(triangle) / area for an area light; P(light) for a point light
+  RGB radiance;     // Le for an area light or the environment; intensity I for a point light
+  float pdf_area;   // P(triangle) / area for an area light; P(light) for a point light; per solid angle for the
+                    // environment
   bool is_point = false;
+  bool at_infinity = false;  // from the environment (render/lights/environment.hpp): `direction`, not a point
+  Vec3 direction{};          // towards the environment, unit length
 };
+
+// The environment's sample for uniform (u, v), the environment having been chosen with probability `share`.
+inline LightSample environment_sample(const Scene& scene, float share, Uniform2 uv) {
+  const Environment::Sample s = scene.environment()->sample(uv.u, uv.v);
+  LightSample ls{{}, {}, UINT32_MAX, s.radiance, share * s.pdf};
+  ls.at_infinity = true;
+  ls.direction = s.wi;
+  return ls;
+}
+
+// The density, per solid angle, with which light sampling draws direction wi from the environment (for MIS when a
+// BSDF-sampled ray leaves the scene). 0 without an environment.
+inline float environment_pdf(const Scene& scene, Vec3 wi) {
+  const float share = scene.environment_share();
+  return share > 0 ? share * scene.environment()->pdf(wi) : 0.0f;
+}
+
+// A uniform number u that fell at or above `share`, rescaled to [0, 1) over the rest.
+inline float past_share(float u, float share) {
+  return share > 0 ? std::min((u - share) / (1 - share), 0x1.fffffep-1f) : u;
+}
+// One that fell below it, rescaled to [0, 1).
+inline float within_share(float u, float share) { return std::min(u / share, 0x1.fffffep-1f); }
 
 // The area over which emitter e (triangle tri) gets its light samples: the triangle's, or for an emitter an alpha
 // map cuts out, that of the parts that may be there (render/lights/emitter_cutouts.hpp).
@@ -106,17 +132,22 @@ constexpr bool draws_jointly(const Draws& rng) {
   return false;
 }
 
-// Picks a light by power and a uniform point on it. `Draws` is an Rng or a Sampler.
+// Picks a light by power and a uniform point on it, or the environment (Scene::environment_share). `Draws` is an
+// Rng or a Sampler.
 template <class Draws>
 inline LightSample sample_light(const Scene& scene, Draws& rng) {
   float p_light = 0;
+  const float share = scene.environment_share();
   if (draws_jointly(rng)) {
     Uniform2 uv = rng.uniform2();
-    const size_t e = scene.pick_emitter(uv.u, p_light, &uv.u);
-    return light_sample_at(scene, e, p_light, uv);
+    if (uv.u < share) return environment_sample(scene, share, {within_share(uv.u, share), uv.v});
+    const size_t e = scene.pick_emitter(past_share(uv.u, share), p_light, &uv.u);
+    return light_sample_at(scene, e, p_light * (1 - share), uv);
   }
-  const size_t e = scene.pick_emitter(rng.uniform(), p_light);
-  return light_sample_at(scene, e, p_light, rng.uniform2());
+  const float u = rng.uniform();
+  if (u < share) return environment_sample(scene, share, rng.uniform2());
+  const size_t e = scene.pick_emitter(past_share(u, share), p_light);
+  return light_sample_at(scene, e, p_light * (1 - share), rng.uniform2());
 }
 
 // The light for point x facing n from one number u in [0, 1): through the scene's light tree, or, in a learned
@@ -141,24 +172,33 @@ inline bool pick_light(const Scene& scene, Vec3 x, Vec3 n, float u, const LightS
   return true;
 }
 
-// Picks a light for point x facing n: through the scene's light tree (by what each can give the point), or, with a
-// learned LightSelection whose cell holds x, from that cell's lights with chance selection->share() and through the
-// tree otherwise; then a point on it as `mode` says. nullopt when no light can reach x's side.
+// Picks a light for point x facing n: the environment with chance Scene::environment_share(), else through the
+// scene's light tree (by what each can give the point), or, with a learned LightSelection whose cell holds x, from
+// that cell's lights with chance selection->share() and through the tree otherwise; then a point on it as `mode`
+// says. nullopt when no light can reach x's side.
 template <class Draws>
 inline std::optional<LightSample> sample_light_at(const Scene& scene, Vec3 x, Vec3 n, Draws& rng,
                                                   LightPoint mode = LightPoint::area,
                                                   const LightSelection* selection = nullptr) {
   size_t e = 0;
   float p_light = 0;
-  auto pick = [&](float u, float* remainder) { return pick_light(scene, x, n, u, selection, e, p_light, remainder); };
+  const float share = scene.environment_share();
+  auto pick = [&](float u, float* remainder) {
+    if (!pick_light(scene, x, n, past_share(u, share), selection, e, p_light, remainder)) return false;
+    p_light *= 1 - share;
+    return true;
+  };
   if (draws_jointly(rng)) {
     Uniform2 uv = rng.uniform2();
+    if (uv.u < share) return environment_sample(scene, share, {within_share(uv.u, share), uv.v});
     if (!pick(uv.u, &uv.u)) return std::nullopt;
     // The default's path is exactly the area sample, with nothing to decide per sample.
     if (mode == LightPoint::area) return light_sample_at(scene, e, p_light, uv);
     return light_sample_from(scene, e, p_light, uv, x, mode);
   }
-  if (!pick(rng.uniform(), nullptr)) return std::nullopt;
+  const float u = rng.uniform();
+  if (u < share) return environment_sample(scene, share, rng.uniform2());
+  if (!pick(u, nullptr)) return std::nullopt;
   if (mode == LightPoint::area) return light_sample_at(scene, e, p_light, rng.uniform2());
   return light_sample_from(scene, e, p_light, rng.uniform2(), x, mode);
 }
@@ -171,6 +211,7 @@ inline float light_pdf_area_at(const Scene& scene, uint32_t tri, Vec3 x, Vec3 n,
   float p_light = scene.light_tree().probability(x, n, e);
   if (const int32_t cell = selection ? selection->cell_of(x, n) : -1; cell >= 0)
     p_light = selection->mixture(cell, e, p_light);
+  p_light *= 1 - scene.environment_share();
   double omega = 0;
   if (solid_angle_sampled(scene, e, x, mode, omega))
     return p_light * static_cast<float>(std::fabs(cos_y) / (omega * static_cast<double>(dist) * dist));
@@ -181,7 +222,7 @@ inline float light_pdf_area_at(const Scene& scene, uint32_t tri, Vec3 x, Vec3 n,
 // a light).
 inline float light_pdf_area(const Scene& scene, uint32_t tri) {
   const float area = scene.emitter_cutouts().any() ? emitter_sampled_area(scene, tri, scene.emitter_index_of(tri)) : scene.area(tri);
-  return scene.emitter_probability_of_triangle(tri) / area;
+  return scene.emitter_probability_of_triangle(tri) * (1 - scene.environment_share()) / area;
 }
 
 // Power heuristic (beta = 2) weight of a sample drawn with density `a` when `b` could also have drawn it.

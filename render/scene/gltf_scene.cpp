@@ -414,6 +414,7 @@ Result<Scene> Scene::parse_gltf_unlit(const std::string& path, const std::string
     auto it = model.extensions.find("KHR_lights_punctual");
     return it != model.extensions.end() && it->second.Has("lights") ? &it->second.Get("lights") : nullptr;
   }();
+  bool has_sun = false;
   const Status status = for_each_node(model, where, [&](const tinygltf::Node& node, const Mat4& world) -> Status {
     if (auto it = node.extensions.find("KHR_lights_punctual"); it != node.extensions.end() && lights && it->second.Has("light")) {
       const int li = it->second.Get("light").GetNumberAsInt();
@@ -421,17 +422,30 @@ Result<Scene> Scene::parse_gltf_unlit(const std::string& path, const std::string
         const tinygltf::Value& light = lights->Get(li);
         const std::string type = light.Has("type") ? light.Get("type").Get<std::string>() : "";
         const std::string name = light.Has("name") ? light.Get("name").Get<std::string>() : "light" + std::to_string(li);
+        RGB colour{1, 1, 1};
+        if (light.Has("color") && light.Get("color").ArrayLen() == 3)
+          colour = {static_cast<float>(light.Get("color").Get(0).GetNumberAsDouble()),
+                    static_cast<float>(light.Get("color").Get(1).GetNumberAsDouble()),
+                    static_cast<float>(light.Get("color").Get(2).GetNumberAsDouble())};
+        // glTF's lights are photometric (candela, lux); lightfarm's radiometric (W/sr, W/m^2): 683 lm/W.
+        const float photometric = light.Has("intensity") ? static_cast<float>(light.Get("intensity").GetNumberAsDouble()) : 1.0f;
+        const RGB radiometric = colour * std::max(0.0f, photometric / 683.0f);
+        const Vec3 towards = world.vector({0, 0, 1});  // a directional light shines along its node's -z
         if (type == "point") {
-          RGB colour{1, 1, 1};
-          if (light.Has("color") && light.Get("color").ArrayLen() == 3)
-            colour = {static_cast<float>(light.Get("color").Get(0).GetNumberAsDouble()),
-                      static_cast<float>(light.Get("color").Get(1).GetNumberAsDouble()),
-                      static_cast<float>(light.Get("color").Get(2).GetNumberAsDouble())};
-          const float candela = light.Has("intensity") ? static_cast<float>(light.Get("intensity").GetNumberAsDouble()) : 1.0f;
-          // glTF's point light is photometric (candela); lightfarm's radiometric (W/sr): 683 lm/W.
-          s.add_point_light(world.point({0, 0, 0}), colour * std::max(0.0f, candela / 683.0f));
+          s.add_point_light(world.point({0, 0, 0}), radiometric);
+        } else if (type == "directional" && !has_sun && length(towards) > 0) {
+          // The sun of the scene, 0.526 degrees across (glTF gives a directional light no size).
+          Environment sky;
+          Sun sun;
+          sun.direction = normalize(towards);
+          sun.irradiance = radiometric;
+          sky.set_sun(sun);
+          s.set_environment(std::move(sky));
+          has_sun = true;
+        } else if (type == "directional") {
+          warn("light '" + name + "' (directional): only the first directional light is read, as the scene's sun");
         } else {
-          warn("light '" + name + "' (" + type + ") is not supported yet; only point lights are read");
+          warn("light '" + name + "' (" + type + ") is not supported yet; point and directional lights are read");
         }
       }
     }

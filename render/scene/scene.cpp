@@ -145,11 +145,16 @@ Status Scene::finalize(const std::string& what) {
     power.push_back(4.0 * kPi * average(p.intensity));
     total += power.back();
   }
-  if (power.empty() || !(total > 0)) {
+  const bool environment_emits = environment_ && environment_->emits();
+  if ((power.empty() || !(total > 0)) && !environment_emits) {
     std::string hint;
     for (const auto& name : ambient_only_) hint += (hint.empty() ? "" : ", ") + name;
     if (!hint.empty()) hint = "; " + hint + " ha" + (ambient_only_.size() > 1 ? "ve" : "s") + " Ka but no Ke: did you mean Ke?";
-    return make_error(what + ": the scene has no light (no material with Ke > 0, and the script adds none)" + hint);
+    return make_error(what + ": the scene has no light (no material with Ke > 0, and the script adds no light, environment or sun)" + hint);
+  }
+  if (!(total > 0)) {  // only the environment lights the scene
+    power.clear();
+    emitters_.clear();
   }
   double running = 0;
   for (double p : power) {
@@ -157,13 +162,19 @@ Status Scene::finalize(const std::string& what) {
     emitter_cdf_.push_back(static_cast<float>(running / total));
     emitter_pdf_.push_back(static_cast<float>(p / total));
   }
-  emitter_cdf_.back() = 1.0f;
+  if (!power.empty()) emitter_cdf_.back() = 1.0f;
   triangle_light_pdf_.assign(triangles_.size(), 0.0f);
   for (size_t i = 0; i < emitters_.size(); ++i) triangle_light_pdf_[emitters_[i]] = emitter_pdf_[i];
   view_owned_arrays();
   light_tree_ = std::make_shared<const LightTree>(*this);
   emitter_cutouts_ = std::make_shared<const EmitterCutouts>(*this);
+  settle_environment_share();
   return Ok{};
+}
+
+void Scene::settle_environment_share() {
+  const bool others = !emitter_cdf_.empty();
+  environment_share_ = environment_ && environment_->emits() ? (others ? 0.5f : 1.0f) : 0.0f;
 }
 
 size_t Scene::emitter_index_of(uint32_t t) const {

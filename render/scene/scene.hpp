@@ -13,6 +13,7 @@
 #include "core/specs.hpp"
 #include "core/result.hpp"
 #include "render/lights/emitter_cutouts.hpp"
+#include "render/lights/environment.hpp"
 #include "render/lights/light_tree.hpp"
 #include "render/math.hpp"
 
@@ -179,6 +180,19 @@ class Scene {
   // Lights: emitter triangles, then point lights, chosen with probability proportional to emitted flux.
   const std::vector<uint32_t>& emitters() const { return emitters_; }
   const std::vector<PointLight>& point_lights() const { return point_lights_; }
+  // The light at infinity (render/lights/environment.hpp): an environment map or radiance and a sun; null without.
+  // Set before finalize().
+  void set_environment(Environment env) { environment_ = std::make_shared<const Environment>(std::move(env)); }
+  const Environment* environment() const { return environment_.get(); }
+  // The share of light samples that go to the environment rather than to the other lights: all of them when it is
+  // the only light, else half (as pbrt-v4's light sampler gives its infinite lights: the tree's choice depends on
+  // the point, the environment's reach does not, and neither can be weighed against the other from the point
+  // alone). 0 without one.
+  float environment_share() const { return environment_share_; }
+  // What a camera ray that leaves the scene in direction `d` sees.
+  RGB background(Vec3 d) const {
+    return environment_ && environment_->camera_visible() ? environment_->radiance(d) : RGB{};
+  }
   // Picks a light for u in [0,1); an index below emitters().size() is a triangle, above it a point light.
   // With `remainder`: where u fell within that light's share of [0, 1), rescaled to [0, 1) (LightTree::pick).
   size_t pick_emitter(float u, float& probability, float* remainder = nullptr) const;
@@ -277,6 +291,9 @@ class Scene {
   std::span<const Vec2> corner_uv_view_;
   std::shared_ptr<const LightTree> light_tree_;
   std::shared_ptr<const EmitterCutouts> emitter_cutouts_;
+  std::shared_ptr<const Environment> environment_;
+  float environment_share_ = 0;
+  void settle_environment_share();
   std::shared_ptr<const void> storage_;  // the mapping the views point into, when mapped
   std::vector<std::string> ambient_only_;  // OBJ materials with Ka but no Ke: named if the scene ends up unlit
   Bounds bounds_;

@@ -151,7 +151,7 @@ TEST(Scene, SceneWithoutEmittersIsAnErrorThatSaysSo) {
   REQUIRE_SHARED_SCENES();
   auto s = Scene::load_obj(kShared + "CornellBox-Glossy.obj");
   ASSERT_FALSE(s.ok());
-  EXPECT_NE(s.error().message.find("has no light (no material with Ke > 0, and the script adds none)"),
+  EXPECT_NE(s.error().message.find("has no light (no material with Ke > 0, and the script adds no light, environment or sun)"),
             std::string::npos)
       << s.error().message;
 }
@@ -225,7 +225,7 @@ TEST(Scene, ObjDiagnosticsNameFileAndLine) {
   auto unlit = Scene::load_obj(b);
   ASSERT_FALSE(unlit.ok());
   EXPECT_EQ(unlit.error().message, "scene file '" + b + "': the scene has no light (no material with Ke > 0, and the "
-                                   "script adds none); glow has Ka but no Ke: did you mean Ke?");
+                                   "script adds no light, environment or sun); glow has Ka but no Ke: did you mean Ke?");
   std::filesystem::remove_all(dir);
 
   Scene s;

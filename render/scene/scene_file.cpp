@@ -15,7 +15,7 @@ namespace lf {
 
 namespace {
 
-constexpr std::string_view kMagic = "LFSCENE4";  // 4: materials carry metallic and roughness
+constexpr std::string_view kMagic = "LFSCENE5";  // 4: materials carry metallic and roughness; 5: the environment
 using bytes::put;
 using bytes::put_rgb;
 using bytes::Reader;
@@ -70,11 +70,15 @@ std::string scene_to_bytes(const Scene& scene) {
     put<float>(out, p.position.z);
     put_rgb(out, p.intensity);
   }
+  std::string environment;
+  if (scene.environment()) scene.environment()->write(environment);
+  put<uint32_t>(out, static_cast<uint32_t>(environment.size()));
+  out += environment;
   return out;
 }
 
 Result<Scene> scene_from_bytes(std::string_view bytes, const std::string& what) {
-  if (bytes.substr(0, kMagic.size()) != kMagic) return make_error(what + ": not a lightfarm scene (no LFSCENE4)");
+  if (bytes.substr(0, kMagic.size()) != kMagic) return make_error(what + ": not a lightfarm scene (no LFSCENE5)");
   Reader r(bytes.substr(kMagic.size()));
   auto bad = [&] { return make_error(what + ": the scene's bytes are truncated or inconsistent"); };
   Scene s;
@@ -135,6 +139,14 @@ Result<Scene> scene_from_bytes(std::string_view bytes, const std::string& what) 
     Vec3 p, c;
     if (!r.vec(p) || !r.vec(c)) return bad();
     s.add_point_light(p, c);
+  }
+  uint32_t environment_size = 0;
+  std::string environment;
+  if (!r.u32(environment_size) || !r.str(environment, environment_size)) return bad();
+  if (environment_size > 0) {
+    auto env = Environment::read(environment);
+    if (!env) return make_error(what + ": " + env.error().message);
+    s.set_environment(std::move(*env));
   }
   if (!r.done() || s.triangle_count() != n) return bad();
   if (auto st = s.finalize(what); !st) return st.error();

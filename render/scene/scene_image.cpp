@@ -19,7 +19,7 @@ namespace {
 
 constexpr char kMagic[8] = {'L', 'F', 'I', 'M', 'A', 'G', 'E', '2'};
 constexpr uint32_t kByteOrderMark = 0x01020304;
-constexpr uint32_t kVersion = 4;  // 3: materials carry kr and tf; 4: metallic and roughness
+constexpr uint32_t kVersion = 5;  // 3: materials carry kr and tf; 4: metallic and roughness; 5: the environment
 constexpr size_t kAlign = 64;
 constexpr size_t kVertexSlack = 16;
 
@@ -143,6 +143,10 @@ std::string SceneImage::encode(const Scene& scene, const std::string& hash) {
   for (uint32_t e : scene.emitters_) bytes::put(out, e);
   for (float c : scene.emitter_cdf_) bytes::put(out, c);
   for (float p : scene.emitter_pdf_) bytes::put(out, p);
+  std::string environment;
+  if (scene.environment()) scene.environment()->write(environment);
+  bytes::put(out, static_cast<uint64_t>(environment.size()));
+  out += environment;
   h.small_size = out.size() - h.offset[kSmall];
   std::memcpy(out.data(), &h, sizeof h);
   return out;
@@ -237,7 +241,16 @@ Result<Scene> SceneImage::map(const std::string& path, const std::string& hash, 
   s.emitter_pdf_.resize(lights);
   for (float& c : s.emitter_cdf_) r.f32(c);
   for (float& p : s.emitter_pdf_) r.f32(p);
-  if (!r.done() || lights == 0) return bad("the small part");
+  uint64_t environment_size = 0;
+  std::string environment;
+  if (!r.u64(environment_size) || environment_size > h.small_size || !r.str(environment, static_cast<uint32_t>(environment_size)))
+    return bad("the environment");
+  if (environment_size > 0) {
+    auto env = Environment::read(environment);
+    if (!env) return bad(env.error().message);
+    s.set_environment(std::move(*env));
+  }
+  if (!r.done() || (lights == 0 && environment_size == 0)) return bad("the small part");
 
   // Every index the renderer follows must stay inside its array.
   for (const auto& tri : s.triangle_view_)
@@ -250,6 +263,7 @@ Result<Scene> SceneImage::map(const std::string& path, const std::string& hash, 
   s.storage_ = std::move(mapping);
   s.light_tree_ = std::make_shared<const LightTree>(s);
   s.emitter_cutouts_ = std::make_shared<const EmitterCutouts>(s);
+  s.settle_environment_share();
   return s;
 }
 

@@ -1,5 +1,8 @@
-// The lights and shapes a farm script adds to a scene (light { quad | sphere | point }, shape { plane | sphere }).
+// The lights and shapes a farm script adds to a scene (light { quad | sphere | point }, environment { }, sun { },
+// shape { plane | sphere }).
 #include "render/scene/scene.hpp"
+
+#include "render/images/image.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -16,9 +19,56 @@ static bool vec3_of(const Value* v, Vec3& out) {
   return true;
 }
 
+static float number_or(const Value& table, const char* key, float fallback) {
+  const Value* v = table.find(key);
+  return v && v->is_number() ? static_cast<float>(v->as_double()) : fallback;
+}
+
+// environment { map | radiance, intensity, rotation (degrees), camera } as farm/spec_readers.cpp checked it; the map
+// is read here, once, and travels in the shipped scene from then on.
+static Result<Environment> script_environment(const Value& e) {
+  Environment env;
+  if (const Value* map = e.find("map"); map && map->is_string()) {
+    auto image = read_image(map->as_string());
+    if (!image) return make_error("environment map '" + map->as_string() + "': " + image.error().message);
+    if (image->width < 2 || image->height < 1 || image->width > 32768 || image->height > 16384)
+      return make_error("environment map '" + map->as_string() + "': " + std::to_string(image->width) + "x" +
+                        std::to_string(image->height) + " is not an equirectangular map's size (2x1 to 32768x16384)");
+    env = Environment(image->width, image->height, std::move(image->pixels), number_or(e, "intensity", 1),
+                      number_or(e, "rotation", 0) * kPi / 180);
+  } else {
+    RGB radiance;
+    if (!vec3_of(e.find("radiance"), radiance)) return make_error("environment needs map = \"file\" or radiance = {r, g, b}");
+    env = Environment(radiance * number_or(e, "intensity", 1));
+  }
+  if (const Value* c = e.find("camera"); c && c->is_bool()) env.set_camera_visible(c->as_bool());
+  return env;
+}
+
 Status Scene::add_script_lights(const Value::Array& lights) {
+  std::optional<Environment> environment;
+  std::optional<Sun> sun;
   for (size_t i = 0; i < lights.size(); ++i) {
     const Value& l = lights[i];
+    if (const Value* e = l.find("environment")) {
+      if (environment) return make_error("environment is declared twice");
+      auto env = script_environment(*e);
+      if (!env) return env.error();
+      environment = std::move(*env);
+      continue;
+    }
+    if (const Value* sv = l.find("sun")) {
+      if (sun) return make_error("sun is declared twice");
+      Sun made;
+      if (!vec3_of(sv->find("direction"), made.direction) || !(length(made.direction) > 0))
+        return make_error("sun needs a direction {x, y, z} (towards the sun) that is not 0");
+      if (!vec3_of(sv->find("irradiance"), made.irradiance)) return make_error("sun needs irradiance = {r, g, b}");
+      const float degrees = number_or(*sv, "angle", made.angle * 180 / kPi);
+      if (!(degrees > 0 && degrees < 90)) return make_error("sun: angle must be above 0 and below 90 degrees");
+      made.angle = degrees * kPi / 180;
+      sun = made;
+      continue;
+    }
     const std::string which = "light " + std::to_string(i + 1);
     // Where the script said it ("farm.lua:12"), for diagnostics about what it lights (light_checks.hpp).
     const Value* at = l.find("at");
@@ -54,6 +104,13 @@ Status Scene::add_script_lights(const Value::Array& lights) {
     } else {
       return make_error(which + ": give quad, sphere or point");
     }
+  }
+  if (environment || sun) {
+    // What the script gives replaces the scene file's own (a glTF's sun), part by part.
+    if (!sun && environment_ && environment_->sun()) sun = *environment_->sun();
+    if (!environment) environment = environment_ ? *environment_ : Environment();
+    if (sun) environment->set_sun(*sun);
+    set_environment(std::move(*environment));
   }
   return Ok{};
 }

@@ -12,7 +12,7 @@ SceneLobes scene_lobes(const Scene& scene) {
   std::vector<bool> used(scene.materials().size(), false);
   for (uint32_t t = 0; t < scene.triangle_count(); ++t) used[scene.material_of(t)] = true;
   SceneLobes out;
-  out.emits = !scene.point_lights().empty();
+  out.emits = !scene.point_lights().empty() || (scene.environment() && scene.environment()->emits());
   for (size_t id = 0; id < used.size(); ++id) {
     if (!used[id]) continue;
     const Material& m = scene.material(static_cast<uint32_t>(id));

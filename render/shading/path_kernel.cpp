@@ -98,6 +98,8 @@ class Wavefront {
 
   void start(const ShadingPoints& points);
   void sample_light_for(uint32_t p, int depth);
+  // Next-event estimation towards the environment: a direction, its shadow ray open-ended.
+  void sample_environment_for(uint32_t p, const Path& path, const Material& m, const Bsdf& bsdf, const LightSample& ls);
   // A glossy vertex with the cache takes its lobes one at a time, so that its diffuse lobe's rays are the cache's as
   // a diffuse surface's are (MIS then pairs each lobe's samples with the light samples' share of that lobe).
   bool by_lobe(const Material& m) const { return cache_ && m.type == Material::Type::glossy; }
@@ -161,6 +163,10 @@ void Wavefront::sample_light_for(uint32_t p, int depth) {
                    : sample_light(scene_, path.rng);
   if (!picked) return;
   const LightSample& ls = *picked;
+  if (ls.at_infinity) {
+    sample_environment_for(p, path, m, bsdf, ls);
+    return;
+  }
   const Vec3 d = ls.point - path.x;
   const float dist2 = dot(d, d);
   if (!(dist2 > 0)) return;
@@ -196,6 +202,31 @@ void Wavefront::sample_light_for(uint32_t p, int depth) {
     }
   }
   rays.push_back(Ray{origin, to_light / span, 0.0f, span});
+}
+
+void Wavefront::sample_environment_for(uint32_t p, const Path& path, const Material& m, const Bsdf& bsdf,
+                                       const LightSample& ls) {
+  const Vec3 wi = ls.direction;
+  if (is_black(ls.radiance) || !(ls.pdf_area > 0) || !above_both(wi, path.n, path.ng)) return;
+  const float cos_x = dot(path.n, wi);
+  const float light_pdf = ls.pdf_area;  // per solid angle already
+  const float span = std::numeric_limits<float>::infinity();
+  // The same weights as an area light's (sample_light_for): the directional cache answers only light reflected
+  // beyond its neighbourhood, so a direction it answers leaves the environment's light to this sample alone.
+  RGB fw;
+  if (by_lobe(m)) {
+    const float w_d = cache_answers(path, m, path.above, wi, span) ? 1.0f
+                                                                   : power_heuristic(light_pdf, bsdf.pdf_diffuse(path.n, path.wo, wi));
+    const float w_g = power_heuristic(light_pdf, bsdf.pdf_glossy(path.n, path.wo, wi));
+    fw = bsdf.eval_diffuse(path.n, path.wo, wi) * w_d + bsdf.eval_glossy(path.n, path.wo, wi) * w_g;
+  } else {
+    const bool light_only = (o_.light_only_on_diffuse && m.type == Material::Type::diffuse) ||
+                            cache_answers(path, m, path.above, wi, span);
+    fw = bsdf.eval(path.n, path.wo, wi) * (light_only ? 1.0f : power_heuristic(light_pdf, bsdf.pdf(path.n, path.wo, wi)));
+  }
+  if (is_black(fw)) return;
+  pending_.push_back({p, path.beta * fw * ls.radiance * (cos_x / light_pdf)});
+  rays.push_back(Ray{path.above, wi, 0.0f, span});
 }
 
 void Wavefront::sample_continuations(int depth) {
@@ -284,7 +315,13 @@ void Wavefront::land(int depth) {
     Path& path = paths_[continuing_[r]];
     if (!path.alive) continue;  // answered by the cache
     if (!hits[r].valid()) {
-      // Out of the scene: nothing comes from that direction, which the cache learns too.
+      // Out of the scene: the environment's light from there (weighed against its light samples), and nothing
+      // reflected, which the cache learns (it holds reflected light only).
+      if (scene_.environment_share() > 0) {
+        const Vec3 wi = rays[r].direction;
+        const RGB le = scene_.environment()->radiance(wi);
+        if (!is_black(le)) path.L += path.beta * le * (path.delta ? 1.0f : power_heuristic(path.bsdf_pdf, environment_pdf(scene_, wi)));
+      }
       if (ray_global_[r] && !cache_->frozen()) cache_->record(ray_cell_[r], rays[r].direction, RGB{});
       path.alive = false;
       continue;

@@ -63,7 +63,12 @@ void tile_points(const Scene& scene, const Camera& camera, const ImageSpec& imag
   work.sampler = sampler_of(image);
   work.image_width = image.width;
   for (size_t i = 0; i < samples; ++i) {
-    if (!hits[i].valid()) continue;
+    if (!hits[i].valid()) {
+      // What the camera sees beyond the scene: the environment, if it shows it. (An adaptive second round's rays
+      // that were not traced again have no hit either; its emission is never read.)
+      if (more_shaded.empty() && scene.environment()) work.emitted[i] = scene.background(rays[i].direction);
+      continue;
+    }
     const uint32_t tri = hits[i].triangle;
     const Vec3 wo = -rays[i].direction;
     const Material& m = scene.material(scene.material_of(tri));
