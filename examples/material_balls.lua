@@ -1,16 +1,19 @@
 -- glTF's metal-roughness materials: the material-ball grid Blender's own glTF exporter wrote (../shared/scenes/gltf/
 -- balls.glb: blue dielectric balls in front, gold metal balls behind, roughness 0.05 / 0.3 / 0.6 / 0.9 from left
--- to right, on a rough grey floor). The file's panel faces away from the balls and its sun is not read yet
--- (docs/lua-api.md, "glTF 2.0"), so the script hangs a softbox above them.
+-- to right, on a rough grey floor), lit as a look-development artist lights it: an HDR environment (the courtyard
+-- from ../shared/scenes/gltf/hdri) and the file's own sun (its directional light, 2 W/m^2). The file's emissive
+-- panel faces away from the balls.
 --
 --   lightfarm run examples/material_balls.lua                          -> material_balls.png
 --   lightfarm run examples/material_balls.lua --set lighting=pathtrace (the same light by path tracing alone)
+--   lightfarm run examples/material_balls.lua --set hdri=sunset        (forest, interior, sunset, courtyard)
 --
--- Every glTF material is one glossy lobe for the light-path check: `direct` gives it its direct light and `glossy`
--- the rest, asking the bounce paths where each lobe sample lands; the irradiance cache has nothing to cache here.
+-- Every glTF material is one glossy lobe for the light-path check: `direct` gives it its direct light (the sky's
+-- and the sun's included) and `glossy` the rest, asking the bounce paths where each lobe sample lands; the
+-- irradiance cache has nothing to cache here.
 
 scene  { file = "../../shared/scenes/gltf/balls.glb" }
-light  { quad = {{-1.5, 4, -0.5}, {1.5, 4, -0.5}, {1.5, 4, 2.5}, {-1.5, 4, 2.5}}, radiance = {6, 6, 6} }
+environment { map = "../../shared/scenes/gltf/hdri/" .. param("hdri", "courtyard") .. ".exr" }
 -- The file's own camera, "Camera": from (0, 2.6, 5.5) down at the grid, 23 degrees vertically for 16:9.
 camera { gltf = "Camera" }
 image  { width = param("width", 640), height = param("height", 360), spp = param("spp", 64),

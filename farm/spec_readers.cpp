@@ -162,6 +162,44 @@ Value read_light(const Value& light) {
   return light;
 }
 
+Value read_environment(const ParamTable& p, const fs::path& script_dir) {
+  Value::Map e;
+  const std::string map = p.get_string("map", "");
+  if (!map.empty() == p.has("radiance"))
+    throw ParamError("environment needs exactly one of map = \"sky.exr\" or radiance = {r, g, b}");
+  if (!map.empty()) {
+    const std::string found = existing_file(map, script_dir);
+    if (found.empty()) throw ParamError("environment map '" + script_relative(map, script_dir) + "' not found");
+    e["map"] = found;
+    e["rotation"] = p.get_float("rotation", 0, -360, 360);
+  } else {
+    const auto c = p.get_vec3("radiance", {0, 0, 0});
+    for (double v : c)
+      if (!(v >= 0 && v <= 1e6)) throw ParamError("environment: radiance must be between 0 and 1e6 in each channel");
+    e["radiance"] = Value::Array{c[0], c[1], c[2]};
+  }
+  e["intensity"] = p.get_float("intensity", 1, 0, 1e6);
+  e["camera"] = p.get_bool("camera", true);
+  p.report_unused();
+  return Value(Value::Map{{"environment", Value(std::move(e))}});
+}
+
+Value read_sun(const ParamTable& p) {
+  Value::Map sun;
+  if (!p.has("direction")) throw ParamError("sun needs a direction = {x, y, z} (towards the sun)");
+  const auto d = p.get_vec3("direction", {0, 1, 0});
+  if (d[0] == 0 && d[1] == 0 && d[2] == 0) throw ParamError("sun: direction must not be {0, 0, 0}");
+  sun["direction"] = Value::Array{d[0], d[1], d[2]};
+  if (!p.has("irradiance")) throw ParamError("sun needs irradiance = {r, g, b} (W/m^2 on a surface facing it)");
+  const auto e = p.get_vec3("irradiance", {0, 0, 0});
+  for (double v : e)
+    if (!(v >= 0 && v <= 1e9)) throw ParamError("sun: irradiance must be between 0 and 1e9 in each channel");
+  sun["irradiance"] = Value::Array{e[0], e[1], e[2]};
+  sun["angle"] = p.get_float("angle", 0.526, 1e-3, 45);
+  p.report_unused();
+  return Value(Value::Map{{"sun", Value(std::move(sun))}});
+}
+
 ShapeRead read_shape(const std::string& name, const Value::Map& table, std::vector<std::string>& materials) {
   const std::string which = "shape '" + name + "'";
   static const std::set<std::string, std::less<>> kGeometry{"plane", "normal", "size", "sphere", "radius", "material"};

@@ -34,6 +34,14 @@ Value read_material_change(const std::string& name, const ParamTable& p, const s
 // light { quad | sphere + radius | point, radiance | intensity }: the light, checked by the scene's own reader.
 Value read_light(const Value& light);
 
+// environment { map = "sky.exr", intensity = 1, rotation = 0, camera = true } | environment { radiance = {r, g, b},
+// intensity, camera }: the light at infinity (render/lights/environment.hpp), the map there; rotation in degrees
+// about the up axis; camera = false hides it from camera rays. As the scene adds it: {environment = {...}}.
+Value read_environment(const ParamTable& p, const std::filesystem::path& script_dir);
+// sun { direction = {x, y, z}, irradiance = {r, g, b}, angle = 0.526 }: a disc towards `direction`, `angle` degrees
+// across, giving `irradiance` (W/m^2) to a surface facing it. As the scene adds it: {sun = {...}}.
+Value read_sun(const ParamTable& p);
+
 // shape "name" { plane = {x,y,z}, normal = {0,1,0}, size | sphere = {x,y,z}, radius, and material = "a scene
 // material" or the shape's own material's parameters (those of material { }) }. The shape as the scene adds it,
 // and, when the shape has a material of its own with parameters, that material's change; `materials` (the

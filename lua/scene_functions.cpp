@@ -1,4 +1,4 @@
-// The script functions that say what is rendered: scene, camera, image, light, material, shape. Each reads its table
+// The script functions that say what is rendered: scene, camera, image, light, environment, sun, material, shape. Each reads its table
 // through a reader (core/specs, farm/spec_readers) and adds the script's line to what goes wrong.
 #include "farm/spec_readers.hpp"
 #include "lua/binding.hpp"
@@ -60,6 +60,27 @@ int l_light(lua_State* L) {
   return 0;
 }
 
+// environment { map = "sky.exr", intensity = 1, rotation = 0, camera = true } | environment { radiance = {r,g,b} }:
+// light from every direction beyond the scene; sun { direction = {x,y,z}, irradiance = {r,g,b}, angle = 0.526 }: a
+// distant disc. Each at most once (farm/spec_readers.hpp).
+template <class Read>
+int declare_distant_light(lua_State* L, const char* name, Read read) {
+  Builder& b = builder(L);
+  ParamTable p = table_params(L, 1, name);
+  with_params(L, [&] {
+    Value light = read(p);
+    for (const Value& l : b.spec.scene.lights)
+      if (l.find(name)) throw ParamError(std::string(name) + " is declared twice");
+    b.spec.scene.lights.push_back(std::move(light));
+  });
+  return 0;
+}
+int l_environment(lua_State* L) {
+  const fs::path dir = builder(L).script_dir;
+  return declare_distant_light(L, "environment", [&dir](const ParamTable& p) { return read_environment(p, dir); });
+}
+int l_sun(lua_State* L) { return declare_distant_light(L, "sun", [](const ParamTable& p) { return read_sun(p); }); }
+
 // material "Name" { emission = {r, g, b}, kd = {r, g, b}, ks = {r, g, b}, mirror = {r, g, b}, tf = {r, g, b}, ns = 20,
 // ior = 1.5, type = "glossy" }:
 // changes a material of the scene by name (an OBJ's MTL, or a built-in scene's); the scene must come first.
@@ -103,7 +124,8 @@ int l_shape(lua_State* L) { return with_name(L, l_shape_table); }
 
 void register_scene_functions(lua_State* L, Builder& b) {
   const luaL_Reg functions[] = {{"scene", l_scene}, {"camera", l_camera}, {"image", l_image},
-                                {"light", l_light}, {"material", l_material}, {"shape", l_shape}};
+                                {"light", l_light}, {"environment", l_environment}, {"sun", l_sun},
+                                {"material", l_material}, {"shape", l_shape}};
   for (const luaL_Reg& f : functions) {
     lua_pushlightuserdata(L, &b);
     lua_pushcclosure(L, f.func, 1);

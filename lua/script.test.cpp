@@ -284,6 +284,27 @@ TEST_F(ScriptTest, LightsAreCheckedAtTheirLine) {
   EXPECT_EQ(error_of("light { point = {0, 0, 0}, intensity = {1, -1, 1} }\n"), "farm.lua:1: light: intensity must not be negative");
 }
 
+TEST_F(ScriptTest, EnvironmentAndSunAreCheckedAtTheirLine) {
+  auto r = evaluate_script(write("farm.lua", std::string(kCornell) +
+                                                 "environment { radiance = {0.2, 0.3, 0.5}, camera = false }\n"
+                                                 "sun { direction = {1, 2, 0}, irradiance = {3, 3, 3}, angle = 1 }\n"));
+  ASSERT_TRUE(r.ok()) << r.error().message;
+  ASSERT_EQ(r->scene.lights.size(), 2u);
+  EXPECT_EQ(r->scene.lights[0].find("environment")->find("camera")->as_bool(), false);
+  EXPECT_EQ(r->scene.lights[1].find("sun")->find("angle")->as_double(), 1.0);
+  EXPECT_EQ(error_of("environment { map = \"sky.exr\" }\n"),
+            "farm.lua:1: environment map '" + (dir / "sky.exr").string() + "' not found");
+  EXPECT_EQ(error_of("environment { map = \"sky.exr\", radiance = {1, 1, 1} }\n"),
+            "farm.lua:1: environment needs exactly one of map = \"sky.exr\" or radiance = {r, g, b}");
+  EXPECT_EQ(error_of("environment { radiance = {1, 1, 1} }\nenvironment { radiance = {1, 1, 1} }\n"),
+            "farm.lua:2: environment is declared twice");
+  EXPECT_EQ(error_of("sun { irradiance = {1, 1, 1} }\n"), "farm.lua:1: sun needs a direction = {x, y, z} (towards the sun)");
+  EXPECT_EQ(error_of("sun { direction = {0, 0, 0}, irradiance = {1, 1, 1} }\n"),
+            "farm.lua:1: sun: direction must not be {0, 0, 0}");
+  EXPECT_NE(error_of("environment { radiance = {1, 1, 1}, rotaton = 3 }\n").find("farm.lua:1: "), std::string::npos);
+  EXPECT_NE(error_of("environment { radiance = {1, 1, 1}, rotaton = 3 }\n").find("rotaton"), std::string::npos);
+}
+
 TEST_F(ScriptTest, MissingSceneFileIsNamedRelativeToTheScript) {
   auto m = error_of("scene { file = \"room.obj\" }\n");
   EXPECT_EQ(m, "farm.lua:1: scene file '" + (dir / "room.obj").string() + "' not found");

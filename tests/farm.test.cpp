@@ -269,6 +269,13 @@ TEST_F(FarmTest, AGltfSceneRendersThroughTheFarm) {
   }
   EXPECT_GT(back.x, 1.5f * back.z) << "gold reflects red over blue";
   EXPECT_GT(front.z, 1.5f * front.x) << "the dielectric balls are blue";
+  // Above the floor's far edge the camera sees the courtyard's warm walls: the environment travelled with the
+  // shipped scene to every renderer.
+  RGB sky{};
+  for (int x = 0; x < 64; ++x)
+    for (int y = 0; y <= 2; ++y) sky += one.pixels[static_cast<size_t>(y * 64 + x)];
+  EXPECT_GT(average(sky) / (64 * 3), 0.2f) << "the camera sees the environment";
+  EXPECT_GT(sky.x, sky.z) << "the courtyard's walls are warm";
 }
 
 TEST_F(FarmTest, StatsJsonCarriesPhasesAndActors) {
