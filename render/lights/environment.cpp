@@ -61,12 +61,12 @@ void Environment::set_sun(const Sun& sun) {
 Vec3 Environment::direction_of(float u, float v) {
   const float theta = kPi * v, phi = 2.0f * kPi * (u - 0.5f);
   const float s = std::sin(theta);
-  return {-s * std::cos(phi), std::cos(theta), -s * std::sin(phi)};
+  return {s * std::cos(phi), std::cos(theta), s * std::sin(phi)};
 }
 
 void Environment::image_coordinates(Vec3 wi, float& u, float& v) {
   v = std::acos(std::clamp(wi.y, -1.0f, 1.0f)) / kPi;
-  u = std::atan2(-wi.z, -wi.x) / (2.0f * kPi) + 0.5f;
+  u = std::atan2(wi.z, wi.x) / (2.0f * kPi) + 0.5f;
 }
 
 Vec3 Environment::to_map(Vec3 wi) const {

@@ -7,7 +7,8 @@
 //
 // Directions are the scene's, y up. The map is laid out as Blender lays out a world's equirectangular image, seen
 // through a glTF export (Blender's z up is the scene's y, its -y the scene's +z): the image's top row is straight
-// up, its middle column looks along -x, and the azimuth grows from -x towards -z. A map rendered with Cycles as a
+// up, its middle column looks along +x, and the azimuth grows from +x towards +z (Blender's u = 0.5 -
+// atan2(y, x) / 2 pi). A map rendered with Cycles as a
 // world and a glTF of the same scene then light the scene the same way. `rotation` turns the map about the up axis
 // (counter-clockwise seen from above).
 #include <cstdint>

@@ -56,11 +56,12 @@ TEST(Environment, ImageCoordinatesAndDirectionsAreInverses) {
       EXPECT_NEAR(u2, u, 1e-5f);
       EXPECT_NEAR(v2, v, 1e-5f);
     }
-  // Blender's layout seen through glTF's axes: the top row is up, the middle column looks along -x.
+  // Blender's layout seen through glTF's axes: the top row is up, the middle column looks along +x, and a quarter
+  // further along the image along +z (Blender's -y: u = 0.5 - atan2(y, x) / 2 pi there).
   const Vec3 up = Environment::direction_of(0.5f, 0.0f), middle = Environment::direction_of(0.5f, 0.5f);
   EXPECT_NEAR(up.y, 1.0f, 1e-6f);
-  EXPECT_NEAR(middle.x, -1.0f, 1e-6f);
-  EXPECT_NEAR(Environment::direction_of(0.75f, 0.5f).z, -1.0f, 1e-6f);  // the azimuth grows from -x towards -z
+  EXPECT_NEAR(middle.x, 1.0f, 1e-6f);
+  EXPECT_NEAR(Environment::direction_of(0.75f, 0.5f).z, 1.0f, 1e-6f);
 }
 
 TEST(Environment, DensityIntegratesToOneAndMatchesWhatSamplingDraws) {
@@ -144,7 +145,7 @@ TEST(Environment, RotationTurnsTheMapAboutTheUpAxis) {
   for (float u : {0.1f, 0.4f, 0.63f})
     for (float v : {0.2f, 0.45f}) {
       const Vec3 d = Environment::direction_of(u, v);
-      // Turned a quarter counter-clockwise seen from above: what was towards -x is now towards +z.
+      // Turned a quarter counter-clockwise seen from above: what was towards +x is now towards -z.
       const Vec3 d_turned{d.z, d.y, -d.x};
       const RGB a = still.radiance(d), b = turned.radiance(d_turned);
       EXPECT_NEAR(a.x, b.x, 1e-4f * a.x) << u << " " << v;
@@ -183,9 +184,14 @@ struct Ball {
   Scene scene;
   uint32_t material = 0;
   ShadingPoints points;
-  explicit Ball(Environment env, Material m = {"ball", {0.5f, 0.5f, 0.5f}, {}}) {
+  explicit Ball(Environment env, Material m = {"ball", {0.5f, 0.5f, 0.5f}, {}}, bool panel_facing_away = false) {
     material = scene.add_material(m);
     scene.add_sphere({0, 0, 0}, 1, 2, material);
+    // A small bright panel high above, emitting upwards: it lights nothing here (and hides 0.05 % of the sky),
+    // but it is a light of the tree.
+    if (panel_facing_away)
+      scene.add_quad({-0.1f, 5, -0.1f}, {-0.1f, 5, 0.1f}, {0.1f, 5, 0.1f}, {0.1f, 5, -0.1f},
+                     scene.add_material({"panel", {}, {5000, 5000, 5000}}));
     scene.set_environment(std::move(env));
     EXPECT_TRUE(scene.finalize("ball").ok());
     for (uint32_t t = 0; t < scene.triangle_count(); t += 17) {
@@ -218,6 +224,21 @@ TEST(Environment, AWhiteFurnaceBallReflectsItsAlbedoOfTheSky) {
   for (const char* kind : {"pathtrace", "direct"}) {
     const auto out = ball.shade(kind, {{std::string(kind) == "direct" ? "light_samples" : "samples", 256}});
     for (const RGB& c : out) EXPECT_NEAR(c.y, 1.0, 0.06) << kind;
+    EXPECT_NEAR(mean_of(out), 1.0, 0.01) << kind;
+  }
+}
+
+// With a light elsewhere, half the light samples go to the environment; where that light cannot reach (a panel
+// facing away), all of them: the furnace stays exact either way, and no sample is spent on the panel.
+TEST(Environment, WhereNoOtherLightReachesEverySampleGoesToTheEnvironment) {
+  Ball ball(Environment(RGB{2, 2, 2}), {"ball", {0.5f, 0.5f, 0.5f}, {}}, true);
+  EXPECT_FLOAT_EQ(ball.scene.environment_share(), 0.5f);
+  for (size_t i = 0; i < ball.points.size(); ++i)
+    EXPECT_FLOAT_EQ(environment_share_at(ball.scene, ball.points.position[i], ball.points.normal[i], nullptr), 1.0f);
+  // Below the panel, facing up at its back: still nothing of it; beside it, above its plane, it counts.
+  EXPECT_FLOAT_EQ(environment_share_at(ball.scene, {0, 6, 0}, {0, -1, 0}, nullptr), 0.5f);
+  for (const char* kind : {"pathtrace", "direct"}) {
+    const auto out = ball.shade(kind, {{std::string(kind) == "direct" ? "light_samples" : "samples", 256}});
     EXPECT_NEAR(mean_of(out), 1.0, 0.01) << kind;
   }
 }

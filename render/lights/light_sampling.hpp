@@ -31,10 +31,19 @@ inline LightSample environment_sample(const Scene& scene, float share, Uniform2 
   return ls;
 }
 
-// The density, per solid angle, with which light sampling draws direction wi from the environment (for MIS when a
-// BSDF-sampled ray leaves the scene). 0 without an environment.
-inline float environment_pdf(const Scene& scene, Vec3 wi) {
+// The environment's share of the light samples at point x facing n when lights are chosen through the tree (and a
+// learned selection): Scene::environment_share(), or all of them where no other light can reach x's side (neither
+// the tree nor a learned cell has one: a panel facing away), so that no sample is spent on nothing there.
+inline float environment_share_at(const Scene& scene, Vec3 x, Vec3 n, const LightSelection* selection) {
   const float share = scene.environment_share();
+  if (share <= 0 || share >= 1) return share;
+  if (selection && selection->cell_of(x, n) >= 0) return share;
+  return scene.light_tree().reaches(x, n) ? share : 1.0f;
+}
+
+// The density, per solid angle, with which light sampling draws direction wi from the environment, given the
+// environment's share of the samples there (for MIS when a BSDF-sampled ray leaves the scene).
+inline float environment_pdf(const Scene& scene, Vec3 wi, float share) {
   return share > 0 ? share * scene.environment()->pdf(wi) : 0.0f;
 }
 
@@ -172,7 +181,7 @@ inline bool pick_light(const Scene& scene, Vec3 x, Vec3 n, float u, const LightS
   return true;
 }
 
-// Picks a light for point x facing n: the environment with chance Scene::environment_share(), else through the
+// Picks a light for point x facing n: the environment with chance environment_share_at(), else through the
 // scene's light tree (by what each can give the point), or, with a learned LightSelection whose cell holds x, from
 // that cell's lights with chance selection->share() and through the tree otherwise; then a point on it as `mode`
 // says. nullopt when no light can reach x's side.
@@ -182,7 +191,7 @@ inline std::optional<LightSample> sample_light_at(const Scene& scene, Vec3 x, Ve
                                                   const LightSelection* selection = nullptr) {
   size_t e = 0;
   float p_light = 0;
-  const float share = scene.environment_share();
+  const float share = environment_share_at(scene, x, n, selection);
   auto pick = [&](float u, float* remainder) {
     if (!pick_light(scene, x, n, past_share(u, share), selection, e, p_light, remainder)) return false;
     p_light *= 1 - share;
@@ -211,7 +220,7 @@ inline float light_pdf_area_at(const Scene& scene, uint32_t tri, Vec3 x, Vec3 n,
   float p_light = scene.light_tree().probability(x, n, e);
   if (const int32_t cell = selection ? selection->cell_of(x, n) : -1; cell >= 0)
     p_light = selection->mixture(cell, e, p_light);
-  p_light *= 1 - scene.environment_share();
+  p_light *= 1 - environment_share_at(scene, x, n, selection);
   double omega = 0;
   if (solid_angle_sampled(scene, e, x, mode, omega))
     return p_light * static_cast<float>(std::fabs(cos_y) / (omega * static_cast<double>(dist) * dist));

@@ -240,6 +240,12 @@ int choose_slot(const float* weight, float total, float u, float& below) {
 
 }  // namespace
 
+bool LightTree::reaches(Vec3 x, Vec3 n) const {
+  if (nodes_.empty()) return false;
+  float weight[kWidth];
+  return weigh(nodes_[0], x, n, weight) > 0;
+}
+
 bool LightTree::pick(Vec3 x, Vec3 n, float u, size_t& light, float& probability, float* remainder) const {
   if (nodes_.empty()) return false;
   int32_t at = 0;

@@ -34,6 +34,8 @@ class LightTree {
   // With `remainder`, also where u fell within the picked light's share, rescaled to [0, 1): a number as uniform as
   // u, for a sampler that draws the light and the point on it from one 2D point.
   bool pick(Vec3 x, Vec3 n, float u, size_t& light, float& probability, float* remainder = nullptr) const;
+  // Whether any light may reach x's side at all (the root's importance there is not 0): else pick() finds none.
+  bool reaches(Vec3 x, Vec3 n) const;
   // The chance that pick() at (x, n) returns `light`.
   float probability(Vec3 x, Vec3 n, size_t light) const;
 

@@ -154,7 +154,9 @@ Result<std::string> describe_scene(const std::string& obj_path) {
     out += line + "\n";
   }
   out += emitting_faces ? "  emitters   " + std::to_string(emitting_faces) + " triangles" + format(", flux %.4g\n", total_flux)
-                        : "  emitters   none: add light { } or material \"Name\" { emission = {r, g, b} } in the script\n";
+                        : "  emitters   none: add light { }, environment { }, sun { } or material \"Name\" { emission = "
+                          "{r, g, b} } in the script\n";
+  if (s.environment()) out += "  sky        " + s.environment()->describe() + "\n";  // a glTF's sun
   // One line per texture file: which statements use it, for how many materials, and whether it is there.
   struct TextureUse {
     std::map<std::string, int> slots;

@@ -320,7 +320,11 @@ void Wavefront::land(int depth) {
       if (scene_.environment_share() > 0) {
         const Vec3 wi = rays[r].direction;
         const RGB le = scene_.environment()->radiance(wi);
-        if (!is_black(le)) path.L += path.beta * le * (path.delta ? 1.0f : power_heuristic(path.bsdf_pdf, environment_pdf(scene_, wi)));
+        if (!is_black(le)) {
+          const float share = o_.light_tree ? environment_share_at(scene_, path.x, path.n, o_.light_selection)
+                                            : scene_.environment_share();
+          path.L += path.beta * le * (path.delta ? 1.0f : power_heuristic(path.bsdf_pdf, environment_pdf(scene_, wi, share)));
+        }
       }
       if (ray_global_[r] && !cache_->frozen()) cache_->record(ray_cell_[r], rays[r].direction, RGB{});
       path.alive = false;
