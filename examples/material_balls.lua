@@ -20,12 +20,14 @@ image  { width = param("width", 640), height = param("height", 360), spp = param
          output = param("output", "material_balls.png") }
 
 local lighting = param("lighting", "network")
+local seed = param("seed", 0)  -- the light's random numbers (bench/peer/compare_balls.sh renders pairs)
 if lighting == "network" then
-  local paths = lightop "pathtrace" { name = "bounces" }
+  local paths = lightop "pathtrace" { name = "bounces", seed = seed }
   renderers { count = param("renderers", 2),
-              lighting = lightop "combine" { inputs = { lightop "direct" {}, lightop "glossy" { input = paths } } } }
+              lighting = lightop "combine" { inputs = { lightop "direct" { seed = seed },
+                                                        lightop "glossy" { input = paths, seed = seed } } } }
 elseif lighting == "pathtrace" then
-  renderers { count = param("renderers", 2), lighting = multiplexer { lightop "pathtrace" {}, replicas = 2 } }
+  renderers { count = param("renderers", 2), lighting = multiplexer { lightop "pathtrace" { seed = seed }, replicas = 2 } }
 else
   error("lighting must be \"network\" or \"pathtrace\", not \"" .. tostring(lighting) .. "\"")
 end

@@ -1,0 +1,80 @@
+#!/usr/bin/env bash
+# lightfarm against Cycles on the same glTF file (issue: scenes as artists make them): Blender's material-ball grid
+# (../shared/scenes/gltf/balls.glb) under an HDRI and the file's sun, 320x180, 2 cores. Cycles imports the file with
+# Blender's own glTF importer (Principled BSDFs; cycles_balls.py); lightfarm renders examples/material_balls.lua
+# (its network: direct + glossy over path-traced bounces). Prints
+#   1. per-ball means (inner discs; balls_peer.py) of Cycles with Principled GGX, Cycles with multiscatter GGX and
+#      lightfarm, at 256 spp, two seeds each averaged; and the same with every material made Lambert on both sides
+#      (the light transport alone, without the material models);
+#   2. quality per time: each renderer's noise from a pair of seeds at 64 and 256 spp (no reference), its seconds
+#      (Cycles: its render call; lightfarm: the whole run), and the time lightfarm takes to reach Cycles' 256-spp
+#      noise as a share of Cycles' time.
+# Needs `blender` (Debian's 3.4) and a built lightfarm. About three minutes.
+#
+#   bench/peer/compare_balls.sh [LIGHTFARM] [HDRI]      e.g. bench/peer/compare_balls.sh build/lightfarm courtyard
+set -euo pipefail
+here=$(cd "$(dirname "$0")" && pwd)
+lightfarm=${1:-$here/../../build/lightfarm}
+hdri=${2:-courtyard}
+map=$here/../../../shared/scenes/gltf/hdri/$hdri.exr
+command -v blender >/dev/null || { echo "compare_balls.sh: needs blender (apt-get install blender)" >&2; exit 2; }
+out=$(mktemp -d)
+trap 'rm -rf "$out"' EXIT
+size=(--set width=320 --set height=180)
+declare -A secs
+cycles() {  # OUT SPP SEED MODEL
+  blender -b -P "$here/cycles_balls.py" -- "$1" "$2" 320 180 "$3" "$map" "$4" 2>/dev/null | awk '/RENDER_SECONDS/ {print $2}'
+}
+for spp in 64 256; do
+  for seed in 3 4; do
+    t0=$EPOCHREALTIME
+    "$lightfarm" run "$here/../../examples/material_balls.lua" "${size[@]}" --set spp=$spp --set seed=$seed \
+      --set hdri=$hdri --output "$out/lf_${spp}_$seed.exr" --quiet 2>/dev/null
+    secs[lf_${spp}_$seed]=$(python3 -c "print($EPOCHREALTIME - $t0)")
+    secs[cy_${spp}_$seed]=$(cycles "$out/cy_${spp}_$seed.exr" $spp $seed GGX)
+  done
+done
+cycles "$out/cy_multi_3.exr" 256 3 MULTI_GGX >/dev/null
+cycles "$out/cy_multi_4.exr" 256 4 MULTI_GGX >/dev/null
+cycles "$out/cy_lambert_3.exr" 256 3 LAMBERT >/dev/null
+"$lightfarm" run "$here/lightfarm_balls_lambert.lua" --set hdri=$hdri --set seed=3 --output "$out/lf_lambert_3.exr" --quiet 2>/dev/null
+# Two seeds averaged: 512 samples' worth for the means.
+blender -b --python-expr "
+import bpy, numpy, sys
+d = '$out'
+for name in ('cy_256', 'cy_multi', 'lf_256'):
+    imgs = [bpy.data.images.load(d + '/%s_%d.exr' % (name, s)) for s in (3, 4)]
+    px = []
+    for im in imgs:
+        a = numpy.empty(len(im.pixels), dtype=numpy.float32); im.pixels.foreach_get(a); px.append(a)
+    out = imgs[0].copy(); out.pixels.foreach_set((px[0] + px[1]) / 2)
+    out.filepath_raw = d + '/%s_mean.exr' % name; out.file_format = 'OPEN_EXR'; out.save()
+" >/dev/null 2>&1
+json=$out/cy_256_3.exr.balls.json
+echo "lightfarm against Cycles on balls.glb under $hdri.exr and the file's sun; 320x180, 2 cores"
+echo "1. means over each ball's inner disc and the floor (columns: Cycles Principled GGX, Cycles multiscatter GGX, lightfarm)"
+blender -b -P "$here/balls_peer.py" -- "$json" means "$out/cy_256_mean.exr" "$out/cy_multi_mean.exr" "$out/lf_256_mean.exr" 2>/dev/null | grep '^MEAN'
+echo "   every material Lambert (columns: Cycles, lightfarm)"
+blender -b -P "$here/balls_peer.py" -- "$json" means "$out/cy_lambert_3.exr" "$out/lf_lambert_3.exr" 2>/dev/null | grep '^MEAN'
+noise=$(blender -b -P "$here/balls_peer.py" -- "$json" noise \
+          "$out/lf_64_3.exr" "$out/lf_64_4.exr" "$out/lf_256_3.exr" "$out/lf_256_4.exr" \
+          "$out/cy_64_3.exr" "$out/cy_64_4.exr" "$out/cy_256_3.exr" "$out/cy_256_4.exr" 2>/dev/null | awk '/^NOISE/ {print $4}')
+read -r lf64 lf256 cy64 cy256 <<<"$(echo $noise)"
+python3 - "$lf64" "$lf256" "$cy64" "$cy256" "${secs[lf_64_3]}" "${secs[lf_64_4]}" "${secs[lf_256_3]}" "${secs[lf_256_4]}" \
+  "${secs[cy_64_3]}" "${secs[cy_64_4]}" "${secs[cy_256_3]}" "${secs[cy_256_4]}" <<'PY'
+import math, sys
+a = list(map(float, sys.argv[1:]))
+lf64, lf256, cy64, cy256 = a[0:4]
+lf_t64, lf_t256, cy_t64, cy_t256 = (a[4] + a[5]) / 2, (a[6] + a[7]) / 2, (a[8] + a[9]) / 2, (a[10] + a[11]) / 2
+print("2. quality per time (noise from seed pairs over the balls' discs and the floor)")
+print("%-10s %10s %10s %12s" % ("", "noise", "seconds", "noise^2 x s"))
+for name, n, s in (("lf 64", lf64, lf_t64), ("lf 256", lf256, lf_t256), ("cy 64", cy64, cy_t64), ("cy 256", cy256, cy_t256)):
+    print("%-10s %10.5f %10.2f %12.5f" % (name, n, s, n * n * s))
+slope = math.log(lf64 / lf256) / math.log(4)
+spp = 256 * (lf256 / cy256) ** (1 / slope)
+per_spp = (lf_t256 - lf_t64) / 192
+fixed = lf_t256 - 256 * per_spp
+lf_time = fixed + per_spp * spp
+print("lightfarm reaches Cycles' 256-spp noise at ~%.0f spp (its noise falls as spp^-%.2f) in ~%.1f s: %.2f of Cycles' %.1f s"
+      % (spp, slope, lf_time, lf_time / cy_t256, cy_t256))
+PY

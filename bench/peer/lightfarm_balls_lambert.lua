@@ -1,0 +1,12 @@
+-- Used by bench/peer/compare_balls.sh: examples/material_balls.lua's scene and light with every material made a
+-- Lambert surface of its base colour, as cycles_balls.py's LAMBERT renders it: the light transport alone.
+scene  { file = "../../../shared/scenes/gltf/balls.glb" }
+environment { map = "../../../shared/scenes/gltf/hdri/" .. param("hdri", "courtyard") .. ".exr" }
+camera { gltf = "Camera" }
+image  { width = param("width", 320), height = param("height", 180), spp = param("spp", 256) }
+material "Floor" { type = "diffuse", kd = {0.6, 0.6, 0.6} }
+for _, r in ipairs({"0.05", "0.3", "0.6", "0.9"}) do
+  material("Ball_m0_r" .. r) { type = "diffuse", kd = {0.2, 0.35, 0.8} }
+  material("Ball_m1_r" .. r) { type = "diffuse", kd = {0.9, 0.6, 0.2} }
+end
+renderers { count = 2, lighting = multiplexer { lightop "pathtrace" { seed = param("seed", 0) }, replicas = 2 } }
