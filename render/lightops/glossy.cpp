@@ -49,7 +49,10 @@ class Glossy final : public LightOp {
       const Material& m = scene.material(points.material[i]);
       const bool microfacet = m.type == Material::Type::metal_rough;
       // A microfacet material's base colour may be a texture's; a Phong lobe needs no albedo.
-      const Bsdf bsdf = microfacet ? Bsdf(m, points.albedo(i, scene, ctx_.pixel_footprint(points.position[i]))) : Bsdf(m);
+      const float footprint = ctx_.pixel_footprint(points.position[i]);
+      float metallic = 0, roughness = 0;
+      if (microfacet) points.metal_rough(i, scene, footprint, metallic, roughness);
+      const Bsdf bsdf = microfacet ? Bsdf(m, points.albedo(i, scene, footprint), metallic, roughness) : Bsdf(m);
       if (!bsdf.has_glossy_lobe()) continue;
       ++points_;
       const Vec3 ng = points.face_normal(i, scene);

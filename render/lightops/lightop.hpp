@@ -63,6 +63,14 @@ struct ShadingPoints {
     if (triangle.empty() || m.kd_map < 0 || !scene.has_uvs()) return m.kd;
     return scene.albedo(triangle[i], scene.barycentrics(triangle[i], position[i]), footprint);
   }
+  // A metal_rough material's metallic and roughness at point i (Scene::metal_rough_at; its factors without maps).
+  void metal_rough(size_t i, const Scene& scene, float footprint, float& metallic, float& roughness) const {
+    const Material& m = scene.material(material[i]);
+    metallic = m.metallic;
+    roughness = m.roughness;
+    if (triangle.empty() || (m.metallic_map < 0 && m.roughness_map < 0) || !scene.has_uvs()) return;
+    scene.metal_rough_at(triangle[i], scene.barycentrics(triangle[i], position[i]), footprint, metallic, roughness);
+  }
   // Empty string when consistent; otherwise what is wrong (for validating what arrives from the wire).
   std::string check(size_t material_count, size_t triangle_count = SIZE_MAX) const;
 };

@@ -154,7 +154,10 @@ class PhotonMap final : public LightOp {
           continue;
         }
       }
-      const Bsdf bsdf(m, points.albedo(i, scene, ctx_.pixel_footprint(points.position[i])));
+      const float footprint = ctx_.pixel_footprint(points.position[i]);
+      float metallic, roughness;
+      points.metal_rough(i, scene, footprint, metallic, roughness);
+      const Bsdf bsdf(m, points.albedo(i, scene, footprint), metallic, roughness);
       radiance[i] = estimate(points.position[i], points.normal[i],
                              [&](Vec3 wi) { return bsdf.eval(points.normal[i], points.wo[i], wi); });
     }

@@ -199,16 +199,20 @@ Status for_each_node(const tinygltf::Model& model, const std::string& where,
   return Ok{};
 }
 
-// The image a material's base colour texture samples, and the name it goes by; null without one.
-const tinygltf::Image* base_color_image(const tinygltf::Model& model, const tinygltf::Material& material,
-                                        std::string& name) {
-  const int t = material.pbrMetallicRoughness.baseColorTexture.index;
+// The image texture `t` samples, and the name it goes by; null without one.
+const tinygltf::Image* texture_image(const tinygltf::Model& model, int t, std::string& name) {
   if (t < 0 || static_cast<size_t>(t) >= model.textures.size()) return nullptr;
   const int source = model.textures[static_cast<size_t>(t)].source;
   if (source < 0 || static_cast<size_t>(source) >= model.images.size()) return nullptr;
   const tinygltf::Image& image = model.images[static_cast<size_t>(source)];
   name = image.name.empty() ? "image" + std::to_string(source) : image.name;
   return &image;
+}
+
+// The image a material's base colour texture samples, and the name it goes by; null without one.
+const tinygltf::Image* base_color_image(const tinygltf::Model& model, const tinygltf::Material& material,
+                                        std::string& name) {
+  return texture_image(model, material.pbrMetallicRoughness.baseColorTexture.index, name);
 }
 
 std::string material_name(const tinygltf::Material& m, size_t index) {
@@ -285,6 +289,24 @@ std::optional<Texture> base_color_texture(const tinygltf::Image& image, RGB fact
       }
       t.owned[i * 3 + c] = v;
     }
+  t.build_pyramid();
+  return t;
+}
+
+// One channel of an 8-bit image as a linear one-channel texture (a metallic-roughness texture's blue: metallic,
+// its green: roughness).
+std::optional<Texture> channel_texture(const tinygltf::Image& image, int channel, const std::string& name) {
+  if (image.width <= 0 || image.height <= 0 || image.bits != 8 || image.component <= channel ||
+      image.image.size() < static_cast<size_t>(image.width) * static_cast<size_t>(image.height) * static_cast<size_t>(image.component))
+    return std::nullopt;
+  Texture t;
+  t.path = name;
+  t.width = static_cast<uint32_t>(image.width);
+  t.height = static_cast<uint32_t>(image.height);
+  t.channels = 1;
+  const size_t n = static_cast<size_t>(t.width) * t.height, from = static_cast<size_t>(image.component);
+  t.owned.resize(n);
+  for (size_t i = 0; i < n; ++i) t.owned[i] = image.image[i * from + static_cast<size_t>(channel)];
   t.build_pyramid();
   return t;
 }
@@ -390,7 +412,19 @@ Result<Scene> Scene::parse_gltf_unlit(const std::string& path, const std::string
       else warn(which + ": its base colour texture cannot be read (8-bit RGB or RGBA); the material stays flat");
       if (pbr.baseColorTexture.texCoord != 0) warn(which + ": a texture on TEXCOORD_" + std::to_string(pbr.baseColorTexture.texCoord) + " is read with TEXCOORD_0");
     }
-    if (pbr.metallicRoughnessTexture.index >= 0) warn(which + ": metallicRoughnessTexture is not read; its factors hold everywhere");
+    if (pbr.metallicRoughnessTexture.index >= 0) {
+      std::string mr_name;
+      const tinygltf::Image* mr = texture_image(model, pbr.metallicRoughnessTexture.index, mr_name);
+      std::optional<Texture> metallic, roughness;
+      if (mr) metallic = channel_texture(*mr, 2, mr_name + " (metallic)"), roughness = channel_texture(*mr, 1, mr_name + " (roughness)");
+      if (metallic && roughness) {
+        m.metallic_map = static_cast<int32_t>(s.add_texture(std::move(*metallic)));
+        m.roughness_map = static_cast<int32_t>(s.add_texture(std::move(*roughness)));
+      } else {
+        warn(which + ": its metallicRoughnessTexture cannot be read (8-bit RGB or RGBA); its factors hold everywhere");
+      }
+      if (pbr.metallicRoughnessTexture.texCoord != 0) warn(which + ": a texture on TEXCOORD_" + std::to_string(pbr.metallicRoughnessTexture.texCoord) + " is read with TEXCOORD_0");
+    }
     if (g.normalTexture.index >= 0) warn(which + ": normalTexture is not read");
     if (g.emissiveTexture.index >= 0) warn(which + ": emissiveTexture is not read; emissiveFactor holds everywhere");
     if (g.occlusionTexture.index >= 0) warn(which + ": occlusionTexture is left out (a path tracer computes occlusion)");

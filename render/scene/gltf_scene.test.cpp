@@ -9,6 +9,7 @@
 #include <fstream>
 
 #include "render/scene/scene.hpp"
+#include "render/scene/scene_file.hpp"
 
 namespace lf {
 namespace {
@@ -121,6 +122,43 @@ TEST(GltfScene, AlphaMaskCutsWhereCoverageIsBelowTheCutoff) {
   // Triangle 0 runs (0,0) (1,0) (1,1); x < 0.5 is the image's left half.
   EXPECT_TRUE(s->opaque(0, {0.8f, 0.1f, 0.1f}));
   EXPECT_FALSE(s->opaque(0, {0.1f, 0.8f, 0.1f}));
+}
+
+// metallicRoughnessTexture: blue is metallic, green roughness, each times its factor, and the maps travel with the
+// shipped scene. A 4 x 4 TGA: the left half rough (green 1) dielectric (blue 0), the right half smooth (green 0.2)
+// metal (blue 1); factors metallic 1, roughness 0.5.
+TEST(GltfScene, MetallicRoughnessTexturesVaryTheModelOverTheSurface) {
+  GltfFiles files;
+  std::string tga(18, '\0');
+  tga[2] = 2;                    // uncompressed true colour
+  tga[12] = 4, tga[14] = 4;      // 4 x 4
+  tga[16] = 24, tga[17] = 0x20;  // BGR, top row first
+  for (int y = 0; y < 4; ++y)
+    for (int x = 0; x < 4; ++x) tga += x < 2 ? std::string{'\x00', '\xff', '\x00'} : std::string{'\xff', '\x33', '\x00'};
+  std::ofstream(files.dir / "mr.tga", std::ios::binary) << tga;
+  const std::string path = files.write(
+      R"([{"mesh": 0}])", 4,
+      R"({"name": "patchy", "pbrMetallicRoughness": {"metallicFactor": 1, "roughnessFactor": 0.5, "metallicRoughnessTexture": {"index": 0}}})",
+      R"("textures": [{"source": 0}], "images": [{"uri": "mr.tga"}],)");
+  auto s = Scene::load_gltf_unlit(path);
+  ASSERT_TRUE(s.ok()) << s.error().message;
+  const Material& m = s->material(s->material_of(0));
+  ASSERT_GE(m.metallic_map, 0);
+  ASSERT_GE(m.roughness_map, 0);
+  s->add_point_light({0, 0, 1}, {1, 1, 1});
+  ASSERT_TRUE(s->finalize("patchy").ok());
+  auto shipped = scene_from_bytes(scene_to_bytes(*s), "shipped");
+  ASSERT_TRUE(shipped.ok()) << shipped.error().message;
+  // Triangle 0's texture coordinates: u = b1 + b2, so b = (0.8, 0.1, 0.1) is at u 0.2 (left), (0.3, 0.4, 0.3) at 0.7.
+  for (const Scene* scene : {&*s, &*shipped}) {
+    float metallic = -1, roughness = -1;
+    scene->metal_rough_at(0, {0.8f, 0.1f, 0.1f}, 0, metallic, roughness);
+    EXPECT_NEAR(metallic, 0.0f, 1e-6f);
+    EXPECT_NEAR(roughness, 0.5f, 1e-6f);
+    scene->metal_rough_at(0, {0.3f, 0.4f, 0.3f}, 0, metallic, roughness);
+    EXPECT_NEAR(metallic, 1.0f, 1e-6f);
+    EXPECT_NEAR(roughness, 0.1f, 1e-3f);
+  }
 }
 
 TEST(GltfScene, BadFilesAreRefusedWithAMessage) {

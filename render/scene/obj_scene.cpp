@@ -101,7 +101,7 @@ namespace {
 // MTL's PBR extension (Pr, Pm; Blender's exporter writes them): glTF's metal-roughness model with Kd (and map_Kd) as
 // the base colour, in place of the illum model's lobes. tinyobjloader reads an absent Pr or Pm as 0, so a material
 // with both 0 and no maps stays the illum model's; glass stays glass (no rough glass yet).
-void with_mtl_pbr(Material& mat, const tinyobj::material_t& m, const std::string& path) {
+void with_mtl_pbr(Material& mat, const tinyobj::material_t& m) {
   const bool pbr = m.roughness > 0 || m.metallic > 0 || !m.roughness_texname.empty() || !m.metallic_texname.empty();
   if (!pbr || mat.type == Material::Type::glass) return;
   mat.type = Material::Type::metal_rough;
@@ -110,9 +110,9 @@ void with_mtl_pbr(Material& mat, const tinyobj::material_t& m, const std::string
   mat.roughness = std::clamp(static_cast<float>(m.roughness), 0.0f, 1.0f);
   mat.ks = mat.kr = {};
   mat.ns = 0;
-  if (!m.roughness_texname.empty() || !m.metallic_texname.empty())
-    log_warn("scene file '" + path + "': material '" + m.name + "': map_Pr and map_Pm are not read; its Pr " +
-             std::to_string(mat.roughness) + " and Pm " + std::to_string(mat.metallic) + " hold everywhere");
+  // A map holds the value itself (as Blender's importer reads map_Pr and map_Pm): the factor it multiplies is 1.
+  if (!m.roughness_texname.empty()) mat.roughness = 1;
+  if (!m.metallic_texname.empty()) mat.metallic = 1;
 }
 
 }  // namespace
@@ -130,16 +130,20 @@ Result<Scene> Scene::from_obj_reader(const tinyobj::ObjReader& reader, const std
                                      {m.specular[0], m.specular[1], m.specular[2]},
                                      {m.emission[0], m.emission[1], m.emission[2]}, m.shininess, m.ior, m.illum,
                                      {m.transmittance[0], m.transmittance[1], m.transmittance[2]});
-    with_mtl_pbr(mat, m, path);
+    with_mtl_pbr(mat, m);
     s.add_material(std::move(mat));
   }
   // Textures, each file read once per use (a colour map keeps RGB, an alpha map one channel). One that cannot be
   // read leaves its material flat, with a warning.
   const std::string where = "scene file '" + path + "'";
-  std::map<std::pair<std::string, bool>, int32_t> loaded;
-  auto texture = [&](const std::string& name, bool alpha, const std::string& material) -> int32_t {
+  // A colour map keeps RGB (sRGB-encoded); a coverage map (map_d) and a scalar map (map_Pr, map_Pm: linear values,
+  // the first channel) one channel.
+  enum class Use { colour, coverage, scalar };
+  std::map<std::pair<std::string, Use>, int32_t> loaded;
+  auto texture = [&](const std::string& name, Use use, const std::string& material, const char* statement) -> int32_t {
     if (name.empty()) return -1;
-    auto [it, fresh] = loaded.emplace(std::pair{name, alpha}, -1);
+    const bool alpha = use != Use::colour;
+    auto [it, fresh] = loaded.emplace(std::pair{name, use}, -1);
     if (!fresh) return it->second;
     const std::string file = (std::filesystem::path(texture_dir) / name).string();
     std::error_code ec;
@@ -147,9 +151,9 @@ Result<Scene> Scene::from_obj_reader(const tinyobj::ObjReader& reader, const std
     auto texels = !texture_dir.empty() && std::filesystem::is_regular_file(file, ec) ? read_texels(file)
                                                              : Result<Texels>(make_error("no such file"));
     if (!texels) {
-      log_warn(where + ": material '" + material + "': " + (alpha ? "map_d" : "map_Kd") + " '" + name +
-               "' cannot be read (" + texels.error().message + "); the material stays " +
-               (alpha ? "uncut" : "flat (its Kd)"));
+      log_warn(where + ": material '" + material + "': " + statement + " '" + name + "' cannot be read (" +
+               texels.error().message + "); the material stays " +
+               (use == Use::coverage ? "uncut" : use == Use::colour ? "flat (its Kd)" : "at its factor everywhere"));
       return -1;
     }
     Texture t;
@@ -162,7 +166,7 @@ Result<Scene> Scene::from_obj_reader(const tinyobj::ObjReader& reader, const std
     // Coverage is the alpha channel where it says something (varies), else the first channel: a grey image, as the
     // MTL format means map_d (Lost Empire's alpha map is grey with a constant alpha).
     size_t coverage = 0;
-    if (alpha && (from == 2 || from == 4))
+    if (use == Use::coverage && (from == 2 || from == 4))
       for (size_t i = 0; i < n && coverage == 0; ++i)
         if (texels->bytes[i * from + from - 1] != texels->bytes[from - 1]) coverage = from - 1;
     for (size_t i = 0; i < n; ++i) {
@@ -186,8 +190,15 @@ Result<Scene> Scene::from_obj_reader(const tinyobj::ObjReader& reader, const std
   for (size_t i = 0; i < materials.size(); ++i) {
     Material& m = s.materials_[i];
     if (m.type == Material::Type::diffuse || m.type == Material::Type::glossy || m.type == Material::Type::metal_rough)
-      m.kd_map = texture(materials[i].diffuse_texname, false, m.name);
-    m.alpha_map = texture(materials[i].alpha_texname, true, m.name);
+      m.kd_map = texture(materials[i].diffuse_texname, Use::colour, m.name, "map_Kd");
+    m.alpha_map = texture(materials[i].alpha_texname, Use::coverage, m.name, "map_d");
+    if (m.type == Material::Type::metal_rough) {
+      m.roughness_map = texture(materials[i].roughness_texname, Use::scalar, m.name, "map_Pr");
+      m.metallic_map = texture(materials[i].metallic_texname, Use::scalar, m.name, "map_Pm");
+      // A map that cannot be read leaves the factor, which the map's presence set to 1: back to the file's value.
+      if (m.roughness_map < 0 && !materials[i].roughness_texname.empty()) m.roughness = std::clamp(materials[i].roughness, 0.0f, 1.0f);
+      if (m.metallic_map < 0 && !materials[i].metallic_texname.empty()) m.metallic = std::clamp(materials[i].metallic, 0.0f, 1.0f);
+    }
   }
   // Faces without a material get a neutral grey, as most renderers do.
   const auto fallback = s.add_material({"(default)", {0.5f, 0.5f, 0.5f}, {}});
@@ -270,7 +281,8 @@ Result<ObjCatalogue> Scene::catalogue_obj(const std::string& path) {
         out.material_names.push_back(m.name);
         known.insert(m.name);
         for (const auto& [slot, name] : {std::pair{"map_Kd", &m.diffuse_texname}, {"map_Ks", &m.specular_texname},
-                                         {"map_d", &m.alpha_texname}, {"map_Ke", &m.emissive_texname}})
+                                         {"map_d", &m.alpha_texname}, {"map_Ke", &m.emissive_texname},
+                                         {"map_Pr", &m.roughness_texname}, {"map_Pm", &m.metallic_texname}})
           if (!name->empty()) {
             std::error_code ec;
             out.textures.push_back({m.name, slot, *name, std::filesystem::is_regular_file(dir / *name, ec)});

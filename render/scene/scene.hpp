@@ -41,6 +41,10 @@ struct Material {
   // coordinates; alpha_map cuts the surface out where its coverage is below one half (docs/decisions.md).
   int32_t kd_map = -1;
   int32_t alpha_map = -1;
+  // metal_rough: one-channel linear textures the factors above multiply (glTF's metallicRoughnessTexture, its blue
+  // and green channels; MTL map_Pm and map_Pr).
+  int32_t metallic_map = -1;
+  int32_t roughness_map = -1;
   bool emissive() const { return !is_black(ke); }
   bool specular() const { return type == Type::mirror || type == Type::glass; }
   // A diffuse or glossy surface that also reflects like a mirror (kr): its mirror term is the `specular` op's.
@@ -159,6 +163,8 @@ class Scene {
   // `footprint`: how wide a pixel is at the point, in scene units (0: the texture's full resolution). The texture
   // is filtered to that width (its mip level), so a pixel's few samples see the mean colour it covers.
   RGB albedo(uint32_t triangle, Vec3 b, float footprint = 0) const;
+  // A metal_rough material's metallic and roughness at barycentrics b: its factors, times its maps' values there.
+  void metal_rough_at(uint32_t triangle, Vec3 b, float footprint, float& metallic, float& roughness) const;
   // Whether the surface is there at barycentrics b (false where an alpha map cuts it out).
   bool opaque(uint32_t triangle, Vec3 b) const;
   // Whether any material is cut out by an alpha map (the tracer then filters its hits).

@@ -140,6 +140,36 @@ TEST(Scene, MtlPbrFieldsMakeAMetalRoughMaterial) {
   EXPECT_FLOAT_EQ(shipped->material(shipped->material_of(0)).roughness, 0.25f);
 }
 
+// map_Pr and map_Pm hold the roughness and metallic values themselves (their first channel, linear), as Blender's
+// importer reads them; one that cannot be read leaves the file's Pm, with a warning.
+TEST(Scene, MtlPbrMapsVaryRoughnessOverTheSurface) {
+  const auto dir = std::filesystem::temp_directory_path() / ("lightfarm-pbrmaps-" + std::to_string(::getpid()));
+  std::filesystem::create_directories(dir);
+  std::string tga(18, '\0');
+  tga[2] = 3;                    // uncompressed grey
+  tga[12] = 2, tga[14] = 1;      // 2 x 1
+  tga[16] = 8, tga[17] = 0x20;   // 8 bits, top row first
+  tga += std::string{'\x33', '\xff'};  // 0.2 on the left, 1 on the right
+  std::ofstream(dir / "rough.tga", std::ios::binary) << tga;
+  std::ofstream(dir / "x.obj") << "mtllib x.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0.5\nvt 1 0.5\nvt 0 0.5\n"
+                                  "usemtl patchy\nf 1/1 2/2 3/3\n";
+  std::ofstream(dir / "x.mtl") << "newmtl patchy\nKd 0.5 0.5 0.5\nPr 0.5\nPm 0.3\nmap_Pr rough.tga\nmap_Pm gone.tga\n";
+  auto s = Scene::load_obj_unlit((dir / "x.obj").string());
+  std::filesystem::remove_all(dir);
+  ASSERT_TRUE(s.ok()) << s.error().message;
+  const Material& m = s->material(s->material_of(0));
+  ASSERT_EQ(m.type, Material::Type::metal_rough);
+  ASSERT_GE(m.roughness_map, 0);
+  EXPECT_EQ(m.metallic_map, -1);
+  float metallic = -1, roughness = -1;
+  // Corner 2 is at u = 1 (the right texel's centre is u = 0.75, the left's 0.25, repeating between them).
+  s->metal_rough_at(0, {0.5f, 0.5f, 0.0f}, 0, metallic, roughness);  // u = 0.5: halfway between the two texels
+  EXPECT_NEAR(roughness, 0.6f, 0.01f);
+  EXPECT_NEAR(metallic, 0.3f, 1e-6f);
+  s->metal_rough_at(0, {0.5f, 0.25f, 0.25f}, 0, metallic, roughness);  // u = 0.25: the left texel's centre
+  EXPECT_NEAR(roughness, 0.2f, 0.01f);
+}
+
 TEST(Scene, McGuireEmptyCOReadsTheIndentedMaterial) {
   REQUIRE_SHARED_SCENES();
   auto s = Scene::load_obj(kShared + "CornellBox-Empty-CO.obj");

@@ -15,10 +15,11 @@ namespace lf {
 
 namespace {
 
-constexpr std::string_view kMagic = "LFSCENE5";  // 4: materials carry metallic and roughness; 5: the environment
+constexpr std::string_view kMagic = "LFSCENE6";  // 4: metallic and roughness; 5: the environment; 6: their maps
 using bytes::put;
 using bytes::put_rgb;
 using bytes::Reader;
+using bytes::maps_within;
 using bytes::put_material;
 using bytes::read_material;
 
@@ -78,7 +79,7 @@ std::string scene_to_bytes(const Scene& scene) {
 }
 
 Result<Scene> scene_from_bytes(std::string_view bytes, const std::string& what) {
-  if (bytes.substr(0, kMagic.size()) != kMagic) return make_error(what + ": not a lightfarm scene (no LFSCENE5)");
+  if (bytes.substr(0, kMagic.size()) != kMagic) return make_error(what + ": not a lightfarm scene (no LFSCENE6)");
   Reader r(bytes.substr(kMagic.size()));
   auto bad = [&] { return make_error(what + ": the scene's bytes are truncated or inconsistent"); };
   Scene s;
@@ -106,7 +107,7 @@ Result<Scene> scene_from_bytes(std::string_view bytes, const std::string& what) 
   if (!r.u32(materials) || !r.room(materials, 50)) return bad();
   for (uint32_t i = 0; i < materials; ++i) {
     Material m;
-    if (!read_material(r, m) || m.kd_map >= static_cast<int32_t>(textures) || m.alpha_map >= static_cast<int32_t>(textures))
+    if (!read_material(r, m) || !maps_within(m, textures))
       return bad();
     s.add_material(std::move(m));
   }

@@ -19,7 +19,7 @@ namespace {
 
 constexpr char kMagic[8] = {'L', 'F', 'I', 'M', 'A', 'G', 'E', '2'};
 constexpr uint32_t kByteOrderMark = 0x01020304;
-constexpr uint32_t kVersion = 5;  // 3: materials carry kr and tf; 4: metallic and roughness; 5: the environment
+constexpr uint32_t kVersion = 6;  // 3: kr and tf; 4: metallic and roughness; 5: the environment; 6: their maps
 constexpr size_t kAlign = 64;
 constexpr size_t kVertexSlack = 16;
 
@@ -220,8 +220,7 @@ Result<Scene> SceneImage::map(const std::string& path, const std::string& hash, 
   if (!r.room(h.materials, 50)) return bad("material count");
   for (uint32_t i = 0; i < h.materials; ++i) {
     Material m;
-    if (!bytes::read_material(r, m) || m.kd_map >= static_cast<int32_t>(h.textures) ||
-        m.alpha_map >= static_cast<int32_t>(h.textures))
+    if (!bytes::read_material(r, m) || !bytes::maps_within(m, h.textures))
       return bad("materials");
     s.materials_.push_back(std::move(m));
   }

@@ -158,21 +158,38 @@ Vec2 Scene::uv(uint32_t t, Vec3 b) const {
   return {c[0].u * b.x + c[1].u * b.y + c[2].u * b.z, c[0].v * b.x + c[1].v * b.y + c[2].v * b.z};
 }
 
+// The mip level at which triangle t shows `tex` for a pixel `footprint` wide (0: the full image).
+static float texture_lod(const Scene& s, uint32_t t, const Texture& tex, float footprint) {
+  if (!(footprint > 0)) return 0;
+  // Texels per scene unit on this triangle: the square root of its texel area over its area.
+  const Vec2 c[3] = {s.corner_uv(t, 0), s.corner_uv(t, 1), s.corner_uv(t, 2)};
+  const float uv_area = 0.5f * std::abs((c[1].u - c[0].u) * (c[2].v - c[0].v) - (c[2].u - c[0].u) * (c[1].v - c[0].v));
+  const float density = std::sqrt(uv_area * static_cast<float>(tex.width) * static_cast<float>(tex.height) / s.area(t));
+  const float texels = footprint * density;
+  return texels > 1 && std::isfinite(texels) ? std::log2(texels) : 0.0f;
+}
+
+void Scene::metal_rough_at(uint32_t t, Vec3 b, float footprint, float& metallic, float& roughness) const {
+  const Material& m = materials_[material_view_[t]];
+  metallic = m.metallic;
+  roughness = m.roughness;
+  if ((m.metallic_map < 0 && m.roughness_map < 0) || corner_uv_view_.empty()) return;
+  const Vec2 at = uv(t, b);
+  if (!std::isfinite(at.u) || !std::isfinite(at.v)) return;
+  for (auto [map, value] : {std::pair{m.metallic_map, &metallic}, std::pair{m.roughness_map, &roughness}}) {
+    if (map < 0) continue;
+    const Texture& tex = textures_[static_cast<size_t>(map)];
+    *value = std::clamp(*value * tex.sample(at, 0, texture_lod(*this, t, tex, footprint)), 0.0f, 1.0f);
+  }
+}
+
 RGB Scene::albedo(uint32_t t, Vec3 b, float footprint) const {
   const Material& m = materials_[material_view_[t]];
   if (m.kd_map < 0 || corner_uv_view_.empty()) return m.kd;
   const Texture& tex = textures_[static_cast<size_t>(m.kd_map)];
   const Vec2 at = uv(t, b);
   if (!std::isfinite(at.u) || !std::isfinite(at.v)) return m.kd;  // a face without texture coordinates
-  float lod = 0;
-  if (footprint > 0) {
-    // Texels per scene unit on this triangle: the square root of its texel area over its area.
-    const Vec2* c = &corner_uv_view_[3 * static_cast<size_t>(t)];
-    const float uv_area = 0.5f * std::abs((c[1].u - c[0].u) * (c[2].v - c[0].v) - (c[2].u - c[0].u) * (c[1].v - c[0].v));
-    const float density = std::sqrt(uv_area * static_cast<float>(tex.width) * static_cast<float>(tex.height) / area(t));
-    const float texels = footprint * density;
-    if (texels > 1 && std::isfinite(texels)) lod = std::log2(texels);
-  }
+  const float lod = texture_lod(*this, t, tex, footprint);
   return {tex.sample(at, 0, lod), tex.sample(at, 1, lod), tex.sample(at, 2, lod)};
 }
 

@@ -17,11 +17,13 @@ class Bsdf {
   explicit Bsdf(const Material& m) : m_(m), kd_(m.kd) { with_microfacet(); }
   // With the diffuse reflectance (a metal_rough material's base colour) at the point (a texture's), kept to at most
   // 1 - ks per channel.
-  Bsdf(const Material& m, RGB albedo)
+  Bsdf(const Material& m, RGB albedo) : Bsdf(m, albedo, m.metallic, m.roughness) {}
+  // The same with a metal_rough material's metallic and roughness at the point (its maps', Scene::metal_rough_at).
+  Bsdf(const Material& m, RGB albedo, float metallic, float roughness)
       : m_(m),
         kd_{std::min(albedo.x, 1 - m.ks.x - m.kr.x), std::min(albedo.y, 1 - m.ks.y - m.kr.y),
             std::min(albedo.z, 1 - m.ks.z - m.kr.z)} {
-    with_microfacet();
+    if (m_.type == Material::Type::metal_rough) microfacet_.emplace(kd_, metallic, roughness);
   }
 
   // Mirror and glass scatter into single directions: light sampling cannot reach them, only sample() can.

@@ -18,6 +18,7 @@ struct Path {
   Vec3 above;  // where rays that leave x on the face's side start (Scene::ray_origin)
   Vec3 ng;     // the face's normal on n's side (n is the shading normal)
   RGB albedo;  // the diffuse reflectance here (a texture's, or the material's kd)
+  float metallic, roughness;  // a metal_rough material's here (its maps', or its factors)
   uint32_t material;
   uint32_t triangle;  // UINT32_MAX: a point that names none
   bool outside;
@@ -139,10 +140,14 @@ void Wavefront::start(const ShadingPoints& points) {
   for (size_t i = 0; i < points_; ++i) {
     const Vec3 ng = points.face_normal(i, scene_);
     const Vec3 above = scene_.ray_origin(points.triangle_of(i), points.position[i], ng);
-    const RGB albedo = points.albedo(i, scene_, ctx_.pixel_footprint(points.position[i]));
+    const float footprint = ctx_.pixel_footprint(points.position[i]);
+    const RGB albedo = points.albedo(i, scene_, footprint);
+    float metallic, roughness;
+    points.metal_rough(i, scene_, footprint, metallic, roughness);
     const bool outside = points.outside(i, scene_);
     for (size_t s = 0; s < per_; ++s)
-      paths_.push_back(Path{points.position[i], points.normal[i], points.wo[i], above, ng, albedo, points.material[i],
+      paths_.push_back(Path{points.position[i], points.normal[i], points.wo[i], above, ng, albedo, metallic, roughness,
+                            points.material[i],
                             points.triangle_of(i), outside, {1, 1, 1}, {},
                             Sampler(ctx_.sampler, points.key[i], o_.stream, static_cast<uint32_t>(s), static_cast<uint32_t>(per_))});
   }
@@ -155,7 +160,7 @@ void Wavefront::start(const ShadingPoints& points) {
 void Wavefront::sample_light_for(uint32_t p, int depth) {
   Path& path = paths_[p];
   const Material& m = scene_.material(path.material);
-  const Bsdf bsdf(m, path.albedo);
+  const Bsdf bsdf(m, path.albedo, path.metallic, path.roughness);
   if (bsdf.is_delta()) return;
   path.rng.at_dimension(kSlotsPerVertex * (depth - 1));
   std::optional<LightSample> picked =
@@ -243,7 +248,7 @@ void Wavefront::sample_continuations(int depth) {
     path.rng.at_dimension(kSlotsPerVertex * (depth - 1) + 2);
     const float u0 = path.rng.uniform();
     const Uniform2 direction = path.rng.uniform2();
-    const Bsdf bsdf(m, path.albedo);
+    const Bsdf bsdf(m, path.albedo, path.metallic, path.roughness);
     auto s = by_lobe(m) ? bsdf.sample_by_lobe(path.n, path.wo, u0, direction.u, direction.v)
                         : bsdf.sample(path.n, path.wo, path.outside, u0, direction.u, direction.v);
     // Only glass may send a path through the face; a reflection the shading normal allows below it ends here.
@@ -372,6 +377,10 @@ void Wavefront::land(int depth) {
     path.material = scene_.material_of(tri);
     path.triangle = tri;
     path.albedo = hit_material.kd_map < 0 ? hit_material.kd : scene_.albedo(tri, scene_.barycentrics(tri, path.x), ctx_.pixel_footprint(path.x));
+    path.metallic = hit_material.metallic;
+    path.roughness = hit_material.roughness;
+    if (hit_material.metallic_map >= 0 || hit_material.roughness_map >= 0)
+      scene_.metal_rough_at(tri, scene_.barycentrics(tri, path.x), ctx_.pixel_footprint(path.x), path.metallic, path.roughness);
     path.outside = front;
   }
   // Those that go on are among those that continued, in the same order.
