@@ -293,6 +293,25 @@ std::optional<Texture> base_color_texture(const tinygltf::Image& image, RGB fact
   return t;
 }
 
+// An 8-bit RGB(A) image whose channels are data (a normal map's x, y, z), kept as they are: a `linear` texture.
+std::optional<Texture> data_texture(const tinygltf::Image& image, const std::string& name) {
+  if (image.width <= 0 || image.height <= 0 || image.bits != 8 || image.component < 3 ||
+      image.image.size() < static_cast<size_t>(image.width) * static_cast<size_t>(image.height) * static_cast<size_t>(image.component))
+    return std::nullopt;
+  Texture t;
+  t.path = name;
+  t.width = static_cast<uint32_t>(image.width);
+  t.height = static_cast<uint32_t>(image.height);
+  t.channels = 3;
+  t.linear = true;
+  const size_t n = static_cast<size_t>(t.width) * t.height, from = static_cast<size_t>(image.component);
+  t.owned.resize(n * 3);
+  for (size_t i = 0; i < n; ++i)
+    for (size_t c = 0; c < 3; ++c) t.owned[i * 3 + c] = image.image[i * from + c];
+  t.build_pyramid();
+  return t;
+}
+
 // One channel of an 8-bit image as a linear one-channel texture (a metallic-roughness texture's blue: metallic,
 // its green: roughness).
 std::optional<Texture> channel_texture(const tinygltf::Image& image, int channel, const std::string& name) {
@@ -425,7 +444,19 @@ Result<Scene> Scene::parse_gltf_unlit(const std::string& path, const std::string
       }
       if (pbr.metallicRoughnessTexture.texCoord != 0) warn(which + ": a texture on TEXCOORD_" + std::to_string(pbr.metallicRoughnessTexture.texCoord) + " is read with TEXCOORD_0");
     }
-    if (g.normalTexture.index >= 0) warn(which + ": normalTexture is not read");
+    if (g.normalTexture.index >= 0) {
+      std::string normal_name;
+      const tinygltf::Image* normals = texture_image(model, g.normalTexture.index, normal_name);
+      std::optional<Texture> tex;
+      if (normals) tex = data_texture(*normals, normal_name);
+      if (tex) {
+        m.normal_map = static_cast<int32_t>(s.add_texture(std::move(*tex)));
+        m.normal_scale = static_cast<float>(g.normalTexture.scale);
+      } else {
+        warn(which + ": its normalTexture cannot be read (8-bit RGB or RGBA); its surface stays smooth");
+      }
+      if (g.normalTexture.texCoord != 0) warn(which + ": a texture on TEXCOORD_" + std::to_string(g.normalTexture.texCoord) + " is read with TEXCOORD_0");
+    }
     if (g.emissiveTexture.index >= 0) warn(which + ": emissiveTexture is not read; emissiveFactor holds everywhere");
     if (g.occlusionTexture.index >= 0) warn(which + ": occlusionTexture is left out (a path tracer computes occlusion)");
     if (g.alphaMode == "MASK" || g.alphaMode == "BLEND") {

@@ -10,6 +10,8 @@
 
 #include "render/scene/scene.hpp"
 #include "render/scene/scene_file.hpp"
+#include "render/scene/scene_image.hpp"
+#include "render/scene/surface.hpp"
 
 namespace lf {
 namespace {
@@ -158,6 +160,47 @@ TEST(GltfScene, MetallicRoughnessTexturesVaryTheModelOverTheSurface) {
     scene->metal_rough_at(0, {0.3f, 0.4f, 0.3f}, 0, metallic, roughness);
     EXPECT_NEAR(metallic, 1.0f, 1e-6f);
     EXPECT_NEAR(roughness, 0.1f, 1e-3f);
+  }
+}
+
+// normalTexture turns the shading normal (surface_at's, which every op shades with) in the tangent frame of the
+// texture coordinates: red along +u, green along +v (image up, glTF's convention), blue along the normal. A
+// constant map tilted 30 degrees towards +u, then towards +v; read, and after shipping.
+TEST(GltfScene, NormalTexturesTurnTheShadingNormal) {
+  for (int axis : {0, 1}) {
+    GltfFiles files;
+    std::string tga(18, '\0');
+    tga[2] = 2;                    // uncompressed true colour
+    tga[12] = 2, tga[14] = 2;      // 2 x 2
+    tga[16] = 24, tga[17] = 0x20;  // BGR, top row first
+    const unsigned char red = axis == 0 ? 191 : 128, green = axis == 1 ? 191 : 128, blue = 238;
+    for (int i = 0; i < 4; ++i) tga += std::string{static_cast<char>(blue), static_cast<char>(green), static_cast<char>(red)};
+    std::ofstream(files.dir / "n.tga", std::ios::binary) << tga;
+    const std::string path = files.write(
+        R"([{"mesh": 0}])", 4,
+        R"({"name": "bumpy", "pbrMetallicRoughness": {"baseColorFactor": [0.5, 0.5, 0.5, 1], "metallicFactor": 0, "roughnessFactor": 1}, "normalTexture": {"index": 0}})",
+        R"("textures": [{"source": 0}], "images": [{"uri": "n.tga"}],)");
+    auto s = Scene::load_gltf_unlit(path);
+    ASSERT_TRUE(s.ok()) << s.error().message;
+    ASSERT_GE(s->material(s->material_of(0)).normal_map, 0);
+    s->add_point_light({0, 0, 1}, {1, 1, 1});
+    ASSERT_TRUE(s->finalize("bumpy").ok());
+    ASSERT_TRUE(s->has_normal_maps());
+    auto shipped = scene_from_bytes(scene_to_bytes(*s), "shipped");
+    ASSERT_TRUE(shipped.ok()) << shipped.error().message;
+    const fs::path image = files.dir / "x.image";  // as a host's actors map the shipped scene
+    std::ofstream(image, std::ios::binary) << SceneImage::encode(*shipped, "0123456789abcdef");
+    auto mapped = SceneImage::map(image.string(), "0123456789abcdef", "mapped");
+    ASSERT_TRUE(mapped.ok()) << mapped.error().message;
+    const float x = 2 * red / 255.0f - 1, y = 2 * green / 255.0f - 1, z = 2 * blue / 255.0f - 1;
+    const Vec3 expected = normalize(Vec3{x, y, z});  // the quad's u runs along +x, its v along +y
+    for (const Scene* scene : {&*s, &*shipped, &*mapped}) {
+      const SurfacePoint sp = surface_at(*scene, 0, {0.7f, 0.3f, 0}, {0, 0, 1});
+      EXPECT_NEAR(sp.ns.x, expected.x, 1e-4f) << "axis " << axis;
+      EXPECT_NEAR(sp.ns.y, expected.y, 1e-4f) << "axis " << axis;
+      EXPECT_NEAR(sp.ns.z, expected.z, 1e-4f) << "axis " << axis;
+      EXPECT_NEAR(sp.ng.z, 1.0f, 1e-6f);
+    }
   }
 }
 

@@ -138,11 +138,11 @@ Result<Scene> Scene::from_obj_reader(const tinyobj::ObjReader& reader, const std
   const std::string where = "scene file '" + path + "'";
   // A colour map keeps RGB (sRGB-encoded); a coverage map (map_d) and a scalar map (map_Pr, map_Pm: linear values,
   // the first channel) one channel.
-  enum class Use { colour, coverage, scalar };
+  enum class Use { colour, coverage, scalar, normals };
   std::map<std::pair<std::string, Use>, int32_t> loaded;
   auto texture = [&](const std::string& name, Use use, const std::string& material, const char* statement) -> int32_t {
     if (name.empty()) return -1;
-    const bool alpha = use != Use::colour;
+    const bool alpha = use == Use::coverage || use == Use::scalar;
     auto [it, fresh] = loaded.emplace(std::pair{name, use}, -1);
     if (!fresh) return it->second;
     const std::string file = (std::filesystem::path(texture_dir) / name).string();
@@ -153,7 +153,7 @@ Result<Scene> Scene::from_obj_reader(const tinyobj::ObjReader& reader, const std
     if (!texels) {
       log_warn(where + ": material '" + material + "': " + statement + " '" + name + "' cannot be read (" +
                texels.error().message + "); the material stays " +
-               (use == Use::coverage ? "uncut" : use == Use::colour ? "flat (its Kd)" : "at its factor everywhere"));
+               (use == Use::coverage ? "uncut" : use == Use::colour ? "flat (its Kd)" : use == Use::normals ? "smooth" : "at its factor everywhere"));
       return -1;
     }
     Texture t;
@@ -161,6 +161,7 @@ Result<Scene> Scene::from_obj_reader(const tinyobj::ObjReader& reader, const std
     t.width = static_cast<uint32_t>(texels->width);
     t.height = static_cast<uint32_t>(texels->height);
     t.channels = alpha ? 1 : 3;
+    t.linear = use == Use::normals;  // a normal map's channels are x, y, z, not colour
     const size_t n = static_cast<size_t>(t.width) * t.height, from = static_cast<size_t>(texels->channels);
     t.owned.resize(n * t.channels);
     // Coverage is the alpha channel where it says something (varies), else the first channel: a grey image, as the
@@ -177,7 +178,7 @@ Result<Scene> Scene::from_obj_reader(const tinyobj::ObjReader& reader, const std
       }
       for (size_t c = 0; c < 3; ++c) {
         uint8_t v = px[std::min(c, from == 2 ? 0 : from - 1)];
-        if (texels->linear) {  // stored sRGB-encoded, as 8-bit colour files are
+        if (texels->linear && use == Use::colour) {  // stored sRGB-encoded, as 8-bit colour files are
           const float l = static_cast<float>(v) / 255.0f;
           v = static_cast<uint8_t>(std::lround(std::clamp(srgb_encode(l), 0.0f, 1.0f) * 255.0f));
         }
@@ -192,6 +193,7 @@ Result<Scene> Scene::from_obj_reader(const tinyobj::ObjReader& reader, const std
     if (m.type == Material::Type::diffuse || m.type == Material::Type::glossy || m.type == Material::Type::metal_rough)
       m.kd_map = texture(materials[i].diffuse_texname, Use::colour, m.name, "map_Kd");
     m.alpha_map = texture(materials[i].alpha_texname, Use::coverage, m.name, "map_d");
+    if (!m.specular()) m.normal_map = texture(materials[i].normal_texname, Use::normals, m.name, "norm");
     if (m.type == Material::Type::metal_rough) {
       m.roughness_map = texture(materials[i].roughness_texname, Use::scalar, m.name, "map_Pr");
       m.metallic_map = texture(materials[i].metallic_texname, Use::scalar, m.name, "map_Pm");
@@ -282,7 +284,8 @@ Result<ObjCatalogue> Scene::catalogue_obj(const std::string& path) {
         known.insert(m.name);
         for (const auto& [slot, name] : {std::pair{"map_Kd", &m.diffuse_texname}, {"map_Ks", &m.specular_texname},
                                          {"map_d", &m.alpha_texname}, {"map_Ke", &m.emissive_texname},
-                                         {"map_Pr", &m.roughness_texname}, {"map_Pm", &m.metallic_texname}})
+                                         {"map_Pr", &m.roughness_texname}, {"map_Pm", &m.metallic_texname},
+                                         {"norm", &m.normal_texname}})
           if (!name->empty()) {
             std::error_code ec;
             out.textures.push_back({m.name, slot, *name, std::filesystem::is_regular_file(dir / *name, ec)});

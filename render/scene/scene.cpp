@@ -169,7 +169,14 @@ Status Scene::finalize(const std::string& what) {
   light_tree_ = std::make_shared<const LightTree>(*this);
   emitter_cutouts_ = std::make_shared<const EmitterCutouts>(*this);
   settle_environment_share();
+  settle_normal_maps();
   return Ok{};
+}
+
+void Scene::settle_normal_maps() {
+  has_normal_maps_ = false;
+  for (const Material& m : materials_) has_normal_maps_ = has_normal_maps_ || m.normal_map >= 0;
+  has_normal_maps_ = has_normal_maps_ && has_uvs();
 }
 
 void Scene::settle_environment_share() {

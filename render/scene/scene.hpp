@@ -45,6 +45,10 @@ struct Material {
   // and green channels; MTL map_Pm and map_Pr).
   int32_t metallic_map = -1;
   int32_t roughness_map = -1;
+  // A tangent-space normal map (a `linear` three-channel texture; glTF's normalTexture, MTL norm), its x and y
+  // scaled by normal_scale: it turns the shading normal (render/scene/surface.hpp).
+  int32_t normal_map = -1;
+  float normal_scale = 1;
   bool emissive() const { return !is_black(ke); }
   bool specular() const { return type == Type::mirror || type == Type::glass; }
   // A diffuse or glossy surface that also reflects like a mirror (kr): its mirror term is the `specular` op's.
@@ -74,10 +78,11 @@ Bounds bounds_of(std::span<const Vec3> points);
 struct Texture {
   std::string path;  // as the MTL named it
   uint32_t width = 0, height = 0, channels = 0;  // of the full image (level 0)
+  bool linear = false;  // three channels that hold data, not sRGB colour (a normal map)
   std::span<const uint8_t> texels;  // every level: pyramid_bytes(width, height, channels)
   std::vector<uint8_t> owned;       // the texels, unless they live in a mapped scene image
   // Channel c at texture coordinates uv, bilinear and repeating, at level of detail `lod` (0: the full image;
-  // between levels, trilinear); colour channels decoded from sRGB to linear.
+  // between levels, trilinear); colour channels decoded from sRGB to linear (unless `linear`).
   float sample(Vec2 uv, uint32_t c, float lod = 0) const;
   // Channel c of the full image's texel (x, y), repeating, decoded as sample() decodes it; y = 0 is the top row.
   float texel(int64_t x, int64_t y, uint32_t c) const;
@@ -163,6 +168,11 @@ class Scene {
   // `footprint`: how wide a pixel is at the point, in scene units (0: the texture's full resolution). The texture
   // is filtered to that width (its mip level), so a pixel's few samples see the mean colour it covers.
   RGB albedo(uint32_t triangle, Vec3 b, float footprint = 0) const;
+  // Whether any triangle's material has a normal map (surface_at then looks).
+  bool has_normal_maps() const { return has_normal_maps_; }
+  // Shading normal n (unit, on the winding's side) at barycentrics b of a triangle whose material has a normal map,
+  // turned as the map says in the triangle's tangent frame (from its texture coordinates: x along u, y along v).
+  Vec3 normal_mapped(uint32_t triangle, Vec3 b, Vec3 n) const;
   // A metal_rough material's metallic and roughness at barycentrics b: its factors, times its maps' values there.
   void metal_rough_at(uint32_t triangle, Vec3 b, float footprint, float& metallic, float& roughness) const;
   // Whether the surface is there at barycentrics b (false where an alpha map cuts it out).
@@ -300,6 +310,8 @@ class Scene {
   std::shared_ptr<const Environment> environment_;
   float environment_share_ = 0;
   void settle_environment_share();
+  bool has_normal_maps_ = false;
+  void settle_normal_maps();
   std::shared_ptr<const void> storage_;  // the mapping the views point into, when mapped
   std::vector<std::string> ambient_only_;  // OBJ materials with Ka but no Ke: named if the scene ends up unlit
   Bounds bounds_;

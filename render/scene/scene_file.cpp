@@ -15,7 +15,8 @@ namespace lf {
 
 namespace {
 
-constexpr std::string_view kMagic = "LFSCENE6";  // 4: metallic and roughness; 5: the environment; 6: their maps
+constexpr std::string_view kMagic = "LFSCENE7";  // 4: metallic and roughness; 5: the environment; 6: their maps;
+                                                 // 7: normal maps
 using bytes::put;
 using bytes::put_rgb;
 using bytes::Reader;
@@ -34,6 +35,7 @@ std::string scene_to_bytes(const Scene& scene) {
     put<uint32_t>(out, t.width);
     put<uint32_t>(out, t.height);
     put<uint32_t>(out, t.channels);
+    out.push_back(t.linear ? 1 : 0);
     uLongf size = compressBound(t.texels.size());
     std::string deflated(size, '\0');
     if (compress2(reinterpret_cast<Bytef*>(deflated.data()), &size, t.texels.data(), t.texels.size(), 6) != Z_OK)
@@ -79,7 +81,7 @@ std::string scene_to_bytes(const Scene& scene) {
 }
 
 Result<Scene> scene_from_bytes(std::string_view bytes, const std::string& what) {
-  if (bytes.substr(0, kMagic.size()) != kMagic) return make_error(what + ": not a lightfarm scene (no LFSCENE6)");
+  if (bytes.substr(0, kMagic.size()) != kMagic) return make_error(what + ": not a lightfarm scene (no LFSCENE7)");
   Reader r(bytes.substr(kMagic.size()));
   auto bad = [&] { return make_error(what + ": the scene's bytes are truncated or inconsistent"); };
   Scene s;
@@ -88,10 +90,12 @@ Result<Scene> scene_from_bytes(std::string_view bytes, const std::string& what) 
   for (uint32_t i = 0; i < textures; ++i) {
     Texture t;
     uint32_t length = 0, deflated = 0;
+    uint8_t linear = 0;
     std::string packed;
     if (!r.u32(length) || !r.str(t.path, length) || !r.u32(t.width) || !r.u32(t.height) || !r.u32(t.channels) ||
-        !r.u32(deflated) || !r.str(packed, deflated))
+        !r.u8(linear) || linear > 1 || !r.u32(deflated) || !r.str(packed, deflated))
       return bad();
+    t.linear = linear != 0;
     // At most 64k x 64k texels (with their mip levels) of 1 or 3 channels, and no more than deflate can make of the bytes there (1032:1).
     const uint64_t size = Texture::pyramid_bytes(t.width, t.height, t.channels);
     if (t.width == 0 || t.height == 0 || t.width > 65536 || t.height > 65536 || (t.channels != 1 && t.channels != 3) ||

@@ -19,7 +19,8 @@ namespace {
 
 constexpr char kMagic[8] = {'L', 'F', 'I', 'M', 'A', 'G', 'E', '2'};
 constexpr uint32_t kByteOrderMark = 0x01020304;
-constexpr uint32_t kVersion = 6;  // 3: kr and tf; 4: metallic and roughness; 5: the environment; 6: their maps
+constexpr uint32_t kVersion = 7;  // 3: kr and tf; 4: metallic and roughness; 5: the environment; 6: their maps;
+                                  // 7: normal maps
 constexpr size_t kAlign = 64;
 constexpr size_t kVertexSlack = 16;
 
@@ -133,6 +134,7 @@ std::string SceneImage::encode(const Scene& scene, const std::string& hash) {
     bytes::put(out, t.width);
     bytes::put(out, t.height);
     bytes::put(out, t.channels);
+    bytes::put<uint8_t>(out, t.linear ? 1 : 0);
     bytes::put(out, texel_offsets[i]);
   }
   for (const Material& m : scene.materials()) bytes::put_material(out, m);
@@ -205,9 +207,11 @@ Result<Scene> SceneImage::map(const std::string& path, const std::string& hash, 
     Texture t;
     uint32_t length = 0;
     uint64_t at = 0;
+    uint8_t linear = 0;
     if (!r.u32(length) || !r.str(t.path, length) || !r.u32(t.width) || !r.u32(t.height) || !r.u32(t.channels) ||
-        !r.u64(at))
+        !r.u8(linear) || linear > 1 || !r.u64(at))
       return bad("textures");
+    t.linear = linear != 0;
     if ((t.channels != 1 && t.channels != 3) || t.width == 0 || t.height == 0 || t.width > 65536 || t.height > 65536)
       return bad("a texture's size");
     const uint64_t bytes = Texture::pyramid_bytes(t.width, t.height, t.channels);
@@ -263,6 +267,7 @@ Result<Scene> SceneImage::map(const std::string& path, const std::string& hash, 
   s.light_tree_ = std::make_shared<const LightTree>(s);
   s.emitter_cutouts_ = std::make_shared<const EmitterCutouts>(s);
   s.settle_environment_share();
+  s.settle_normal_maps();
   return s;
 }
 

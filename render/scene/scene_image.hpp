@@ -10,7 +10,7 @@
 //     small part), u64 size of the small part
 //   the arrays, each at a 64-byte boundary; the vertex array is followed by at least 16 bytes (Embree reads
 //     vertices with 16-byte loads); the texels are every texture's, one after another
-//   the small part: textures (u32 path length, path, u32 width, height, channels, u64 offset in the texels),
+//   the small part: textures (u32 path length, path, u32 width, height, channels, u8 linear, u64 offset in the texels),
 //     materials (as in scene_file), point lights, emitters (u32), light cdf and pdf (f32), u64 environment size and
 //     the environment's binary form (Environment::write; size 0: none)
 // Mapping checks every size, offset and index against the file, so a damaged image is refused (and remade), never

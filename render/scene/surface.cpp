@@ -45,7 +45,7 @@ void Texture::build_pyramid() {
   const uint64_t base = uint64_t{width} * height * channels;
   owned.resize(base);
   owned.reserve(pyramid_bytes(width, height, channels));
-  const bool colour = channels == 3;
+  const bool colour = channels == 3 && !linear;
   auto encode = [&](float l) {
     const float v = colour ? srgb_encode(l) : l;
     return static_cast<uint8_t>(std::lround(std::clamp(v, 0.0f, 1.0f) * 255.0f));
@@ -80,7 +80,7 @@ void Texture::build_pyramid() {
 namespace {
 
 // Channel c of one level (w x h texels at `texels`), bilinear and repeating.
-float bilinear(const uint8_t* texels, uint32_t w, uint32_t h, uint32_t channels, Vec2 uv, uint32_t c) {
+float bilinear(const uint8_t* texels, uint32_t w, uint32_t h, uint32_t channels, bool linear, Vec2 uv, uint32_t c) {
   // Texel centres sit at half-integers; v = 0 is the bottom row, and files store the top row first.
   const float x = uv.u * static_cast<float>(w) - 0.5f;
   const float y = (1.0f - uv.v) * static_cast<float>(h) - 0.5f;
@@ -91,7 +91,7 @@ float bilinear(const uint8_t* texels, uint32_t w, uint32_t h, uint32_t channels,
   const auto ix = static_cast<int64_t>(std::fmod(fx, static_cast<float>(w) * 1024.0f));
   const auto iy = static_cast<int64_t>(std::fmod(fy, static_cast<float>(h) * 1024.0f));
   const uint32_t x0 = wrap(ix, w), x1 = wrap(ix + 1, w), y0 = wrap(iy, h), y1 = wrap(iy + 1, h);
-  const bool colour = channels == 3;
+  const bool colour = channels == 3 && !linear;
   auto texel = [&](uint32_t tx, uint32_t ty) {
     const uint8_t v = texels[(static_cast<size_t>(ty) * w + tx) * channels + c];
     return colour ? srgb_to_linear()[v] : static_cast<float>(v) / 255.0f;
@@ -107,12 +107,12 @@ float Texture::texel(int64_t x, int64_t y, uint32_t c) const {
   const uint32_t tx = x >= 0 && x < width ? static_cast<uint32_t>(x) : wrap(x, width);
   const uint32_t ty = y >= 0 && y < height ? static_cast<uint32_t>(y) : wrap(y, height);
   const uint8_t v = texels[(static_cast<size_t>(ty) * width + tx) * channels + c];
-  return channels == 3 ? srgb_to_linear()[v] : static_cast<float>(v) / 255.0f;
+  return channels == 3 && !linear ? srgb_to_linear()[v] : static_cast<float>(v) / 255.0f;
 }
 
 float Texture::sample(Vec2 uv, uint32_t c, float lod) const {
   if (width == 0 || height == 0 || c >= channels) return 1.0f;
-  if (!(lod > 0)) return bilinear(texels.data(), width, height, channels, uv, c);
+  if (!(lod > 0)) return bilinear(texels.data(), width, height, channels, linear, uv, c);
   // Walk down to the level below `lod`, then blend it with the next.
   const int below = static_cast<int>(std::min(lod, 30.0f));
   const float blend = std::min(lod, 30.0f) - static_cast<float>(below);
@@ -123,10 +123,10 @@ float Texture::sample(Vec2 uv, uint32_t c, float lod) const {
     w = std::max(1u, w / 2);
     h = std::max(1u, h / 2);
   }
-  const float fine = bilinear(texels.data() + at, w, h, channels, uv, c);
+  const float fine = bilinear(texels.data() + at, w, h, channels, linear, uv, c);
   if (blend <= 0 || (w == 1 && h == 1)) return fine;
   const size_t next = at + size_t{w} * h * channels;
-  const float coarse = bilinear(texels.data() + next, std::max(1u, w / 2), std::max(1u, h / 2), channels, uv, c);
+  const float coarse = bilinear(texels.data() + next, std::max(1u, w / 2), std::max(1u, h / 2), channels, linear, uv, c);
   return fine * (1 - blend) + coarse * blend;
 }
 
@@ -167,6 +167,32 @@ static float texture_lod(const Scene& s, uint32_t t, const Texture& tex, float f
   const float density = std::sqrt(uv_area * static_cast<float>(tex.width) * static_cast<float>(tex.height) / s.area(t));
   const float texels = footprint * density;
   return texels > 1 && std::isfinite(texels) ? std::log2(texels) : 0.0f;
+}
+
+Vec3 Scene::normal_mapped(uint32_t t, Vec3 b, Vec3 n) const {
+  const Material& m = materials_[material_view_[t]];
+  if (m.normal_map < 0 || corner_uv_view_.empty()) return n;
+  const Vec2 at = uv(t, b);
+  if (!std::isfinite(at.u) || !std::isfinite(at.v)) return n;
+  // The tangent frame: dP/du and dP/dv over the triangle (v up, as texture coordinates are kept), made
+  // orthonormal around n; the bitangent keeps the side dP/dv is on (a mirrored UV layout flips it).
+  const Vec3 e1 = vertex(t, 1) - vertex(t, 0), e2 = vertex(t, 2) - vertex(t, 0);
+  const Vec2 c0 = corner_uv(t, 0), c1 = corner_uv(t, 1), c2 = corner_uv(t, 2);
+  const float du1 = c1.u - c0.u, dv1 = c1.v - c0.v, du2 = c2.u - c0.u, dv2 = c2.v - c0.v;
+  const float det = du1 * dv2 - du2 * dv1;
+  if (!(std::abs(det) > 0)) return n;  // degenerate texture coordinates: no frame
+  const Vec3 dpdu = (e1 * dv2 - e2 * dv1) / det, dpdv = (e2 * du1 - e1 * du2) / det;
+  const Vec3 along = dpdu - n * dot(n, dpdu);
+  if (!(dot(along, along) > 0)) return n;
+  const Vec3 tangent = normalize(along);
+  Vec3 bitangent = cross(n, tangent);
+  if (dot(bitangent, dpdv) < 0) bitangent = -bitangent;
+  const Texture& tex = textures_[static_cast<size_t>(m.normal_map)];
+  const float x = (2 * tex.sample(at, 0) - 1) * m.normal_scale, y = (2 * tex.sample(at, 1) - 1) * m.normal_scale;
+  const float z = 2 * tex.sample(at, 2) - 1;
+  const Vec3 turned = tangent * x + bitangent * y + n * z;
+  const float len = length(turned);
+  return len > 0 && std::isfinite(len) ? turned / len : n;
 }
 
 void Scene::metal_rough_at(uint32_t t, Vec3 b, float footprint, float& metallic, float& roughness) const {

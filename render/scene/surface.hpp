@@ -1,6 +1,7 @@
 #pragma once
 // Where a ray met a triangle, as shading sees it: the geometric normal decides sides (offsets, which way light
-// may come from), the shading normal (interpolated OBJ vertex normals) the cosines and the BSDF's frame.
+// may come from), the shading normal (interpolated vertex normals, turned by a normal map) the cosines and the
+// BSDF's frame.
 #include "render/math.hpp"
 #include "render/scene/scene.hpp"
 
@@ -16,8 +17,11 @@ inline SurfacePoint surface_at(const Scene& scene, uint32_t triangle, Vec3 p, Ve
   const Vec3 n = scene.normal(triangle);
   const bool front = dot(n, wo) > 0;
   const Vec3 ng = front ? n : -n;
-  if (!scene.has_shading_normals()) return {ng, ng, front};
-  Vec3 ns = scene.shading_normal(triangle, scene.barycentrics(triangle, p));
+  const bool mapped = scene.has_normal_maps() && scene.material(scene.material_of(triangle)).normal_map >= 0;
+  if (!scene.has_shading_normals() && !mapped) return {ng, ng, front};
+  const Vec3 b = scene.barycentrics(triangle, p);
+  Vec3 ns = scene.has_shading_normals() ? scene.shading_normal(triangle, b) : n;
+  if (mapped) ns = scene.normal_mapped(triangle, b, ns);
   if (!front) ns = -ns;
   // At silhouettes the interpolated normal can turn away from the viewer, which would shade black: the face's
   // normal then.
