@@ -60,21 +60,6 @@ noise=$(blender -b -P "$here/balls_peer.py" -- "$json" noise \
           "$out/lf_64_3.exr" "$out/lf_64_4.exr" "$out/lf_256_3.exr" "$out/lf_256_4.exr" \
           "$out/cy_64_3.exr" "$out/cy_64_4.exr" "$out/cy_256_3.exr" "$out/cy_256_4.exr" 2>/dev/null | awk '/^NOISE/ {print $4}')
 read -r lf64 lf256 cy64 cy256 <<<"$(echo $noise)"
-python3 - "$lf64" "$lf256" "$cy64" "$cy256" "${secs[lf_64_3]}" "${secs[lf_64_4]}" "${secs[lf_256_3]}" "${secs[lf_256_4]}" \
-  "${secs[cy_64_3]}" "${secs[cy_64_4]}" "${secs[cy_256_3]}" "${secs[cy_256_4]}" <<'PY'
-import math, sys
-a = list(map(float, sys.argv[1:]))
-lf64, lf256, cy64, cy256 = a[0:4]
-lf_t64, lf_t256, cy_t64, cy_t256 = (a[4] + a[5]) / 2, (a[6] + a[7]) / 2, (a[8] + a[9]) / 2, (a[10] + a[11]) / 2
-print("2. quality per time (noise from seed pairs over the balls' discs and the floor)")
-print("%-10s %10s %10s %12s" % ("", "noise", "seconds", "noise^2 x s"))
-for name, n, s in (("lf 64", lf64, lf_t64), ("lf 256", lf256, lf_t256), ("cy 64", cy64, cy_t64), ("cy 256", cy256, cy_t256)):
-    print("%-10s %10.5f %10.2f %12.5f" % (name, n, s, n * n * s))
-slope = math.log(lf64 / lf256) / math.log(4)
-spp = 256 * (lf256 / cy256) ** (1 / slope)
-per_spp = (lf_t256 - lf_t64) / 192
-fixed = lf_t256 - 256 * per_spp
-lf_time = fixed + per_spp * spp
-print("lightfarm reaches Cycles' 256-spp noise at ~%.0f spp (its noise falls as spp^-%.2f) in ~%.1f s: %.2f of Cycles' %.1f s"
-      % (spp, slope, lf_time, lf_time / cy_t256, cy_t256))
-PY
+echo "2. quality per time (noise from seed pairs over the balls' discs and the floor)"
+python3 "$here/quality_per_time.py" "$lf64" "$lf256" "$cy64" "$cy256" "${secs[lf_64_3]}" "${secs[lf_64_4]}" \
+  "${secs[lf_256_3]}" "${secs[lf_256_4]}" "${secs[cy_64_3]}" "${secs[cy_64_4]}" "${secs[cy_256_3]}" "${secs[cy_256_4]}"

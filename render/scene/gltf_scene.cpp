@@ -266,88 +266,59 @@ Result<tinygltf::Model> read_model(const std::string& path, std::vector<std::str
   return model;
 }
 
+// A texture of `channels` channels from an 8-bit image with at least `components`: channel c of texel i is
+// texel(the image's pixel i, c). nullopt for an image of another kind, or one whose data is short.
+template <class Texel>
+std::optional<Texture> image_texture(const tinygltf::Image& image, int components, uint32_t channels, bool linear,
+                                     const std::string& name, Texel texel) {
+  if (image.width <= 0 || image.height <= 0 || image.bits != 8 || image.component < components ||
+      image.image.size() < static_cast<size_t>(image.width) * static_cast<size_t>(image.height) * static_cast<size_t>(image.component))
+    return std::nullopt;
+  Texture t;
+  t.path = name;
+  t.width = static_cast<uint32_t>(image.width);
+  t.height = static_cast<uint32_t>(image.height);
+  t.channels = channels;
+  t.linear = linear;
+  const size_t n = static_cast<size_t>(t.width) * t.height, from = static_cast<size_t>(image.component);
+  t.owned.resize(n * channels);
+  for (size_t i = 0; i < n; ++i)
+    for (uint32_t c = 0; c < channels; ++c) t.owned[i * channels + c] = texel(&image.image[i * from], c);
+  t.build_pyramid();
+  return t;
+}
+
 // A base colour texture as the scene keeps it: RGB, sRGB-encoded, with the material's base colour factor (which
 // glTF multiplies in linear values) applied to its texels.
 std::optional<Texture> base_color_texture(const tinygltf::Image& image, RGB factor, const std::string& name) {
-  if (image.width <= 0 || image.height <= 0 || image.bits != 8 || image.component < 3 ||
-      image.image.size() < static_cast<size_t>(image.width) * static_cast<size_t>(image.height) * static_cast<size_t>(image.component))
-    return std::nullopt;
-  Texture t;
-  t.path = name;
-  t.width = static_cast<uint32_t>(image.width);
-  t.height = static_cast<uint32_t>(image.height);
-  t.channels = 3;
-  const size_t n = static_cast<size_t>(t.width) * t.height, from = static_cast<size_t>(image.component);
-  t.owned.resize(n * 3);
   const bool scaled = factor.x != 1 || factor.y != 1 || factor.z != 1;
-  for (size_t i = 0; i < n; ++i)
-    for (size_t c = 0; c < 3; ++c) {
-      uint8_t v = image.image[i * from + c];
-      if (scaled) {
-        const float f = c == 0 ? factor.x : c == 1 ? factor.y : factor.z;
-        v = static_cast<uint8_t>(std::lround(std::clamp(srgb_encode(srgb_decode(v / 255.0f) * f), 0.0f, 1.0f) * 255.0f));
-      }
-      t.owned[i * 3 + c] = v;
-    }
-  t.build_pyramid();
-  return t;
+  return image_texture(image, 3, 3, false, name, [&](const unsigned char* px, uint32_t c) {
+    const uint8_t v = px[c];
+    if (!scaled) return v;
+    const float f = c == 0 ? factor.x : c == 1 ? factor.y : factor.z;
+    return static_cast<uint8_t>(std::lround(std::clamp(srgb_encode(srgb_decode(v / 255.0f) * f), 0.0f, 1.0f) * 255.0f));
+  });
 }
 
-// An 8-bit RGB(A) image whose channels are data (a normal map's x, y, z), kept as they are: a `linear` texture.
+// An image whose channels are data (a normal map's x, y, z), kept as they are: a `linear` texture.
 std::optional<Texture> data_texture(const tinygltf::Image& image, const std::string& name) {
-  if (image.width <= 0 || image.height <= 0 || image.bits != 8 || image.component < 3 ||
-      image.image.size() < static_cast<size_t>(image.width) * static_cast<size_t>(image.height) * static_cast<size_t>(image.component))
-    return std::nullopt;
-  Texture t;
-  t.path = name;
-  t.width = static_cast<uint32_t>(image.width);
-  t.height = static_cast<uint32_t>(image.height);
-  t.channels = 3;
-  t.linear = true;
-  const size_t n = static_cast<size_t>(t.width) * t.height, from = static_cast<size_t>(image.component);
-  t.owned.resize(n * 3);
-  for (size_t i = 0; i < n; ++i)
-    for (size_t c = 0; c < 3; ++c) t.owned[i * 3 + c] = image.image[i * from + c];
-  t.build_pyramid();
-  return t;
+  return image_texture(image, 3, 3, true, name, [](const unsigned char* px, uint32_t c) { return px[c]; });
 }
 
-// One channel of an 8-bit image as a linear one-channel texture (a metallic-roughness texture's blue: metallic,
-// its green: roughness).
+// One channel of an image as a linear one-channel texture (a metallic-roughness texture's blue: metallic, its
+// green: roughness).
 std::optional<Texture> channel_texture(const tinygltf::Image& image, int channel, const std::string& name) {
-  if (image.width <= 0 || image.height <= 0 || image.bits != 8 || image.component <= channel ||
-      image.image.size() < static_cast<size_t>(image.width) * static_cast<size_t>(image.height) * static_cast<size_t>(image.component))
-    return std::nullopt;
-  Texture t;
-  t.path = name;
-  t.width = static_cast<uint32_t>(image.width);
-  t.height = static_cast<uint32_t>(image.height);
-  t.channels = 1;
-  const size_t n = static_cast<size_t>(t.width) * t.height, from = static_cast<size_t>(image.component);
-  t.owned.resize(n);
-  for (size_t i = 0; i < n; ++i) t.owned[i] = image.image[i * from + static_cast<size_t>(channel)];
-  t.build_pyramid();
-  return t;
+  return image_texture(image, channel + 1, 1, false, name,
+                       [channel](const unsigned char* px, uint32_t) { return px[channel]; });
 }
 
 // A cut-out as the scene keeps it (one linear channel, absent below one half) from a base colour texture's alpha
 // times the factor's: scaled so that the material's alphaCutoff falls on one half.
 std::optional<Texture> coverage_texture(const tinygltf::Image& image, float factor, float cutoff, const std::string& name) {
-  if (image.width <= 0 || image.height <= 0 || image.bits != 8 || image.component != 4 ||
-      image.image.size() < static_cast<size_t>(image.width) * static_cast<size_t>(image.height) * 4)
-    return std::nullopt;
-  Texture t;
-  t.path = name + " (alpha)";
-  t.width = static_cast<uint32_t>(image.width);
-  t.height = static_cast<uint32_t>(image.height);
-  t.channels = 1;
-  const size_t n = static_cast<size_t>(t.width) * t.height;
-  t.owned.resize(n);
   const float scale = factor * 0.5f / std::max(cutoff, 1e-3f);
-  for (size_t i = 0; i < n; ++i)
-    t.owned[i] = static_cast<uint8_t>(std::lround(std::clamp(image.image[i * 4 + 3] * scale, 0.0f, 255.0f)));
-  t.build_pyramid();
-  return t;
+  return image_texture(image, 4, 1, false, name + " (alpha)", [scale](const unsigned char* px, uint32_t) {
+    return static_cast<uint8_t>(std::lround(std::clamp(px[3] * scale, 0.0f, 255.0f)));
+  });
 }
 
 }  // namespace

@@ -18,6 +18,15 @@ namespace {
 
 namespace fs = std::filesystem;
 
+// An uncompressed true-colour TGA, top row first: `pixels` as BGR (24 bits) or BGRA (32) bytes, row by row.
+void write_tga(const fs::path& path, int width, int height, int bits, const std::string& pixels) {
+  std::string tga(18, '\0');
+  tga[2] = 2;
+  tga[12] = static_cast<char>(width), tga[14] = static_cast<char>(height);
+  tga[16] = static_cast<char>(bits), tga[17] = static_cast<char>(0x20 | (bits == 32 ? 8 : 0));
+  std::ofstream(path, std::ios::binary) << tga + pixels;
+}
+
 struct GltfFiles {
   fs::path dir = fs::temp_directory_path() / ("lightfarm-gltf-" + std::to_string(::getpid()));
   GltfFiles() { fs::create_directories(dir); }
@@ -105,13 +114,10 @@ TEST(GltfScene, AMirroringTransformKeepsTheFrontFacingOut) {
 // a 4 x 4 TGA whose left half has alpha 0.4 and right half 0.2, cut at 0.3 (a cut at one half would take both).
 TEST(GltfScene, AlphaMaskCutsWhereCoverageIsBelowTheCutoff) {
   GltfFiles files;
-  std::string tga(18, '\0');
-  tga[2] = 2;                    // uncompressed true colour
-  tga[12] = 4, tga[14] = 4;      // 4 x 4
-  tga[16] = 32, tga[17] = 0x28;  // BGRA, 8 alpha bits, top row first
+  std::string px;
   for (int y = 0; y < 4; ++y)
-    for (int x = 0; x < 4; ++x) tga += std::string{'\x80', '\x80', '\x80', static_cast<char>(x < 2 ? 102 : 50)};
-  std::ofstream(files.dir / "leaf.tga", std::ios::binary) << tga;
+    for (int x = 0; x < 4; ++x) px += std::string{'\x80', '\x80', '\x80', static_cast<char>(x < 2 ? 102 : 50)};
+  write_tga(files.dir / "leaf.tga", 4, 4, 32, px);
   const std::string path = files.write(
       R"([{"mesh": 0}])", 4,
       R"({"name": "leaf", "alphaMode": "MASK", "alphaCutoff": 0.3, "pbrMetallicRoughness": {"baseColorTexture": {"index": 0}}})",
@@ -131,13 +137,10 @@ TEST(GltfScene, AlphaMaskCutsWhereCoverageIsBelowTheCutoff) {
 // metal (blue 1); factors metallic 1, roughness 0.5.
 TEST(GltfScene, MetallicRoughnessTexturesVaryTheModelOverTheSurface) {
   GltfFiles files;
-  std::string tga(18, '\0');
-  tga[2] = 2;                    // uncompressed true colour
-  tga[12] = 4, tga[14] = 4;      // 4 x 4
-  tga[16] = 24, tga[17] = 0x20;  // BGR, top row first
+  std::string px;
   for (int y = 0; y < 4; ++y)
-    for (int x = 0; x < 4; ++x) tga += x < 2 ? std::string{'\x00', '\xff', '\x00'} : std::string{'\xff', '\x33', '\x00'};
-  std::ofstream(files.dir / "mr.tga", std::ios::binary) << tga;
+    for (int x = 0; x < 4; ++x) px += x < 2 ? std::string{'\x00', '\xff', '\x00'} : std::string{'\xff', '\x33', '\x00'};
+  write_tga(files.dir / "mr.tga", 4, 4, 24, px);
   const std::string path = files.write(
       R"([{"mesh": 0}])", 4,
       R"({"name": "patchy", "pbrMetallicRoughness": {"metallicFactor": 1, "roughnessFactor": 0.5, "metallicRoughnessTexture": {"index": 0}}})",
@@ -169,13 +172,10 @@ TEST(GltfScene, MetallicRoughnessTexturesVaryTheModelOverTheSurface) {
 TEST(GltfScene, NormalTexturesTurnTheShadingNormal) {
   for (int axis : {0, 1}) {
     GltfFiles files;
-    std::string tga(18, '\0');
-    tga[2] = 2;                    // uncompressed true colour
-    tga[12] = 2, tga[14] = 2;      // 2 x 2
-    tga[16] = 24, tga[17] = 0x20;  // BGR, top row first
     const unsigned char red = axis == 0 ? 191 : 128, green = axis == 1 ? 191 : 128, blue = 238;
-    for (int i = 0; i < 4; ++i) tga += std::string{static_cast<char>(blue), static_cast<char>(green), static_cast<char>(red)};
-    std::ofstream(files.dir / "n.tga", std::ios::binary) << tga;
+    std::string px;
+    for (int i = 0; i < 4; ++i) px += std::string{static_cast<char>(blue), static_cast<char>(green), static_cast<char>(red)};
+    write_tga(files.dir / "n.tga", 2, 2, 24, px);
     const std::string path = files.write(
         R"([{"mesh": 0}])", 4,
         R"({"name": "bumpy", "pbrMetallicRoughness": {"baseColorFactor": [0.5, 0.5, 0.5, 1], "metallicFactor": 0, "roughnessFactor": 1}, "normalTexture": {"index": 0}})",
