@@ -69,7 +69,7 @@ Result<Mesh> build_mesh(const Scene& scene, const MeshSettings& settings) {
       p.surface = s;
       // A metal_rough base is no Lambert lobe: the solution leaves it to the `glossy` op.
       p.reflectance = material.type == Material::Type::metal_rough ? RGB{} : material.kd;
-      p.emission = material.ke * kPi;
+      p.emission = scene.mean_emission(material) * kPi;
       p.element_tiles = tiles_for(piece.max_edge(), element_size);
       mesh.patches.push_back(p);
     }

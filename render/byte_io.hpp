@@ -57,7 +57,7 @@ class Reader {
 
 // A material as both binary forms store it: u32 name length, name, f32 kd[3] ke[3] ks[3], f32 ns, f32 ior, u8 type,
 // i32 kd_map, i32 alpha_map (-1: none; the reader of the whole form checks them against its texture count), f32 kr[3]
-// tf[3], f32 metallic, f32 roughness, i32 metallic_map, i32 roughness_map, i32 normal_map, f32 normal_scale.
+// tf[3], f32 metallic, f32 roughness, i32 metallic_map, i32 roughness_map, i32 normal_map, f32 normal_scale, i32 emission_map.
 inline void put_material(std::string& out, const Material& m) {
   put(out, static_cast<uint32_t>(m.name.size()));
   out += m.name;
@@ -77,11 +77,12 @@ inline void put_material(std::string& out, const Material& m) {
   put(out, m.roughness_map);
   put(out, m.normal_map);
   put(out, m.normal_scale);
+  put(out, m.emission_map);
 }
 // Whether every texture a material names is one of `textures`.
 inline bool maps_within(const Material& m, uint32_t textures) {
   const int32_t n = static_cast<int32_t>(textures);
-  return m.kd_map < n && m.alpha_map < n && m.metallic_map < n && m.roughness_map < n && m.normal_map < n;
+  return m.kd_map < n && m.alpha_map < n && m.metallic_map < n && m.roughness_map < n && m.normal_map < n && m.emission_map < n;
 }
 inline bool read_material(Reader& r, Material& m) {
   uint32_t len = 0;
@@ -96,12 +97,15 @@ inline bool read_material(Reader& r, Material& m) {
   m.kd_map = static_cast<int32_t>(kd_map);
   m.alpha_map = static_cast<int32_t>(alpha_map);
   if (!r.vec(m.kr) || !r.vec(m.tf) || !r.f32(m.metallic) || !r.f32(m.roughness)) return false;
-  uint32_t metallic_map = 0, roughness_map = 0, normal_map = 0;
-  if (!r.u32(metallic_map) || !r.u32(roughness_map) || !r.u32(normal_map) || !r.f32(m.normal_scale)) return false;
+  uint32_t metallic_map = 0, roughness_map = 0, normal_map = 0, emission_map = 0;
+  if (!r.u32(metallic_map) || !r.u32(roughness_map) || !r.u32(normal_map) || !r.f32(m.normal_scale) ||
+      !r.u32(emission_map))
+    return false;
+  m.emission_map = static_cast<int32_t>(emission_map);
   m.metallic_map = static_cast<int32_t>(metallic_map);
   m.roughness_map = static_cast<int32_t>(roughness_map);
   m.normal_map = static_cast<int32_t>(normal_map);
-  return m.kd_map >= -1 && m.alpha_map >= -1 && m.metallic_map >= -1 && m.roughness_map >= -1 && m.normal_map >= -1 &&
+  return m.kd_map >= -1 && m.alpha_map >= -1 && m.metallic_map >= -1 && m.roughness_map >= -1 && m.normal_map >= -1 && m.emission_map >= -1 &&
          m.metallic >= 0 && m.metallic <= 1 && m.roughness >= 0 && m.roughness <= 1 && std::isfinite(m.normal_scale);
 }
 

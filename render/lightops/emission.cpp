@@ -16,8 +16,13 @@ class Emission final : public LightOp {
   std::optional<LightPaths> paths(std::span<const LightPaths>) const override { return LightPaths::emission(); }
   Task shade(const ShadingPoints& points, std::span<RGB> radiance, Inputs&) override {
     const Scene& scene = *ctx_.scene;
-    for (size_t i = 0; i < points.size(); ++i)
-      radiance[i] = points.outside(i, scene) ? scene.material(points.material[i]).ke : RGB{};
+    for (size_t i = 0; i < points.size(); ++i) {
+      const uint32_t t = points.triangle_of(i);
+      // Without a triangle (a point that names none), the material's own ke: no place on an emission map.
+      radiance[i] = !points.outside(i, scene) ? RGB{}
+                    : t == UINT32_MAX || t >= scene.triangle_count() ? scene.material(points.material[i]).ke
+                                                                     : scene.emission(t, scene.barycentrics(t, points.position[i]));
+    }
     co_return;
   }
 

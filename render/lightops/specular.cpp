@@ -118,7 +118,8 @@ class Specular final : public LightOp {
         const bool front = sp.front;
         const uint32_t m = scene.material_of(tri);
         const Material& hit = scene.material(m);
-        if (emitters_ && hit.emissive() && front) ch.emitted += ch.weight * hit.ke;
+        if (emitters_ && hit.emissive() && front)
+          ch.emitted += ch.weight * (hit.emission_map < 0 ? hit.ke : scene.emission(tri, scene.barycentrics(tri, x)));
         if (!hit.specular() && ch.asks_input) {
           // Keyed by the point, the chain and the depth: the same on every batch and layout.
           const uint64_t chain = static_cast<uint64_t>(ch.sample) * 256 + static_cast<uint64_t>(depth);

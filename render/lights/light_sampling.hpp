@@ -83,7 +83,7 @@ inline LightSample light_sample_at(const Scene& scene, size_t e, float p_light, 
   }
   const Vec3 y = scene.vertex(tri, 0) * b.x + scene.vertex(tri, 1) * b.y + scene.vertex(tri, 2) * b.z;
   // A cut-out part of an emitter is not there: it sends nothing (the sample still counts, so no bias).
-  const RGB le = scene.opaque(tri, b) ? scene.material(scene.material_of(tri)).ke : RGB{};
+  const RGB le = scene.opaque(tri, b) ? scene.emission(tri, b) : RGB{};
   return LightSample{y, scene.normal(tri), tri, le, p_light / area};
 }
 
@@ -123,7 +123,8 @@ inline LightSample light_sample_from(const Scene& scene, size_t e, float p_light
     if (dir && t > 0 && std::isfinite(t)) {
       const Vec3 y = x + *dir * t;
       // The emitter's alpha there (a wholly cut-out emitter sends nothing).
-      const RGB le = scene.opaque(tri, scene.barycentrics(tri, y)) ? scene.material(scene.material_of(tri)).ke : RGB{};
+      const Vec3 b = scene.barycentrics(tri, y);
+      const RGB le = scene.opaque(tri, b) ? scene.emission(tri, b) : RGB{};
       // Density 1 / omega over directions, as an area density at y: cos_y / (omega t^2).
       const float pdf_area = p_light * static_cast<float>(std::fabs(facing) / (omega * static_cast<double>(t) * t));
       return LightSample{y, ng, tri, le, pdf_area};

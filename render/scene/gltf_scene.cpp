@@ -428,7 +428,15 @@ Result<Scene> Scene::parse_gltf_unlit(const std::string& path, const std::string
       }
       if (g.normalTexture.texCoord != 0) warn(which + ": a texture on TEXCOORD_" + std::to_string(g.normalTexture.texCoord) + " is read with TEXCOORD_0");
     }
-    if (g.emissiveTexture.index >= 0) warn(which + ": emissiveTexture is not read; emissiveFactor holds everywhere");
+    if (g.emissiveTexture.index >= 0 && m.emissive()) {
+      std::string emission_name;
+      const tinygltf::Image* glow = texture_image(model, g.emissiveTexture.index, emission_name);
+      std::optional<Texture> tex;
+      if (glow) tex = base_color_texture(*glow, RGB{1, 1, 1}, emission_name);  // sRGB colour, as base colour is
+      if (tex) m.emission_map = static_cast<int32_t>(s.add_texture(std::move(*tex)));
+      else warn(which + ": its emissiveTexture cannot be read (8-bit RGB or RGBA); emissiveFactor holds everywhere");
+      if (g.emissiveTexture.texCoord != 0) warn(which + ": a texture on TEXCOORD_" + std::to_string(g.emissiveTexture.texCoord) + " is read with TEXCOORD_0");
+    }
     if (g.occlusionTexture.index >= 0) warn(which + ": occlusionTexture is left out (a path tracer computes occlusion)");
     if (g.alphaMode == "MASK" || g.alphaMode == "BLEND") {
       // BLEND has no cut-out: the approximation is a cut-out at coverage one half (what lightfarm does with MTL

@@ -12,6 +12,7 @@
 #include "render/scene/scene_file.hpp"
 #include "render/scene/scene_image.hpp"
 #include "render/scene/surface.hpp"
+#include "render/lights/light_sampling.hpp"
 
 namespace lf {
 namespace {
@@ -201,6 +202,41 @@ TEST(GltfScene, NormalTexturesTurnTheShadingNormal) {
       EXPECT_NEAR(sp.ns.z, expected.z, 1e-4f) << "axis " << axis;
       EXPECT_NEAR(sp.ng.z, 1.0f, 1e-6f);
     }
+  }
+}
+
+// emissiveTexture: emissiveFactor (times the strength) times the texture's colour, at every place light meets it: a
+// quad whose left half glows (white) and right half does not (black), strength 2. Light samples on it carry that
+// radiance, so their estimate of its emitted radiance over its area is 1 (half of the unit quad at 2).
+TEST(GltfScene, EmissiveTexturesLightWhereTheyGlow) {
+  GltfFiles files;
+  std::string px;
+  for (int y = 0; y < 4; ++y)
+    for (int x = 0; x < 4; ++x) px += x < 2 ? std::string(3, '\xff') : std::string(3, '\0');
+  write_tga(files.dir / "glow.tga", 4, 4, 24, px);
+  const std::string path = files.write(
+      R"([{"mesh": 0}])", 4,
+      R"({"name": "sign", "emissiveFactor": [1, 1, 1], "emissiveTexture": {"index": 0}, "extensions": {"KHR_materials_emissive_strength": {"emissiveStrength": 2}}})",
+      R"("textures": [{"source": 0}], "images": [{"uri": "glow.tga"}],)");
+  auto s = Scene::load_gltf_unlit(path);
+  ASSERT_TRUE(s.ok()) << s.error().message;
+  ASSERT_GE(s->material(s->material_of(0)).emission_map, 0);
+  ASSERT_TRUE(s->finalize("sign").ok());
+  auto shipped = scene_from_bytes(scene_to_bytes(*s), "shipped");
+  ASSERT_TRUE(shipped.ok()) << shipped.error().message;
+  for (const Scene* scene : {&*s, &*shipped}) {
+    // Triangle 0: u = b1 + b2 (see the metallic-roughness test): left at 0.2, right at 0.7.
+    EXPECT_NEAR(scene->emission(0, {0.8f, 0.1f, 0.1f}).x, 2.0f, 1e-4f);
+    EXPECT_NEAR(scene->emission(0, {0.3f, 0.4f, 0.3f}).x, 0.0f, 1e-4f);
+    EXPECT_NEAR(scene->mean_emission(scene->material(scene->material_of(0))).y, 1.0f, 0.02f);
+    Rng rng(1, 2);
+    double integral = 0;
+    const int n = 200000;
+    for (int i = 0; i < n; ++i) {
+      const LightSample ls = sample_light(*scene, rng);
+      integral += ls.radiance.x / ls.pdf_area;
+    }
+    EXPECT_NEAR(integral / n, 1.0, 0.02);
   }
 }
 

@@ -49,6 +49,9 @@ struct Material {
   // scaled by normal_scale: it turns the shading normal (render/scene/surface.hpp).
   int32_t normal_map = -1;
   float normal_scale = 1;
+  // An emission map (sRGB colour; glTF's emissiveTexture): ke times its colour where the triangle has texture
+  // coordinates.
+  int32_t emission_map = -1;
   bool emissive() const { return !is_black(ke); }
   bool specular() const { return type == Type::mirror || type == Type::glass; }
   // A diffuse or glossy surface that also reflects like a mirror (kr): its mirror term is the `specular` op's.
@@ -168,6 +171,13 @@ class Scene {
   // `footprint`: how wide a pixel is at the point, in scene units (0: the texture's full resolution). The texture
   // is filtered to that width (its mip level), so a pixel's few samples see the mean colour it covers.
   RGB albedo(uint32_t triangle, Vec3 b, float footprint = 0) const;
+  // The radiance emitter triangle t emits at barycentrics b (its material's ke, times its emission map there).
+  RGB emission(uint32_t triangle, Vec3 b) const {
+    const Material& m = material(material_of(triangle));
+    return m.emission_map < 0 || !has_uvs() ? m.ke : mapped_emission(triangle, b);
+  }
+  // Its mean over the material's emission map (ke without one): what light selection and radiosity take.
+  RGB mean_emission(const Material& m) const;
   // Whether any triangle's material has a normal map (surface_at then looks).
   bool has_normal_maps() const { return has_normal_maps_; }
   // Shading normal n (unit, on the winding's side) at barycentrics b of a triangle whose material has a normal map,
@@ -312,6 +322,7 @@ class Scene {
   void settle_environment_share();
   bool has_normal_maps_ = false;
   void settle_normal_maps();
+  RGB mapped_emission(uint32_t triangle, Vec3 b) const;
   std::shared_ptr<const void> storage_;  // the mapping the views point into, when mapped
   std::vector<std::string> ambient_only_;  // OBJ materials with Ka but no Ke: named if the scene ends up unlit
   Bounds bounds_;

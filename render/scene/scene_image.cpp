@@ -19,8 +19,8 @@ namespace {
 
 constexpr char kMagic[8] = {'L', 'F', 'I', 'M', 'A', 'G', 'E', '2'};
 constexpr uint32_t kByteOrderMark = 0x01020304;
-constexpr uint32_t kVersion = 7;  // 3: kr and tf; 4: metallic and roughness; 5: the environment; 6: their maps;
-                                  // 7: normal maps
+constexpr uint32_t kVersion = 8;  // 3: kr and tf; 4: metallic and roughness; 5: the environment; 6: their maps;
+                                  // 7: normal maps; 8: emission maps
 constexpr size_t kAlign = 64;
 constexpr size_t kVertexSlack = 16;
 

@@ -251,7 +251,23 @@ float Scene::opaque_fraction(uint32_t t) const {
 }
 
 float Scene::emitted_power(uint32_t t) const {
-  return area(t) * average(materials_[material_view_[t]].ke) * kPi * opaque_fraction(t);
+  const Material& m = materials_[material_view_[t]];
+  return area(t) * average(m.emission_map < 0 ? m.ke : mean_emission(m)) * kPi * opaque_fraction(t);
+}
+
+RGB Scene::mapped_emission(uint32_t t, Vec3 b) const {
+  const Material& m = materials_[material_view_[t]];
+  const Vec2 at = uv(t, b);
+  if (!std::isfinite(at.u) || !std::isfinite(at.v)) return m.ke;
+  const Texture& tex = textures_[static_cast<size_t>(m.emission_map)];
+  return m.ke * RGB{tex.sample(at, 0), tex.sample(at, 1), tex.sample(at, 2)};
+}
+
+RGB Scene::mean_emission(const Material& m) const {
+  if (m.emission_map < 0 || !has_uvs()) return m.ke;
+  // The pyramid's last level is the image's mean (levels average in linear values).
+  const Texture& tex = textures_[static_cast<size_t>(m.emission_map)];
+  return m.ke * RGB{tex.sample({0.5f, 0.5f}, 0, 64), tex.sample({0.5f, 0.5f}, 1, 64), tex.sample({0.5f, 0.5f}, 2, 64)};
 }
 
 }  // namespace lf

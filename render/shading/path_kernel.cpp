@@ -350,7 +350,10 @@ void Wavefront::land(int depth) {
         const float light_pdf = pdf_area * hits[r].t * hits[r].t / cos_y;
         w = power_heuristic(path.bsdf_pdf, light_pdf);
       }
-      path.L += path.beta * hit_material.ke * w;
+      const RGB le = hit_material.emission_map < 0
+                         ? hit_material.ke
+                         : scene_.emission(tri, scene_.barycentrics(tri, rays[r].origin + rays[r].direction * hits[r].t));
+      path.L += path.beta * le * w;
     }
     if (ray_global_[r] && !cache_->frozen())
       recordings_.push_back({continuing_[r], ray_cell_[r], rays[r].direction, path.L, path.beta});
