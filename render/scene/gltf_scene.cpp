@@ -266,6 +266,37 @@ Result<tinygltf::Model> read_model(const std::string& path, std::vector<std::str
   return model;
 }
 
+// KHR_texture_transform's matrix (offset x rotation x scale, in glTF's texture coordinates, v down), applied to
+// texture coordinates: u' = a u + b v + c, v' = d u + e v + f.
+struct UvTransform {
+  double a = 1, b = 0, c = 0, d = 0, e = 1, f = 0;
+  bool operator==(const UvTransform&) const = default;
+  Vec2 apply(float u, float v) const {
+    return {static_cast<float>(a * u + b * v + c), static_cast<float>(d * u + e * v + f)};
+  }
+};
+
+// A texture reference's KHR_texture_transform (the identity without one).
+template <class Info>
+UvTransform uv_transform_of(const Info& info) {
+  UvTransform t;
+  const auto it = info.extensions.find("KHR_texture_transform");
+  if (it == info.extensions.end()) return t;
+  const tinygltf::Value& x = it->second;
+  auto number = [&](const tinygltf::Value& v, double fallback) { return v.IsNumber() ? v.GetNumberAsDouble() : fallback; };
+  double ox = 0, oy = 0, sx = 1, sy = 1, r = 0;
+  if (x.Has("offset") && x.Get("offset").ArrayLen() == 2)
+    ox = number(x.Get("offset").Get(0), 0), oy = number(x.Get("offset").Get(1), 0);
+  if (x.Has("scale") && x.Get("scale").ArrayLen() == 2)
+    sx = number(x.Get("scale").Get(0), 1), sy = number(x.Get("scale").Get(1), 1);
+  if (x.Has("rotation")) r = number(x.Get("rotation"), 0);
+  // The extension's matrices: T [1 0 ox; 0 1 oy] R [cos sin; -sin cos] S [sx 0; 0 sy].
+  const double cr = std::cos(r), sr = std::sin(r);
+  t.a = cr * sx, t.b = sr * sy, t.c = ox;
+  t.d = -sr * sx, t.e = cr * sy, t.f = oy;
+  return t;
+}
+
 // A texture of `channels` channels from an 8-bit image with at least `components`: channel c of texel i is
 // texel(the image's pixel i, c). nullopt for an image of another kind, or one whose data is short.
 template <class Texel>
@@ -369,15 +400,32 @@ Result<Scene> Scene::parse_gltf_unlit(const std::string& path, const std::string
     if (warned.insert(what).second) log_warn(where + ": " + what);
   };
   for (const auto& e : model.extensionsUsed)
-    if (e != "KHR_lights_punctual" && e != "KHR_materials_emissive_strength")
+    if (e != "KHR_lights_punctual" && e != "KHR_materials_emissive_strength" && e != "KHR_texture_transform")
       warn("extension " + e + " is not supported; what it adds is left out");
 
   Scene s;
   const std::vector<std::string> names = material_names(model);
+  // Each material's texture transform, applied to its primitives' texture coordinates as they are read: every
+  // texture of a material shares the triangle's coordinates here, so they share one transform.
+  std::vector<UvTransform> uv_transforms(model.materials.size());
   for (size_t i = 0; i < model.materials.size(); ++i) {
     const tinygltf::Material& g = model.materials[i];
     const auto& pbr = g.pbrMetallicRoughness;
     Material m{names[i], {}, {}};
+    {
+      std::vector<std::pair<int, UvTransform>> used;  // (texture index, transform) of each texture it names
+      for (const auto& [index, transform] :
+           {std::pair{pbr.baseColorTexture.index, uv_transform_of(pbr.baseColorTexture)},
+            {pbr.metallicRoughnessTexture.index, uv_transform_of(pbr.metallicRoughnessTexture)},
+            {g.normalTexture.index, uv_transform_of(g.normalTexture)},
+            {g.emissiveTexture.index, uv_transform_of(g.emissiveTexture)}})
+        if (index >= 0) used.emplace_back(index, transform);
+      if (!used.empty()) uv_transforms[i] = used.front().second;
+      for (const auto& u : used)
+        if (!(u.second == used.front().second))
+          warn("material '" + names[i] + "': its textures have different KHR_texture_transforms; the first one's "
+               "(base colour, metallic-roughness, normal, emissive in that order) is used for all");
+    }
     m.type = Material::Type::metal_rough;
     RGB factor{1, 1, 1};
     if (pbr.baseColorFactor.size() == 4)
@@ -544,7 +592,11 @@ Result<Scene> Scene::parse_gltf_unlit(const std::string& path, const std::string
             p[c] = world.point({(*positions)[3 * v], (*positions)[3 * v + 1], (*positions)[3 * v + 2]});
             if (!normals.empty()) vn[c] = normal_of({normals[3 * v], normals[3 * v + 1], normals[3 * v + 2]});
             // glTF's texture coordinates start at the image's top left; the scene's, as OBJ's, at its bottom left.
-            if (!uvs.empty()) vt[c] = {uvs[2 * v], 1.0f - uvs[2 * v + 1]};
+            if (!uvs.empty()) {
+              const Vec2 t = material < uv_transforms.size() ? uv_transforms[material].apply(uvs[2 * v], uvs[2 * v + 1])
+                                                             : Vec2{uvs[2 * v], uvs[2 * v + 1]};
+              vt[c] = {t.u, 1.0f - t.v};
+            }
           }
           s.add_triangle(p[0], p[1], p[2], material, {normals.empty() ? nullptr : vn, uvs.empty() ? nullptr : vt});
         }

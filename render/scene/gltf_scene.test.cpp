@@ -240,6 +240,31 @@ TEST(GltfScene, EmissiveTexturesLightWhereTheyGlow) {
   }
 }
 
+// KHR_texture_transform moves a material's texture over its surface: a texture white on its left half and black
+// on its right, shifted by half its width, is black where it was white; scaled by 2, it repeats twice across.
+TEST(GltfScene, TextureTransformsMoveTheTexture) {
+  for (const char* transform : {R"({"offset": [0.5, 0]})", R"({"scale": [2, 1]})"}) {
+    GltfFiles files;
+    std::string px;
+    for (int y = 0; y < 4; ++y)
+      for (int x = 0; x < 4; ++x) px += x < 2 ? std::string(3, '\xff') : std::string(3, '\0');
+    write_tga(files.dir / "half.tga", 4, 4, 24, px);
+    const std::string path = files.write(
+        R"([{"mesh": 0}])", 4,
+        std::string(R"({"name": "moved", "pbrMetallicRoughness": {"baseColorTexture": {"index": 0, "extensions": {"KHR_texture_transform": )") +
+            transform + "}}}}",
+        R"("textures": [{"source": 0}], "images": [{"uri": "half.tga"}],)");
+    auto s = Scene::load_gltf_unlit(path);
+    ASSERT_TRUE(s.ok()) << s.error().message;
+    // Triangle 0: u = b1 + b2. Shifted by a half, u 0.2 reads the texture at 0.7 (black) and 0.7 at 1.2, i.e. 0.2
+    // (white); scaled by 2, u 0.375 reads it at 0.75 (a black texel's centre) and 0.625 at 1.25, i.e. 0.25 (white).
+    const bool shifted = std::string(transform).find("offset") != std::string::npos;
+    const float black_at = shifted ? 0.2f : 0.375f, white_at = shifted ? 0.7f : 0.625f;
+    EXPECT_NEAR(s->albedo(0, {1 - black_at, black_at / 2, black_at / 2}).x, 0.0f, 1e-3f) << transform;
+    EXPECT_NEAR(s->albedo(0, {1 - white_at, white_at / 2, white_at / 2}).x, 1.0f, 1e-3f) << transform;
+  }
+}
+
 TEST(GltfScene, BadFilesAreRefusedWithAMessage) {
   GltfFiles files;
   auto past = Scene::load_gltf_unlit(files.write(R"([{"mesh": 0}])", 40));
