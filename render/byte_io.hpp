@@ -79,6 +79,22 @@ inline void put_material(std::string& out, const Material& m) {
   put(out, m.normal_scale);
   put(out, m.emission_map);
 }
+// A point light as both binary forms store it: f32 position[3], intensity[3], axis[3], cos_inner, cos_outer.
+inline void put_point_light(std::string& out, const PointLight& p) {
+  put_rgb(out, p.position);
+  put_rgb(out, p.intensity);
+  put_rgb(out, p.axis);
+  put(out, p.cos_inner);
+  put(out, p.cos_outer);
+}
+inline bool read_point_light(Reader& r, PointLight& p) {
+  if (!r.vec(p.position) || !r.vec(p.intensity) || !r.vec(p.axis) || !r.f32(p.cos_inner) || !r.f32(p.cos_outer))
+    return false;
+  // A spot's axis must be a direction, and its cones cosines.
+  return !p.spot() || (std::abs(length(p.axis) - 1) < 1e-3f && p.cos_inner <= 1 && p.cos_outer <= p.cos_inner);
+}
+inline constexpr size_t kPointLightBytes = 44;
+
 // Whether every texture a material names is one of `textures`.
 inline bool maps_within(const Material& m, uint32_t textures) {
   const int32_t n = static_cast<int32_t>(textures);

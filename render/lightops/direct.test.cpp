@@ -332,3 +332,40 @@ TEST(Direct, AClosedRoomOfSmallBlocksLeaksNoLight) {
 }
 
 }  // namespace lf
+
+namespace lf {
+namespace {
+
+// A spot light one unit above a Lambert floor, shining down, cones of 0.2 and 0.4 radians: straight below it gives
+// I / d^2, between the cones glTF's falloff (the square of the linear ramp in the cosine), outside nothing; the
+// photon map's spot photons stay inside the cone.
+TEST(DirectLight, ASpotLightsFalloffFollowsItsCones) {
+  Scene s;
+  const uint32_t floor = s.add_material({"floor", {0.5f, 0.5f, 0.5f}, {}});
+  s.add_quad({-3, -3, 0}, {3, -3, 0}, {3, 3, 0}, {-3, 3, 0}, floor);
+  PointLight spot{{0, 0, 1}, {10, 10, 10}};
+  spot.axis = {0, 0, -1};
+  spot.cos_inner = std::cos(0.2f);
+  spot.cos_outer = std::cos(0.4f);
+  s.add_point_light(spot);
+  ASSERT_TRUE(s.finalize("spot").ok());
+  RayTracer tracer(s);
+  ShadingPoints pts;
+  const float angles[] = {0.0f, 0.15f, 0.3f, 0.5f};
+  for (int i = 0; i < 4; ++i)
+    pts.push_back({std::tan(angles[i]), 0, 0}, {0, 0, 1}, {0, 0, 1}, floor, sample_key(static_cast<uint64_t>(i), 0), 0);
+  const auto out = test::shade_direct(SceneContext{&s, &tracer}, pts, "tree", 1);
+  for (int i = 0; i < 4; ++i) {
+    const float a = angles[i], c = std::cos(a);
+    const float ramp = std::clamp((c - spot.cos_outer) / (spot.cos_inner - spot.cos_outer), 0.0f, 1.0f);
+    // I(a) cos(a) / d^2 with d = 1 / cos(a), times rho / pi.
+    const float expected = 0.5f / kPi * 10 * ramp * ramp * c * c * c;
+    EXPECT_NEAR(out[static_cast<size_t>(i)].x, expected, 1e-4f * 10) << "at " << a << " radians";
+  }
+  EXPECT_GT(out[2].x, 0.0f);
+  EXPECT_LT(out[2].x, out[1].x * 0.5f) << "between the cones, fading";
+  EXPECT_EQ(out[3].x, 0.0f) << "outside the outer cone";
+}
+
+}  // namespace
+}  // namespace lf

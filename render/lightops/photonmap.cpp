@@ -276,6 +276,18 @@ class PhotonMap final : public LightOp {
           flights.push_back(Flight{Ray{origin, -ls.direction}, flux, rng});
           continue;
         }
+        if (ls.point_light && ls.point_light->spot()) {
+          // A spot: uniform over its outer cone, flux I(dir) times the cone's solid angle over P(light).
+          const PointLight& spot = *ls.point_light;
+          const float one_minus = 1 - spot.cos_outer, cos_t = 1 - u * one_minus;
+          const float sin_t = std::sqrt(std::max(0.0f, 1 - cos_t * cos_t)), phi = 2.0f * kPi * v;
+          Vec3 t, b;
+          basis(spot.axis, t, b);
+          const Vec3 dir = normalize(t * (sin_t * std::cos(phi)) + b * (sin_t * std::sin(phi)) + spot.axis * cos_t);
+          const RGB flux = spot.intensity_towards(dir) * (2.0f * kPi * one_minus / (ls.pdf_area * count));
+          if (!is_black(flux)) flights.push_back(Flight{Ray{ls.point, dir}, flux, rng});
+          continue;
+        }
         Vec3 dir;
         if (ls.is_point) {  // uniform over the sphere
           const float z = 1.0f - 2.0f * u, r = std::sqrt(std::max(0.0f, 1.0f - z * z)), phi = 2.0f * kPi * v;

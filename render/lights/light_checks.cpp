@@ -58,10 +58,16 @@ std::vector<LightEscape> light_escapes(const Scene& scene, const std::vector<std
   for (size_t p = 0; p < points.size(); ++p) {
     Rng rng(p, streams::light_check ^ 0x9e37);
     std::vector<Ray> rays;
+    const PointLight& light = points[p];
+    Vec3 t, b;
+    basis(light.axis, t, b);
     for (int i = 0; i < kRays; ++i) {
-      const float z = 1 - 2 * rng.uniform(), phi = 2 * kPi * rng.uniform();
+      // Uniform over the sphere, or over a spot's outer cone.
+      const float span = light.spot() ? 1 - light.cos_outer : 2.0f;
+      const float z = 1 - span * rng.uniform(), phi = 2 * kPi * rng.uniform();
       const float r = std::sqrt(std::max(0.0f, 1 - z * z));
-      rays.push_back(Ray{points[p].position, {r * std::cos(phi), r * std::sin(phi), z}});
+      rays.push_back(Ray{light.position, light.spot() ? t * (r * std::cos(phi)) + b * (r * std::sin(phi)) + light.axis * z
+                                                      : Vec3{r * std::cos(phi), r * std::sin(phi), z}});
     }
     const size_t first_labelled = points.size() - std::min(points.size(), point_light_labels.size());
     const std::string label = p >= first_labelled ? point_light_labels[p - first_labelled]

@@ -20,6 +20,11 @@ struct LightSample {
   bool is_point = false;
   bool at_infinity = false;  // from the environment (render/lights/environment.hpp): `direction`, not a point
   Vec3 direction{};          // towards the environment, unit length
+  const PointLight* point_light = nullptr;  // a point light's own (a spot's intensity depends on the direction)
+  // The intensity of a point light towards x (a spot's falloff), or `radiance` for any other light.
+  RGB radiance_towards(Vec3 x) const {
+    return point_light && point_light->spot() ? point_light->intensity_towards(normalize(x - point)) : radiance;
+  }
 };
 
 // The environment's sample for uniform (u, v), the environment having been chosen with probability `share`.
@@ -66,7 +71,9 @@ inline float emitter_sampled_area(const Scene& scene, uint32_t tri, size_t e) {
 inline LightSample light_sample_at(const Scene& scene, size_t e, float p_light, Uniform2 uv) {
   if (e >= scene.emitters().size()) {
     const PointLight& p = scene.point_lights()[e - scene.emitters().size()];
-    return LightSample{p.position, {}, UINT32_MAX, p.intensity, p_light, true};
+    LightSample ls{p.position, {}, UINT32_MAX, p.intensity, p_light, true};
+    ls.point_light = &p;
+    return ls;
   }
   const uint32_t tri = scene.emitters()[e];
   const EmitterCutouts& cut = scene.emitter_cutouts();

@@ -219,7 +219,7 @@ Task LightSelection::build(const SceneContext& ctx, const LightSelectionOptions&
         const Vec3 wi = d / std::sqrt(dist2);
         const float cos_y = ls.is_point ? 1.0f : -dot(ls.normal, wi);
         if (!above_both(wi, p.ns, p.ng) || cos_y <= 0) continue;
-        const float value = average(ls.radiance) * dot(p.ns, wi) * cos_y / (dist2 * ls.pdf_area);
+        const float value = average(ls.radiance_towards(p.x)) * dot(p.ns, wi) * cos_y / (dist2 * ls.pdf_area);
         if (!(value > 0) || !std::isfinite(value)) continue;
         const Vec3 target = ls.is_point ? ls.point : scene.ray_origin(ls.triangle, ls.point, ls.normal);
         const Vec3 to_light = target - p.origin;

@@ -79,7 +79,8 @@ LightTree::LightTree(const Scene& scene) {
   }
   for (size_t i = 0; i < scene.point_lights().size(); ++i) {
     const PointLight& p = scene.point_lights()[i];
-    items.push_back({p.position, p.position, p.position, {0, 0, 1}, -1.0f, 4 * kPi * average(p.intensity),
+    const float power = p.spot() ? static_cast<float>(p.power()) : 4 * kPi * average(p.intensity);
+    items.push_back({p.position, p.position, p.position, {0, 0, 1}, -1.0f, power,
                      static_cast<uint32_t>(emitters.size() + i)});
   }
   trail_.assign(items.size(), 0);

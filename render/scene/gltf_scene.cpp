@@ -525,6 +525,21 @@ Result<Scene> Scene::parse_gltf_unlit(const std::string& path, const std::string
         const Vec3 towards = world.vector({0, 0, 1});  // a directional light shines along its node's -z
         if (type == "point") {
           s.add_point_light(world.point({0, 0, 0}), radiometric);
+        } else if (type == "spot" && length(world.vector({0, 0, -1})) > 0) {
+          // A spot shines along its node's -z; its cone angles (radians) default to 0 and pi / 4.
+          PointLight spot{world.point({0, 0, 0}), radiometric};
+          spot.axis = normalize(world.vector({0, 0, -1}));
+          double inner = 0, outer = kPi / 4;
+          if (light.Has("spot")) {
+            const tinygltf::Value& cone = light.Get("spot");
+            if (cone.Has("innerConeAngle")) inner = cone.Get("innerConeAngle").GetNumberAsDouble();
+            if (cone.Has("outerConeAngle")) outer = cone.Get("outerConeAngle").GetNumberAsDouble();
+          }
+          outer = std::clamp(outer, 1e-4, static_cast<double>(kPi) / 2);
+          inner = std::clamp(inner, 0.0, outer);
+          spot.cos_outer = static_cast<float>(std::cos(outer));
+          spot.cos_inner = static_cast<float>(std::cos(inner));
+          s.add_point_light(spot);
         } else if (type == "directional" && !has_sun && length(towards) > 0) {
           // The sun of the scene, 0.526 degrees across (glTF gives a directional light no size).
           Environment sky;
@@ -537,7 +552,7 @@ Result<Scene> Scene::parse_gltf_unlit(const std::string& path, const std::string
         } else if (type == "directional") {
           warn("light '" + name + "' (directional): only the first directional light is read, as the scene's sun");
         } else {
-          warn("light '" + name + "' (" + type + ") is not supported yet; point and directional lights are read");
+          warn("light '" + name + "' (" + type + ") is not supported; point, spot and directional lights are read");
         }
       }
     }

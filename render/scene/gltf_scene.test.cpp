@@ -265,6 +265,38 @@ TEST(GltfScene, TextureTransformsMoveTheTexture) {
   }
 }
 
+// A KHR_lights_punctual spot shines along its node's -z with its cone angles; shipped with them.
+TEST(GltfScene, SpotLightsShineAlongTheirNodesMinusZ) {
+  GltfFiles files;
+  // A quarter turn about +x takes the node's -z to the scene's +y.
+  const std::string path = files.write(R"([{"mesh": 0}, {"rotation": [0.7071068, 0, 0, 0.7071068],
+      "extensions": {"KHR_lights_punctual": {"light": 0}}}])");
+  {
+    std::ifstream in(path);
+    std::string json((std::istreambuf_iterator<char>(in)), {});
+    const std::string point = R"({"type": "point", "intensity": 683, "color": [1, 0.5, 0.25]})";
+    json.replace(json.find(point), point.size(),
+                 R"({"type": "spot", "intensity": 683, "spot": {"innerConeAngle": 0.1, "outerConeAngle": 0.3}})");
+    json.replace(json.find(R"("nodes": [0])"), 12, R"("nodes": [0, 1])");
+    std::ofstream(path) << json;
+  }
+  auto s = Scene::load_gltf_unlit(path);
+  ASSERT_TRUE(s.ok()) << s.error().message;
+  ASSERT_EQ(s->point_lights().size(), 1u);
+  ASSERT_TRUE(s->finalize("spot").ok());
+  auto shipped = scene_from_bytes(scene_to_bytes(*s), "shipped");
+  ASSERT_TRUE(shipped.ok()) << shipped.error().message;
+  for (const Scene* scene : {&*s, &*shipped}) {
+    const PointLight& spot = scene->point_lights()[0];
+    ASSERT_TRUE(spot.spot());
+    EXPECT_NEAR(spot.axis.y, 1.0f, 1e-5f);
+    EXPECT_NEAR(spot.cos_inner, std::cos(0.1f), 1e-6f);
+    EXPECT_NEAR(spot.cos_outer, std::cos(0.3f), 1e-6f);
+    EXPECT_NEAR(spot.intensity_towards({0, 1, 0}).x, 1.0f, 1e-6f);
+    EXPECT_EQ(spot.intensity_towards({1, 0, 0}).x, 0.0f);
+  }
+}
+
 TEST(GltfScene, BadFilesAreRefusedWithAMessage) {
   GltfFiles files;
   auto past = Scene::load_gltf_unlit(files.write(R"([{"mesh": 0}])", 40));

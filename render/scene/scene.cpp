@@ -142,7 +142,7 @@ Status Scene::finalize(const std::string& what) {
     total += power.back();
   }
   for (const auto& p : point_lights_) {
-    power.push_back(4.0 * kPi * average(p.intensity));
+    power.push_back(p.power());
     total += power.back();
   }
   const bool environment_emits = environment_ && environment_->emits();

@@ -102,7 +102,24 @@ struct CornerAttributes {
 
 struct PointLight {
   Vec3 position;
-  RGB intensity;  // W/sr per channel
+  RGB intensity;  // W/sr per channel (a spot's on its axis)
+  // A spot light (glTF's KHR_lights_punctual "spot"): it shines along `axis`, fully within cos_inner of it and
+  // fading to nothing at cos_outer (glTF's smooth falloff, the square of the linear ramp). cos_outer < -1: every way.
+  Vec3 axis{0, 0, -1};
+  float cos_inner = 1, cos_outer = -2;
+  bool spot() const { return cos_outer >= -1; }
+  // The intensity towards unit direction d (from the light).
+  RGB intensity_towards(Vec3 d) const {
+    if (!spot()) return intensity;
+    const float c = dot(d, axis);
+    if (c <= cos_outer) return {};
+    const float t = cos_inner > cos_outer ? std::min(1.0f, (c - cos_outer) / (cos_inner - cos_outer)) : 1.0f;
+    return intensity * (t * t);
+  }
+  // Its flux, per channel's average: 4 pi I, or over a spot's outer cone (an upper bound, for light selection).
+  double power() const {
+    return spot() ? 2.0 * kPi * (1 - static_cast<double>(cos_outer)) * average(intensity) : 4.0 * kPi * average(intensity);
+  }
 };
 
 struct ObjCatalogue {
@@ -142,6 +159,7 @@ class Scene {
   // An icosphere; `smooth`: with the sphere's own normals at the corners (shaded round, not faceted).
   void add_sphere(Vec3 center, float radius, int subdivisions, uint32_t material, bool smooth = false);
   void add_point_light(Vec3 position, RGB intensity) { point_lights_.push_back({position, intensity}); }
+  void add_point_light(const PointLight& light) { point_lights_.push_back(light); }
   // Adds the lights a script declares (SceneSpec::lights); an error names what is wrong with one.
   // shape "name" { plane | sphere }: a script's geometry (SceneSpec::shapes), each with a material of its own
   // (named after the shape, grey until the script's material changes say otherwise) or one of the scene's.

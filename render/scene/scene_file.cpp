@@ -15,8 +15,8 @@ namespace lf {
 
 namespace {
 
-constexpr std::string_view kMagic = "LFSCENE8";  // 4: metallic and roughness; 5: the environment; 6: their maps;
-                                                 // 7: normal maps; 8: emission maps
+constexpr std::string_view kMagic = "LFSCENE9";  // 4: metallic and roughness; 5: the environment; 6: their maps;
+                                                 // 7: normal maps; 8: emission maps; 9: spot lights
 using bytes::put;
 using bytes::put_rgb;
 using bytes::Reader;
@@ -67,12 +67,7 @@ std::string scene_to_bytes(const Scene& scene) {
         put<float>(out, scene.corner_uv(t, c).v);
       }
   put<uint32_t>(out, static_cast<uint32_t>(scene.point_lights().size()));
-  for (const PointLight& p : scene.point_lights()) {
-    put<float>(out, p.position.x);
-    put<float>(out, p.position.y);
-    put<float>(out, p.position.z);
-    put_rgb(out, p.intensity);
-  }
+  for (const PointLight& p : scene.point_lights()) bytes::put_point_light(out, p);
   std::string environment;
   if (scene.environment()) scene.environment()->write(environment);
   put<uint32_t>(out, static_cast<uint32_t>(environment.size()));
@@ -81,7 +76,7 @@ std::string scene_to_bytes(const Scene& scene) {
 }
 
 Result<Scene> scene_from_bytes(std::string_view bytes, const std::string& what) {
-  if (bytes.substr(0, kMagic.size()) != kMagic) return make_error(what + ": not a lightfarm scene (no LFSCENE8)");
+  if (bytes.substr(0, kMagic.size()) != kMagic) return make_error(what + ": not a lightfarm scene (no LFSCENE9)");
   Reader r(bytes.substr(kMagic.size()));
   auto bad = [&] { return make_error(what + ": the scene's bytes are truncated or inconsistent"); };
   Scene s;
@@ -139,11 +134,11 @@ Result<Scene> scene_from_bytes(std::string_view bytes, const std::string& what) 
   if (s.triangle_count() != n) return bad();
   s.restore_corners(std::move(normals), std::move(uvs));
   uint32_t points = 0;
-  if (!r.u32(points) || !r.room(points, 24)) return bad();
+  if (!r.u32(points) || !r.room(points, bytes::kPointLightBytes)) return bad();
   for (uint32_t i = 0; i < points; ++i) {
-    Vec3 p, c;
-    if (!r.vec(p) || !r.vec(c)) return bad();
-    s.add_point_light(p, c);
+    PointLight p;
+    if (!bytes::read_point_light(r, p)) return bad();
+    s.add_point_light(p);
   }
   uint32_t environment_size = 0;
   std::string environment;

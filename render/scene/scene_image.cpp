@@ -19,8 +19,8 @@ namespace {
 
 constexpr char kMagic[8] = {'L', 'F', 'I', 'M', 'A', 'G', 'E', '2'};
 constexpr uint32_t kByteOrderMark = 0x01020304;
-constexpr uint32_t kVersion = 8;  // 3: kr and tf; 4: metallic and roughness; 5: the environment; 6: their maps;
-                                  // 7: normal maps; 8: emission maps
+constexpr uint32_t kVersion = 9;  // 3: kr and tf; 4: metallic and roughness; 5: the environment; 6: their maps;
+                                  // 7: normal maps; 8: emission maps; 9: spot lights
 constexpr size_t kAlign = 64;
 constexpr size_t kVertexSlack = 16;
 
@@ -138,10 +138,7 @@ std::string SceneImage::encode(const Scene& scene, const std::string& hash) {
     bytes::put(out, texel_offsets[i]);
   }
   for (const Material& m : scene.materials()) bytes::put_material(out, m);
-  for (const PointLight& p : scene.point_lights()) {
-    bytes::put_rgb(out, p.position);
-    bytes::put_rgb(out, p.intensity);
-  }
+  for (const PointLight& p : scene.point_lights()) bytes::put_point_light(out, p);
   for (uint32_t e : scene.emitters_) bytes::put(out, e);
   for (float c : scene.emitter_cdf_) bytes::put(out, c);
   for (float p : scene.emitter_pdf_) bytes::put(out, p);
@@ -228,10 +225,10 @@ Result<Scene> SceneImage::map(const std::string& path, const std::string& hash, 
       return bad("materials");
     s.materials_.push_back(std::move(m));
   }
-  if (!r.room(h.point_lights, 24)) return bad("point light count");
+  if (!r.room(h.point_lights, bytes::kPointLightBytes)) return bad("point light count");
   for (uint32_t i = 0; i < h.point_lights; ++i) {
     PointLight p;
-    if (!r.vec(p.position) || !r.vec(p.intensity)) return bad("point lights");
+    if (!bytes::read_point_light(r, p)) return bad("point lights");
     s.point_lights_.push_back(p);
   }
   const uint64_t lights = uint64_t{h.emitters} + h.point_lights;

@@ -165,7 +165,7 @@ TEST_F(ImageDir, DamagedImagesAreRefusedAndRemade) {
   refused(good.substr(0, good.size() / 2), "is damaged");
   refused(good.substr(0, 10), "shorter than its header");
   std::string wrong_version = good;
-  wrong_version[12] = 9;
+  wrong_version[12] = 99;
   refused(wrong_version, "not an image of this version");
   // A vertex index far outside the vertex array: the first triangle's first corner.
   std::string bad_index = good;

@@ -189,7 +189,9 @@ void Wavefront::sample_light_for(uint32_t p, int depth) {
   const float span = length(to_light);
   if (ls.is_point) {
     // A point light: I cos / d^2, and no BSDF sample can ever hit it, so no MIS.
-    pending_.push_back({p, path.beta * f * ls.radiance * (cos_x / (dist2 * ls.pdf_area))});
+    const RGB intensity = ls.radiance_towards(path.x);
+    if (is_black(intensity)) return;  // outside a spot's cone
+    pending_.push_back({p, path.beta * f * intensity * (cos_x / (dist2 * ls.pdf_area))});
   } else {
     const float light_pdf = ls.pdf_area * dist2 / cos_y;  // per solid angle
     if (by_lobe(m)) {
