@@ -42,7 +42,7 @@ inline LightSample environment_sample(const Scene& scene, float share, Uniform2 
 inline float environment_share_at(const Scene& scene, Vec3 x, Vec3 n, const LightSelection* selection) {
   const float share = scene.environment_share();
   if (share <= 0 || share >= 1) return share;
-  if (selection && selection->cell_of(x, n) >= 0) return share;
+  if (const int32_t cell = selection ? selection->cell_of(x, n) : -1; cell >= 0) return selection->environment_share(cell, share);
   return scene.light_tree().reaches(x, n) ? share : 1.0f;
 }
 

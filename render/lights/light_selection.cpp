@@ -13,6 +13,8 @@ namespace lf {
 namespace {
 
 inline constexpr uint64_t kSelectionStream = 8;  // next to sampler.hpp's streams
+// The moment maps' key for the environment: after every light index.
+inline constexpr uint32_t kEnvironmentEntry = UINT32_MAX;
 
 struct Candidate {
   Vec3 origin;  // the shadow rays' start, above the face
@@ -186,6 +188,8 @@ Task LightSelection::build(const SceneContext& ctx, const LightSelectionOptions&
   // all or nothing. Measured on Lost Empire, the mean instead gave 2 % more error, and a second round drawn through
   // the first round's mixture 27 % more (docs/decisions.md, "Lights learned where the camera looks").
   const size_t n = static_cast<size_t>(std::max(1, options.samples));
+  const float base_share = scene.environment_share();
+  const size_t n_environment = base_share > 0 && base_share < 1 ? std::max<size_t>(1, n / 4) : 0;
   std::vector<std::map<uint32_t, double>> moment(cell_ranges.size());  // per cell and light: sum of p (f / p)^2
   // A pool's replicas each learn every replicas-th cell; a cell's samples are seeded by the cell alone.
   const size_t replicas = ctx.exchange ? static_cast<size_t>(std::max(1, ctx.replica_count)) : 1;
@@ -228,6 +232,20 @@ Task LightSelection::build(const SceneContext& ctx, const LightSelectionOptions&
         pending.push_back({static_cast<uint32_t>(c), static_cast<uint32_t>(e), value, p_light});
         shadow.push_back(Ray{p.origin, to_light / span, 0.0f, span});
       }
+      // The environment's own samples, a quarter as many, weighed n / n_env so that its moment is on the tree
+      // lights' footing: each cell then learns its share of the samples too (a room's sky through a window).
+      for (size_t s = 0; s < n_environment; ++s) {
+        const Candidate& p = candidates[keyed[first + s % (last - first)].second];
+        Rng rng(splitmix64(key ^ (options.seed << 40)) ^ s, kSelectionStream ^ 0xe4b);
+        const float u = rng.uniform(), v = rng.uniform();
+        const Environment::Sample d = scene.environment()->sample(u, v);
+        if (!(d.pdf > 0) || is_black(d.radiance) || !above_both(d.wi, p.ns, p.ng)) continue;
+        const float value = average(d.radiance) * dot(p.ns, d.wi) / d.pdf;
+        if (!(value > 0) || !std::isfinite(value)) continue;
+        pending.push_back({static_cast<uint32_t>(c), kEnvironmentEntry, value,
+                           static_cast<float>(n) / static_cast<float>(n_environment)});
+        shadow.push_back(Ray{p.origin, d.wi});
+      }
     }
     std::vector<uint8_t> blocked(shadow.size());
     if (!shadow.empty()) co_await trace_occluded(ctx, shadow, blocked);
@@ -248,10 +266,17 @@ Task LightSelection::build(const SceneContext& ctx, const LightSelectionOptions&
 }
 
 void LightSelection::add_cell(uint64_t key, std::map<uint32_t, double>& moment) {
+  // The environment's entry (the map's last key) is its share of the cell, not a light of the distribution.
+  double environment = 0;
+  if (auto it = moment.find(kEnvironmentEntry); it != moment.end()) {
+    environment = std::sqrt(it->second);
+    moment.erase(it);
+  }
   double sum = 0;
   for (auto& [light, m] : moment) sum += (m = std::sqrt(m));
   if (!(sum > 0)) return;
   Cell cell{static_cast<uint32_t>(lights_.size()), static_cast<uint32_t>(moment.size())};
+  cell.environment = static_cast<float>(environment / (environment + sum));
   double running = 0;
   for (const auto& [light, m] : moment) {
     running += m;

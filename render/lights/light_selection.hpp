@@ -58,6 +58,13 @@ class LightSelection {
   // The chance cell's distribution gives light (0 for one it never saw).
   float probability(int32_t cell, size_t light) const;
   float share() const { return share_; }
+  // The environment's share of light samples at a point in `cell`, where it is `base` otherwise
+  // (Scene::environment_share): the learned share mixed with `base` as the lights are mixed with the tree, so
+  // neither side is ever left without samples.
+  float environment_share(int32_t cell, float base) const {
+    const float learned = cells_[static_cast<size_t>(cell)].environment;
+    return learned < 0 ? base : share_ * learned + (1 - share_) * base;
+  }
   // The chance of light at a point in `cell` under the mixture: the cell's distribution with chance share(), the
   // tree (which gives the light p_tree) otherwise.
   float mixture(int32_t cell, size_t light, float p_tree) const {
@@ -79,6 +86,7 @@ class LightSelection {
   void add_cell(uint64_t key, std::map<uint32_t, double>& moment);
   struct Cell {
     uint32_t first = 0, count = 0;  // its lights in lights_ / cdf_, sorted by light
+    float environment = -1;         // the environment's learned share of the cell's light (-1: not learned)
   };
   float inverse_size_ = 1, share_ = 0.5f;
   std::unordered_map<uint64_t, int32_t> index_;

@@ -227,3 +227,47 @@ TEST(LightSelection, NeedsACameraAndSaysSo) {
 
 }  // namespace
 }  // namespace lf
+
+namespace lf {
+namespace {
+
+// Under a sky, a floor half covered by a roof with a lamp beneath it: under the roof the sky reaches few points and
+// the lamp most, in the open the sky gives nearly everything. The cells learn the environment's share of their
+// samples accordingly (mixed half and half with the default half), and direct light through the learned shares is
+// what the default shares give.
+TEST(LightSelection, CellsLearnHowMuchOfTheirLightIsTheSky) {
+  Scene scene;
+  const auto floor = scene.add_material({"floor", {0.8f, 0.8f, 0.8f}, {}});
+  const auto lamp = scene.add_material({"lamp", {}, {200, 200, 200}});
+  scene.add_quad({0, 0, -10}, {0, 0, 10}, {12, 0, 10}, {12, 0, -10}, floor);
+  scene.add_quad({-1, 1, -10}, {4, 1, -10}, {4, 1, 10}, {-1, 1, 10}, floor);  // the roof, facing down
+  scene.add_quad({1.9f, 0.95f, -0.1f}, {2.1f, 0.95f, -0.1f}, {2.1f, 0.95f, 0.1f}, {1.9f, 0.95f, 0.1f}, lamp);
+  scene.set_environment(Environment(RGB{1, 1, 1}));
+  ASSERT_TRUE(scene.finalize("half roofed").ok());
+  ASSERT_FLOAT_EQ(scene.environment_share(), 0.5f);
+  const Camera camera{CameraSpec{{-0.5f, 0.6f, 0}, {8, 0, 0}, {0, 1, 0}, 60}, 64, 48};
+  RayTracer tracer(scene);
+  SceneContext ctx{&scene, &tracer};
+  ctx.camera = &camera;
+  ctx.width = 64;
+  ctx.height = 48;
+  LightSelection selection;
+  run_to_completion(LightSelection::build(ctx, {}, selection));
+  const Vec3 up{0, 1, 0}, roofed{2, 0, 0}, open{7, 0, 0};
+  ASSERT_GE(selection.cell_of(roofed, up), 0);
+  ASSERT_GE(selection.cell_of(open, up), 0);
+  const float under = environment_share_at(scene, roofed, up, &selection);
+  const float outside = environment_share_at(scene, open, up, &selection);
+  EXPECT_LT(under, 0.4f) << "under the roof the lamp gives most";
+  EXPECT_GT(outside, 0.6f) << "in the open the sky gives most";
+  EXPECT_LT(environment_share_at(scene, roofed, up, nullptr), 0.51f);
+  // Unbiased either way: direct light at the two points, learned against the tree's default shares.
+  ShadingPoints pts;
+  for (int i = 0; i < 2; ++i) pts.push_back(i ? open : roofed, up, up, floor, sample_key(static_cast<uint64_t>(i), 0), 0);
+  const auto learned = test::shade_direct(ctx, pts, "learned", 8192);
+  const auto tree = test::shade_direct(ctx, pts, "tree", 8192);
+  for (size_t i = 0; i < 2; ++i) EXPECT_NEAR(learned[i].x / tree[i].x, 1.0, 0.03) << "point " << i;
+}
+
+}  // namespace
+}  // namespace lf
