@@ -94,6 +94,43 @@ int main(int argc, char** argv) {
   auto cornell = Scene::builtin("cornell");
   seed("scene_file", "cornell.lfscene", scene_to_bytes(*cornell));
   seed("scene_file", "cornell.image", SceneImage::encode(*cornell, "00000000fuzz0000"));
+  // Every field the shipped forms carry: a texture of each kind (colour, one channel, linear data), a microfacet
+  // material with all its maps, texture coordinates, an environment map with a sun, a spot light.
+  Scene rich;
+  auto texture = [&rich](uint32_t channels, bool linear) {
+    Texture t;
+    t.path = "t" + std::to_string(rich.textures().size());
+    t.width = t.height = 2;
+    t.channels = channels;
+    t.linear = linear;
+    t.owned.assign(4 * channels, 200);
+    t.build_pyramid();
+    return static_cast<int32_t>(rich.add_texture(std::move(t)));
+  };
+  Material m{"rich", {0.5f, 0.5f, 0.5f}, {1, 1, 1}};
+  m.type = Material::Type::metal_rough;
+  m.kd_map = texture(3, false);
+  m.alpha_map = texture(1, false);
+  m.metallic_map = texture(1, false);
+  m.roughness_map = texture(1, false);
+  m.normal_map = texture(3, true);
+  m.emission_map = texture(3, false);
+  rich.add_material(m);
+  const Vec2 uv[3] = {{0, 0}, {1, 0}, {0, 1}};
+  rich.add_triangle({0, 0, 0}, {1, 0, 0}, {0, 1, 0}, 0, {nullptr, uv});
+  Environment sky(2, 1, {{1, 1, 1}, {2, 2, 2}}, 1.5f, 0.5f);
+  sky.set_sun({{0, 1, 0}, 0.01f, {3, 3, 3}});
+  rich.set_environment(std::move(sky));
+  PointLight spot{{0, 0, 1}, {1, 1, 1}};
+  spot.cos_inner = 0.9f;
+  spot.cos_outer = 0.5f;
+  rich.add_point_light(spot);
+  if (auto st = rich.finalize("rich"); !st) {
+    std::fprintf(stderr, "%s\n", st.error().message.c_str());
+    return 1;
+  }
+  seed("scene_file", "rich.lfscene", scene_to_bytes(rich));
+  seed("scene_file", "rich.image", SceneImage::encode(rich, "00000000fuzz0001"));
 
   seed("obj", "room.obj",
        "mtllib fuzz.mtl\nv -1 0 -1\nv 1 0 -1\nv 1 0 1\nv -1 0 1\nv -1 2 -1\nv 1 2 -1\nv 1 2 1\nv -1 2 1\n"
