@@ -24,6 +24,7 @@ cases=(
   "radiosity_room.lua|width=96 height=72 spp=2 iterations=60"
   "plugin-python/tinted_cornell.lua|"
   "material_balls.lua|width=96 height=54 spp=4"
+  "product_shot.lua|width=96 height=54 spp=4"
 )
 
 failed=0

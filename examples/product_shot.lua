@@ -1,0 +1,23 @@
+-- A product shot as a look-development artist sets one up: the material-ball grid Blender exported
+-- (../shared/scenes/gltf/balls.glb) seen low from the front left through a lens (depth of field) focused on the
+-- front-left ball, lit by an HDRI alone (the file's own sun switched off; `rotation` turns the sky about the up
+-- axis), on a wide ground so that the horizon is the floor's, not the sky's.
+--
+--   lightfarm run examples/product_shot.lua                         -> product_shot.png
+--   lightfarm run examples/product_shot.lua --set aperture=0       (a pinhole: everything sharp)
+--   lightfarm run examples/product_shot.lua --set hdri=forest --set rotation=90
+
+scene       { file = "../../shared/scenes/gltf/balls.glb" }
+environment { map = "../../shared/scenes/gltf/hdri/" .. param("hdri", "sunset") .. ".exr",
+              rotation = param("rotation", 200) }
+sun         { direction = {0, 1, 0}, irradiance = {0, 0, 0} }   -- the file's sun off: the HDRI's own lights it
+shape "ground" { plane = {0, -0.001, 0}, size = 200, base_color = {0.35, 0.33, 0.3}, roughness = 0.6, metallic = 0 }
+-- From the front left, low: the rows run away diagonally, the front-left ball (3.1 units off) in focus.
+camera { eye = {-3.5, 0.7, 3.0}, at = {-0.5, 0.4, 0}, fov = 32,
+         aperture = param("aperture", 0.06), focus_distance = 3.13 }
+image  { width = param("width", 640), height = param("height", 360), spp = param("spp", 64),
+         output = param("output", "product_shot.png"), tonemap = "aces", exposure = param("exposure", 0.5) }
+
+local paths = lightop "pathtrace" { name = "bounces" }
+renderers { count = param("renderers", 2),
+            lighting = lightop "combine" { inputs = { lightop "direct" {}, lightop "glossy" { input = paths } } } }
