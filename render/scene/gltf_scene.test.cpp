@@ -28,6 +28,14 @@ void write_tga(const fs::path& path, int width, int height, int bits, const std:
   std::ofstream(path, std::ios::binary) << tga + pixels;
 }
 
+// A 4 x 4 image's pixels whose left half is `left` and right half `right` (one pixel's bytes each).
+std::string halves(const std::string& left, const std::string& right) {
+  std::string px;
+  for (int y = 0; y < 4; ++y)
+    for (int x = 0; x < 4; ++x) px += x < 2 ? left : right;
+  return px;
+}
+
 struct GltfFiles {
   fs::path dir = fs::temp_directory_path() / ("lightfarm-gltf-" + std::to_string(::getpid()));
   GltfFiles() { fs::create_directories(dir); }
@@ -69,6 +77,11 @@ struct GltfFiles {
     const fs::path path = dir / "x.gltf";
     std::ofstream(path) << json;
     return path.string();
+  }
+  // The quad under one node with `material`, whose textures are all the one image `image` (in dir).
+  std::string write_textured(const std::string& material, const std::string& image) const {
+    return write(R"([{"mesh": 0}])", 4, material,
+                 R"("textures": [{"source": 0}], "images": [{"uri": ")" + image + R"("}],)");
   }
 };
 
@@ -115,14 +128,8 @@ TEST(GltfScene, AMirroringTransformKeepsTheFrontFacingOut) {
 // a 4 x 4 TGA whose left half has alpha 0.4 and right half 0.2, cut at 0.3 (a cut at one half would take both).
 TEST(GltfScene, AlphaMaskCutsWhereCoverageIsBelowTheCutoff) {
   GltfFiles files;
-  std::string px;
-  for (int y = 0; y < 4; ++y)
-    for (int x = 0; x < 4; ++x) px += std::string{'\x80', '\x80', '\x80', static_cast<char>(x < 2 ? 102 : 50)};
-  write_tga(files.dir / "leaf.tga", 4, 4, 32, px);
-  const std::string path = files.write(
-      R"([{"mesh": 0}])", 4,
-      R"({"name": "leaf", "alphaMode": "MASK", "alphaCutoff": 0.3, "pbrMetallicRoughness": {"baseColorTexture": {"index": 0}}})",
-      R"("textures": [{"source": 0}], "images": [{"uri": "leaf.tga"}],)");
+  write_tga(files.dir / "leaf.tga", 4, 4, 32, halves({'\x80', '\x80', '\x80', 102}, {'\x80', '\x80', '\x80', 50}));
+  const std::string path = files.write_textured(R"({"name": "leaf", "alphaMode": "MASK", "alphaCutoff": 0.3, "pbrMetallicRoughness": {"baseColorTexture": {"index": 0}}})", "leaf.tga");
   auto s = Scene::load_gltf_unlit(path);
   ASSERT_TRUE(s.ok()) << s.error().message;
   const Material& leaf = s->material(s->material_of(0));
@@ -138,14 +145,8 @@ TEST(GltfScene, AlphaMaskCutsWhereCoverageIsBelowTheCutoff) {
 // metal (blue 1); factors metallic 1, roughness 0.5.
 TEST(GltfScene, MetallicRoughnessTexturesVaryTheModelOverTheSurface) {
   GltfFiles files;
-  std::string px;
-  for (int y = 0; y < 4; ++y)
-    for (int x = 0; x < 4; ++x) px += x < 2 ? std::string{'\x00', '\xff', '\x00'} : std::string{'\xff', '\x33', '\x00'};
-  write_tga(files.dir / "mr.tga", 4, 4, 24, px);
-  const std::string path = files.write(
-      R"([{"mesh": 0}])", 4,
-      R"({"name": "patchy", "pbrMetallicRoughness": {"metallicFactor": 1, "roughnessFactor": 0.5, "metallicRoughnessTexture": {"index": 0}}})",
-      R"("textures": [{"source": 0}], "images": [{"uri": "mr.tga"}],)");
+  write_tga(files.dir / "mr.tga", 4, 4, 24, halves({'\x00', '\xff', '\x00'}, {'\xff', '\x33', '\x00'}));
+  const std::string path = files.write_textured(R"({"name": "patchy", "pbrMetallicRoughness": {"metallicFactor": 1, "roughnessFactor": 0.5, "metallicRoughnessTexture": {"index": 0}}})", "mr.tga");
   auto s = Scene::load_gltf_unlit(path);
   ASSERT_TRUE(s.ok()) << s.error().message;
   const Material& m = s->material(s->material_of(0));
@@ -177,10 +178,7 @@ TEST(GltfScene, NormalTexturesTurnTheShadingNormal) {
     std::string px;
     for (int i = 0; i < 4; ++i) px += std::string{static_cast<char>(blue), static_cast<char>(green), static_cast<char>(red)};
     write_tga(files.dir / "n.tga", 2, 2, 24, px);
-    const std::string path = files.write(
-        R"([{"mesh": 0}])", 4,
-        R"({"name": "bumpy", "pbrMetallicRoughness": {"baseColorFactor": [0.5, 0.5, 0.5, 1], "metallicFactor": 0, "roughnessFactor": 1}, "normalTexture": {"index": 0}})",
-        R"("textures": [{"source": 0}], "images": [{"uri": "n.tga"}],)");
+    const std::string path = files.write_textured(R"({"name": "bumpy", "pbrMetallicRoughness": {"baseColorFactor": [0.5, 0.5, 0.5, 1], "metallicFactor": 0, "roughnessFactor": 1}, "normalTexture": {"index": 0}})", "n.tga");
     auto s = Scene::load_gltf_unlit(path);
     ASSERT_TRUE(s.ok()) << s.error().message;
     ASSERT_GE(s->material(s->material_of(0)).normal_map, 0);
@@ -210,14 +208,8 @@ TEST(GltfScene, NormalTexturesTurnTheShadingNormal) {
 // radiance, so their estimate of its emitted radiance over its area is 1 (half of the unit quad at 2).
 TEST(GltfScene, EmissiveTexturesLightWhereTheyGlow) {
   GltfFiles files;
-  std::string px;
-  for (int y = 0; y < 4; ++y)
-    for (int x = 0; x < 4; ++x) px += x < 2 ? std::string(3, '\xff') : std::string(3, '\0');
-  write_tga(files.dir / "glow.tga", 4, 4, 24, px);
-  const std::string path = files.write(
-      R"([{"mesh": 0}])", 4,
-      R"({"name": "sign", "emissiveFactor": [1, 1, 1], "emissiveTexture": {"index": 0}, "extensions": {"KHR_materials_emissive_strength": {"emissiveStrength": 2}}})",
-      R"("textures": [{"source": 0}], "images": [{"uri": "glow.tga"}],)");
+  write_tga(files.dir / "glow.tga", 4, 4, 24, halves(std::string(3, '\xff'), std::string(3, '\0')));
+  const std::string path = files.write_textured(R"({"name": "sign", "emissiveFactor": [1, 1, 1], "emissiveTexture": {"index": 0}, "extensions": {"KHR_materials_emissive_strength": {"emissiveStrength": 2}}})", "glow.tga");
   auto s = Scene::load_gltf_unlit(path);
   ASSERT_TRUE(s.ok()) << s.error().message;
   ASSERT_GE(s->material(s->material_of(0)).emission_map, 0);
@@ -245,15 +237,9 @@ TEST(GltfScene, EmissiveTexturesLightWhereTheyGlow) {
 TEST(GltfScene, TextureTransformsMoveTheTexture) {
   for (const char* transform : {R"({"offset": [0.5, 0]})", R"({"scale": [2, 1]})"}) {
     GltfFiles files;
-    std::string px;
-    for (int y = 0; y < 4; ++y)
-      for (int x = 0; x < 4; ++x) px += x < 2 ? std::string(3, '\xff') : std::string(3, '\0');
-    write_tga(files.dir / "half.tga", 4, 4, 24, px);
-    const std::string path = files.write(
-        R"([{"mesh": 0}])", 4,
-        std::string(R"({"name": "moved", "pbrMetallicRoughness": {"baseColorTexture": {"index": 0, "extensions": {"KHR_texture_transform": )") +
-            transform + "}}}}",
-        R"("textures": [{"source": 0}], "images": [{"uri": "half.tga"}],)");
+    write_tga(files.dir / "half.tga", 4, 4, 24, halves(std::string(3, '\xff'), std::string(3, '\0')));
+    const std::string path = files.write_textured(std::string(R"({"name": "moved", "pbrMetallicRoughness": {"baseColorTexture": {"index": 0, "extensions": {"KHR_texture_transform": )") +
+            transform + "}}}}", "half.tga");
     auto s = Scene::load_gltf_unlit(path);
     ASSERT_TRUE(s.ok()) << s.error().message;
     // Triangle 0: u = b1 + b2. Shifted by a half, u 0.2 reads the texture at 0.7 (black) and 0.7 at 1.2, i.e. 0.2
