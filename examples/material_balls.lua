@@ -14,6 +14,8 @@
 
 scene  { file = "../../shared/scenes/gltf/balls.glb" }
 environment { map = "../../shared/scenes/gltf/hdri/" .. param("hdri", "courtyard") .. ".exr" }
+-- --set sun=0 switches the file's sun off (the HDRI alone: no sub-degree glints, bench/peer/compare_balls.sh).
+if param("sun", 1) == 0 then sun { direction = {0, 1, 0}, irradiance = {0, 0, 0} } end
 -- The file's own camera, "Camera": from (0, 2.6, 5.5) down at the grid, 23 degrees vertically for 16:9.
 camera { gltf = "Camera" }
 image  { width = param("width", 640), height = param("height", 360), spp = param("spp", 64),

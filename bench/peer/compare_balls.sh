@@ -11,11 +11,16 @@
 #      noise as a share of Cycles' time.
 # Needs `blender` (Debian's 3.4) and a built lightfarm. About three minutes.
 #
-#   bench/peer/compare_balls.sh [LIGHTFARM] [HDRI]      e.g. bench/peer/compare_balls.sh build/lightfarm courtyard
+#   bench/peer/compare_balls.sh [LIGHTFARM] [HDRI] [nosun]   e.g. bench/peer/compare_balls.sh build/lightfarm courtyard
+# nosun takes the file's sun out on both sides: the HDRI alone, without the sun's sub-degree glints, whose rare
+# fireflies make the noise of a seed pair a lottery.
 set -euo pipefail
 here=$(cd "$(dirname "$0")" && pwd)
 lightfarm=${1:-$here/../../build/lightfarm}
 hdri=${2:-courtyard}
+sun=${3:-sun}
+lf_sun=1
+[[ $sun == nosun ]] && lf_sun=0
 map=$here/../../../shared/scenes/gltf/hdri/$hdri.exr
 command -v blender >/dev/null || { echo "compare_balls.sh: needs blender (apt-get install blender)" >&2; exit 2; }
 out=$(mktemp -d)
@@ -23,13 +28,13 @@ trap 'rm -rf "$out"' EXIT
 size=(--set width=320 --set height=180)
 declare -A secs
 cycles() {  # OUT SPP SEED MODEL
-  blender -b -P "$here/cycles_balls.py" -- "$1" "$2" 320 180 "$3" "$map" "$4" 2>/dev/null | awk '/RENDER_SECONDS/ {print $2}'
+  blender -b -P "$here/cycles_balls.py" -- "$1" "$2" 320 180 "$3" "$map" "$4" "$sun" 2>/dev/null | awk '/RENDER_SECONDS/ {print $2}'
 }
 for spp in 64 256; do
   for seed in 3 4; do
     t0=$EPOCHREALTIME
     "$lightfarm" run "$here/../../examples/material_balls.lua" "${size[@]}" --set spp=$spp --set seed=$seed \
-      --set hdri=$hdri --output "$out/lf_${spp}_$seed.exr" --quiet 2>/dev/null
+      --set hdri=$hdri --set sun=$lf_sun --output "$out/lf_${spp}_$seed.exr" --quiet 2>/dev/null
     secs[lf_${spp}_$seed]=$(python3 -c "print($EPOCHREALTIME - $t0)")
     secs[cy_${spp}_$seed]=$(cycles "$out/cy_${spp}_$seed.exr" $spp $seed GGX)
   done
@@ -37,7 +42,7 @@ done
 cycles "$out/cy_multi_3.exr" 256 3 MULTI_GGX >/dev/null
 cycles "$out/cy_multi_4.exr" 256 4 MULTI_GGX >/dev/null
 cycles "$out/cy_lambert_3.exr" 256 3 LAMBERT >/dev/null
-"$lightfarm" run "$here/lightfarm_balls_lambert.lua" --set hdri=$hdri --set seed=3 --output "$out/lf_lambert_3.exr" --quiet 2>/dev/null
+"$lightfarm" run "$here/lightfarm_balls_lambert.lua" --set hdri=$hdri --set sun=$lf_sun --set seed=3 --output "$out/lf_lambert_3.exr" --quiet 2>/dev/null
 # Two seeds averaged: 512 samples' worth for the means.
 blender -b --python-expr "
 import bpy, numpy, sys
@@ -51,7 +56,7 @@ for name in ('cy_256', 'cy_multi', 'lf_256'):
     out.filepath_raw = d + '/%s_mean.exr' % name; out.file_format = 'OPEN_EXR'; out.save()
 " >/dev/null 2>&1
 json=$out/cy_256_3.exr.balls.json
-echo "lightfarm against Cycles on balls.glb under $hdri.exr and the file's sun; 320x180, 2 cores"
+echo "lightfarm against Cycles on balls.glb under $hdri.exr ($sun); 320x180, 2 cores"
 echo "1. means over each ball's inner disc and the floor (columns: Cycles Principled GGX, Cycles multiscatter GGX, lightfarm)"
 blender -b -P "$here/balls_peer.py" -- "$json" means "$out/cy_256_mean.exr" "$out/cy_multi_mean.exr" "$out/lf_256_mean.exr" 2>/dev/null | grep '^MEAN'
 echo "   every material Lambert (columns: Cycles, lightfarm)"

@@ -4,7 +4,8 @@
 # filter one pixel wide, 2 threads. Also writes, next to the image, OUT.balls.json: each ball's name and its disc
 # on the image (centre and radius in pixels, from the camera's projection), for per-ball means.
 #
-#   blender -b -P cycles_balls.py -- OUT.exr SPP WIDTH HEIGHT SEED HDRI.exr [GGX|MULTI_GGX|LAMBERT]   # prints RENDER_SECONDS
+#   blender -b -P cycles_balls.py -- OUT.exr SPP WIDTH HEIGHT SEED HDRI.exr [GGX|MULTI_GGX|LAMBERT] [nosun]
+#   (prints RENDER_SECONDS; nosun removes the file's sun)
 #
 # LAMBERT makes every material a Diffuse BSDF of its base colour: the light transport alone, without the models.
 import json
@@ -22,12 +23,15 @@ numpy.bool = bool  # Debian 12's Blender 3.4 glTF importer still names numpy.boo
 args = sys.argv[sys.argv.index("--") + 1:]
 out, spp, width, height, seed, hdri = args[0], int(args[1]), int(args[2]), int(args[3]), int(args[4]), args[5]
 distribution = args[6] if len(args) > 6 else "GGX"
+with_sun = not (len(args) > 7 and args[7] == "nosun")
 here = __file__.rsplit("/", 1)[0]
 
 bpy.ops.wm.read_factory_settings(use_empty=True)
 bpy.ops.import_scene.gltf(filepath=here + "/../../../shared/scenes/gltf/balls.glb")
 scene = bpy.context.scene
 scene.camera = bpy.data.objects["Camera"]
+if not with_sun:
+    bpy.data.objects.remove(bpy.data.objects["Sun"], do_unlink=True)
 
 for m in bpy.data.materials:
     node = m.node_tree.nodes.get("Principled BSDF") if m.node_tree else None

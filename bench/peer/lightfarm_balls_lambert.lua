@@ -2,6 +2,7 @@
 -- Lambert surface of its base colour, as cycles_balls.py's LAMBERT renders it: the light transport alone.
 scene  { file = "../../../shared/scenes/gltf/balls.glb" }
 environment { map = "../../../shared/scenes/gltf/hdri/" .. param("hdri", "courtyard") .. ".exr" }
+if param("sun", 1) == 0 then sun { direction = {0, 1, 0}, irradiance = {0, 0, 0} } end
 camera { gltf = "Camera" }
 image  { width = param("width", 320), height = param("height", 180), spp = param("spp", 256) }
 material "Floor" { type = "diffuse", kd = {0.6, 0.6, 0.6} }
