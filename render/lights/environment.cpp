@@ -117,7 +117,6 @@ void Environment::build() {
   if (sun_) {
     const double half = std::clamp(static_cast<double>(sun_->angle) / 2, 1e-6, kPiD / 2);
     const double one_minus_cos = 2 * std::sin(half / 2) * std::sin(half / 2);
-    sun_cos_ = static_cast<float>(std::cos(half));
     sun_one_minus_cos_ = static_cast<float>(one_minus_cos);
     sun_sin2_ = static_cast<float>(std::sin(half) * std::sin(half));
     // A disc of radiance L and half angle a gives pi L sin^2(a) on a surface facing it.
@@ -125,7 +124,9 @@ void Environment::build() {
     sun_power_ = average(sun_->irradiance) * sun_radiance_scale_ * 2 * kPiD * one_minus_cos;
     basis(sun_->direction, sun_u_, sun_v_);
     // Both parts keep some samples, so neither's directions rely on the other's density alone.
-    if (sun_power_ > 0) sun_share_ = map_power_ > 0 ? std::clamp(static_cast<float>(sun_power_ / (sun_power_ + map_power_)), 0.1f, 0.9f) : 1.0f;
+    if (sun_power_ > 0)
+      sun_share_ = map_power_ > 0 ? std::clamp(static_cast<float>(sun_power_ / (sun_power_ + map_power_)), 0.1f, 0.9f)
+                                  : 1.0f;
   }
 }
 
@@ -146,14 +147,14 @@ RGB Environment::map_radiance(Vec3 wi) const {
   const float tx = fx - x0f, ty = fy - y0f;
   const int x0 = (static_cast<int>(x0f) % width_ + width_) % width_, x1 = (x0 + 1) % width_;
   const int y0 = std::clamp(static_cast<int>(y0f), 0, height_ - 1), y1 = std::clamp(static_cast<int>(y0f) + 1, 0, height_ - 1);
-  auto at = [&](int x, int y) { return pixels_[static_cast<size_t>(y) * static_cast<size_t>(width_) + static_cast<size_t>(x)]; };
+  auto at = [&](int x, int y) { return pixels_[texel(x, y)]; };
   const RGB top = at(x0, y0) * (1 - tx) + at(x1, y0) * tx, bottom = at(x0, y1) * (1 - tx) + at(x1, y1) * tx;
   return (top * (1 - ty) + bottom * ty) * intensity_;
 }
 
 double Environment::texel_probability(int x, int y) const {
   if (!has_map() || x < 0 || y < 0 || x >= width_ || y >= height_) return 0;
-  return static_cast<double>(row_pdf_[static_cast<size_t>(y)]) * col_pdf_[static_cast<size_t>(y) * static_cast<size_t>(width_) + static_cast<size_t>(x)];
+  return static_cast<double>(row_pdf_[static_cast<size_t>(y)]) * col_pdf_[texel(x, y)];
 }
 
 RGB Environment::radiance(Vec3 wi) const {
@@ -172,7 +173,7 @@ float Environment::map_pdf(Vec3 wi) const {
   const int y = std::clamp(static_cast<int>(v * static_cast<float>(height_)), 0, height_ - 1);
   const float sin_theta = std::sqrt(std::max(0.0f, 1.0f - d.y * d.y));
   if (!(sin_theta > 0)) return 0;
-  const float p = row_pdf_[static_cast<size_t>(y)] * col_pdf_[static_cast<size_t>(y) * static_cast<size_t>(width_) + static_cast<size_t>(x)];
+  const float p = row_pdf_[static_cast<size_t>(y)] * col_pdf_[texel(x, y)];
   return p * static_cast<float>(width_) * static_cast<float>(height_) / (2.0f * kPi * kPi * sin_theta);
 }
 

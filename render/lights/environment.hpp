@@ -87,6 +87,7 @@ class Environment {
   float map_pdf(Vec3 wi) const;
   RGB map_radiance(Vec3 wi) const;
   bool in_sun(Vec3 wi) const;
+  size_t texel(int x, int y) const { return static_cast<size_t>(y) * static_cast<size_t>(width_) + static_cast<size_t>(x); }
 
   RGB constant_{};
   int width_ = 0, height_ = 0;
@@ -100,8 +101,8 @@ class Environment {
   std::vector<float> col_cdf_, col_pdf_;    // width_ * height_
   double map_power_ = 0, sun_power_ = 0;
   float sun_share_ = 0;
-  // The sun's half angle a as cos a, 1 - cos a and sin^2 a (each computed where it is precise); Le = E * scale.
-  float sun_cos_ = 1, sun_one_minus_cos_ = 0, sun_sin2_ = 0, sun_radiance_scale_ = 0;
+  // The sun's half angle a as 1 - cos a and sin^2 a (each computed where it is precise); Le = E * scale.
+  float sun_one_minus_cos_ = 0, sun_sin2_ = 0, sun_radiance_scale_ = 0;
   Vec3 sun_u_, sun_v_;                          // a frame around the sun's direction
 };
 

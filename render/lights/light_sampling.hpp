@@ -1,5 +1,6 @@
 #pragma once
-// Sampling a point on the scene's area lights (or a direction of its environment), shared by every LightOp that does next-event estimation.
+// Sampling a point on the scene's area lights (or a direction of its environment), shared by every LightOp that
+// does next-event estimation.
 #include <optional>
 
 #include "render/lights/light_selection.hpp"
@@ -42,7 +43,8 @@ inline LightSample environment_sample(const Scene& scene, float share, Uniform2 
 inline float environment_share_at(const Scene& scene, Vec3 x, Vec3 n, const LightSelection* selection) {
   const float share = scene.environment_share();
   if (share <= 0 || share >= 1) return share;
-  if (const int32_t cell = selection ? selection->cell_of(x, n) : -1; cell >= 0) return selection->environment_share(cell, share);
+  if (const int32_t cell = selection ? selection->cell_of(x, n) : -1; cell >= 0)
+    return selection->environment_share(cell, share);
   return scene.light_tree().reaches(x, n) ? share : 1.0f;
 }
 
