@@ -21,7 +21,7 @@ class Emission final : public LightOp {
       // Without a triangle (a point that names none), the material's own ke: no place on an emission map.
       radiance[i] = !points.outside(i, scene) ? RGB{}
                     : t == UINT32_MAX || t >= scene.triangle_count() ? scene.material(points.material[i]).ke
-                                                                     : scene.emission(t, scene.barycentrics(t, points.position[i]));
+                                                                     : scene.emission_at(t, points.position[i]);
     }
     co_return;
   }

@@ -119,7 +119,7 @@ class Specular final : public LightOp {
         const uint32_t m = scene.material_of(tri);
         const Material& hit = scene.material(m);
         if (emitters_ && hit.emissive() && front)
-          ch.emitted += ch.weight * (hit.emission_map < 0 ? hit.ke : scene.emission(tri, scene.barycentrics(tri, x)));
+          ch.emitted += ch.weight * scene.emission_at(tri, x);
         if (!hit.specular() && ch.asks_input) {
           // Keyed by the point, the chain and the depth: the same on every batch and layout.
           const uint64_t chain = static_cast<uint64_t>(ch.sample) * 256 + static_cast<uint64_t>(depth);

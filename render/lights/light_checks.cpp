@@ -59,8 +59,8 @@ std::vector<LightEscape> light_escapes(const Scene& scene, const std::vector<std
     Rng rng(p, streams::light_check ^ 0x9e37);
     std::vector<Ray> rays;
     const PointLight& light = points[p];
-    Vec3 t, b;
-    basis(light.axis, t, b);
+    Vec3 t, b;  // a spot's frame
+    if (light.spot()) basis(light.axis, t, b);
     for (int i = 0; i < kRays; ++i) {
       // Uniform over the sphere, or over a spot's outer cone.
       const float span = light.spot() ? 1 - light.cos_outer : 2.0f;

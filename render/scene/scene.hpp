@@ -194,6 +194,11 @@ class Scene {
     const Material& m = material(material_of(triangle));
     return m.emission_map < 0 || !has_uvs() ? m.ke : mapped_emission(triangle, b);
   }
+  // The same at point p on the triangle (its barycentrics found only where a map needs them).
+  RGB emission_at(uint32_t triangle, Vec3 p) const {
+    const Material& m = material(material_of(triangle));
+    return m.emission_map < 0 || !has_uvs() ? m.ke : mapped_emission(triangle, barycentrics(triangle, p));
+  }
   // Its mean over the material's emission map (ke without one): what light selection and radiosity take.
   RGB mean_emission(const Material& m) const;
   // Whether any triangle's material has a normal map (surface_at then looks).

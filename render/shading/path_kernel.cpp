@@ -352,10 +352,7 @@ void Wavefront::land(int depth) {
         const float light_pdf = pdf_area * hits[r].t * hits[r].t / cos_y;
         w = power_heuristic(path.bsdf_pdf, light_pdf);
       }
-      const RGB le = hit_material.emission_map < 0
-                         ? hit_material.ke
-                         : scene_.emission(tri, scene_.barycentrics(tri, rays[r].origin + rays[r].direction * hits[r].t));
-      path.L += path.beta * le * w;
+      path.L += path.beta * scene_.emission_at(tri, rays[r].origin + rays[r].direction * hits[r].t) * w;
     }
     if (ray_global_[r] && !cache_->frozen())
       recordings_.push_back({continuing_[r], ray_cell_[r], rays[r].direction, path.L, path.beta});
@@ -381,11 +378,16 @@ void Wavefront::land(int depth) {
     path.wo = wo;
     path.material = scene_.material_of(tri);
     path.triangle = tri;
-    path.albedo = hit_material.kd_map < 0 ? hit_material.kd : scene_.albedo(tri, scene_.barycentrics(tri, path.x), ctx_.pixel_footprint(path.x));
+    path.albedo = hit_material.kd;
     path.metallic = hit_material.metallic;
     path.roughness = hit_material.roughness;
-    if (hit_material.metallic_map >= 0 || hit_material.roughness_map >= 0)
-      scene_.metal_rough_at(tri, scene_.barycentrics(tri, path.x), ctx_.pixel_footprint(path.x), path.metallic, path.roughness);
+    const bool metal_rough_maps = hit_material.metallic_map >= 0 || hit_material.roughness_map >= 0;
+    if (hit_material.kd_map >= 0 || metal_rough_maps) {  // textures: where on the triangle, once for all of them
+      const Vec3 b = scene_.barycentrics(tri, path.x);
+      const float footprint = ctx_.pixel_footprint(path.x);
+      if (hit_material.kd_map >= 0) path.albedo = scene_.albedo(tri, b, footprint);
+      if (metal_rough_maps) scene_.metal_rough_at(tri, b, footprint, path.metallic, path.roughness);
+    }
     path.outside = front;
   }
   // Those that go on are among those that continued, in the same order.

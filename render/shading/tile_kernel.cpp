@@ -77,13 +77,12 @@ void tile_points(const Scene& scene, const Camera& camera, const ImageSpec& imag
       if (k < shaded || k >= more_shaded[i / per_pixel]) continue;
     } else if (i % per_pixel >= shaded) {  // seen, not shaded: only its emission counts (surface_at's front)
       if (m.emissive() && dot(scene.normal(tri), wo) > 0)
-        work.emitted[i] = m.emission_map < 0 ? m.ke
-                                             : scene.emission(tri, scene.barycentrics(tri, point_on_ray(rays[i].origin, wo, hits[i].t)));
+        work.emitted[i] = scene.emission_at(tri, point_on_ray(rays[i].origin, wo, hits[i].t));
       continue;
     }
     const Vec3 p = point_on_ray(rays[i].origin, wo, hits[i].t);
     const SurfacePoint sp = surface_at(scene, tri, p, wo);
-    if (sp.front && m.emissive()) work.emitted[i] = m.emission_map < 0 ? m.ke : scene.emission(tri, scene.barycentrics(tri, p));
+    if (sp.front && m.emissive()) work.emitted[i] = scene.emission_at(tri, p);
     work.points.push_back(p, sp.ns, wo, scene.material_of(tri), keys[i], tri);
     work.sample_of_point.push_back(static_cast<uint32_t>(i));
     // Rays through a lens leave from points other than the eye: their points travel as positions, not as
