@@ -37,6 +37,9 @@ struct Material {
   RGB kr;            // diffuse and glossy: a perfect mirror term beside their lobes (MTL illum 3 with Kd)
   RGB tf{1, 1, 1};   // glass: what light entering it keeps, per channel (MTL Tf)
   float metallic = 0, roughness = 0.5f;  // metal_rough: glTF's metallicFactor and roughnessFactor (0 to 1)
+  // metal_rough: the share of its dielectric part that is rough glass of index `ior` (glTF's
+  // KHR_materials_transmission; render/shading/microfacet.hpp).
+  float transmission = 0;
   // Textures (indices into Scene::textures(), -1 for none). kd_map replaces kd where the triangle has texture
   // coordinates; alpha_map cuts the surface out where its coverage is below one half (docs/decisions.md).
   int32_t kd_map = -1;
@@ -56,6 +59,9 @@ struct Material {
   bool specular() const { return type == Type::mirror || type == Type::glass; }
   // A diffuse or glossy surface that also reflects like a mirror (kr): its mirror term is the `specular` op's.
   bool has_mirror_term() const { return !specular() && !is_black(kr); }
+  // Light passes through the surface along lobes that are not single directions (rough glass): such a point
+  // gathers light from both sides.
+  bool transmits() const { return type == Type::metal_rough && transmission > 0 && metallic < 1; }
   // A Lambert lobe of its own (diffuse and glossy materials with kd): what the diffuse caches serve. A metal_rough
   // material's base is not one: its share under the coating depends on both directions, so its whole BSDF is a
   // glossy lobe, the `glossy` op's (docs/decisions.md, "Microfacet materials").

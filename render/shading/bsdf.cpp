@@ -58,13 +58,13 @@ struct Frame {
 }  // namespace
 
 RGB Bsdf::eval_microfacet(Vec3 n, Vec3 wo, Vec3 wi) const {
-  if (dot(n, wi) <= 0 || dot(n, wo) <= 0) return {};
+  if ((dot(n, wi) <= 0 && !microfacet_->transmits()) || dot(n, wo) <= 0) return {};
   const Frame f(n);
   return microfacet_->eval(f.local(wo), f.local(wi));
 }
 
 float Bsdf::pdf_microfacet(Vec3 n, Vec3 wo, Vec3 wi) const {
-  if (dot(n, wi) <= 0 || dot(n, wo) <= 0) return 0;
+  if ((dot(n, wi) <= 0 && !microfacet_->transmits()) || dot(n, wo) <= 0) return 0;
   const Frame f(n);
   return microfacet_->pdf(f.local(wo), f.local(wi));
 }

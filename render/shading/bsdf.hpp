@@ -19,15 +19,19 @@ class Bsdf {
   // 1 - ks per channel.
   Bsdf(const Material& m, RGB albedo) : Bsdf(m, albedo, m.metallic, m.roughness) {}
   // The same with a metal_rough material's metallic and roughness at the point (its maps', Scene::metal_rough_at).
-  Bsdf(const Material& m, RGB albedo, float metallic, float roughness)
+  // `outside`: wo is on the side the face's normal points to (a transmitting material's index ratio depends on it).
+  Bsdf(const Material& m, RGB albedo, float metallic, float roughness, bool outside = true)
       : m_(m),
         kd_{std::min(albedo.x, 1 - m.ks.x - m.kr.x), std::min(albedo.y, 1 - m.ks.y - m.kr.y),
             std::min(albedo.z, 1 - m.ks.z - m.kr.z)} {
-    if (m_.type == Material::Type::metal_rough) microfacet_.emplace(kd_, metallic, roughness);
+    if (m_.type == Material::Type::metal_rough)
+      microfacet_.emplace(kd_, metallic, roughness, Transmission{m.transmission, m.ior, outside});
   }
 
   // Mirror and glass scatter into single directions: light sampling cannot reach them, only sample() can.
   bool is_delta() const { return m_.type == Material::Type::mirror || m_.type == Material::Type::glass; }
+  // Non-delta lobes also scatter through the surface (rough glass): directions below n count.
+  bool transmits() const { return microfacet_ && microfacet_->transmits(); }
   RGB eval(Vec3 n, Vec3 wo, Vec3 wi) const;
   float pdf(Vec3 n, Vec3 wo, Vec3 wi) const;
 
@@ -63,7 +67,8 @@ class Bsdf {
   // The chance sample() takes a surface's mirror term (0 without one), in proportion to its reflectance.
   float mirror_probability() const;
   void with_microfacet() {
-    if (m_.type == Material::Type::metal_rough) microfacet_.emplace(kd_, m_.metallic, m_.roughness);
+    if (m_.type == Material::Type::metal_rough)
+      microfacet_.emplace(kd_, m_.metallic, m_.roughness, Transmission{m_.transmission, m_.ior, true});
   }
   // The microfacet model in the frame around n (z = n), for a metal_rough material.
   RGB eval_microfacet(Vec3 n, Vec3 wo, Vec3 wi) const;

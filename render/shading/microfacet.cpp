@@ -3,14 +3,14 @@
 #include <algorithm>
 #include <cmath>
 
+#include "render/shading/bsdf.hpp"  // fresnel_dielectric, refract
+
 namespace lf {
 namespace {
 
 constexpr float kMinAlpha = 1e-4f;
 
 Vec3 reflect_about(Vec3 w, Vec3 n) { return n * (2 * dot(w, n)) - w; }
-
-RGB mix(RGB a, RGB b, float t) { return a * (1 - t) + b * t; }
 
 Vec3 cosine_local(float u1, float u2) {
   const float r = std::sqrt(u1), phi = 2 * kPi * u2;
@@ -138,11 +138,64 @@ float MicrofacetAlbedo::dielectric_average(float roughness) const {
   return lerp_at(average[1], std::clamp(roughness, 0.0f, 1.0f) * (kN - 1));
 }
 
-MetalRoughness::MetalRoughness(RGB base_color, float metallic, float roughness)
+std::optional<Vec3> RoughDielectric::half_vector(Vec3 wo, Vec3 wi) const {
+  if (wo.z <= 0 || wi.z == 0) return std::nullopt;
+  const float etap = wi.z > 0 ? 1.0f : eta_;
+  Vec3 wm = wi * etap + wo;
+  if (!(dot(wm, wm) > 0)) return std::nullopt;
+  wm = normalize(wm);
+  if (wm.z < 0) wm = -wm;
+  if (dot(wm, wi) * wi.z <= 0 || dot(wm, wo) <= 0) return std::nullopt;
+  return wm;
+}
+
+float RoughDielectric::eval(Vec3 wo, Vec3 wi) const {
+  const auto wm = half_vector(wo, wi);
+  if (!wm) return 0;
+  const float f = fresnel_dielectric(dot(wo, *wm), eta_);
+  if (wi.z > 0) return f * ggx_.d(*wm) * ggx_.g(wo, wi) / (4 * wo.z * wi.z);
+  const float denom = dot(wi, *wm) + dot(wo, *wm) / eta_;
+  return (1 - f) * ggx_.d(*wm) * ggx_.g(wo, wi) *
+         std::fabs(dot(wi, *wm) * dot(wo, *wm) / (denom * denom * wi.z * wo.z));
+}
+
+float RoughDielectric::pdf(Vec3 wo, Vec3 wi) const {
+  const auto wm = half_vector(wo, wi);
+  if (!wm) return 0;
+  const float f = fresnel_dielectric(dot(wo, *wm), eta_);
+  if (wi.z > 0) return f * ggx_.d_visible(wo, *wm) / (4 * dot(wo, *wm));
+  const float denom = dot(wi, *wm) + dot(wo, *wm) / eta_;
+  return (1 - f) * ggx_.d_visible(wo, *wm) * std::fabs(dot(wi, *wm)) / (denom * denom);
+}
+
+std::optional<Vec3> RoughDielectric::sample(Vec3 wo, float u0, float u1, float u2) const {
+  if (wo.z <= 0) return std::nullopt;
+  const Vec3 wm = ggx_.sample_visible_normal(wo, u1, u2);
+  if (u0 < fresnel_dielectric(dot(wo, wm), eta_)) {
+    const Vec3 wi = reflect_about(wo, wm);
+    return wi.z > 0 ? std::optional<Vec3>(wi) : std::nullopt;
+  }
+  const auto wi = refract(wo, wm, eta_);
+  return wi && wi->z < 0 ? wi : std::nullopt;
+}
+
+float RoughDielectric::reflectance(Vec3 wo) const { return fresnel_dielectric(std::max(0.0f, wo.z), eta_); }
+
+MetalRoughness::MetalRoughness(RGB base_color, float metallic, float roughness, Transmission transmission)
     : base_(base_color),
       metallic_(std::clamp(metallic, 0.0f, 1.0f)),
       roughness_(std::clamp(roughness, 0.0f, 1.0f)),
-      ggx_(TrowbridgeReitz::alpha_of_roughness(roughness_), TrowbridgeReitz::alpha_of_roughness(roughness_)) {
+      conductor_weight_(metallic_),
+      dielectric_weight_((1 - metallic_) * (1 - std::clamp(transmission.amount, 0.0f, 1.0f))),
+      glass_weight_((1 - metallic_) * std::clamp(transmission.amount, 0.0f, 1.0f)),
+      tint_(transmission.from_outside ? base_color : RGB{1, 1, 1}),
+      ggx_(TrowbridgeReitz::alpha_of_roughness(roughness_), TrowbridgeReitz::alpha_of_roughness(roughness_)),
+      glass_(TrowbridgeReitz::alpha_of_roughness(roughness_),
+             transmission.from_outside ? transmission.ior : 1 / transmission.ior) {
+  if (glass_weight_ > 0 && !transmission.from_outside) {
+    conductor_weight_ = dielectric_weight_ = 0;
+    glass_weight_ = 1;
+  }
   const MicrofacetAlbedo& table = MicrofacetAlbedo::table();
   conductor_average_ = table.conductor_average(roughness_);
   dielectric_average_ = table.dielectric_average(roughness_);
@@ -155,11 +208,24 @@ MetalRoughness::MetalRoughness(RGB base_color, float metallic, float roughness)
   multiple_scattering_fresnel_ = {f_ms(base_.x), f_ms(base_.y), f_ms(base_.z)};
 }
 
+RGB MetalRoughness::eval(Vec3 wo, Vec3 wi) const {
+  if (!transmits()) return eval_specular(wo, wi) + eval_diffuse(wo, wi);
+  if (wi.z < 0) return eval_transmitting(wo, wi);
+  return eval_specular(wo, wi) + eval_diffuse(wo, wi) + eval_transmitting(wo, wi);
+}
+
+RGB MetalRoughness::eval_transmitting(Vec3 wo, Vec3 wi) const {
+  if (!transmits()) return {};
+  const float f = glass_weight_ * glass_.eval(wo, wi);
+  return wi.z < 0 ? tint_ * f : RGB{f, f, f};
+}
+
 RGB MetalRoughness::eval_specular(Vec3 wo, Vec3 wi) const {
   if (wo.z <= 0 || wi.z <= 0) return {};
   const Vec3 wm = normalize(wo + wi);
   const float cos_h = dot(wo, wm);
-  const RGB f = mix(fresnel_schlick(RGB{0.04f, 0.04f, 0.04f}, cos_h), fresnel_schlick(base_, cos_h), metallic_);
+  const RGB f = fresnel_schlick(RGB{0.04f, 0.04f, 0.04f}, cos_h) * dielectric_weight_ +
+                fresnel_schlick(base_, cos_h) * conductor_weight_;
   return f * (ggx_.d(wm) * ggx_.g(wo, wi) / (4 * wo.z * wi.z));
 }
 
@@ -167,13 +233,13 @@ RGB MetalRoughness::eval_diffuse(Vec3 wo, Vec3 wi) const {
   if (wo.z <= 0 || wi.z <= 0) return {};
   const MicrofacetAlbedo& table = MicrofacetAlbedo::table();
   RGB f{};
-  if (metallic_ > 0 && conductor_average_ < 1) {
+  if (conductor_weight_ > 0 && conductor_average_ < 1) {
     const float lost = (1 - table.conductor(wo.z, roughness_)) * (1 - table.conductor(wi.z, roughness_));
-    f += multiple_scattering_fresnel_ * (metallic_ * lost / (kPi * (1 - conductor_average_)));
+    f += multiple_scattering_fresnel_ * (conductor_weight_ * lost / (kPi * (1 - conductor_average_)));
   }
-  if (metallic_ < 1) {
+  if (dielectric_weight_ > 0) {
     const float passed = (1 - table.dielectric(wo.z, roughness_)) * (1 - table.dielectric(wi.z, roughness_));
-    f += base_ * ((1 - metallic_) * passed / (kPi * (1 - dielectric_average_)));
+    f += base_ * (dielectric_weight_ * passed / (kPi * (1 - dielectric_average_)));
   }
   return f;
 }
@@ -183,17 +249,37 @@ RGB MetalRoughness::eval_diffuse(Vec3 wo, Vec3 wi) const {
 float MetalRoughness::specular_probability(Vec3 wo) const {
   const MicrofacetAlbedo& table = MicrofacetAlbedo::table();
   const float e_d = table.dielectric(wo.z, roughness_), e_c = table.conductor(wo.z, roughness_);
-  const float spec = (1 - metallic_) * e_d + metallic_ * e_c * average(fresnel_schlick(base_, wo.z));
-  const float diffuse = (1 - metallic_) * average(base_) * (1 - e_d) +
-                        metallic_ * average(multiple_scattering_fresnel_) * (1 - e_c);
+  const float spec = dielectric_weight_ * e_d + conductor_weight_ * e_c * average(fresnel_schlick(base_, wo.z));
+  const float diffuse = dielectric_weight_ * average(base_) * (1 - e_d) +
+                        conductor_weight_ * average(multiple_scattering_fresnel_) * (1 - e_c);
   if (diffuse <= 0) return 1;
   if (spec <= 0) return 0;
   return std::clamp(spec / (spec + diffuse), 0.02f, 0.98f);
 }
 
+// The rough dielectric's share, by its albedo (reflectance plus tinted transmittance) against the reflecting parts'
+// (dielectric layer, base, conductor), at least 2 % of the samples for each side that has any.
+float MetalRoughness::glass_probability(Vec3 wo) const {
+  if (!transmits()) return 0;
+  if (conductor_weight_ <= 0 && dielectric_weight_ <= 0) return 1;
+  const float r = glass_.reflectance(wo);
+  const float glass = glass_weight_ * (r + (1 - r) * average(tint_));
+  const float rest = conductor_weight_ * average(fresnel_schlick(base_, wo.z)) +
+                     dielectric_weight_ * std::max(0.04f, average(base_));
+  if (rest <= 0) return 1;
+  return std::clamp(glass / (glass + rest), 0.02f, 0.98f);
+}
+
 float MetalRoughness::pdf(Vec3 wo, Vec3 wi) const {
-  if (wo.z <= 0 || wi.z <= 0) return 0;
-  return mixture_pdf(wo, wi, specular_probability(wo));
+  if (!transmits()) {
+    if (wo.z <= 0 || wi.z <= 0) return 0;
+    return mixture_pdf(wo, wi, specular_probability(wo));
+  }
+  if (wo.z <= 0) return 0;
+  const float pg = glass_probability(wo);
+  float p = pg * glass_.pdf(wo, wi);
+  if (wi.z > 0 && pg < 1) p += (1 - pg) * mixture_pdf(wo, wi, specular_probability(wo));
+  return p;
 }
 
 float MetalRoughness::mixture_pdf(Vec3 wo, Vec3 wi, float specular_share) const {
@@ -201,6 +287,24 @@ float MetalRoughness::mixture_pdf(Vec3 wo, Vec3 wi, float specular_share) const 
 }
 
 std::optional<MetalRoughness::Sample> MetalRoughness::sample(Vec3 wo, float u0, float u1, float u2) const {
+  if (!transmits()) return sample_reflecting(wo, u0, u1, u2);
+  if (wo.z <= 0) return std::nullopt;
+  const float pg = glass_probability(wo);
+  std::optional<Vec3> wi;
+  if (u0 < pg) {
+    wi = glass_.sample(wo, std::min(u0 / pg, 0x1.fffffep-1f), u1, u2);
+  } else {
+    const float u = std::min((u0 - pg) / (1 - pg), 0x1.fffffep-1f);
+    wi = u < specular_probability(wo) ? reflect_about(wo, ggx_.sample_visible_normal(wo, u1, u2)) : cosine_local(u1, u2);
+    if (wi->z <= 0) return std::nullopt;
+  }
+  if (!wi) return std::nullopt;
+  const float p = pdf(wo, *wi);
+  if (!(p > 0)) return std::nullopt;
+  return Sample{*wi, eval(wo, *wi) * (std::fabs(wi->z) / p), p};
+}
+
+std::optional<MetalRoughness::Sample> MetalRoughness::sample_reflecting(Vec3 wo, float u0, float u1, float u2) const {
   if (wo.z <= 0) return std::nullopt;
   const float ps = specular_probability(wo);  // once: two table lookups and a Fresnel term
   const Vec3 wi = u0 < ps ? reflect_about(wo, ggx_.sample_visible_normal(wo, u1, u2)) : cosine_local(u1, u2);

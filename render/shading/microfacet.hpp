@@ -58,6 +58,38 @@ struct MicrofacetAlbedo {
   float average[2][kSize];
 };
 
+// A rough dielectric interface (Walter, Marschner, Li and Torrance 2007, "Microfacet Models for Refraction through
+// Rough Surfaces"): GGX reflection and refraction weighed by the dielectric's Fresnel term, in the frame where wo
+// is above the surface (z > 0); wi below it is transmission. eta: the index of refraction beyond the surface over
+// the index on wo's side. Transmission is not scaled by 1 / eta^2 (the radiance a denser medium compresses), as
+// the perfect `glass` material is not: a path enters and leaves a closed object, and the two factors cancel.
+// Single scattering loses light at high roughness, as reflection does (microfacet.test measures it).
+class RoughDielectric {
+ public:
+  RoughDielectric(float alpha, float eta) : ggx_(alpha, alpha), eta_(eta) {}
+  float eval(Vec3 wo, Vec3 wi) const;
+  float pdf(Vec3 wo, Vec3 wi) const;
+  // u0 chooses reflection or refraction (by the Fresnel term at the visible normal u1, u2 draws).
+  std::optional<Vec3> sample(Vec3 wo, float u0, float u1, float u2) const;
+  // The Fresnel reflectance at the macro surface for wo: the expected share of reflection, for lobe choices.
+  float reflectance(Vec3 wo) const;
+
+ private:
+  // The generalized half vector of wo and wi (facing up), or nullopt where none exists or a microfacet would be
+  // seen from behind by either direction.
+  std::optional<Vec3> half_vector(Vec3 wo, Vec3 wi) const;
+  TrowbridgeReitz ggx_;
+  float eta_;
+};
+
+// How much of a metal_rough material's dielectric part transmits, through what, and from which side wo is
+// (glTF's KHR_materials_transmission and KHR_materials_ior).
+struct Transmission {
+  float amount = 0;    // 0: opaque; 1: every dielectric part is rough glass
+  float ior = 1.5f;
+  bool from_outside = true;  // wo on the side the surface's normal faces
+};
+
 // glTF's metal-roughness material in the local frame, energy-conserving:
 //   f = F(wo.wm) D G / (4 cos_o cos_i)                                   the specular lobe (single scattering),
 //       F = mix(F_schlick(0.04), F_schlick(base), metallic)
@@ -68,10 +100,17 @@ struct MicrofacetAlbedo {
 // reflect all the light at every roughness and angle (the glTF specification's own mix, (1 - F(wo.wm)) base / pi,
 // reflects up to 1.57 times the light at grazing angles: roughness 0.1, 85 degrees), and the whole stays reciprocal. The first term is the
 // glossy lobe (G), the other two the diffuse-like one (D) of the light-path classes.
+//
+// With transmission t (KHR_materials_transmission), the dielectric part is (1 - t) of the above and t of a rough
+// dielectric (RoughDielectric with the material's index) whose transmission the base colour tints, as glTF
+// specifies. Seen from inside (wo on the far side of a transmitting surface), the material is that interface
+// alone: the base and the conductor are on the outside. The tint applies where light crosses from the outside, as
+// the `glass` material's does (once per pass through a closed object, not twice). This refracts as Blender's
+// importer and Cycles do, where glTF without KHR_materials_volume means a thin wall (docs/looks.md).
 class MetalRoughness {
  public:
-  MetalRoughness(RGB base_color, float metallic, float roughness);
-  RGB eval(Vec3 wo, Vec3 wi) const { return eval_specular(wo, wi) + eval_diffuse(wo, wi); }
+  MetalRoughness(RGB base_color, float metallic, float roughness, Transmission transmission = {});
+  RGB eval(Vec3 wo, Vec3 wi) const;
   float pdf(Vec3 wo, Vec3 wi) const;
   struct Sample {
     Vec3 wi;
@@ -83,13 +122,23 @@ class MetalRoughness {
   std::optional<Sample> sample(Vec3 wo, float u0, float u1, float u2) const;
   RGB eval_specular(Vec3 wo, Vec3 wi) const;
   RGB eval_diffuse(Vec3 wo, Vec3 wi) const;  // the conductor's multiple scattering and the base
+  RGB eval_transmitting(Vec3 wo, Vec3 wi) const;  // the rough dielectric's reflection and transmission
+  // Whether wi below the surface gets anything (the rough dielectric's share is not 0).
+  bool transmits() const { return glass_weight_ > 0; }
 
  private:
   float specular_probability(Vec3 wo) const;
+  // The chance sample() takes the rough dielectric (1 from inside).
+  float glass_probability(Vec3 wo) const;
   float mixture_pdf(Vec3 wo, Vec3 wi, float specular_share) const;
+  std::optional<Sample> sample_reflecting(Vec3 wo, float u0, float u1, float u2) const;
   RGB base_;
   float metallic_, roughness_;
+  // The parts' weights: metallic, (1 - metallic)(1 - t) and (1 - metallic) t; from inside 0, 0 and 1.
+  float conductor_weight_, dielectric_weight_, glass_weight_;
+  RGB tint_;  // of transmission: the base colour from outside, white from inside
   TrowbridgeReitz ggx_;
+  RoughDielectric glass_;
   RGB multiple_scattering_fresnel_;  // F_ms, per channel
   float conductor_average_, dielectric_average_;
 };
