@@ -131,7 +131,7 @@ Value read_material_change(const std::string& name, const ParamTable& p, const s
   for (const char* key : {"kd", "ks", "mirror", "tf", "base_color"}) colour(key, 1);
   if (p.has("ns")) change["ns"] = p.get_float("ns", 0, 0, 1e6);
   if (p.has("ior")) change["ior"] = p.get_float("ior", 1.5, 1, 3);
-  for (const char* key : {"metallic", "roughness"})
+  for (const char* key : {"metallic", "roughness", "transmission"})
     if (p.has(key)) change[key] = p.get_float(key, 0, 0, 1);
   if (p.has("type"))
     change["type"] = p.get_string("type", "diffuse", {"diffuse", "glossy", "mirror", "glass", "metal_rough"});

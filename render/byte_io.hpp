@@ -78,6 +78,7 @@ inline void put_material(std::string& out, const Material& m) {
   put(out, m.normal_map);
   put(out, m.normal_scale);
   put(out, m.emission_map);
+  put(out, m.transmission);
 }
 // A point light as both binary forms store it: f32 position[3], intensity[3], axis[3], cos_inner, cos_outer.
 inline void put_point_light(std::string& out, const PointLight& p) {
@@ -115,14 +116,15 @@ inline bool read_material(Reader& r, Material& m) {
   if (!r.vec(m.kr) || !r.vec(m.tf) || !r.f32(m.metallic) || !r.f32(m.roughness)) return false;
   uint32_t metallic_map = 0, roughness_map = 0, normal_map = 0, emission_map = 0;
   if (!r.u32(metallic_map) || !r.u32(roughness_map) || !r.u32(normal_map) || !r.f32(m.normal_scale) ||
-      !r.u32(emission_map))
+      !r.u32(emission_map) || !r.f32(m.transmission))
     return false;
   m.emission_map = static_cast<int32_t>(emission_map);
   m.metallic_map = static_cast<int32_t>(metallic_map);
   m.roughness_map = static_cast<int32_t>(roughness_map);
   m.normal_map = static_cast<int32_t>(normal_map);
   return m.kd_map >= -1 && m.alpha_map >= -1 && m.metallic_map >= -1 && m.roughness_map >= -1 && m.normal_map >= -1 && m.emission_map >= -1 &&
-         m.metallic >= 0 && m.metallic <= 1 && m.roughness >= 0 && m.roughness <= 1 && std::isfinite(m.normal_scale);
+         m.metallic >= 0 && m.metallic <= 1 && m.roughness >= 0 && m.roughness <= 1 && std::isfinite(m.normal_scale) &&
+         m.transmission >= 0 && m.transmission <= 1 && std::isfinite(m.ior) && m.ior > 0;
 }
 
 }  // namespace lf::bytes

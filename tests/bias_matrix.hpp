@@ -20,7 +20,8 @@ struct Scene {
 
 // Diffuse (the Cornell box), mirror and glass (cornell_glass), glossy (McGuire's CornellBox-Glossy: a glossy sphere
 // and box), glossy everywhere (its walls, floor and ceiling given a Phong lobe from the script), a floor both
-// diffuse and a mirror, and glTF's metal-roughness model on the sphere, the box and the floor. `mcguire`: the folder holding CornellBox-Glossy.obj.
+// diffuse and a mirror, glTF's metal-roughness model on the sphere, the box and the floor, and rough glass.
+// `mcguire`: the folder holding CornellBox-Glossy.obj.
 inline std::vector<Scene> scenes(const std::string& mcguire) {
   const std::string cornell_camera = "camera { eye = {278, 273, -800}, at = {278, 273, 0}, fov = 39.3 }\n";
   const std::string glossy = "scene { file = \"" + mcguire + "CornellBox-Glossy.obj\" }\n"
@@ -38,12 +39,19 @@ inline std::vector<Scene> scenes(const std::string& mcguire) {
                                  "material \"sphere\" { metallic = 1, roughness = 0.3, base_color = {0.95, 0.8, 0.5} }\n"
                                  "material \"shortBox\" { metallic = 0, roughness = 0.5, base_color = {0.2, 0.4, 0.8} }\n"
                                  "material \"floor\" { metallic = 0, roughness = 0.2, base_color = {0.7, 0.7, 0.7} }\n";
+  // Rough glass (glTF's transmission): a clear sphere and a tinted, rougher box, light reaching the floor through
+  // both (L G+ D) and the walls seen through them.
+  const std::string rough_glass =
+      glossy +
+      "material \"sphere\" { transmission = 1, roughness = 0.3, base_color = {0.95, 0.95, 0.95} }\n"
+      "material \"shortBox\" { transmission = 1, roughness = 0.6, base_color = {0.7, 0.85, 1.0} }\n";
   return {{"cornell", "scene { builtin = \"cornell\" }\n" + cornell_camera},
           {"cornell_glass", "scene { builtin = \"cornell_glass\" }\n" + cornell_camera},
           {"glossy", glossy},
           {"glossy_walls", shiny_walls},
           {"mirror_floor", mirror_floor},
-          {"microfacet", microfacet}};
+          {"microfacet", microfacet},
+          {"rough_glass", rough_glass}};
 }
 
 // A shipped network that says it computes all the light, and what it is run with besides the frame's size.

@@ -1,5 +1,5 @@
 // glossy: indirect light reflected by a glossy lobe. At a point whose material has one (a Phong lobe, Ks > 0, or a
-// metal_rough material's whole microfacet BSDF),
+// metal_rough material's whole microfacet BSDF, rough glass's refraction included),
 // `samples` directions drawn in proportion to that lobe; where each lands, the input is asked (in one batch) for
 // the light leaving that surface back towards the point. The answer is the lobe's share of the reflected light:
 // ks (ns + 2) / (ns + 1) cos(wi) times what arrives, averaged. One input.
@@ -52,7 +52,8 @@ class Glossy final : public LightOp {
       const float footprint = ctx_.pixel_footprint(points.position[i]);
       float metallic = 0, roughness = 0;
       if (microfacet) points.metal_rough(i, scene, footprint, metallic, roughness);
-      const Bsdf bsdf = microfacet ? Bsdf(m, points.albedo(i, scene, footprint), metallic, roughness) : Bsdf(m);
+      const Bsdf bsdf = microfacet ? Bsdf(m, points.albedo(i, scene, footprint), metallic, roughness, points.outside(i, scene))
+                                   : Bsdf(m);
       if (!bsdf.has_glossy_lobe()) continue;
       ++points_;
       const Vec3 ng = points.face_normal(i, scene);
@@ -65,9 +66,12 @@ class Glossy final : public LightOp {
         // lobe's directions stay what they were).
         const float part = microfacet ? sampler.uniform() : 0.5f;
         auto sample = bsdf.sample_glossy(points.normal[i], points.wo[i], u.u, u.v, part);
-        // A reflection the shading normal allows below the face would leave through the surface: no light.
-        if (!sample || dot(sample->wi, ng) <= 0) continue;
-        rays.push_back(Ray{origin, sample->wi});
+        // A reflection the shading normal allows below the face would leave through the surface: no light. Rough
+        // glass sends its refractions through, below both normals, from beneath the face.
+        if (!sample) continue;
+        const bool through = bsdf.transmits() && above_both(-sample->wi, points.normal[i], ng);
+        if (!through && dot(sample->wi, ng) <= 0) continue;
+        rays.push_back(Ray{through ? scene.ray_origin(points.triangle_of(i), points.position[i], -ng) : origin, sample->wi});
         weights.push_back(sample->weight);
         owners.push_back(i);
         sample_of.push_back(static_cast<uint32_t>(s));

@@ -157,9 +157,9 @@ class PhotonMap final : public LightOp {
       const float footprint = ctx_.pixel_footprint(points.position[i]);
       float metallic, roughness;
       points.metal_rough(i, scene, footprint, metallic, roughness);
-      const Bsdf bsdf(m, points.albedo(i, scene, footprint), metallic, roughness);
+      const Bsdf bsdf(m, points.albedo(i, scene, footprint), metallic, roughness, points.outside(i, scene));
       radiance[i] = estimate(points.position[i], points.normal[i],
-                             [&](Vec3 wi) { return bsdf.eval(points.normal[i], points.wo[i], wi); });
+                             [&](Vec3 wi) { return bsdf.eval(points.normal[i], points.wo[i], wi); }, bsdf.transmits());
     }
     co_return;
   }
@@ -203,9 +203,10 @@ class PhotonMap final : public LightOp {
   mutable uint64_t estimates_ = 0;  // density estimates made (lookups and precomputed ones) that found photons
   mutable double radius_sum_ = 0;   // and the sum of their gather radii
   uint64_t lookups_ = 0, served_precomputed_ = 0;
-  // sum f(wi) * flux * w / (pi r^2 norm) over the k nearest photons within max_radius that arrived on n's side.
+  // sum f(wi) * flux * w / (pi r^2 norm) over the k nearest photons within max_radius that arrived on n's side
+  // (`both_sides`: on either side, for rough glass, which transmits them as f says).
   template <class Brdf>
-  RGB estimate(Vec3 x, Vec3 n, Brdf&& f) const {
+  RGB estimate(Vec3 x, Vec3 n, Brdf&& f, bool both_sides = false) const {
     std::vector<uint32_t>& index = scratch_index_;
     std::vector<float>& dist2 = scratch_dist2_;
     index.resize(k_);
@@ -227,7 +228,7 @@ class PhotonMap final : public LightOp {
     RGB sum{};
     for (size_t j = 0; j < found; ++j) {
       const Photon& ph = cloud_.photons[index[j]];
-      if (dot(ph.incoming, n) <= 0) continue;  // arrived on the other side
+      if (!both_sides && dot(ph.incoming, n) <= 0) continue;  // arrived on the other side
       float w = 1.0f;
       const float d = std::sqrt(dist2[j]);
       if (filter_ == Filter::cone) w = 1.0f - d / (cone_k_ * r);

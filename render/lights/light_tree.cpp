@@ -208,7 +208,9 @@ void LightTree::importance(const Wide& node, Vec3 x, Vec3 n, float out[kWidth]) 
   // cos of max(0, theta_i - theta_b) at x.
   const F4 cos_i = -(n.x * wx + n.y * wy + n.z * wz);
   const F4 sin_i = sqrt4(max4(zero, one - cos_i * cos_i));
-  const F4 cos_at_x = cos_i >= cos_b ? one : cos_i * cos_b + sin_i * sin_b;
+  // A point that gathers light from every side (n = 0: rough glass) bounds no angle at x.
+  const bool any_side = n.x == 0 && n.y == 0 && n.z == 0;
+  const F4 cos_at_x = any_side ? one : (cos_i >= cos_b ? one : cos_i * cos_b + sin_i * sin_b);
   const auto dark = (cos_at_lights <= zero) | (cos_at_x <= zero);
   const F4 bounded = dark ? zero : falloff * cos_at_lights * cos_at_x;
   const F4 result = among ? falloff : bounded;

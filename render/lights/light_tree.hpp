@@ -28,7 +28,8 @@ class LightTree {
  public:
   explicit LightTree(const Scene& scene);
 
-  // Picks a light for point x whose surface faces n (unit). Returns false when no light can reach x's side;
+  // Picks a light for point x whose surface faces n (unit, or zero for a point that takes light from every side,
+  // such as rough glass). Returns false when no light can reach x's side;
   // otherwise `light` is an index in Scene's numbering (below emitters().size() a triangle, above a point light)
   // and `probability` the chance this call picked it.
   // With `remainder`, also where u fell within the picked light's share, rescaled to [0, 1): a number as uniform as

@@ -1,7 +1,8 @@
 // glTF 2.0 scenes (.gltf, .glb) through tinygltf: the default scene's node tree with its transforms, triangle
 // primitives with normals and texture coordinates, metal-roughness materials with their base colour textures and
-// emission, and KHR_lights_punctual point lights. What is not supported yet is a warning that names the file and the
-// element (docs/lua-api.md, "Materials").
+// emission, transmission and index of refraction (KHR_materials_transmission, KHR_materials_ior: rough glass, or
+// smooth glass where it is smooth), and KHR_lights_punctual lights. What is not supported is a warning that names
+// the file and the element (docs/lua-api.md, "Materials").
 #include <tiny_gltf.h>
 
 #include <algorithm>
@@ -400,7 +401,8 @@ Result<Scene> Scene::parse_gltf_unlit(const std::string& path, const std::string
     if (warned.insert(what).second) log_warn(where + ": " + what);
   };
   for (const auto& e : model.extensionsUsed)
-    if (e != "KHR_lights_punctual" && e != "KHR_materials_emissive_strength" && e != "KHR_texture_transform")
+    if (e != "KHR_lights_punctual" && e != "KHR_materials_emissive_strength" && e != "KHR_texture_transform" &&
+        e != "KHR_materials_transmission" && e != "KHR_materials_ior")
       warn("extension " + e + " is not supported; what it adds is left out");
 
   Scene s;
@@ -441,6 +443,28 @@ Result<Scene> Scene::parse_gltf_unlit(const std::string& path, const std::string
       m.ke = RGB{static_cast<float>(g.emissiveFactor[0]), static_cast<float>(g.emissiveFactor[1]),
                  static_cast<float>(g.emissiveFactor[2])} * std::max(0.0f, strength);
     const std::string which = "material '" + m.name + "'";
+    if (auto it = g.extensions.find("KHR_materials_ior"); it != g.extensions.end() && it->second.Has("ior")) {
+      const double ior = it->second.Get("ior").GetNumberAsDouble();
+      if (ior >= 1 && ior <= 3) m.ior = static_cast<float>(ior);
+      else warn(which + ": KHR_materials_ior " + std::to_string(ior) + " is outside [1, 3]; 1.5 is used");
+    }
+    if (auto it = g.extensions.find("KHR_materials_transmission"); it != g.extensions.end()) {
+      if (it->second.Has("transmissionFactor"))
+        m.transmission = std::clamp(static_cast<float>(it->second.Get("transmissionFactor").GetNumberAsDouble()), 0.0f, 1.0f);
+      if (it->second.Has("transmissionTexture"))
+        warn(which + ": its transmissionTexture is left out; transmissionFactor holds everywhere");
+    }
+    // Whole transmission through a smooth dielectric is the `glass` material, a single direction (the `specular`
+    // op's): at roughness 0.02 (alpha 4e-4) the lobe is narrower than a pixel of any usual view, and a microfacet
+    // lobe that sharp only makes light sampling noisy. The base colour tints it as Tf does.
+    const bool smooth_glass = m.transmission >= 1 && m.metallic <= 0 && m.roughness <= 0.02f &&
+                              pbr.metallicRoughnessTexture.index < 0 && pbr.baseColorTexture.index < 0;
+    if (smooth_glass) {
+      m.type = Material::Type::glass;
+      m.tf = m.kd;
+      m.kd = {};
+      m.transmission = 0;
+    }
     std::string image_name;
     const tinygltf::Image* image = base_color_image(model, g, image_name);
     if (pbr.baseColorTexture.index >= 0) {

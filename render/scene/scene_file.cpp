@@ -15,8 +15,9 @@ namespace lf {
 
 namespace {
 
-constexpr std::string_view kMagic = "LFSCENE9";  // 4: metallic and roughness; 5: the environment; 6: their maps;
-                                                 // 7: normal maps; 8: emission maps; 9: spot lights
+constexpr std::string_view kMagic = "LFSCENE10";  // 4: metallic and roughness; 5: the environment; 6: their maps;
+                                                  // 7: normal maps; 8: emission maps; 9: spot lights;
+                                                  // 10: transmission
 using bytes::put;
 using bytes::put_rgb;
 using bytes::Reader;
@@ -76,7 +77,7 @@ std::string scene_to_bytes(const Scene& scene) {
 }
 
 Result<Scene> scene_from_bytes(std::string_view bytes, const std::string& what) {
-  if (bytes.substr(0, kMagic.size()) != kMagic) return make_error(what + ": not a lightfarm scene (no LFSCENE9)");
+  if (bytes.substr(0, kMagic.size()) != kMagic) return make_error(what + ": not a lightfarm scene (no " + std::string(kMagic) + ")");
   Reader r(bytes.substr(kMagic.size()));
   auto bad = [&] { return make_error(what + ": the scene's bytes are truncated or inconsistent"); };
   Scene s;

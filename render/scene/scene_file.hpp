@@ -2,7 +2,7 @@
 // A finished scene in a compact binary form, for shipping it to hosts once and caching it there: geometry,
 // materials, textures and lights, exactly as the director loaded them, so that an actor rebuilds the same scene
 // bit for bit without the OBJ file (or its MTL and images) and without parsing anything. Little-endian:
-//   "LFSCENE9"
+//   "LFSCENE10"
 //   u32 textures; each: u32 path length, path, u32 width, height, channels, u8 linear, u32 deflated size, the texels (the
 //     whole mip pyramid, render/scene/scene.hpp) deflated (zlib)
 //   u32 materials; each: u32 name length, name, f32 kd[3] ke[3] ks[3], f32 ns, f32 ior, u8 type, i32 kd_map,

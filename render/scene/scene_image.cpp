@@ -19,8 +19,8 @@ namespace {
 
 constexpr char kMagic[8] = {'L', 'F', 'I', 'M', 'A', 'G', 'E', '2'};
 constexpr uint32_t kByteOrderMark = 0x01020304;
-constexpr uint32_t kVersion = 9;  // 3: kr and tf; 4: metallic and roughness; 5: the environment; 6: their maps;
-                                  // 7: normal maps; 8: emission maps; 9: spot lights
+constexpr uint32_t kVersion = 10;  // 3: kr and tf; 4: metallic and roughness; 5: the environment; 6: their maps;
+                                   // 7: normal maps; 8: emission maps; 9: spot lights; 10: transmission
 constexpr size_t kAlign = 64;
 constexpr size_t kVertexSlack = 16;
 

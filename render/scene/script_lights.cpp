@@ -205,10 +205,11 @@ Status Scene::apply_material_overrides(const Value::Array& overrides) {
     }
     // The microfacet model's parameters make a material metal_rough where no type is given; its base colour is kd
     // (the material's own colour and texture unless base_color replaces them).
-    const bool microfacet_params = o.find("metallic") || o.find("roughness") || o.find("base_color");
+    const bool microfacet_params =
+        o.find("metallic") || o.find("roughness") || o.find("base_color") || o.find("transmission");
     if (microfacet_params) {
       if (o.find("type") && m->type != Material::Type::metal_rough)
-        return make_error(which + ": metallic, roughness and base_color belong to type \"metal_rough\"");
+        return make_error(which + ": metallic, roughness, base_color and transmission belong to type \"metal_rough\"");
       m->type = Material::Type::metal_rough;
     }
     if (m->type == Material::Type::metal_rough) {
@@ -219,7 +220,8 @@ Status Scene::apply_material_overrides(const Value::Array& overrides) {
         if (!colour("base_color", m->kd)) return make_error(which + ": base_color must be {r, g, b}");
         m->kd_map = -1;
       }
-      for (auto [key, field] : {std::pair<const char*, float*>{"metallic", &m->metallic}, {"roughness", &m->roughness}})
+      for (auto [key, field] : {std::pair<const char*, float*>{"metallic", &m->metallic}, {"roughness", &m->roughness},
+                                {"transmission", &m->transmission}})
         if (const Value* v = o.find(key); v && v->is_number()) {
           const double x = v->as_double();
           if (!(x >= 0 && x <= 1)) return make_error(which + ": " + key + " must be between 0 and 1");

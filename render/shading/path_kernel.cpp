@@ -104,6 +104,25 @@ class Wavefront {
   // A glossy vertex with the cache takes its lobes one at a time, so that its diffuse lobe's rays are the cache's as
   // a diffuse surface's are (MIS then pairs each lobe's samples with the light samples' share of that lobe).
   bool by_lobe(const Material& m) const { return cache_ && m.type == Material::Type::glossy; }
+  // What light selection knows of a vertex: the normal it faces, or none (zero: any side) where the surface
+  // transmits along rough lobes and gathers light from both sides; there the learned cells, which are per side,
+  // are left out. Light samples and the MIS weights of emitters hit later both ask through these.
+  Vec3 facing(const Path& path) const { return scene_.material(path.material).transmits() ? Vec3{} : path.n; }
+  const LightSelection* selection_for(const Path& path) const {
+    return scene_.material(path.material).transmits() ? nullptr : o_.light_selection;
+  }
+  // Whether a light sample's direction wi can reach the vertex's BSDF: above both normals, or, where the surface
+  // transmits, below both; `below` then says which. A direction between the two normals reaches neither side.
+  static bool reachable(const Path& path, const Bsdf& bsdf, Vec3 wi, bool& below) {
+    below = false;
+    if (above_both(wi, path.n, path.ng)) return true;
+    below = bsdf.transmits() && above_both(-wi, path.n, path.ng);
+    return below;
+  }
+  // Where rays towards wi leave the vertex: above its face, or below it for light it transmits.
+  Vec3 origin_towards(const Path& path, bool below) const {
+    return below ? scene_.ray_origin(path.triangle, path.x, -path.ng) : path.above;
+  }
   // The directional cache's view of a diffuse vertex's direction wi towards a light's point `distance` away from
   // the ray's origin: whether a ray that way leaves the local neighbourhood before reaching it, and the cache
   // answers that direction.
@@ -160,11 +179,11 @@ void Wavefront::start(const ShadingPoints& points) {
 void Wavefront::sample_light_for(uint32_t p, int depth) {
   Path& path = paths_[p];
   const Material& m = scene_.material(path.material);
-  const Bsdf bsdf(m, path.albedo, path.metallic, path.roughness);
+  const Bsdf bsdf(m, path.albedo, path.metallic, path.roughness, path.outside);
   if (bsdf.is_delta()) return;
   path.rng.at_dimension(kSlotsPerVertex * (depth - 1));
   std::optional<LightSample> picked =
-      o_.light_tree ? sample_light_at(scene_, path.x, path.n, path.rng, o_.light_point, o_.light_selection)
+      o_.light_tree ? sample_light_at(scene_, path.x, facing(path), path.rng, o_.light_point, selection_for(path))
                    : sample_light(scene_, path.rng);
   if (!picked) return;
   const LightSample& ls = *picked;
@@ -176,14 +195,15 @@ void Wavefront::sample_light_for(uint32_t p, int depth) {
   const float dist2 = dot(d, d);
   if (!(dist2 > 0)) return;
   const Vec3 wi = d / std::sqrt(dist2);
-  const float cos_x = dot(path.n, wi);
   const float cos_y = ls.is_point ? 1.0f : -dot(ls.normal, wi);
-  if (!above_both(wi, path.n, path.ng) || cos_y <= 0) return;
+  bool below;
+  if (!reachable(path, bsdf, wi, below) || cos_y <= 0) return;
+  const float cos_x = std::fabs(dot(path.n, wi));
   const RGB f = bsdf.eval(path.n, path.wo, wi);
   if (is_black(f)) return;
-  // The shadow ray runs between the two surfaces' offset points, so it neither starts below this one nor ends
-  // beyond the light's.
-  const Vec3 origin = path.above;
+  // The shadow ray runs between the two surfaces' offset points, so it neither starts on the wrong side of this
+  // one nor ends beyond the light's.
+  const Vec3 origin = origin_towards(path, below);
   const Vec3 target = ls.is_point ? ls.point : scene_.ray_origin(ls.triangle, ls.point, ls.normal);
   const Vec3 to_light = target - origin;
   const float span = length(to_light);
@@ -214,8 +234,9 @@ void Wavefront::sample_light_for(uint32_t p, int depth) {
 void Wavefront::sample_environment_for(uint32_t p, const Path& path, const Material& m, const Bsdf& bsdf,
                                        const LightSample& ls) {
   const Vec3 wi = ls.direction;
-  if (is_black(ls.radiance) || !(ls.pdf_area > 0) || !above_both(wi, path.n, path.ng)) return;
-  const float cos_x = dot(path.n, wi);
+  bool below;
+  if (is_black(ls.radiance) || !(ls.pdf_area > 0) || !reachable(path, bsdf, wi, below)) return;
+  const float cos_x = std::fabs(dot(path.n, wi));
   const float light_pdf = ls.pdf_area;  // per solid angle already
   const float span = std::numeric_limits<float>::infinity();
   // The same weights as an area light's (sample_light_for): the directional cache answers only light reflected
@@ -233,7 +254,7 @@ void Wavefront::sample_environment_for(uint32_t p, const Path& path, const Mater
   }
   if (is_black(fw)) return;
   pending_.push_back({p, path.beta * fw * ls.radiance * (cos_x / light_pdf)});
-  rays.push_back(Ray{path.above, wi, 0.0f, span});
+  rays.push_back(Ray{origin_towards(path, below), wi, 0.0f, span});
 }
 
 void Wavefront::sample_continuations(int depth) {
@@ -250,13 +271,18 @@ void Wavefront::sample_continuations(int depth) {
     path.rng.at_dimension(kSlotsPerVertex * (depth - 1) + 2);
     const float u0 = path.rng.uniform();
     const Uniform2 direction = path.rng.uniform2();
-    const Bsdf bsdf(m, path.albedo, path.metallic, path.roughness);
+    const Bsdf bsdf(m, path.albedo, path.metallic, path.roughness, path.outside);
     auto s = by_lobe(m) ? bsdf.sample_by_lobe(path.n, path.wo, u0, direction.u, direction.v)
                         : bsdf.sample(path.n, path.wo, path.outside, u0, direction.u, direction.v);
-    // Only glass may send a path through the face; a reflection the shading normal allows below it ends here.
-    // A diffuse or glossy surface's mirror term is the specular op's where specular surfaces are (`direct`).
-    if (!s || is_black(s->weight) || (m.type != Material::Type::glass && dot(s->wi, path.ng) <= 0) ||
-        (o_.dark_on_specular && s->delta)) {
+    // Only glass, smooth or rough, may send a path through the face; a reflection the shading normal allows below
+    // it ends here, and so does a refraction it allows above. A diffuse or glossy surface's mirror term is the
+    // specular op's where specular surfaces are (`direct`).
+    auto leaves_well = [&](Vec3 wi) {
+      if (m.type == Material::Type::glass) return true;
+      if (bsdf.transmits()) return above_both(wi, path.n, path.ng) || above_both(-wi, path.n, path.ng);
+      return dot(wi, path.ng) > 0;
+    };
+    if (!s || is_black(s->weight) || !leaves_well(s->wi) || (o_.dark_on_specular && s->delta)) {
       path.alive = false;
       continue;
     }
@@ -328,7 +354,7 @@ void Wavefront::land(int depth) {
         const Vec3 wi = rays[r].direction;
         const RGB le = scene_.environment()->radiance(wi);
         if (!is_black(le)) {
-          const float share = o_.light_tree ? environment_share_at(scene_, path.x, path.n, o_.light_selection)
+          const float share = o_.light_tree ? environment_share_at(scene_, path.x, facing(path), selection_for(path))
                                             : scene_.environment_share();
           path.L += path.beta * le * (path.delta ? 1.0f : power_heuristic(path.bsdf_pdf, environment_pdf(scene_, wi, share)));
         }
@@ -346,8 +372,8 @@ void Wavefront::land(int depth) {
       float w = 1.0f;
       if (!path.delta) {
         const float cos_y = dot(ng, wo);
-        const float pdf_area = o_.light_tree ? light_pdf_area_at(scene_, tri, path.x, path.n, o_.light_point, hits[r].t, cos_y,
-                                                              o_.light_selection)
+        const float pdf_area = o_.light_tree ? light_pdf_area_at(scene_, tri, path.x, facing(path), o_.light_point,
+                                                              hits[r].t, cos_y, selection_for(path))
                                             : light_pdf_area(scene_, tri);
         const float light_pdf = pdf_area * hits[r].t * hits[r].t / cos_y;
         w = power_heuristic(path.bsdf_pdf, light_pdf);
