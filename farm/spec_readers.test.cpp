@@ -165,7 +165,7 @@ TEST(MaterialReader, MetalRoughFromItsParameters) {
   EXPECT_EQ(error_of([&] { read_material_change("ball", table({{"roughness", 1.5}}, "m"), names); }),
             "m: parameter 'roughness' must be in [0, 1], got 1.5");
   EXPECT_EQ(error_of([&] { read_material_change("ball", table({{"type", "glossy"}, {"metallic", 1}}, "m"), names); }),
-            "material 'ball': metallic, roughness and base_color belong to type \"metal_rough\"");
+            "material 'ball': metallic, roughness, base_color and transmission belong to type \"metal_rough\"");
   EXPECT_EQ(error_of([&] { read_material_change("ball", table({{"roughness", 0.5}, {"ks", Value::Array{0.1, 0.1, 0.1}}}, "m"), names); }),
             "material 'ball': a metal_rough material takes base_color, metallic and roughness, not kd, ks, ns or mirror");
 }

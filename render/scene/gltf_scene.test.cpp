@@ -115,6 +115,42 @@ TEST(GltfScene, NodesTransformsMaterialsAndLightsAsTheFileSays) {
   EXPECT_EQ(catalogue->material_names, (std::vector<std::string>{"gold"}));
 }
 
+// KHR_materials_transmission and KHR_materials_ior: a rough transmitting material is rough glass of the file's
+// index; a smooth, whole, untextured one the `glass` material, its base colour the tint; a transmission texture is
+// a warning, the factor holding everywhere.
+TEST(GltfScene, TransmissionMakesGlassRoughOrSmooth) {
+  GltfFiles files;
+  auto load = [&](const std::string& material, std::string* warnings = nullptr) {
+    testing::internal::CaptureStderr();
+    auto s = Scene::load_gltf_unlit(files.write(R"([{"mesh": 0}])", 4, material));
+    const std::string err = testing::internal::GetCapturedStderr();
+    if (warnings) *warnings = err;
+    EXPECT_TRUE(s.ok()) << s.error().message;
+    return s.ok() ? s->material(s->material_of(0)) : Material{};
+  };
+  const Material frosted = load(R"({"name": "frosted", "pbrMetallicRoughness": {"baseColorFactor": [0.8, 0.9, 1, 1], "metallicFactor": 0, "roughnessFactor": 0.4},
+      "extensions": {"KHR_materials_transmission": {"transmissionFactor": 1}, "KHR_materials_ior": {"ior": 1.33}}})");
+  EXPECT_EQ(frosted.type, Material::Type::metal_rough);
+  EXPECT_FLOAT_EQ(frosted.transmission, 1);
+  EXPECT_FLOAT_EQ(frosted.ior, 1.33f);
+  EXPECT_TRUE(frosted.transmits());
+  const Material clear = load(R"({"name": "clear", "pbrMetallicRoughness": {"baseColorFactor": [0.8, 0.9, 1, 1], "metallicFactor": 0, "roughnessFactor": 0},
+      "extensions": {"KHR_materials_transmission": {"transmissionFactor": 1}}})");
+  EXPECT_EQ(clear.type, Material::Type::glass);
+  EXPECT_FLOAT_EQ(clear.ior, 1.5f);
+  EXPECT_EQ(clear.tf, (RGB{0.8f, 0.9f, 1}));
+  std::string warnings;
+  const Material textured = load(R"({"name": "half", "pbrMetallicRoughness": {"metallicFactor": 0, "roughnessFactor": 0.5},
+      "extensions": {"KHR_materials_transmission": {"transmissionFactor": 0.5, "transmissionTexture": {"index": 0}}, "KHR_materials_ior": {"ior": 7}}})",
+                                 &warnings);
+  EXPECT_FLOAT_EQ(textured.transmission, 0.5f);
+  EXPECT_FLOAT_EQ(textured.ior, 1.5f);
+  EXPECT_NE(warnings.find("material 'half': its transmissionTexture is left out; transmissionFactor holds everywhere"),
+            std::string::npos) << warnings;
+  EXPECT_NE(warnings.find("material 'half': KHR_materials_ior 7.000000 is outside [1, 3]; 1.5 is used"), std::string::npos)
+      << warnings;
+}
+
 TEST(GltfScene, AMirroringTransformKeepsTheFrontFacingOut) {
   GltfFiles files;
   auto s = Scene::load_gltf_unlit(files.write(R"([{"scale": [1, 1, -1], "mesh": 0}])"));

@@ -19,6 +19,8 @@ TEST(SceneFile, RoundTripsTheWholeSceneBitForBit) {
   ball.type = Material::Type::metal_rough;
   ball.metallic = 0.75f;
   ball.roughness = 0.125f;
+  ball.transmission = 0.5f;
+  ball.ior = 1.33f;
   s->add_sphere({0.5f, 0.5f, 0.5f}, 0.1f, 1, s->add_material(ball), true);
   ASSERT_TRUE(s->finalize("test").ok());
   const std::string bytes = scene_to_bytes(*s);
@@ -40,6 +42,8 @@ TEST(SceneFile, RoundTripsTheWholeSceneBitForBit) {
     EXPECT_EQ(back->materials()[m].ke, s->materials()[m].ke);
     EXPECT_EQ(back->materials()[m].metallic, s->materials()[m].metallic);
     EXPECT_EQ(back->materials()[m].roughness, s->materials()[m].roughness);
+    EXPECT_EQ(back->materials()[m].transmission, s->materials()[m].transmission);
+    EXPECT_EQ(back->materials()[m].ior, s->materials()[m].ior);
   }
   ASSERT_EQ(back->point_lights().size(), 1u);
   EXPECT_EQ(back->point_lights()[0].intensity, (RGB{4, 5, 6}));
