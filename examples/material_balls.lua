@@ -7,6 +7,7 @@
 --   lightfarm run examples/material_balls.lua                          -> material_balls.png
 --   lightfarm run examples/material_balls.lua --set lighting=pathtrace (the same light by path tracing alone)
 --   lightfarm run examples/material_balls.lua --set hdri=sunset        (forest, interior, sunset, courtyard)
+--   lightfarm run examples/material_balls.lua --set glass=1            (the blue balls as rough glass)
 --
 -- Every glTF material is one glossy lobe for the light-path check: `direct` gives it its direct light (the sky's
 -- and the sun's included) and `glossy` the rest, asking the bounce paths where each lobe sample lands; the
@@ -16,6 +17,11 @@ scene  { file = "../../shared/scenes/gltf/balls.glb" }
 environment { map = "../../shared/scenes/gltf/hdri/" .. param("hdri", "courtyard") .. ".exr" }
 -- --set sun=0 switches the file's sun off (the HDRI alone: no sub-degree glints, bench/peer/compare_balls.sh).
 if param("sun", 1) == 0 then sun { direction = {0, 1, 0}, irradiance = {0, 0, 0} } end
+-- --set glass=1 makes the front row's dielectrics transmit (glTF's KHR_materials_transmission): rough glass of their
+-- roughness, tinted blue at each crossing.
+if param("glass", 0) == 1 then
+  for _, r in ipairs({"0.05", "0.3", "0.6", "0.9"}) do material("Ball_m0_r" .. r) { transmission = 1 } end
+end
 -- The file's own camera, "Camera": from (0, 2.6, 5.5) down at the grid, 23 degrees vertically for 16:9.
 camera { gltf = "Camera" }
 image  { width = param("width", 640), height = param("height", 360), spp = param("spp", 64),

@@ -8,10 +8,12 @@
 #      (the light transport alone, without the material models);
 #   2. quality per time: each renderer's noise from a pair of seeds at 64 and 256 spp (no reference), its seconds
 #      (Cycles: its render call; lightfarm: the whole run), and the time lightfarm takes to reach Cycles' 256-spp
-#      noise as a share of Cycles' time.
+#      noise as a share of Cycles' time;
+#   3. with `glass` as the fourth argument, also the front row as rough glass and everything else Lambert on both
+#      sides (GLASS, glass=1) at 1024 spp: the glass model alone.
 # Needs `blender` (Debian's 3.4) and a built lightfarm. About three minutes.
 #
-#   bench/peer/compare_balls.sh [LIGHTFARM] [HDRI] [nosun]   e.g. bench/peer/compare_balls.sh build/lightfarm courtyard
+#   bench/peer/compare_balls.sh [LIGHTFARM] [HDRI] [sun|nosun] [glass]   e.g. bench/peer/compare_balls.sh build/lightfarm courtyard
 # nosun takes the file's sun out on both sides: the HDRI alone, without the sun's sub-degree glints, whose rare
 # fireflies make the noise of a seed pair a lottery.
 set -euo pipefail
@@ -19,6 +21,7 @@ here=$(cd "$(dirname "$0")" && pwd)
 lightfarm=${1:-$here/../../build/lightfarm}
 hdri=${2:-courtyard}
 sun=${3:-sun}
+glass=${4:-}
 lf_sun=1
 [[ $sun == nosun ]] && lf_sun=0
 map=$here/../../../shared/scenes/gltf/hdri/$hdri.exr
@@ -68,3 +71,10 @@ read -r lf64 lf256 cy64 cy256 <<<"$(echo $noise)"
 echo "2. quality per time (noise from seed pairs over the balls' discs and the floor)"
 python3 "$here/quality_per_time.py" "$lf64" "$lf256" "$cy64" "$cy256" "${secs[lf_64_3]}" "${secs[lf_64_4]}" \
   "${secs[lf_256_3]}" "${secs[lf_256_4]}" "${secs[cy_64_3]}" "${secs[cy_64_4]}" "${secs[cy_256_3]}" "${secs[cy_256_4]}"
+if [[ $glass == glass ]]; then
+  cycles "$out/cy_glass.exr" 1024 3 GLASS >/dev/null
+  "$lightfarm" run "$here/lightfarm_balls_lambert.lua" --set hdri=$hdri --set sun=$lf_sun --set seed=3 --set glass=1 \
+    --set spp=1024 --output "$out/lf_glass.exr" --quiet 2>/dev/null
+  echo "3. the front row rough glass, everything else Lambert, 1024 spp (columns: Cycles Principled GGX, lightfarm)"
+  blender -b -P "$here/balls_peer.py" -- "$json" means "$out/cy_glass.exr" "$out/lf_glass.exr" 2>/dev/null | grep '^MEAN'
+fi

@@ -4,10 +4,13 @@
 # filter one pixel wide, 2 threads. Also writes, next to the image, OUT.balls.json: each ball's name and its disc
 # on the image (centre and radius in pixels, from the camera's projection), for per-ball means.
 #
-#   blender -b -P cycles_balls.py -- OUT.exr SPP WIDTH HEIGHT SEED HDRI.exr [GGX|MULTI_GGX|LAMBERT] [nosun]
+#   blender -b -P cycles_balls.py -- OUT.exr SPP WIDTH HEIGHT SEED HDRI.exr [GGX|MULTI_GGX|LAMBERT|GLASS|GLASS_MULTI] [nosun]
 #   (prints RENDER_SECONDS; nosun removes the file's sun)
 #
 # LAMBERT makes every material a Diffuse BSDF of its base colour: the light transport alone, without the models.
+# GLASS makes the front row's dielectric balls rough glass (Principled GGX with Transmission 1) and every other
+# material Lambert, as lightfarm_balls_lambert.lua's glass=1 does: the glass model alone against Cycles'
+# (GLASS_MULTI: the same with multiscatter GGX glass).
 import json
 import math
 import sys
@@ -37,7 +40,10 @@ for m in bpy.data.materials:
     node = m.node_tree.nodes.get("Principled BSDF") if m.node_tree else None
     if not node:
         continue
-    if distribution == "LAMBERT":  # the light alone: every material a Lambert surface of its base colour
+    if distribution.startswith("GLASS") and m.name.startswith("Ball_m0_"):
+        node.distribution = "MULTI_GGX" if distribution == "GLASS_MULTI" else "GGX"
+        node.inputs["Transmission"].default_value = 1.0
+    elif distribution in ("LAMBERT", "GLASS", "GLASS_MULTI"):  # the light alone: every material a Lambert surface of its base colour
         diffuse = m.node_tree.nodes.new("ShaderNodeBsdfDiffuse")
         diffuse.inputs["Color"].default_value = node.inputs["Base Color"].default_value
         output = m.node_tree.nodes["Material Output"]

@@ -456,12 +456,13 @@ Result<Scene> Scene::parse_gltf_unlit(const std::string& path, const std::string
     }
     // Whole transmission through a smooth dielectric is the `glass` material, a single direction (the `specular`
     // op's): at roughness 0.02 (alpha 4e-4) the lobe is narrower than a pixel of any usual view, and a microfacet
-    // lobe that sharp only makes light sampling noisy. The base colour tints it as Tf does.
+    // lobe that sharp only makes light sampling noisy. glTF tints at each crossing by the base colour, `glass` once
+    // where light enters (Tf): the base colour squared is the same for light that enters and leaves.
     const bool smooth_glass = m.transmission >= 1 && m.metallic <= 0 && m.roughness <= 0.02f &&
                               pbr.metallicRoughnessTexture.index < 0 && pbr.baseColorTexture.index < 0;
     if (smooth_glass) {
       m.type = Material::Type::glass;
-      m.tf = m.kd;
+      m.tf = m.kd * m.kd;
       m.kd = {};
       m.transmission = 0;
     }

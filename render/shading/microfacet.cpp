@@ -188,7 +188,6 @@ MetalRoughness::MetalRoughness(RGB base_color, float metallic, float roughness, 
       conductor_weight_(metallic_),
       dielectric_weight_((1 - metallic_) * (1 - std::clamp(transmission.amount, 0.0f, 1.0f))),
       glass_weight_((1 - metallic_) * std::clamp(transmission.amount, 0.0f, 1.0f)),
-      tint_(transmission.from_outside ? base_color : RGB{1, 1, 1}),
       ggx_(TrowbridgeReitz::alpha_of_roughness(roughness_), TrowbridgeReitz::alpha_of_roughness(roughness_)),
       glass_(TrowbridgeReitz::alpha_of_roughness(roughness_),
              transmission.from_outside ? transmission.ior : 1 / transmission.ior) {
@@ -217,7 +216,7 @@ RGB MetalRoughness::eval(Vec3 wo, Vec3 wi) const {
 RGB MetalRoughness::eval_transmitting(Vec3 wo, Vec3 wi) const {
   if (!transmits()) return {};
   const float f = glass_weight_ * glass_.eval(wo, wi);
-  return wi.z < 0 ? tint_ * f : RGB{f, f, f};
+  return wi.z < 0 ? base_ * f : RGB{f, f, f};
 }
 
 RGB MetalRoughness::eval_specular(Vec3 wo, Vec3 wi) const {
@@ -263,7 +262,7 @@ float MetalRoughness::glass_probability(Vec3 wo) const {
   if (!transmits()) return 0;
   if (conductor_weight_ <= 0 && dielectric_weight_ <= 0) return 1;
   const float r = glass_.reflectance(wo);
-  const float glass = glass_weight_ * (r + (1 - r) * average(tint_));
+  const float glass = glass_weight_ * (r + (1 - r) * average(base_));
   const float rest = conductor_weight_ * average(fresnel_schlick(base_, wo.z)) +
                      dielectric_weight_ * std::max(0.04f, average(base_));
   if (rest <= 0) return 1;

@@ -103,10 +103,10 @@ struct Transmission {
 //
 // With transmission t (KHR_materials_transmission), the dielectric part is (1 - t) of the above and t of a rough
 // dielectric (RoughDielectric with the material's index) whose transmission the base colour tints, as glTF
-// specifies. Seen from inside (wo on the far side of a transmitting surface), the material is that interface
-// alone: the base and the conductor are on the outside. The tint applies where light crosses from the outside, as
-// the `glass` material's does (once per pass through a closed object, not twice). This refracts as Blender's
-// importer and Cycles do, where glTF without KHR_materials_volume means a thin wall (docs/looks.md).
+// specifies: at every crossing, as glTF's BTDF and Cycles' Principled BSDF tint (a closed object's light crosses
+// twice, so a solid ball's colour is the base colour squared). Seen from inside (wo on the far side of a transmitting
+// surface), the material is that interface alone: the base and the conductor are on the outside. It refracts as
+// Blender's importer and Cycles do, where glTF without KHR_materials_volume means a thin wall (docs/looks.md).
 class MetalRoughness {
  public:
   MetalRoughness(RGB base_color, float metallic, float roughness, Transmission transmission = {});
@@ -136,7 +136,6 @@ class MetalRoughness {
   float metallic_, roughness_;
   // The parts' weights: metallic, (1 - metallic)(1 - t) and (1 - metallic) t; from inside 0, 0 and 1.
   float conductor_weight_, dielectric_weight_, glass_weight_;
-  RGB tint_;  // of transmission: the base colour from outside, white from inside
   TrowbridgeReitz ggx_;
   RoughDielectric glass_;
   RGB multiple_scattering_fresnel_;  // F_ms, per channel
