@@ -98,9 +98,20 @@ Result<Scene> Scene::parse_obj_unlit(const std::string& obj_text, const std::str
 
 namespace {
 
+// Whether every pixel's colour channels are equal (one or two channels, grey and alpha, always are).
+bool is_grey(const Texels& t, size_t pixels) {
+  const size_t c = static_cast<size_t>(t.channels);
+  if (c < 3) return true;
+  for (size_t i = 0; i < pixels; ++i) {
+    const uint8_t* px = &t.bytes[i * c];
+    if (px[0] != px[1] || px[1] != px[2]) return false;
+  }
+  return true;
+}
+
 // MTL's PBR extension (Pr, Pm; Blender's exporter writes them): glTF's metal-roughness model with Kd (and map_Kd) as
 // the base colour, in place of the illum model's lobes. tinyobjloader reads an absent Pr or Pm as 0, so a material
-// with both 0 and no maps stays the illum model's; glass stays glass (no rough glass yet).
+// with both 0 and no maps stays the illum model's; glass stays glass (the extension has no transmission).
 void with_mtl_pbr(Material& mat, const tinyobj::material_t& m) {
   const bool pbr = m.roughness > 0 || m.metallic > 0 || !m.roughness_texname.empty() || !m.metallic_texname.empty();
   if (!pbr || mat.type == Material::Type::glass) return;
@@ -156,6 +167,14 @@ Result<Scene> Scene::from_obj_reader(const tinyobj::ObjReader& reader, const std
                (use == Use::coverage ? "uncut" : use == Use::colour ? "flat (its Kd)" : use == Use::normals ? "smooth" : "at its factor everywhere"));
       return -1;
     }
+    const size_t pixels = static_cast<size_t>(texels->width) * static_cast<size_t>(texels->height);
+    if (use == Use::normals && is_grey(*texels, pixels)) {
+      // A grey image is a height map (old files' map_Bump), not directions: leaving it out beats a tilted surface.
+      log_warn(where + ": material '" + material + "': " + statement + " '" + name +
+               "' is grey, a height map; lightfarm reads " + statement +
+               " as a tangent-space normal map (as Blender does), so the material stays smooth");
+      return -1;
+    }
     Texture t;
     t.path = name;
     t.width = static_cast<uint32_t>(texels->width);
@@ -193,7 +212,14 @@ Result<Scene> Scene::from_obj_reader(const tinyobj::ObjReader& reader, const std
     if (m.type == Material::Type::diffuse || m.type == Material::Type::glossy || m.type == Material::Type::metal_rough)
       m.kd_map = texture(materials[i].diffuse_texname, Use::colour, m.name, "map_Kd");
     m.alpha_map = texture(materials[i].alpha_texname, Use::coverage, m.name, "map_d");
-    if (!m.specular()) m.normal_map = texture(materials[i].normal_texname, Use::normals, m.name, "norm");
+    if (!m.specular()) {
+      // norm, else map_Bump / bump, which Blender's importer and exporter mean as a normal map too; -bm scales it.
+      const bool norm = !materials[i].normal_texname.empty();
+      const tinyobj::texture_option_t& option = norm ? materials[i].normal_texopt : materials[i].bump_texopt;
+      m.normal_map = texture(norm ? materials[i].normal_texname : materials[i].bump_texname, Use::normals, m.name,
+                             norm ? "norm" : "map_Bump");
+      if (m.normal_map >= 0 && std::isfinite(option.bump_multiplier)) m.normal_scale = option.bump_multiplier;
+    }
     if (m.type == Material::Type::metal_rough) {
       m.roughness_map = texture(materials[i].roughness_texname, Use::scalar, m.name, "map_Pr");
       m.metallic_map = texture(materials[i].metallic_texname, Use::scalar, m.name, "map_Pm");
@@ -285,7 +311,7 @@ Result<ObjCatalogue> Scene::catalogue_obj(const std::string& path) {
         for (const auto& [slot, name] : {std::pair{"map_Kd", &m.diffuse_texname}, {"map_Ks", &m.specular_texname},
                                          {"map_d", &m.alpha_texname}, {"map_Ke", &m.emissive_texname},
                                          {"map_Pr", &m.roughness_texname}, {"map_Pm", &m.metallic_texname},
-                                         {"norm", &m.normal_texname}})
+                                         {"norm", &m.normal_texname}, {"map_Bump", &m.bump_texname}})
           if (!name->empty()) {
             std::error_code ec;
             out.textures.push_back({m.name, slot, *name, std::filesystem::is_regular_file(dir / *name, ec)});

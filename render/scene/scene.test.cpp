@@ -170,6 +170,43 @@ TEST(Scene, MtlPbrMapsVaryRoughnessOverTheSurface) {
   EXPECT_NEAR(roughness, 0.2f, 0.01f);
 }
 
+// map_Bump (and bump) is a tangent-space normal map, as Blender's importer and exporter mean it, scaled by -bm; a
+// grey one is an old file's height map, left out with a warning that says so.
+TEST(Scene, MtlBumpIsANormalMapAndAGreyOneIsRefused) {
+  const auto dir = std::filesystem::temp_directory_path() / ("lightfarm-bump-" + std::to_string(::getpid()));
+  std::filesystem::create_directories(dir);
+  auto tga = [&](const char* name, int type, int bits, const std::string& pixels) {
+    std::string t(18, '\0');
+    t[2] = static_cast<char>(type);  // 2: true colour, 3: grey
+    t[12] = 1, t[14] = 1;            // 1 x 1
+    t[16] = static_cast<char>(bits), t[17] = 0x20;
+    std::ofstream(dir / name, std::ios::binary) << t + pixels;
+  };
+  tga("tilted.tga", 2, 24, std::string{'\xd9', '\x80', '\xd9'});  // BGR: x 0.7, y 0, z 0.7 (45 degrees along +u)
+  tga("height.tga", 3, 8, std::string{'\x80'});
+  std::ofstream(dir / "x.obj") << "mtllib x.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nvt 1 0\nvt 0 1\n"
+                                  "usemtl bumpy\nf 1/1 2/2 3/3\nusemtl old\nf 1/1 2/2 3/3\n";
+  std::ofstream(dir / "x.mtl") << "newmtl bumpy\nKd 0.5 0.5 0.5\nmap_Bump -bm 0.5 tilted.tga\n"
+                                  "newmtl old\nKd 0.5 0.5 0.5\nbump height.tga\n";
+  testing::internal::CaptureStderr();
+  auto s = Scene::load_obj_unlit((dir / "x.obj").string());
+  const std::string warnings = testing::internal::GetCapturedStderr();
+  std::filesystem::remove_all(dir);
+  ASSERT_TRUE(s.ok()) << s.error().message;
+  const Material& bumpy = s->material(s->material_of(0));
+  ASSERT_GE(bumpy.normal_map, 0);
+  EXPECT_FLOAT_EQ(bumpy.normal_scale, 0.5f);
+  // x scaled by one half: the normal leans towards +u (the triangle's +x) by atan(0.35 / 0.7), not 45 degrees.
+  const Vec3 n = s->normal_mapped(0, {1.0f / 3, 1.0f / 3, 1.0f / 3}, {0, 0, 1});
+  EXPECT_NEAR(std::atan2(n.x, n.z) * 180 / kPi, std::atan(0.5) * 180 / kPi, 1.0);
+  EXPECT_NEAR(n.y, 0, 0.01);
+  EXPECT_EQ(s->material(s->material_of(1)).normal_map, -1);
+  EXPECT_NE(warnings.find("material 'old': map_Bump 'height.tga' is grey, a height map; lightfarm reads map_Bump as a "
+                          "tangent-space normal map (as Blender does), so the material stays smooth"),
+            std::string::npos)
+      << warnings;
+}
+
 TEST(Scene, McGuireEmptyCOReadsTheIndentedMaterial) {
   REQUIRE_SHARED_SCENES();
   auto s = Scene::load_obj(kShared + "CornellBox-Empty-CO.obj");
