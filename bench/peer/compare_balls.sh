@@ -8,7 +8,7 @@
 #      (the light transport alone, without the material models);
 #   2. quality per time: each renderer's noise from a pair of seeds at 64 and 256 spp (no reference), its seconds
 #      (Cycles: its render call; lightfarm: the whole run), and the time lightfarm takes to reach Cycles' 256-spp
-#      noise as a share of Cycles' time;
+#      noise as a share of Cycles' time, for the example's network and for its path tracer (lighting=pathtrace);
 #   3. with `glass` as the fourth argument, also the front row as rough glass and everything else Lambert on both
 #      sides (GLASS, glass=1) at 1024 spp: the glass model alone.
 # Needs `blender` (Debian's 3.4) and a built lightfarm. About three minutes.
@@ -33,12 +33,17 @@ declare -A secs
 cycles() {  # OUT SPP SEED MODEL
   blender -b -P "$here/cycles_balls.py" -- "$1" "$2" 320 180 "$3" "$map" "$4" "$sun" 2>/dev/null | awk '/RENDER_SECONDS/ {print $2}'
 }
+# lf: the example's network; pt: the same example's path tracer (--set lighting=pathtrace).
 for spp in 64 256; do
   for seed in 3 4; do
-    t0=$EPOCHREALTIME
-    "$lightfarm" run "$here/../../examples/material_balls.lua" "${size[@]}" --set spp=$spp --set seed=$seed \
-      --set hdri=$hdri --set sun=$lf_sun --output "$out/lf_${spp}_$seed.exr" --quiet 2>/dev/null
-    secs[lf_${spp}_$seed]=$(python3 -c "print($EPOCHREALTIME - $t0)")
+    for kind in lf pt; do
+      lighting=network
+      [[ $kind == pt ]] && lighting=pathtrace
+      t0=$EPOCHREALTIME
+      "$lightfarm" run "$here/../../examples/material_balls.lua" "${size[@]}" --set spp=$spp --set seed=$seed \
+        --set hdri=$hdri --set sun=$lf_sun --set lighting=$lighting --output "$out/${kind}_${spp}_$seed.exr" --quiet 2>/dev/null
+      secs[${kind}_${spp}_$seed]=$(python3 -c "print($EPOCHREALTIME - $t0)")
+    done
     secs[cy_${spp}_$seed]=$(cycles "$out/cy_${spp}_$seed.exr" $spp $seed GGX)
   done
 done
@@ -66,11 +71,15 @@ echo "   every material Lambert (columns: Cycles, lightfarm)"
 blender -b -P "$here/balls_peer.py" -- "$json" means "$out/cy_lambert_3.exr" "$out/lf_lambert_3.exr" 2>/dev/null | grep '^MEAN'
 noise=$(blender -b -P "$here/balls_peer.py" -- "$json" noise \
           "$out/lf_64_3.exr" "$out/lf_64_4.exr" "$out/lf_256_3.exr" "$out/lf_256_4.exr" \
-          "$out/cy_64_3.exr" "$out/cy_64_4.exr" "$out/cy_256_3.exr" "$out/cy_256_4.exr" 2>/dev/null | awk '/^NOISE/ {print $4}')
-read -r lf64 lf256 cy64 cy256 <<<"$(echo $noise)"
-echo "2. quality per time (noise from seed pairs over the balls' discs and the floor)"
+          "$out/cy_64_3.exr" "$out/cy_64_4.exr" "$out/cy_256_3.exr" "$out/cy_256_4.exr" \
+          "$out/pt_64_3.exr" "$out/pt_64_4.exr" "$out/pt_256_3.exr" "$out/pt_256_4.exr" 2>/dev/null | awk '/^NOISE/ {print $4}')
+read -r lf64 lf256 cy64 cy256 pt64 pt256 <<<"$(echo $noise)"
+echo "2. quality per time (noise from seed pairs over the balls' discs and the floor); lf: the network"
 python3 "$here/quality_per_time.py" "$lf64" "$lf256" "$cy64" "$cy256" "${secs[lf_64_3]}" "${secs[lf_64_4]}" \
   "${secs[lf_256_3]}" "${secs[lf_256_4]}" "${secs[cy_64_3]}" "${secs[cy_64_4]}" "${secs[cy_256_3]}" "${secs[cy_256_4]}"
+echo "   the same with lightfarm's path tracer (lighting=pathtrace) as lf"
+python3 "$here/quality_per_time.py" "$pt64" "$pt256" "$cy64" "$cy256" "${secs[pt_64_3]}" "${secs[pt_64_4]}" \
+  "${secs[pt_256_3]}" "${secs[pt_256_4]}" "${secs[cy_64_3]}" "${secs[cy_64_4]}" "${secs[cy_256_3]}" "${secs[cy_256_4]}"
 if [[ $glass == glass ]]; then
   cycles "$out/cy_glass.exr" 1024 3 GLASS >/dev/null
   "$lightfarm" run "$here/lightfarm_balls_lambert.lua" --set hdri=$hdri --set sun=$lf_sun --set seed=3 --set glass=1 \

@@ -13,9 +13,25 @@ namespace {
 
 constexpr double kPiD = 3.14159265358979323846;
 
-// The index i with cdf[i - 1] <= u < cdf[i] (cdf[-1] = 0), and where u falls within it, rescaled to [0, 1).
-size_t pick(const float* cdf, size_t n, float u, float& remainder) {
-  const size_t i = std::min(static_cast<size_t>(std::upper_bound(cdf, cdf + n, u) - cdf), n - 1);
+// Where a cdf of n entries first exceeds k / g, for k = 0..g: the bounds a guided search starts from.
+void guide(const float* cdf, size_t n, size_t g, uint32_t* out) {
+  for (size_t k = 0; k <= g; ++k)
+    out[k] = static_cast<uint32_t>(std::upper_bound(cdf, cdf + n, static_cast<float>(k) / static_cast<float>(g)) - cdf);
+}
+
+// The index i with cdf[i - 1] <= u < cdf[i] (cdf[-1] = 0), and where u falls within it, rescaled to [0, 1). By
+// its guide table (guide() over g bins) the search runs between the bounds of u's bin, and over the whole cdf only
+// where rounding put u outside them: the same i either way.
+size_t pick(const float* cdf, size_t n, float u, float& remainder, const uint32_t* bounds, size_t g) {
+  size_t found = n;
+  if (bounds) {
+    const size_t k = std::min(static_cast<size_t>(u * static_cast<float>(g)), g - 1);
+    const size_t lo = bounds[k], hi = std::min<size_t>(bounds[k + 1] + 1, n);
+    const size_t at = static_cast<size_t>(std::upper_bound(cdf + lo, cdf + hi, u) - cdf);
+    if ((lo == 0 || cdf[lo - 1] <= u) && (at < hi || hi == n)) found = at;
+  }
+  if (found == n) found = static_cast<size_t>(std::upper_bound(cdf, cdf + n, u) - cdf);
+  const size_t i = std::min(found, n - 1);
   const float low = i > 0 ? cdf[i - 1] : 0.0f, width = cdf[i] - low;
   remainder = width > 0 ? std::clamp((u - low) / width, 0.0f, 0x1.fffffep-1f) : 0.5f;
   return i;
@@ -107,6 +123,10 @@ void Environment::build() {
       row_weights[y] = tabulate(weights.data(), w, &col_cdf_[y * w], &col_pdf_[y * w]);
     }
     const double total = tabulate(row_weights.data(), h, row_cdf_.data(), row_pdf_.data());
+    row_guide_.assign(kGuide + 1, 0);
+    guide(row_cdf_.data(), h, kGuide, row_guide_.data());
+    col_guide_.assign(h * (kGuide + 1), 0);
+    for (size_t y = 0; y < h; ++y) guide(&col_cdf_[y * w], w, kGuide, &col_guide_[y * (kGuide + 1)]);
     // The integral of brightness over the sphere: each texel spans (2 pi / w) (pi / h) sin(theta) steradians.
     map_power_ = total * intensity_ * (2 * kPiD / static_cast<double>(w)) * (kPiD / static_cast<double>(h));
   } else {
@@ -141,6 +161,10 @@ RGB Environment::map_radiance(Vec3 wi) const {
   if (!has_map()) return constant_;
   float u, v;
   image_coordinates(to_map(wi), u, v);
+  return map_radiance_at(u, v);
+}
+
+RGB Environment::map_radiance_at(float u, float v) const {
   // Bilinear between texel centres, around the azimuth and clamped at the poles (as Cycles' linear lookup is).
   const float fx = u * static_cast<float>(width_) - 0.5f, fy = v * static_cast<float>(height_) - 0.5f;
   const float x0f = std::floor(fx), y0f = std::floor(fy);
@@ -171,7 +195,11 @@ float Environment::map_pdf(Vec3 wi) const {
   image_coordinates(d, u, v);
   const int x = std::clamp(static_cast<int>(u * static_cast<float>(width_)), 0, width_ - 1);
   const int y = std::clamp(static_cast<int>(v * static_cast<float>(height_)), 0, height_ - 1);
-  const float sin_theta = std::sqrt(std::max(0.0f, 1.0f - d.y * d.y));
+  return map_pdf_at(x, y, d.y);
+}
+
+float Environment::map_pdf_at(int x, int y, float pole_cosine) const {
+  const float sin_theta = std::sqrt(std::max(0.0f, 1.0f - pole_cosine * pole_cosine));
   if (!(sin_theta > 0)) return 0;
   const float p = row_pdf_[static_cast<size_t>(y)] * col_pdf_[texel(x, y)];
   return p * static_cast<float>(width_) * static_cast<float>(height_) / (2.0f * kPi * kPi * sin_theta);
@@ -199,10 +227,22 @@ Environment::Sample Environment::sample(float u, float v) const {
       wi = {s * std::cos(phi), z, s * std::sin(phi)};
     } else {
       float du, dv;
-      const size_t y = pick(row_cdf_.data(), row_cdf_.size(), r, du);
-      const size_t x = pick(&col_cdf_[y * static_cast<size_t>(width_)], static_cast<size_t>(width_), v, dv);
-      wi = from_map(direction_of((static_cast<float>(x) + dv) / static_cast<float>(width_),
-                                 (static_cast<float>(y) + du) / static_cast<float>(height_)));
+      const size_t y = pick(row_cdf_.data(), row_cdf_.size(), r, du, row_guide_.data(), kGuide);
+      const size_t x = pick(&col_cdf_[y * static_cast<size_t>(width_)], static_cast<size_t>(width_), v, dv,
+                            &col_guide_[y * (kGuide + 1)], kGuide);
+      const float mu = (static_cast<float>(x) + dv) / static_cast<float>(width_);
+      const float mv = (static_cast<float>(y) + du) / static_cast<float>(height_);
+      const Vec3 d = direction_of(mu, mv);
+      wi = from_map(d);
+      // The point's radiance and density from where it was drawn in the image; the sun's part added if it lies in
+      // the sun's disc (then the sun could have drawn it too).
+      RGB l = map_radiance_at(mu, mv);
+      float p = (1.0f - sun_share_) * (map_power_ > 0 ? map_pdf_at(static_cast<int>(x), static_cast<int>(y), d.y) : 0.0f);
+      if (in_sun(wi)) {
+        l += sun_->irradiance * sun_radiance_scale_;
+        if (sun_share_ > 0) p += sun_share_ / (2.0f * kPi * sun_one_minus_cos_);
+      }
+      return Sample{wi, l, p};
     }
   }
   // Radiance and density of the direction itself, whichever part drew it: a direction in the sun's disc could have
