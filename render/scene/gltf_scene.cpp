@@ -601,7 +601,7 @@ Result<Scene> Scene::parse_gltf_unlit(const std::string& path, const std::string
         auto positions = read.floats(find("POSITION"), 3, what + " positions");
         if (!positions) return positions.error();
         const size_t vertices = positions->size() / 3;
-        std::vector<float> normals, uvs;
+        std::vector<float> normals, uvs, tangents;
         if (find("NORMAL") >= 0) {
           auto n = read.floats(find("NORMAL"), 3, what + " normals");
           if (!n) return n.error();
@@ -611,6 +611,14 @@ Result<Scene> Scene::parse_gltf_unlit(const std::string& path, const std::string
           auto t = read.floats(find("TEXCOORD_0"), 2, what + " texture coordinates");
           if (!t) return t.error();
           if (t->size() / 2 == vertices) uvs = std::move(*t);
+        }
+        // Tangents matter only where a normal map turns the normal along them.
+        const bool normal_mapped = prim.material >= 0 && static_cast<size_t>(prim.material) < model.materials.size() &&
+                                   s.material(static_cast<uint32_t>(prim.material)).normal_map >= 0;
+        if (find("TANGENT") >= 0 && normal_mapped && !normals.empty()) {
+          auto t = read.floats(find("TANGENT"), 4, what + " tangents");
+          if (!t) return t.error();
+          if (t->size() / 4 == vertices) tangents = std::move(*t);
         }
         std::vector<uint32_t> order;
         if (prim.indices >= 0) {
@@ -627,6 +635,7 @@ Result<Scene> Scene::parse_gltf_unlit(const std::string& path, const std::string
         for (size_t f = 0; f + 2 < order.size(); f += 3) {
           Vec3 p[3], vn[3];
           Vec2 vt[3];
+          CornerTangent tn[3];
           for (int c = 0; c < 3; ++c) {
             const size_t v = order[f + static_cast<size_t>(mirrored ? 2 - c : c)];
             p[c] = world.point({(*positions)[3 * v], (*positions)[3 * v + 1], (*positions)[3 * v + 2]});
@@ -637,8 +646,14 @@ Result<Scene> Scene::parse_gltf_unlit(const std::string& path, const std::string
                                                              : Vec2{uvs[2 * v], uvs[2 * v + 1]};
               vt[c] = {t.u, 1.0f - t.v};
             }
+            // A tangent turns with the node as surface directions do; a mirroring transform flips the bitangent's
+            // side (cross(n, t) of the mirrored pair points the other way).
+            if (!tangents.empty())
+              tn[c] = {world.vector({tangents[4 * v], tangents[4 * v + 1], tangents[4 * v + 2]}),
+                       (tangents[4 * v + 3] < 0) != mirrored ? -1.0f : 1.0f};
           }
-          s.add_triangle(p[0], p[1], p[2], material, {normals.empty() ? nullptr : vn, uvs.empty() ? nullptr : vt});
+          s.add_triangle(p[0], p[1], p[2], material,
+                         {normals.empty() ? nullptr : vn, uvs.empty() ? nullptr : vt, tangents.empty() ? nullptr : tn});
         }
       }
     }

@@ -4,7 +4,9 @@
 #include <gtest/gtest.h>
 #include <unistd.h>
 
+#include <array>
 #include <cstring>
+#include <optional>
 #include <filesystem>
 #include <fstream>
 
@@ -38,6 +40,8 @@ std::string halves(const std::string& left, const std::string& right) {
 
 struct GltfFiles {
   fs::path dir = fs::temp_directory_path() / ("lightfarm-gltf-" + std::to_string(::getpid()));
+  // Set: every corner has this TANGENT (x, y, z, w), in a fifth buffer view.
+  std::optional<std::array<float, 4>> tangent;
   GltfFiles() { fs::create_directories(dir); }
   ~GltfFiles() { fs::remove_all(dir); }
   // A quad of two triangles (u16 indices) with normals and texture coordinates in x.bin; `accessor_count` lets a
@@ -56,7 +60,12 @@ struct GltfFiles {
     add(normals, sizeof normals);
     add(uvs, sizeof uvs);
     add(indices, sizeof indices);
+    if (tangent)
+      for (int v = 0; v < 4; ++v) add(tangent->data(), sizeof(float) * 4);
     std::ofstream(dir / "x.bin", std::ios::binary) << bin;
+    const std::string tangent_attribute = tangent ? R"(, "TANGENT": 4)" : "";
+    const std::string tangent_view = tangent ? R"(, {"buffer": 0, "byteOffset": 140, "byteLength": 64})" : "";
+    const std::string tangent_accessor = tangent ? R"(, {"bufferView": 4, "componentType": 5126, "count": 4, "type": "VEC4"})" : "";
     const std::string json = R"({
   "asset": {"version": "2.0"},
   "extensionsUsed": ["KHR_lights_punctual"],
@@ -64,15 +73,15 @@ struct GltfFiles {
   "scene": 0,
   "scenes": [{"nodes": [0]}],
   "nodes": )" + nodes + R"(,
-  "meshes": [{"name": "quad", "primitives": [{"attributes": {"POSITION": 0, "NORMAL": 1, "TEXCOORD_0": 2}, "indices": 3, "material": 0}]}],
+  "meshes": [{"name": "quad", "primitives": [{"attributes": {"POSITION": 0, "NORMAL": 1, "TEXCOORD_0": 2)" + tangent_attribute + R"(}, "indices": 3, "material": 0}]}],
   "materials": [)" + material + R"(],)" + images + R"(
-  "buffers": [{"uri": "x.bin", "byteLength": 140}],
+  "buffers": [{"uri": "x.bin", "byteLength": )" + std::to_string(bin.size()) + R"(}],
   "bufferViews": [{"buffer": 0, "byteOffset": 0, "byteLength": 48}, {"buffer": 0, "byteOffset": 48, "byteLength": 48},
-                  {"buffer": 0, "byteOffset": 96, "byteLength": 32}, {"buffer": 0, "byteOffset": 128, "byteLength": 12}],
+                  {"buffer": 0, "byteOffset": 96, "byteLength": 32}, {"buffer": 0, "byteOffset": 128, "byteLength": 12})" + tangent_view + R"(],
   "accessors": [{"bufferView": 0, "componentType": 5126, "count": )" + std::to_string(accessor_count) + R"(, "type": "VEC3", "min": [0, 0, 0], "max": [1, 1, 0]},
                 {"bufferView": 1, "componentType": 5126, "count": 4, "type": "VEC3"},
                 {"bufferView": 2, "componentType": 5126, "count": 4, "type": "VEC2"},
-                {"bufferView": 3, "componentType": 5123, "count": 6, "type": "SCALAR"}]
+                {"bufferView": 3, "componentType": 5123, "count": 6, "type": "SCALAR"})" + tangent_accessor + R"(]
 })";
     const fs::path path = dir / "x.gltf";
     std::ofstream(path) << json;
@@ -271,6 +280,38 @@ TEST(GltfScene, EmissiveTexturesLightWhereTheyGlow) {
 
 // KHR_texture_transform moves a material's texture over its surface: a texture white on its left half and black
 // on its right, shifted by half its width, is black where it was white; scaled by 2, it repeats twice across.
+// A file's TANGENT gives the frame (not the texture coordinates): tangents along +y with the bitangent on the -x
+// side turn a map that leans along its x towards +y, and with w = -1 the bitangent flips (a mirrored UV layout).
+TEST(GltfScene, TheFilesTangentsGiveTheNormalMapsFrame) {
+  for (float w : {1.0f, -1.0f}) {
+    GltfFiles files;
+    files.tangent = std::array<float, 4>{0, 1, 0, w};
+    std::string px;  // x 0.5, y 0.25, z 0.83
+    for (int i = 0; i < 4; ++i) px += std::string{static_cast<char>(233), static_cast<char>(160), static_cast<char>(191)};
+    write_tga(files.dir / "n.tga", 2, 2, 24, px);
+    auto s = Scene::load_gltf_unlit(files.write_textured(R"({"name": "bumpy", "normalTexture": {"index": 0}})", "n.tga"));
+    ASSERT_TRUE(s.ok()) << s.error().message;
+    ASSERT_TRUE(s->has_tangents());
+    s->add_point_light({0, 0, 1}, {1, 1, 1});
+    ASSERT_TRUE(s->finalize("bumpy").ok());
+    auto shipped = scene_from_bytes(scene_to_bytes(*s), "shipped");
+    ASSERT_TRUE(shipped.ok()) << shipped.error().message;
+    const fs::path image = files.dir / "x.image";
+    std::ofstream(image, std::ios::binary) << SceneImage::encode(*shipped, "0123456789abcdef");
+    auto mapped = SceneImage::map(image.string(), "0123456789abcdef", "mapped");
+    ASSERT_TRUE(mapped.ok()) << mapped.error().message;
+    const float x = 2 * 191 / 255.0f - 1, y = 2 * 160 / 255.0f - 1, z = 2 * 233 / 255.0f - 1;
+    // Tangent +y; bitangent w * cross(+z, +y) = w * -x.
+    const Vec3 expected = normalize(Vec3{-w * y, x, z});
+    for (const Scene* scene : {&*s, &*shipped, &*mapped}) {
+      const SurfacePoint sp = surface_at(*scene, 0, {0.7f, 0.3f, 0}, {0, 0, 1});
+      EXPECT_NEAR(sp.ns.x, expected.x, 1e-4f) << "w " << w;
+      EXPECT_NEAR(sp.ns.y, expected.y, 1e-4f) << "w " << w;
+      EXPECT_NEAR(sp.ns.z, expected.z, 1e-4f) << "w " << w;
+    }
+  }
+}
+
 TEST(GltfScene, TextureTransformsMoveTheTexture) {
   for (const char* transform : {R"({"offset": [0.5, 0]})", R"({"scale": [2, 1]})"}) {
     GltfFiles files;

@@ -272,7 +272,7 @@ Result<Scene> Scene::from_obj_reader(const tinyobj::ObjReader& reader, const std
     bool flat = true;
     for (uint32_t t = 0; t < s.triangle_count() && flat; ++t)
       for (int c = 0; c < 3 && flat; ++c) flat = dot(s.corner_normal(t, c), s.normal(t)) > 1 - 1e-6f;
-    if (flat) s.restore_corners({}, std::move(s.corner_uvs_));
+    if (flat) s.restore_corners({}, std::move(s.corner_uvs_), std::move(s.corner_tangents_));
   }
   return s;
 }

@@ -50,6 +50,12 @@ void Scene::add_triangle(Vec3 a, Vec3 b, Vec3 c, uint32_t material, CornerAttrib
     if (corner_uvs_.empty()) corner_uvs_.assign(3 * before, kNoUv);
     for (int k = 0; k < 3; ++k) corner_uvs_.push_back(extra.uvs ? extra.uvs[k] : kNoUv);
   }
+  if (extra.tangents || !corner_tangents_.empty()) {
+    constexpr float kNaN = std::numeric_limits<float>::quiet_NaN();
+    const CornerTangent none{{kNaN, kNaN, kNaN}, 1};
+    if (corner_tangents_.empty()) corner_tangents_.assign(3 * before, none);
+    for (int k = 0; k < 3; ++k) corner_tangents_.push_back(extra.tangents ? extra.tangents[k] : none);
+  }
   auto base = static_cast<uint32_t>(vertices_.size());
   vertices_.push_back(a);
   vertices_.push_back(b);
@@ -70,11 +76,13 @@ void Scene::view_owned_arrays() {
   light_pdf_view_ = triangle_light_pdf_;
   corner_normal_view_ = corner_normals_;
   corner_uv_view_ = corner_uvs_;
+  corner_tangent_view_ = corner_tangents_;
 }
 
-void Scene::restore_corners(std::vector<Vec3> normals, std::vector<Vec2> uvs) {
+void Scene::restore_corners(std::vector<Vec3> normals, std::vector<Vec2> uvs, std::vector<CornerTangent> tangents) {
   corner_normals_ = std::move(normals);
   corner_uvs_ = std::move(uvs);
+  corner_tangents_ = std::move(tangents);
   view_owned_arrays();
 }
 

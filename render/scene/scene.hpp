@@ -101,9 +101,17 @@ struct Texture {
 };
 
 // What a triangle may carry beyond its corners: OBJ vertex normals and texture coordinates, per corner.
+// A corner's tangent (glTF's TANGENT): the surface direction of increasing u, and the bitangent's side: the
+// bitangent is sign * cross(normal, direction). A NaN direction: none (the frame then comes from the uvs).
+struct CornerTangent {
+  Vec3 direction;
+  float sign = 1;
+};
+
 struct CornerAttributes {
   const Vec3* normals = nullptr;  // 3, or none
   const Vec2* uvs = nullptr;      // 3, or none
+  const CornerTangent* tangents = nullptr;  // 3, or none
 };
 
 struct PointLight {
@@ -158,9 +166,9 @@ class Scene {
   void add_quad(Vec3 a, Vec3 b, Vec3 c, Vec3 d, uint32_t material);
   void add_triangle(Vec3 a, Vec3 b, Vec3 c, uint32_t material, CornerAttributes extra = {});
   uint32_t add_texture(Texture t);
-  // For the binary forms: every triangle's corner normals and texture coordinates (3 each, or none) exactly as
-  // stored, after the triangles.
-  void restore_corners(std::vector<Vec3> normals, std::vector<Vec2> uvs);
+  // For the binary forms: every triangle's corner normals, texture coordinates and tangents (3 each, or none)
+  // exactly as stored, after the triangles.
+  void restore_corners(std::vector<Vec3> normals, std::vector<Vec2> uvs, std::vector<CornerTangent> tangents = {});
   // A sphere as a subdivided icosahedron (20 * 4^subdivisions triangles), wound outwards.
   // An icosphere; `smooth`: with the sphere's own normals at the corners (shaded round, not faceted).
   void add_sphere(Vec3 center, float radius, int subdivisions, uint32_t material, bool smooth = false);
@@ -210,8 +218,11 @@ class Scene {
   // Whether any triangle's material has a normal map (surface_at then looks).
   bool has_normal_maps() const { return has_normal_maps_; }
   // Shading normal n (unit, on the winding's side) at barycentrics b of a triangle whose material has a normal map,
-  // turned as the map says in the triangle's tangent frame (from its texture coordinates: x along u, y along v).
+  // turned as the map says in the tangent frame there: the file's tangents where it gave them (glTF's TANGENT),
+  // else the triangle's from its texture coordinates (x along u, y along v).
   Vec3 normal_mapped(uint32_t triangle, Vec3 b, Vec3 n) const;
+  // The file's tangent frame at barycentrics b around unit normal n; false without usable tangents there.
+  bool file_tangent_frame(uint32_t triangle, Vec3 b, Vec3 n, Vec3& tangent, Vec3& bitangent) const;
   // A metal_rough material's metallic and roughness at barycentrics b: its factors, times its maps' values there.
   void metal_rough_at(uint32_t triangle, Vec3 b, float footprint, float& metallic, float& roughness) const;
   // Whether the surface is there at barycentrics b (false where an alpha map cuts it out).
@@ -226,6 +237,8 @@ class Scene {
   Vec3 corner_normal(uint32_t triangle, int corner) const { return corner_normal_view_[3 * size_t{triangle} + corner]; }
   Vec2 corner_uv(uint32_t triangle, int corner) const { return corner_uv_view_[3 * size_t{triangle} + corner]; }
   bool has_uvs() const { return !corner_uv_view_.empty(); }
+  bool has_tangents() const { return !corner_tangent_view_.empty(); }
+  CornerTangent corner_tangent(uint32_t triangle, int corner) const { return corner_tangent_view_[3 * size_t{triangle} + corner]; }
   const std::vector<Texture>& textures() const { return textures_; }
 
   // True when the per-triangle arrays live in a memory-mapped scene image that other processes on this host
@@ -329,6 +342,7 @@ class Scene {
   std::vector<float> areas_;
   std::vector<Vec3> corner_normals_;  // 3 per triangle, or none
   std::vector<Vec2> corner_uvs_;      // 3 per triangle, or none
+  std::vector<CornerTangent> corner_tangents_;  // 3 per triangle, or none
   std::vector<Texture> textures_;
   std::vector<Material> materials_;
   std::vector<uint32_t> emitters_;
@@ -344,6 +358,7 @@ class Scene {
   std::span<const float> light_pdf_view_;
   std::span<const Vec3> corner_normal_view_;
   std::span<const Vec2> corner_uv_view_;
+  std::span<const CornerTangent> corner_tangent_view_;
   std::shared_ptr<const LightTree> light_tree_;
   std::shared_ptr<const EmitterCutouts> emitter_cutouts_;
   std::shared_ptr<const Environment> environment_;

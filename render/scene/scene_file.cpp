@@ -15,9 +15,9 @@ namespace lf {
 
 namespace {
 
-constexpr std::string_view kMagic = "LFSCENE10";  // 4: metallic and roughness; 5: the environment; 6: their maps;
+constexpr std::string_view kMagic = "LFSCENE11";  // 4: metallic and roughness; 5: the environment; 6: their maps;
                                                   // 7: normal maps; 8: emission maps; 9: spot lights;
-                                                  // 10: transmission
+                                                  // 10: transmission; 11: corner tangents
 using bytes::put;
 using bytes::put_rgb;
 using bytes::Reader;
@@ -66,6 +66,13 @@ std::string scene_to_bytes(const Scene& scene) {
       for (int c = 0; c < 3; ++c) {
         put<float>(out, scene.corner_uv(t, c).u);
         put<float>(out, scene.corner_uv(t, c).v);
+      }
+  out.push_back(scene.has_tangents() ? 1 : 0);
+  if (scene.has_tangents())
+    for (uint32_t t = 0; t < n; ++t)
+      for (int c = 0; c < 3; ++c) {
+        put_rgb(out, scene.corner_tangent(t, c).direction);
+        put<float>(out, scene.corner_tangent(t, c).sign);
       }
   put<uint32_t>(out, static_cast<uint32_t>(scene.point_lights().size()));
   for (const PointLight& p : scene.point_lights()) bytes::put_point_light(out, p);
@@ -132,8 +139,13 @@ Result<Scene> scene_from_bytes(std::string_view bytes, const std::string& what) 
   uvs.resize(present ? 3 * size_t{n} : 0);
   for (auto& v : uvs)
     if (!r.f32(v.u) || !r.f32(v.v)) return bad();
+  std::vector<CornerTangent> tangents;
+  if (!r.u8(present) || present > 1 || (present && !r.room(12 * uint64_t{n}, 4))) return bad();
+  tangents.resize(present ? 3 * size_t{n} : 0);
+  for (auto& v : tangents)
+    if (!r.vec(v.direction) || !r.f32(v.sign)) return bad();
   if (s.triangle_count() != n) return bad();
-  s.restore_corners(std::move(normals), std::move(uvs));
+  s.restore_corners(std::move(normals), std::move(uvs), std::move(tangents));
   uint32_t points = 0;
   if (!r.u32(points) || !r.room(points, bytes::kPointLightBytes)) return bad();
   for (uint32_t i = 0; i < points; ++i) {

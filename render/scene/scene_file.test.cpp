@@ -57,8 +57,8 @@ TEST(SceneFile, RefusesShortInconsistentAndHostileBytes) {
   const std::string bytes = scene_to_bytes(*s);
   for (size_t cut : {size_t{0}, size_t{5}, size_t{9}, bytes.size() / 2, bytes.size() - 1})
     EXPECT_FALSE(scene_from_bytes(std::string_view(bytes).substr(0, cut), "x").ok()) << cut;
-  EXPECT_EQ(scene_from_bytes("LFSCENE0", "x").error().message, "x: not a lightfarm scene (no LFSCENE10)");
-  std::string hostile = "LFSCENE10";
+  EXPECT_EQ(scene_from_bytes("LFSCENE0", "x").error().message, "x: not a lightfarm scene (no LFSCENE11)");
+  std::string hostile = "LFSCENE11";
   hostile += std::string("\xff\xff\xff\x7f", 4);  // two billion textures in a few bytes
   EXPECT_EQ(scene_from_bytes(hostile, "x").error().message, "x: the scene's bytes are truncated or inconsistent");
   EXPECT_FALSE(scene_from_bytes(bytes + "extra", "x").ok());

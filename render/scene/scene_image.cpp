@@ -19,12 +19,14 @@ namespace {
 
 constexpr char kMagic[8] = {'L', 'F', 'I', 'M', 'A', 'G', 'E', '2'};
 constexpr uint32_t kByteOrderMark = 0x01020304;
-constexpr uint32_t kVersion = 10;  // 3: kr and tf; 4: metallic and roughness; 5: the environment; 6: their maps;
-                                   // 7: normal maps; 8: emission maps; 9: spot lights; 10: transmission
+constexpr uint32_t kVersion = 11;  // 3: kr and tf; 4: metallic and roughness; 5: the environment; 6: their maps;
+                                   // 7: normal maps; 8: emission maps; 9: spot lights; 10: transmission;
+                                   // 11: corner tangents
 constexpr size_t kAlign = 64;
 constexpr size_t kVertexSlack = 16;
 
-enum Array { kVertices, kTriangles, kMaterialIds, kNormals, kAreas, kLightPdf, kCornerNormals, kCornerUvs, kTexels, kSmall, kArrays };
+enum Array { kVertices, kTriangles, kMaterialIds, kNormals, kAreas, kLightPdf, kCornerNormals, kCornerUvs, kCornerTangents,
+             kTexels, kSmall, kArrays };
 
 struct Header {
   char magic[8];
@@ -39,6 +41,7 @@ struct Header {
   uint32_t textures;
   uint32_t corner_normals;  // 1 when every triangle has 3 vertex normals, else 0
   uint32_t corner_uvs;      // the same for texture coordinates
+  uint32_t corner_tangents;  // and for tangents
   uint64_t texel_bytes;
   float lo[3], hi[3];
   float epsilon;
@@ -95,6 +98,7 @@ std::string SceneImage::encode(const Scene& scene, const std::string& hash) {
   h.textures = static_cast<uint32_t>(scene.textures().size());
   h.corner_normals = scene.has_shading_normals() ? 1 : 0;
   h.corner_uvs = scene.has_uvs() ? 1 : 0;
+  h.corner_tangents = scene.has_tangents() ? 1 : 0;
   const Bounds& b = scene.bounds();
   const float lo[3] = {b.lo.x, b.lo.y, b.lo.z}, hi[3] = {b.hi.x, b.hi.y, b.hi.z};
   std::memcpy(h.lo, lo, sizeof lo);
@@ -118,6 +122,8 @@ std::string SceneImage::encode(const Scene& scene, const std::string& hash) {
   append_array(out, scene.corner_normal_view_);
   h.offset[kCornerUvs] = out.size();
   append_array(out, scene.corner_uv_view_);
+  h.offset[kCornerTangents] = out.size();
+  append_array(out, scene.corner_tangent_view_);
   h.offset[kTexels] = out.size();
   std::vector<uint64_t> texel_offsets;
   for (const Texture& t : scene.textures()) {
@@ -176,9 +182,10 @@ Result<Scene> SceneImage::map(const std::string& path, const std::string& hash, 
                                      h.triangles * sizeof(float),
                                      h.corner_normals * 3 * h.triangles * sizeof(Vec3),
                                      h.corner_uvs * 3 * h.triangles * sizeof(Vec2),
+                                     h.corner_tangents * 3 * h.triangles * sizeof(CornerTangent),
                                      h.texel_bytes,
                                      h.small_size};
-  if (h.triangles == 0 || h.triangles > size || h.vertices > size || h.corner_normals > 1 || h.corner_uvs > 1 ||
+  if (h.triangles == 0 || h.triangles > size || h.vertices > size || h.corner_normals > 1 || h.corner_uvs > 1 || h.corner_tangents > 1 ||
       h.texel_bytes > size)
     return bad("impossible counts");
   uint64_t end = kHeaderSize;
@@ -197,6 +204,8 @@ Result<Scene> SceneImage::map(const std::string& path, const std::string& hash, 
   s.light_pdf_view_ = {reinterpret_cast<const float*>(base + h.offset[kLightPdf]), h.triangles};
   s.corner_normal_view_ = {reinterpret_cast<const Vec3*>(base + h.offset[kCornerNormals]), h.corner_normals * 3 * h.triangles};
   s.corner_uv_view_ = {reinterpret_cast<const Vec2*>(base + h.offset[kCornerUvs]), h.corner_uvs * 3 * h.triangles};
+  s.corner_tangent_view_ = {reinterpret_cast<const CornerTangent*>(base + h.offset[kCornerTangents]),
+                            h.corner_tangents * 3 * h.triangles};
 
   bytes::Reader r(std::string_view(base + h.offset[kSmall], h.small_size));
   if (!r.room(h.textures, 24)) return bad("texture count");

@@ -170,9 +170,9 @@ TEST_F(ImageDir, DamagedImagesAreRefusedAndRemade) {
   // A vertex index far outside the vertex array: the first triangle's first corner.
   std::string bad_index = good;
   uint64_t triangles_at = 0;
-  // magic, byte order, version, hash, 2 counts of 8 bytes, 6 of 4, the texel bytes, bounds and epsilon, 4 bytes
-  // of padding, then the offsets: the second is the triangles'.
-  std::memcpy(&triangles_at, good.data() + 8 + 4 + 4 + 16 + 8 + 8 + 4 * 6 + 8 + 4 * 7 + 4 + 8, 8);
+  // magic, byte order, version, hash, 2 counts of 8 bytes, 7 of 4 and 4 bytes of padding, the texel bytes, bounds
+  // and epsilon, 4 bytes of padding, then the offsets: the second is the triangles'.
+  std::memcpy(&triangles_at, good.data() + 8 + 4 + 4 + 16 + 8 + 8 + 4 * 7 + 4 + 8 + 4 * 7 + 4 + 8, 8);
   ASSERT_LT(triangles_at, good.size());
   const uint32_t huge = 0x7fffffff;
   std::memcpy(bad_index.data() + triangles_at, &huge, 4);

@@ -169,24 +169,40 @@ static float texture_lod(const Scene& s, uint32_t t, const Texture& tex, float f
   return texels > 1 && std::isfinite(texels) ? std::log2(texels) : 0.0f;
 }
 
+bool Scene::file_tangent_frame(uint32_t t, Vec3 b, Vec3 n, Vec3& tangent, Vec3& bitangent) const {
+  if (corner_tangent_view_.empty()) return false;
+  const CornerTangent* c = &corner_tangent_view_[3 * static_cast<size_t>(t)];
+  // Interpolated as vertex normals are, then made orthonormal around the shading normal (MikkTSpace's frames are
+  // per vertex, shared by the faces around it: no seams where the faces' own uv frames would turn).
+  const Vec3 d = c[0].direction * b.x + c[1].direction * b.y + c[2].direction * b.z;
+  const Vec3 along = d - n * dot(n, d);
+  if (!(dot(along, along) > 1e-12f) || !std::isfinite(dot(along, along))) return false;
+  tangent = normalize(along);
+  bitangent = cross(n, tangent) * (c[0].sign < 0 ? -1.0f : 1.0f);
+  return true;
+}
+
 Vec3 Scene::normal_mapped(uint32_t t, Vec3 b, Vec3 n) const {
   const Material& m = materials_[material_view_[t]];
   if (m.normal_map < 0 || corner_uv_view_.empty()) return n;
   const Vec2 at = uv(t, b);
   if (!std::isfinite(at.u) || !std::isfinite(at.v)) return n;
-  // The tangent frame: dP/du and dP/dv over the triangle (v up, as texture coordinates are kept), made
-  // orthonormal around n; the bitangent keeps the side dP/dv is on (a mirrored UV layout flips it).
-  const Vec3 e1 = vertex(t, 1) - vertex(t, 0), e2 = vertex(t, 2) - vertex(t, 0);
-  const Vec2 c0 = corner_uv(t, 0), c1 = corner_uv(t, 1), c2 = corner_uv(t, 2);
-  const float du1 = c1.u - c0.u, dv1 = c1.v - c0.v, du2 = c2.u - c0.u, dv2 = c2.v - c0.v;
-  const float det = du1 * dv2 - du2 * dv1;
-  if (!(std::abs(det) > 0)) return n;  // degenerate texture coordinates: no frame
-  const Vec3 dpdu = (e1 * dv2 - e2 * dv1) / det, dpdv = (e2 * du1 - e1 * du2) / det;
-  const Vec3 along = dpdu - n * dot(n, dpdu);
-  if (!(dot(along, along) > 0)) return n;
-  const Vec3 tangent = normalize(along);
-  Vec3 bitangent = cross(n, tangent);
-  if (dot(bitangent, dpdv) < 0) bitangent = -bitangent;
+  Vec3 tangent, bitangent;
+  if (!file_tangent_frame(t, b, n, tangent, bitangent)) {
+    // The tangent frame: dP/du and dP/dv over the triangle (v up, as texture coordinates are kept), made
+    // orthonormal around n; the bitangent keeps the side dP/dv is on (a mirrored UV layout flips it).
+    const Vec3 e1 = vertex(t, 1) - vertex(t, 0), e2 = vertex(t, 2) - vertex(t, 0);
+    const Vec2 c0 = corner_uv(t, 0), c1 = corner_uv(t, 1), c2 = corner_uv(t, 2);
+    const float du1 = c1.u - c0.u, dv1 = c1.v - c0.v, du2 = c2.u - c0.u, dv2 = c2.v - c0.v;
+    const float det = du1 * dv2 - du2 * dv1;
+    if (!(std::abs(det) > 0)) return n;  // degenerate texture coordinates: no frame
+    const Vec3 dpdu = (e1 * dv2 - e2 * dv1) / det, dpdv = (e2 * du1 - e1 * du2) / det;
+    const Vec3 along = dpdu - n * dot(n, dpdu);
+    if (!(dot(along, along) > 0)) return n;
+    tangent = normalize(along);
+    bitangent = cross(n, tangent);
+    if (dot(bitangent, dpdv) < 0) bitangent = -bitangent;
+  }
   const Texture& tex = textures_[static_cast<size_t>(m.normal_map)];
   const float x = (2 * tex.sample(at, 0) - 1) * m.normal_scale, y = (2 * tex.sample(at, 1) - 1) * m.normal_scale;
   const float z = 2 * tex.sample(at, 2) - 1;
