@@ -140,6 +140,7 @@ Result<std::string> describe_scene(const std::string& obj_path) {
     std::string line = "    " + mat.name + "  " + kind_name(mat.type) + "  kd " + vec(mat.kd);
     if (mat.type == Material::Type::metal_rough)
       line += format("  metallic %.3g  roughness %.3g", mat.metallic, mat.roughness);
+      if (mat.transmission > 0) line += format("  transmission %.3g  ior %.3g", mat.transmission, mat.ior);
     else if (mat.type != Material::Type::diffuse)
       line += "  ks " + vec(mat.ks);
     line += "  faces " + std::to_string(it == used.end() ? 0 : it->second.faces);

@@ -95,7 +95,8 @@ int main(int argc, char** argv) {
   seed("scene_file", "cornell.lfscene", scene_to_bytes(*cornell));
   seed("scene_file", "cornell.image", SceneImage::encode(*cornell, "00000000fuzz0000"));
   // Every field the shipped forms carry: a texture of each kind (colour, one channel, linear data), a microfacet
-  // material with all its maps, texture coordinates, an environment map with a sun, a spot light.
+  // material with all its maps and transmission, texture coordinates and tangents, an environment map with a sun, a
+  // spot light.
   Scene rich;
   auto texture = [&rich](uint32_t channels, bool linear) {
     Texture t;
@@ -115,9 +116,12 @@ int main(int argc, char** argv) {
   m.roughness_map = texture(1, false);
   m.normal_map = texture(3, true);
   m.emission_map = texture(3, false);
+  m.transmission = 0.5f;
+  m.ior = 1.33f;
   rich.add_material(m);
   const Vec2 uv[3] = {{0, 0}, {1, 0}, {0, 1}};
-  rich.add_triangle({0, 0, 0}, {1, 0, 0}, {0, 1, 0}, 0, {nullptr, uv});
+  const CornerTangent tangents[3] = {{{1, 0, 0}, 1}, {{1, 0, 0}, 1}, {{1, 0, 0}, -1}};
+  rich.add_triangle({0, 0, 0}, {1, 0, 0}, {0, 1, 0}, 0, {nullptr, uv, tangents});
   Environment sky(2, 1, {{1, 1, 1}, {2, 2, 2}}, 1.5f, 0.5f);
   sky.set_sun({{0, 1, 0}, 0.01f, {3, 3, 3}});
   rich.set_environment(std::move(sky));
