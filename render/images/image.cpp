@@ -81,8 +81,10 @@ static float to_srgb(float linear) { return srgb_encode(std::clamp(linear, 0.0f,
 float display_srgb(float linear, const Display& display) { return to_srgb(ToneCurve(display)(linear)); }
 
 namespace {
-// Opens the first of a module's usual places that loads: $`env`, beside the executable (an install, or build/ for
-// the lightfarm binary), ../lib from it, where this build put it. `what` lists every failure otherwise.
+// Opens the first of a module's usual places that loads: $`env`, beside the executable (build/ for the lightfarm
+// binary), where an install puts it (../LIBDIR/lightfarm from bin/: the Debian package's
+// /usr/lib/lightfarm), ../lib from it, where this build put it. `what` lists every failure
+// otherwise.
 void* open_module(const char* env, const char* name, const char* build_path, std::string& what) {
   std::vector<std::string> candidates;
   if (const char* set = std::getenv(env)) candidates.push_back(set);
@@ -90,6 +92,7 @@ void* open_module(const char* env, const char* name, const char* build_path, std
   auto exe = fs::read_symlink("/proc/self/exe", ec);
   if (!ec) {
     candidates.push_back((exe.parent_path() / name).string());
+    candidates.push_back((exe.parent_path() / ".." / LIGHTFARM_MODULE_DIR / name).string());
     candidates.push_back((exe.parent_path() / ".." / "lib" / name).string());
   }
   candidates.push_back(build_path);
