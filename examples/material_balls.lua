@@ -5,7 +5,8 @@
 -- panel faces away from the balls.
 --
 --   lightfarm run examples/material_balls.lua                          -> material_balls.png
---   lightfarm run examples/material_balls.lua --set lighting=pathtrace (the same light by path tracing alone)
+--   lightfarm run examples/material_balls.lua --set lighting=pathtrace (the same light by path tracing alone:
+--                                                                       faster here, bench/peer/README.md)
 --   lightfarm run examples/material_balls.lua --set hdri=sunset        (forest, interior, sunset, courtyard)
 --   lightfarm run examples/material_balls.lua --set glass=1            (the blue balls as rough glass)
 --

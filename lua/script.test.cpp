@@ -455,7 +455,8 @@ TEST_F(ScriptTest, ScriptsHaveAnInstructionAndAMemoryBudget) {
 // The network `lightfarm scene` suggests for a scene's lobes counts every light path on them once.
 TEST_F(ScriptTest, TheSuggestedNetworksAreComplete) {
   const Lobes sets[] = {Lobes::of({Lobe::diffuse}), Lobes::of({Lobe::diffuse, Lobe::glossy}),
-                        Lobes::of({Lobe::diffuse, Lobe::specular}), Lobes::all()};
+                        Lobes::of({Lobe::diffuse, Lobe::specular}), Lobes::all(), Lobes::of({Lobe::glossy}),
+                        Lobes::of({Lobe::glossy, Lobe::specular})};
   for (const Lobes& lobes : sets) {
     auto r = evaluate_script(write("farm.lua", "scene { builtin = \"cornell\" }\n" + complete_network_for(lobes)));
     ASSERT_TRUE(r.ok()) << r.error().message;

@@ -11,7 +11,8 @@ namespace lf {
 
 Result<std::string> describe_scene(const std::string& obj_path);
 
-// Lua for a network that counts every light path on these lobes once (docs/lua-api.md, "Light paths").
+// Lua for a network that counts every light path on these lobes once (docs/lua-api.md, "Light paths"): direct light,
+// caches and the ops the lobes need, or the path tracer alone where no lobe is diffuse.
 std::string complete_network_for(const Lobes& lobes);
 
 }  // namespace lf

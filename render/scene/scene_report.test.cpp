@@ -68,6 +68,23 @@ TEST(SceneReport, DescribesARoomAndFramesIt) {
 // A material-test setup: a small knob in front of a large backdrop, lit by a lamp on the same side (-z). The camera
 // looks from that side, where the backdrop's lit face and the knob are, not at the backdrop's unlit back (+z, the
 // view every scene got before: an image of zeros).
+// Glossy surfaces only (glTF's metal-roughness model everywhere, a black lamp): no cache would hold anything, so the
+// suggestion is the path tracer, which the light-path check finds complete.
+TEST(SceneReport, AllGlossyScenesGetThePathTracer) {
+  const auto dir = std::filesystem::temp_directory_path() / ("lightfarm-report-glossy-" + std::to_string(::getpid()));
+  std::filesystem::create_directories(dir);
+  const std::string obj = (dir / "balls.obj").string();
+  std::ofstream(obj) << "mtllib balls.mtl\nv -1 0 -1\nv 1 0 -1\nv 1 0 1\nv -1 0 1\nv -0.3 1.99 -0.3\nv 0.3 1.99 -0.3\n"
+                        "v 0.3 1.99 0.3\nv -0.3 1.99 0.3\nusemtl gold\nf 1 2 3 4\nusemtl lamp\nf 8 7 6 5\n";
+  std::ofstream(dir / "balls.mtl") << "newmtl gold\nKd 0.9 0.7 0.3\nPr 0.4\nPm 1\nnewmtl lamp\nKd 0 0 0\nKe 5 5 5\n";
+  auto text = describe_scene(obj);
+  std::filesystem::remove_all(dir);
+  ASSERT_TRUE(text.ok()) << text.error().message;
+  EXPECT_NE(text->find("  lobes      G (glossy) on 1 material\n"), std::string::npos) << *text;
+  EXPECT_NE(text->find("renderers { lighting = lightop \"pathtrace\" {} }"), std::string::npos) << *text;
+  EXPECT_EQ(text->find("irradiance"), std::string::npos) << *text;
+}
+
 TEST(SceneReport, TheSuggestedCameraLooksAtTheLitSide) {
   const auto dir = std::filesystem::temp_directory_path() / ("lightfarm-report-lit-" + std::to_string(::getpid()));
   std::filesystem::create_directories(dir);
