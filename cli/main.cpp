@@ -5,6 +5,7 @@
 
 #include <csignal>
 
+#include <cmath>
 #include <cstdio>
 #include <fstream>
 #include <cstdlib>
@@ -32,6 +33,7 @@ constexpr const char* kUsage = R"(lightfarm — a distributed lighting-simulatio
 
 usage:
   lightfarm run SCRIPT [--output FILE] [--set NAME=VALUE]... [--stats-json FILE] [--quiet] [--monitor [ADDR:]PORT]
+                      [--checkpoint-every SECONDS] [--restart]
       Turn a farm script into processes and an image.
   lightfarm graph SCRIPT [--set NAME=VALUE]...
       Print the script's actor graph as Graphviz DOT; launches nothing.
@@ -56,6 +58,9 @@ options:
   --monitor [ADDR:]PORT  serve a live monitor page there (default address 127.0.0.1; port 0 picks one; the URL
                       is printed, with a token when not on loopback); docs/monitor.md
   --monitor-hold SECONDS  keep the monitor up that long after the frame
+  --checkpoint-every SECONDS  write the frame's finished tiles to OUTPUT.lfresume at most this often (default 30;
+                      0: never); a run of the same frame after a crash renders only the rest, to the same image
+  --restart           render the frame from its start, ignoring OUTPUT.lfresume
   --quiet             print no tables, only errors
 
 exit status: 0 done; 1 the farm failed; 2 bad command line or script; 128+N stopped by signal N.
@@ -122,8 +127,8 @@ bool parse(int argc, char** argv, int first, const std::vector<std::string>& kno
 int cmd_run(int argc, char** argv, bool graph_only) {
   Args args;
   std::string error;
-  std::vector<std::string> known = graph_only ? std::vector<std::string>{} : std::vector<std::string>{"output", "stats-json", "monitor", "monitor-hold"};
-  std::vector<std::string> flags = graph_only ? std::vector<std::string>{} : std::vector<std::string>{"quiet"};
+  std::vector<std::string> known = graph_only ? std::vector<std::string>{} : std::vector<std::string>{"output", "stats-json", "monitor", "monitor-hold", "checkpoint-every"};
+  std::vector<std::string> flags = graph_only ? std::vector<std::string>{} : std::vector<std::string>{"quiet", "restart"};
   if (!parse(argc, argv, 2, known, flags, args, error)) return usage_error(error);
   if (args.positional.size() != 1) return usage_error(std::string(graph_only ? "graph" : "run") + " needs one SCRIPT");
   lf::ScriptOptions so;
@@ -148,6 +153,13 @@ int cmd_run(int argc, char** argv, bool graph_only) {
     ro.monitor_hold = std::strtod(args.options["monitor-hold"].c_str(), &end);
     if (*end != '\0' || !(ro.monitor_hold >= 0)) return usage_error("--monitor-hold needs seconds (0 or more)");
   }
+  if (args.options.count("checkpoint-every")) {
+    char* end = nullptr;
+    ro.checkpoint_every = std::strtod(args.options["checkpoint-every"].c_str(), &end);
+    if (*end != '\0' || !(ro.checkpoint_every >= 0) || !std::isfinite(ro.checkpoint_every))
+      return usage_error("--checkpoint-every needs seconds (0 or more; 0: no checkpoint)");
+  }
+  ro.restart = args.options.count("restart") > 0;
   return lf::run_farm(*spec, ro);
 }
 

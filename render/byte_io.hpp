@@ -57,7 +57,8 @@ class Reader {
 
 // A material as both binary forms store it: u32 name length, name, f32 kd[3] ke[3] ks[3], f32 ns, f32 ior, u8 type,
 // i32 kd_map, i32 alpha_map (-1: none; the reader of the whole form checks them against its texture count), f32 kr[3]
-// tf[3], f32 metallic, f32 roughness, i32 metallic_map, i32 roughness_map, i32 normal_map, f32 normal_scale, i32 emission_map.
+// tf[3], f32 metallic, f32 roughness, i32 metallic_map, i32 roughness_map, i32 normal_map, f32 normal_scale, i32 emission_map,
+// f32 transmission.
 inline void put_material(std::string& out, const Material& m) {
   put(out, static_cast<uint32_t>(m.name.size()));
   out += m.name;

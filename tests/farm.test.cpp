@@ -311,8 +311,9 @@ TEST_F(FarmTest, ActorsGetHugePagesAndKeepTheUsersTunables) {
     SCOPED_TRACE(given);
     std::vector<std::string> env;
     if (!given.empty()) env.push_back("GLIBC_TUNABLES=" + given);
+    // Each case interrupts the same frame: without --checkpoint-every 0 the next would resume past 20 %.
     Farm farm({"run", kCornellScript, "--output", path("thp.exr"), "--set", "spp=4096", "--set", "width=64", "--set",
-               "height=64"},
+               "height=64", "--checkpoint-every", "0"},
               env);
     // Read the environment once the frame is under way: a process shows its whole GLIBC_TUNABLES until its
     // loader has read them (an actor caught just after exec showed both tunables of the third case).
@@ -460,7 +461,7 @@ std::vector<std::string> long_render(const std::string& output) {
   return {"run", kCornellScript, "--output", output, "--set", "spp=64", "--set", "light_samples=4"};
 }
 
-TEST_F(FarmTest, SigintAndSigtermStopEverythingAndWriteNothing) {
+TEST_F(FarmTest, SigintAndSigtermStopEverythingAndWriteNoImage) {
   for (int sig : {SIGINT, SIGTERM}) {
     Farm farm(long_render(path("x.png")));
     ASSERT_TRUE(Farm::eventually([&] { return farm.err_so_far().find("render 10%") != std::string::npos; }, 60))
@@ -469,7 +470,9 @@ TEST_F(FarmTest, SigintAndSigtermStopEverythingAndWriteNothing) {
     auto r = farm.wait(30);
     EXPECT_EQ(r.status, 128 + sig) << r.err;
     EXPECT_NE(r.err.find("interrupted by signal " + std::to_string(sig)), std::string::npos) << r.err;
-    EXPECT_EQ(files_in_dir(), 0u);
+    // No image; the tiles done so far wait beside where it goes, for the next run of the frame.
+    EXPECT_EQ(files_in_dir(), 1u);
+    EXPECT_TRUE(fs::exists(path("x.png.lfresume")));
     expect_no_leftovers(r);
   }
 }
@@ -495,8 +498,58 @@ TEST_F(FarmTest, LightOpKilledMidFrameStopsTheFarmNamingIt) {
   EXPECT_NE(r.err.find("actor 'direct' (pid " + std::to_string(pids[0]) + ") was killed by signal 9 (Killed) during render"),
             std::string::npos)
       << r.err;
-  EXPECT_EQ(files_in_dir(), 0u);
+  EXPECT_EQ(files_in_dir(), 1u) << "no image; only the frame's checkpoint";
+  EXPECT_TRUE(fs::exists(path("x.png.lfresume")));
   expect_no_leftovers(r);
+}
+
+// A frame whose director was SIGKILLed mid-render resumes from the checkpoint beside its output (the tiles done by
+// then, written every 0.1 s here): the next run renders only the rest, says how many tiles were done, writes the
+// uninterrupted frame's image bit for bit and removes the checkpoint. Another frame (a different spp) does not
+// take it, nor does a run with --restart.
+TEST_F(FarmTest, AKilledFrameResumesToTheSameImage) {
+  auto run_args = [&](const std::string& out, const std::string& spp, std::vector<std::string> extra) {
+    std::vector<std::string> a{"run", kCornellScript, "--output", path(out), "--set", "width=96", "--set", "height=96",
+                               "--set", "spp=" + spp, "--set", "light_samples=4", "--checkpoint-every", "0.1"};
+    a.insert(a.end(), extra.begin(), extra.end());
+    return a;
+  };
+  const auto reference = run_lightfarm(run_args("ref.png", "256", {"--checkpoint-every", "0"}));
+  ASSERT_EQ(reference.status, 0) << reference.err;
+  Farm farm(run_args("x.png", "256", {}));
+  ASSERT_TRUE(Farm::eventually([&] { return fs::exists(path("x.png.lfresume")); }, 60)) << farm.err_so_far();
+  ::kill(farm.pid(), SIGKILL);
+  const auto killed = farm.wait(10);
+  EXPECT_EQ(killed.status, 128 + SIGKILL);
+  expect_no_leftovers(killed);
+  ASSERT_FALSE(fs::exists(path("x.png"))) << "the frame ended before the kill";
+  fs::copy_file(path("x.png.lfresume"), path("kept.lfresume"));
+
+  const auto other = run_lightfarm(run_args("x.png", "128", {}));
+  EXPECT_EQ(other.status, 0) << other.err;
+  EXPECT_NE(other.err.find("x.png.lfresume holds another frame's tiles"), std::string::npos) << other.err;
+  EXPECT_FALSE(fs::exists(path("x.png.lfresume")));
+  fs::copy_file(path("kept.lfresume"), path("x.png.lfresume"));
+  const auto restarted = run_lightfarm(run_args("x.png", "256", {"--restart"}));
+  EXPECT_EQ(restarted.status, 0) << restarted.err;
+  EXPECT_EQ(restarted.err.find("resumed"), std::string::npos) << restarted.err;
+  EXPECT_FALSE(fs::exists(path("x.png.lfresume")));
+
+  fs::copy_file(path("kept.lfresume"), path("x.png.lfresume"));
+  const auto resumed = run_lightfarm(run_args("x.png", "256", {}));
+  ASSERT_EQ(resumed.status, 0) << resumed.err;
+  const auto at = resumed.err.find("resumed from " + path("x.png.lfresume") + ": ");
+  ASSERT_NE(at, std::string::npos) << resumed.err;
+  int done = 0, total = 0;
+  ASSERT_EQ(std::sscanf(resumed.err.c_str() + at + 13 + path("x.png.lfresume").size(), ": %d of %d tiles", &done, &total), 2)
+      << resumed.err;
+  EXPECT_GT(done, 0);
+  EXPECT_LT(done, total);
+  auto a = read_image(path("ref.png")), b = read_image(path("x.png"));
+  ASSERT_TRUE(a.ok() && b.ok());
+  EXPECT_TRUE(a->pixels == b->pixels) << "the resumed frame differs from the uninterrupted one";
+  EXPECT_FALSE(fs::exists(path("x.png.lfresume")));
+  expect_no_leftovers(resumed);
 }
 
 TEST_F(FarmTest, GraphPrintsDotAndLaunchesNothing) {

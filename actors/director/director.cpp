@@ -61,6 +61,7 @@ class Director {
       run_stages();
     } catch (const FarmFailure& f) {
       if (tiles_.drawing_progress()) std::fprintf(stderr, "\n");
+      if (!timeline_.image_written) tiles_.save_checkpoint();  // what is done stays done for the next run
       // With the image whole and in place, the farm's work is done: only the actors' goodbyes were cut short.
       if (timeline_.image_written) log_warn(f.message + " after the image was written");
       else log_error(f.message), status = f.status;
@@ -125,6 +126,7 @@ class Director {
     warn_about_escaping_light(spec_, scene);
     deployment_ = deployer.finish(scene);
     supervisor_.set_host_agents(deployment_.agent_sockets);
+    tiles_.resume(spec_, deployment_.scene_hash, options_.checkpoint_every, options_.restart);
     if (ring_.active()) check(ring_.prepare(scene));
     auto endpoint = control_.open(deployment_);
     if (!endpoint) throw FarmFailure{endpoint.error().message};
@@ -203,6 +205,7 @@ class Director {
     const Display display{static_cast<float>(spec_.image.exposure), spec_.image.tonemap};
     if (auto st = write_image(tiles_.film(), spec_.image.output, display); !st) throw FarmFailure{st.error().message};
     timeline_.image_written = true;
+    tiles_.image_written();
     if (all_black(tiles_.film()))
       log_warn(spec_.image.output + ": every pixel is 0, nothing the camera sees is lit: it may look at the back of the "
                "scene's surfaces from outside or past them (`lightfarm scene FILE.obj` suggests a camera that frames "

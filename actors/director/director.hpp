@@ -18,6 +18,10 @@ struct RunOptions {
   bool quiet = false;                 // no tables (benchmarks)
   std::string monitor;                // "[ADDR:]PORT": serve the live monitor there (actors/monitor/monitor.hpp)
   double monitor_hold = 0;            // seconds the monitor stays up after the frame
+  // The frame's finished tiles go to OUTPUT.lfresume at most this often (actors/director/film_checkpoint.hpp); a
+  // later run of the same frame resumes from them. 0: no checkpoint.
+  double checkpoint_every = 30;
+  bool restart = false;               // ignore (and replace) OUTPUT.lfresume
 };
 
 // Returns the process exit status: 0 on success, 1 if the farm failed, 2 for a fault of the script or command line

@@ -40,15 +40,25 @@ RenderMaster::Outcome RenderMaster::complete(const std::string& worker, uint64_t
   if (done_[id]) return Outcome::already_done;
   auto it = holder_.find(id);
   if (it == holder_.end() || it->second != worker) return Outcome::not_holder;
+  if (rgb.size() != static_cast<size_t>(3 * tiles_[id].pixel_count())) return Outcome::wrong_size;
+  place(id, rgb);
+  holder_.erase(it);
+  return Outcome::accepted;
+}
+
+bool RenderMaster::restore(uint64_t id, std::span<const float> rgb) {
+  if (id >= tiles_.size() || done_[id] || rgb.size() != static_cast<size_t>(3 * tiles_[id].pixel_count())) return false;
+  place(id, rgb);
+  return true;
+}
+
+void RenderMaster::place(uint64_t id, std::span<const float> rgb) {
   const TileRect& r = tiles_[id];
-  if (rgb.size() != static_cast<size_t>(3 * r.pixel_count())) return Outcome::wrong_size;
   size_t i = 0;
   for (int y = r.y0; y < r.y1; ++y)
     for (int x = r.x0; x < r.x1; ++x, i += 3) film_.at(x, y) = {rgb[i], rgb[i + 1], rgb[i + 2]};
   done_[id] = true;
-  holder_.erase(it);
   ++done_count_;
-  return Outcome::accepted;
 }
 
 size_t RenderMaster::release(const std::string& worker) {

@@ -29,6 +29,11 @@ class RenderMaster {
   Outcome complete(const std::string& worker, uint64_t id, std::span<const float> rgb);
   // Puts every tile `worker` holds back in line (its process is gone). Returns how many.
   size_t release(const std::string& worker);
+  // A tile finished by an earlier run of the same frame (FilmCheckpoint): done, with its pixels, held by nobody.
+  // False for an unknown id, a tile already done or a wrong pixel count.
+  bool restore(uint64_t id, std::span<const float> rgb);
+  bool is_done(uint64_t id) const { return id < done_.size() && done_[static_cast<size_t>(id)]; }
+  const TileRect& rect(uint64_t id) const { return tiles_[static_cast<size_t>(id)]; }
 
   size_t total() const { return tiles_.size(); }
   size_t done() const { return done_count_; }
@@ -44,6 +49,7 @@ class RenderMaster {
   static const char* describe(Outcome o);
 
  private:
+  void place(uint64_t id, std::span<const float> rgb);  // its pixels into the film; done
   std::vector<TileRect> tiles_;
   std::vector<bool> done_;
   std::map<uint64_t, std::string> holder_;

@@ -51,6 +51,18 @@ std::string TileService::holders() const {
 
 void TileService::finish_progress() { progress_.update(master_.done(), render_seconds(), true); }
 
+void TileService::resume(const FarmSpec& spec, const std::string& scene_hash, double interval, bool restart) {
+  if (interval <= 0) return;
+  checkpoint_.emplace(spec.image.output + ".lfresume", frame_key(spec, scene_hash), spec.image.width,
+                      spec.image.height, spec.image.tile, interval);
+  if (restart) checkpoint_->remove();
+  std::string note;
+  resumed_ = checkpoint_->restore(master_, note);
+  if (note.empty()) return;
+  if (resumed_ > 0) log_info(note, LogKind::recovery);
+  else log_warn(note);
+}
+
 Status TileService::on_request(const std::string& actor, wire::Op op, uint64_t id, Value body, Outbox& out) {
   if (op == wire::Op::tile) {
     waiting_.emplace_back(actor, id);
@@ -69,8 +81,9 @@ Status TileService::on_request(const std::string& actor, wire::Op op, uint64_t i
     return Ok{};
   }
   out.reply(actor, id, Value::Map{});
+  if (checkpoint_) checkpoint_->save(master_);
   last_progress_ = Clock::now();
-  if (master_.done() == 1) first_tile_seconds_ = render_seconds();
+  if (master_.done() == resumed_ + 1) first_tile_seconds_ = render_seconds();
   progress_.update(master_.done(), render_seconds());
   if (master_.finished()) serve_waiting(out);
   return Ok{};

@@ -6,9 +6,11 @@
 // A tile request waits while no tile is free but some are out with others (a lost renderer's tiles come back),
 // and before the render phase. A lost renderer's tiles go back in line.
 #include <memory>
+#include <optional>
 #include <utility>
 #include <vector>
 
+#include "actors/director/film_checkpoint.hpp"
 #include "actors/director/progress.hpp"
 #include "actors/director/render_master.hpp"
 #include "actors/director/service.hpp"
@@ -25,6 +27,18 @@ class TileService final : public Service {
   Status on_phase(wire::Phase phase, Outbox& out) override;
   Status on_lost(const std::string& actor, const std::string& why, Outbox& out) override;
 
+  // The frame's checkpoint beside its output (FilmCheckpoint; `interval` <= 0: none): the tiles an earlier run of
+  // the same frame finished are done now, said in the log, and it is written as tiles land. `restart`: it is
+  // dropped first.
+  void resume(const FarmSpec& spec, const std::string& scene_hash, double interval, bool restart);
+  // The farm stops early: what is done goes to the checkpoint now. The image is written: it has served.
+  void save_checkpoint() {
+    if (checkpoint_) checkpoint_->save(master_, true);
+  }
+  void image_written() {
+    if (checkpoint_) checkpoint_->remove();
+  }
+  size_t tiles_resumed() const { return resumed_; }
   bool finished() const { return master_.finished(); }
   const Image& film() const { return master_.film(); }
   size_t tiles_done() const { return master_.done(); }
@@ -53,6 +67,8 @@ class TileService final : public Service {
   double first_tile_seconds_ = 0;
   std::chrono::steady_clock::time_point last_progress_;
   std::vector<std::pair<std::string, uint64_t>> waiting_;  // tile requests not yet answered, oldest first
+  std::optional<FilmCheckpoint> checkpoint_;
+  size_t resumed_ = 0;
 };
 
 }  // namespace lf
