@@ -8,6 +8,7 @@
 
 #include "core/log.hpp"
 #include "render/byte_io.hpp"
+#include "render/images/image.hpp"  // partial_path
 #include "render/scene/scene_file.hpp"  // content_hash
 #include "transport/message.hpp"        // kProtocolVersion
 
@@ -50,6 +51,7 @@ FilmCheckpoint::FilmCheckpoint(std::string path, std::string key, int width, int
 size_t FilmCheckpoint::restore(RenderMaster& master, std::string& note) const {
   note.clear();
   if (!enabled()) return 0;
+  sweep_stale_partials(path_);  // what a director killed while writing left
   std::error_code ec;
   if (!fs::is_regular_file(path_, ec)) return 0;
   std::ifstream in(path_, std::ios::binary);
@@ -101,7 +103,7 @@ void FilmCheckpoint::save(const RenderMaster& master, bool now_anyway) {
     for (int y = t.y0; y < t.y1; ++y)
       for (int x = t.x0; x < t.x1; ++x) bytes::put_rgb(out, master.film().at(x, y));
   }
-  const std::string temporary = path_ + ".partial-" + std::to_string(::getpid());
+  const std::string temporary = partial_path(path_);
   bool written = false;
   {
     std::ofstream f(temporary, std::ios::binary | std::ios::trunc);

@@ -1,8 +1,10 @@
 // FilmCheckpoint alone: finished tiles round-trip with their pixels bit for bit; a file of another frame (another
-// key or size) or a damaged one restores nothing and says so; writes wait for the interval unless forced.
+// key or size) or a damaged one restores nothing and says so; writes wait for the interval unless forced; a dead
+// writer's temporary is swept.
 #include "actors/director/film_checkpoint.hpp"
 
 #include <gtest/gtest.h>
+#include <sys/wait.h>
 #include <unistd.h>
 
 #include <filesystem>
@@ -61,6 +63,18 @@ TEST(FilmCheckpoint, FinishedTilesComeBackBitForBit) {
   std::ofstream(f.path(), std::ios::binary | std::ios::trunc) << "LFRESUME1\x05";
   EXPECT_EQ(FilmCheckpoint(f.path(), "key", 20, 12, 8, 1).restore(other, note), 0u);
   EXPECT_EQ(note, f.path() + " is damaged or not a lightfarm film; rendering the frame from its start");
+
+  // A temporary whose writer is gone (a director killed while writing) goes; one still being written stays.
+  const pid_t dead = ::fork();
+  if (dead == 0) ::_exit(0);
+  ::waitpid(dead, nullptr, 0);
+  const fs::path stale = f.dir / (".x.png.partial-" + std::to_string(dead) + ".lfresume");
+  const fs::path live = f.dir / (".x.png.partial-" + std::to_string(::getpid()) + ".lfresume");
+  std::ofstream(stale) << "half";
+  std::ofstream(live) << "being written";
+  FilmCheckpoint(f.path(), "key", 20, 12, 8, 1).restore(other, note);
+  EXPECT_FALSE(fs::exists(stale));
+  EXPECT_TRUE(fs::exists(live));
 
   FilmCheckpoint(f.path(), "key", 20, 12, 8, 1).remove();
   EXPECT_FALSE(fs::exists(f.path()));

@@ -182,9 +182,16 @@ Status check_written(const std::string& file, const std::string& ext) {
   return result;
 }
 
-// Removes `.STEM.partial-PID.EXT` files beside `target` whose writer no longer runs (a director SIGKILLed while
-// writing cannot remove its own).
-void sweep_stale_partials(const fs::path& target) {
+}  // namespace
+
+std::string partial_path(const std::string& target) {
+  const fs::path t(target);
+  return (t.parent_path() / ("." + t.stem().string() + ".partial-" + std::to_string(::getpid()) + t.extension().string()))
+      .string();
+}
+
+void sweep_stale_partials(const std::string& target_path) {
+  const fs::path target(target_path);
   const std::string head = "." + target.stem().string() + ".partial-", ext = target.extension().string();
   std::error_code ec;
   const fs::path dir = target.parent_path().empty() ? fs::path(".") : target.parent_path();
@@ -198,8 +205,6 @@ void sweep_stale_partials(const fs::path& target) {
   }
 }
 
-}  // namespace
-
 Status write_image(const Image& image, const std::string& path, const Display& display) {
   if (auto st = check_output_path(path); !st) return st;
   const std::string ext = extension_of(path);
@@ -207,9 +212,8 @@ Status write_image(const Image& image, const std::string& path, const Display& d
   if (light ? !exr_png_module().write : !image_module().write)
     return make_error(light ? exr_png_module().error : image_module().error);
   fs::path target(path);
-  sweep_stale_partials(target);
-  fs::path temp = target.parent_path() /
-                  ("." + target.stem().string() + ".partial-" + std::to_string(::getpid()) + target.extension().string());
+  sweep_stale_partials(path);
+  fs::path temp = partial_path(path);
   const bool linear = is_float_format(ext);
   std::vector<unsigned char> bytes;
   if (!linear) {

@@ -25,6 +25,11 @@ bool all_black(const Image& image);
 
 // An error if the extension is not one we write, or the directory does not exist or is not writable.
 Status check_output_path(const std::string& path);
+// Writing a file whole: the temporary it goes to first (.STEM.partial-PID.EXT beside it, renamed into place), and
+// the removal of such temporaries beside `target` whose writer no longer runs (a process SIGKILLed while writing
+// cannot remove its own).
+std::string partial_path(const std::string& target);
+void sweep_stale_partials(const std::string& target);
 // How an 8-bit output shows linear radiance: scaled by 2^exposure, then mapped to [0, 1] per channel by the tone
 // map ("clamp": min(v, 1); "reinhard": v / (1 + v); "aces": Narkowicz's fit of the ACES filmic curve), then sRGB.
 // Float outputs (EXR) ignore it: they keep the linear values.
