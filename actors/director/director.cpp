@@ -61,7 +61,7 @@ class Director {
       run_stages();
     } catch (const FarmFailure& f) {
       if (tiles_.drawing_progress()) std::fprintf(stderr, "\n");
-      if (!timeline_.image_written) tiles_.save_checkpoint();  // what is done stays done for the next run
+      tiles_.save_checkpoint();  // what is done stays done for the next run
       // With the image whole and in place, the farm's work is done: only the actors' goodbyes were cut short.
       if (timeline_.image_written) log_warn(f.message + " after the image was written");
       else log_error(f.message), status = f.status;
@@ -202,14 +202,8 @@ class Director {
   static constexpr double kStallReportSeconds = 30;
 
   void finish() {
-    const Display display{static_cast<float>(spec_.image.exposure), spec_.image.tonemap};
-    if (auto st = write_image(tiles_.film(), spec_.image.output, display); !st) throw FarmFailure{st.error().message};
+    if (auto st = tiles_.write_frame(); !st) throw FarmFailure{st.error().message};
     timeline_.image_written = true;
-    tiles_.image_written();
-    if (all_black(tiles_.film()))
-      log_warn(spec_.image.output + ": every pixel is 0, nothing the camera sees is lit: it may look at the back of the "
-               "scene's surfaces from outside or past them (`lightfarm scene FILE.obj` suggests a camera that frames "
-               "the scene), or the lights may face away from what it sees");
     supervisor_.broadcast(wire::make_phase("director", Phase::finish));
     // Wait for every actor's STATS and BYE, and for its process to end.
     const auto deadline = Clock::now() + std::chrono::seconds(10);

@@ -6,13 +6,15 @@
 #include <cmath>
 
 #include "core/log.hpp"
+#include "render/images/image.hpp"
 
 namespace lf {
 
 using Clock = std::chrono::steady_clock;
 
 TileService::TileService(const ImageSpec& image, std::vector<std::string> renderers, bool terminal, bool quiet)
-    : renderers_(std::move(renderers)),
+    : image_(image),
+      renderers_(std::move(renderers)),
       master_(image.width, image.height, image.tile),
       progress_(terminal, quiet, master_.total(), static_cast<uint64_t>(image.tile) * image.tile * image.spp) {}
 
@@ -50,6 +52,18 @@ std::string TileService::holders() const {
 }
 
 void TileService::finish_progress() { progress_.update(master_.done(), render_seconds(), true); }
+
+Status TileService::write_frame() {
+  const Display display{static_cast<float>(image_.exposure), image_.tonemap};
+  if (auto st = write_image(master_.film(), image_.output, display); !st) return st;
+  written_ = true;
+  if (checkpoint_) checkpoint_->remove();
+  if (all_black(master_.film()))
+    log_warn(image_.output + ": every pixel is 0, nothing the camera sees is lit: it may look at the back of the "
+             "scene's surfaces from outside or past them (`lightfarm scene FILE.obj` suggests a camera that frames "
+             "the scene), or the lights may face away from what it sees");
+  return Ok{};
+}
 
 void TileService::resume(const FarmSpec& spec, const std::string& scene_hash, double interval, bool restart) {
   if (interval <= 0) return;

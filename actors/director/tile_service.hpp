@@ -1,5 +1,6 @@
 #pragma once
-// The tile service: the render master and the film (Kipfer's MasterRenderer). Serves
+// The tile service: the render master and the film (Kipfer's MasterRenderer), its checkpoint beside the output
+// and, once every tile is in, the image. Serves
 //   tile       {}                          -> {tile: {id, x0, y0, x1, y1}}, or {} once every tile is done
 //   tile_done  {id, pixels: f32[3 w h]}    -> {}; ERROR refused unless the sender holds the tile (and only once);
 //                                             ERROR bad_request for a body without id and pixels
@@ -31,13 +32,13 @@ class TileService final : public Service {
   // the same frame finished are done now, said in the log, and it is written as tiles land. `restart`: it is
   // dropped first.
   void resume(const FarmSpec& spec, const std::string& scene_hash, double interval, bool restart);
-  // The farm stops early: what is done goes to the checkpoint now. The image is written: it has served.
+  // The farm stops early: what is done goes to the checkpoint now (nothing once the image is written).
   void save_checkpoint() {
-    if (checkpoint_) checkpoint_->save(master_, true);
+    if (checkpoint_ && !written_) checkpoint_->save(master_, true);
   }
-  void image_written() {
-    if (checkpoint_) checkpoint_->remove();
-  }
+  // Writes the finished frame to the image's output (with its exposure and tone map); the checkpoint has served
+  // then. A frame whose every pixel is 0 is written with a warning naming the likely causes.
+  Status write_frame();
   size_t tiles_resumed() const { return resumed_; }
   bool finished() const { return master_.finished(); }
   const Image& film() const { return master_.film(); }
@@ -59,6 +60,7 @@ class TileService final : public Service {
  private:
   void serve_waiting(Outbox& out);
 
+  ImageSpec image_;
   std::vector<std::string> renderers_;
   RenderMaster master_;
   Progress progress_;
@@ -67,6 +69,7 @@ class TileService final : public Service {
   double first_tile_seconds_ = 0;
   std::chrono::steady_clock::time_point last_progress_;
   std::vector<std::pair<std::string, uint64_t>> waiting_;  // tile requests not yet answered, oldest first
+  bool written_ = false;
   std::optional<FilmCheckpoint> checkpoint_;
   size_t resumed_ = 0;
 };

@@ -23,14 +23,11 @@ void guide(const float* cdf, size_t n, size_t g, uint32_t* out) {
 // its guide table (guide() over g bins) the search runs between the bounds of u's bin, and over the whole cdf only
 // where rounding put u outside them: the same i either way.
 size_t pick(const float* cdf, size_t n, float u, float& remainder, const uint32_t* bounds, size_t g) {
-  size_t found = n;
-  if (bounds) {
-    const size_t k = std::min(static_cast<size_t>(u * static_cast<float>(g)), g - 1);
-    const size_t lo = bounds[k], hi = std::min<size_t>(bounds[k + 1] + 1, n);
-    const size_t at = static_cast<size_t>(std::upper_bound(cdf + lo, cdf + hi, u) - cdf);
-    if ((lo == 0 || cdf[lo - 1] <= u) && (at < hi || hi == n)) found = at;
-  }
-  if (found == n) found = static_cast<size_t>(std::upper_bound(cdf, cdf + n, u) - cdf);
+  const size_t k = std::min(static_cast<size_t>(u * static_cast<float>(g)), g - 1);
+  const size_t lo = bounds[k], hi = std::min<size_t>(bounds[k + 1] + 1, n);
+  size_t found = static_cast<size_t>(std::upper_bound(cdf + lo, cdf + hi, u) - cdf);
+  if ((lo > 0 && cdf[lo - 1] > u) || (found == hi && hi < n))
+    found = static_cast<size_t>(std::upper_bound(cdf, cdf + n, u) - cdf);
   const size_t i = std::min(found, n - 1);
   const float low = i > 0 ? cdf[i - 1] : 0.0f, width = cdf[i] - low;
   remainder = width > 0 ? std::clamp((u - low) / width, 0.0f, 0x1.fffffep-1f) : 0.5f;
@@ -150,6 +147,12 @@ void Environment::build() {
   }
 }
 
+RGB Environment::sun_radiance(Vec3 wi) const { return in_sun(wi) ? sun_->irradiance * sun_radiance_scale_ : RGB{}; }
+
+float Environment::sun_pdf(Vec3 wi) const {
+  return sun_share_ > 0 && in_sun(wi) ? sun_share_ / (2.0f * kPi * sun_one_minus_cos_) : 0.0f;
+}
+
 bool Environment::in_sun(Vec3 wi) const {
   if (!sun_) return false;
   // The cross product's length is the angle's sine, precise for the small angles a sun has (a cosine near 1 is not).
@@ -181,11 +184,7 @@ double Environment::texel_probability(int x, int y) const {
   return static_cast<double>(row_pdf_[static_cast<size_t>(y)]) * col_pdf_[texel(x, y)];
 }
 
-RGB Environment::radiance(Vec3 wi) const {
-  RGB l = map_radiance(wi);
-  if (in_sun(wi)) l += sun_->irradiance * sun_radiance_scale_;
-  return l;
-}
+RGB Environment::radiance(Vec3 wi) const { return map_radiance(wi) + sun_radiance(wi); }
 
 float Environment::map_pdf(Vec3 wi) const {
   if (map_power_ <= 0) return 0;
@@ -205,11 +204,7 @@ float Environment::map_pdf_at(int x, int y, float pole_cosine) const {
   return p * static_cast<float>(width_) * static_cast<float>(height_) / (2.0f * kPi * kPi * sin_theta);
 }
 
-float Environment::pdf(Vec3 wi) const {
-  float p = (1.0f - sun_share_) * map_pdf(wi);
-  if (sun_share_ > 0 && in_sun(wi)) p += sun_share_ / (2.0f * kPi * sun_one_minus_cos_);
-  return p;
-}
+float Environment::pdf(Vec3 wi) const { return (1.0f - sun_share_) * map_pdf(wi) + sun_pdf(wi); }
 
 Environment::Sample Environment::sample(float u, float v) const {
   Vec3 wi;
@@ -236,13 +231,8 @@ Environment::Sample Environment::sample(float u, float v) const {
       wi = from_map(d);
       // The point's radiance and density from where it was drawn in the image; the sun's part added if it lies in
       // the sun's disc (then the sun could have drawn it too).
-      RGB l = map_radiance_at(mu, mv);
-      float p = (1.0f - sun_share_) * (map_power_ > 0 ? map_pdf_at(static_cast<int>(x), static_cast<int>(y), d.y) : 0.0f);
-      if (in_sun(wi)) {
-        l += sun_->irradiance * sun_radiance_scale_;
-        if (sun_share_ > 0) p += sun_share_ / (2.0f * kPi * sun_one_minus_cos_);
-      }
-      return Sample{wi, l, p};
+      const float map_p = map_power_ > 0 ? map_pdf_at(static_cast<int>(x), static_cast<int>(y), d.y) : 0.0f;
+      return Sample{wi, map_radiance_at(mu, mv) + sun_radiance(wi), (1.0f - sun_share_) * map_p + sun_pdf(wi)};
     }
   }
   // Radiance and density of the direction itself, whichever part drew it: a direction in the sun's disc could have

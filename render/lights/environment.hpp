@@ -92,6 +92,9 @@ class Environment {
   RGB map_radiance(Vec3 wi) const;
   RGB map_radiance_at(float u, float v) const;
   bool in_sun(Vec3 wi) const;
+  // The sun's part of radiance() and of pdf() at wi (0 outside its disc).
+  RGB sun_radiance(Vec3 wi) const;
+  float sun_pdf(Vec3 wi) const;
   size_t texel(int x, int y) const { return static_cast<size_t>(y) * static_cast<size_t>(width_) + static_cast<size_t>(x); }
 
   RGB constant_{};

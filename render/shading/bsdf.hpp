@@ -14,7 +14,7 @@ namespace lf {
 
 class Bsdf {
  public:
-  explicit Bsdf(const Material& m) : m_(m), kd_(m.kd) { with_microfacet(); }
+  explicit Bsdf(const Material& m) : m_(m), kd_(m.kd) { with_microfacet(m.metallic, m.roughness, true); }
   // With the diffuse reflectance (a metal_rough material's base colour) at the point (a texture's), kept to at most
   // 1 - ks per channel.
   Bsdf(const Material& m, RGB albedo) : Bsdf(m, albedo, m.metallic, m.roughness) {}
@@ -24,8 +24,7 @@ class Bsdf {
       : m_(m),
         kd_{std::min(albedo.x, 1 - m.ks.x - m.kr.x), std::min(albedo.y, 1 - m.ks.y - m.kr.y),
             std::min(albedo.z, 1 - m.ks.z - m.kr.z)} {
-    if (m_.type == Material::Type::metal_rough)
-      microfacet_.emplace(kd_, metallic, roughness, Transmission{m.transmission, m.ior, outside});
+    with_microfacet(metallic, roughness, outside);
   }
 
   // Mirror and glass scatter into single directions: light sampling cannot reach them, only sample() can.
@@ -66,9 +65,9 @@ class Bsdf {
   float diffuse_probability() const;
   // The chance sample() takes a surface's mirror term (0 without one), in proportion to its reflectance.
   float mirror_probability() const;
-  void with_microfacet() {
+  void with_microfacet(float metallic, float roughness, bool outside) {
     if (m_.type == Material::Type::metal_rough)
-      microfacet_.emplace(kd_, m_.metallic, m_.roughness, Transmission{m_.transmission, m_.ior, true});
+      microfacet_.emplace(kd_, metallic, roughness, Transmission{m_.transmission, m_.ior, outside});
   }
   // The microfacet model in the frame around n (z = n), for a metal_rough material.
   RGB eval_microfacet(Vec3 n, Vec3 wo, Vec3 wi) const;

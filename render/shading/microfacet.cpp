@@ -275,9 +275,12 @@ float MetalRoughness::pdf(Vec3 wo, Vec3 wi) const {
     return mixture_pdf(wo, wi, specular_probability(wo));
   }
   if (wo.z <= 0) return 0;
-  const float pg = glass_probability(wo);
-  float p = pg * glass_.pdf(wo, wi);
-  if (wi.z > 0 && pg < 1) p += (1 - pg) * mixture_pdf(wo, wi, specular_probability(wo));
+  return transmitting_pdf(wo, wi, glass_probability(wo), specular_probability(wo));
+}
+
+float MetalRoughness::transmitting_pdf(Vec3 wo, Vec3 wi, float glass_share, float specular_share) const {
+  float p = glass_share * glass_.pdf(wo, wi);
+  if (wi.z > 0 && glass_share < 1) p += (1 - glass_share) * mixture_pdf(wo, wi, specular_share);
   return p;
 }
 
@@ -288,17 +291,17 @@ float MetalRoughness::mixture_pdf(Vec3 wo, Vec3 wi, float specular_share) const 
 std::optional<MetalRoughness::Sample> MetalRoughness::sample(Vec3 wo, float u0, float u1, float u2) const {
   if (!transmits()) return sample_reflecting(wo, u0, u1, u2);
   if (wo.z <= 0) return std::nullopt;
-  const float pg = glass_probability(wo);
+  const float pg = glass_probability(wo), ps = specular_probability(wo);  // once, for the choice and the density
   std::optional<Vec3> wi;
   if (u0 < pg) {
     wi = glass_.sample(wo, std::min(u0 / pg, 0x1.fffffep-1f), u1, u2);
   } else {
     const float u = std::min((u0 - pg) / (1 - pg), 0x1.fffffep-1f);
-    wi = u < specular_probability(wo) ? reflect_about(wo, ggx_.sample_visible_normal(wo, u1, u2)) : cosine_local(u1, u2);
+    wi = u < ps ? reflect_about(wo, ggx_.sample_visible_normal(wo, u1, u2)) : cosine_local(u1, u2);
     if (wi->z <= 0) return std::nullopt;
   }
   if (!wi) return std::nullopt;
-  const float p = pdf(wo, *wi);
+  const float p = transmitting_pdf(wo, *wi, pg, ps);
   if (!(p > 0)) return std::nullopt;
   return Sample{*wi, eval(wo, *wi) * (std::fabs(wi->z) / p), p};
 }

@@ -131,6 +131,8 @@ class MetalRoughness {
   // The chance sample() takes the rough dielectric (1 from inside).
   float glass_probability(Vec3 wo) const;
   float mixture_pdf(Vec3 wo, Vec3 wi, float specular_share) const;
+  // pdf() of a transmitting material, given its lobe shares at wo.
+  float transmitting_pdf(Vec3 wo, Vec3 wi, float glass_share, float specular_share) const;
   std::optional<Sample> sample_reflecting(Vec3 wo, float u0, float u1, float u2) const;
   RGB base_;
   float metallic_, roughness_;
