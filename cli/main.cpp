@@ -33,7 +33,7 @@ constexpr const char* kUsage = R"(lightfarm — a distributed lighting-simulatio
 
 usage:
   lightfarm run SCRIPT [--output FILE] [--set NAME=VALUE]... [--stats-json FILE] [--quiet] [--monitor [ADDR:]PORT]
-                      [--checkpoint-every SECONDS] [--restart]
+                      [--frames LIST] [--checkpoint-every SECONDS] [--restart]
       Turn a farm script into processes and an image.
   lightfarm graph SCRIPT [--set NAME=VALUE]...
       Print the script's actor graph as Graphviz DOT; launches nothing.
@@ -54,13 +54,15 @@ usage:
 options:
   --output FILE       write the image here instead of image { output = ... } (.exr, .png, .tif)
   --set NAME=VALUE    override param("NAME", default) in the script
+  --frames LIST       render these of the script's frames { } (e.g. 1-24,30); a job skips the frames its record
+                      (OUTPUT.lfjob/) says are done and whose images are unchanged
   --stats-json FILE   also write phase timings and per-actor statistics as JSON
   --monitor [ADDR:]PORT  serve a live monitor page there (default address 127.0.0.1; port 0 picks one; the URL
                       is printed, with a token when not on loopback); docs/monitor.md
   --monitor-hold SECONDS  keep the monitor up that long after the frame
   --checkpoint-every SECONDS  write the frame's finished tiles to OUTPUT.lfresume at most this often (default 30;
                       0: never); a run of the same frame after a crash renders only the rest, to the same image
-  --restart           render the frame from its start, ignoring OUTPUT.lfresume
+  --restart           render the frame (or the job) from its start, ignoring OUTPUT.lfresume (and the job record)
   --quiet             print no tables, only errors
 
 exit status: 0 done; 1 the farm failed; 2 bad command line or script; 128+N stopped by signal N.
@@ -127,13 +129,20 @@ bool parse(int argc, char** argv, int first, const std::vector<std::string>& kno
 int cmd_run(int argc, char** argv, bool graph_only) {
   Args args;
   std::string error;
-  std::vector<std::string> known = graph_only ? std::vector<std::string>{} : std::vector<std::string>{"output", "stats-json", "monitor", "monitor-hold", "checkpoint-every"};
+  std::vector<std::string> known = graph_only ? std::vector<std::string>{} : std::vector<std::string>{"output", "stats-json", "monitor", "monitor-hold", "checkpoint-every", "frames"};
   std::vector<std::string> flags = graph_only ? std::vector<std::string>{} : std::vector<std::string>{"quiet", "restart"};
   if (!parse(argc, argv, 2, known, flags, args, error)) return usage_error(error);
   if (args.positional.size() != 1) return usage_error(std::string(graph_only ? "graph" : "run") + " needs one SCRIPT");
   lf::ScriptOptions so;
   so.set = args.set;
   if (args.options.count("output")) so.output = args.options["output"];
+  if (args.options.count("frames")) {
+    try {
+      so.frames = lf::parse_frame_list(args.options["frames"]);
+    } catch (const lf::ParamError& e) {
+      return usage_error(e.what());
+    }
+  }
   auto spec = lf::evaluate_script(args.positional[0], so);
   if (!spec) {
     std::fprintf(stderr, "lightfarm: error: %s\n", spec.error().message.c_str());

@@ -8,6 +8,7 @@
 #include "core/specs.hpp"
 #include "core/value.hpp"
 #include "farm/actor_kinds.hpp"
+#include "farm/job.hpp"
 
 namespace lf {
 
@@ -54,6 +55,10 @@ struct FarmSpec {
   SceneSpec scene;
   CameraSpec camera;
   ImageSpec image;
+  // frames { } and camera { keys } as the script gave them, and the frames to render (farm/job.hpp): empty for a
+  // farm of one frame that is no job (no frames { }, no --frames), which renders `camera` to `image.output`.
+  JobSpec job;
+  std::vector<FrameSpec> frames;
   std::vector<HostSpec> hosts;
   std::vector<ActorSpec> actors;
   int lighting = -1;  // index of the MasterLightOp the renderers ask

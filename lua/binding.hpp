@@ -71,5 +71,7 @@ int host_gc(lua_State* L);
 // slurm_hosts, lightop (with lightop.exec), multiplexer, renderers, radiosity, partition, farm, param.
 void register_scene_functions(lua_State* L, Builder& b);
 void register_farm_functions(lua_State* L, Builder& b);
+// frames (lua/job_functions.cpp).
+void register_job_functions(lua_State* L, Builder& b);
 
 }  // namespace lf::lua_binding

@@ -34,8 +34,22 @@ int declare_once(lua_State* L, bool& declared, const char* name, Spec& into, Rea
 }
 
 // camera { eye = {x,y,z}, at = {x,y,z}, up = {0,1,0}, fov = 39.3 } | camera { gltf = "Camera", ... }
+// | camera { keys = { {frame = 1, eye = ..., at = ...}, ... }, fov = ... }: keyframes over the table's other keys
+// (farm/job.hpp; read when the script ends, with frames { }).
 int l_camera(lua_State* L) {
   Builder& b = builder(L);
+  luaL_checktype(L, 1, LUA_TTABLE);
+  lua_getfield(L, 1, "keys");
+  if (!lua_isnil(L, -1)) {
+    const Value keys = to_value(L, -1, "camera: keys");
+    if (!keys.is_array() || keys.as_array().empty())
+      luaL_error(L, "camera: keys must be a list of tables, each a frame and camera keys ({frame = 1, eye = ..., at = ...})");
+    b.spec.job.camera_keys = keys.as_array();
+    b.spec.job.keys_loc = caller_loc(L);
+    lua_pushnil(L);
+    lua_setfield(L, 1, "keys");
+  }
+  lua_pop(L, 1);
   return declare_once(L, b.have_camera, "camera", b.spec.camera,
                       [&b](const ParamTable& p) { return read_camera(p, b.spec.scene); });
 }

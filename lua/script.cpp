@@ -3,7 +3,7 @@
 // scene_functions.cpp and farm_functions.cpp, what their tables mean in farm/spec_readers.cpp and core/specs.cpp.
 //
 // Globals a script sees: scene, camera, image, light, material, shape, lightop, pool (or multiplexer), radiosity, partition,
-// renderers, host, slurm_hosts, farm, param (and Lua's base, string, table, math and utf8 libraries; no io or os,
+// renderers, host, slurm_hosts, farm, frames, param (and Lua's base, string, table, math and utf8 libraries; no io or os,
 // so a script describes a farm and does nothing else).
 #include "lua/script.hpp"
 
@@ -42,6 +42,18 @@ std::string finish(Builder& b) {
     if (!b.consumed_params.count(name)) return "--set " + name + "=" + value + ": the script has no param '" + name + "'";
   if (auto st = validate(b.spec); !st) return st.error().message;
   settle_pool_dispatch(b.spec);
+  // A job's frames, each with its camera and output (farm/job.hpp).
+  const JobSpec& job = b.spec.job;
+  if (!job.declared && !job.camera_keys.empty())
+    return job.keys_loc.str() + ": camera: keys need frames { first = ..., last = ... }, the frames to render";
+  if (!job.declared && !b.options.frames.empty()) return "--frames: the script declares no frames { } to choose from";
+  if (job.declared) {
+    try {
+      b.spec.frames = expand_frames(job, b.spec.camera, b.spec.image.output, b.options.frames);
+    } catch (const ParamError& e) {
+      return job.loc.line > 0 ? job.loc.str() + ": " + e.what() : std::string(e.what());
+    }
+  }
   return {};
 }
 
@@ -123,6 +135,7 @@ Result<FarmSpec> evaluate(const std::string& path, const std::string* text, cons
   lua_pop(L, 1);
   register_scene_functions(L, b);
   register_farm_functions(L, b);
+  register_job_functions(L, b);
 
   std::string failure;
   const int loaded = text ? luaL_loadbuffer(L, text->data(), text->size(), ("@" + path).c_str())
@@ -135,8 +148,8 @@ Result<FarmSpec> evaluate(const std::string& path, const std::string* text, cons
   }
   lua_close(L);
   if (!failure.empty()) return make_error(failure);
-  if (std::string e = finish(b); !e.empty()) return make_error(e.find(path) == 0 ? e : path + ": " + e);
   if (!options.output.empty()) b.spec.image.output = options.output;
+  if (std::string e = finish(b); !e.empty()) return make_error(e.find(path) == 0 ? e : path + ": " + e);
   return std::move(b.spec);
 }
 

@@ -5,6 +5,7 @@
 #include <cstdint>
 #include <map>
 #include <string>
+#include <vector>
 
 #include "farm/farm_spec.hpp"
 #include "core/result.hpp"
@@ -14,6 +15,7 @@ namespace lf {
 struct ScriptOptions {
   std::map<std::string, std::string> set;  // --set name=value, read by param(name, default)
   std::string output;                      // --output FILE, overrides image { output = ... }
+  std::vector<int> frames;                 // --frames: which of the job's frames to render (empty: all)
   // A script describes a farm and must end: it may run this many Lua instructions and hold this much memory;
   // beyond, an error at the line it was running (an endless loop, a table that keeps growing).
   uint64_t instruction_budget = 200'000'000;

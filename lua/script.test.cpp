@@ -470,5 +470,50 @@ TEST_F(ScriptTest, TheSuggestedNetworksAreComplete) {
   }
 }
 
+// A job: frames { } with a camera function or camera { keys }, output patterns, --frames, and their mistakes.
+TEST_F(ScriptTest, FramesMakeAJob) {
+  const std::string net = "local direct = lightop \"direct\" { }\nrenderers { count = 1, lighting = direct }\n";
+  const std::string head = "scene { builtin = \"cornell\" }\nimage { output = \"t.####.png\" }\n";
+  auto r = evaluate_script(write("farm.lua", head + "camera { fov = 30 }\n"
+                                 "frames { first = 2, last = 8, step = 3, camera = function(f) return { eye = {f, 0, -800} } end }\n" + net));
+  ASSERT_TRUE(r.ok()) << r.error().message;
+  ASSERT_EQ(r->frames.size(), 3u);
+  EXPECT_EQ(r->frames[2].number, 8);
+  EXPECT_EQ(r->frames[2].output, "t.0008.png");
+  EXPECT_EQ(r->frames[2].camera.eye, (std::array<double, 3>{8, 0, -800}));
+  EXPECT_EQ(r->frames[2].camera.fov, 30) << "the camera table's other keys stand";
+  ScriptOptions o;
+  o.frames = {5};
+  r = evaluate_script(write("farm.lua", head + "camera { keys = { {frame = 1, eye = {0, 0, -800}}, {frame = 9, eye = {80, 0, -800}} } }\n"
+                                 "frames { first = 1, last = 9 }\n" + net), o);
+  ASSERT_TRUE(r.ok()) << r.error().message;
+  ASSERT_EQ(r->frames.size(), 1u);
+  EXPECT_NEAR(r->frames[0].camera.eye[0], 40, 1e-9);
+  EXPECT_TRUE(r->job.declared);
+  // Without frames { }: one frame, no job.
+  r = evaluate_script(write("farm.lua", kCornell));
+  ASSERT_TRUE(r.ok());
+  EXPECT_TRUE(r->frames.empty());
+
+  EXPECT_EQ(error_of(head + "frames { first = 1, last = 3 }\nframes { }\n" + net), "farm.lua:4: frames is declared twice");
+  EXPECT_EQ(error_of(head + "frames { first = 3, last = 1 }\n" + net), "farm.lua:3: frames: last (1) comes before first (3)");
+  EXPECT_EQ(error_of(head + "frames { last = 3, camera = 5 }\n" + net), "farm.lua:3: frames: camera must be a function of the frame number");
+  EXPECT_EQ(error_of(head + "frames { last = 3, camera = function(f) return f end }\n" + net),
+            "farm.lua:3: frames: the camera function returned a number for frame 1, not a camera table");
+  EXPECT_EQ(error_of(head + "frames { last = 3, camera = function(f) return { eye = {0, 0, 0}, at = {0, 0, 0} } end }\n" + net),
+            "farm.lua:3: frames: the camera function's table for frame 1: camera: eye and at are the same point");
+  EXPECT_EQ(error_of("scene { builtin = \"cornell\" }\nimage { output = \"t.png\" }\nframes { last = 3 }\n" + net),
+            "farm.lua:3: image: output 't.png' has no #### where the frame number goes, so every frame of the job's 3 "
+            "would write the same file (e.g. \"walk.####.png\")");
+  EXPECT_EQ(error_of(head + "camera { keys = { {frame = 1}, {frame = 2, eye = {1, 0, -800}} } }\n" + net),
+            "farm.lua:3: camera: keys need frames { first = ..., last = ... }, the frames to render");
+  EXPECT_EQ(error_of(head + "camera { keys = 3 }\n" + net),
+            "farm.lua:3: camera: keys must be a list of tables, each a frame and camera keys ({frame = 1, eye = ..., at = ...})");
+  o.frames = {4};
+  EXPECT_EQ(error_of(head + "frames { last = 3 }\n" + net, o),
+            "farm.lua:3: --frames: frame 4 is not one of the script's frames (1-3)");
+  EXPECT_EQ(error_of(kCornell, o), "farm.lua: --frames: the script declares no frames { } to choose from");
+}
+
 }  // namespace
 }  // namespace lf

@@ -1,0 +1,65 @@
+#pragma once
+// A render job: the frames one farm renders in turn (frames { first, last, step } and --frames), the camera of
+// each (camera { keys } interpolated, or a function of the frame the script evaluates) and where each frame's
+// image goes (image { output = "walk.####.png" }). Data only: the script fills JobSpec, expand_frames makes the
+// list the director renders (actors/director/frame_loop.hpp).
+#include <map>
+#include <string>
+#include <vector>
+
+#include "core/specs.hpp"
+#include "core/value.hpp"
+
+namespace lf {
+
+// One frame to render.
+struct FrameSpec {
+  int number = 1;
+  CameraSpec camera;
+  std::string output;  // the image's output with the frame number in place of its ####
+};
+
+// A camera keyframe: camera { keys = { {frame = 1, eye = ..., at = ...}, ... } }.
+struct CameraKey {
+  double frame = 1;
+  CameraSpec camera;
+};
+
+struct JobSpec {
+  bool declared = false;  // frames { } was given: a job, with a record of finished frames (even of one frame)
+  int first = 1, last = 1, step = 1;
+  std::vector<Value> camera_keys;        // camera { keys }, each key's table as written
+  SourceLoc keys_loc;
+  std::map<int, Value> camera_of_frame;  // frames { camera = function(frame) }: each frame's table as returned
+  SourceLoc loc;
+  // The job's frame numbers, first to last by step.
+  std::vector<int> numbers() const;
+};
+
+// "1-240,300" (numbers and ranges, comma-separated) -> the frame numbers, ascending, each once. Throws ParamError.
+std::vector<int> parse_frame_list(const std::string& text);
+
+// Whether an output names where the frame number goes: a run of '#' in its file name.
+bool has_frame_pattern(const std::string& output);
+// The output of frame `number`: the last run of '#' in the file name replaced by the number, zero-padded to the
+// run's length ("walk.####.png", 7 -> "walk.0007.png"; a longer number is written whole).
+std::string frame_output(const std::string& pattern, int number);
+
+// The camera at `frame` along keys sorted by frame: eye and at follow a Catmull-Rom spline through the keys' points
+// (tangents from the neighbouring keys, scaled by the keys' frame spacing, so uneven spacing keeps the speed
+// smooth; one-sided at the ends), up, fov, aperture and focus distance are linear between keys; before the first
+// key and after the last the camera holds. Throws ParamError if the result is no camera (eye on at, up along the
+// view).
+CameraSpec interpolate_camera(const std::vector<CameraKey>& keys, double frame);
+// camera { keys }: each key read over `base` (the camera table's other keys), with its frame; keys strictly
+// ascending by frame. Throws ParamError.
+std::vector<CameraKey> read_camera_keys(const std::vector<Value>& keys, const CameraSpec& base);
+
+// The frames to render: the job's (or, with no frames { }, the one frame the script describes), restricted to
+// `selection` (--frames; empty: all), each with its camera and output. Throws ParamError: a selected frame that is
+// not one of the job's, an output without #### for a job of several frames, a key or a function's camera that is
+// no camera.
+std::vector<FrameSpec> expand_frames(const JobSpec& job, const CameraSpec& base, const std::string& output,
+                                     const std::vector<int>& selection);
+
+}  // namespace lf
