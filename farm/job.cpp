@@ -168,24 +168,22 @@ std::vector<CameraKey> read_camera_keys(const std::vector<Value>& keys, const Ca
 std::vector<FrameSpec> expand_frames(const JobSpec& job, const CameraSpec& base, const std::string& output,
                                      const std::vector<int>& selection) {
   const std::vector<int> numbers = job.numbers();
-  std::vector<int> chosen = numbers;
-  if (!selection.empty()) {
-    const std::set<int> known(numbers.begin(), numbers.end());
-    for (int f : selection)
-      if (!known.count(f))
-        throw ParamError("--frames: frame " + std::to_string(f) + " is not one of the script's frames (" +
-                         std::to_string(job.first) + "-" + std::to_string(job.last) +
-                         (job.step > 1 ? " by " + std::to_string(job.step) : std::string()) + ")");
-    chosen = selection;
-  }
+  const std::set<int> known(numbers.begin(), numbers.end());
+  for (int f : selection)
+    if (!known.count(f))
+      throw ParamError("--frames: frame " + std::to_string(f) + " is not one of the script's frames (" +
+                       std::to_string(job.first) + "-" + std::to_string(job.last) +
+                       (job.step > 1 ? " by " + std::to_string(job.step) : std::string()) + ")");
+  const std::set<int> chosen(selection.begin(), selection.end());
   if (numbers.size() > 1 && !has_frame_pattern(output))
     throw ParamError("image: output '" + output + "' has no #### where the frame number goes, so every frame of the "
                      "job's " + std::to_string(numbers.size()) + " would write the same file (e.g. \"walk.####.png\")");
   const std::vector<CameraKey> keys = read_camera_keys(job.camera_keys, base);
   std::vector<FrameSpec> frames;
-  for (int n : chosen) {
+  for (int n : numbers) {
     FrameSpec f;
     f.number = n;
+    f.selected = chosen.empty() || chosen.count(n) > 0;
     f.output = frame_output(output, n);
     if (auto it = job.camera_of_frame.find(n); it != job.camera_of_frame.end()) {
       f.camera = read_camera_table(it->second, base, "frames: the camera function's table for frame " + std::to_string(n));

@@ -16,7 +16,8 @@ namespace lf {
 struct FrameSpec {
   int number = 1;
   CameraSpec camera;
-  std::string output;  // the image's output with the frame number in place of its ####
+  std::string output;     // the image's output with the frame number in place of its ####
+  bool selected = true;   // to render (--frames); the job's first frame is kept either way, for its camera
 };
 
 // A camera keyframe: camera { keys = { {frame = 1, eye = ..., at = ...}, ... } }.
@@ -55,10 +56,11 @@ CameraSpec interpolate_camera(const std::vector<CameraKey>& keys, double frame);
 // ascending by frame. Throws ParamError.
 std::vector<CameraKey> read_camera_keys(const std::vector<Value>& keys, const CameraSpec& base);
 
-// The frames to render: the job's (or, with no frames { }, the one frame the script describes), restricted to
-// `selection` (--frames; empty: all), each with its camera and output. Throws ParamError: a selected frame that is
-// not one of the job's, an output without #### for a job of several frames, a key or a function's camera that is
-// no camera.
+// The job's frames, each with its camera and output, those in `selection` (--frames; empty: all) selected to render,
+// and the job's first frame always listed first: the farm is set up seen from it, whichever frames render (so a
+// setup kept over the frames is the same in every run of the job). Throws ParamError: a selected frame that is not
+// one of the job's, an output without #### for a job of several frames, a key or a function's camera that is no
+// camera.
 std::vector<FrameSpec> expand_frames(const JobSpec& job, const CameraSpec& base, const std::string& output,
                                      const std::vector<int>& selection);
 

@@ -106,9 +106,14 @@ TEST(ExpandFrames, SelectionOutputsAndCamerasPerFrame) {
   EXPECT_EQ(frames[1].camera.eye, (std::array<double, 3>{1, 2, 3}));
   EXPECT_EQ(frames[1].camera.at, base.at) << "what the function leaves out comes from camera { }";
   EXPECT_EQ(frames[0].camera.eye, base.eye);
+  EXPECT_TRUE(frames[1].selected);
   frames = expand_frames(job, base, "t.###.png", {5, 9});
-  ASSERT_EQ(frames.size(), 2u);
-  EXPECT_EQ(frames[1].output, "t.009.png");
+  ASSERT_EQ(frames.size(), 5u) << "the job's frames, the first with the camera the farm is set up from";
+  EXPECT_FALSE(frames[0].selected);
+  EXPECT_TRUE(frames[2].selected);
+  EXPECT_FALSE(frames[3].selected);
+  EXPECT_TRUE(frames[4].selected);
+  EXPECT_EQ(frames[4].output, "t.009.png");
   EXPECT_EQ(error_of([&] { expand_frames(job, base, "t.###.png", {4}); }),
             "--frames: frame 4 is not one of the script's frames (1-9 by 2)");
   EXPECT_NE(error_of([&] { expand_frames(job, base, "t.png", {}); }).find("has no #### where the frame number goes"),

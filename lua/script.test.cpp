@@ -487,8 +487,10 @@ TEST_F(ScriptTest, FramesMakeAJob) {
   r = evaluate_script(write("farm.lua", head + "camera { keys = { {frame = 1, eye = {0, 0, -800}}, {frame = 9, eye = {80, 0, -800}} } }\n"
                                  "frames { first = 1, last = 9 }\n" + net), o);
   ASSERT_TRUE(r.ok()) << r.error().message;
-  ASSERT_EQ(r->frames.size(), 1u);
-  EXPECT_NEAR(r->frames[0].camera.eye[0], 40, 1e-9);
+  ASSERT_EQ(r->frames.size(), 9u);
+  EXPECT_TRUE(r->frames[4].selected);
+  EXPECT_FALSE(r->frames[3].selected);
+  EXPECT_NEAR(r->frames[4].camera.eye[0], 40, 1e-9);
   EXPECT_TRUE(r->job.declared);
   // Without frames { }: one frame, no job.
   r = evaluate_script(write("farm.lua", kCornell));

@@ -54,6 +54,7 @@ constexpr std::pair<Phase, std::string_view> kPhases[] = {
     {Phase::setup, "setup"},
     {Phase::render, "render"},
     {Phase::finish, "finish"},
+    {Phase::frame, "frame"},
 };
 }  // namespace
 
@@ -334,8 +335,9 @@ Message make_reply(std::string sender, uint64_t id, Value body, uint32_t queue) 
   return m;
 }
 
-Message make_phase(std::string sender, Phase phase) {
-  Message m = make(MsgType::phase, std::move(sender), Value::Map{{"phase", std::string(phase_name(phase))}});
+Message make_phase(std::string sender, Phase phase, Value::Map body) {
+  body["phase"] = std::string(phase_name(phase));
+  Message m = make(MsgType::phase, std::move(sender), std::move(body));
   m.header.op = phase_name(phase);
   return m;
 }

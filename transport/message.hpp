@@ -41,7 +41,8 @@ std::optional<Phase> phase_of(const Header& header);
 Message make(MsgType type, std::string sender, Value body = {}, uint64_t id = 0);
 Message make_request(std::string sender, Op op, Value body, uint64_t id);
 Message make_reply(std::string sender, uint64_t id, Value body, uint32_t queue = 0);
-Message make_phase(std::string sender, Phase phase);
+// `body`: what the phase carries besides its name (PHASE frame: {frame, camera}).
+Message make_phase(std::string sender, Phase phase, Value::Map body = {});
 Message make_ready(std::string sender, Phase phase);
 Message make_error_reply(std::string sender, uint64_t id, ErrorCode code, std::string message);
 // An ERROR's body as an Error: its code and message ("?" when the body says nothing).

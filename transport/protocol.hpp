@@ -61,8 +61,9 @@ std::string_view op_name(Op op);
 Op op_from_name(std::string_view name);
 
 // Phases the director drives (PHASE and READY carry the name in header `op`). configure is answered by READY
-// without a PHASE: CONFIG starts it.
-enum class Phase : uint8_t { configure, setup, render, finish };
+// without a PHASE: CONFIG starts it. frame comes between one frame of a job and the next (its body: the frame
+// number and camera): what depends on the view is redone, then render again.
+enum class Phase : uint8_t { configure, setup, render, finish, frame };
 std::string_view phase_name(Phase phase);
 std::optional<Phase> phase_from_name(std::string_view name);
 

@@ -14,6 +14,7 @@
 #include "actors/director/deployment.hpp"
 #include "actors/director/exchange_service.hpp"
 #include "actors/director/farm_failure.hpp"
+#include "actors/director/frame_loop.hpp"
 #include "actors/launchers/local_launcher.hpp"
 #include "actors/director/monitor_feed.hpp"
 #include "actors/director/progress.hpp"
@@ -40,10 +41,11 @@ class Director {
       : spec_(spec),
         options_(options),
         launchers_(launchers),
-        supervisor_(spec, launchers_, control_, [this](const std::string& a) { return services_.needs_restart(a); }),
+        supervisor_(spec_, launchers_, control_, [this](const std::string& a) { return services_.needs_restart(a); }),
         tiles_(spec.image, spec.renderer_names(), options.progress_on_terminal, options.quiet),
-        ring_(spec, exchange_, options.quiet, options.progress_on_terminal),
-        loop_(spec, control_, supervisor_, launchers_, [this](SupervisorEvent& e) { route(e); }),
+        frames_(spec_, tiles_, options.checkpoint_every, options.restart, options.quiet),
+        ring_(spec_, exchange_, options.quiet, options.progress_on_terminal),
+        loop_(spec_, control_, supervisor_, launchers_, [this](SupervisorEvent& e) { route(e); }),
         step_progress_(options.quiet) {}
 
   int run() {
@@ -87,6 +89,7 @@ class Director {
  private:
   void run_stages() {
     stage(Stage::prepare, [&] { prepare(); });  // timed: the director's own scene load shows in the table
+    if (frames_.nothing_left()) return;         // a job whose every frame is done already
     stage(Stage::launch, [&] {
       std::function<std::string(const ActorSpec&)> keys_of;
       if (deployment_.curve()) keys_of = [&](const ActorSpec& a) { return deployment_.keys_line_for(a.name); };
@@ -101,9 +104,8 @@ class Director {
     stage(Stage::setup, [&] { run_phase(Phase::setup); });
     stage(Stage::render, [&] {
       render_start_ = Clock::now();
-      run_phase(Phase::render);
-      tiles_.finish_progress();
-      if (!tiles_.finished()) throw FarmFailure{"the renderers stopped before every tile was done"};
+      frames_.run([&](Phase phase, Value::Map body) { run_phase(phase, std::move(body)); });
+      timeline_.image_written = true;
     });
     stage(Stage::finish, [&] { finish(); });
   }
@@ -126,7 +128,7 @@ class Director {
     warn_about_escaping_light(spec_, scene);
     deployment_ = deployer.finish(scene);
     supervisor_.set_host_agents(deployment_.agent_sockets);
-    tiles_.resume(spec_, deployment_.scene_hash, options_.checkpoint_every, options_.restart);
+    frames_.prepare(deployment_.scene_hash);  // sets spec_.camera, every actor's CONFIG, to the first frame's
     if (ring_.active()) check(ring_.prepare(scene));
     auto endpoint = control_.open(deployment_);
     if (!endpoint) throw FarmFailure{endpoint.error().message};
@@ -167,10 +169,10 @@ class Director {
     return Ok{};
   }
 
-  // PHASE to everyone, then wait for every READY of it. Setup takes what it takes; so does rendering, after which
-  // every actor has had PHASE render for the whole frame and must have said READY render (docs/PROTOCOL.md).
-  void run_phase(Phase phase) {
-    supervisor_.broadcast(wire::make_phase("director", phase));
+  // PHASE to everyone, then wait for every READY of it. Setup (and a job's frame) takes what it takes; so does
+  // rendering, after which every actor has had PHASE render for the whole frame and must have said READY render.
+  void run_phase(Phase phase, Value::Map body = {}) {
+    supervisor_.broadcast(wire::make_phase("director", phase, std::move(body)));
     check(services_.phase(phase, control_));
     if (phase != Phase::render) {
       // A READY sent before a rollback counts for nothing: the services say when the phase's work is really in.
@@ -202,8 +204,6 @@ class Director {
   static constexpr double kStallReportSeconds = 30;
 
   void finish() {
-    if (auto st = tiles_.write_frame(); !st) throw FarmFailure{st.error().message};
-    timeline_.image_written = true;
     supervisor_.broadcast(wire::make_phase("director", Phase::finish));
     // Wait for every actor's STATS and BYE, and for its process to end.
     const auto deadline = Clock::now() + std::chrono::seconds(10);
@@ -245,6 +245,7 @@ class Director {
     f.stage_seconds = timeline_.stage_seconds;
     f.total_seconds = timeline_.seconds();
     f.render_seconds = tiles_.render_seconds();
+    frames_.add_figures(f);
     f.first_tile_seconds = std::chrono::duration<double>(render_start_ - timeline_.start).count() + tiles_.first_tile_seconds();
     if (ring_.active()) f.radiosity = ring_.report();
     f.scene = deployment_.scene_figures();
@@ -254,7 +255,7 @@ class Director {
     return 0;
   }
 
-  const FarmSpec& spec_;
+  FarmSpec spec_;  // the script's, with the first frame's camera once prepared
   RunOptions options_;
   FarmTimeline timeline_;
   Launchers& launchers_;
@@ -264,6 +265,7 @@ class Director {
   std::string control_endpoint_;
   Supervisor supervisor_;
   TileService tiles_;
+  FrameLoop frames_;
   ExchangeService exchange_;
   RingService ring_;
   ServiceRouter services_{&tiles_, &exchange_, &ring_};

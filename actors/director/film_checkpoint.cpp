@@ -21,7 +21,7 @@ namespace {
 constexpr std::string_view kMagic = "LFRESUME1";
 }
 
-std::string frame_key(const FarmSpec& spec, const std::string& scene_hash) {
+std::string frame_key(const FarmSpec& spec, const std::string& scene_hash, const CameraSpec& camera) {
   // The renderers and the hosts are left out: which process renders a tile, and where, changes no pixel.
   Value::Array actors;
   for (const ActorSpec& a : spec.actors) {
@@ -36,7 +36,7 @@ std::string frame_key(const FarmSpec& spec, const std::string& scene_hash) {
   const Value what = Value::Map{{"protocol", static_cast<int64_t>(wire::kProtocolVersion)},
                                 {"scene", spec.scene.to_value()},
                                 {"scene_hash", scene_hash},
-                                {"camera", spec.camera.to_value()},
+                                {"camera", camera.to_value()},
                                 {"image", Value(image)},
                                 {"lighting", spec.lighting >= 0 ? Value(spec.actors[static_cast<size_t>(spec.lighting)].name) : Value()},
                                 {"actors", Value(actors)},
@@ -103,16 +103,7 @@ void FilmCheckpoint::save(const RenderMaster& master, bool now_anyway) {
     for (int y = t.y0; y < t.y1; ++y)
       for (int x = t.x0; x < t.x1; ++x) bytes::put_rgb(out, master.film().at(x, y));
   }
-  const std::string temporary = partial_path(path_);
-  bool written = false;
-  {
-    std::ofstream f(temporary, std::ios::binary | std::ios::trunc);
-    written = static_cast<bool>(f << out) && static_cast<bool>(f.flush());
-  }
-  std::error_code ec;
-  if (written) fs::rename(temporary, path_, ec);
-  if (!written || ec) {
-    fs::remove(temporary, ec);
+  if (!write_file_whole(path_, out)) {
     if (!warned_) log_warn("cannot write the frame's checkpoint " + path_ + "; the frame goes on without one");
     warned_ = true;
   }

@@ -42,8 +42,8 @@ class FilmCheckpoint {
   bool warned_ = false;
 };
 
-// The key of a frame: a content hash of what its pixels depend on (`scene_hash`: a file scene's shipped content,
-// textures and environment map included; empty for a built-in one).
-std::string frame_key(const FarmSpec& spec, const std::string& scene_hash);
+// The key of a frame seen by `camera`: a content hash of what its pixels depend on (`scene_hash`: a file scene's
+// shipped content, textures and environment map included; empty for a built-in one).
+std::string frame_key(const FarmSpec& spec, const std::string& scene_hash, const CameraSpec& camera);
 
 }  // namespace lf

@@ -15,6 +15,8 @@ class Progress {
   void update(size_t done, double elapsed_seconds, bool force = false);
   // True while the bar owns the terminal's current line (an error message then starts on a new one).
   bool drawing() const { return terminal_ && !finished_; }
+  // The next frame of a job: from none done.
+  void restart() { *this = Progress(terminal_, quiet_, total_, per_tile_); }
 
  private:
   bool terminal_;

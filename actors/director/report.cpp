@@ -5,6 +5,8 @@
 #include <cstdio>
 #include <fstream>
 
+#include "actors/director/job_record.hpp"
+
 namespace lf {
 
 namespace {
@@ -15,11 +17,15 @@ double num(const Value& stats, const char* key) {
 }  // namespace
 
 void print_report(const FarmSpec& spec, const Supervisor& supervisor, const RunFigures& f) {
-  const double samples = static_cast<double>(spec.image.width) * spec.image.height * spec.image.spp;
+  const double samples = static_cast<double>(spec.image.width) * spec.image.height * spec.image.spp * f.frames_rendered;
   std::fprintf(stderr, "\n%-12s %9s %7s\n", "phase", "seconds", "share");
   for (const auto& [name, secs] : f.stage_seconds)
     std::fprintf(stderr, "%-12s %9.3f %6.1f%%\n", name.c_str(), secs, 100.0 * secs / f.total_seconds);
   std::fprintf(stderr, "%-12s %9.3f %6.1f%%\n\n", "total", f.total_seconds, 100.0);
+  if (f.frames_rendered == 0) {
+    std::printf("nothing to render: every frame of the job is done (%s)\n", JobRecord::folder_for(spec.image.output).c_str());
+    return;
+  }
   std::fprintf(stderr, "%-14s %-10s %8s %9s %11s %9s %9s %8s %7s %6s\n", "actor", "kind", "pid", "requests", "points",
                "MiB in", "MiB out", "busy s", "cpu s", "peakq");
   for (const auto& a : spec.actors) {
@@ -60,13 +66,20 @@ void print_report(const FarmSpec& spec, const Supervisor& supervisor, const RunF
   std::fprintf(stderr, "\nrender: %.2f M samples/s\n", samples / f.render_seconds / 1e6);
   const std::string shaded =
       spec.image.shaded_per_pixel() < spec.image.spp ? ", " + std::to_string(spec.image.shade_spp) + " shaded" : "";
-  std::printf("wrote %s (%dx%d, %d spp%s)\n", spec.image.output.c_str(), spec.image.width, spec.image.height,
-              spec.image.spp, shaded.c_str());
+  const Value* frames = f.frames.find("frames");
+  std::string what = spec.image.output;
+  if (frames && frames->is_array() && !frames->as_array().empty()) {
+    const auto& list = frames->as_array();
+    what = std::to_string(list.size()) + " frame" + (list.size() == 1 ? ": " : "s: ") + list.front().find("output")->as_string();
+    if (list.size() > 1) what += (list.size() > 2 ? " ... " : ", ") + list.back().find("output")->as_string();
+  }
+  std::printf("wrote %s (%dx%d, %d spp%s)\n", what.c_str(), spec.image.width, spec.image.height, spec.image.spp,
+              shaded.c_str());
 }
 
 Status write_stats_json(const FarmSpec& spec, const Supervisor& supervisor, const RunFigures& f,
                         const std::string& path) {
-  const double samples = static_cast<double>(spec.image.width) * spec.image.height * spec.image.spp;
+  const double samples = static_cast<double>(spec.image.width) * spec.image.height * spec.image.spp * f.frames_rendered;
   Value::Map phases;
   for (const auto& [name, secs] : f.stage_seconds) phases[name] = secs;
   phases["total"] = f.total_seconds;
@@ -96,7 +109,7 @@ Status write_stats_json(const FarmSpec& spec, const Supervisor& supervisor, cons
                          {"output", spec.image.output},
                          {"image", spec.image.to_value()},
                          {"phases_seconds", std::move(phases)},
-                         {"render_samples_per_second", samples / f.render_seconds},
+                         {"render_samples_per_second", f.render_seconds > 0 ? samples / f.render_seconds : 0.0},
                          {"first_tile_seconds", f.first_tile_seconds},
                          {"render_seconds", f.render_seconds},
                          {"totals", Value::Map{{"renderer_shading_requests", shading_requests},
@@ -106,6 +119,7 @@ Status write_stats_json(const FarmSpec& spec, const Supervisor& supervisor, cons
                          {"actors", std::move(actors)}};
   if (!f.radiosity.is_nil()) doc.as_map()["radiosity"] = f.radiosity;
   if (!f.scene.is_nil()) doc.as_map()["scene"] = f.scene;
+  if (!f.frames.is_nil()) doc.as_map()["job"] = f.frames;
   std::ofstream out(path);
   out << to_json(doc, 2) << "\n";
   if (!out) return make_error("could not write stats to '" + path + "'");

@@ -14,8 +14,10 @@ namespace lf {
 struct RunFigures {
   std::vector<std::pair<std::string, double>> stage_seconds;  // in order
   double total_seconds = 0;
-  double render_seconds = 0;
+  double render_seconds = 0;       // a job's: every frame's, PHASE frame to image written
   double first_tile_seconds = 0;  // from the director's start
+  size_t frames_rendered = 1;
+  Value frames;                   // a job's: {frames: [{frame, seconds, output}], skipped, record}; nil for one frame
   Value radiosity;                // the ring's report, or nil
   Value scene;                    // a shipped scene: {hash, bytes, bytes_shipped: {host: bytes}}, or nil
 };

@@ -65,10 +65,17 @@ Status TileService::write_frame() {
   return Ok{};
 }
 
-void TileService::resume(const FarmSpec& spec, const std::string& scene_hash, double interval, bool restart) {
+void TileService::begin_frame(const std::string& output, const std::string& key, double interval, bool restart) {
+  image_.output = output;
+  master_ = RenderMaster(image_.width, image_.height, image_.tile);
+  progress_.restart();
+  rendering_ = false;
+  waiting_.clear();  // none: every renderer said the last frame had no tile left
+  written_ = false;
+  checkpoint_.reset();
+  resumed_ = 0;
   if (interval <= 0) return;
-  checkpoint_.emplace(spec.image.output + ".lfresume", frame_key(spec, scene_hash), spec.image.width,
-                      spec.image.height, spec.image.tile, interval);
+  checkpoint_.emplace(output + ".lfresume", key, image_.width, image_.height, image_.tile, interval);
   if (restart) checkpoint_->remove();
   std::string note;
   resumed_ = checkpoint_->restore(master_, note);

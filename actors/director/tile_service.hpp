@@ -28,10 +28,11 @@ class TileService final : public Service {
   Status on_phase(wire::Phase phase, Outbox& out) override;
   Status on_lost(const std::string& actor, const std::string& why, Outbox& out) override;
 
-  // The frame's checkpoint beside its output (FilmCheckpoint; `interval` <= 0: none): the tiles an earlier run of
-  // the same frame finished are done now, said in the log, and it is written as tiles land. `restart`: it is
-  // dropped first.
-  void resume(const FarmSpec& spec, const std::string& scene_hash, double interval, bool restart);
+  // A frame begins (the farm's one, or each of a job's in turn): every tile to do, its image to go to `output`, and
+  // its checkpoint beside it (OUTPUT.lfresume, FilmCheckpoint; `interval` <= 0: none): the tiles an earlier run of
+  // the same frame (`key`, frame_key) finished are done now, said in the log, and it is written as tiles land.
+  // `restart`: it is dropped first.
+  void begin_frame(const std::string& output, const std::string& key, double interval, bool restart);
   // The farm stops early: what is done goes to the checkpoint now (nothing once the image is written).
   void save_checkpoint() {
     if (checkpoint_ && !written_) checkpoint_->save(master_, true);
@@ -60,7 +61,7 @@ class TileService final : public Service {
  private:
   void serve_waiting(Outbox& out);
 
-  ImageSpec image_;
+  ImageSpec image_;  // output: the frame's
   std::vector<std::string> renderers_;
   RenderMaster master_;
   Progress progress_;

@@ -4,6 +4,7 @@
 //   REQUEST op="tile"       {}                        -> REPLY { tile: {id, x0, y0, x1, y1} } or {} when none remain
 //   REQUEST op="tile_done"  { id, pixels: f32[3wh] }  -> REPLY {}
 // Sends to its one input (the MasterLightOp): REQUEST op="shade" batches, several in flight (the input's window).
+// PHASE frame (a job's next frame) brings a new camera.
 // Ready for "render" once configured (scene loaded, BVH built); in a partitioned farm (partition { parts = N }) its
 // camera rays go to the geometry actors instead, through RemoteTracing. Answers READY render when the master has no tiles
 // left and every finished tile was acknowledged. Keeps up to `tiles_in_flight` tiles going, so it traces the next
@@ -67,6 +68,14 @@ class RendererActor final : public Actor {
       rendering_ = true;
       ask_for_tiles(rt);
     }
+  }
+
+  // A job's next frame: its tiles are traced from the new camera (the last frame's are all done and acknowledged:
+  // this renderer said READY render).
+  void on_frame(int, const CameraSpec& camera, Runtime& rt) override {
+    *camera_ = Camera(camera, image_.width, image_.height);
+    no_more_tiles_ = false;
+    rt.phase_done(wire::Phase::frame);
   }
 
   void on_request(const std::string& peer, wire::Op, wire::Message& m, Runtime& rt) override {

@@ -73,7 +73,9 @@ class RingNodeActor final : public Actor {
   }
 
   void on_phase(wire::Phase phase, Runtime& rt) override {
+    if (phase == wire::Phase::setup && solving_started_) return rt.phase_done(wire::Phase::setup);  // a job's next frame
     if (phase == wire::Phase::setup) {
+      solving_started_ = true;
       solve_cpu_start_ = cpu_seconds();
       carry_out(protocol_->start(), rt);
     }
@@ -194,6 +196,7 @@ class RingNodeActor final : public Actor {
   }
 
   double solve_cpu_start_ = 0, solve_cpu_ = 0;
+  bool solving_started_ = false;  // PHASE setup again (a job's next frame): the solution is in, nothing to redo
   RingConfig config_;
   std::unique_ptr<RingPlan> plan_;
   std::unique_ptr<RingNode> node_;

@@ -5,7 +5,11 @@
 //   (L one value a point, or one a pixel when the request says fold: actors/codecs/shade_codec.hpp)
 //   anything else / malformed                  ->  ERROR { code, message }; the actor carries on
 // Control: CONFIG builds the op from its parameters and loads the scene; PHASE setup runs op.setup() and answers
-// READY setup when it finishes; PHASE render is answered READY render at once; PHASE finish / BYE stop it.
+// READY setup when it finishes; PHASE render is answered READY render at once; PHASE frame (a job's next frame)
+// takes the new camera at once and, for an op whose setup depends on it (LightOp::setup_sees_camera), holds
+// requests from then on; the PHASE setup that follows builds a new op for the view and sets it up (any other op
+// answers it at once). Two steps, so that no op's new setup asks one that has not yet taken the view. PHASE
+// finish / BYE stop it.
 // Requests that arrive before setup finished wait.
 // Requests queue in arrival order and start one per loop turn, so heartbeats and replies keep flowing. A request
 // whose op asks its inputs suspends (a coroutine) while the runtime sends those batches asynchronously; other
@@ -218,6 +222,7 @@ class LightOpActor final : public Actor {
     } catch (const ParamError& e) {
       return make_error(e.what());
     }
+    params_ = config.params;
     // In a partitioned farm an op that traces only through the parts builds no BVH of the whole scene (unless a host
     // agent shares one anyway).
     const bool parts_trace = !config.geometry.empty() && kind_.traces_through_context;
@@ -253,20 +258,21 @@ class LightOpActor final : public Actor {
 
   void on_phase(wire::Phase phase, Runtime& rt) override {
     if (phase == wire::Phase::setup) {
-      SceneContext ctx{scene_.get(), tracer_.get(), replica_index_, replica_count_, exchange_.get()};
-      ctx.camera = camera_.get();
-      ctx.width = width_;
-      ctx.height = height_;
-      ctx.lit_samples = lit_samples_;
-      ctx.sampler = sampler_;
-      ctx.tracing = tracing_.get();
-      ctx.progress = [&rt](const char* what, uint64_t done, uint64_t total) { rt.report_progress(what, done, total); };
-      setup_ = op_->setup(std::move(ctx), *inputs_);
-      setup_running_ = true;
+      if (renew_) setup_asked_ = true;  // a job's next frame: a new op, once nothing runs (on_progress)
+      else if (setups_ > 0) return rt.phase_done(wire::Phase::setup);  // a job's next frame; the op is kept
+      else start_setup(rt);
       on_progress(rt);
     } else if (phase == wire::Phase::render) {
       rt.phase_done(wire::Phase::render);  // a LightOp renders by answering requests
     }
+  }
+
+  void on_frame(int, const CameraSpec& camera, Runtime& rt) override {
+    ++frames_;
+    *camera_ = Camera(camera, width_, height_);  // what ctx.camera points at, for the op's shade() too
+    // Requests from now on (another op's new setup asking this one) wait for this op's new setup.
+    if (op_->setup_sees_camera()) renew_ = true, set_up_ = false;
+    rt.phase_done(wire::Phase::frame);
   }
 
   void on_request(const std::string& peer, wire::Op op, wire::Message& m, Runtime& rt) override {
@@ -298,6 +304,13 @@ class LightOpActor final : public Actor {
   }
 
   void on_progress(Runtime& rt) override {
+    // PHASE setup after PHASE frame: a new op for the view, once the last one has answered what it started
+    // (nothing, between frames).
+    if (renew_ && setup_asked_ && running_.empty()) {
+      renew_ = setup_asked_ = false;
+      op_ = create_lightop(kind_, ParamTable(params_, "lightop '" + rt.name() + "'"));
+      start_setup(rt);
+    }
     if (setup_running_ && setup_.done()) {
       setup_running_ = false;
       try {
@@ -345,9 +358,15 @@ class LightOpActor final : public Actor {
 
   size_t queue_length() const override { return waiting_.size(); }
   bool has_local_work() const override { return set_up_ && !waiting_.empty(); }
-  // The op's own figures (cache hits, photons, ...) under STATS "detail".
+  // The op's own figures (cache hits, photons, ...) under STATS "detail"; in a job of several frames, how many
+  // frames and setups there were (the op's figures are then the last setup's).
   Value extra_stats() const override {
     Value stats = op_ ? op_->stats() : Value();
+    if (frames_ > 0) {
+      if (!stats.is_map()) stats = Value::Map{};
+      stats.as_map()["frames"] = static_cast<int64_t>(frames_ + 1);
+      stats.as_map()["setups"] = static_cast<int64_t>(setups_);
+    }
     if (tracing_) {
       if (!stats.is_map()) stats = Value::Map{};
       Value tracing = tracing_->stats(tracer_ != nullptr);  // held: a range-for over a temporary's map would dangle
@@ -357,6 +376,21 @@ class LightOpActor final : public Actor {
   }
 
  private:
+  // Starts op.setup() over this actor's context; on_progress answers READY setup once it finishes.
+  void start_setup(Runtime& rt) {
+    SceneContext ctx{scene_.get(), tracer_.get(), replica_index_, replica_count_, exchange_.get()};
+    ctx.camera = camera_.get();
+    ctx.width = width_;
+    ctx.height = height_;
+    ctx.lit_samples = lit_samples_;
+    ctx.sampler = sampler_;
+    ctx.tracing = tracing_.get();
+    ctx.progress = [&rt](const char* what, uint64_t done, uint64_t total) { rt.report_progress(what, done, total); };
+    setup_ = op_->setup(std::move(ctx), *inputs_);
+    setup_running_ = true;
+    ++setups_;
+  }
+
   struct Job {
     std::string peer;
     uint64_t id = 0;
@@ -368,6 +402,7 @@ class LightOpActor final : public Actor {
   static constexpr size_t kMaxRunning = 16;
 
   const LightOpKind& kind_;
+  Value::Map params_;  // the op's parameters, for a new op each frame whose setup depends on the view
   std::unique_ptr<LightOp> op_;
   std::shared_ptr<const Scene> scene_;
   std::shared_ptr<const RayTracer> tracer_;
@@ -383,6 +418,10 @@ class LightOpActor final : public Actor {
   Task setup_;
   bool setup_running_ = false;
   bool set_up_ = false;  // setup finished: requests may start
+  bool renew_ = false;   // PHASE frame: a new op is due for the new view, set up at the next PHASE setup
+  bool setup_asked_ = false;
+  size_t frames_ = 0;    // PHASE frames taken (frames after the first)
+  size_t setups_ = 0;
   std::deque<std::unique_ptr<Job>> waiting_;
   std::vector<std::unique_ptr<Job>> running_;
 };

@@ -35,6 +35,8 @@ Value ActorStats::to_value(const wire::SocketCounters& t) const {
                     {"messages_out", t.messages_out}};
 }
 
+void Actor::on_frame(int, const CameraSpec&, Runtime& rt) { rt.phase_done(wire::Phase::frame); }
+
 void Actor::on_peer_down(const std::string& name, Runtime& rt) {
   rt.fail("input '" + name + "' was lost and this actor has no other");
 }
@@ -227,7 +229,19 @@ void Runtime::handle_control(wire::Message& m, Actor& actor) {
         return;
       }
       auto started = Clock::now();
-      actor.on_phase(*phase, *this);
+      if (*phase == wire::Phase::frame) {
+        // The director's own message: one it cannot read is a broken farm, not a frame to skip.
+        const Value* frame = m.body.find("frame");
+        const Value* camera_value = m.body.find("camera");
+        auto camera = camera_value ? CameraSpec::from_value(*camera_value) : Result<CameraSpec>(make_error("no camera"));
+        if (!frame || !frame->is_int() || !camera) {
+          fail("PHASE frame needs {frame, camera}" + (camera ? std::string() : ": " + camera.error().message));
+          return;
+        }
+        actor.on_frame(static_cast<int>(frame->as_int()), *camera, *this);
+      } else {
+        actor.on_phase(*phase, *this);
+      }
       add_busy(started);
       return;
     }

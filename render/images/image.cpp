@@ -11,6 +11,7 @@
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
+#include <fstream>
 #include <vector>
 
 #include "core/private_dir.hpp"
@@ -203,6 +204,20 @@ void sweep_stale_partials(const std::string& target_path) {
       fs::remove(it->path(), rm);
     }
   }
+}
+
+bool write_file_whole(const std::string& target, std::string_view bytes) {
+  const std::string temporary = partial_path(target);
+  bool written = false;
+  {
+    std::ofstream f(temporary, std::ios::binary | std::ios::trunc);
+    written = static_cast<bool>(f.write(bytes.data(), static_cast<std::streamsize>(bytes.size()))) &&
+              static_cast<bool>(f.flush());
+  }
+  std::error_code ec;
+  if (written) fs::rename(temporary, target, ec);
+  if (!written || ec) fs::remove(temporary, ec);
+  return written && !ec;
 }
 
 Status write_image(const Image& image, const std::string& path, const Display& display) {

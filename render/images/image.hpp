@@ -4,6 +4,7 @@
 // leaves a half-written image under the requested name.
 #include <cstdint>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "core/result.hpp"
@@ -30,6 +31,8 @@ Status check_output_path(const std::string& path);
 // cannot remove its own).
 std::string partial_path(const std::string& target);
 void sweep_stale_partials(const std::string& target);
+// `bytes` to `target` that way; false (and no temporary left) if it could not be written.
+bool write_file_whole(const std::string& target, std::string_view bytes);
 // How an 8-bit output shows linear radiance: scaled by 2^exposure, then mapped to [0, 1] per channel by the tone
 // map ("clamp": min(v, 1); "reinhard": v / (1 + v); "aces": Narkowicz's fit of the ACES filmic curve), then sRGB.
 // Float outputs (EXR) ignore it: they keep the linear values.

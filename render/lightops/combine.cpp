@@ -18,6 +18,8 @@ class Combine final : public LightOp {
     co_return;
   }
 
+  bool setup_sees_camera() const override { return false; }
+
   std::optional<LightPaths> paths(std::span<const LightPaths> inputs) const override {
     LightPaths sum;
     for (size_t i = 0; i < inputs.size(); ++i) sum += inputs[i] * (weights_.empty() ? 1.0f : weights_[i]);

@@ -45,6 +45,9 @@ class DirectLight final : public LightOp {
     return m;
   }
 
+  // Lights are learned where the camera looks.
+  bool setup_sees_camera() const override { return light_sampling_ == LightSampling::learned; }
+
   // Light straight from an emitter, scattered at the point by its diffuse or glossy lobe.
   std::optional<LightPaths> paths(std::span<const LightPaths>) const override {
     return LightPaths::every(1, 1, Lobes::of({Lobe::diffuse, Lobe::glossy}));

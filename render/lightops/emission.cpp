@@ -13,6 +13,8 @@ class Emission final : public LightOp {
     ctx_ = ctx;
     co_return;
   }
+  bool setup_sees_camera() const override { return false; }
+
   std::optional<LightPaths> paths(std::span<const LightPaths>) const override { return LightPaths::emission(); }
   Task shade(const ShadingPoints& points, std::span<RGB> radiance, Inputs&) override {
     const Scene& scene = *ctx_.scene;

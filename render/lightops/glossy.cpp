@@ -29,6 +29,8 @@ class Glossy final : public LightOp {
     co_return;
   }
 
+  bool setup_sees_camera() const override { return false; }
+
   std::optional<LightPaths> paths(std::span<const LightPaths> inputs) const override {
     return inputs.empty() ? LightPaths() : inputs[0].then(Lobe::glossy);
   }

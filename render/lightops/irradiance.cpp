@@ -102,6 +102,9 @@ class Irradiance final : public LightOp {
                       {"records_per_lookup", served ? static_cast<double>(records_used_) / served : 0.0}};
   }
 
+  // Records placed by the camera (or by where its records' rays land) follow the view; ones placed by area do not.
+  bool setup_sees_camera() const override { return placement_ != Placement::area; }
+
   // What the input gives at the hemisphere's hits, reflected by the point's diffuse lobe.
   std::optional<LightPaths> paths(std::span<const LightPaths> inputs) const override {
     return inputs.empty() ? LightPaths() : inputs[0].then(Lobe::diffuse);

@@ -239,6 +239,10 @@ class LightOp {
   // Runs once before rendering (photon shooting, caches, ...). The pointers in ctx outlive the op. ctx comes by
   // value because setup is a coroutine: a reference parameter would dangle after its first co_await.
   virtual Task setup(SceneContext ctx, Inputs& inputs) = 0;
+  // Whether setup() depends on the camera (it places work where the camera looks): the next frame of a job, seen
+  // from elsewhere, then sets up a new op; one whose setup does not (a photon map) keeps it for every frame. Either
+  // way ctx.camera points at the frame's camera while it renders. Unsure: true.
+  virtual bool setup_sees_camera() const { return true; }
   // Writes the radiance leaving each point towards its wo into radiance[i] (radiance.size() == points.size()).
   // Emission of the point itself is not included: the renderer adds what the camera sees directly.
   virtual Task shade(const ShadingPoints& points, std::span<RGB> radiance, Inputs& inputs) = 0;

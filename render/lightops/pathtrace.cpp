@@ -54,6 +54,9 @@ class PathTrace final : public LightOp {
     if (use_cache_) co_await fill_cache();
   }
 
+  // Lights are learned, and the directional cache filled, where the camera looks.
+  bool setup_sees_camera() const override { return learned_ || use_cache_; }
+
   // Every path of up to max_depth events (Russian roulette ends paths without leaving any out).
   std::optional<LightPaths> paths(std::span<const LightPaths>) const override {
     return LightPaths::every(1, options_.max_depth);

@@ -165,6 +165,9 @@ class PhotonMap final : public LightOp {
   }
 
  public:
+  // The photons leave the lights, wherever the camera is.
+  bool setup_sees_camera() const override { return false; }
+
   // Light that reached a diffuse or glossy point through mirrors and glass alone: L S+ (D|G).
   std::optional<LightPaths> paths(std::span<const LightPaths>) const override {
     const LightPaths chains = LightPaths::emission().then_repeated(Lobe::specular, 1, max_depth_);

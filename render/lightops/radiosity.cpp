@@ -32,6 +32,9 @@ class Radiosity final : public LightOp {
     offset_ = 20 * ctx.scene->epsilon();
   }
 
+  // The solution is the whole scene's.
+  bool setup_sees_camera() const override { return false; }
+
   // Reflected radiosity: light after one or more diffuse reflections, and only those (the solution treats every
   // surface as diffuse with its Kd: mirrors and glass absorb).
   std::optional<LightPaths> paths(std::span<const LightPaths>) const override {

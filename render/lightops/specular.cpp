@@ -34,6 +34,8 @@ class Specular final : public LightOp {
     co_return;
   }
 
+  bool setup_sees_camera() const override { return false; }
+
   // Chains of 1..max_depth specular events from where they land: an emitter's own light there (added here), or what
   // the input gives at a diffuse or glossy landing (its emission too, should it return that).
   std::optional<LightPaths> paths(std::span<const LightPaths> inputs) const override {

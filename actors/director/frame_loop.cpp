@@ -1,0 +1,88 @@
+#include "actors/director/frame_loop.hpp"
+
+#include <chrono>
+#include <cstdio>
+
+#include "actors/director/farm_failure.hpp"
+#include "actors/director/film_checkpoint.hpp"
+#include "core/log.hpp"
+
+namespace lf {
+
+FrameLoop::FrameLoop(FarmSpec& spec, TileService& tiles, double checkpoint_every, bool restart, bool quiet)
+    : spec_(spec), tiles_(tiles), checkpoint_every_(checkpoint_every), restart_(restart), quiet_(quiet) {}
+
+void FrameLoop::prepare(const std::string& scene_hash) {
+  if (!spec_.job.declared) {
+    FrameSpec one{1, spec_.camera, spec_.image.output};
+    left_.push_back({one, frame_key(spec_, scene_hash, one.camera)});
+  } else {
+    record_.emplace(spec_.image.output);
+    std::string note;
+    if (restart_) record_->clear();
+    else record_->load(note);
+    if (!note.empty()) log_warn(note);
+    for (const FrameSpec& f : spec_.frames) {
+      if (!f.selected) continue;
+      std::string key = frame_key(spec_, scene_hash, f.camera);
+      if (record_->done(f.number, key, f.output)) ++skipped_;
+      else left_.push_back({f, std::move(key)});
+    }
+    if (skipped_ > 0)
+      log_info(std::to_string(skipped_) + " of the job's " + std::to_string(left_.size() + skipped_) + " frames are done (" +
+                   record_->folder() + ", their images unchanged); " +
+                   (left_.empty() ? std::string("nothing to render") : std::to_string(left_.size()) + " to render"),
+               LogKind::recovery);
+  }
+  if (left_.empty()) return;
+  tiles_.begin_frame(left_[0].frame.output, left_[0].key, checkpoint_every_, restart_);
+  // Set up seen from the job's first frame, whichever frame renders first: a setup kept over the frames (one
+  // that does not see the camera, but may have asked ops that do) is then the same in every run of the job.
+  set_up_as_ = spec_.job.declared ? spec_.frames.front().number : left_[0].frame.number;
+  spec_.camera = spec_.job.declared ? spec_.frames.front().camera : left_[0].frame.camera;
+}
+
+void FrameLoop::run(const std::function<void(wire::Phase, Value::Map)>& run_phase) {
+  using Clock = std::chrono::steady_clock;
+  for (size_t i = 0; i < left_.size(); ++i) {
+    const Left& f = left_[i];
+    const auto start = Clock::now();
+    if (i > 0) tiles_.begin_frame(f.frame.output, f.key, checkpoint_every_, restart_);
+    if (i > 0 || f.frame.number != set_up_as_) {
+      // Every actor takes the view first; then what depends on it is set up again (an op's new setup may ask others).
+      run_phase(wire::Phase::frame, Value::Map{{"frame", static_cast<int64_t>(f.frame.number)},
+                                               {"camera", f.frame.camera.to_value()}});
+      run_phase(wire::Phase::setup, {});
+    }
+    run_phase(wire::Phase::render, {});
+    tiles_.finish_progress();
+    if (!tiles_.finished()) throw FarmFailure{"the renderers stopped before every tile was done"};
+    if (auto st = tiles_.write_frame(); !st) throw FarmFailure{st.error().message};
+    ++written_;
+    const double seconds = std::chrono::duration<double>(Clock::now() - start).count();
+    figures_.push_back({f.frame.number, seconds, f.frame.output});
+    if (!record_) continue;
+    if (auto st = record_->add(f.frame.number, f.key, f.frame.output); !st)
+      log_warn(st.error().message + "; a later run will render frame " + std::to_string(f.frame.number) + " again");
+    if (!quiet_) {
+      char line[64];
+      std::snprintf(line, sizeof line, " (%zu of %zu) in %.1f s", written_ + skipped_, left_.size() + skipped_, seconds);
+      log_info("frame " + std::to_string(f.frame.number) + " written to " + f.frame.output + line);
+    }
+  }
+}
+
+void FrameLoop::add_figures(RunFigures& f) const {
+  f.frames_rendered = figures_.size();
+  if (!record_) return;
+  Value::Array frames;
+  double seconds = 0;
+  for (const auto& fig : figures_) {
+    frames.push_back(Value::Map{{"frame", static_cast<int64_t>(fig.number)}, {"seconds", fig.seconds}, {"output", fig.output}});
+    seconds += fig.seconds;
+  }
+  f.render_seconds = seconds;
+  f.frames = Value::Map{{"frames", std::move(frames)}, {"skipped", static_cast<int64_t>(skipped_)}, {"record", record_->folder()}};
+}
+
+}  // namespace lf

@@ -1,0 +1,65 @@
+#pragma once
+// The director's render stage as a sequence of frames: the farm's one frame, or a job's frames in turn over the
+// one farm (launched, shipped and set up once, seen from the job's first frame). Before each other frame it sends
+// PHASE frame {frame, camera}: each actor takes the new view and redoes only the setup that depends on it
+// (LightOp::setup_sees_camera); the rest is kept. So frame k's image is a pure function of the job and k: the same
+// on any layout, and whether the job ran in one go or resumed; where no kept setup asked an op that sees the camera
+// (a photon map, an area-placed cache over ops that do not learn from the view) it is also what a farm of frame k
+// alone renders. Each frame is written as soon as it is complete and recorded in the job's record (JobRecord),
+// which a later run of the same job reads to skip the frames done; the frame in progress resumes from its film
+// checkpoint (FilmCheckpoint).
+#include <functional>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "actors/director/job_record.hpp"
+#include "actors/director/report.hpp"
+#include "actors/director/tile_service.hpp"
+#include "farm/farm_spec.hpp"
+#include "transport/protocol.hpp"
+
+namespace lf {
+
+class FrameLoop {
+ public:
+  // `checkpoint_every`, `restart`: RunOptions'.
+  FrameLoop(FarmSpec& spec, TileService& tiles, double checkpoint_every, bool restart, bool quiet);
+
+  // With the scene's content hash known: which frames are left (a job skips those its record says are done and
+  // whose files are unchanged), the first of them begun in the tile service, and its camera made the farm's
+  // (spec.camera, what every actor's CONFIG says).
+  void prepare(const std::string& scene_hash);
+  bool nothing_left() const { return left_.empty(); }
+
+  // Renders every frame left. `run_phase(phase, body)` sends PHASE to every actor and waits for each READY; throws
+  // FarmFailure when a frame cannot be finished or written.
+  void run(const std::function<void(wire::Phase, Value::Map)>& run_phase);
+  bool all_written() const { return written_ == left_.size(); }
+
+  // A job's figures in the run's report: each frame rendered (PHASE frame, or the render's start, to its image
+  // written), the frames the record had done; the render's seconds are every frame's.
+  void add_figures(RunFigures& f) const;
+
+ private:
+  struct Left {
+    FrameSpec frame;
+    std::string key;
+  };
+  FarmSpec& spec_;
+  TileService& tiles_;
+  double checkpoint_every_;
+  bool restart_, quiet_;
+  std::optional<JobRecord> record_;  // a job's (frames { }); none for a farm of one frame
+  std::vector<Left> left_;
+  size_t skipped_ = 0, written_ = 0;
+  int set_up_as_ = 0;  // the frame whose camera the farm was set up with
+  struct FrameFigures {
+    int number = 0;
+    double seconds = 0;
+    std::string output;
+  };
+  std::vector<FrameFigures> figures_;
+};
+
+}  // namespace lf

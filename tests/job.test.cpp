@@ -1,0 +1,163 @@
+// Render jobs (issue 41): a turntable of frames over one farm. Each frame equals the single-frame render of its
+// camera, bit for bit, on any number of renderers; only the setup that depends on the view is redone; a job whose
+// director is SIGKILLed resumes from its record to the same frames; a changed scene renders its frames again.
+#include <gtest/gtest.h>
+#include <signal.h>
+
+#include <cstdio>
+#include <regex>
+
+#include "render/images/image.hpp"
+#include "tests/farm_harness.hpp"
+
+namespace lf::test {
+namespace {
+
+// cornell_glass turned about its centre; a network with view-dependent setups (direct's learned lights, the camera-
+// placed irradiance cache) and view-independent ones (a pool of two photon maps, an area-placed cache over the path
+// tracer). --set frame=K renders frame K's camera as a farm of one frame, without frames { }; --set paths_learned=1
+// makes the path tracer learn its lights where the camera looks, so the kept area-placed cache asked an op that
+// saw the first frame's camera.
+constexpr const char* kTurntable = R"(
+scene  { builtin = "cornell_glass" }
+image  { width = 40, height = 40, spp = param("spp", 4), output = param("out", "turn.####.png") }
+local function view(f)
+  local a = (f - 1) * 0.05
+  return { eye = {278 + 1073 * math.sin(a), 273, 273 - 1073 * math.cos(a)}, at = {278, 273, 273}, fov = 39.3 }
+end
+local single = param("frame", 0)
+if single > 0 then camera(view(single)) else frames { first = 1, last = param("last", 12), camera = view } end
+local direct   = lightop "direct" { light_sampling = "learned", light_samples = 2 }
+local caustics = multiplexer { lightop "photonmap" { photons = 20000, k = 50 }, replicas = 2 }
+local paths    = lightop "pathtrace" { name = "paths", light_sampling = param("paths_learned", 0) == 1 and "learned" or "tree" }
+local bounce1  = lightop "irradiance" { input = paths, name = "bounce1", placement = "area", prepass = 3000 }
+local glossy1  = lightop "glossy" { input = paths, name = "glossy1" }
+local through  = lightop "specular" { input = lightop "combine" { inputs = { direct, bounce1, glossy1 }, name = "seen" },
+                                      emitters = false, name = "through" }
+local lit1     = lightop "combine" { inputs = { direct, bounce1, glossy1, through }, name = "lit1" }
+local indirect = lightop "irradiance" { input = lit1, name = "indirect" }
+local glossy   = lightop "glossy" { input = lit1, name = "glossy" }
+local landing  = lightop "combine" { inputs = { direct, caustics, indirect, glossy }, name = "landing" }
+local specular = lightop "specular" { input = landing }
+renderers { count = param("renderers", 1),
+            lighting = lightop "combine" { inputs = { direct, specular, caustics, indirect, glossy } } }
+)";
+
+class JobTest : public FarmFixture {
+ protected:
+  std::string script;
+  void SetUp() override {
+    FarmFixture::SetUp();
+    script = write("turn.lua", kTurntable);
+  }
+  RunResult run(const std::string& out, std::vector<std::string> extra = {}) {
+    std::vector<std::string> a{"run", script, "--set", "out=" + path(out), "--checkpoint-every", "0"};
+    a.insert(a.end(), extra.begin(), extra.end());
+    return run_lightfarm(a);
+  }
+  // Frame n of outputs "NAME.####.exr".
+  std::string frame(const std::string& name, int n) const {
+    char file[64];
+    std::snprintf(file, sizeof file, "%s.%04d.exr", name.c_str(), n);
+    return path(file);
+  }
+  static bool same_pixels(const std::string& a, const std::string& b) {
+    auto x = read_image(a), y = read_image(b);
+    return x.ok() && y.ok() && x->width == y->width && x->pixels == y->pixels;
+  }
+  // A LightOp's figure `key` from the end-of-run table ("NAME   a 1, b 2, ..."); -1 if it is not there.
+  static int figure(const std::string& err, const std::string& actor, const std::string& key) {
+    std::smatch m;
+    if (!std::regex_search(err, m, std::regex("\n" + actor + " +[^\n]*\\b" + key + " ([0-9]+)"))) return -1;
+    return std::stoi(m[1]);
+  }
+};
+
+TEST_F(JobTest, FramesEqualSingleFrameRendersOnAnyLayoutAndRedoOnlyViewDependentSetup) {
+  const auto one = run("a.####.exr", {"--stats-json", path("a.json")});
+  ASSERT_EQ(one.status, 0) << one.err;
+  expect_no_leftovers(one);
+  EXPECT_NE(one.out.find("wrote 12 frames: " + frame("a", 1) + " ... " + frame("a", 12)),
+            std::string::npos) << one.out;
+  const auto three = run("b.####.exr", {"--set", "renderers=3"});
+  ASSERT_EQ(three.status, 0) << three.err;
+  for (int n = 1; n <= 12; ++n)
+    EXPECT_TRUE(same_pixels(frame("a", n), frame("b", n))) << "frame " << n << ": 1 and 3 renderers differ";
+  // Frames after the first, whose view-dependent setups were redone for them, equal farms of that frame alone.
+  for (int n : {1, 6, 12}) {
+    const auto single = run("single.exr", {"--set", "frame=" + std::to_string(n)});
+    ASSERT_EQ(single.status, 0) << single.err;
+    EXPECT_TRUE(same_pixels(frame("a", n), path("single.exr"))) << "frame " << n << " differs from its farm alone";
+  }
+  EXPECT_FALSE(same_pixels(frame("a", 1), frame("a", 2))) << "the camera did not move";
+  // Setup keys: what depends on the camera was set up once a frame, the rest once for the job.
+  EXPECT_EQ(figure(one.err, "direct", "setups"), 12) << "learned lights follow the view\n" << one.err;
+  EXPECT_EQ(figure(one.err, "indirect", "setups"), 12) << "a camera-placed cache follows the view";
+  EXPECT_EQ(figure(one.err, "paths", "setups"), 1);
+  EXPECT_EQ(figure(one.err, "bounce1", "setups"), 1) << "an area-placed cache is the scene's";
+  EXPECT_EQ(figure(one.err, "photonmap.0", "setups"), 1) << "photons do not depend on the camera";
+  EXPECT_EQ(figure(one.err, "photonmap.1", "setups"), 1);
+  EXPECT_EQ(figure(one.err, "glossy", "setups"), 1);
+  EXPECT_EQ(figure(one.err, "direct", "frames"), 12);
+  const std::string stats = read_file(path("a.json"));
+  EXPECT_NE(stats.find("\"job\""), std::string::npos);
+  size_t frames = 0;
+  for (size_t at = stats.find("\"frame\":"); at != std::string::npos; at = stats.find("\"frame\":", at + 1)) ++frames;
+  EXPECT_EQ(frames, 12u) << stats;
+}
+
+TEST_F(JobTest, AKilledJobResumesFromItsRecordToTheSameFrames) {
+  const auto reference = run("ref.####.exr", {"--set", "last=8", "--set", "paths_learned=1"});
+  ASSERT_EQ(reference.status, 0) << reference.err;
+  Farm farm({"run", script, "--set", "out=" + path("x.####.exr"), "--set", "last=8", "--set", "paths_learned=1", "--checkpoint-every", "0"});
+  ASSERT_TRUE(Farm::eventually([&] { return fs::exists(frame("x", 5)); }, 120)) << farm.err_so_far();
+  ::kill(farm.pid(), SIGKILL);
+  const auto killed = farm.wait(10);
+  EXPECT_EQ(killed.status, 128 + SIGKILL);
+  expect_no_leftovers(killed);
+  ASSERT_TRUE(fs::exists(path("x.lfjob/frames")));
+  // A frame whose image was overwritten since it was recorded is not done.
+  fs::copy_file(frame("ref", 1), frame("x", 2), fs::copy_options::overwrite_existing);
+
+  const auto resumed = run("x.####.exr", {"--set", "last=8", "--set", "paths_learned=1"});
+  ASSERT_EQ(resumed.status, 0) << resumed.err;
+  expect_no_leftovers(resumed);
+  int done = 0, total = 0;
+  const auto at = resumed.err.find(" of the job's ");
+  ASSERT_NE(at, std::string::npos) << resumed.err;
+  ASSERT_EQ(std::sscanf(resumed.err.c_str() + resumed.err.rfind(' ', at - 1) + 1, "%d of the job's %d", &done, &total), 2);
+  EXPECT_GE(done, 4) << "frames 1, 3, 4, 5 were done and unchanged";
+  EXPECT_LT(done, 8);
+  EXPECT_EQ(total, 8);
+  EXPECT_NE(resumed.err.find("frame 2 written"), std::string::npos) << "the overwritten frame renders again";
+  for (int n = 1; n <= 8; ++n)
+    EXPECT_TRUE(same_pixels(frame("ref", n), frame("x", n))) << "frame " << n << " differs after the resume";
+
+  // Done: nothing launches; --restart renders what --frames asks; another image (spp) renders its frames again.
+  const auto again = run("x.####.exr", {"--set", "last=8", "--set", "paths_learned=1"});
+  EXPECT_EQ(again.status, 0) << again.err;
+  EXPECT_NE(again.out.find("nothing to render: every frame of the job is done"), std::string::npos) << again.out;
+  const auto only = run("x.####.exr", {"--set", "last=8", "--set", "paths_learned=1", "--frames", "3-4", "--restart"});
+  EXPECT_EQ(only.status, 0) << only.err;
+  EXPECT_NE(only.out.find("wrote 2 frames"), std::string::npos) << only.out;
+  const auto other = run("x.####.exr", {"--set", "last=8", "--set", "paths_learned=1", "--set", "spp=2", "--frames", "1"});
+  EXPECT_EQ(other.status, 0) << other.err;
+  EXPECT_EQ(other.err.find(" of the job's "), std::string::npos) << "frame 1 at 2 spp is not the frame recorded";
+  EXPECT_NE(other.err.find("frame 1 written"), std::string::npos) << other.err;
+}
+
+TEST_F(JobTest, BadJobsAreRefusedBeforeAnythingStarts) {
+  auto r = run_lightfarm({"run", script, "--set", "out=" + path("plain.exr")});
+  EXPECT_EQ(r.status, 2);
+  EXPECT_NE(r.err.find("has no #### where the frame number goes"), std::string::npos) << r.err;
+  r = run_lightfarm({"run", script, "--frames", "13"});
+  EXPECT_EQ(r.status, 2);
+  EXPECT_NE(r.err.find("--frames: frame 13 is not one of the script's frames (1-12)"), std::string::npos) << r.err;
+  r = run_lightfarm({"run", script, "--frames", "3-1"});
+  EXPECT_EQ(r.status, 2);
+  EXPECT_NE(r.err.find("range 3-1 runs backwards"), std::string::npos) << r.err;
+  expect_no_leftovers(r);
+}
+
+}  // namespace
+}  // namespace lf::test
