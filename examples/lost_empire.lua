@@ -38,7 +38,21 @@ scene    { file = "../../shared/scenes/lost_empire/lost_empire.obj" }
 -- kd = 0: a torch's crossed quads would otherwise light each other where they meet, at distances near 0 (an
 -- estimator without finite variance: fireflies that never average out).
 material "Torch" { emission = {9, 9, 6}, kd = {0, 0, 0} }
-camera   { eye = {-5, 18, -30}, at = {5, 12, 5}, fov = 70 }
+-- --set frames=N: a walkthrough of N frames (outputs lost_empire.####.png): the eye walks in from the opening view and
+-- turns, along a smooth path a Lua function of the frame gives; --set frame=K renders frame K of it alone.
+local walk, at_frame = param("frames", 0), param("frame", 0)
+local function walk_view(f)
+  local t = walk > 1 and (f - 1) / (walk - 1) or 0
+  local s = t * t * (3 - 2 * t)  -- eases in and out
+  return { eye = {-5 + 8 * s, 18 - s, -30 + 14 * s}, at = {5 + 7 * s, 12, 5 + 9 * s}, fov = 70 }
+end
+if walk > 0 and at_frame == 0 then
+  frames { first = 1, last = walk, camera = walk_view }
+elseif walk > 0 then
+  camera(walk_view(at_frame))
+else
+  camera { eye = {-5, 18, -30}, at = {5, 12, 5}, fov = 70 }
+end
 -- shade_spp: of the spp camera samples per pixel, how many the lighting shades; the others only see the torches'
 -- flames, whose sub-pixel shapes need many camera samples but no light (docs/lua-api.md, image).
 local spp = param("spp", 16)
@@ -46,7 +60,7 @@ local shade_spp = param("shade_spp", spp)
 -- adaptive_spp: pixels still noisy after shade_spp lit samples (near the torches, mostly) get more of their spp
 -- samples lit, up to adaptive_spp (docs/lua-api.md, image).
 local look = { width = param("width", 320), height = param("height", 240), spp = spp, shade_spp = shade_spp,
-               exposure = param("exposure", 2), output = param("output", "lost_empire.png") }
+               exposure = param("exposure", 2), output = param("output", walk > 0 and at_frame == 0 and "lost_empire.####.png" or "lost_empire.png") }
 if param("adaptive_spp", 0) > 0 then
   look.adaptive_spp = param("adaptive_spp", 0)
   look.adaptive_threshold = param("adaptive_threshold", 0.05)

@@ -75,9 +75,9 @@ class Director {
     }
     // No actor outlives the farm, whatever happened above. Host agents leave by themselves once their actors have
     // exited (a Slurm step killed from outside would be cancelled with them); one still there after the grace is
-    // stopped like an actor.
+    // stopped like an actor (at once when no actor started: a job with every frame done).
     supervisor_.send_bye_to_all();
-    launchers_.stop_all(std::chrono::milliseconds(status == 0 ? 3000 : 300));
+    launchers_.stop_all(std::chrono::milliseconds(frames_.nothing_left() ? 0 : status == 0 ? 3000 : 300));
     kill_orphans();
     // An actor removes its IPC folder when it exits; one that was killed cannot. Every actor here is reaped by now.
     sweep_stale_private_dirs("actor");

@@ -1,0 +1,146 @@
+// A walkthrough of Lost Empire as one job against the same frames as separate `lightfarm run`s (issue 41's goals).
+//
+// The job: examples/lost_empire.lua with --set frames=N (the network: --set lighting=network), one farm rendering
+// frame 1..N. The separate runs: the same script with --set frame=K, a farm of that frame alone, for an evenly
+// spread sample of the frames (--separate, default 6: frames 1, ..., N); their mean time stands for every frame's,
+// and N times it for the N separate runs. Printed and written as JSON:
+//   - the job's wall time against the N separate runs' (goal: <= 0.4);
+//   - the job's time per frame after the first against its first frame's (goal: <= 0.5), median and spread;
+//   - the share of the machine's CPU time the job left idle (actors' and director's CPU-seconds against wall time
+//     times the CPUs it may use), and the same for the separate runs;
+//   - the first frame's time is the setup stage and its render; a later frame's, PHASE frame to its image written;
+//   - whether each sampled frame of the job equals its separate run bit for bit (it does where no setup the job
+//     keeps asked an op that sees the camera: the network's path tracer does not learn from the view);
+//   - resume: the job run again with every frame done (verify the record, launch nothing): its wall time.
+//
+//   build/bench/walkthrough_bench [--frames N] [--separate K] [--lighting network|direct] [--width W --height H]
+//                                 [--spp S] [--json FILE]
+#include <sched.h>
+
+#include <algorithm>
+#include <cstdio>
+#include <fstream>
+#include <string>
+
+#include "bench/bench_util.hpp"
+#include "render/images/image.hpp"
+
+namespace {
+
+struct Args {
+  int frames = 24, separate = 6;
+  std::string lighting = "network";
+  int width = 320, height = 240, spp = 16;
+  std::string json = "bench-walkthrough.json";
+};
+
+Args parse(int argc, char** argv) {
+  Args a;
+  for (int i = 1; i + 1 < argc; i += 2) {
+    const std::string k = argv[i], v = argv[i + 1];
+    if (k == "--frames") a.frames = std::max(2, std::atoi(v.c_str()));
+    else if (k == "--separate") a.separate = std::max(2, std::atoi(v.c_str()));
+    else if (k == "--lighting") a.lighting = v;
+    else if (k == "--width") a.width = std::atoi(v.c_str());
+    else if (k == "--height") a.height = std::atoi(v.c_str());
+    else if (k == "--spp") a.spp = std::atoi(v.c_str());
+    else if (k == "--json") a.json = v;
+  }
+  a.separate = std::min(a.separate, a.frames);
+  return a;
+}
+
+int cpu_count() {
+  cpu_set_t set;
+  CPU_ZERO(&set);
+  return sched_getaffinity(0, sizeof set, &set) == 0 ? CPU_COUNT(&set) : 1;
+}
+
+std::string frame_file(const std::string& dir, int k) {
+  char name[64];
+  std::snprintf(name, sizeof name, "/walk.%04d.exr", k);
+  return dir + name;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  const Args args = parse(argc, argv);
+  if (bench::shared_scene("lost_empire/lost_empire.obj").empty()) return 0;
+  const std::string script = std::string(LIGHTFARM_SOURCE_DIR) + "/examples/lost_empire.lua";
+  const auto dir = bench::fs::temp_directory_path() / ("lightfarm-walkthrough-" + std::to_string(::getpid()));
+  bench::fs::create_directories(dir);
+  const std::vector<std::string> look{"lighting=" + args.lighting, "width=" + std::to_string(args.width),
+                                      "height=" + std::to_string(args.height), "spp=" + std::to_string(args.spp),
+                                      "frames=" + std::to_string(args.frames)};
+  const int cpus = cpu_count();
+
+  // The job, one farm.
+  const auto job = bench::run_farm(script, look, (dir / "walk.####.exr").string());
+  const auto frame_seconds = bench::json_numbers(job.stats, "seconds");  // the job's frames, in order
+  std::vector<double> later(frame_seconds.begin() + (frame_seconds.empty() ? 0 : 1), frame_seconds.end());
+  // The first frame's setup is the setup stage; a later frame's (what depends on the view) is in its own seconds.
+  const double first = frame_seconds.empty() ? 0 : job.number("setup") + frame_seconds.front();
+  const auto later_spread = bench::spread(later);
+  const double job_idle = 1 - job.cpu_seconds / (job.wall_seconds * cpus);
+  std::printf("job: %d frames in %.1f s (%.1f CPU-s; %.0f%% of %d CPUs idle); first frame %.2f s, later frames "
+              "%.2f s (%.2f-%.2f)\n", args.frames, job.wall_seconds, job.cpu_seconds, 100 * job_idle, cpus, first,
+              later_spread.median, later_spread.min, later_spread.max);
+  std::printf("  phases: setup %.2f s, render %.2f s (the setups of frames after the first are in render)\n",
+              job.number("setup"), job.number("render"));
+  std::fflush(stdout);
+
+  // Separate farms of single frames, evenly spread over the walk.
+  std::vector<double> separate_seconds;
+  double separate_cpu = 0;
+  int identical = 0;
+  std::printf("separate runs:");
+  for (int i = 0; i < args.separate; ++i) {
+    const int k = 1 + static_cast<int>(std::lround(static_cast<double>(i) * (args.frames - 1) / (args.separate - 1)));
+    std::vector<std::string> sets = look;
+    sets.push_back("frame=" + std::to_string(k));
+    const std::string out = (dir / ("single." + std::to_string(k) + ".exr")).string();
+    const auto one = bench::run_farm(script, sets, out);
+    separate_seconds.push_back(one.wall_seconds);
+    separate_cpu += one.cpu_seconds;
+    auto a = lf::read_image(out), b = lf::read_image(frame_file(dir.string(), k));
+    const bool same = a.ok() && b.ok() && a->pixels == b->pixels;
+    identical += same;
+    std::printf(" %d: %.2f s%s", k, one.wall_seconds, same ? "" : " (differs)");
+    std::fflush(stdout);
+  }
+  std::printf("\n");
+  double mean_separate = 0;
+  for (double s : separate_seconds) mean_separate += s;
+  mean_separate /= static_cast<double>(separate_seconds.size());
+  double separate_wall = 0;
+  for (double s : separate_seconds) separate_wall += s;
+  const double separate_idle = 1 - separate_cpu / (separate_wall * cpus);
+  const double estimate = mean_separate * args.frames;
+  std::printf("  mean %.2f s a frame: %d separate runs ~ %.1f s (%.0f%% of %d CPUs idle)\n", mean_separate, args.frames,
+              estimate, 100 * separate_idle, cpus);
+  std::printf("  %d of %d sampled frames identical to the job's\n", identical, args.separate);
+
+  // Resume with every frame done: the scene loaded for its key, the record verified, nothing launched.
+  std::fflush(stdout);
+  const auto again = bench::run_farm(script, look, (dir / "walk.####.exr").string());
+  std::printf("resume with every frame done: %.2f s\n", again.wall_seconds);
+
+  const double ratio = job.wall_seconds / estimate;
+  const double per_frame = first > 0 ? later_spread.median / first : 0;
+  std::printf("\njob / separate runs: %.3f (goal <= 0.4)\nlater frame / first frame: %.3f (%.3f-%.3f; goal <= 0.5)\n",
+              ratio, per_frame, first > 0 ? later_spread.min / first : 0, first > 0 ? later_spread.max / first : 0);
+
+  std::ofstream(args.json) << "{\n  \"frames\": " << args.frames << ", \"lighting\": \"" << args.lighting
+                           << "\", \"width\": " << args.width << ", \"height\": " << args.height << ", \"spp\": " << args.spp
+                           << ",\n  \"job_seconds\": " << job.wall_seconds << ", \"job_cpu_seconds\": " << job.cpu_seconds
+                           << ", \"job_idle_share\": " << job_idle << ",\n  \"first_frame_seconds\": " << first
+                           << ", \"later_frame_seconds\": {\"median\": " << later_spread.median << ", \"min\": "
+                           << later_spread.min << ", \"max\": " << later_spread.max << "},\n  \"separate_mean_seconds\": "
+                           << mean_separate << ", \"separate_sampled\": " << args.separate
+                           << ", \"separate_idle_share\": " << separate_idle << ", \"identical_frames\": " << identical
+                           << ",\n  \"job_over_separate\": " << ratio << ", \"later_over_first\": " << per_frame
+                           << ", \"resume_all_done_seconds\": " << again.wall_seconds << "\n}\n";
+  bench::fs::remove_all(dir);
+  return 0;
+}
