@@ -13,9 +13,9 @@
 namespace lf::test {
 namespace {
 
-// cornell_glass turned about its centre; a network with view-dependent setups (direct's learned lights, the camera-
-// placed irradiance cache) and view-independent ones (a pool of two photon maps, an area-placed cache over the path
-// tracer). --set frame=K renders frame K's camera as a farm of one frame, without frames { }; --set paths_learned=1
+// cornell_glass turned about its centre; a network with view-dependent setups (direct's learned lights; the camera-
+// placed irradiance cache, which carries its records over the frames, or with --set reuse=0 makes its own each
+// frame) and view-independent ones (a pool of two photon maps, an area-placed cache over the path tracer). --set frame=K renders frame K's camera as a farm of one frame, without frames { }; --set paths_learned=1
 // makes the path tracer learn its lights where the camera looks, so the kept area-placed cache asked an op that
 // saw the first frame's camera.
 constexpr const char* kTurntable = R"(
@@ -35,7 +35,7 @@ local glossy1  = lightop "glossy" { input = paths, name = "glossy1" }
 local through  = lightop "specular" { input = lightop "combine" { inputs = { direct, bounce1, glossy1 }, name = "seen" },
                                       emitters = false, name = "through" }
 local lit1     = lightop "combine" { inputs = { direct, bounce1, glossy1, through }, name = "lit1" }
-local indirect = lightop "irradiance" { input = lit1, name = "indirect" }
+local indirect = lightop "irradiance" { input = lit1, name = "indirect", reuse = param("reuse", 1) == 1 }
 local glossy   = lightop "glossy" { input = lit1, name = "glossy" }
 local landing  = lightop "combine" { inputs = { direct, caustics, indirect, glossy }, name = "landing" }
 local specular = lightop "specular" { input = landing }
@@ -74,12 +74,13 @@ class JobTest : public FarmFixture {
 };
 
 TEST_F(JobTest, FramesEqualSingleFrameRendersOnAnyLayoutAndRedoOnlyViewDependentSetup) {
-  const auto one = run("a.####.exr", {"--stats-json", path("a.json")});
+  // The camera-placed cache made anew each frame: every setup a frame uses is its own view's or the scene's.
+  const auto one = run("a.####.exr", {"--stats-json", path("a.json"), "--set", "reuse=0"});
   ASSERT_EQ(one.status, 0) << one.err;
   expect_no_leftovers(one);
   EXPECT_NE(one.out.find("wrote 12 frames: " + frame("a", 1) + " ... " + frame("a", 12)),
             std::string::npos) << one.out;
-  const auto three = run("b.####.exr", {"--set", "renderers=3"});
+  const auto three = run("b.####.exr", {"--set", "renderers=3", "--set", "reuse=0"});
   ASSERT_EQ(three.status, 0) << three.err;
   for (int n = 1; n <= 12; ++n)
     EXPECT_TRUE(same_pixels(frame("a", n), frame("b", n))) << "frame " << n << ": 1 and 3 renderers differ";
@@ -99,6 +100,17 @@ TEST_F(JobTest, FramesEqualSingleFrameRendersOnAnyLayoutAndRedoOnlyViewDependent
   EXPECT_EQ(figure(one.err, "photonmap.1", "setups"), 1);
   EXPECT_EQ(figure(one.err, "glossy", "setups"), 1);
   EXPECT_EQ(figure(one.err, "direct", "frames"), 12);
+  // The cache carried over the frames: records added where each new view needs them, the same on any layout.
+  const auto carried = run("c.####.exr");
+  ASSERT_EQ(carried.status, 0) << carried.err;
+  const auto carried3 = run("d.####.exr", {"--set", "renderers=3"});
+  ASSERT_EQ(carried3.status, 0) << carried3.err;
+  for (int n = 1; n <= 12; ++n)
+    EXPECT_TRUE(same_pixels(frame("c", n), frame("d", n))) << "frame " << n << ": 1 and 3 renderers differ";
+  EXPECT_TRUE(same_pixels(frame("a", 1), frame("c", 1))) << "the first frame has only its own view's records";
+  EXPECT_FALSE(same_pixels(frame("a", 6), frame("c", 6))) << "frame 6 used no record of the frames before it";
+  EXPECT_EQ(figure(carried.err, "indirect", "setups"), 1) << carried.err;
+  EXPECT_EQ(figure(carried.err, "indirect", "extended"), 11);
   const std::string stats = read_file(path("a.json"));
   EXPECT_NE(stats.find("\"job\""), std::string::npos);
   size_t frames = 0;
@@ -127,6 +139,7 @@ TEST_F(JobTest, AKilledJobResumesFromItsRecordToTheSameFrames) {
   ASSERT_NE(at, std::string::npos) << resumed.err;
   ASSERT_EQ(std::sscanf(resumed.err.c_str() + resumed.err.rfind(' ', at - 1) + 1, "%d of the job's %d", &done, &total), 2);
   EXPECT_GE(done, 4) << "frames 1, 3, 4, 5 were done and unchanged";
+  EXPECT_NE(resumed.err.find("replaying the views of the "), std::string::npos) << "the cache carried over the frames";
   EXPECT_LT(done, 8);
   EXPECT_EQ(total, 8);
   EXPECT_NE(resumed.err.find("frame 2 written"), std::string::npos) << "the overwritten frame renders again";
@@ -140,10 +153,30 @@ TEST_F(JobTest, AKilledJobResumesFromItsRecordToTheSameFrames) {
   const auto only = run("x.####.exr", {"--set", "last=8", "--set", "paths_learned=1", "--frames", "3-4", "--restart"});
   EXPECT_EQ(only.status, 0) << only.err;
   EXPECT_NE(only.out.find("wrote 2 frames"), std::string::npos) << only.out;
+  EXPECT_NE(only.err.find("replaying the views of the 1 frames before frame 3"), std::string::npos) << only.err;
+  for (int n : {3, 4})
+    EXPECT_TRUE(same_pixels(frame("ref", n), frame("x", n))) << "frame " << n << " of --frames 3-4 is not the job's";
   const auto other = run("x.####.exr", {"--set", "last=8", "--set", "paths_learned=1", "--set", "spp=2", "--frames", "1"});
   EXPECT_EQ(other.status, 0) << other.err;
   EXPECT_EQ(other.err.find(" of the job's "), std::string::npos) << "frame 1 at 2 spp is not the frame recorded";
   EXPECT_NE(other.err.find("frame 1 written"), std::string::npos) << other.err;
+
+  // Two runs of the job at once in one folder, each with its --frames (a Slurm array's tasks): every frame is
+  // recorded, and each equals the uninterrupted job's.
+  auto task = [&](const std::string& frames) {
+    return std::make_unique<Farm>(std::vector<std::string>{"run", script, "--set", "out=" + path("y.####.exr"), "--set", "last=8",
+                                                           "--set", "paths_learned=1", "--checkpoint-every", "0", "--frames", frames});
+  };
+  auto first = task("1-4"), second = task("5-8");
+  const auto first_done = first->wait(300), second_done = second->wait(300);
+  ASSERT_EQ(first_done.status, 0) << first_done.err;
+  ASSERT_EQ(second_done.status, 0) << second_done.err;
+  expect_no_leftovers(first_done);
+  expect_no_leftovers(second_done);
+  for (int n = 1; n <= 8; ++n)
+    EXPECT_TRUE(same_pixels(frame("ref", n), frame("y", n))) << "frame " << n << " of a task differs from the job's";
+  const auto whole = run("y.####.exr", {"--set", "last=8", "--set", "paths_learned=1"});
+  EXPECT_NE(whole.err.find("8 of the job's 8 frames are done"), std::string::npos) << whole.err;
 }
 
 TEST_F(JobTest, BadJobsAreRefusedBeforeAnythingStarts) {

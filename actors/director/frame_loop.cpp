@@ -6,8 +6,28 @@
 #include "actors/director/farm_failure.hpp"
 #include "actors/director/film_checkpoint.hpp"
 #include "core/log.hpp"
+#include "render/lightops/lightop_registry.hpp"
 
 namespace lf {
+
+namespace {
+
+// Whether a LightOp of the farm carries its setup over a job's views (a plug-in's own process cannot say: no).
+bool carries_views(const FarmSpec& spec) {
+  for (const ActorSpec& a : spec.actors) {
+    const LightOpKind* kind = a.runtime.count("cmd") ? nullptr : find_lightop_kind(a.kind);
+    if (!kind) continue;
+    try {
+      const auto op = create_lightop(*kind, ParamTable(a.params, a.name));
+      if (op->setup_sees_camera() && op->carries_views()) return true;
+    } catch (const std::exception&) {
+      // Its own process will say what is wrong with its parameters.
+    }
+  }
+  return false;
+}
+
+}  // namespace
 
 FrameLoop::FrameLoop(FarmSpec& spec, TileService& tiles, double checkpoint_every, bool restart, bool quiet)
     : spec_(spec), tiles_(tiles), checkpoint_every_(checkpoint_every), restart_(restart), quiet_(quiet) {}
@@ -15,19 +35,21 @@ FrameLoop::FrameLoop(FarmSpec& spec, TileService& tiles, double checkpoint_every
 void FrameLoop::prepare(const std::string& scene_hash) {
   if (!spec_.job.declared) {
     FrameSpec one{1, spec_.camera, spec_.image.output};
-    left_.push_back({one, frame_key(spec_, scene_hash, one.camera)});
+    left_.push_back({one, 0, frame_key(spec_, scene_hash, one.camera)});
   } else {
     record_.emplace(spec_.image.output);
     std::string note;
     if (restart_) record_->clear();
     else record_->load(note);
     if (!note.empty()) log_warn(note);
-    for (const FrameSpec& f : spec_.frames) {
+    for (size_t i = 0; i < spec_.frames.size(); ++i) {
+      const FrameSpec& f = spec_.frames[i];
       if (!f.selected) continue;
       std::string key = frame_key(spec_, scene_hash, f.camera);
       if (record_->done(f.number, key, f.output)) ++skipped_;
-      else left_.push_back({f, std::move(key)});
+      else left_.push_back({f, i, std::move(key)});
     }
+    carries_views_ = carries_views(spec_);
     if (skipped_ > 0)
       log_info(std::to_string(skipped_) + " of the job's " + std::to_string(left_.size() + skipped_) + " frames are done (" +
                    record_->folder() + ", their images unchanged); " +
@@ -38,22 +60,31 @@ void FrameLoop::prepare(const std::string& scene_hash) {
   tiles_.begin_frame(left_[0].frame.output, left_[0].key, checkpoint_every_, restart_);
   // Set up seen from the job's first frame, whichever frame renders first: a setup kept over the frames (one
   // that does not see the camera, but may have asked ops that do) is then the same in every run of the job.
-  set_up_as_ = spec_.job.declared ? spec_.frames.front().number : left_[0].frame.number;
   spec_.camera = spec_.job.declared ? spec_.frames.front().camera : left_[0].frame.camera;
+}
+
+void FrameLoop::switch_view(const FrameSpec& f, const std::function<void(wire::Phase, Value::Map)>& run_phase) {
+  // Every actor takes the view first; then what depends on it is set up again (an op's new setup may ask others).
+  run_phase(wire::Phase::frame, Value::Map{{"frame", static_cast<int64_t>(f.number)}, {"camera", f.camera.to_value()}});
+  run_phase(wire::Phase::setup, {});
 }
 
 void FrameLoop::run(const std::function<void(wire::Phase, Value::Map)>& run_phase) {
   using Clock = std::chrono::steady_clock;
+  size_t holds = 0;  // the frame (in spec.frames) whose view the farm holds: set up from the first
   for (size_t i = 0; i < left_.size(); ++i) {
     const Left& f = left_[i];
     const auto start = Clock::now();
     if (i > 0) tiles_.begin_frame(f.frame.output, f.key, checkpoint_every_, restart_);
-    if (i > 0 || f.frame.number != set_up_as_) {
-      // Every actor takes the view first; then what depends on it is set up again (an op's new setup may ask others).
-      run_phase(wire::Phase::frame, Value::Map{{"frame", static_cast<int64_t>(f.frame.number)},
-                                               {"camera", f.frame.camera.to_value()}});
-      run_phase(wire::Phase::setup, {});
+    if (carries_views_ && f.index > holds + 1) {
+      if (!quiet_)
+        log_info("replaying the views of the " + std::to_string(f.index - holds - 1) + " frames before frame " +
+                 std::to_string(f.frame.number) + ", which this run does not render: a setup carried over the frames "
+                 "then holds what the whole job's would");
+      for (size_t j = holds + 1; j < f.index; ++j) switch_view(spec_.frames[j], run_phase);
     }
+    if (f.index != holds) switch_view(f.frame, run_phase);
+    holds = f.index;
     run_phase(wire::Phase::render, {});
     tiles_.finish_progress();
     if (!tiles_.finished()) throw FarmFailure{"the renderers stopped before every tile was done"};

@@ -2,10 +2,13 @@
 // The director's render stage as a sequence of frames: the farm's one frame, or a job's frames in turn over the
 // one farm (launched, shipped and set up once, seen from the job's first frame). Before each other frame it sends
 // PHASE frame {frame, camera}: each actor takes the new view and redoes only the setup that depends on it
-// (LightOp::setup_sees_camera); the rest is kept. So frame k's image is a pure function of the job and k: the same
-// on any layout, and whether the job ran in one go or resumed; where no kept setup asked an op that sees the camera
-// (a photon map, an area-placed cache over ops that do not learn from the view) it is also what a farm of frame k
-// alone renders. Each frame is written as soon as it is complete and recorded in the job's record (JobRecord),
+// (LightOp::setup_sees_camera: a new op for the view, or the op's setup extended to it, LightOp::carries_views);
+// the rest is kept. So frame k's image is a pure function of the job and k: the same on any layout, and whether
+// the job ran in one go or resumed: where an op carries its setup over the views, the views of frames a run skips
+// (done, or not chosen by --frames) are replayed (PHASE frame and setup, no render) so that it holds what the
+// uninterrupted job's held. Where nothing is carried and no kept setup asked an op that sees the camera (a photon
+// map, an area-placed cache over ops that do not learn from the view) it is also what a farm of frame k alone
+// renders. Each frame is written as soon as it is complete and recorded in the job's record (JobRecord),
 // which a later run of the same job reads to skip the frames done; the frame in progress resumes from its film
 // checkpoint (FilmCheckpoint).
 #include <functional>
@@ -44,8 +47,11 @@ class FrameLoop {
  private:
   struct Left {
     FrameSpec frame;
+    size_t index = 0;  // in spec.frames
     std::string key;
   };
+  // PHASE frame and PHASE setup: the farm takes frame `f`'s view.
+  void switch_view(const FrameSpec& f, const std::function<void(wire::Phase, Value::Map)>& run_phase);
   FarmSpec& spec_;
   TileService& tiles_;
   double checkpoint_every_;
@@ -53,7 +59,7 @@ class FrameLoop {
   std::optional<JobRecord> record_;  // a job's (frames { }); none for a farm of one frame
   std::vector<Left> left_;
   size_t skipped_ = 0, written_ = 0;
-  int set_up_as_ = 0;  // the frame whose camera the farm was set up with
+  bool carries_views_ = false;  // an op carries its setup over the views: frames skipped are replayed
   struct FrameFigures {
     int number = 0;
     double seconds = 0;

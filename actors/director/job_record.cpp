@@ -1,5 +1,9 @@
 #include "actors/director/job_record.hpp"
 
+#include <fcntl.h>
+#include <sys/file.h>
+#include <unistd.h>
+
 #include <filesystem>
 #include <fstream>
 #include <sstream>
@@ -21,6 +25,11 @@ std::string read_all(const std::string& path, bool& ok) {
   ss << in.rdbuf();
   ok = static_cast<bool>(in) || in.eof();
   return ss.str();
+}
+
+// content_hash's form: 16 hex digits.
+bool is_hash(const std::string& s) {
+  return s.size() == 16 && s.find_first_not_of("0123456789abcdef") == std::string::npos;
 }
 
 }  // namespace
@@ -55,6 +64,10 @@ JobRecord::JobRecord(const std::string& output_pattern) : folder_(folder_for(out
 void JobRecord::load(std::string& note) {
   note.clear();
   frames_.clear();
+  read_into(frames_, note);
+}
+
+void JobRecord::read_into(std::map<int, Entry>& frames, std::string& note) const {
   const std::string path = folder_ + "/frames";
   std::error_code ec;
   if (!fs::is_regular_file(path, ec)) return;
@@ -70,11 +83,12 @@ void JobRecord::load(std::string& note) {
     std::istringstream fields(line);
     int number = 0;
     Entry e;
-    if (!(fields >> number >> e.key >> e.checksum) || !std::getline(fields >> std::ws, e.file) || e.file.empty()) {
+    if (!(fields >> number >> e.key >> e.checksum) || !is_hash(e.key) || !is_hash(e.checksum) ||
+        !std::getline(fields >> std::ws, e.file) || e.file.empty()) {
       ++skipped;
       continue;
     }
-    frames_[number] = std::move(e);
+    frames[number] = std::move(e);
   }
   if (skipped > 0) note = path + ": " + std::to_string(skipped) + " damaged line(s) skipped; those frames render again";
 }
@@ -90,13 +104,26 @@ Status JobRecord::add(int number, const std::string& key, const std::string& out
   const std::string checksum = file_checksum(output);
   if (checksum.empty()) return make_error("cannot read " + output + " back to record it in " + folder_);
   frames_[number] = Entry{key, checksum, fs::path(output).filename().string()};
-  std::string text = std::string(kHeader) + "\n";
-  for (const auto& [n, e] : frames_) text += std::to_string(n) + " " + e.key + " " + e.checksum + " " + e.file + "\n";
   std::error_code ec;
   fs::create_directories(folder_, ec);
   const std::string path = folder_ + "/frames";
+  // Other runs of the job may record frames in the same folder at the same time (a Slurm array's tasks, each with
+  // its --frames): under the folder's lock, what they wrote is read back and kept beside this run's frames.
+  const int lock = ::open((folder_ + "/lock").c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0644);
+  if (lock < 0 || ::flock(lock, LOCK_EX) != 0) {
+    if (lock >= 0) ::close(lock);
+    return make_error("cannot lock the job record " + folder_ + "/lock");
+  }
+  std::map<int, Entry> on_disk;
+  std::string note;
+  read_into(on_disk, note);
+  for (auto& [n, e] : on_disk) frames_.try_emplace(n, std::move(e));
+  std::string text = std::string(kHeader) + "\n";
+  for (const auto& [n, e] : frames_) text += std::to_string(n) + " " + e.key + " " + e.checksum + " " + e.file + "\n";
   sweep_stale_partials(path);
-  if (ec || !write_file_whole(path, text)) return make_error("cannot write the job record " + path);
+  const bool written = !ec && write_file_whole(path, text);
+  ::close(lock);  // releases the lock
+  if (!written) return make_error("cannot write the job record " + path);
   return Ok{};
 }
 

@@ -5,7 +5,10 @@
 //   <frame> <key> <checksum of the image file's bytes> <the image file's name>
 // (the key: frame_key, what the frame's pixels depend on). A frame counts as done only while its key is the one
 // the frame has now and its file still has the recorded checksum: a changed scene, camera or network, or an image
-// deleted or overwritten since, renders it again. The file is written whole (renamed into place) after each frame.
+// deleted or overwritten since, renders it again. The file is written whole (renamed into place) after each frame,
+// under a lock on the folder (flock on OUTPUT.lfjob/lock), merged with what other runs of the job recorded
+// meanwhile: the tasks of a Slurm array may share the folder on a file system whose clients honour flock (NFSv4,
+// Lustre and BeeGFS mounted with locking, any local one).
 #include <map>
 #include <string>
 
@@ -24,7 +27,8 @@ class JobRecord {
   void load(std::string& note);
   // Whether frame `number` is done: recorded with `key`, and `output` holds the bytes it was recorded with.
   bool done(int number, const std::string& key, const std::string& output) const;
-  // Frame `number` was written to `output`: recorded (the folder made if need be). An error says why it could not be.
+  // Frame `number` was written to `output`: recorded (the folder made if need be), with the frames other runs
+  // recorded since this one loaded. An error says why it could not be.
   Status add(int number, const std::string& key, const std::string& output);
   // --restart: the record is forgotten (the folder's file removed).
   void clear();
@@ -33,6 +37,8 @@ class JobRecord {
   struct Entry {
     std::string key, checksum, file;
   };
+  // The file's lines into `frames` (a missing file adds nothing); `note`: what could not be used.
+  void read_into(std::map<int, Entry>& frames, std::string& note) const;
   std::string folder_;
   std::map<int, Entry> frames_;
 };

@@ -7,8 +7,8 @@
 // Control: CONFIG builds the op from its parameters and loads the scene; PHASE setup runs op.setup() and answers
 // READY setup when it finishes; PHASE render is answered READY render at once; PHASE frame (a job's next frame)
 // takes the new camera at once and, for an op whose setup depends on it (LightOp::setup_sees_camera), holds
-// requests from then on; the PHASE setup that follows builds a new op for the view and sets it up (any other op
-// answers it at once). Two steps, so that no op's new setup asks one that has not yet taken the view. PHASE
+// requests from then on; the PHASE setup that follows builds a new op for the view and sets it up, or, for an op
+// that carries its setup over the views (LightOp::carries_views), extends it (any other op answers at once). Two steps, so that no op's new setup asks one that has not yet taken the view. PHASE
 // finish / BYE stop it.
 // Requests that arrive before setup finished wait.
 // Requests queue in arrival order and start one per loop turn, so heartbeats and replies keep flowing. A request
@@ -258,7 +258,7 @@ class LightOpActor final : public Actor {
 
   void on_phase(wire::Phase phase, Runtime& rt) override {
     if (phase == wire::Phase::setup) {
-      if (renew_) setup_asked_ = true;  // a job's next frame: a new op, once nothing runs (on_progress)
+      if (renew_ || extend_) setup_asked_ = true;  // a job's next frame: once nothing runs (on_progress)
       else if (setups_ > 0) return rt.phase_done(wire::Phase::setup);  // a job's next frame; the op is kept
       else start_setup(rt);
       on_progress(rt);
@@ -271,7 +271,7 @@ class LightOpActor final : public Actor {
     ++frames_;
     *camera_ = Camera(camera, width_, height_);  // what ctx.camera points at, for the op's shade() too
     // Requests from now on (another op's new setup asking this one) wait for this op's new setup.
-    if (op_->setup_sees_camera()) renew_ = true, set_up_ = false;
+    if (op_->setup_sees_camera()) (op_->carries_views() ? extend_ : renew_) = true, set_up_ = false;
     rt.phase_done(wire::Phase::frame);
   }
 
@@ -306,10 +306,10 @@ class LightOpActor final : public Actor {
   void on_progress(Runtime& rt) override {
     // PHASE setup after PHASE frame: a new op for the view, once the last one has answered what it started
     // (nothing, between frames).
-    if (renew_ && setup_asked_ && running_.empty()) {
-      renew_ = setup_asked_ = false;
-      op_ = create_lightop(kind_, ParamTable(params_, "lightop '" + rt.name() + "'"));
-      start_setup(rt);
+    if ((renew_ || extend_) && setup_asked_ && running_.empty()) {
+      if (renew_) op_ = create_lightop(kind_, ParamTable(params_, "lightop '" + rt.name() + "'"));
+      start_setup(rt, extend_);
+      renew_ = extend_ = setup_asked_ = false;
     }
     if (setup_running_ && setup_.done()) {
       setup_running_ = false;
@@ -359,13 +359,14 @@ class LightOpActor final : public Actor {
   size_t queue_length() const override { return waiting_.size(); }
   bool has_local_work() const override { return set_up_ && !waiting_.empty(); }
   // The op's own figures (cache hits, photons, ...) under STATS "detail"; in a job of several frames, how many
-  // frames and setups there were (the op's figures are then the last setup's).
+  // frames, setups and extensions to a view there were (the op's figures are then the last setup's).
   Value extra_stats() const override {
     Value stats = op_ ? op_->stats() : Value();
     if (frames_ > 0) {
       if (!stats.is_map()) stats = Value::Map{};
       stats.as_map()["frames"] = static_cast<int64_t>(frames_ + 1);
       stats.as_map()["setups"] = static_cast<int64_t>(setups_);
+      if (extensions_ > 0) stats.as_map()["extended"] = static_cast<int64_t>(extensions_);
     }
     if (tracing_) {
       if (!stats.is_map()) stats = Value::Map{};
@@ -376,8 +377,9 @@ class LightOpActor final : public Actor {
   }
 
  private:
-  // Starts op.setup() over this actor's context; on_progress answers READY setup once it finishes.
-  void start_setup(Runtime& rt) {
+  // Starts op.setup() (or, `extend`: op.extend_to_view()) over this actor's context; on_progress answers READY
+  // setup once it finishes.
+  void start_setup(Runtime& rt, bool extend = false) {
     SceneContext ctx{scene_.get(), tracer_.get(), replica_index_, replica_count_, exchange_.get()};
     ctx.camera = camera_.get();
     ctx.width = width_;
@@ -386,9 +388,9 @@ class LightOpActor final : public Actor {
     ctx.sampler = sampler_;
     ctx.tracing = tracing_.get();
     ctx.progress = [&rt](const char* what, uint64_t done, uint64_t total) { rt.report_progress(what, done, total); };
-    setup_ = op_->setup(std::move(ctx), *inputs_);
+    setup_ = extend ? op_->extend_to_view(std::move(ctx), *inputs_) : op_->setup(std::move(ctx), *inputs_);
     setup_running_ = true;
-    ++setups_;
+    ++(extend ? extensions_ : setups_);
   }
 
   struct Job {
@@ -419,9 +421,10 @@ class LightOpActor final : public Actor {
   bool setup_running_ = false;
   bool set_up_ = false;  // setup finished: requests may start
   bool renew_ = false;   // PHASE frame: a new op is due for the new view, set up at the next PHASE setup
+  bool extend_ = false;  // PHASE frame: the op carries its setup to the new view, at the next PHASE setup
   bool setup_asked_ = false;
   size_t frames_ = 0;    // PHASE frames taken (frames after the first)
-  size_t setups_ = 0;
+  size_t setups_ = 0, extensions_ = 0;
   std::deque<std::unique_ptr<Job>> waiting_;
   std::vector<std::unique_ptr<Job>> running_;
 };

@@ -43,6 +43,7 @@ class Irradiance final : public LightOp {
         own_rays_(static_cast<int>(p.get_int("own_rays", 8, 0, 1 << 16))),
         nearest_(static_cast<float>(p.get_float("nearest", 1.5, 0, 1000))),
         bounds_(bounds_up_to(p.get_float("relax", 1, 1, 4))),
+        reuse_(p.get_bool("reuse", true)),
         seed_(static_cast<uint64_t>(p.get_int("seed", 0, 0, INT32_MAX))) {}
 
   Task setup(SceneContext ctx, Inputs& inputs) override {
@@ -55,37 +56,21 @@ class Irradiance final : public LightOp {
     extent_ = scene.bounds().diagonal();
     cache_ = std::make_unique<IrradianceCache>(a_, extent_);
     if (inputs.count() != 1) throw LightOpError("irradiance needs one input");
-    SoloExchange solo;
-    Exchange& exchange = ctx.exchange ? *ctx.exchange : solo;
 
     const std::vector<Candidate> candidates = placement_ == Placement::camera     ? camera_candidates(ctx)
                                               : placement_ == Placement::overture ? overture_candidates(ctx)
                                                                                   : area_candidates(scene);
-    const uint32_t round_size = 512;
-    const uint64_t total_candidates = candidates.size();
-    for (size_t first = 0; first < candidates.size(); first += round_size) {
-      ctx.report("cache pre-pass", first, total_candidates);
-      // The round's points the cache cannot serve yet become records.
-      std::vector<Candidate> open;
-      for (size_t c = first; c < std::min(candidates.size(), first + round_size); ++c) {
-        RGB unused;
-        if (!cache_->lookup(candidates[c].x, candidates[c].n, unused)) open.push_back(candidates[c]);
-      }
-      // This replica's contiguous share of the open points; shares concatenate back into candidate order.
-      const size_t r = static_cast<size_t>(ctx.replica_index), count = static_cast<size_t>(ctx.replica_count);
-      const size_t begin = open.size() * r / count, end = open.size() * (r + 1) / count;
-      std::vector<IrradianceRecord> mine;
-      co_await compute(std::span<const Candidate>(open.data() + begin, end - begin), inputs, mine, m_, n_);
-      std::vector<std::string> parts;
-      co_await exchange.all_gather(IrradianceCache::serialize(mine), &parts);
-      for (const auto& part : parts) {
-        std::vector<IrradianceRecord> records;
-        if (!IrradianceCache::deserialize(part, records)) throw LightOpError("irradiance: a replica's records are malformed");
-        for (const auto& rec : records) cache_->insert(rec);
-      }
-    }
-    ctx.report("cache pre-pass", total_candidates, std::max<uint64_t>(total_candidates, 1));
-    cache_->freeze();  // rendering only reads it
+    co_await place(ctx, candidates, inputs);
+  }
+
+  // Records placed by the camera (or by where its records' rays land) follow the view; ones placed by area do not.
+  bool setup_sees_camera() const override { return placement_ != Placement::area; }
+  // A camera-placed cache keeps its records over a job's frames (Radiance's ambient file over a walkthrough) and
+  // adds them only where the new view finds none that serve it; `reuse = false`: a cache of each frame's own.
+  bool carries_views() const override { return placement_ == Placement::camera && reuse_; }
+  Task extend_to_view(SceneContext ctx, Inputs& inputs) override {
+    ctx_ = ctx;
+    co_await place(ctx, camera_candidates(ctx), inputs);
   }
 
   // records: the cache's size; lookups: diffuse points asked for; served_a/_2a/_4a: answered by records valid under
@@ -101,9 +86,6 @@ class Irradiance final : public LightOp {
                       {"own_values", static_cast<int64_t>(own_values_)},
                       {"records_per_lookup", served ? static_cast<double>(records_used_) / served : 0.0}};
   }
-
-  // Records placed by the camera (or by where its records' rays land) follow the view; ones placed by area do not.
-  bool setup_sees_camera() const override { return placement_ != Placement::area; }
 
   // What the input gives at the hemisphere's hits, reflected by the point's diffuse lobe.
   std::optional<LightPaths> paths(std::span<const LightPaths> inputs) const override {
@@ -156,6 +138,38 @@ class Irradiance final : public LightOp {
     uint64_t key;
     uint32_t triangle;  // UINT32_MAX: a point that names none
   };
+
+  // The pre-pass: candidates in order, a round at a time; the ones no record serves yet become records, computed
+  // by the replicas in shares and gathered in candidate order. Frozen afterwards (rendering only reads it).
+  Task place(const SceneContext& ctx, const std::vector<Candidate>& candidates, Inputs& inputs) {
+    SoloExchange solo;
+    Exchange& exchange = ctx.exchange ? *ctx.exchange : solo;
+    const uint32_t round_size = 512;
+    const uint64_t total_candidates = candidates.size();
+    for (size_t first = 0; first < candidates.size(); first += round_size) {
+      ctx.report("cache pre-pass", first, total_candidates);
+      // The round's points the cache cannot serve yet become records.
+      std::vector<Candidate> open;
+      for (size_t c = first; c < std::min(candidates.size(), first + round_size); ++c) {
+        RGB unused;
+        if (!cache_->lookup(candidates[c].x, candidates[c].n, unused)) open.push_back(candidates[c]);
+      }
+      // This replica's contiguous share of the open points; shares concatenate back into candidate order.
+      const size_t r = static_cast<size_t>(ctx.replica_index), count = static_cast<size_t>(ctx.replica_count);
+      const size_t begin = open.size() * r / count, end = open.size() * (r + 1) / count;
+      std::vector<IrradianceRecord> mine;
+      co_await compute(std::span<const Candidate>(open.data() + begin, end - begin), inputs, mine, m_, n_);
+      std::vector<std::string> parts;
+      co_await exchange.all_gather(IrradianceCache::serialize(mine), &parts);
+      for (const auto& part : parts) {
+        std::vector<IrradianceRecord> records;
+        if (!IrradianceCache::deserialize(part, records)) throw LightOpError("irradiance: a replica's records are malformed");
+        for (const auto& rec : records) cache_->insert(rec);
+      }
+    }
+    ctx.report("cache pre-pass", total_candidates, std::max<uint64_t>(total_candidates, 1));
+    cache_->freeze();
+  }
 
   // `prepass` points stratified over the area of non-emitting, non-specular triangles, in a fixed order (front
   // sides): for a cache whose points come from other ops' hemispheres, anywhere in the scene.
@@ -374,6 +388,7 @@ class Irradiance final : public LightOp {
   float nearest_;  // R <= nearest * the nearest hit's distance; 0: the harmonic mean alone
   // The bounds a lookup tries in turn, as multiples of a: {1}, {1, 2} or {1, 2, 4}.
   std::vector<float> bounds_;
+  bool reuse_;
   static std::vector<float> bounds_up_to(double relax) {
     std::vector<float> b{1.0f};
     for (float f = 2.0f; f <= relax + 1e-6; f *= 2) b.push_back(f);

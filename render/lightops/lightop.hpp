@@ -243,6 +243,14 @@ class LightOp {
   // from elsewhere, then sets up a new op; one whose setup does not (a photon map) keeps it for every frame. Either
   // way ctx.camera points at the frame's camera while it renders. Unsure: true.
   virtual bool setup_sees_camera() const { return true; }
+  // An op whose setup sees the camera may instead carry what it built over a job's frames: extend_to_view() then
+  // adds what the new view (*ctx.camera) needs, never changing what is there, and the op is kept. Frame k's image
+  // then depends on the job's frames up to k (the farm replays the views of frames it skips to keep it so).
+  virtual bool carries_views() const { return false; }
+  virtual Task extend_to_view(SceneContext ctx, Inputs& inputs) {
+    (void)ctx, (void)inputs;
+    co_return;
+  }
   // Writes the radiance leaving each point towards its wo into radiance[i] (radiance.size() == points.size()).
   // Emission of the point itself is not included: the renderer adds what the camera sees directly.
   virtual Task shade(const ShadingPoints& points, std::span<RGB> radiance, Inputs& inputs) = 0;
