@@ -11,10 +11,13 @@
 //   - the first frame's time is the setup stage and its render; a later frame's, PHASE frame to its image written;
 //   - whether each sampled frame of the job equals its separate run bit for bit (it does where no setup the job
 //     keeps asked an op that sees the camera: the network's path tracer does not learn from the view);
-//   - resume: the job run again with every frame done (verify the record, launch nothing): its wall time.
+//   - resume: the job run again with every frame done (verify the record, launch nothing): its wall time;
+//   - error against path-traced references (lighting=pathtrace at --reference-spp, kept in --cache) of the first,
+//     middle and last sampled frames: the job's frame and the separate run's (relative RMSE, bench/image_error.hpp;
+//     --reference-spp 0: none).
 //
 //   build/bench/walkthrough_bench [--frames N] [--separate K] [--lighting network|direct] [--width W --height H]
-//                                 [--spp S] [--json FILE]
+//                                 [--spp S] [--reference-spp S] [--cache DIR] [--json FILE]
 #include <sched.h>
 
 #include <algorithm>
@@ -23,6 +26,7 @@
 #include <string>
 
 #include "bench/bench_util.hpp"
+#include "bench/image_error.hpp"
 #include "render/images/image.hpp"
 
 namespace {
@@ -31,6 +35,8 @@ struct Args {
   int frames = 24, separate = 6;
   std::string lighting = "network";
   int width = 320, height = 240, spp = 16;
+  int reference_spp = 1024;
+  std::string cache = (bench::fs::temp_directory_path() / "lightfarm-walkthrough-references").string();
   std::string json = "bench-walkthrough.json";
 };
 
@@ -45,6 +51,8 @@ Args parse(int argc, char** argv) {
     else if (k == "--height") a.height = std::atoi(v.c_str());
     else if (k == "--spp") a.spp = std::atoi(v.c_str());
     else if (k == "--json") a.json = v;
+    else if (k == "--reference-spp") a.reference_spp = std::atoi(v.c_str());
+    else if (k == "--cache") a.cache = v;
   }
   a.separate = std::min(a.separate, a.frames);
   return a;
@@ -92,6 +100,7 @@ int main(int argc, char** argv) {
 
   // Separate farms of single frames, evenly spread over the walk.
   std::vector<double> separate_seconds;
+  std::vector<int> sampled;
   double separate_cpu = 0;
   int identical = 0;
   std::printf("separate runs:");
@@ -102,6 +111,7 @@ int main(int argc, char** argv) {
     const std::string out = (dir / ("single." + std::to_string(k) + ".exr")).string();
     const auto one = bench::run_farm(script, sets, out);
     separate_seconds.push_back(one.wall_seconds);
+    sampled.push_back(k);
     separate_cpu += one.cpu_seconds;
     auto a = lf::read_image(out), b = lf::read_image(frame_file(dir.string(), k));
     const bool same = a.ok() && b.ok() && a->pixels == b->pixels;
@@ -126,6 +136,36 @@ int main(int argc, char** argv) {
   const auto again = bench::run_farm(script, look, (dir / "walk.####.exr").string());
   std::printf("resume with every frame done: %.2f s\n", again.wall_seconds);
 
+  // Quality: the job's frames and the separate runs' against path-traced references.
+  std::string errors_json;
+  if (args.reference_spp > 0) {
+    bench::fs::create_directories(args.cache);
+    for (size_t i : {size_t{0}, sampled.size() / 2, sampled.size() - 1}) {
+      const int k = sampled[i];
+      char name[160];
+      std::snprintf(name, sizeof name, "/walk%d_frame%d_%dx%d_%dspp.exr", args.frames, k, args.width, args.height,
+                    args.reference_spp);
+      const std::string ref_path = args.cache + name;
+      if (!bench::fs::exists(ref_path)) {
+        std::vector<std::string> sets = look;
+        sets[0] = "lighting=pathtrace";
+        sets[3] = "spp=" + std::to_string(args.reference_spp);
+        sets.push_back("frame=" + std::to_string(k));
+        bench::run_farm(script, sets, ref_path);
+      }
+      auto ref = lf::read_image(ref_path), in_job = lf::read_image(frame_file(dir.string(), k)),
+           alone = lf::read_image((dir / ("single." + std::to_string(k) + ".exr")).string());
+      if (!ref || !in_job || !alone) continue;
+      const double e_job = bench::relative_rmse(*in_job, *ref), e_alone = bench::relative_rmse(*alone, *ref);
+      std::printf("frame %d against a %d-spp path-traced reference: job %.4f, separate run %.4f (job / separate %.3f)\n",
+                  k, args.reference_spp, e_job, e_alone, e_job / e_alone);
+      char entry[200];
+      std::snprintf(entry, sizeof entry, "%s{\"frame\": %d, \"job\": %.5f, \"separate\": %.5f}",
+                    errors_json.empty() ? "" : ", ", k, e_job, e_alone);
+      errors_json += entry;
+    }
+  }
+
   const double ratio = job.wall_seconds / estimate;
   const double per_frame = first > 0 ? later_spread.median / first : 0;
   std::printf("\njob / separate runs: %.3f (goal <= 0.4)\nlater frame / first frame: %.3f (%.3f-%.3f; goal <= 0.5)\n",
@@ -140,7 +180,8 @@ int main(int argc, char** argv) {
                            << mean_separate << ", \"separate_sampled\": " << args.separate
                            << ", \"separate_idle_share\": " << separate_idle << ", \"identical_frames\": " << identical
                            << ",\n  \"job_over_separate\": " << ratio << ", \"later_over_first\": " << per_frame
-                           << ", \"resume_all_done_seconds\": " << again.wall_seconds << "\n}\n";
+                           << ", \"resume_all_done_seconds\": " << again.wall_seconds
+                           << ",\n  \"reference_spp\": " << args.reference_spp << ", \"errors\": [" << errors_json << "]\n}\n";
   bench::fs::remove_all(dir);
   return 0;
 }

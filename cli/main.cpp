@@ -33,7 +33,7 @@ constexpr const char* kUsage = R"(lightfarm — a distributed lighting-simulatio
 
 usage:
   lightfarm run SCRIPT [--output FILE] [--set NAME=VALUE]... [--stats-json FILE] [--quiet] [--monitor [ADDR:]PORT]
-                      [--frames LIST] [--checkpoint-every SECONDS] [--restart]
+                      [--frames LIST] [--checkpoint-every SECONDS] [--preview-every SECONDS] [--restart]
       Turn a farm script into processes and an image.
   lightfarm graph SCRIPT [--set NAME=VALUE]...
       Print the script's actor graph as Graphviz DOT; launches nothing.
@@ -62,6 +62,8 @@ options:
   --monitor-hold SECONDS  keep the monitor up that long after the frame
   --checkpoint-every SECONDS  write the frame's finished tiles to OUTPUT.lfresume at most this often (default 30;
                       0: never); a run of the same frame after a crash renders only the rest, to the same image
+  --preview-every SECONDS  write the partial frame (unfinished tiles black) to OUTPUT's STEM.preview.EXT at most
+                      this often while it renders; removed once the frame is written
   --restart           render the frame (or the job) from its start, ignoring OUTPUT.lfresume (and the job record)
   --quiet             print no tables, only errors
 
@@ -129,7 +131,7 @@ bool parse(int argc, char** argv, int first, const std::vector<std::string>& kno
 int cmd_run(int argc, char** argv, bool graph_only) {
   Args args;
   std::string error;
-  std::vector<std::string> known = graph_only ? std::vector<std::string>{} : std::vector<std::string>{"output", "stats-json", "monitor", "monitor-hold", "checkpoint-every", "frames"};
+  std::vector<std::string> known = graph_only ? std::vector<std::string>{} : std::vector<std::string>{"output", "stats-json", "monitor", "monitor-hold", "checkpoint-every", "frames", "preview-every"};
   std::vector<std::string> flags = graph_only ? std::vector<std::string>{} : std::vector<std::string>{"quiet", "restart"};
   if (!parse(argc, argv, 2, known, flags, args, error)) return usage_error(error);
   if (args.positional.size() != 1) return usage_error(std::string(graph_only ? "graph" : "run") + " needs one SCRIPT");
@@ -167,6 +169,12 @@ int cmd_run(int argc, char** argv, bool graph_only) {
     ro.checkpoint_every = std::strtod(args.options["checkpoint-every"].c_str(), &end);
     if (*end != '\0' || !(ro.checkpoint_every >= 0) || !std::isfinite(ro.checkpoint_every))
       return usage_error("--checkpoint-every needs seconds (0 or more; 0: no checkpoint)");
+  }
+  if (args.options.count("preview-every")) {
+    char* end = nullptr;
+    ro.preview_every = std::strtod(args.options["preview-every"].c_str(), &end);
+    if (*end != '\0' || !(ro.preview_every > 0) || !std::isfinite(ro.preview_every))
+      return usage_error("--preview-every needs seconds (more than 0)");
   }
   ro.restart = args.options.count("restart") > 0;
   return lf::run_farm(*spec, ro);

@@ -5,6 +5,7 @@
 #include <signal.h>
 
 #include <cstdio>
+#include <optional>
 #include <regex>
 
 #include "render/images/image.hpp"
@@ -20,7 +21,7 @@ namespace {
 // saw the first frame's camera.
 constexpr const char* kTurntable = R"(
 scene  { builtin = "cornell_glass" }
-image  { width = 40, height = 40, spp = param("spp", 4), output = param("out", "turn.####.png") }
+image  { width = 40, height = 40, spp = param("spp", 4), tile = param("tile", 32), output = param("out", "turn.####.png") }
 local function view(f)
   local a = (f - 1) * 0.05
   return { eye = {278 + 1073 * math.sin(a), 273, 273 - 1073 * math.cos(a)}, at = {278, 273, 273}, fov = 39.3 }
@@ -177,6 +178,33 @@ TEST_F(JobTest, AKilledJobResumesFromItsRecordToTheSameFrames) {
     EXPECT_TRUE(same_pixels(frame("ref", n), frame("y", n))) << "frame " << n << " of a task differs from the job's";
   const auto whole = run("y.####.exr", {"--set", "last=8", "--set", "paths_learned=1"});
   EXPECT_NE(whole.err.find("8 of the job's 8 frames are done"), std::string::npos) << whole.err;
+}
+
+// --preview-every: while a frame renders its partial image (finished tiles, the rest black) is beside the output;
+// it goes once the frame is written.
+TEST_F(JobTest, APreviewShowsTheFrameWhileItRenders) {
+  Farm farm({"run", script, "--set", "out=" + path("p.####.exr"), "--set", "last=1", "--set", "spp=256", "--set", "tile=8",
+             "--checkpoint-every", "0", "--preview-every", "0.05"});
+  const std::string preview = path("p.0001.preview.exr");
+  std::optional<Image> seen;
+  ASSERT_TRUE(Farm::eventually([&] {
+    if (!fs::exists(preview)) return false;
+    auto img = read_image(preview);
+    if (img.ok()) seen = *img;
+    return img.ok();
+  }, 120)) << farm.err_so_far();
+  const auto done = farm.wait(300);
+  ASSERT_EQ(done.status, 0) << done.err;
+  expect_no_leftovers(done);
+  EXPECT_FALSE(fs::exists(preview)) << "the preview outlived its frame";
+  ASSERT_TRUE(seen.has_value());
+  size_t black = 0, lit = 0;
+  for (const RGB& p : seen->pixels) (p.x == 0 && p.y == 0 && p.z == 0 ? black : lit) += 1;
+  EXPECT_GT(lit, 0u) << "a preview is written once a tile has landed";
+  EXPECT_GT(black, 0u) << "and before the last";
+  auto bad = run_lightfarm({"run", script, "--preview-every", "0"});
+  EXPECT_EQ(bad.status, 2);
+  EXPECT_NE(bad.err.find("--preview-every needs seconds (more than 0)"), std::string::npos) << bad.err;
 }
 
 TEST_F(JobTest, BadJobsAreRefusedBeforeAnythingStarts) {

@@ -43,7 +43,7 @@ class Director {
         launchers_(launchers),
         supervisor_(spec_, launchers_, control_, [this](const std::string& a) { return services_.needs_restart(a); }),
         tiles_(spec.image, spec.renderer_names(), options.progress_on_terminal, options.quiet),
-        frames_(spec_, tiles_, options.checkpoint_every, options.restart, options.quiet),
+        frames_(spec_, tiles_, options_),
         ring_(spec_, exchange_, options.quiet, options.progress_on_terminal),
         loop_(spec_, control_, supervisor_, launchers_, [this](SupervisorEvent& e) { route(e); }),
         step_progress_(options.quiet) {}

@@ -21,7 +21,10 @@ struct RunOptions {
   // The frame's finished tiles go to OUTPUT.lfresume at most this often (actors/director/film_checkpoint.hpp); a
   // later run of the same frame resumes from them. 0: no checkpoint.
   double checkpoint_every = 30;
-  bool restart = false;               // ignore (and replace) OUTPUT.lfresume
+  bool restart = false;               // ignore (and replace) OUTPUT.lfresume and a job's record
+  // The frame's partial image (unfinished tiles black) to OUTPUT's STEM.preview.EXT at most this often while it
+  // renders, removed once the frame is written. 0: none.
+  double preview_every = 0;
 };
 
 // Returns the process exit status: 0 on success, 1 if the farm failed, 2 for a fault of the script or command line

@@ -29,8 +29,8 @@ bool carries_views(const FarmSpec& spec) {
 
 }  // namespace
 
-FrameLoop::FrameLoop(FarmSpec& spec, TileService& tiles, double checkpoint_every, bool restart, bool quiet)
-    : spec_(spec), tiles_(tiles), checkpoint_every_(checkpoint_every), restart_(restart), quiet_(quiet) {}
+FrameLoop::FrameLoop(FarmSpec& spec, TileService& tiles, const RunOptions& options)
+    : spec_(spec), tiles_(tiles), options_(options) {}
 
 void FrameLoop::prepare(const std::string& scene_hash) {
   if (!spec_.job.declared) {
@@ -39,7 +39,7 @@ void FrameLoop::prepare(const std::string& scene_hash) {
   } else {
     record_.emplace(spec_.image.output);
     std::string note;
-    if (restart_) record_->clear();
+    if (options_.restart) record_->clear();
     else record_->load(note);
     if (!note.empty()) log_warn(note);
     for (size_t i = 0; i < spec_.frames.size(); ++i) {
@@ -57,7 +57,7 @@ void FrameLoop::prepare(const std::string& scene_hash) {
                LogKind::recovery);
   }
   if (left_.empty()) return;
-  tiles_.begin_frame(left_[0].frame.output, left_[0].key, checkpoint_every_, restart_);
+  tiles_.begin_frame(left_[0].frame.output, left_[0].key, options_.checkpoint_every, options_.restart, options_.preview_every);
   // Set up seen from the job's first frame, whichever frame renders first: a setup kept over the frames (one
   // that does not see the camera, but may have asked ops that do) is then the same in every run of the job.
   spec_.camera = spec_.job.declared ? spec_.frames.front().camera : left_[0].frame.camera;
@@ -75,9 +75,9 @@ void FrameLoop::run(const std::function<void(wire::Phase, Value::Map)>& run_phas
   for (size_t i = 0; i < left_.size(); ++i) {
     const Left& f = left_[i];
     const auto start = Clock::now();
-    if (i > 0) tiles_.begin_frame(f.frame.output, f.key, checkpoint_every_, restart_);
+    if (i > 0) tiles_.begin_frame(f.frame.output, f.key, options_.checkpoint_every, options_.restart, options_.preview_every);
     if (carries_views_ && f.index > holds + 1) {
-      if (!quiet_)
+      if (!options_.quiet)
         log_info("replaying the views of the " + std::to_string(f.index - holds - 1) + " frames before frame " +
                  std::to_string(f.frame.number) + ", which this run does not render: a setup carried over the frames "
                  "then holds what the whole job's would");
@@ -95,7 +95,7 @@ void FrameLoop::run(const std::function<void(wire::Phase, Value::Map)>& run_phas
     if (!record_) continue;
     if (auto st = record_->add(f.frame.number, f.key, f.frame.output); !st)
       log_warn(st.error().message + "; a later run will render frame " + std::to_string(f.frame.number) + " again");
-    if (!quiet_) {
+    if (!options_.quiet) {
       char line[64];
       std::snprintf(line, sizeof line, " (%zu of %zu) in %.1f s", written_ + skipped_, left_.size() + skipped_, seconds);
       log_info("frame " + std::to_string(f.frame.number) + " written to " + f.frame.output + line);

@@ -16,6 +16,7 @@
 #include <string>
 #include <vector>
 
+#include "actors/director/director.hpp"
 #include "actors/director/job_record.hpp"
 #include "actors/director/report.hpp"
 #include "actors/director/tile_service.hpp"
@@ -26,8 +27,7 @@ namespace lf {
 
 class FrameLoop {
  public:
-  // `checkpoint_every`, `restart`: RunOptions'.
-  FrameLoop(FarmSpec& spec, TileService& tiles, double checkpoint_every, bool restart, bool quiet);
+  FrameLoop(FarmSpec& spec, TileService& tiles, const RunOptions& options);
 
   // With the scene's content hash known: which frames are left (a job skips those its record says are done and
   // whose files are unchanged), the first of them begun in the tile service, and its camera made the farm's
@@ -54,8 +54,7 @@ class FrameLoop {
   void switch_view(const FrameSpec& f, const std::function<void(wire::Phase, Value::Map)>& run_phase);
   FarmSpec& spec_;
   TileService& tiles_;
-  double checkpoint_every_;
-  bool restart_, quiet_;
+  const RunOptions& options_;
   std::optional<JobRecord> record_;  // a job's (frames { }); none for a farm of one frame
   std::vector<Left> left_;
   size_t skipped_ = 0, written_ = 0;

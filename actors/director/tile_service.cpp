@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <filesystem>
 
 #include "core/log.hpp"
 #include "render/images/image.hpp"
@@ -58,6 +59,10 @@ Status TileService::write_frame() {
   if (auto st = write_image(master_.film(), image_.output, display); !st) return st;
   written_ = true;
   if (checkpoint_) checkpoint_->remove();
+  if (preview_every_ > 0) {
+    std::error_code ec;
+    std::filesystem::remove(preview_path(image_.output), ec);
+  }
   if (all_black(master_.film()))
     log_warn(image_.output + ": every pixel is 0, nothing the camera sees is lit: it may look at the back of the "
              "scene's surfaces from outside or past them (`lightfarm scene FILE.obj` suggests a camera that frames "
@@ -65,8 +70,28 @@ Status TileService::write_frame() {
   return Ok{};
 }
 
-void TileService::begin_frame(const std::string& output, const std::string& key, double interval, bool restart) {
+std::string preview_path(const std::string& output) {
+  const size_t slash = output.find_last_of('/');
+  const size_t dot = output.find_last_of('.');
+  if (dot == std::string::npos || (slash != std::string::npos && dot < slash)) return output + ".preview";
+  return output.substr(0, dot) + ".preview" + output.substr(dot);
+}
+
+void TileService::write_preview(bool now_anyway) {
+  if (preview_every_ <= 0 || written_) return;
+  const auto now = Clock::now();
+  if (!now_anyway && std::chrono::duration<double>(now - last_preview_).count() < preview_every_) return;
+  last_preview_ = now;
+  const Display display{static_cast<float>(image_.exposure), image_.tonemap};
+  if (auto st = write_image(master_.film(), preview_path(image_.output), display); !st)
+    log_warn("cannot write the preview: " + st.error().message + "; no more previews of this frame"), preview_every_ = 0;
+}
+
+void TileService::begin_frame(const std::string& output, const std::string& key, double interval, bool restart,
+                              double preview_every) {
   image_.output = output;
+  preview_every_ = preview_every;
+  last_preview_ = Clock::now();
   master_ = RenderMaster(image_.width, image_.height, image_.tile);
   progress_.restart();
   rendering_ = false;
@@ -103,6 +128,7 @@ Status TileService::on_request(const std::string& actor, wire::Op op, uint64_t i
   }
   out.reply(actor, id, Value::Map{});
   if (checkpoint_) checkpoint_->save(master_);
+  if (!master_.finished()) write_preview(false);
   last_progress_ = Clock::now();
   if (master_.done() == resumed_ + 1) first_tile_seconds_ = render_seconds();
   progress_.update(master_.done(), render_seconds());

@@ -19,6 +19,9 @@
 
 namespace lf {
 
+// Where a frame's partial image goes: STEM.preview.EXT beside OUTPUT.
+std::string preview_path(const std::string& output);
+
 class TileService final : public Service {
  public:
   // `renderers`: the actors that ask for tiles (a loss of any other actor is not this service's concern).
@@ -31,8 +34,10 @@ class TileService final : public Service {
   // A frame begins (the farm's one, or each of a job's in turn): every tile to do, its image to go to `output`, and
   // its checkpoint beside it (OUTPUT.lfresume, FilmCheckpoint; `interval` <= 0: none): the tiles an earlier run of
   // the same frame (`key`, frame_key) finished are done now, said in the log, and it is written as tiles land.
-  // `restart`: it is dropped first.
-  void begin_frame(const std::string& output, const std::string& key, double interval, bool restart);
+  // `restart`: it is dropped first. `preview_every` > 0: the partial image goes to preview_path(output) at most
+  // that often while tiles land (removed once the frame is written).
+  void begin_frame(const std::string& output, const std::string& key, double interval, bool restart,
+                   double preview_every = 0);
   // The farm stops early: what is done goes to the checkpoint now (nothing once the image is written).
   void save_checkpoint() {
     if (checkpoint_ && !written_) checkpoint_->save(master_, true);
@@ -72,6 +77,9 @@ class TileService final : public Service {
   std::vector<std::pair<std::string, uint64_t>> waiting_;  // tile requests not yet answered, oldest first
   bool written_ = false;
   std::optional<FilmCheckpoint> checkpoint_;
+  double preview_every_ = 0;
+  std::chrono::steady_clock::time_point last_preview_;
+  void write_preview(bool now_anyway);
   size_t resumed_ = 0;
 };
 
