@@ -198,6 +198,31 @@ TEST_F(MonitorTest, StateAndMetricsHoldTheEndOfRunFigures) {
   expect_no_leftovers(r);
 }
 
+// A job of frames: /api/state says how far it is, and its output is the frame's.
+TEST_F(MonitorTest, StateShowsAJobsFrames) {
+  const std::string script = write("job.lua", "scene { builtin = \"cornell\" }\n"
+                                              "image { width = 32, height = 32, spp = 2, output = \"" + path("j.####.exr") + "\" }\n"
+                                              "frames { first = 3, last = 5 }\n"
+                                              "renderers { count = 1, lighting = lightop \"direct\" { } }\n"
+                                              "farm { light_paths = \"partial\" }\n");
+  Farm farm({"run", script, "--monitor", "0", "--monitor-hold", "30"});
+  const std::string url = monitor_url(farm);
+  ASSERT_FALSE(url.empty()) << farm.err_so_far();
+  ASSERT_TRUE(Farm::eventually([&] { return farm.err_so_far().find("monitor: holding") != std::string::npos; }, 60));
+  auto [token, client] = client_for(url);
+  auto state = client.Get("/api/state");
+  ASSERT_TRUE(state);
+  write("state.json", state->body);
+  const std::string check = run_command("python3 -c \"import json; s=json.load(open('" + path("state.json") +
+                                        "')); j=s['job']; print(j['frames_total'], j['frames_done'], j['frame'], "
+                                        "j['eta_seconds'], s['farm']['output'].endswith('j.0005.exr'))\"");
+  EXPECT_EQ(check, "3 3 0 0 True\n") << state->body;
+  ::kill(farm.pid(), SIGINT);
+  auto r = farm.wait(30);
+  EXPECT_EQ(r.status, 0) << r.err;
+  expect_no_leftovers(r);
+}
+
 // Fifty clients on /events at once, one of which drops its stream mid-way, do not break the farm or change its
 // image.
 TEST_F(MonitorTest, ManyClientsAndADroppedStreamLeaveTheFarmAndItsImageAlone) {

@@ -54,7 +54,7 @@ class Director {
     // Orphans of actors (a daemonised grandchild) become ours, so that kill_orphans() can end them.
     ::prctl(PR_SET_CHILD_SUBREAPER, 1);
     if (!options_.monitor.empty()) {
-      auto feed = MonitorFeed::start(options_.monitor, spec_, supervisor_, tiles_, ring_, timeline_);
+      auto feed = MonitorFeed::start(options_.monitor, spec_, supervisor_, tiles_, ring_, timeline_, frames_);
       if (!feed) return log_error(feed.error().message), 2;
       monitor_ = std::move(*feed);
     }

@@ -96,11 +96,30 @@ void FrameLoop::run(const std::function<void(wire::Phase, Value::Map)>& run_phas
     if (auto st = record_->add(f.frame.number, f.key, f.frame.output); !st)
       log_warn(st.error().message + "; a later run will render frame " + std::to_string(f.frame.number) + " again");
     if (!options_.quiet) {
-      char line[64];
+      char line[96];
       std::snprintf(line, sizeof line, " (%zu of %zu) in %.1f s", written_ + skipped_, left_.size() + skipped_, seconds);
-      log_info("frame " + std::to_string(f.frame.number) + " written to " + f.frame.output + line);
+      std::string text = "frame " + std::to_string(f.frame.number) + " written to " + f.frame.output + line;
+      if (const Value* eta = status(0).find("eta_seconds"); eta && written_ < left_.size())
+        std::snprintf(line, sizeof line, "; the job's frames left: about %.0f s", eta->as_double()), text += line;
+      log_info(text);
     }
   }
+}
+
+Value FrameLoop::status(double current_done) const {
+  if (!record_) return Value();
+  double mean = 0;
+  size_t counted = 0;
+  for (size_t i = figures_.size() > 1 ? 1 : 0; i < figures_.size(); ++i) mean += figures_[i].seconds, ++counted;
+  if (counted > 0) mean /= static_cast<double>(counted);
+  const size_t rendering = written_ < left_.size() ? 1 : 0;
+  Value::Map m{{"frames_total", static_cast<int64_t>(left_.size() + skipped_)},
+               {"frames_done", static_cast<int64_t>(written_ + skipped_)},
+               {"frame", static_cast<int64_t>(rendering ? left_[written_].frame.number : 0)},
+               {"frame_seconds", mean}};
+  if (counted > 0)
+    m["eta_seconds"] = mean * (static_cast<double>(left_.size() - written_) - rendering * std::min(1.0, current_done));
+  return m;
 }
 
 void FrameLoop::add_figures(RunFigures& f) const {

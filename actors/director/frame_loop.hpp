@@ -39,6 +39,10 @@ class FrameLoop {
   // FarmFailure when a frame cannot be finished or written.
   void run(const std::function<void(wire::Phase, Value::Map)>& run_phase);
   bool all_written() const { return written_ == left_.size(); }
+  // A job's progress for the monitor: {frames_total, frames_done, frame, frame_seconds (the mean of the frames
+  // after the first, else the first's), eta_seconds}, given how much of the current frame is done (0..1); nil for
+  // a farm of one frame.
+  Value status(double current_done) const;
 
   // A job's figures in the run's report: each frame rendered (PHASE frame, or the render's start, to its image
   // written), the frames the record had done; the render's seconds are every frame's.

@@ -1,5 +1,7 @@
 #include "actors/director/monitor_feed.hpp"
 
+#include "actors/director/frame_loop.hpp"
+
 #include <algorithm>
 #include <cmath>
 #include <thread>
@@ -12,10 +14,11 @@ namespace lf {
 
 Result<std::unique_ptr<MonitorFeed>> MonitorFeed::start(const std::string& address, const FarmSpec& spec,
                                                         const Supervisor& supervisor, const TileService& tiles,
-                                                        const RingService& ring, const FarmTimeline& timeline) {
+                                                        const RingService& ring, const FarmTimeline& timeline,
+                                                        const FrameLoop& frames) {
   auto m = Monitor::start(address);
   if (!m) return m.error();
-  std::unique_ptr<MonitorFeed> feed(new MonitorFeed(std::move(*m), spec, supervisor, tiles, ring, timeline));
+  std::unique_ptr<MonitorFeed> feed(new MonitorFeed(std::move(*m), spec, supervisor, tiles, ring, timeline, frames));
   set_log_observer([f = feed.get()](const std::string& level, const std::string& text, LogKind kind) {
     f->keep_log_line(level, text, kind);
   });
@@ -25,8 +28,10 @@ Result<std::unique_ptr<MonitorFeed>> MonitorFeed::start(const std::string& addre
 }
 
 MonitorFeed::MonitorFeed(std::unique_ptr<Monitor> monitor, const FarmSpec& spec, const Supervisor& supervisor,
-                         const TileService& tiles, const RingService& ring, const FarmTimeline& timeline)
-    : monitor_(std::move(monitor)), spec_(spec), supervisor_(supervisor), tiles_(tiles), ring_(ring), timeline_(timeline) {}
+                         const TileService& tiles, const RingService& ring, const FarmTimeline& timeline,
+                         const FrameLoop& frames)
+    : monitor_(std::move(monitor)), spec_(spec), supervisor_(supervisor), tiles_(tiles), ring_(ring), timeline_(timeline),
+      frames_(frames) {}
 
 MonitorFeed::~MonitorFeed() { set_log_observer({}); }
 
@@ -134,7 +139,7 @@ Value MonitorFeed::state() {
     for (const Value::Map& l : log_lines_) log.push_back(l);
   }
   Value::Map farm{{"script", spec_.script},
-                  {"output", spec_.image.output},
+                  {"output", tiles_.output()},
                   {"width", static_cast<int64_t>(spec_.image.width)},
                   {"height", static_cast<int64_t>(spec_.image.height)},
                   {"stage", timeline_.image_written ? std::string("done") : std::string(stage_name(supervisor_.stage()))},
@@ -143,6 +148,9 @@ Value MonitorFeed::state() {
                   {"tiles_total", static_cast<int64_t>(tiles_.tiles_total())}};
   Value::Map state{{"farm", std::move(farm)}, {"actors", std::move(actors)}, {"stages", std::move(stages)},
                    {"progress", std::move(progress)}, {"log", std::move(log)}};
+  if (Value job = frames_.status(static_cast<double>(tiles_.tiles_done()) / std::max<size_t>(1, tiles_.tiles_total()));
+      !job.is_nil())
+    state["job"] = std::move(job);
   if (ring_.active()) {
     // The last 200 iterations' unshot power (older ones thinned out): what a progressive solution shows.
     const auto& unshot = ring_.unshot_fraction();

@@ -20,6 +20,8 @@
 
 namespace lf {
 
+class FrameLoop;
+
 // The farm's stages as they pass: when it began, each finished stage's seconds, and whether the image is written.
 struct FarmTimeline {
   Clock::time_point start = Clock::now();
@@ -33,7 +35,8 @@ class MonitorFeed {
   // Serves the monitor at `address` ("[ADDR:]PORT") and keeps the director's log lines for it until destroyed.
   static Result<std::unique_ptr<MonitorFeed>> start(const std::string& address, const FarmSpec& spec,
                                                     const Supervisor& supervisor, const TileService& tiles,
-                                                    const RingService& ring, const FarmTimeline& timeline);
+                                                    const RingService& ring, const FarmTimeline& timeline,
+                                                    const FrameLoop& frames);
   ~MonitorFeed();
   std::string url() const { return monitor_->url(); }
 
@@ -47,7 +50,7 @@ class MonitorFeed {
 
  private:
   MonitorFeed(std::unique_ptr<Monitor> monitor, const FarmSpec& spec, const Supervisor& supervisor,
-              const TileService& tiles, const RingService& ring, const FarmTimeline& timeline);
+              const TileService& tiles, const RingService& ring, const FarmTimeline& timeline, const FrameLoop& frames);
   void keep_log_line(const std::string& level, const std::string& text, LogKind kind);
   std::string actor_state(const ActorRecord& a) const;
   Value actor_entry(const ActorSpec& spec, const Value::Array& parts);
@@ -61,6 +64,7 @@ class MonitorFeed {
   const TileService& tiles_;
   const RingService& ring_;
   const FarmTimeline& timeline_;
+  const FrameLoop& frames_;
   std::map<std::string, Value> progress_;  // actor + step -> {actor, what, done, total}
   std::map<std::string, std::tuple<Value, Clock::time_point, Value>> live_before_;  // figures, when, rates
   std::mutex log_mutex_;  // lines may be logged on other threads (hosts connecting)

@@ -46,6 +46,7 @@ class TileService final : public Service {
   // then. A frame whose every pixel is 0 is written with a warning naming the likely causes.
   Status write_frame();
   size_t tiles_resumed() const { return resumed_; }
+  const std::string& output() const { return image_.output; }  // the frame's
   bool finished() const { return master_.finished(); }
   const Image& film() const { return master_.film(); }
   size_t tiles_done() const { return master_.done(); }
