@@ -81,7 +81,9 @@ void FrameLoop::run(const std::function<void(wire::Phase, Value::Map)>& run_phas
         log_info("replaying the views of the " + std::to_string(f.index - holds - 1) + " frames before frame " +
                  std::to_string(f.frame.number) + ", which this run does not render: a setup carried over the frames "
                  "then holds what the whole job's would");
+      const auto replay_start = Clock::now();
       for (size_t j = holds + 1; j < f.index; ++j) switch_view(spec_.frames[j], run_phase);
+      replay_seconds_ += std::chrono::duration<double>(Clock::now() - replay_start).count();
     }
     if (f.index != holds) switch_view(f.frame, run_phase);
     holds = f.index;
@@ -132,7 +134,8 @@ void FrameLoop::add_figures(RunFigures& f) const {
     seconds += fig.seconds;
   }
   f.render_seconds = seconds;
-  f.frames = Value::Map{{"frames", std::move(frames)}, {"skipped", static_cast<int64_t>(skipped_)}, {"record", record_->folder()}};
+  f.frames = Value::Map{{"frames", std::move(frames)}, {"skipped", static_cast<int64_t>(skipped_)},
+                        {"replay_seconds", replay_seconds_}, {"record", record_->folder()}};
 }
 
 }  // namespace lf

@@ -45,7 +45,8 @@ class FrameLoop {
   Value status(double current_done) const;
 
   // A job's figures in the run's report: each frame rendered (PHASE frame, or the render's start, to its image
-  // written), the frames the record had done; the render's seconds are every frame's.
+  // written; replays included), the frames the record had done, the seconds spent replaying the views of frames
+  // not rendered; the render's seconds are every frame's.
   void add_figures(RunFigures& f) const;
 
  private:
@@ -63,6 +64,7 @@ class FrameLoop {
   std::vector<Left> left_;
   size_t skipped_ = 0, written_ = 0;
   bool carries_views_ = false;  // an op carries its setup over the views: frames skipped are replayed
+  double replay_seconds_ = 0;
   struct FrameFigures {
     int number = 0;
     double seconds = 0;
