@@ -139,11 +139,18 @@ int main(int argc, char** argv) {
 
   // A resume mid-job: the second half's images deleted, the job run again. Its frames replay the views of the
   // first half (the carried cache) before rendering.
-  for (int k = args.frames / 2 + 1; k <= args.frames; ++k) bench::fs::remove(frame_file(dir.string(), k));
+  for (int k = args.frames / 2 + 1; k <= args.frames; ++k)
+    bench::fs::rename(frame_file(dir.string(), k), frame_file(dir.string(), k) + ".first.exr");
   const auto half = bench::run_farm(script, look, (dir / "walk.####.exr").string());
   const double replay = bench::json_number(half.stats, "replay_seconds");
-  std::printf("resume with frames %d-%d to render: %.1f s, of which replaying the views of frames 2-%d %.2f s\n",
-              args.frames / 2 + 1, args.frames, half.wall_seconds, args.frames / 2, replay);
+  int resumed_identical = 0;
+  for (int k = args.frames / 2 + 1; k <= args.frames; ++k) {
+    auto a = lf::read_image(frame_file(dir.string(), k)), b = lf::read_image(frame_file(dir.string(), k) + ".first.exr");
+    resumed_identical += a.ok() && b.ok() && a->pixels == b->pixels;
+  }
+  std::printf("resume with frames %d-%d to render: %.1f s, of which replaying the views of frames 2-%d %.2f s; %d of %d "
+              "frames identical to the uninterrupted job's\n", args.frames / 2 + 1, args.frames, half.wall_seconds,
+              args.frames / 2, replay, resumed_identical, args.frames - args.frames / 2);
   std::fflush(stdout);
 
   // Quality: the job's frames and the separate runs' against path-traced references.
@@ -192,6 +199,7 @@ int main(int argc, char** argv) {
                            << ",\n  \"job_over_separate\": " << ratio << ", \"later_over_first\": " << per_frame
                            << ", \"resume_all_done_seconds\": " << again.wall_seconds
                            << ", \"resume_half_seconds\": " << half.wall_seconds << ", \"replay_seconds\": " << replay
+                           << ", \"resumed_identical\": " << resumed_identical
                            << ",\n  \"reference_spp\": " << args.reference_spp << ", \"errors\": [" << errors_json << "]\n}\n";
   bench::fs::remove_all(dir);
   return 0;

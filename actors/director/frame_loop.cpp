@@ -12,19 +12,37 @@ namespace lf {
 
 namespace {
 
-// Whether a LightOp of the farm carries its setup over a job's views (a plug-in's own process cannot say: no).
-bool carries_views(const FarmSpec& spec) {
-  for (const ActorSpec& a : spec.actors) {
-    const LightOpKind* kind = a.runtime.count("cmd") ? nullptr : find_lightop_kind(a.kind);
-    if (!kind) continue;
-    try {
-      const auto op = create_lightop(*kind, ParamTable(a.params, a.name));
-      if (op->setup_sees_camera() && op->carries_views()) return true;
-    } catch (const std::exception&) {
-      // Its own process will say what is wrong with its parameters.
-    }
+// Whether actor `a` is a LightOp that carries its setup over a job's views (a plug-in's own process cannot say: no).
+bool carries_views(const ActorSpec& a) {
+  const LightOpKind* kind = a.runtime.count("cmd") ? nullptr : find_lightop_kind(a.kind);
+  if (!kind) return false;
+  try {
+    const auto op = create_lightop(*kind, ParamTable(a.params, a.name));
+    return op->setup_sees_camera() && op->carries_views();
+  } catch (const std::exception&) {
+    return false;  // its own process will say what is wrong with its parameters
   }
-  return false;
+}
+
+// The actors a carried setup may ask while it extends to a view: every input of a carrying op, and theirs, on to the
+// end of the network. During a replay only these set themselves up for the view.
+Value::Array asked_by_carried_setups(const FarmSpec& spec) {
+  std::vector<bool> asked(spec.actors.size(), false);
+  std::vector<int> todo;
+  for (size_t i = 0; i < spec.actors.size(); ++i)
+    if (carries_views(spec.actors[i])) todo.insert(todo.end(), spec.actors[i].inputs.begin(), spec.actors[i].inputs.end());
+  while (!todo.empty()) {
+    const int i = todo.back();
+    todo.pop_back();
+    if (asked[static_cast<size_t>(i)]) continue;
+    asked[static_cast<size_t>(i)] = true;
+    const auto& inputs = spec.actors[static_cast<size_t>(i)].inputs;
+    todo.insert(todo.end(), inputs.begin(), inputs.end());
+  }
+  Value::Array names;
+  for (size_t i = 0; i < spec.actors.size(); ++i)
+    if (asked[i]) names.push_back(spec.actors[i].name);
+  return names;
 }
 
 }  // namespace
@@ -49,7 +67,8 @@ void FrameLoop::prepare(const std::string& scene_hash) {
       if (record_->done(f.number, key, f.output)) ++skipped_;
       else left_.push_back({f, i, std::move(key)});
     }
-    carries_views_ = carries_views(spec_);
+    for (const ActorSpec& a : spec_.actors) carries_views_ = carries_views_ || carries_views(a);
+    if (carries_views_) asked_by_carried_ = asked_by_carried_setups(spec_);
     if (skipped_ > 0)
       log_info(std::to_string(skipped_) + " of the job's " + std::to_string(left_.size() + skipped_) + " frames are done (" +
                    record_->folder() + ", their images unchanged); " +
@@ -63,9 +82,12 @@ void FrameLoop::prepare(const std::string& scene_hash) {
   spec_.camera = spec_.job.declared ? spec_.frames.front().camera : left_[0].frame.camera;
 }
 
-void FrameLoop::switch_view(const FrameSpec& f, const std::function<void(wire::Phase, Value::Map)>& run_phase) {
+void FrameLoop::switch_view(const FrameSpec& f, bool replay, const std::function<void(wire::Phase, Value::Map)>& run_phase) {
   // Every actor takes the view first; then what depends on it is set up again (an op's new setup may ask others).
-  run_phase(wire::Phase::frame, Value::Map{{"frame", static_cast<int64_t>(f.number)}, {"camera", f.camera.to_value()}});
+  // A replayed view, which nothing renders, needs only what carried setups extend to it and what they ask.
+  Value::Map body{{"frame", static_cast<int64_t>(f.number)}, {"camera", f.camera.to_value()}};
+  if (replay) body["renew"] = asked_by_carried_;
+  run_phase(wire::Phase::frame, std::move(body));
   run_phase(wire::Phase::setup, {});
 }
 
@@ -82,10 +104,10 @@ void FrameLoop::run(const std::function<void(wire::Phase, Value::Map)>& run_phas
                  std::to_string(f.frame.number) + ", which this run does not render: a setup carried over the frames "
                  "then holds what the whole job's would");
       const auto replay_start = Clock::now();
-      for (size_t j = holds + 1; j < f.index; ++j) switch_view(spec_.frames[j], run_phase);
+      for (size_t j = holds + 1; j < f.index; ++j) switch_view(spec_.frames[j], true, run_phase);
       replay_seconds_ += std::chrono::duration<double>(Clock::now() - replay_start).count();
     }
-    if (f.index != holds) switch_view(f.frame, run_phase);
+    if (f.index != holds) switch_view(f.frame, false, run_phase);
     holds = f.index;
     run_phase(wire::Phase::render, {});
     tiles_.finish_progress();

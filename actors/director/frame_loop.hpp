@@ -55,8 +55,8 @@ class FrameLoop {
     size_t index = 0;  // in spec.frames
     std::string key;
   };
-  // PHASE frame and PHASE setup: the farm takes frame `f`'s view.
-  void switch_view(const FrameSpec& f, const std::function<void(wire::Phase, Value::Map)>& run_phase);
+  // PHASE frame and PHASE setup: the farm takes frame `f`'s view (`replay`: to extend carried setups, no render).
+  void switch_view(const FrameSpec& f, bool replay, const std::function<void(wire::Phase, Value::Map)>& run_phase);
   FarmSpec& spec_;
   TileService& tiles_;
   const RunOptions& options_;
@@ -65,6 +65,7 @@ class FrameLoop {
   size_t skipped_ = 0, written_ = 0;
   bool carries_views_ = false;  // an op carries its setup over the views: frames skipped are replayed
   double replay_seconds_ = 0;
+  Value::Array asked_by_carried_;  // the actors a carried setup may ask: they set up for a replayed view too
   struct FrameFigures {
     int number = 0;
     double seconds = 0;

@@ -72,8 +72,8 @@ class RendererActor final : public Actor {
 
   // A job's next frame: its tiles are traced from the new camera (the last frame's are all done and acknowledged:
   // this renderer said READY render).
-  void on_frame(int, const CameraSpec& camera, Runtime& rt) override {
-    *camera_ = Camera(camera, image_.width, image_.height);
+  void on_frame(const FrameView& view, Runtime& rt) override {
+    *camera_ = Camera(view.camera, image_.width, image_.height);
     no_more_tiles_ = false;
     rt.phase_done(wire::Phase::frame);
   }

@@ -17,7 +17,7 @@ class SlowedActor final : public Actor {
     return inner_->configure(config, rt);
   }
   void on_phase(wire::Phase phase, Runtime& rt) override { inner_->on_phase(phase, rt); }
-  void on_frame(int frame, const CameraSpec& camera, Runtime& rt) override { inner_->on_frame(frame, camera, rt); }
+  void on_frame(const FrameView& view, Runtime& rt) override { inner_->on_frame(view, rt); }
   void on_request(const std::string& peer, wire::Op op, wire::Message& request, Runtime& rt) override {
     inner_->on_request(peer, op, request, rt);
   }

@@ -267,11 +267,13 @@ class LightOpActor final : public Actor {
     }
   }
 
-  void on_frame(int, const CameraSpec& camera, Runtime& rt) override {
+  void on_frame(const FrameView& view, Runtime& rt) override {
     ++frames_;
-    *camera_ = Camera(camera, width_, height_);  // what ctx.camera points at, for the op's shade() too
-    // Requests from now on (another op's new setup asking this one) wait for this op's new setup.
-    if (op_->setup_sees_camera()) (op_->carries_views() ? extend_ : renew_) = true, set_up_ = false;
+    *camera_ = Camera(view.camera, width_, height_);  // what ctx.camera points at, for the op's shade() too
+    // Requests from now on (another op's new setup asking this one) wait for this op's new setup. A carried setup is
+    // extended to every view, replayed ones too.
+    if (op_->setup_sees_camera() && op_->carries_views()) extend_ = true, set_up_ = false;
+    else if (op_->setup_sees_camera() && view.renew) renew_ = true, set_up_ = false;
     rt.phase_done(wire::Phase::frame);
   }
 

@@ -35,7 +35,7 @@ Value ActorStats::to_value(const wire::SocketCounters& t) const {
                     {"messages_out", t.messages_out}};
 }
 
-void Actor::on_frame(int, const CameraSpec&, Runtime& rt) { rt.phase_done(wire::Phase::frame); }
+void Actor::on_frame(const FrameView&, Runtime& rt) { rt.phase_done(wire::Phase::frame); }
 
 void Actor::on_peer_down(const std::string& name, Runtime& rt) {
   rt.fail("input '" + name + "' was lost and this actor has no other");
@@ -238,7 +238,13 @@ void Runtime::handle_control(wire::Message& m, Actor& actor) {
           fail("PHASE frame needs {frame, camera}" + (camera ? std::string() : ": " + camera.error().message));
           return;
         }
-        actor.on_frame(static_cast<int>(frame->as_int()), *camera, *this);
+        FrameView view{static_cast<int>(frame->as_int()), *camera};
+        // A replayed view names the actors that must set themselves up for it (docs/PROTOCOL.md).
+        if (const Value* renew = m.body.find("renew"); renew && renew->is_array()) {
+          view.renew = false;
+          for (const Value& n : renew->as_array()) view.renew = view.renew || (n.is_string() && n.as_string() == args_.name);
+        }
+        actor.on_frame(view, *this);
       } else {
         actor.on_phase(*phase, *this);
       }

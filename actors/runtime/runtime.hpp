@@ -8,7 +8,8 @@
 //         -> READY configure
 //         -> PHASE setup -> on_phase("setup") ... phase_done("setup") -> READY setup
 //         -> PHASE render -> on_phase("render") ...
-//         (a job of several frames: -> PHASE frame -> on_frame(n, camera) ... phase_done("frame") -> PHASE render ...)
+//         (a job of several frames: -> PHASE frame -> on_frame(view) ... phase_done("frame") -> PHASE setup ...
+//          -> PHASE render ...)
 //         -> PHASE finish (or BYE) -> STATS -> BYE -> exit 0
 // It exits non-zero after fail(), and on its own when the director is silent for longer than the heartbeat
 // timeout or SIGINT/SIGTERM arrives: an actor never outlives its farm.
@@ -60,6 +61,16 @@ struct ActorStats {
 
 class Runtime;
 
+// PHASE frame: a job's next view.
+struct FrameView {
+  int frame = 0;
+  CameraSpec camera;
+  // False while the director replays the views of frames a run does not render (a resumed job) for an actor that no
+  // setup carried over the frames asks: it need not set itself up for this view (the next rendered frame's PHASE
+  // frame says true).
+  bool renew = true;
+};
+
 class Actor {
  public:
   virtual ~Actor() = default;
@@ -69,9 +80,10 @@ class Actor {
   // PHASE setup or render arrived. Call rt.phase_done(phase) when the phase's work is finished: every actor
   // answers both (a LightOp answers render at once; it renders by answering requests).
   virtual void on_phase(wire::Phase phase, Runtime& rt) = 0;
-  // PHASE frame arrived: the job's next frame, seen by `camera`. Take the view and redo what depends on it, then
-  // call rt.phase_done(frame); PHASE render follows. By default the actor has nothing that depends on the view.
-  virtual void on_frame(int frame, const CameraSpec& camera, Runtime& rt);
+  // PHASE frame arrived: the job's next frame, seen by `view.camera`. Take the view and call rt.phase_done(frame);
+  // at the PHASE setup that follows, redo what depends on it (when view.renew). By default the actor has nothing
+  // that depends on the view.
+  virtual void on_frame(const FrameView& view, Runtime& rt);
   // A REQUEST on the data socket (`op` is Op::unknown for a name not in the protocol; the raw name is in the
   // header). Answer now or later with rt.reply / rt.reply_error.
   virtual void on_request(const std::string& peer, wire::Op op, wire::Message& request, Runtime& rt) = 0;
