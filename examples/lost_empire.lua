@@ -38,20 +38,18 @@ scene    { file = "../../shared/scenes/lost_empire/lost_empire.obj" }
 -- kd = 0: a torch's crossed quads would otherwise light each other where they meet, at distances near 0 (an
 -- estimator without finite variance: fireflies that never average out).
 material "Torch" { emission = {9, 9, 6}, kd = {0, 0, 0} }
+camera   { eye = {-5, 18, -30}, at = {5, 12, 5}, fov = 70 }
 -- --set frames=N: a walkthrough of N frames (outputs lost_empire.####.png): the eye walks in from the opening view and
--- turns, along a smooth path a Lua function of the frame gives; --set frame=K renders frame K of it alone.
+-- turns, along a smooth path a Lua function of the frame gives; --set frame=K renders frame K of it alone (a job
+-- of that one frame, to lost_empire.png).
 local walk, at_frame = param("frames", 0), param("frame", 0)
 local function walk_view(f)
   local t = walk > 1 and (f - 1) / (walk - 1) or 0
   local s = t * t * (3 - 2 * t)  -- eases in and out
-  return { eye = {-5 + 8 * s, 18 - s, -30 + 14 * s}, at = {5 + 7 * s, 12, 5 + 9 * s}, fov = 70 }
+  return { eye = {-5 + 8 * s, 18 - s, -30 + 14 * s}, at = {5 + 7 * s, 12, 5 + 9 * s} }
 end
-if walk > 0 and at_frame == 0 then
-  frames { first = 1, last = walk, camera = walk_view }
-elseif walk > 0 then
-  camera(walk_view(at_frame))
-else
-  camera { eye = {-5, 18, -30}, at = {5, 12, 5}, fov = 70 }
+if walk > 0 then
+  frames { first = at_frame > 0 and at_frame or 1, last = at_frame > 0 and at_frame or walk, camera = walk_view }
 end
 -- shade_spp: of the spp camera samples per pixel, how many the lighting shades; the others only see the torches'
 -- flames, whose sub-pixel shapes need many camera samples but no light (docs/lua-api.md, image).
