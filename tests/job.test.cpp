@@ -1,6 +1,8 @@
-// Render jobs (issue 41): a turntable of frames over one farm. Each frame equals the single-frame render of its
-// camera, bit for bit, on any number of renderers; only the setup that depends on the view is redone; a job whose
-// director is SIGKILLed resumes from its record to the same frames; a changed scene renders its frames again.
+// Render jobs (issue 41): a turntable of frames over one farm. Frames are the same on any number of renderers; with
+// per-frame caches each equals the single-frame render of its camera, bit for bit; only the setup that depends on
+// the view is redone, or, for a cache carried over the frames, extended; a job whose director is SIGKILLed resumes
+// from its record to the same frames (replaying the views it skips); runs sharing the record keep each other's
+// frames; a preview shows a frame while it renders.
 #include <gtest/gtest.h>
 #include <signal.h>
 
@@ -16,8 +18,9 @@ namespace {
 
 // cornell_glass turned about its centre; a network with view-dependent setups (direct's learned lights; the camera-
 // placed irradiance cache, which carries its records over the frames, or with --set reuse=0 makes its own each
-// frame) and view-independent ones (a pool of two photon maps, an area-placed cache over the path tracer). --set frame=K renders frame K's camera as a farm of one frame, without frames { }; --set paths_learned=1
-// makes the path tracer learn its lights where the camera looks, so the kept area-placed cache asked an op that
+// frame) and view-independent ones (a pool of two photon maps, an area-placed cache over the path tracer).
+// --set frame=K renders frame K's camera as a farm of one frame, without frames { }; --set paths_learned=1 makes the
+// path tracer learn its lights where the camera looks, so the kept area-placed cache asked an op that
 // saw the first frame's camera.
 constexpr const char* kTurntable = R"(
 scene  { builtin = "cornell_glass" }

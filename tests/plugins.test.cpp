@@ -26,12 +26,12 @@ int count(const std::string& text, const std::string& what) {
 TEST_F(PluginTest, ExamplesAndBuiltinsPassCheckActor) {
   struct Case {
     std::vector<std::string> args;
-    int checks;  // hello configure setup render requests [inputs] malformed heartbeat bye orphaned sigterm
+    int checks;  // hello configure setup render requests [inputs] malformed frame heartbeat bye orphaned sigterm
   };
-  for (const auto& c : std::vector<Case>{{{"check-actor", "--", kTint}, 10},
-                                         {{"check-actor", "--inputs", "1", "--", kTint}, 11},
-                                         {{"check-actor", "--kind", "direct", "--", LIGHTFARM_BINARY, "actor"}, 10},
-                                         {{"check-actor", "--inputs", "1", "--", kBroken, "--mode", "ok"}, 11}}) {
+  for (const auto& c : std::vector<Case>{{{"check-actor", "--", kTint}, 11},
+                                         {{"check-actor", "--inputs", "1", "--", kTint}, 12},
+                                         {{"check-actor", "--kind", "direct", "--", LIGHTFARM_BINARY, "actor"}, 11},
+                                         {{"check-actor", "--inputs", "1", "--", kBroken, "--mode", "ok"}, 12}}) {
     auto r = run_lightfarm(c.args);
     EXPECT_EQ(r.status, 0) << r.out << r.err;
     EXPECT_EQ(count(r.out, "PASS "), c.checks) << r.out;
@@ -48,6 +48,7 @@ TEST_F(PluginTest, EachBrokenContractFailsItsOwnCheck) {
   };
   for (const Case& c :
        {Case{"no_ready_render", "FAIL render     no READY render within 2 s"},
+        Case{"no_ready_frame", "FAIL frame      no READY frame within 2 s"},
         Case{"ignore_input", "FAIL inputs     asked its input nothing while shading"},
         Case{"ignore_sigterm", "FAIL sigterm    still running 2 s after SIGTERM"},
         Case{"silent_on_malformed", "FAIL malformed  no ERROR for malformed packet 1: nothing within 2 s"},
@@ -56,8 +57,8 @@ TEST_F(PluginTest, EachBrokenContractFailsItsOwnCheck) {
     auto r = run_lightfarm({"check-actor", "--inputs", "1", "--timeout", "2", "--", kBroken, "--mode", c.mode});
     EXPECT_EQ(r.status, 1) << c.mode;
     EXPECT_NE(r.out.find(c.says), std::string::npos) << c.mode << ":\n" << r.out;
-    // wrong_n also fails the good request after the malformed ones; every other variant fails once.
-    EXPECT_EQ(count(r.out, "FAIL "), std::string(c.mode) == "wrong_n" ? 2 : 1) << c.mode << ":\n" << r.out;
+    // wrong_n also fails the good requests after the malformed ones and after a frame; every other variant fails once.
+    EXPECT_EQ(count(r.out, "FAIL "), std::string(c.mode) == "wrong_n" ? 3 : 1) << c.mode << ":\n" << r.out;
     expect_no_leftovers(r);
   }
 }
@@ -98,7 +99,7 @@ TEST_F(PluginTest, CheckActorSpeaksCurveAsFarmsDo) {
 TEST_F(PluginTest, CheckActorKeepsASlowActorAlive) {
   auto r = run_lightfarm({"check-actor", "--heartbeat-timeout", "1", "--timeout", "3", "--", kBroken, "--mode", "slow"});
   EXPECT_EQ(r.status, 0) << r.out << r.err;
-  EXPECT_EQ(count(r.out, "PASS "), 10) << r.out;
+  EXPECT_EQ(count(r.out, "PASS "), 11) << r.out;
   expect_no_leftovers(r);
 }
 
@@ -192,7 +193,7 @@ TEST_F(PluginTest, SdkBuildsAnOutOfTreeLightOpThatRendersInAFarm) {
 
   auto check = run_lightfarm({"check-actor", "--", program});
   EXPECT_EQ(check.status, 0) << check.out << check.err;
-  EXPECT_EQ(count(check.out, "PASS "), 10) << check.out;  // every check but inputs
+  EXPECT_EQ(count(check.out, "PASS "), 11) << check.out;  // every check but inputs
 
   const std::string script = kSource + "/examples/plugin-cpp/ao_cornell.lua";
   auto one = run_lightfarm({"run", script, "--set", "program=" + program, "--set", "replicas=1", "--set", "width=48",

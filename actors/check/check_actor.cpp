@@ -12,6 +12,8 @@
 //   inputs     (with --inputs N) every input was asked for light while shading
 //   malformed  three undecodable packets are each answered with ERROR bad_message (id 0), an unknown operation
 //              with ERROR unknown_op (its id), and a good request afterwards still with a REPLY
+//   frame      a job's next frame: PHASE frame (another camera) is answered with READY frame, the PHASE setup that
+//              follows with READY setup, and a shade request after them with a REPLY
 //   heartbeat  a HEARTBEAT arrives within the heartbeat timeout it was configured with
 //   bye        PHASE finish: STATS and BYE come back and the process exits with status 0
 //   orphaned   a second instance, configured, whose director then falls silent, exits within its heartbeat
@@ -66,6 +68,7 @@ class Checker {
       check("requests", [&] { return requests(); });
       if (options_.inputs > 0) check("inputs", [&] { return inputs_asked(); });
       check("malformed", [&] { return malformed(); });
+      check("frame", [&] { return next_frame(); });
       check("heartbeat", [&] { return heartbeat(); });
       check("bye", [&] { return bye(); });
     }
@@ -281,6 +284,18 @@ class Checker {
           return "radiance must be finite and non-negative";
       return {};
     }
+  }
+
+  // A job's next frame, as the director's FrameLoop drives it (docs/PROTOCOL.md, "Jobs of frames").
+  std::string next_frame() {
+    CameraSpec moved;
+    moved.eye = {378, 273, -800};
+    send_control(wire::make_phase("director", wire::Phase::frame,
+                                  Value::Map{{"frame", int64_t{2}}, {"camera", moved.to_value()}}));
+    if (std::string why = expect_ready(wire::Phase::frame); !why.empty()) return why;
+    if (std::string why = phase(wire::Phase::setup); !why.empty()) return why + " (after PHASE frame)";
+    if (std::string why = shade(100, 200); !why.empty()) return "after the frame: " + why;
+    return {};
   }
 
   std::string requests() {

@@ -73,9 +73,8 @@ class Director {
                 std::to_string(spec_.image.height) + "); stopping the farm");
       status = 1;
     }
-    // No actor outlives the farm, whatever happened above. Host agents leave by themselves once their actors have
-    // exited (a Slurm step killed from outside would be cancelled with them); one still there after the grace is
-    // stopped like an actor (at once when no actor started: a job with every frame done).
+    // No actor outlives the farm, whatever happened above. Host agents leave once their actors have exited (a Slurm
+    // step killed from outside is cancelled with them); one left after the grace (none if no actor began) is stopped.
     supervisor_.send_bye_to_all();
     launchers_.stop_all(std::chrono::milliseconds(frames_.nothing_left() ? 0 : status == 0 ? 3000 : 300));
     kill_orphans();
@@ -174,6 +173,8 @@ class Director {
   void run_phase(Phase phase, Value::Map body = {}) {
     supervisor_.broadcast(wire::make_phase("director", phase, std::move(body)));
     check(services_.phase(phase, control_));
+    // READY frame only says the view is taken (docs/PROTOCOL.md): an actor silent for a minute never will say it.
+    if (phase == Phase::frame) return wait_all(60.0, [](const ActorRecord& a) { return a.ready == Phase::frame; });
     if (phase != Phase::render) {
       // A READY sent before a rollback counts for nothing: the services say when the phase's work is really in.
       while (!services_.phase_complete(phase) || !supervisor_.all([phase](const ActorRecord& a) { return a.ready == phase; }))
@@ -229,10 +230,9 @@ class Director {
   }
 
   void pump(long timeout_ms) {
-    // The image writer's load (OpenImageIO's, for formats other than .exr and .png: 0.4-0.6 CPU-s) runs beside the
-    // render once the first tile is in: not with the actors' start-up, which it slowed, and not after the last
-    // tile, which adds its time to every frame. dlopen holds the loader's lock, which creating a thread needs:
-    // by now this process has made its own threads (ZeroMQ's, the ZAP handler, hosts connecting).
+    // OpenImageIO's load (formats other than .exr and .png: 0.4-0.6 CPU-s) runs beside the render once a tile is in:
+    // not with the actors' start-up, which it slowed, nor after the last tile, adding to every frame. dlopen holds the
+    // loader's lock, which creating a thread needs: by now this process has its threads (ZeroMQ's, ZAP, hosts).
     if (!image_io_.joinable() && tiles_.tiles_done() > 0) image_io_ = std::jthread(preload_image_writer, spec_.image.output);
     loop_.turn(timeout_ms);
     if (monitor_) monitor_->update(false);

@@ -189,12 +189,14 @@ class Actor:
                             self.to_director(ERROR, body={"code": "actor_failed", "message": str(e)})
                             return 1
                         self.to_director(READY, "configure", {"phase": "configure"})
-                    elif t == PHASE and op in ("setup", "render"):
-                        self.to_director(READY, op, {"phase": op})
                     elif (t == PHASE and op == "finish") or t == BYE:
                         self.to_director(STATS, body={"requests": self.requests, "points": self.points})
                         self.to_director(BYE)
                         return 0
+                    elif t == PHASE:
+                        # Every other phase (setup, render, a job's frame) is answered at once: tint keeps nothing
+                        # that depends on the phase or the view.
+                        self.to_director(READY, op, {"phase": op})
             if self.data in ready:
                 while self.data.poll(0):
                     frames = self.data.recv_multipart()

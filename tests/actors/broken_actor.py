@@ -8,6 +8,7 @@ other mode fails check-actor for its one reason only.
   --mode silent               never answers a shade request (nor anything else on its data socket)
   --mode crash                exits with status 3 on its first shade request
   --mode no_ready_render      never answers PHASE render with READY render
+  --mode no_ready_frame       never answers PHASE frame (a job's next frame) with READY frame
   --mode ignore_input         answers without asking the input it was given
   --mode ignore_sigterm       ignores SIGTERM
   --mode silent_on_malformed  drops malformed packets without an ERROR
@@ -30,7 +31,7 @@ import zmq
 import zmq.utils.z85
 
 HELLO, CONFIG, PHASE, REQUEST, REPLY, ERROR, STATS, HEARTBEAT, BYE, READY, PEER_DOWN = range(1, 12)
-MODES = ["ok", "wrong_version", "silent", "crash", "no_ready_render", "ignore_input", "ignore_sigterm",
+MODES = ["ok", "wrong_version", "silent", "crash", "no_ready_render", "no_ready_frame", "ignore_input", "ignore_sigterm",
          "silent_on_malformed", "wrong_n", "no_routing_id", "crash_at_finish", "no_curve", "slow"]
 
 
@@ -119,6 +120,9 @@ def main():
             elif h["t"] == PHASE and h["op"] == "render":
                 if a.mode != "no_ready_render":
                     send(READY, "render", {"phase": "render"})
+            elif h["t"] == PHASE and h["op"] == "frame":
+                if a.mode != "no_ready_frame":
+                    send(READY, "frame", {"phase": "frame"})
             elif h["t"] == BYE or (h["t"] == PHASE and h["op"] == "finish"):
                 if a.mode == "crash_at_finish":
                     return 3
