@@ -217,6 +217,10 @@ TEST_F(MonitorTest, StateShowsAJobsFrames) {
                                         "')); j=s['job']; print(j['frames_total'], j['frames_done'], j['frame'], "
                                         "j['eta_seconds'], s['farm']['output'].endswith('j.0005.exr'))\"");
   EXPECT_EQ(check, "3 3 0 0 True\n") << state->body;
+  if (have_chromium()) {  // the page says it too
+    const std::string dom = page_dom(url);
+    EXPECT_NE(dom.find("frame - (3 of 3 done, ~0 s left) · tiles 1 / 1"), std::string::npos) << dom;
+  }
   ::kill(farm.pid(), SIGINT);
   auto r = farm.wait(30);
   EXPECT_EQ(r.status, 0) << r.err;

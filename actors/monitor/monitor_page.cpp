@@ -140,7 +140,11 @@ function render(s) {
   setText($("script"), f.script || "");
   setText($("stage"), f.stage || "-");
   setText($("elapsed"), num(f.elapsed_seconds, 1) + " s");
-  setText($("tiles"), `tiles ${f.tiles_done ?? 0} / ${f.tiles_total ?? 0}`);
+  // A job of frames: which frame, how many are done, and what the rest should take.
+  const j = s.job;
+  const job = j ? `frame ${j.frame || "-"} (${j.frames_done} of ${j.frames_total} done` +
+    (j.eta_seconds === undefined ? ") · " : `, ~${num(j.eta_seconds)} s left) · `) : "";
+  setText($("tiles"), job + `tiles ${f.tiles_done ?? 0} / ${f.tiles_total ?? 0}`);
   const actors = s.actors || [];
   const graphKey = actors.map(a => a.name + ":" + a.state + ":" + a.inputs.join(",") + ":" + (a.rays_from || []).join(",")).join(";");
   if (graphKey !== lastGraph) { lastGraph = graphKey; drawGraph(actors); }
