@@ -1,7 +1,8 @@
-// A walkthrough of Lost Empire as one job against the same frames as separate `lightfarm run`s (issue 41's goals).
+// A walkthrough of Lost Empire as one job against the same frames as separate `lightfarm run`s (one run a frame:
+// how a sequence is rendered without jobs).
 //
 // The job: examples/lost_empire.lua with --set frames=N (the network: --set lighting=network), one farm rendering
-// frame 1..N. The separate runs: the same script with --set frame=K, a farm of that frame alone, for an evenly
+// frame 1..N. The separate runs: the same script with --set frame=K, a job of that one frame alone, for an evenly
 // spread sample of the frames (--separate, default 6: frames 1, ..., N); their mean time stands for every frame's,
 // and N times it for the N separate runs. Printed and written as JSON:
 //   - the job's wall time against the N separate runs' (goal: <= 0.4);
@@ -65,6 +66,11 @@ int cpu_count() {
   return sched_getaffinity(0, sizeof set, &set) == 0 ? CPU_COUNT(&set) : 1;
 }
 
+bool same_pixels(const std::string& a, const std::string& b) {
+  auto x = lf::read_image(a), y = lf::read_image(b);
+  return x.ok() && y.ok() && x->pixels == y->pixels;
+}
+
 std::string frame_file(const std::string& dir, int k) {
   char name[64];
   std::snprintf(name, sizeof name, "/walk.%04d.exr", k);
@@ -99,7 +105,7 @@ int main(int argc, char** argv) {
               job.number("setup"), job.number("render"));
   std::fflush(stdout);
 
-  // Separate farms of single frames, evenly spread over the walk.
+  // Separate runs of single frames, evenly spread over the walk.
   std::vector<double> separate_seconds;
   std::vector<int> sampled;
   double separate_cpu = 0;
@@ -114,18 +120,15 @@ int main(int argc, char** argv) {
     separate_seconds.push_back(one.wall_seconds);
     sampled.push_back(k);
     separate_cpu += one.cpu_seconds;
-    auto a = lf::read_image(out), b = lf::read_image(frame_file(dir.string(), k));
-    const bool same = a.ok() && b.ok() && a->pixels == b->pixels;
+    const bool same = same_pixels(out, frame_file(dir.string(), k));
     identical += same;
     std::printf(" %d: %.2f s%s", k, one.wall_seconds, same ? "" : " (differs)");
     std::fflush(stdout);
   }
   std::printf("\n");
-  double mean_separate = 0;
-  for (double s : separate_seconds) mean_separate += s;
-  mean_separate /= static_cast<double>(separate_seconds.size());
   double separate_wall = 0;
   for (double s : separate_seconds) separate_wall += s;
+  const double mean_separate = separate_wall / static_cast<double>(separate_seconds.size());
   const double separate_idle = 1 - separate_cpu / (separate_wall * cpus);
   const double estimate = mean_separate * args.frames;
   std::printf("  mean %.2f s a frame: %d separate runs ~ %.1f s (%.0f%% of %d CPUs idle)\n", mean_separate, args.frames,
@@ -144,10 +147,8 @@ int main(int argc, char** argv) {
   const auto half = bench::run_farm(script, look, (dir / "walk.####.exr").string());
   const double replay = bench::json_number(half.stats, "replay_seconds");
   int resumed_identical = 0;
-  for (int k = args.frames / 2 + 1; k <= args.frames; ++k) {
-    auto a = lf::read_image(frame_file(dir.string(), k)), b = lf::read_image(frame_file(dir.string(), k) + ".first.exr");
-    resumed_identical += a.ok() && b.ok() && a->pixels == b->pixels;
-  }
+  for (int k = args.frames / 2 + 1; k <= args.frames; ++k)
+    resumed_identical += same_pixels(frame_file(dir.string(), k), frame_file(dir.string(), k) + ".first.exr");
   std::printf("resume with frames %d-%d to render: %.1f s, of which replaying the views of frames 2-%d %.2f s; %d of %d "
               "frames identical to the uninterrupted job's\n", args.frames / 2 + 1, args.frames, half.wall_seconds,
               args.frames / 2, replay, resumed_identical, args.frames - args.frames / 2);

@@ -13,6 +13,7 @@ namespace lf {
 namespace {
 
 constexpr int kMaxFrame = 10'000'000;
+constexpr int64_t kMaxFrames = 1'000'000;
 
 using Vec = std::array<double, 3>;
 
@@ -72,6 +73,17 @@ void check_camera(const CameraSpec& c, const std::string& what) {
 }
 
 }  // namespace
+
+void read_frames(const ParamTable& p, JobSpec& job) {
+  job.first = static_cast<int>(p.get_int("first", 1, -kMaxFrame, kMaxFrame));
+  job.last = static_cast<int>(p.get_int("last", job.first, -kMaxFrame, kMaxFrame));
+  job.step = static_cast<int>(p.get_int("step", 1, 1, kMaxFrame));
+  p.report_unused();
+  if (job.last < job.first)
+    throw ParamError("frames: last (" + std::to_string(job.last) + ") comes before first (" + std::to_string(job.first) + ")");
+  if ((int64_t{job.last} - job.first) / job.step >= kMaxFrames)
+    throw ParamError("frames: more than " + std::to_string(kMaxFrames) + " frames");
+}
 
 std::vector<int> JobSpec::numbers() const {
   std::vector<int> n;

@@ -37,6 +37,12 @@ struct JobSpec {
   std::vector<int> numbers() const;
 };
 
+class ParamTable;
+
+// frames { first, last, step } into `job` (its camera function is the binding's to call): the ranges, last not
+// before first, at most a million frames. Throws ParamError.
+void read_frames(const ParamTable& p, JobSpec& job);
+
 // "1-240,300" (numbers and ranges, comma-separated) -> the frame numbers, ascending, each once. Throws ParamError.
 std::vector<int> parse_frame_list(const std::string& text);
 

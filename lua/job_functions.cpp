@@ -6,9 +6,6 @@
 namespace lf::lua_binding {
 namespace {
 
-constexpr int64_t kMaxFrame = 10'000'000;
-constexpr int64_t kMaxFrames = 1'000'000;
-
 // frames { first = 1, last = 240, step = 1, camera = function(frame) return { eye = ..., at = ... } end }
 int l_frames(lua_State* L) {
   Builder& b = builder(L);
@@ -24,16 +21,7 @@ int l_frames(lua_State* L) {
   lua_setfield(L, 1, "camera");
   ParamTable p = table_params(L, 1, "frames");
   JobSpec& job = b.spec.job;
-  with_params(L, [&] {
-    job.first = static_cast<int>(p.get_int("first", 1, -kMaxFrame, kMaxFrame));
-    job.last = static_cast<int>(p.get_int("last", job.first, -kMaxFrame, kMaxFrame));
-    job.step = static_cast<int>(p.get_int("step", 1, 1, kMaxFrame));
-    p.report_unused();
-    if (job.last < job.first) throw ParamError("frames: last (" + std::to_string(job.last) + ") comes before first (" +
-                                               std::to_string(job.first) + ")");
-    if ((int64_t{job.last} - job.first) / job.step >= kMaxFrames)
-      throw ParamError("frames: more than " + std::to_string(kMaxFrames) + " frames");
-  });
+  with_params(L, [&] { read_frames(p, job); });
   job.declared = true;
   job.loc = caller_loc(L);
   if (!has_function) return 0;

@@ -1,4 +1,4 @@
-// Render jobs (issue 41): a turntable of frames over one farm. Frames are the same on any number of renderers; with
+// Render jobs: a turntable of frames over one farm. Frames are the same on any number of renderers; with
 // per-frame caches each equals the single-frame render of its camera, bit for bit; only the setup that depends on
 // the view is redone, or, for a cache carried over the frames, extended; a job whose director is SIGKILLed resumes
 // from its record to the same frames (replaying the views it skips); runs sharing the record keep each other's

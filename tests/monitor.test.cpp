@@ -68,6 +68,18 @@ std::pair<std::string, httplib::Client> client_for(const std::string& url) {
   return {m[3], httplib::Client(m[1].str(), std::stoi(m[2]))};
 }
 
+// /api/state of a farm run with --monitor 0 and --monitor-hold, read once it holds after the frame; "" if it never
+// does. `url`: the monitor's.
+std::string held_state(Farm& farm, std::string& url) {
+  url = monitor_url(farm);
+  if (url.empty() ||
+      !Farm::eventually([&] { return farm.err_so_far().find("monitor: holding") != std::string::npos; }, 60))
+    return {};
+  auto [token, client] = client_for(url);
+  auto state = client.Get("/api/state");
+  return state ? state->body : std::string();
+}
+
 class MonitorTest : public FarmFixture {};
 
 TEST_F(MonitorTest, ThePageShowsTheNetworkTheImageFillingInAndALostReplica) {
@@ -206,17 +218,14 @@ TEST_F(MonitorTest, StateShowsAJobsFrames) {
                                               "renderers { count = 1, lighting = lightop \"direct\" { } }\n"
                                               "farm { light_paths = \"partial\" }\n");
   Farm farm({"run", script, "--monitor", "0", "--monitor-hold", "30"});
-  const std::string url = monitor_url(farm);
-  ASSERT_FALSE(url.empty()) << farm.err_so_far();
-  ASSERT_TRUE(Farm::eventually([&] { return farm.err_so_far().find("monitor: holding") != std::string::npos; }, 60));
-  auto [token, client] = client_for(url);
-  auto state = client.Get("/api/state");
-  ASSERT_TRUE(state);
-  write("state.json", state->body);
+  std::string url;
+  const std::string state = held_state(farm, url);
+  ASSERT_FALSE(state.empty()) << farm.err_so_far();
+  write("state.json", state);
   const std::string check = run_command("python3 -c \"import json; s=json.load(open('" + path("state.json") +
                                         "')); j=s['job']; print(j['frames_total'], j['frames_done'], j['frame'], "
                                         "j['eta_seconds'], s['farm']['output'].endswith('j.0005.exr'))\"");
-  EXPECT_EQ(check, "3 3 0 0 True\n") << state->body;
+  EXPECT_EQ(check, "3 3 0 0 True\n") << state;
   if (have_chromium()) {  // the page says it too
     const std::string dom = page_dom(url);
     EXPECT_NE(dom.find("frame - (3 of 3 done, ~0 s left) · tiles 1 / 1"), std::string::npos) << dom;
@@ -280,18 +289,15 @@ partition { parts = 2 }
 renderers { count = 1, lighting = lightop "direct" {} }
 )");
   Farm farm({"run", script, "--monitor", "0", "--monitor-hold", "30", "--output", path("parts.exr")});
-  const std::string url = monitor_url(farm);
-  ASSERT_FALSE(url.empty()) << farm.err_so_far();
-  ASSERT_TRUE(Farm::eventually([&] { return farm.err_so_far().find("monitor: holding") != std::string::npos; }, 60));
-  auto [token, client] = client_for(url);
-  auto state = client.Get("/api/state");
-  ASSERT_TRUE(state);
-  write("parts-state.json", state->body);
+  std::string url;
+  const std::string state = held_state(farm, url);
+  ASSERT_FALSE(state.empty()) << farm.err_so_far();
+  write("parts-state.json", state);
   const std::string check = run_command("python3 -c \"import json; s=json.load(open('" + path("parts-state.json") +
                                         "')); print(sorted((a['name'], a.get('rays_from')) for a in s['actors'] "
                                         "if a['kind'] != 'geometry'))\"");
   EXPECT_EQ(check, "[('direct', ['geometry.0', 'geometry.1']), ('renderer-0', ['geometry.0', 'geometry.1'])]\n")
-      << state->body;
+      << state;
   ::kill(farm.pid(), SIGINT);  // ends the hold
   auto r = farm.wait(30);
   EXPECT_EQ(r.status, 0) << r.err;

@@ -29,6 +29,7 @@
 #include <cstdio>
 #include <thread>
 
+#include "actors/codecs/control_codec.hpp"
 #include "actors/launchers/local_launcher.hpp"
 #include "actors/runtime/actor_config.hpp"
 #include "actors/runtime/hello.hpp"
@@ -290,8 +291,7 @@ class Checker {
   std::string next_frame() {
     CameraSpec moved;
     moved.eye = {378, 273, -800};
-    send_control(wire::make_phase("director", wire::Phase::frame,
-                                  Value::Map{{"frame", int64_t{2}}, {"camera", moved.to_value()}}));
+    send_control(wire::make_phase("director", wire::Phase::frame, control::encode_frame({2, moved, std::nullopt})));
     if (std::string why = expect_ready(wire::Phase::frame); !why.empty()) return why;
     if (std::string why = phase(wire::Phase::setup); !why.empty()) return why + " (after PHASE frame)";
     if (std::string why = shade(100, 200); !why.empty()) return "after the frame: " + why;

@@ -69,4 +69,34 @@ Result<std::string> decode_peer_down(const Value& body) {
   return *name;
 }
 
+Value::Map encode_frame(const FrameView& view) {
+  Value::Map m{{"frame", static_cast<int64_t>(view.frame)}, {"camera", view.camera.to_value()}};
+  if (view.renew) {
+    Value::Array names;
+    for (const auto& n : *view.renew) names.push_back(n);
+    m["renew"] = std::move(names);
+  }
+  return m;
+}
+
+Result<FrameView> decode_frame(const Value& body) {
+  const Value* frame = body.find("frame");
+  if (!frame || !frame->is_int() || frame->as_int() < INT_MIN || frame->as_int() > INT_MAX)
+    return bad("a PHASE frame without a frame number");
+  const Value* camera = body.find("camera");
+  if (!camera) return bad("a PHASE frame without a camera");
+  auto spec = CameraSpec::from_value(*camera);
+  if (!spec) return bad("a PHASE frame's camera: " + spec.error().message);
+  FrameView view{static_cast<int>(frame->as_int()), *spec, std::nullopt};
+  if (const Value* renew = body.find("renew")) {
+    if (!renew->is_array()) return bad("a PHASE frame's renew is not a list of names");
+    view.renew.emplace();
+    for (const Value& n : renew->as_array()) {
+      if (!n.is_string()) return bad("a PHASE frame's renew is not a list of names");
+      view.renew->push_back(n.as_string());
+    }
+  }
+  return view;
+}
+
 }  // namespace lf::control

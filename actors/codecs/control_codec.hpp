@@ -6,6 +6,7 @@
 //   tile_done (renderer -> director): { id, pixels: f32[3wh] }          reply: {}
 //   PEER_MOVED (director -> actor): { name, endpoint, key }  (key "" without CURVE or over same-host IPC)
 //   PEER_DOWN (director -> actor):  { name }
+//   PHASE frame (director -> actor): { frame, camera: {eye, at, ...} (CameraSpec), renew?: [names] }
 #include <cstdint>
 #include <optional>
 #include <span>
@@ -13,6 +14,7 @@
 #include <vector>
 
 #include "core/result.hpp"
+#include "core/specs.hpp"
 #include "core/value.hpp"
 #include "render/shading/tile_kernel.hpp"
 
@@ -41,5 +43,14 @@ Result<PeerMoved> decode_peer_moved(const Value& body);
 
 Value encode_peer_down(const std::string& name);
 Result<std::string> decode_peer_down(const Value& body);
+
+// A job's next view. `renew`: on a replayed view (no render), the actors that set themselves up for it.
+struct FrameView {
+  int frame = 0;
+  CameraSpec camera;
+  std::optional<std::vector<std::string>> renew;
+};
+Value::Map encode_frame(const FrameView& view);  // the body besides the phase's name (wire::make_phase adds it)
+Result<FrameView> decode_frame(const Value& body);
 
 }  // namespace lf::control

@@ -57,5 +57,29 @@ TEST(ControlCodec, PeerMessagesRoundTrip) {
   EXPECT_FALSE(decode_peer_down(Value::Map{{"name", 3}}).ok());
 }
 
+// PHASE frame: the frame number, the camera as CONFIG's, and on a replayed view the actors that set up for it.
+TEST(ControlCodec, FrameRoundTripsAndRefusesWhatIsNotAFrame) {
+  CameraSpec camera;
+  camera.eye = {1, 2, 3};
+  camera.fov = 50;
+  auto plain = decode_frame(Value(encode_frame({7, camera, std::nullopt})));
+  ASSERT_TRUE(plain.ok()) << plain.error().message;
+  EXPECT_EQ(plain->frame, 7);
+  EXPECT_EQ(plain->camera.eye, camera.eye);
+  EXPECT_EQ(plain->camera.fov, 50);
+  EXPECT_FALSE(plain->renew.has_value());
+  auto replay = decode_frame(Value(encode_frame({3, camera, std::vector<std::string>{"direct", "paths"}})));
+  ASSERT_TRUE(replay.ok());
+  EXPECT_EQ(*replay->renew, (std::vector<std::string>{"direct", "paths"}));
+  EXPECT_EQ(decode_frame(Value::Map{{"camera", camera.to_value()}}).error().message,
+            "a PHASE frame without a frame number");
+  EXPECT_EQ(decode_frame(Value::Map{{"frame", 1}}).error().message, "a PHASE frame without a camera");
+  EXPECT_NE(decode_frame(Value::Map{{"frame", 1}, {"camera", Value::Map{{"eye", 3}}}}).error().message.find(
+                "a PHASE frame's camera: "),
+            std::string::npos);
+  EXPECT_EQ(decode_frame(Value::Map{{"frame", 1}, {"camera", camera.to_value()}, {"renew", Value::Array{1}}}).error().message,
+            "a PHASE frame's renew is not a list of names");
+}
+
 }  // namespace
 }  // namespace lf::control

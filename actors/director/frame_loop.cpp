@@ -3,6 +3,7 @@
 #include <chrono>
 #include <cstdio>
 
+#include "actors/codecs/control_codec.hpp"
 #include "actors/director/farm_failure.hpp"
 #include "actors/director/film_checkpoint.hpp"
 #include "core/log.hpp"
@@ -26,7 +27,7 @@ bool carries_views(const ActorSpec& a) {
 
 // The actors a carried setup may ask while it extends to a view: every input of a carrying op, and theirs, on to the
 // end of the network. During a replay only these set themselves up for the view.
-Value::Array asked_by_carried_setups(const FarmSpec& spec) {
+std::vector<std::string> asked_by_carried_setups(const FarmSpec& spec) {
   std::vector<bool> asked(spec.actors.size(), false);
   std::vector<int> todo;
   for (size_t i = 0; i < spec.actors.size(); ++i)
@@ -39,7 +40,7 @@ Value::Array asked_by_carried_setups(const FarmSpec& spec) {
     const auto& inputs = spec.actors[static_cast<size_t>(i)].inputs;
     todo.insert(todo.end(), inputs.begin(), inputs.end());
   }
-  Value::Array names;
+  std::vector<std::string> names;
   for (size_t i = 0; i < spec.actors.size(); ++i)
     if (asked[i]) names.push_back(spec.actors[i].name);
   return names;
@@ -85,9 +86,8 @@ void FrameLoop::prepare(const std::string& scene_hash) {
 void FrameLoop::switch_view(const FrameSpec& f, bool replay, const std::function<void(wire::Phase, Value::Map)>& run_phase) {
   // Every actor takes the view first; then what depends on it is set up again (an op's new setup may ask others).
   // A replayed view, which nothing renders, needs only what carried setups extend to it and what they ask.
-  Value::Map body{{"frame", static_cast<int64_t>(f.number)}, {"camera", f.camera.to_value()}};
-  if (replay) body["renew"] = asked_by_carried_;
-  run_phase(wire::Phase::frame, std::move(body));
+  run_phase(wire::Phase::frame,
+            control::encode_frame({f.number, f.camera, replay ? std::optional(asked_by_carried_) : std::nullopt}));
   run_phase(wire::Phase::setup, {});
 }
 

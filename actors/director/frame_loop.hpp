@@ -38,7 +38,6 @@ class FrameLoop {
   // Renders every frame left. `run_phase(phase, body)` sends PHASE to every actor and waits for each READY; throws
   // FarmFailure when a frame cannot be finished or written.
   void run(const std::function<void(wire::Phase, Value::Map)>& run_phase);
-  bool all_written() const { return written_ == left_.size(); }
   // A job's progress for the monitor: {frames_total, frames_done, frame, frame_seconds (the mean of the frames
   // after the first, else the first's), eta_seconds}, given how much of the current frame is done (0..1); nil for
   // a farm of one frame.
@@ -65,7 +64,7 @@ class FrameLoop {
   size_t skipped_ = 0, written_ = 0;
   bool carries_views_ = false;  // an op carries its setup over the views: frames skipped are replayed
   double replay_seconds_ = 0;
-  Value::Array asked_by_carried_;  // the actors a carried setup may ask: they set up for a replayed view too
+  std::vector<std::string> asked_by_carried_;  // the actors a carried setup may ask: they set up for a replayed view too
   struct FrameFigures {
     int number = 0;
     double seconds = 0;

@@ -55,8 +55,7 @@ std::string TileService::holders() const {
 void TileService::finish_progress() { progress_.update(master_.done(), render_seconds(), true); }
 
 Status TileService::write_frame() {
-  const Display display{static_cast<float>(image_.exposure), image_.tonemap};
-  if (auto st = write_image(master_.film(), image_.output, display); !st) return st;
+  if (auto st = write_image(master_.film(), image_.output, display()); !st) return st;
   written_ = true;
   if (checkpoint_) checkpoint_->remove();
   if (preview_every_ > 0) {
@@ -77,13 +76,12 @@ std::string preview_path(const std::string& output) {
   return output.substr(0, dot) + ".preview" + output.substr(dot);
 }
 
-void TileService::write_preview(bool now_anyway) {
+void TileService::write_preview() {
   if (preview_every_ <= 0 || written_) return;
   const auto now = Clock::now();
-  if (!now_anyway && std::chrono::duration<double>(now - last_preview_).count() < preview_every_) return;
+  if (std::chrono::duration<double>(now - last_preview_).count() < preview_every_) return;
   last_preview_ = now;
-  const Display display{static_cast<float>(image_.exposure), image_.tonemap};
-  if (auto st = write_image(master_.film(), preview_path(image_.output), display); !st)
+  if (auto st = write_image(master_.film(), preview_path(image_.output), display()); !st)
     log_warn("cannot write the preview: " + st.error().message + "; no more previews of this frame"), preview_every_ = 0;
 }
 
@@ -128,9 +126,10 @@ Status TileService::on_request(const std::string& actor, wire::Op op, uint64_t i
   }
   out.reply(actor, id, Value::Map{});
   if (checkpoint_) checkpoint_->save(master_);
-  if (!master_.finished()) write_preview(false);
+  if (!master_.finished()) write_preview();
   last_progress_ = Clock::now();
-  if (master_.done() == resumed_ + 1) first_tile_seconds_ = render_seconds();
+  // The farm's first tile (a job's later frames keep the first frame's figure).
+  if (first_tile_seconds_ == 0 && master_.done() == resumed_ + 1) first_tile_seconds_ = render_seconds();
   progress_.update(master_.done(), render_seconds());
   if (master_.finished()) serve_waiting(out);
   return Ok{};

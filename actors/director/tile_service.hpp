@@ -16,6 +16,7 @@
 #include "actors/director/render_master.hpp"
 #include "actors/director/service.hpp"
 #include "core/specs.hpp"
+#include "render/images/image.hpp"
 
 namespace lf {
 
@@ -45,7 +46,6 @@ class TileService final : public Service {
   // Writes the finished frame to the image's output (with its exposure and tone map); the checkpoint has served
   // then. A frame whose every pixel is 0 is written with a warning naming the likely causes.
   Status write_frame();
-  size_t tiles_resumed() const { return resumed_; }
   const std::string& output() const { return image_.output; }  // the frame's
   bool finished() const { return master_.finished(); }
   const Image& film() const { return master_.film(); }
@@ -80,8 +80,10 @@ class TileService final : public Service {
   std::optional<FilmCheckpoint> checkpoint_;
   double preview_every_ = 0;
   std::chrono::steady_clock::time_point last_preview_;
-  void write_preview(bool now_anyway);
   size_t resumed_ = 0;
+  // The partial frame to preview_path(output), if `preview_every_` has passed since the last.
+  void write_preview();
+  Display display() const { return {static_cast<float>(image_.exposure), image_.tonemap}; }
 };
 
 }  // namespace lf

@@ -231,20 +231,13 @@ void Runtime::handle_control(wire::Message& m, Actor& actor) {
       auto started = Clock::now();
       if (*phase == wire::Phase::frame) {
         // The director's own message: one it cannot read is a broken farm, not a frame to skip.
-        const Value* frame = m.body.find("frame");
-        const Value* camera_value = m.body.find("camera");
-        auto camera = camera_value ? CameraSpec::from_value(*camera_value) : Result<CameraSpec>(make_error("no camera"));
-        if (!frame || !frame->is_int() || !camera) {
-          fail("PHASE frame needs {frame, camera}" + (camera ? std::string() : ": " + camera.error().message));
-          return;
-        }
-        FrameView view{static_cast<int>(frame->as_int()), *camera};
+        auto frame = control::decode_frame(m.body);
+        if (!frame) return fail(frame.error().message);
         // A replayed view names the actors that must set themselves up for it (docs/PROTOCOL.md).
-        if (const Value* renew = m.body.find("renew"); renew && renew->is_array()) {
-          view.renew = false;
-          for (const Value& n : renew->as_array()) view.renew = view.renew || (n.is_string() && n.as_string() == args_.name);
-        }
-        actor.on_frame(view, *this);
+        const auto& renew = frame->renew;
+        actor.on_frame(FrameView{frame->frame, frame->camera,
+                                 !renew || std::find(renew->begin(), renew->end(), args_.name) != renew->end()},
+                       *this);
       } else {
         actor.on_phase(*phase, *this);
       }
