@@ -1,5 +1,7 @@
 #include "radiosity/bsp.hpp"
 
+#include "radiosity/solver.hpp"
+
 #include <algorithm>
 #include <cmath>
 #include <numeric>
@@ -64,23 +66,50 @@ int GlobalBsp::build_node(const Mesh& mesh, const std::vector<uint32_t>& surface
   return index;
 }
 
-GlobalBsp GlobalBsp::build(const Mesh& mesh, int positions, bool balanced) {
+// The shots a tree is tried with: the brightest emitters (the first shooters) and, area-weighted with a fixed
+// seed, some lit surfaces (the later ones).
+static std::vector<Shooter> trial_shooters(const Mesh& mesh) {
+  constexpr size_t kEmitters = 4, kReflectors = 4;
+  std::vector<uint32_t> order(mesh.patches.size());
+  std::iota(order.begin(), order.end(), 0u);
+  auto power = [&](uint32_t p) { return mesh.patches[p].polygon.area() * average(mesh.patches[p].emission); };
+  std::stable_sort(order.begin(), order.end(), [&](uint32_t a, uint32_t b) { return power(a) > power(b); });
+  std::vector<Shooter> out;
+  for (size_t i = 0; i < order.size() && i < kEmitters && power(order[i]) > 0; ++i)
+    out.push_back(make_shooter(mesh, order[i], mesh.patches[order[i]].emission, 16));
+  std::vector<double> cdf;
+  double total = 0;
+  for (const auto& p : mesh.patches) cdf.push_back(total += p.polygon.area() * average(p.reflectance));
+  std::mt19937 rng(20261205);
+  for (size_t i = 0; i < kReflectors && total > 0; ++i) {
+    const double x = std::uniform_real_distribution<double>(0, total)(rng);
+    const auto p = static_cast<uint32_t>(std::min<size_t>(
+        static_cast<size_t>(std::lower_bound(cdf.begin(), cdf.end(), x) - cdf.begin()), cdf.size() - 1));
+    out.push_back(make_shooter(mesh, p, mesh.patches[p].reflectance, 16));
+  }
+  return out;
+}
+
+GlobalBsp GlobalBsp::build(const Mesh& mesh, int positions, bool balanced, std::span<const int> patch_positions) {
   const int base = positions <= 1 ? 0 : static_cast<int>(std::ceil(std::log2(static_cast<double>(positions))));
   std::vector<uint32_t> all(mesh.surfaces.size());
   std::iota(all.begin(), all.end(), 0u);
   const float slack = 4 * mesh.epsilon;
   const Box root{mesh.lo - Vec3{slack, slack, slack}, mesh.hi + Vec3{slack, slack, slack}};
-  GlobalBsp best;
-  size_t best_load = SIZE_MAX;
+  std::vector<GlobalBsp> trees;
+  std::vector<ShotEstimate> estimates;
   const auto probe = balanced ? probe_segments(mesh, kProbeSegments) : std::vector<std::pair<Vec3, Vec3>>{};
-  // A deeper tree lets leaves be dealt more evenly, but a ray then crosses more positions and is cast more often (and
-  // every node stores the tree, Stürzlinger et al. §5.2): try each depth and keep the one whose busiest position has
-  // the least probe work.
+  const auto shooters = balanced && positions > 1 ? trial_shooters(mesh) : std::vector<Shooter>{};
+  // A deeper tree lets leaves be dealt, and each shot's home leaves be chosen, more evenly, but a ray then crosses
+  // more positions and is cast more often (and every node stores the tree, Stürzlinger et al. §5.2): try each depth
+  // and keep the one whose busiest position has the least work, over a few trial shots as each would be planned.
   const int deepest = balanced ? base + 6 : base;
   for (int depth = base; depth <= deepest; ++depth) {
     GlobalBsp t;
     t.positions_ = positions;
     t.depth_ = depth;
+    t.balanced_ = balanced;
+    t.patch_position_.assign(patch_positions.begin(), patch_positions.end());
     t.slack_ = slack;
     t.build_node(mesh, all, root, 0, depth);
     t.owner_.assign(t.leaves_.size(), 0);
@@ -126,15 +155,27 @@ GlobalBsp GlobalBsp::build(const Mesh& mesh, int positions, bool balanced) {
       std::sort(h.begin(), h.end());
       h.erase(std::unique(h.begin(), h.end()), h.end());
     }
-    size_t busiest = 0;
-    if (balanced)
-      for (size_t l : t.probe_load(mesh)) busiest = std::max(busiest, l);
-    if (busiest < best_load) {
-      best_load = busiest;
-      best = std::move(t);
+    ShotEstimate sum;
+    for (const Shooter& shooter : shooters) {
+      ShotEstimate e;
+      t.plan_shot(mesh, shooter.polygon, shooter.targets, &e);
+      sum.busiest += e.busiest;
+      sum.mean += e.mean;
     }
+    if (!shooters.empty()) trees.push_back(std::move(t)), estimates.push_back(sum);
+    else if (trees.empty()) trees.push_back(std::move(t));  // unbalanced: one depth
   }
-  return best;
+  // The most even tree whose busiest position works at most a quarter more than the least busy tree's: idle nodes
+  // cost a farm as much as busy ones, and the estimate of a coarse tree leaves little room to even it.
+  size_t pick = 0;
+  for (size_t i = 1; i < estimates.size(); ++i)
+    if (estimates[i].busiest < estimates[pick].busiest) pick = i;
+  const double limit = estimates.empty() ? 0 : 1.25 * estimates[pick].busiest;
+  for (size_t i = 0; i < estimates.size(); ++i)
+    if (estimates[i].busiest <= limit &&
+        estimates[i].busiest * estimates[pick].mean < estimates[pick].busiest * estimates[i].mean)
+      pick = i;
+  return std::move(trees[pick]);
 }
 
 int GlobalBsp::position_of_point(Vec3 p) const {
@@ -176,6 +217,148 @@ uint64_t GlobalBsp::route(Vec3 a, Vec3 b) const {
   uint64_t bits = 0;
   walk(0, a, b - a, 0.0f, 1.0f, [&](int leaf) { bits |= uint64_t{1} << owner_[static_cast<size_t>(leaf)]; });
   return bits;
+}
+
+Crossing GlobalBsp::cross(Vec3 a, Vec3 b, const ShotPlan& shot) const {
+  Crossing c;
+  if (shot.home_leaf.empty()) {
+    c.positions = route(a, b);
+    return c;
+  }
+  walk(0, a, b - a, 0.0f, 1.0f, [&](int leaf) {
+    if (shot.home_leaf[static_cast<size_t>(leaf)])
+      c.home = true;
+    else
+      c.positions |= uint64_t{1} << owner_[static_cast<size_t>(leaf)];
+  });
+  return c;
+}
+
+ShotPlan GlobalBsp::plan_shot(const Mesh& mesh, const Polygon& shooter, std::span<const Vec3> targets,
+                              ShotEstimate* estimate) const {
+  ShotPlan plan;
+  if (!balanced_ || positions_ < 2 || targets.empty()) return plan;
+  const size_t P = static_cast<size_t>(positions_);
+  // The probe: from patches facing the shooter to its sub-areas, weighted by the patch's elements (its samples).
+  const size_t per_patch =
+      std::clamp<size_t>(kProbeSegments / std::max<size_t>(1, mesh.patches.size()), 1, targets.size());
+  const Vec3 shooter_normal = shooter.normal();
+  std::vector<std::vector<uint32_t>> crossed_by(leaves_.size());
+  std::vector<double> weight;
+  std::vector<uint32_t> home_of;      // per segment: the position its packet starts from
+  std::vector<uint32_t> own_crossed;  // per segment and position: how many of the position's leaves it crosses
+  for (size_t i = 0; i < mesh.patches.size(); ++i) {
+    const Polygon& q = mesh.patches[i].polygon;
+    const Vec3 c = q.centroid(), n = q.normal();
+    for (size_t j = 0; j < per_patch; ++j) {
+      const Vec3 t = targets[(i * per_patch + j) % targets.size()];
+      if (dot(n, t - c) <= 0 || dot(shooter_normal, c - t) <= 0) continue;
+      const Vec3 a = c + n * mesh.epsilon, b = t + shooter_normal * mesh.epsilon;
+      const uint32_t k = static_cast<uint32_t>(weight.size());
+      weight.push_back(static_cast<double>(mesh.patches[i].element_count()) / static_cast<double>(per_patch));
+      home_of.push_back(static_cast<uint32_t>(i < patch_position_.size() ? static_cast<size_t>(patch_position_[i]) : k % P));
+      own_crossed.resize(own_crossed.size() + P, 0);
+      walk(0, a, b - a, 0.0f, 1.0f, [&](int leaf) {
+        crossed_by[static_cast<size_t>(leaf)].push_back(k);
+        ++own_crossed[k * P + static_cast<size_t>(owner_[static_cast<size_t>(leaf)])];
+      });
+    }
+  }
+  // Estimated work per position: the segments crossing its leaves, plus those crossing home leaves whose packets
+  // start there.
+  std::vector<double> work(P, 0);
+  for (size_t k = 0; k < weight.size(); ++k)
+    for (size_t p = 0; p < P; ++p)
+      if (own_crossed[k * P + p]) work[p] += weight[k];
+  std::vector<double> at_home(P, 0);
+  std::vector<uint32_t> home_crossed(weight.size(), 0);
+  auto busiest = [&] {
+    size_t p = 0;
+    for (size_t q = 1; q < P; ++q)
+      if (work[q] + at_home[q] > work[p] + at_home[p]) p = q;
+    return p;
+  };
+  // Surfaces held at home: at most as many as the fullest position holds, so no node holds more than twice that
+  // (the ring exists to divide the scene).
+  size_t budget = 0;
+  for (const auto& h : held_) budget = std::max(budget, h.size());
+  std::vector<uint32_t> home_uses(mesh.surfaces.size(), 0);
+  size_t home_surfaces = 0;
+  auto move = [&](size_t leaf, bool to_home) {
+    const size_t o = static_cast<size_t>(owner_[leaf]);
+    for (uint32_t k : crossed_by[leaf]) {
+      uint32_t& own = own_crossed[k * P + o];
+      if (to_home) {
+        if (--own == 0) work[o] -= weight[k];
+        if (home_crossed[k]++ == 0) at_home[home_of[k]] += weight[k];
+      } else {
+        if (own++ == 0) work[o] += weight[k];
+        if (--home_crossed[k] == 0) at_home[home_of[k]] -= weight[k];
+      }
+    }
+    for (uint32_t surface : leaves_[leaf]) {
+      if (to_home && home_uses[surface]++ == 0) ++home_surfaces;
+      if (!to_home && --home_uses[surface] == 0) --home_surfaces;
+    }
+  };
+  // Positions' estimated work, busiest first: one plan beats another if it is lower at the first place they differ
+  // (so relieving one of two equally busy positions counts).
+  auto ranked = [&] {
+    std::vector<double> r(P);
+    for (size_t q = 0; q < P; ++q) r[q] = work[q] + at_home[q];
+    std::sort(r.begin(), r.end(), std::greater<>());
+    return r;
+  };
+  auto lower = [](const std::vector<double>& a, const std::vector<double>& b) {
+    for (size_t i = 0; i < a.size(); ++i)
+      if (std::abs(a[i] - b[i]) > 1e-9 * std::max(1.0, b[0])) return a[i] < b[i];
+    return false;
+  };
+  plan.home_leaf.assign(leaves_.size(), 0);
+  // Moves leaves home in this order and keeps the run of them that ranks lowest; false: none helped.
+  auto best_run = [&](const std::vector<size_t>& leaves) {
+    std::vector<double> best = ranked();
+    size_t kept = 0, run = 0;
+    for (; run < leaves.size(); ++run) {
+      move(leaves[run], true);
+      if (home_surfaces > budget) {
+        ++run;
+        break;
+      }
+      if (auto now = ranked(); lower(now, best)) best = std::move(now), kept = run + 1;
+    }
+    while (run > kept) move(leaves[--run], false);
+    for (size_t i = 0; i < kept; ++i) plan.home_leaf[leaves[i]] = 1;
+    return kept > 0;
+  };
+  auto busiest_first = [&](std::vector<size_t> leaves) {
+    std::stable_sort(leaves.begin(), leaves.end(),
+                     [&](size_t a, size_t b) { return crossed_by[a].size() > crossed_by[b].size(); });
+    return leaves;
+  };
+  // First the leaves most segments cross, whoever owns them (the space around the shooter, which relieving one
+  // position at a time cannot reach when several share it); then, while it helps, the busiest position's own.
+  std::vector<size_t> all(leaves_.size());
+  std::iota(all.begin(), all.end(), size_t{0});
+  best_run(busiest_first(all));
+  for (bool moved = true; moved;) {
+    const size_t p = busiest();
+    std::vector<size_t> mine;
+    for (size_t leaf = 0; leaf < leaves_.size(); ++leaf)
+      if (!plan.home_leaf[leaf] && static_cast<size_t>(owner_[leaf]) == p && !crossed_by[leaf].empty())
+        mine.push_back(leaf);
+    moved = best_run(busiest_first(mine));
+  }
+  for (size_t leaf = 0; leaf < leaves_.size(); ++leaf)
+    if (plan.home_leaf[leaf]) plan.surfaces.insert(plan.surfaces.end(), leaves_[leaf].begin(), leaves_[leaf].end());
+  if (estimate) {
+    const auto r = ranked();
+    estimate->busiest = r.front();
+    estimate->mean = std::accumulate(r.begin(), r.end(), 0.0) / static_cast<double>(P);
+  }
+  std::sort(plan.surfaces.begin(), plan.surfaces.end());
+  plan.surfaces.erase(std::unique(plan.surfaces.begin(), plan.surfaces.end()), plan.surfaces.end());
+  return plan;
 }
 
 std::vector<size_t> GlobalBsp::probe_load(const Mesh& mesh) const {

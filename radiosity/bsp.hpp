@@ -3,6 +3,7 @@
 // every node; each leaf stands for a subtree that one ring position holds. A segment's processor vector is the set of
 // positions whose leaves it crosses: only they can hold something that blocks it.
 #include <cstdint>
+#include <span>
 #include <vector>
 
 #include "radiosity/mesh.hpp"
@@ -14,6 +15,21 @@ struct Box {
   bool overlaps(const Box& b, float slack) const;
 };
 
+// The leaves a shot leaves to each packet's home (GlobalBsp::plan_shot): every segment of the shot crossing one of
+// them is tested there by the node the packet circulates for, against these surfaces, instead of by the leaf's
+// position.
+struct ShotPlan {
+  std::vector<uint8_t> home_leaf;  // per leaf; empty: none
+  std::vector<uint32_t> surfaces;  // the surfaces overlapping those leaves, sorted (none: nothing there can block)
+};
+
+// Where a segment must be tested: the positions owning the leaves it crosses, and whether it crosses a leaf left to
+// the packet's home.
+struct Crossing {
+  uint64_t positions = 0;
+  bool home = false;
+};
+
 class GlobalBsp {
  public:
   // `balanced` (static load balancing of visibility complexity, Stürzlinger et al. §5.2): the depth and the dealing of
@@ -22,13 +38,30 @@ class GlobalBsp {
   // has to cast it at all, so work is measured with a fixed probe of segments (between facing surfaces, half of
   // them ending on an emitter) counted once per position they cross. Otherwise: one level per doubling of
   // positions, planes through the middle of the box, leaves dealt round-robin.
-  static GlobalBsp build(const Mesh& mesh, int positions, bool balanced);
+  // `patch_positions`: the ring position whose nodes compute each patch (their packets start there), if known.
+  static GlobalBsp build(const Mesh& mesh, int positions, bool balanced, std::span<const int> patch_positions = {});
 
   int positions() const { return positions_; }
   size_t leaf_count() const { return leaves_.size(); }
   int depth() const { return depth_; }
   // Bit p set: the segment crosses a leaf of position p (conservatively: touching counts).
   uint64_t route(Vec3 a, Vec3 b) const;
+  // The same, with the shot's home leaves apart.
+  Crossing cross(Vec3 a, Vec3 b, const ShotPlan& shot) const;
+  // Static balancing of visibility per shot, for a balanced tree (else empty). Every segment of a shot ends on the
+  // shooter, so whichever position holds the space around it tests nearly every segment of the shot, whatever the
+  // dealing of leaves: a static split cannot even out a ring whose shooters keep moving. Once the shooter is known
+  // (every node knows it, and nothing else is needed), the leaves that load some position most are left to each
+  // packet's home instead, which spreads their tests over all positions as the samples are spread. The choice is
+  // estimated with a probe (one segment from each patch facing the shooter to one of its sub-areas), greedily,
+  // busiest leaves first, keeping a leaf only if the busiest position's estimated work goes down. Deterministic,
+  // so every node of the ring makes the same plan.
+  // `estimate`, if given, gets the positions' estimated work under the plan.
+  struct ShotEstimate {
+    double busiest = 0, mean = 0;
+  };
+  ShotPlan plan_shot(const Mesh& mesh, const Polygon& shooter, std::span<const Vec3> targets,
+                     ShotEstimate* estimate = nullptr) const;
   // The surfaces position p holds: those overlapping any of its leaves (a surface can be in several).
   const std::vector<uint32_t>& surfaces_of(int position) const { return held_[static_cast<size_t>(position)]; }
   // Per position, how many of the mesh's probe segments cross its space (the balanced tree's cost model).
@@ -54,6 +87,8 @@ class GlobalBsp {
   std::vector<std::vector<uint32_t>> held_;
   int positions_ = 1;
   int depth_ = 0;
+  bool balanced_ = false;
+  std::vector<int> patch_position_;
   float slack_ = 0;
 };
 

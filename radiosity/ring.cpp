@@ -1,5 +1,6 @@
 #include "radiosity/ring.hpp"
 
+#include <algorithm>
 #include <bit>
 
 namespace lf::radiosity {
@@ -26,6 +27,9 @@ void RingNode::begin_iteration(uint32_t iteration, const Shooter& shooter) {
   pending_head_ = 0;
   out_.clear();
   part_.begin_shot(shooter_);
+  shot_ = bsp_.plan_shot(mesh_, shooter_.polygon, shooter_.targets);
+  at_home_.reset();
+  if (!shot_.surfaces.empty()) at_home_ = std::make_unique<SceneVisibility>(mesh_, shot_.surfaces);
   make_packets();
 }
 
@@ -37,6 +41,8 @@ Status RingNode::restore(int64_t iteration, std::vector<Element> leaves) {
   }
   iteration_ = iteration < 0 ? 0 : static_cast<uint32_t>(iteration);
   shooter_ = Shooter{};
+  shot_ = ShotPlan{};
+  at_home_.reset();
   pending_.clear();
   pending_head_ = 0;
   out_.clear();
@@ -71,7 +77,8 @@ void RingNode::make_packets() {
     for (int m = 0; m < 64; ++m)
       if (mask >> m & 1) {
         const Segment s = visibility_segment(part_.sample_point(i), part_.sample_normal(i), shooter_, m, mesh_.epsilon);
-        route |= bsp_.route(s.from, s.to);
+        const Crossing c = bsp_.cross(s.from, s.to, shot_);
+        route |= c.positions | (c.home ? uint64_t{1} << position() : 0);
       }
     if (!packet.points.empty() && (static_cast<int>(packet.points.size()) >= ring_.samples_per_packet ||
                                    std::popcount(packet.route | route) > ring_.max_visits))
@@ -90,6 +97,13 @@ void RingNode::make_packets() {
   }
 }
 
+size_t RingNode::surfaces_in_memory() const {
+  const auto& held = bsp_.surfaces_of(position());
+  size_t extra = 0;
+  for (uint32_t s : shot_.surfaces) extra += !std::binary_search(held.begin(), held.end(), s);
+  return held.size() + extra;
+}
+
 std::optional<SamplePacket> RingNode::take_pending() {
   if (pending_head_ >= pending_.size()) return std::nullopt;
   return std::move(pending_[pending_head_++]);
@@ -101,24 +115,32 @@ void RingNode::process(SamplePacket& packet) {
   if (!(packet.route & bit)) return;
   packet.route &= ~bit;
   ++work_.visits;
-  std::vector<Segment> segments;
-  std::vector<std::pair<uint32_t, uint32_t>> which;
+  const bool home = layout_.position_of(static_cast<int>(packet.origin)) == p;
+  // Segments crossing this position's leaves are tested against its surfaces; at the packet's home, those crossing
+  // the shot's home leaves also against theirs.
+  std::vector<Segment> segments[2];
+  std::vector<std::pair<uint32_t, uint32_t>> which[2];
   for (size_t i = 0; i < packet.points.size(); ++i) {
     const uint64_t mask = packet.visible[i];
     for (int m = 0; m < 64; ++m) {
       if (!(mask >> m & 1)) continue;
       const Segment s = visibility_segment(packet.points[i], packet.normals[i], shooter_, m, mesh_.epsilon);
-      if (!(bsp_.route(s.from, s.to) & bit)) continue;  // does not cross this position's space
-      segments.push_back(s);
-      which.emplace_back(static_cast<uint32_t>(i), static_cast<uint32_t>(m));
+      const Crossing c = bsp_.cross(s.from, s.to, shot_);
+      for (int set = 0; set < 2; ++set) {
+        if (set == 0 ? !(c.positions & bit) : !(c.home && home && at_home_)) continue;
+        segments[set].push_back(s);
+        which[set].emplace_back(static_cast<uint32_t>(i), static_cast<uint32_t>(m));
+      }
     }
   }
-  work_.rays += segments.size();
-  if (segments.empty()) return;
-  std::vector<uint8_t> occluded(segments.size(), 0);
-  local_(segments, occluded);
-  for (size_t k = 0; k < segments.size(); ++k)
-    if (occluded[k]) packet.visible[which[k].first] &= ~(uint64_t{1} << which[k].second);
+  for (int set = 0; set < 2; ++set) {
+    work_.rays += segments[set].size();
+    if (segments[set].empty()) continue;
+    std::vector<uint8_t> occluded(segments[set].size(), 0);
+    (set == 0 ? local_ : *at_home_)(segments[set], occluded);
+    for (size_t k = 0; k < segments[set].size(); ++k)
+      if (occluded[k]) packet.visible[which[set][k].first] &= ~(uint64_t{1} << which[set][k].second);
+  }
 }
 
 int RingNode::next_position(const SamplePacket& packet, int from) const {

@@ -87,6 +87,8 @@ class RingNode {
   const NodeWork& work() const { return work_; }
   NodeWork& work() { return work_; }
   size_t surfaces_held() const { return bsp_.surfaces_of(position()).size(); }
+  // Those and this shot's home leaves' surfaces: what its visibility structures hold now.
+  size_t surfaces_in_memory() const;
 
  private:
   void make_packets();
@@ -100,6 +102,8 @@ class RingNode {
   Part part_;
   SceneVisibility local_;
   Shooter shooter_;
+  ShotPlan shot_;                            // this shot's home leaves (GlobalBsp::plan_shot)
+  std::unique_ptr<SceneVisibility> at_home_;  // their surfaces; null: none
   uint32_t iteration_ = 0;
   uint64_t next_serial_ = 0;
   std::vector<SamplePacket> pending_;  // front first

@@ -69,6 +69,45 @@ TEST(GlobalBsp, ProcessorVectorsNeverSkipABlocker) {
   }
 }
 
+// A shot's home leaves: every surface a segment toward the shooter crosses is still tested, either by a position
+// on its processor vector that holds it or, at the packet's home, in the shot's own set.
+TEST(GlobalBsp, HomeLeavesNeverSkipABlocker) {
+  auto scene = Scene::builtin("room");
+  ASSERT_TRUE(scene) << scene.error().message;
+  auto mesh = build_mesh(*scene, {});
+  ASSERT_TRUE(mesh);
+  std::mt19937 rng(11);
+  for (int positions : {3, 8}) {
+    const GlobalBsp bsp = GlobalBsp::build(*mesh, positions, true);
+    size_t checked = 0, at_home = 0, shots_with_home_leaves = 0;
+    for (int trial = 0; trial < 6; ++trial) {
+      const auto patch = std::uniform_int_distribution<uint32_t>(0, static_cast<uint32_t>(mesh->patches.size() - 1))(rng);
+      const Shooter shooter = make_shooter(*mesh, patch, {1, 1, 1}, 16);
+      const ShotPlan plan = bsp.plan_shot(*mesh, shooter.polygon, shooter.targets);
+      shots_with_home_leaves += std::count(plan.home_leaf.begin(), plan.home_leaf.end(), 1) > 0;
+      for (int i = 0; i < 400; ++i) {
+        const auto from = std::uniform_int_distribution<size_t>(0, mesh->patches.size() - 1)(rng);
+        const Vec3 a = mesh->patches[from].polygon.centroid() + mesh->patches[from].polygon.normal() * 1e-3f;
+        const Vec3 b = shooter.targets[static_cast<size_t>(i) % shooter.targets.size()];
+        const Crossing c = bsp.cross(a, b, plan);
+        for (const auto& [surface, x] : crossings(*mesh, a, b)) {
+          if (surface == shooter.surface) continue;
+          const int p = bsp.position_of_point(x);
+          const auto& held = bsp.surfaces_of(p);
+          const bool by_position = (c.positions >> p & 1) && std::binary_search(held.begin(), held.end(), surface);
+          const bool by_home = c.home && std::binary_search(plan.surfaces.begin(), plan.surfaces.end(), surface);
+          ASSERT_TRUE(by_position || by_home) << "surface " << surface << " is tested nowhere";
+          at_home += !by_position;
+          ++checked;
+        }
+      }
+    }
+    EXPECT_GT(checked, 500u) << positions;
+    EXPECT_GT(at_home, 0u) << positions << ": no blocker was left to a home";
+    EXPECT_GT(shots_with_home_leaves, 3u) << positions;
+  }
+}
+
 // Static balancing of visibility complexity: positions get even shares of the rays that cross space (measured by
 // the probe the tree is balanced with, and by a second, independent set of segments).
 TEST(GlobalBsp, StaticBalancingEvensVisibilityWork) {
@@ -107,12 +146,15 @@ TEST(GlobalBsp, StaticBalancingEvensVisibilityWork) {
 struct RingRun {
   std::map<uint32_t, std::vector<RGB>> radiosity;  // per patch, its elements in creation order
   std::vector<uint32_t> shooters;
+  std::vector<uint64_t> rays;  // per node
 };
 
 RingRun run_ring(const Mesh& mesh, RingLayout layout, bool balance, bool borrow, const SolverSettings& settings) {
   const int n = layout.nodes();
   const auto owner = assign_patches(mesh, n, balance);
-  const GlobalBsp bsp = GlobalBsp::build(mesh, layout.length, balance);
+  std::vector<int> positions;
+  for (int node : owner) positions.push_back(layout.position_of(node));
+  const GlobalBsp bsp = GlobalBsp::build(mesh, layout.length, balance, positions);
   std::vector<std::unique_ptr<RingNode>> nodes;
   for (int i = 0; i < n; ++i) {
     std::vector<uint32_t> mine;
@@ -179,6 +221,7 @@ RingRun run_ring(const Mesh& mesh, RingLayout layout, bool balance, bool borrow,
   }
   for (auto& node : nodes) {
     for (const auto& e : node->part().elements()) run.radiosity[e.patch].push_back(e.radiosity);
+    run.rays.push_back(node->work().rays);
   }
   return run;
 }
@@ -189,7 +232,7 @@ TEST(Ring, GivesTheSerialSolversAnswerInEveryLayout) {
   settings.subdivide = 0.15f;
   settings.max_iterations = 25;
   for (bool balance : {false, true}) {
-    for (RingLayout layout : {RingLayout{1, 1}, RingLayout{1, 3}, RingLayout{2, 2}}) {
+    for (RingLayout layout : {RingLayout{1, 1}, RingLayout{1, 3}, RingLayout{2, 2}, RingLayout{1, 6}}) {
       Mesh mesh = cornell_mesh();
       if (balance) split_for_balance(mesh, layout.nodes());
       const SceneVisibility vis(mesh);
@@ -210,6 +253,41 @@ TEST(Ring, GivesTheSerialSolversAnswerInEveryLayout) {
       }
     }
   }
+}
+
+}  // namespace
+}  // namespace lf::radiosity
+
+namespace lf::radiosity {
+namespace {
+
+// A long ring stays even: on the furnished room, one ring of 8 without balancing leaves its busiest node about twice
+// the mean's visibility work (the space around each shooter is crossed by nearly every ray); static balancing,
+// with each shot's home leaves, brings it near the mean and lowers the busiest node's work itself.
+TEST(Ring, StaticBalancingKeepsALongRingEven) {
+  auto scene = Scene::builtin("room");
+  ASSERT_TRUE(scene) << scene.error().message;
+  SolverSettings settings;
+  settings.max_iterations = 4;
+  settings.converge = 0;
+  struct Figures {
+    double imbalance, busiest;
+  };
+  auto figures = [&](bool balance) {
+    auto mesh = build_mesh(*scene, {0.5f, 0.25f});
+    EXPECT_TRUE(mesh);
+    if (balance) split_for_balance(*mesh, 8);
+    const RingRun run = run_ring(*mesh, RingLayout{1, 8}, balance, false, settings);
+    double sum = 0, most = 0;
+    for (uint64_t r : run.rays) sum += static_cast<double>(r), most = std::max(most, static_cast<double>(r));
+    return Figures{most / (sum / static_cast<double>(run.rays.size())), most};
+  };
+  const Figures plain = figures(false), even = figures(true);
+  std::printf("1x8 ring: imbalance %.3f -> %.3f, busiest node's rays %.0f -> %.0f\n", plain.imbalance, even.imbalance,
+              plain.busiest, even.busiest);
+  EXPECT_GT(plain.imbalance, 1.5);
+  EXPECT_LT(even.imbalance, 1.2);
+  EXPECT_LT(even.busiest, 0.75 * plain.busiest);
 }
 
 }  // namespace
