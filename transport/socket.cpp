@@ -50,6 +50,7 @@ Socket::~Socket() = default;
 void* Socket::native() { return impl_->socket.handle(); }
 
 void Socket::set_linger_ms(int ms) { impl_->socket.set(zmq::sockopt::linger, ms); }
+void Socket::set_backlog(int connections) { impl_->socket.set(zmq::sockopt::backlog, connections); }
 
 void Socket::make_curve_server(const std::string& secret_key) {
   auto& s = impl_->socket;

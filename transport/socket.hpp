@@ -47,6 +47,8 @@ class Socket {
   std::optional<Incoming> receive();
 
   void set_linger_ms(int ms);
+  // Connections the kernel queues for accept (before bind); it caps this at net.core.somaxconn.
+  void set_backlog(int connections);
   // CURVE, before bind/connect: a server with its secret key (clients are checked by this process's
   // Authenticator), or a client with its keypair and the server's public key. All keys Z85.
   void make_curve_server(const std::string& secret_key);

@@ -129,7 +129,7 @@ class Director {
     supervisor_.set_host_agents(deployment_.agent_sockets);
     frames_.prepare(deployment_.scene_hash);  // sets spec_.camera, every actor's CONFIG, to the first frame's
     if (ring_.active()) check(ring_.prepare(scene));
-    auto endpoint = control_.open(deployment_);
+    auto endpoint = control_.open(deployment_, heartbeat_interval(spec_.heartbeat_timeout));
     if (!endpoint) throw FarmFailure{endpoint.error().message};
     control_endpoint_ = *endpoint;
   }
@@ -192,14 +192,10 @@ class Director {
       log_warn(tiles_.stall_report(supervisor_.in_flight()));
     }
     const auto deadline = Clock::now() + std::chrono::seconds(kReadyRenderGraceSeconds);
-    while (true) {
-      std::string late;
-      if (supervisor_.all([](const ActorRecord& a) { return a.ready == Phase::render; }, &late)) return;
+    for (const auto said = [](const ActorRecord& a) { return a.ready == Phase::render; }; !supervisor_.all(said); pump(100))
       if (Clock::now() > deadline)
-        throw FarmFailure{"every tile is done, but " + late + " never answered PHASE render with READY render (every "
-                          "actor must; docs/PROTOCOL.md, \"Life of an actor\")"};
-      pump(100);
-    }
+        throw FarmFailure{"every tile is done, but " + supervisor_.late(said) + " never answered PHASE render with "
+                          "READY render (every actor must; docs/PROTOCOL.md, \"Life of an actor\")"};
   }
   static constexpr int kReadyRenderGraceSeconds = 5;
   static constexpr double kStallReportSeconds = 30;
@@ -218,15 +214,10 @@ class Director {
   // Processes control messages and exits until every actor satisfies `done`.
   template <class Pred>
   void wait_all(double timeout_seconds, Pred done) {
-    const auto start = Clock::now();
-    while (true) {
-      std::string late;
-      if (supervisor_.all(done, &late)) return;
+    for (const auto start = Clock::now(); !supervisor_.all(done); pump(100))
       if (timeout_seconds > 0 && seconds_since(start) > timeout_seconds)
-        throw FarmFailure{"timed out after " + seconds_text(timeout_seconds) + " waiting for " + late + " in phase " +
-                          std::string(stage_name(supervisor_.stage()))};
-      pump(100);
-    }
+        throw FarmFailure{"timed out after " + seconds_text(timeout_seconds) + " waiting for " + supervisor_.late(done) +
+                          " in phase " + std::string(stage_name(supervisor_.stage()))};
   }
 
   void pump(long timeout_ms) {

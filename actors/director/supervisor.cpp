@@ -91,14 +91,22 @@ void Supervisor::send_bye_to_all() {
     if (a.said_hello && !a.said_bye && !a.exited && !a.lost) send(name, wire::make(MsgType::bye, "director"));
 }
 
-bool Supervisor::all(const std::function<bool(const ActorRecord&)>& done, std::string* late) const {
-  bool all = true;
+bool Supervisor::all(const std::function<bool(const ActorRecord&)>& done) const {
+  for (const auto& [name, a] : actors_)
+    if (!a.lost && a.spec->has_process() && !done(a)) return false;
+  return true;
+}
+
+std::string Supervisor::late(const std::function<bool(const ActorRecord&)>& done) const {
+  constexpr size_t kNamed = 10;
+  std::string names;
+  size_t count = 0;
   for (const auto& [name, a] : actors_) {
     if (a.lost || !a.spec->has_process() || done(a)) continue;
-    all = false;
-    if (late) *late += (late->empty() ? "'" : ", '") + name + "'";
+    if (count++ < kNamed) names += (names.empty() ? "'" : ", '") + name + "'";
   }
-  return all;
+  if (count > kNamed) names += " and " + std::to_string(count - kNamed) + " more";
+  return names;
 }
 
 Status Supervisor::on_message(const std::string& peer, Result<wire::Message>& message) {
@@ -334,7 +342,7 @@ Status Supervisor::check_heartbeats(Clock::time_point now) {
 }
 
 void Supervisor::send_heartbeats(Clock::time_point now) {
-  if (seconds_between(last_heartbeat_, now) < std::min(1.0, spec_.heartbeat_timeout / 4)) return;
+  if (seconds_between(last_heartbeat_, now) < heartbeat_interval(spec_.heartbeat_timeout)) return;
   last_heartbeat_ = now;
   broadcast(wire::make(MsgType::heartbeat, "director"));
 }

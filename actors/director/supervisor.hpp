@@ -16,6 +16,7 @@
 // supervisor is tested by feeding it messages and exits (supervisor.test.cpp).
 #include <sys/types.h>
 
+#include <algorithm>
 #include <chrono>
 #include <functional>
 #include <map>
@@ -33,6 +34,9 @@
 #include "transport/message.hpp"
 
 namespace lf {
+
+// How often the director beats: four times per timeout, and at least once a second (docs/PROTOCOL.md).
+inline double heartbeat_interval(double heartbeat_timeout) { return std::min(1.0, heartbeat_timeout / 4); }
 
 using Clock = std::chrono::steady_clock;
 
@@ -120,8 +124,11 @@ class Supervisor {
   // BYE to everyone still there (the farm is ending).
   void send_bye_to_all();
 
-  // True when every actor not lost satisfies `done`; otherwise `late` lists the others ('a', 'b').
-  bool all(const std::function<bool(const ActorRecord&)>& done, std::string* late = nullptr) const;
+  // True when every actor not lost satisfies `done`.
+  bool all(const std::function<bool(const ActorRecord&)>& done) const;
+  // The others, for a message: 'a', 'b' (the first ten, then "and N more"). Only when a message needs them: a
+  // wait calls all() after every message, and naming thousands of actors each time made it quadratic.
+  std::string late(const std::function<bool(const ActorRecord&)>& done) const;
   std::map<std::string, ActorRecord>& actors() { return actors_; }
   const std::map<std::string, ActorRecord>& actors() const { return actors_; }
   const ActorRecord& at(const std::string& name) const { return actors_.at(name); }

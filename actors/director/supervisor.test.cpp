@@ -121,6 +121,24 @@ TEST_F(SupervisorTest, LaunchesEveryActorPointedAtTheDirector) {
   }
 }
 
+// A farm of thousands waits on HELLOs and READYs after every message; who is late is named only for the message
+// that needs it, ten by name and the rest counted.
+TEST(SupervisorLate, NamesTenLateActorsAndCountsTheRest) {
+  FarmSpec spec;
+  const int direct = add_actor(spec, ActorSpec{.name = "direct", .kind = "direct"});
+  add_renderers(spec, 24, direct, RendererParams{}, {}, {});
+  Launchers launchers;
+  launchers.set("local", std::make_unique<FakeLauncher>());
+  Recorder out;
+  Supervisor sup(spec, launchers, out);
+  ASSERT_TRUE(sup.launch("tcp://127.0.0.1:5555").ok());
+  const auto said_hello = [](const ActorRecord& a) { return a.said_hello; };
+  EXPECT_FALSE(sup.all(said_hello));
+  EXPECT_EQ(sup.late(said_hello),
+            "'direct', 'renderer-0', 'renderer-1', 'renderer-10', 'renderer-11', 'renderer-12', 'renderer-13', "
+            "'renderer-14', 'renderer-15', 'renderer-16' and 15 more");
+}
+
 TEST_F(SupervisorTest, HelloMustNameTheKindAndFloatFormat) {
   auto wrong = say("direct.0", wire::make(MsgType::hello, "direct.0", my_hello("pathtrace", "tcp://x:1").to_value()));
   ASSERT_FALSE(wrong.ok());
@@ -144,9 +162,9 @@ TEST_F(SupervisorTest, ReadyRequestsAndErrorsAreRouted) {
   hello_all();
   ASSERT_TRUE(say("renderer-0", wire::make_ready("renderer-0", wire::Phase::configure)).ok());
   EXPECT_EQ(sup->at("renderer-0").ready, wire::Phase::configure);
-  std::string late;
-  EXPECT_FALSE(sup->all([](const ActorRecord& a) { return a.ready == wire::Phase::configure; }, &late));
-  EXPECT_EQ(late, "'direct', 'direct.0', 'direct.1', 'renderer-1'");
+  const auto configured = [](const ActorRecord& a) { return a.ready == wire::Phase::configure; };
+  EXPECT_FALSE(sup->all(configured));
+  EXPECT_EQ(sup->late(configured), "'direct', 'direct.0', 'direct.1', 'renderer-1'");
   ASSERT_TRUE(say("renderer-1", wire::make_request("renderer-1", wire::Op::tile, Value::Map{}, 4)).ok());
   EXPECT_EQ(events("request"), std::vector<std::string>{"request renderer-1 tile"});
   ASSERT_TRUE(say("direct.0", wire::make(MsgType::progress, "direct.0",
