@@ -92,7 +92,7 @@ class Director {
     stage(Stage::launch, [&] {
       std::function<std::string(const ActorSpec&)> keys_of;
       if (deployment_.curve()) keys_of = [&](const ActorSpec& a) { return deployment_.keys_line_for(a.name); };
-      check(supervisor_.launch(control_endpoint_, deployment_.local_address, keys_of, [&] { pump(0); }));
+      check(supervisor_.launch(control_endpoint_, deployment_.local_address, keys_of));
     });
     stage(Stage::hello, [&] { wait_all(30.0, [](const ActorRecord& a) { return a.said_hello; }); });
     stage(Stage::configure, [&] {

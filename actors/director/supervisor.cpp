@@ -36,8 +36,7 @@ void Supervisor::send(const std::string& name, wire::Message m) {
 }
 
 Status Supervisor::launch(const std::string& director_endpoint, const std::string& local_address,
-                          const std::function<std::string(const ActorSpec&)>& stdin_of,
-                          const std::function<void()>& between) {
+                          const std::function<std::string(const ActorSpec&)>& stdin_of) {
   if (auto st = launchers_.prepare(spec_.hosts_in_use()); !st)
     return make_error("cannot start the farm: " + st.error().message);
   director_endpoint_ = director_endpoint;
@@ -50,7 +49,6 @@ Status Supervisor::launch(const std::string& director_endpoint, const std::strin
     ActorRecord& r = actors_.at(a.name);
     r.pid = *pid;
     r.last_seen = Clock::now();
-    if (between) between();
   }
   return Ok{};
 }

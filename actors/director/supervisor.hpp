@@ -98,12 +98,8 @@ class Supervisor {
   // With `local_address` (a farm that spans hosts), every actor also gets `--bind tcp://ADDRESS:*`: its host's
   // address, or `local_address` for this machine's actors, so that actors on other hosts reach its data socket.
   // `stdin_of(actor)` (a CURVE farm): the keys line each actor reads, which adds `--curve` to its arguments.
-  // `between` runs after each start: the director reads and beats meanwhile, since actors started first say HELLO
-  // long before the last starts (256 actors over 64 ssh hosts: 9 s), and one that hears nothing for
-  // heartbeat_timeout quits.
   Status launch(const std::string& director_endpoint, const std::string& local_address = {},
-                const std::function<std::string(const ActorSpec&)>& stdin_of = {},
-                const std::function<void()>& between = {});
+                const std::function<std::string(const ActorSpec&)>& stdin_of = {});
   void set_stage(Stage stage) { stage_ = stage; }
   Stage stage() const { return stage_; }
   // Hosts whose scene-loading actors a host agent forks: host name -> the agent's socket (`--agent`).
