@@ -114,7 +114,6 @@ class Simulator {
   }
 
   int run() {
-    started_ = Clock::now();
     while (!quit_) {
       for (const std::string& line : commands_.take()) command(line);
       fire_timers();
@@ -348,7 +347,6 @@ class Simulator {
   void* ctx_ = nullptr;
   void* router_ = nullptr;
   bool quit_ = false;
-  Clock::time_point started_;
   std::vector<Actor> actors_;
   std::unordered_map<std::string, size_t> by_name_;
   std::priority_queue<Timer, std::vector<Timer>, std::greater<>> timers_;
