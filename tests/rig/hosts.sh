@@ -20,6 +20,41 @@ set -euo pipefail
 cmd=${1:?usage: hosts.sh up|down|pids DIR [N] [ID]}
 dir=${2:?usage: hosts.sh up|down|pids DIR [N] [ID]}
 
+# The kernel keeps one neighbour (ARP) table for all namespaces, 1,024 entries at most by default. Hosts that all
+# talk to each other need about N x N (64 hosts: ~4,200), and past the limit the kernel drops address resolutions
+# (dmesg: "neighbor table overflow"): connects time out, ssh fails, handshakes stall. `up` raises the limits while
+# rigs are up; the last `down` puts back what was there.
+neigh_saved=/run/lightfarm-rig-neigh
+neigh_keys="net.ipv4.neigh.default.gc_thresh1 net.ipv4.neigh.default.gc_thresh2 net.ipv4.neigh.default.gc_thresh3"
+
+raise_neighbour_limits() {
+  local hosts=$1
+  local need=$(( (hosts + 2) * (hosts + 2) * 2 ))
+  # shellcheck disable=SC2086
+  [ -f "$neigh_saved" ] || sysctl -n $neigh_keys 2>/dev/null | tr '\n' ' ' > "$neigh_saved" || return 0
+  local k v want i=0
+  for k in $neigh_keys; do
+    i=$((i + 1))
+    v=$(sysctl -n "$k" 2>/dev/null) || return 0
+    want=$(( need * i / 3 ))
+    if [ "$v" -lt "$want" ]; then
+      sysctl -qw "$k=$want" 2>/dev/null || echo "hosts.sh: warning: cannot raise $k to $want (many hosts may lose packets)" >&2
+    fi
+  done
+}
+
+restore_neighbour_limits() {
+  [ -f "$neigh_saved" ] || return 0
+  ip -o link show type bridge 2>/dev/null | grep -q ": lfbr" && return 0  # another rig is still up
+  local k i=0
+  read -r -a saved < "$neigh_saved" || true
+  for k in $neigh_keys; do
+    [ -n "${saved[$i]:-}" ] && sysctl -qw "$k=${saved[$i]}" 2>/dev/null
+    i=$((i + 1))
+  done
+  rm -f "$neigh_saved"
+}
+
 down() {
   [ -f "$dir/state" ] || return 0
   # shellcheck disable=SC1091
@@ -32,6 +67,7 @@ down() {
   done
   ip link del "$bridge" 2>/dev/null || true
   rm -f "$dir/state"
+  restore_neighbour_limits
 }
 
 pids() {
@@ -84,6 +120,7 @@ up() {
   for i in $(seq 1 "$n"); do namespaces="$namespaces lfh$id-$i"; done
   printf 'bridge=%s\nnamespaces="%s"\n' "$bridge" "$namespaces" > "$dir/state"
   trap 'down; exit 1' ERR
+  raise_neighbour_limits "$n"
   ip link add "$bridge" type bridge
   ip addr add "10.213.$id.1/24" dev "$bridge"
   ip link set "$bridge" up
