@@ -90,13 +90,29 @@ void Runtime::start_heartbeats() {
       auto due = [&] {
         return sent + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(heartbeat_interval_.load()));
       };
-      while (!heartbeat_stop_ && Clock::now() < due()) std::this_thread::sleep_for(std::chrono::milliseconds(20));
+      // Asleep until due, woken early only to stop or to take a new interval: a thread that looked at the clock
+      // every 20 ms woke 50 times a second in every actor (256 actors on two cores: 12,800 context switches a
+      // second before any work).
+      std::unique_lock<std::mutex> lock(heartbeat_mutex_);
+      while (!heartbeat_stop_ && Clock::now() < due()) heartbeat_wake_.wait_until(lock, due());
     }
   });
 }
 
+void Runtime::set_heartbeat_interval(double seconds) {
+  {
+    std::lock_guard<std::mutex> lock(heartbeat_mutex_);
+    heartbeat_interval_ = seconds;
+  }
+  heartbeat_wake_.notify_all();
+}
+
 void Runtime::stop_heartbeats() {
-  heartbeat_stop_ = true;
+  {
+    std::lock_guard<std::mutex> lock(heartbeat_mutex_);
+    heartbeat_stop_ = true;
+  }
+  heartbeat_wake_.notify_all();
   if (heartbeat_thread_.joinable()) heartbeat_thread_.join();
 }
 
@@ -265,11 +281,10 @@ void Runtime::handle_control(wire::Message& m, Actor& actor) {
     case MsgType::peer_down: {
       auto name = control::decode_peer_down(m.body);
       if (!name) return log_warn("ignored " + name.error().message);
-      for (auto& in : connections_.lighting())
-        if (in.pool && in.pool->lost(*name)) {
-          if (in.pool->live() == 0) fail("lost the last replica of '" + in.name + "'");
-          return;
-        }
+      if (auto* in = connections_.replica_lost(*name)) {
+        if (in->pool->live() == 0) fail("lost the last replica of '" + in->name + "'");
+        return;
+      }
       actor.on_peer_down(*name, *this);
       return;
     }
@@ -290,7 +305,7 @@ void Runtime::on_config(const wire::Message& m, Actor& actor) {
   auto config = ActorConfig::from_value(m.body);
   if (!config) return fail(config.error().message);
   heartbeat_timeout_ = config->heartbeat_timeout;
-  heartbeat_interval_ = std::min(1.0, heartbeat_timeout_ / 4);
+  set_heartbeat_interval(std::min(1.0, heartbeat_timeout_ / 4));
   request_timeout_ = config->request_timeout;
   // Connect to every input before the actor configures, so that it may ask them during setup.
   if (auto st = connections_.connect_config(*config, args_.bind); !st) return fail(st.error().message);

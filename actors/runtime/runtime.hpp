@@ -17,6 +17,7 @@
 
 #include <atomic>
 #include <chrono>
+#include <condition_variable>
 #include <cstdint>
 #include <functional>
 #include <map>
@@ -203,6 +204,9 @@ class Runtime {
   void stop_heartbeats();
   std::thread heartbeat_thread_;
   std::atomic<bool> heartbeat_stop_{false};
+  std::mutex heartbeat_mutex_;
+  std::condition_variable heartbeat_wake_;
+  void set_heartbeat_interval(double seconds);
   // The running figures each HEARTBEAT carries (for the director's monitor), refreshed by the main loop.
   void refresh_live(size_t queue_length);
   std::mutex live_mutex_;
