@@ -21,12 +21,14 @@ MultiplexerParams MultiplexerParams::read(const ParamTable& p) {
   m.split = p.get_int("split", m.split, 0, 1 << 20);
   m.window = p.get_int("window", m.window, 1, 64);
   m.seed = p.get_int("seed", m.seed, 0, INT32_MAX);
+  m.subset = p.get_int("subset", m.subset, -1, 1 << 20);
   m.dispatch = p.get_string("dispatch", m.dispatch, {"clients", "process"});
   return m;
 }
 
 Value::Map MultiplexerParams::to_map() const {
-  return Value::Map{{"strategy", strategy}, {"split", split}, {"window", window}, {"seed", seed}, {"dispatch", dispatch}};
+  return Value::Map{{"strategy", strategy}, {"split", split}, {"window", window}, {"seed", seed}, {"subset", subset},
+                    {"dispatch", dispatch}};
 }
 
 int64_t input_window(const ActorSpec& asker) {

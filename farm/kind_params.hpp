@@ -28,6 +28,9 @@ struct MultiplexerParams {
   int64_t split = 0;                      // split requests larger than this across replicas (0: never)
   int64_t window = 4;                     // requests in flight to each replica
   int64_t seed = 0;                       // for strategy = "random"
+  // Replicas each client connects to (the rest are spares, connected as those are lost); -1: derived
+  // (pool_subset), 0: all.
+  int64_t subset = -1;
   // "clients": built-in clients send to the replicas themselves and the pool has no process; "process": every
   // request goes through a multiplexer process (plug-in clients and pools of pools always do).
   std::string dispatch = "clients";

@@ -18,6 +18,7 @@ const std::string kCornell = kSource + "/examples/cornell.lua";
 const std::string kPool = kSource + "/examples/cornell_pool.lua";
 const std::string kSlowPool = kSource + "/tests/scripts/slow_pool.lua";
 const std::string kNested = kSource + "/tests/scripts/nested_pool.lua";
+const std::string kSubset = kSource + "/tests/scripts/subset_pool.lua";
 
 class FailureTest : public FarmFixture {
  protected:
@@ -139,6 +140,21 @@ TEST_F(FailureTest, KilledRendererReplicaOrStoppedReplicaLeaveTheImageUnchanged)
     ASSERT_TRUE(img.ok());
     EXPECT_TRUE(img->pixels == reference.pixels) << "the image changed after losing " << c.victim;
   }
+}
+
+// Clients of a pool that connect to a subset of its replicas (subset = 1 of 4: renderer-0 to direct.0, renderer-1
+// to direct.1) render the pixels of clients that connect to all; when direct.0 is killed mid-frame, renderer-0
+// connects its next spare and the image is still the same. Only renderer-0 held direct.0, so only it says so.
+TEST_F(FailureTest, ClientsOfAPoolConnectToASubsetAndASpareTakesALostReplicasPlace) {
+  Image reference = render(small(kSubset, {"spp=64", "subset=0"}), "all.exr");
+  auto r = render_with_fault(small(kSubset, {"spp=64", "slowdown=6"}), "subset.exr", "direct.0", SIGKILL);
+  ASSERT_EQ(r.status, 0) << r.err;
+  EXPECT_NE(r.err.find("renderer-0: warning: replica 'direct.0' of 'direct' is gone"), std::string::npos) << r.err;
+  EXPECT_EQ(r.err.find("renderer-1: warning: replica 'direct.0'"), std::string::npos)
+      << "direct.0 was a spare of renderer-1, never connected: " << r.err;
+  auto img = read_image(path("subset.exr"));
+  ASSERT_TRUE(img.ok());
+  EXPECT_TRUE(img->pixels == reference.pixels) << "a subset, or the spare that replaced direct.0, changed the image";
 }
 
 TEST_F(FailureTest, LosingTheLastReplicaOrEveryRendererStopsTheFarmNamingIt) {

@@ -5,6 +5,7 @@
 #include "actors/codecs/control_codec.hpp"
 #include "farm/builders.hpp"
 #include "farm/kind_params.hpp"
+#include "farm/pool_subset.hpp"
 #include "render/lightops/lightop_registry.hpp"
 
 namespace lf {
@@ -37,7 +38,18 @@ ActorConfig config_for(const FarmSpec& spec, int actor, const std::function<std:
     spec_in.strategy = pool.strategy;
     spec_in.split = pool.split;
     spec_in.seed = pool.seed;
-    for (int r : input.inputs) {
+    // Its subset first, then its spares (farm/pool_subset.hpp): this actor's place among the pool's clients.
+    int64_t clients = 0, client = 0;
+    for (const ActorSpec& other : spec.actors)
+      if (std::find(other.inputs.begin(), other.inputs.end(), in) != other.inputs.end()) {
+        if (&other == &a) client = clients;
+        ++clients;
+      }
+    const auto replicas = static_cast<int64_t>(input.inputs.size());
+    const int64_t subset = pool_subset(pool.subset, replicas, clients, window);
+    spec_in.subset = subset < replicas ? subset : 0;
+    for (int64_t j : pool_order(replicas, spec_in.subset, client)) {
+      const int r = input.inputs[static_cast<size_t>(j)];
       spec_in.replicas.push_back({spec.actors[static_cast<size_t>(r)].name, endpoint_of(r), pool.window,
                                   key_of ? key_of(r) : std::string()});
       spec_in.replicas.back().lean = lean(r);

@@ -3,6 +3,9 @@
 
 #include <gtest/gtest.h>
 
+#include <map>
+#include <set>
+
 #include "farm/builders.hpp"
 
 namespace lf {
@@ -75,6 +78,45 @@ TEST(ActorConfigs, OnlyBuiltInLightOpsAreAskedWithLeanRequests) {
   ASSERT_TRUE(decoded.ok()) << decoded.error().message;
   EXPECT_TRUE(decoded->inputs[0].lean);
   EXPECT_FALSE(decoded->inputs[1].lean);
+}
+
+// Each client of a large pool connects to a subset of its replicas (farm/pool_subset.hpp): CONFIG lists every
+// replica, the client's subset first, and says how many that is; the clients' subsets cover every replica evenly.
+// The subset survives CONFIG's encoding; `subset = 0` asks for all.
+TEST(ActorConfigs, ClientsOfALargePoolGetEvenSubsetsAndTheRestAsSpares) {
+  for (const int64_t asked : {int64_t{-1}, int64_t{0}}) {
+    FarmSpec spec;
+    PoolSpec pool;
+    pool.op = add_actor(spec, ActorSpec{.name = "direct", .kind = "direct"});
+    pool.replicas = 16;
+    pool.params.subset = asked;
+    auto mux = replicate(spec, pool);
+    ASSERT_TRUE(mux.ok());
+    RendererParams renderer;
+    renderer.window = 1;
+    add_renderers(spec, 12, *mux, renderer, {}, {});
+    settle_pool_dispatch(spec);
+    auto endpoint = [](int i) { return "tcp://host:" + std::to_string(6000 + i); };
+    std::map<std::string, int> clients_of;
+    for (int k = 0; k < 12; ++k) {
+      const ActorConfig r = config_for(spec, spec.find("renderer-" + std::to_string(k)), endpoint);
+      const InputSpec& in = r.inputs.at(0);
+      ASSERT_EQ(in.replicas.size(), 16u);
+      EXPECT_EQ(in.subset, asked == 0 ? 0 : 2) << "16 replicas over 12 clients need 2 each; a window of 1 asks 2";
+      std::set<std::string> names;
+      for (const auto& replica : in.replicas) names.insert(replica.name);
+      EXPECT_EQ(names.size(), 16u);
+      for (int64_t i = 0; i < (in.subset ? in.subset : 16); ++i) ++clients_of[in.replicas[static_cast<size_t>(i)].name];
+      auto decoded = ActorConfig::from_value(r.to_value());
+      ASSERT_TRUE(decoded.ok()) << decoded.error().message;
+      EXPECT_EQ(decoded->inputs[0].subset, in.subset);
+    }
+    ASSERT_EQ(clients_of.size(), 16u);
+    for (const auto& [name, n] : clients_of) {
+      if (asked == 0) EXPECT_EQ(n, 12) << name;
+      else EXPECT_TRUE(n == 1 || n == 2) << name << ": " << n;  // 24 connections over 16 replicas
+    }
+  }
 }
 
 // CONFIG as the director sends it, over the actor table and the deployment: a pool's client gets each live replica

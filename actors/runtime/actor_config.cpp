@@ -12,7 +12,7 @@ Value::Array inputs_value(const std::vector<InputSpec>& inputs) {
     Value::Map entry{{"name", in.name}, {"window", in.window}};
     if (in.is_pool())
       entry["pool"] = Value::Map{{"strategy", in.strategy}, {"split", in.split}, {"seed", in.seed},
-                                 {"replicas", inputs_value(in.replicas)}};
+                                 {"subset", in.subset}, {"replicas", inputs_value(in.replicas)}};
     else
       entry["endpoint"] = in.endpoint;
     if (!in.key.empty()) entry["key"] = in.key;
@@ -30,6 +30,7 @@ Status read_pool(const std::string& name, const Value& pool, InputSpec& in) {
   const Value* strategy = pool.find("strategy");
   const Value* split = pool.find("split");
   const Value* seed = pool.find("seed");
+  const Value* subset = pool.find("subset");
   const std::string where = "CONFIG input '" + name + "': pool ";
   if (!strategy || !strategy->is_string() || !Scheduler::parse(strategy->as_string()))
     return make_error(where + "strategy must be round_robin, least_loaded or random", ErrorCode::bad_request);
@@ -37,11 +38,14 @@ Status read_pool(const std::string& name, const Value& pool, InputSpec& in) {
     return make_error(where + "split must be a non-negative integer", ErrorCode::bad_request);
   if (seed && (!seed->is_int() || seed->as_int() < 0))
     return make_error(where + "seed must be a non-negative integer", ErrorCode::bad_request);
+  if (subset && (!subset->is_int() || subset->as_int() < 0))
+    return make_error(where + "subset must be a non-negative integer", ErrorCode::bad_request);
   if (auto st = read_inputs(pool, "replicas", in.replicas); !st) return st;
   if (in.replicas.empty()) return make_error(where + "has no replicas", ErrorCode::bad_request);
   in.strategy = strategy->as_string();
   in.split = split ? split->as_int() : 0;
   in.seed = seed ? seed->as_int() : 0;
+  in.subset = subset ? subset->as_int() : 0;
   return Ok{};
 }
 

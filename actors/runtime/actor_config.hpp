@@ -25,6 +25,9 @@ struct InputSpec {
   std::string strategy;  // round_robin | least_loaded | random; empty: a single actor, not a pool
   int64_t split = 0;     // split shade requests larger than this across replicas (0: never)
   int64_t seed = 0;      // for strategy random
+  // Replicas of a pool to connect to at once: the first `subset` of `replicas`; the rest are spares, connected in
+  // order as those are lost (CONFIG inputs[i].pool.subset). 0: all.
+  int64_t subset = 0;
   // The input takes a shade request's `nrm` and `m` from the scene when it carries `tri` (a built-in LightOp): the
   // asker may leave them out (CONFIG inputs[i].lean). A pool is lean when all its replicas are.
   bool lean = false;

@@ -37,8 +37,16 @@ Status Connections::connect_config(const ActorConfig& config, const std::string&
       input.lean = in.lean;
     } else {
       input.lean = std::all_of(in.replicas.begin(), in.replicas.end(), [](const InputSpec& r) { return r.lean; });
+      input.own_bind = own_bind;
+      // A partitioned pool's points must reach the replica holding their part: it connects to all.
+      const bool parts = std::any_of(in.replicas.begin(), in.replicas.end(), [](const InputSpec& r) { return r.part >= 0; });
+      const size_t subset = in.subset > 0 && !parts ? static_cast<size_t>(in.subset) : in.replicas.size();
       std::vector<PoolClient::Replica> replicas;
       for (const auto& replica : in.replicas) {
+        if (replicas.size() >= subset) {
+          input.spares.push_back(replica);
+          continue;
+        }
         auto row = add(Group::lighting, replica);
         if (!row) return row.error();
         replicas.push_back({replica.name, rows_[*row].client.get(), !same_host(replica.endpoint, own_bind), replica.part});
@@ -56,6 +64,28 @@ Status Connections::connect_config(const ActorConfig& config, const std::string&
     for (const auto& in : config.pool->peers)
       if (auto row = add(Group::pool_peer, in); !row) return row.error();
   return Ok{};
+}
+
+Connections::LightingInput* Connections::replica_lost(const std::string& name) {
+  for (auto& in : lighting_) {
+    if (!in.pool) continue;
+    auto spare = std::find_if(in.spares.begin(), in.spares.end(), [&](const InputSpec& s) { return s.name == name; });
+    if (spare != in.spares.end()) {
+      in.spares.erase(spare);
+      return &in;
+    }
+    if (!in.pool->lost(name)) continue;
+    while (!in.spares.empty()) {
+      InputSpec next = std::move(in.spares.front());
+      in.spares.pop_front();
+      auto row = add(Group::lighting, next);
+      if (!row) continue;  // an endpoint that cannot be connected: the next spare
+      in.pool->add({next.name, rows_[*row].client.get(), !same_host(next.endpoint, in.own_bind), next.part});
+      break;
+    }
+    return &in;
+  }
+  return nullptr;
 }
 
 Result<bool> Connections::reconnect(const std::string& name, const std::string& endpoint, const std::string& key) {

@@ -4,6 +4,7 @@
 // own pool when they share their setup. Each row holds the peer's name, the window CONFIG gave it, its group and
 // its RequestClient; PEER_MOVED replaces a row's client. Sockets are made by the Connector the runtime gives
 // (with the actor's name and CURVE keys), so the table is tested with any.
+#include <deque>
 #include <functional>
 #include <utility>
 #include <memory>
@@ -32,6 +33,10 @@ class Connections {
     std::unique_ptr<PoolClient> pool;  // or a pool dispatched here
     bool lean = false;                 // it takes normals and materials from the scene
     bool holds_parts = false;          // some replica holds a scene part itself
+    // A pool's replicas beyond its subset (CONFIG pool.subset), in CONFIG's order: one is connected in place of
+    // each replica of the subset that is lost.
+    std::deque<InputSpec> spares;
+    std::string own_bind;  // where this actor listens (a spare on its host is not remote)
   };
   using Connector = std::function<Result<std::unique_ptr<wire::RequestClient>>(
       const std::string& name, const std::string& endpoint, const std::string& key, size_t window)>;
@@ -45,6 +50,10 @@ class Connections {
   // outstanding there). False for a name that is not in the table (nothing changes); an error for a connection
   // that cannot be made.
   Result<bool> reconnect(const std::string& name, const std::string& endpoint, const std::string& key);
+  // PEER_DOWN: replica `name` of a pool input is gone. Its pool sends its work to the others, and the input's next
+  // spare is connected in its place (a spare that is lost is only forgotten). The input it belonged to, or nullptr
+  // when it is no pool's replica.
+  LightingInput* replica_lost(const std::string& name);
 
   std::vector<LightingInput>& lighting() { return lighting_; }
   const std::vector<LightingInput>& lighting() const { return lighting_; }

@@ -83,6 +83,49 @@ TEST_F(ConnectionsTest, PeerMovedReplacesOneRowAndKeepsItsWindow) {
   EXPECT_EQ(connected.back(), "direct@inproc://direct-again");
 }
 
+// A pool with a subset connects to that many replicas; a lost one is replaced by the next spare in CONFIG's order,
+// a lost spare is only forgotten, and a partitioned pool ignores the subset (its points need their part's holder).
+TEST_F(ConnectionsTest, APoolConnectsItsSubsetAndASpareForEachLoss) {
+  ActorConfig c;
+  InputSpec pool;
+  pool.name = "direct";
+  pool.strategy = "least_loaded";
+  pool.subset = 2;
+  pool.replicas = {input("direct.3"), input("direct.4"), input("direct.0"), input("direct.1"), input("direct.2")};
+  c.inputs.push_back(pool);
+  ASSERT_TRUE(table.connect_config(c, "tcp://127.0.0.1:*").ok());
+  EXPECT_EQ(connected, (std::vector<std::string>{"direct.3@inproc://direct.3", "direct.4@inproc://direct.4"}));
+  Connections::LightingInput& in = table.lighting()[0];
+  EXPECT_EQ(in.pool->live(), 2u);
+  ASSERT_EQ(in.spares.size(), 3u);
+  table.take_changed();
+
+  EXPECT_EQ(table.replica_lost("direct.1"), &in) << "a spare";
+  EXPECT_EQ(connected.size(), 2u);
+  EXPECT_EQ(in.spares.size(), 2u);
+
+  EXPECT_EQ(table.replica_lost("direct.4"), &in);
+  EXPECT_EQ(connected.back(), "direct.0@inproc://direct.0");
+  EXPECT_EQ(in.pool->live(), 2u);
+  EXPECT_TRUE(table.take_changed()) << "the poller must be made again around the spare's socket";
+
+  refuse = "direct.2";  // the last spare cannot be reached: the pool goes on with one
+  EXPECT_EQ(table.replica_lost("direct.3"), &in);
+  EXPECT_EQ(in.pool->live(), 1u);
+  EXPECT_TRUE(in.spares.empty());
+  EXPECT_EQ(table.replica_lost("nobody"), nullptr);
+
+  Connections parted{[](const std::string& name, const std::string& endpoint, const std::string&, size_t window)
+                         -> Result<std::unique_ptr<wire::RequestClient>> {
+    auto client = std::make_unique<wire::RequestClient>("me", name, window);
+    if (auto st = client->connect(endpoint); !st) return st.error();
+    return client;
+  }};
+  c.inputs[0].replicas[1].part = 0;
+  ASSERT_TRUE(parted.connect_config(c, "tcp://127.0.0.1:*").ok());
+  EXPECT_EQ(parted.lighting()[0].pool->live(), 5u);
+}
+
 TEST_F(ConnectionsTest, AnInputThatCannotBeReachedFailsConfig) {
   refuse = "part.1";
   auto st = table.connect_config(config(), "tcp://127.0.0.1:*");

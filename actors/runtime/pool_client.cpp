@@ -157,6 +157,16 @@ bool PoolClient::lost(const std::string& name) {
   return false;
 }
 
+void PoolClient::add(Replica replica) {
+  scheduler_.add(replica.remote, replica.part);
+  replicas_.push_back(std::move(replica));
+  std::vector<uint64_t> stranded;
+  for (const auto& [pid, piece] : pieces_)
+    if (!scheduler_.is_live(piece.replica)) stranded.push_back(pid);
+  for (uint64_t pid : stranded) dispatch(pid);
+  pump();
+}
+
 Value PoolClient::stats() const {
   Value::Array replicas;
   for (size_t r = 0; r < replicas_.size(); ++r)

@@ -56,6 +56,8 @@ class PoolClient {
   // Replica `name` is gone. Returns false if it is not one of this pool's; otherwise its pieces are sent again to
   // the live replicas (none live: the waiting requests stay, and live() says 0).
   bool lost(const std::string& replica);
+  // A replica joins the pool (a spare in place of a lost one): pieces left waiting when none was live go to it.
+  void add(Replica replica);
 
   size_t live() const { return scheduler_.live(); }
   size_t in_progress() const { return requests_.size(); }

@@ -243,6 +243,35 @@ TEST_F(PoolClientTest, ALostReplicasWorkGoesToTheOthersAndItsLateAnswersAreDropp
   EXPECT_EQ(list[0].find("packets")->as_int(), 4);
 }
 
+TEST_F(PoolClientTest, ASpareAddedAfterTheLastReplicaIsLostTakesItsWork) {
+  PoolOptions o;
+  make(2, o);
+  // The pool starts with replica 0 alone; replica 1 is the spare its owner connects once replica 0 is lost.
+  pool = std::make_unique<PoolClient>("pool", std::vector<PoolClient::Replica>{{"replica-0", connections[0].get()}}, o);
+  send(2, 3);
+  ASSERT_EQ(drain(0).size(), 2u);
+  EXPECT_TRUE(pool->lost("replica-0"));
+  EXPECT_EQ(pool->live(), 0u);
+  EXPECT_TRUE(drain(1).empty());
+  pool->add({"replica-1", connections[1].get()});
+  EXPECT_EQ(pool->live(), 1u);
+  auto moved = drain(1);
+  ASSERT_EQ(moved.size(), 2u) << "the stranded requests go to the spare";
+  for (const auto& h : moved) replicas->answer(1, h);
+  for (int i = 0; i < 50 && (results[0].empty() || results[1].empty()); ++i) {
+    poll();
+    std::this_thread::sleep_for(std::chrono::milliseconds(2));
+  }
+  for (size_t i = 0; i < 2; ++i) {
+    ASSERT_EQ(results[i].size(), 3u) << "request " << i;
+    EXPECT_EQ(results[i][0].y, 1.0f) << "request " << i;
+  }
+  const Value stats = pool->stats();
+  const auto& list = stats.find("replicas")->as_array();
+  ASSERT_EQ(list.size(), 2u);
+  EXPECT_EQ(list[1].find("packets")->as_int(), 2);
+}
+
 TEST_F(PoolClientTest, AReplicasErrorReachesTheCallerOnce) {
   PoolOptions o;
   make(1, o);

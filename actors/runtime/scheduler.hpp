@@ -32,6 +32,8 @@ class Scheduler {
   void sent(size_t replica, size_t points);
   void answered(size_t replica, uint32_t reported_queue);
   void lost(size_t replica);  // never picked again
+  // A replica joins (a spare connected in place of a lost one); its index is size() - 1.
+  void add(bool remote, int64_t group) { replicas_.push_back(Replica{true, remote, group}); }
   // Replica r runs on another host than the one dispatching (least_loaded prefers the others on a tie).
   void set_remote(size_t replica, bool remote) { replicas_[replica].remote = remote; }
 
