@@ -8,6 +8,7 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <atomic>
 #include <cerrno>
 #include <cstring>
 #include <cstdlib>
@@ -200,8 +201,10 @@ Result<Launcher::Shipped> LocalLauncher::ship(const std::string& bytes, const st
   if (fs::is_regular_file(file, ec) && fs::file_size(file, ec) == bytes.size()) return Shipped{file.string(), 0};
   fs::create_directories(dir, ec);
   if (ec) return make_error("cannot make the scene cache '" + dir.string() + "': " + ec.message());
-  // Written under a name of this process, then renamed: a farm never reads a half-written scene.
-  const fs::path partial = dir / (hash + ".partial." + std::to_string(::getpid()));
+  // Written under a name of this process and call, then renamed: a farm never reads a half-written scene, and
+  // hosts shipped to at once (the director's threads) that share this cache never write one file together.
+  static std::atomic<uint64_t> writes{0};
+  const fs::path partial = dir / (hash + ".partial." + std::to_string(::getpid()) + "." + std::to_string(writes++));
   {
     std::ofstream out(partial, std::ios::binary);
     out.write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
