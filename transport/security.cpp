@@ -3,6 +3,9 @@
 #include <zmq.hpp>
 
 #include <chrono>
+#include <cstdint>
+#include <cstdio>
+#include <cstring>
 #include <sstream>
 
 #include "core/log.hpp"
@@ -90,11 +93,27 @@ void Authenticator::serve() {
       zmq::message_t event, where;
       if (!monitors[i - 1].recv(event, zmq::recv_flags::dontwait)) continue;
       if (event.more()) (void)monitors[i - 1].recv(where, zmq::recv_flags::dontwait);
+      uint16_t id = 0;
+      uint32_t value = 0;
+      if (event.size() >= 6) {
+        std::memcpy(&id, event.data(), 2);
+        std::memcpy(&value, static_cast<const char*>(event.data()) + 2, 4);
+      }
       ++refused_;
       if (unlogged++ == 0) first_unlogged = Clock::now();
       // The monitor names the endpoint the connection came in on, not its sender (ZeroMQ does not know it before
-      // the handshake); a client that is refused reconnects on its own, so one stranger is counted each time.
-      last_address = "a connection to " + where.to_string() + " that spoke without CURVE, sender unknown";
+      // the handshake); a client that is refused reconnects on its own, so one stranger is counted each time. A
+      // handshake left unfinished is a client without CURVE, or one that timed out or gave up half way (a farm's own
+      // peers do on an overloaded machine): ZeroMQ does not tell which, so neither does the message.
+      char code[16];
+      std::snprintf(code, sizeof code, "0x%08x", value);
+      last_address = "a connection to " + where.to_string() +
+                     (id == ZMQ_EVENT_HANDSHAKE_FAILED_NO_DETAIL
+                          ? " that left the handshake unfinished (no CURVE, or it timed out or closed half way)"
+                      : value == ZMQ_PROTOCOL_ERROR_ZMTP_MECHANISM_MISMATCH
+                          ? " that spoke without CURVE"
+                          : " that broke the handshake (ZeroMQ protocol error " + std::string(code) + ")") +
+                     ", sender unknown";
     }
     if (items[0].revents & ZMQ_POLLIN) {
       // ZAP request: version, request id, domain, address, identity, mechanism, credentials...
