@@ -23,4 +23,16 @@ std::vector<int64_t> pool_order(int64_t replicas, int64_t subset, int64_t client
   return order;
 }
 
+int64_t add_near_replicas(std::vector<int64_t>& order, int64_t subset, const std::vector<bool>& near) {
+  const auto size = static_cast<int64_t>(order.size());
+  if (subset <= 0 || subset >= size) return subset;
+  int64_t connected = subset;
+  for (int64_t i = subset; i < size && connected < 2 * subset; ++i) {
+    if (!near[static_cast<size_t>(order[static_cast<size_t>(i)])]) continue;
+    std::rotate(order.begin() + connected, order.begin() + i, order.begin() + i + 1);
+    ++connected;
+  }
+  return connected < size ? connected : 0;
+}
+
 }  // namespace lf

@@ -21,4 +21,9 @@ int64_t pool_subset(int64_t asked, int64_t replicas, int64_t clients, int64_t wi
 // every replica gives 0, 1, 2, ...
 std::vector<int64_t> pool_order(int64_t replicas, int64_t subset, int64_t client);
 
+// Moves replicas on the client's own host (`near[r]`) that `order` left among the spares to just after its first
+// `subset`, at most `subset` of them, and returns how many to connect now. They are reached over IPC, without CURVE
+// or TCP, and least_loaded prefers them; the dealt subset stays whole, so every replica keeps its clients.
+int64_t add_near_replicas(std::vector<int64_t>& order, int64_t subset, const std::vector<bool>& near);
+
 }  // namespace lf

@@ -47,5 +47,21 @@ TEST(PoolSubset, SubsetsCoverEveryReplicaEvenly) {
   }
 }
 
+TEST(PoolSubset, ReplicasOnTheClientsHostAreAddedAfterItsSubset) {
+  // Replicas 0-7; 1, 5 and 6 share the client's host; the client was dealt 4 and 5.
+  std::vector<bool> near(8, false);
+  near[1] = near[5] = near[6] = true;
+  auto order = pool_order(8, 2, 2);
+  ASSERT_EQ(order, (std::vector<int64_t>{4, 5, 6, 7, 0, 1, 2, 3}));
+  EXPECT_EQ(add_near_replicas(order, 2, near), 4);  // 5 was dealt; 6 and 1 are added, at most 2 of them
+  EXPECT_EQ(order, (std::vector<int64_t>{4, 5, 6, 1, 7, 0, 2, 3}));
+  auto all_near = pool_order(8, 2, 0);
+  EXPECT_EQ(add_near_replicas(all_near, 2, std::vector<bool>(8, true)), 4);  // one host: twice the subset
+  auto whole = pool_order(3, 2, 0);
+  EXPECT_EQ(add_near_replicas(whole, 2, std::vector<bool>(3, true)), 0) << "every replica: connect all";
+  auto none = pool_order(8, 0, 0);
+  EXPECT_EQ(add_near_replicas(none, 0, near), 0);
+}
+
 }  // namespace
 }  // namespace lf

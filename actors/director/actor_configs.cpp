@@ -48,7 +48,11 @@ ActorConfig config_for(const FarmSpec& spec, int actor, const std::function<std:
     const auto replicas = static_cast<int64_t>(input.inputs.size());
     const int64_t subset = pool_subset(pool.subset, replicas, clients, window);
     spec_in.subset = subset < replicas ? subset : 0;
-    for (int64_t j : pool_order(replicas, spec_in.subset, client)) {
+    std::vector<int64_t> order = pool_order(replicas, spec_in.subset, client);
+    std::vector<bool> near;
+    for (int r : input.inputs) near.push_back(spec.actors[static_cast<size_t>(r)].host == a.host);
+    spec_in.subset = add_near_replicas(order, spec_in.subset, near);
+    for (int64_t j : order) {
       const int r = input.inputs[static_cast<size_t>(j)];
       spec_in.replicas.push_back({spec.actors[static_cast<size_t>(r)].name, endpoint_of(r), pool.window,
                                   key_of ? key_of(r) : std::string()});

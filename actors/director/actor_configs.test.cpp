@@ -82,38 +82,56 @@ TEST(ActorConfigs, OnlyBuiltInLightOpsAreAskedWithLeanRequests) {
 
 // Each client of a large pool connects to a subset of its replicas (farm/pool_subset.hpp): CONFIG lists every
 // replica, the client's subset first, and says how many that is; the clients' subsets cover every replica evenly.
-// The subset survives CONFIG's encoding; `subset = 0` asks for all.
+// A client also connects to the replicas on its own host (IPC, no CURVE), up to as many again. The subset
+// survives CONFIG's encoding; `subset = 0` asks for all.
 TEST(ActorConfigs, ClientsOfALargePoolGetEvenSubsetsAndTheRestAsSpares) {
-  for (const int64_t asked : {int64_t{-1}, int64_t{0}}) {
+  struct Case {
+    int64_t asked;
+    bool renderers_beside_replicas;
+  };
+  for (const Case c : {Case{-1, false}, Case{0, false}, Case{-1, true}}) {
+    SCOPED_TRACE(testing::Message() << "subset " << c.asked << (c.renderers_beside_replicas ? ", shared hosts" : ""));
     FarmSpec spec;
     PoolSpec pool;
     pool.op = add_actor(spec, ActorSpec{.name = "direct", .kind = "direct"});
     pool.replicas = 16;
-    pool.params.subset = asked;
+    pool.params.subset = c.asked;
+    pool.hosts = {"h0", "h1", "h2", "h3"};
     auto mux = replicate(spec, pool);
     ASSERT_TRUE(mux.ok());
     RendererParams renderer;
     renderer.window = 1;
-    add_renderers(spec, 12, *mux, renderer, {}, {});
+    add_renderers(spec, 12, *mux, renderer, c.renderers_beside_replicas ? pool.hosts : std::vector<std::string>{"r"}, {});
     settle_pool_dispatch(spec);
     auto endpoint = [](int i) { return "tcp://host:" + std::to_string(6000 + i); };
-    std::map<std::string, int> clients_of;
+    std::map<std::string, int> dealt;
     for (int k = 0; k < 12; ++k) {
-      const ActorConfig r = config_for(spec, spec.find("renderer-" + std::to_string(k)), endpoint);
+      const ActorSpec& me = spec.actors[static_cast<size_t>(spec.find("renderer-" + std::to_string(k)))];
+      const ActorConfig r = config_for(spec, spec.find(me.name), endpoint);
       const InputSpec& in = r.inputs.at(0);
       ASSERT_EQ(in.replicas.size(), 16u);
-      EXPECT_EQ(in.subset, asked == 0 ? 0 : 2) << "16 replicas over 12 clients need 2 each; a window of 1 asks 2";
       std::set<std::string> names;
       for (const auto& replica : in.replicas) names.insert(replica.name);
       EXPECT_EQ(names.size(), 16u);
-      for (int64_t i = 0; i < (in.subset ? in.subset : 16); ++i) ++clients_of[in.replicas[static_cast<size_t>(i)].name];
+      // 16 replicas over 12 clients need 2 each; a window of 1 asks 2. Beside 4 replicas of its host, a client
+      // connects to 2 of them more (those not dealt to it already).
+      if (c.asked == 0) {
+        EXPECT_EQ(in.subset, 0);
+      } else if (!c.renderers_beside_replicas) {
+        EXPECT_EQ(in.subset, 2);
+      } else {
+        EXPECT_EQ(in.subset, 4);
+        for (size_t i = 2; i < 4; ++i)
+          EXPECT_EQ(spec.actors[static_cast<size_t>(spec.find(in.replicas[i].name))].host, me.host) << in.replicas[i].name;
+      }
+      for (size_t i = 0; i < (c.asked == 0 ? 16u : 2u); ++i) ++dealt[in.replicas[i].name];
       auto decoded = ActorConfig::from_value(r.to_value());
       ASSERT_TRUE(decoded.ok()) << decoded.error().message;
       EXPECT_EQ(decoded->inputs[0].subset, in.subset);
     }
-    ASSERT_EQ(clients_of.size(), 16u);
-    for (const auto& [name, n] : clients_of) {
-      if (asked == 0) EXPECT_EQ(n, 12) << name;
+    ASSERT_EQ(dealt.size(), 16u);
+    for (const auto& [name, n] : dealt) {
+      if (c.asked == 0) EXPECT_EQ(n, 12) << name;
       else EXPECT_TRUE(n == 1 || n == 2) << name << ": " << n;  // 24 connections over 16 replicas
     }
   }
