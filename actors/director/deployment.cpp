@@ -97,6 +97,8 @@ void Deployer::ship(const Scene& scene) {
   }
   if (hosts_connected_.valid())
     if (auto st = hosts_connected_.get(); !st) throw FarmFailure{"cannot start the farm: " + st.error().message};
+  if (auto st = launchers_.open_sessions(spec_.hosts_in_use()); !st)
+    throw FarmFailure{"cannot start the farm: " + st.error().message};
   if (d_.scene_bytes.empty()) return;
   const auto hosts = spec_.hosts_in_use();
   if (auto st = launchers_.prepare(hosts); !st) throw FarmFailure{"cannot start the farm: " + st.error().message};

@@ -49,6 +49,8 @@ class HostSession {
   // Starts the session on first use; then asks the host launcher to start the actor. The handle is returned at once:
   // a start that fails on the host arrives as an exit (status 127) and a warning with the host's words.
   Result<pid_t> start(const LaunchRequest& request);
+  // Starts the session now (start() does on first use).
+  Status begin() { return open(); }
   std::optional<ExitReport> reap_one();
   // SIGKILL counts the actor as gone at once: across a cut network the kill may never arrive, and a killed actor
   // must never be waited on (its late answers are dropped anyway).
@@ -107,6 +109,14 @@ class SessionLauncher : public Launcher {
                               const LaunchRequest& request) {
     if (!session_) session_ = std::make_unique<HostSession>(host, transport());
     return session_->start(request);
+  }
+  // Opens the host's session before any actor starts (once every host answered): from then on it keeps ssh's
+  // master connection in use, so that shipping the scene and starting actors never find it gone after
+  // ControlPersist's 5 idle seconds and connect again (64 rig hosts: launch 2.0 -> 1.0 s).
+  Status begin_session(const std::string& host, const std::function<std::vector<std::string>()>& transport) {
+    if (!session_) session_ = std::make_unique<HostSession>(host, transport());
+    if (auto st = session_->begin(); !st) return make_error("host '" + host + "': cannot start its session: " + st.error().message);
+    return Ok{};
   }
 
  private:

@@ -71,19 +71,26 @@ Status SshLauncher::connect(bool need_lightfarm) {
   return Ok{};
 }
 
+std::vector<std::string> SshLauncher::host_launcher_command() const {
+  // The huge-page setting this director runs with (cli/main.cpp), given to the host launcher and so to every
+  // actor it starts, so that none runs itself a second time to set it: ssh passes no environment.
+  std::string command = "exec";
+  if (const char* t = std::getenv("GLIBC_TUNABLES"); t && std::strstr(t, "glibc.malloc.hugetlb=1"))
+    command += " env GLIBC_TUNABLES=glibc.malloc.hugetlb=1";
+  command.append(" ").append(shell_quote(lightfarm_)).append(" host-launcher");
+  auto argv = ssh_command();
+  argv.push_back(command);
+  return argv;
+}
+
+Status SshLauncher::open_session() {
+  if (auto st = connect(true); !st) return st;
+  return begin_session(host_.name, [this] { return host_launcher_command(); });
+}
+
 Result<pid_t> SshLauncher::start(const LaunchRequest& request) {
   if (auto st = connect(true); !st) return st.error();
-  return start_through(host_.name, [&] {
-    // The huge-page setting this director runs with (cli/main.cpp), given to the host launcher and so to every
-    // actor it starts, so that none runs itself a second time to set it: ssh passes no environment.
-    std::string command = "exec";
-    if (const char* t = std::getenv("GLIBC_TUNABLES"); t && std::strstr(t, "glibc.malloc.hugetlb=1"))
-      command += " env GLIBC_TUNABLES=glibc.malloc.hugetlb=1";
-    command.append(" ").append(shell_quote(lightfarm_)).append(" host-launcher");
-    auto argv = ssh_command();
-    argv.push_back(command);
-    return argv;
-  }, request);
+  return start_through(host_.name, [this] { return host_launcher_command(); }, request);
 }
 
 Result<Launcher::Shipped> SshLauncher::ship(const std::string& bytes, const std::string& hash) {

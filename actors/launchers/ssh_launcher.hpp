@@ -22,6 +22,7 @@ class SshLauncher final : public SessionLauncher {
 
   std::string name() const override { return "ssh"; }
   Status prepare() override { return connect(true); }
+  Status open_session() override;
   Result<Shipped> ship(const std::string& bytes, const std::string& hash) override;
   Result<pid_t> start(const LaunchRequest& request) override;
   void stop_all(std::chrono::milliseconds grace) override;
@@ -31,6 +32,7 @@ class SshLauncher final : public SessionLauncher {
 
  private:
   Status connect(bool need_lightfarm);
+  std::vector<std::string> host_launcher_command() const;
   std::string target() const;
 
   HostSpec host_;
