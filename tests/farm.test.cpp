@@ -90,8 +90,9 @@ TEST_F(FarmTest, CornellBoxImageLooksLikeTheCornellBox) {
   EXPECT_GT(green.y, 1.5f * green.x) << "right wall is not green-dominant";
   EXPECT_GT(green.y, 1.5f * green.z);
   EXPECT_EQ(brightest_class, "light");
-  for (const auto& [c, s] : sum)
+  for (const auto& [c, s] : sum) {
     if (c != "light") EXPECT_GT(average(mean("light")), 5 * average(mean(c))) << c;
+  }
   EXPECT_GT(average(mean("floor-under-light")), 1.5f * average(mean("floor-corner")));
   // Pixels whose centre ray leaves the box are black but for jittered samples that graze a wall edge.
   EXPECT_LT(average(mean("none")), 0.05f * average(mean("red")));
@@ -282,7 +283,7 @@ TEST_F(FarmTest, StatsJsonCarriesPhasesAndActors) {
   auto r = render_cornell(path("c.png"), {"--stats-json", path("stats.json")});
   ASSERT_EQ(r.status, 0) << r.err;
   std::string json = read_file(path("stats.json"));
-  for (const char* key : {"\"phases_seconds\"", "\"render\"", "\"setup\"", "\"actors\"", "\"renderer-0\"",
+  for (const char* key : {"\"phases_seconds\"", "\"phases_director_cpu_seconds\"", "\"render\"", "\"setup\"", "\"actors\"", "\"renderer-0\"",
                           "\"direct\"", "\"busy_seconds\"", "\"peak_queue\"", "\"bytes_in\""})
     EXPECT_NE(json.find(key), std::string::npos) << key << " missing from " << json;
   expect_no_leftovers(r);

@@ -363,7 +363,9 @@ TEST_F(HostsTest, TheSceneTravelsOncePerHostAndIsThenReusedFromItsCache) {
     std::vector<std::string> names;
     for (const auto& f : fs::directory_iterator(rig + "/cache-h" + std::to_string(i) + "/scenes")) {
       names.push_back(f.path().filename().string());
-      if (f.path().extension() == ".lfscene") EXPECT_EQ(static_cast<int64_t>(fs::file_size(f.path())), size);
+      if (f.path().extension() == ".lfscene") {
+        EXPECT_EQ(static_cast<int64_t>(fs::file_size(f.path())), size);
+      }
     }
     std::sort(names.begin(), names.end());
     ASSERT_EQ(names.size(), 3u) << "host h" << i;

@@ -112,10 +112,15 @@ class Director {
   template <class Fn>
   void stage(Stage s, Fn&& fn) {
     const auto t = Clock::now();
+    const double cpu = process_cpu_seconds();
     supervisor_.set_stage(s);
     if (monitor_) monitor_->update(true);  // a watching page sees each stage as it begins
     fn();
     timeline_.stage_seconds.emplace_back(std::string(stage_name(s)), seconds_since(t));
+    timeline_.stage_cpu_seconds.push_back(process_cpu_seconds() - cpu);
+    // As it passes (LIGHTFARM_DEBUG): a farm that fails later never writes its stats file.
+    log_debug("stage " + timeline_.stage_seconds.back().first + ": " + seconds_text(timeline_.stage_seconds.back().second) +
+              ", director CPU " + seconds_text(timeline_.stage_cpu_seconds.back()));
   }
 
   void prepare() {
@@ -234,6 +239,7 @@ class Director {
   int report() {
     RunFigures f;
     f.stage_seconds = timeline_.stage_seconds;
+    f.stage_cpu_seconds = timeline_.stage_cpu_seconds;
     f.total_seconds = timeline_.seconds();
     f.render_seconds = tiles_.render_seconds();
     frames_.add_figures(f);

@@ -26,6 +26,7 @@ class FrameLoop;
 struct FarmTimeline {
   Clock::time_point start = Clock::now();
   std::vector<std::pair<std::string, double>> stage_seconds;  // in order
+  std::vector<double> stage_cpu_seconds;  // the director's CPU (all its threads) in each, same order
   bool image_written = false;
   double seconds() const { return std::chrono::duration<double>(Clock::now() - start).count(); }
 };

@@ -81,7 +81,11 @@ Status write_stats_json(const FarmSpec& spec, const Supervisor& supervisor, cons
                         const std::string& path) {
   const double samples = static_cast<double>(spec.image.width) * spec.image.height * spec.image.spp * f.frames_rendered;
   Value::Map phases;
-  for (const auto& [name, secs] : f.stage_seconds) phases[name] = secs;
+  Value::Map director_phases;
+  for (size_t i = 0; i < f.stage_seconds.size(); ++i) {
+    phases[f.stage_seconds[i].first] = f.stage_seconds[i].second;
+    if (i < f.stage_cpu_seconds.size()) director_phases[f.stage_seconds[i].first] = f.stage_cpu_seconds[i];
+  }
   phases["total"] = f.total_seconds;
   Value::Array actors;
   double shading_requests = 0, messages = 0, actors_cpu = 0;
@@ -109,6 +113,7 @@ Status write_stats_json(const FarmSpec& spec, const Supervisor& supervisor, cons
                          {"output", spec.image.output},
                          {"image", spec.image.to_value()},
                          {"phases_seconds", std::move(phases)},
+                         {"phases_director_cpu_seconds", std::move(director_phases)},
                          {"render_samples_per_second", f.render_seconds > 0 ? samples / f.render_seconds : 0.0},
                          {"first_tile_seconds", f.first_tile_seconds},
                          {"render_seconds", f.render_seconds},

@@ -13,6 +13,7 @@ namespace lf {
 
 struct RunFigures {
   std::vector<std::pair<std::string, double>> stage_seconds;  // in order
+  std::vector<double> stage_cpu_seconds;                        // the director's, in the same order
   double total_seconds = 0;
   double render_seconds = 0;       // a job's: every frame's, PHASE frame to image written
   double first_tile_seconds = 0;  // from the director's start
