@@ -77,13 +77,39 @@ void warn_about_escaping_light(const FarmSpec& spec, const Scene& scene) {
 Deployer::Deployer(const FarmSpec& spec, Launchers& launchers, bool quiet)
     : spec_(spec), launchers_(launchers), quiet_(quiet) {
   for (const auto& warning : spec_.setting_warnings()) log_warn(warning);
-  // ssh's key exchange and the check for lightfarm there take about as long as reading a real scene here.
-  if (spec_.has_remote_hosts())
-    hosts_connected_ = std::async(std::launch::async, [this] { return launchers_.prepare(spec_.hosts_in_use()); });
+  // ssh's key exchange and the check for lightfarm there take about as long as reading a real scene here: every
+  // host at once, on threads of their own.
+  if (!spec_.has_remote_hosts()) return;
+  for (const HostSpec* h : spec_.hosts_in_use()) {
+    auto launcher = launchers_.for_host(*h);
+    if (!launcher) {
+      cannot_prepare_ = launcher.error();
+      return;
+    }
+    preparing_.push_back({*launcher, std::async(std::launch::async, [l = *launcher] { return l->prepare(); })});
+  }
 }
 
 Deployer::~Deployer() {
-  if (hosts_connected_.valid()) hosts_connected_.wait();
+  for (auto& p : preparing_)  // hosts still connecting (a farm that failed before launch)
+    if (p.done.valid()) p.done.wait();
+}
+
+// Each host's session (Launcher::open_session) opens as soon as that host has answered, here on the director's
+// thread (a child forked on prepare's threads would die with them: PR_SET_PDEATHSIG follows the thread). Its ssh
+// master connection then stays in use; opened only once every host had answered, the early hosts' masters lapsed
+// after ControlPersist's 5 idle seconds and connected again (64 rig hosts: ~6 s of prepare).
+void Deployer::open_sessions_as_hosts_answer() {
+  if (!cannot_prepare_) throw FarmFailure{"cannot start the farm: " + cannot_prepare_.error().message};
+  for (size_t left = preparing_.size(); left > 0;) {
+    for (auto& p : preparing_) {
+      if (!p.done.valid() || p.done.wait_for(std::chrono::seconds(0)) != std::future_status::ready) continue;
+      --left;
+      if (auto st = p.done.get(); !st) throw FarmFailure{"cannot start the farm: " + st.error().message};
+      if (auto st = p.launcher->open_session(); !st) throw FarmFailure{"cannot start the farm: " + st.error().message};
+    }
+    if (left > 0) std::this_thread::sleep_for(std::chrono::milliseconds(5));
+  }
 }
 
 // A scene from a file travels to the hosts in its binary form; actors never parse the OBJ themselves. Every host
@@ -95,10 +121,7 @@ void Deployer::ship(const Scene& scene) {
     d_.scene_bytes = scene_to_bytes(scene);
     d_.scene_hash = content_hash(d_.scene_bytes);
   }
-  if (hosts_connected_.valid())
-    if (auto st = hosts_connected_.get(); !st) throw FarmFailure{"cannot start the farm: " + st.error().message};
-  if (auto st = launchers_.open_sessions(spec_.hosts_in_use()); !st)
-    throw FarmFailure{"cannot start the farm: " + st.error().message};
+  open_sessions_as_hosts_answer();
   if (d_.scene_bytes.empty()) return;
   const auto hosts = spec_.hosts_in_use();
   if (auto st = launchers_.prepare(hosts); !st) throw FarmFailure{"cannot start the farm: " + st.error().message};

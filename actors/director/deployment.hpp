@@ -58,6 +58,7 @@ class Deployer {
   Deployment finish(const Scene& scene);
 
  private:
+  void open_sessions_as_hosts_answer();
   void start_host_agents();
   void split_scene(const Scene& scene);
   Result<std::string> director_address() const;
@@ -66,7 +67,13 @@ class Deployer {
   const FarmSpec& spec_;
   Launchers& launchers_;
   bool quiet_;
-  std::future<Status> hosts_connected_;
+  // Each remote host's preparation (ssh connected, lightfarm found there), running while the scene loads here.
+  struct Preparing {
+    Launcher* launcher;
+    std::future<Status> done;
+  };
+  std::vector<Preparing> preparing_;
+  Status cannot_prepare_ = Ok{};  // a host whose launcher could not be made
   Deployment d_;
 };
 

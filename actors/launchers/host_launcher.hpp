@@ -110,9 +110,9 @@ class SessionLauncher : public Launcher {
     if (!session_) session_ = std::make_unique<HostSession>(host, transport());
     return session_->start(request);
   }
-  // Opens the host's session before any actor starts (once every host answered): from then on it keeps ssh's
+  // Opens the host's session before any actor starts (as soon as the host answered): from then on it keeps ssh's
   // master connection in use, so that shipping the scene and starting actors never find it gone after
-  // ControlPersist's 5 idle seconds and connect again (64 rig hosts: launch 2.0 -> 1.0 s).
+  // ControlPersist's 5 idle seconds and connect again.
   Status begin_session(const std::string& host, const std::function<std::vector<std::string>()>& transport) {
     if (!session_) session_ = std::make_unique<HostSession>(host, transport());
     if (auto st = session_->begin(); !st) return make_error("host '" + host + "': cannot start its session: " + st.error().message);

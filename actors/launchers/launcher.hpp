@@ -44,7 +44,7 @@ class Launcher {
   // Gets ready to start actors (an ssh connection and a check of the host); called for every host at once before
   // any actor starts, so hosts connect in parallel. An error names the host.
   virtual Status prepare() { return Ok{}; }
-  // Called on the director's own thread once every host is prepared, before the scene is shipped: a launcher whose
+  // Called on the director's own thread once this host is prepared, before the scene is shipped: a launcher whose
   // actors start through one session per host opens it now (a child started from prepare's threads would be
   // killed with its thread: PR_SET_PDEATHSIG follows the thread, not the process).
   virtual Status open_session() { return Ok{}; }
@@ -87,8 +87,6 @@ class Launchers {
   Result<Launcher*> for_host(const HostSpec& host);
   // Makes the launcher of each of `hosts` and prepares them all at once; the first error, if any.
   Status prepare(const std::vector<const HostSpec*>& hosts);
-  // Launcher::open_session of each of `hosts`; the first error, if any.
-  Status open_sessions(const std::vector<const HostSpec*>& hosts);
   Result<pid_t> start(const HostSpec& host, const LaunchRequest& request);
   std::optional<ExitReport> reap_one();
   void kill(pid_t pid, int signal);

@@ -253,15 +253,6 @@ Status Launchers::prepare(const std::vector<const HostSpec*>& hosts) {
   return Ok{};
 }
 
-Status Launchers::open_sessions(const std::vector<const HostSpec*>& hosts) {
-  for (const HostSpec* h : hosts) {
-    auto l = for_host(*h);
-    if (!l) return l.error();
-    if (auto st = (*l)->open_session(); !st) return st;
-  }
-  return Ok{};
-}
-
 Result<pid_t> Launchers::start(const HostSpec& host, const LaunchRequest& request) {
   auto launcher = for_host(host);
   if (!launcher) return launcher.error();
