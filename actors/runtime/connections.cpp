@@ -27,6 +27,7 @@ Result<size_t> Connections::add(Group group, const InputSpec& in) {
 }
 
 Status Connections::connect_config(const ActorConfig& config, const std::string& own_bind) {
+  own_bind_ = own_bind;
   for (const auto& in : config.inputs) {
     LightingInput input;
     input.name = in.name;
@@ -37,7 +38,6 @@ Status Connections::connect_config(const ActorConfig& config, const std::string&
       input.lean = in.lean;
     } else {
       input.lean = std::all_of(in.replicas.begin(), in.replicas.end(), [](const InputSpec& r) { return r.lean; });
-      input.own_bind = own_bind;
       // A partitioned pool's points must reach the replica holding their part: it connects to all.
       const bool parts = std::any_of(in.replicas.begin(), in.replicas.end(), [](const InputSpec& r) { return r.part >= 0; });
       const size_t subset = in.subset > 0 && !parts ? static_cast<size_t>(in.subset) : in.replicas.size();
@@ -49,7 +49,7 @@ Status Connections::connect_config(const ActorConfig& config, const std::string&
         }
         auto row = add(Group::lighting, replica);
         if (!row) return row.error();
-        replicas.push_back({replica.name, rows_[*row].client.get(), !same_host(replica.endpoint, own_bind), replica.part});
+        replicas.push_back({replica.name, rows_[*row].client.get(), !same_host(replica.endpoint, own_bind_), replica.part});
         input.holds_parts = input.holds_parts || replica.part >= 0;
       }
       const PoolOptions options =
@@ -80,7 +80,7 @@ Connections::LightingInput* Connections::replica_lost(const std::string& name) {
       in.spares.pop_front();
       auto row = add(Group::lighting, next);
       if (!row) continue;  // an endpoint that cannot be connected: the next spare
-      in.pool->add({next.name, rows_[*row].client.get(), !same_host(next.endpoint, in.own_bind), next.part});
+      in.pool->add({next.name, rows_[*row].client.get(), !same_host(next.endpoint, own_bind_), next.part});
       break;
     }
     return &in;

@@ -36,7 +36,6 @@ class Connections {
     // A pool's replicas beyond its subset (CONFIG pool.subset), in CONFIG's order: one is connected in place of
     // each replica of the subset that is lost.
     std::deque<InputSpec> spares;
-    std::string own_bind;  // where this actor listens (a spare on its host is not remote)
   };
   using Connector = std::function<Result<std::unique_ptr<wire::RequestClient>>(
       const std::string& name, const std::string& endpoint, const std::string& key, size_t window)>;
@@ -72,6 +71,7 @@ class Connections {
   std::vector<size_t> by_group_[3];  // rows of each Group, in order
   std::vector<LightingInput> lighting_;
   bool changed_ = false;
+  std::string own_bind_;  // where this actor listens (replicas there are not remote)
 };
 
 }  // namespace lf
