@@ -14,6 +14,7 @@ function(lightfarm_component name)
       get_filename_component(test_name ${test_src} NAME_WE)
       set(target test_${name}_${test_name})
       add_executable(${target} ${test_src})
+      target_precompile_headers(${target} REUSE_FROM lightfarm_test_pch)
       set_target_properties(${target} PROPERTIES RUNTIME_OUTPUT_DIRECTORY ${CMAKE_BINARY_DIR}/tests)
       target_link_libraries(${target} PRIVATE lightfarm_${name} ${ARG_TEST_DEPENDS} GTest::gtest_main lightfarm_warnings
                             lightfarm_flags)

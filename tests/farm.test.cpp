@@ -91,7 +91,9 @@ TEST_F(FarmTest, CornellBoxImageLooksLikeTheCornellBox) {
   EXPECT_GT(green.y, 1.5f * green.z);
   EXPECT_EQ(brightest_class, "light");
   for (const auto& [c, s] : sum) {
-    if (c != "light") EXPECT_GT(average(mean("light")), 5 * average(mean(c))) << c;
+    if (c != "light") {
+      EXPECT_GT(average(mean("light")), 5 * average(mean(c))) << c;
+    }
   }
   EXPECT_GT(average(mean("floor-under-light")), 1.5f * average(mean("floor-corner")));
   // Pixels whose centre ray leaves the box are black but for jittered samples that graze a wall edge.

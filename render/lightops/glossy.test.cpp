@@ -68,7 +68,9 @@ TEST(Glossy, FurnaceGivesTheLobesAlbedo) {
       double mean = 0;
       for (const RGB& l : out) mean += l.y / out.size();
       EXPECT_NEAR(mean / expected, 1.0, 0.01) << "ns " << ns << " theta " << theta;
-      if (theta == 0.0f) EXPECT_NEAR(expected, shiny.ks.y, 0.002);
+      if (theta == 0.0f) {
+        EXPECT_NEAR(expected, shiny.ks.y, 0.002);
+      }
     }
   }
 }

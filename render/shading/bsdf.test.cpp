@@ -104,8 +104,9 @@ TEST(Bsdf, MetalRoughIsTheMicrofacetModelAroundTheNormal) {
         ASSERT_NEAR(smp->weight.x, expect.x, 1e-3f * std::max(1.0f, expect.x));
         albedo += smp->weight.y;
       }
-      if (auto g = b.sample_glossy(n, wo, rng.uniform(), rng.uniform(), rng.uniform()))
+      if (auto g = b.sample_glossy(n, wo, rng.uniform(), rng.uniform(), rng.uniform())) {
         EXPECT_NEAR(g->pdf, b.pdf_glossy(n, wo, g->wi), 1e-3f * g->pdf);
+      }
     }
     EXPECT_LE(albedo / count, 1.0) << theta;
     EXPECT_GT(albedo / count, 0.4) << theta;
@@ -226,7 +227,9 @@ TEST(Bsdf, SamplingByLobeReflectsTheSame) {
         diffuse_share += s->weight.x;
         EXPECT_NEAR(s->pdf, b.pdf_diffuse(kN, wo, s->wi), 1e-5f);
       }
-      if (!s->delta) EXPECT_NEAR(b.pdf_diffuse(kN, wo, s->wi) + b.pdf_glossy(kN, wo, s->wi), b.pdf(kN, wo, s->wi), 1e-4f);
+      if (!s->delta) {
+        EXPECT_NEAR(b.pdf_diffuse(kN, wo, s->wi) + b.pdf_glossy(kN, wo, s->wi), b.pdf(kN, wo, s->wi), 1e-4f);
+      }
     }
   }
   EXPECT_NEAR(by_lobe / n, whole / n, 0.005);
