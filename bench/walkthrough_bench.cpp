@@ -13,7 +13,9 @@
 //   - whether each sampled frame of the job equals its separate run bit for bit (it does where no setup the job
 //     keeps asked an op that sees the camera: the network's path tracer does not learn from the view);
 //   - resume: the job run again with every frame done (verify the record, launch nothing): its wall time; and with
-//     the second half's images deleted: its wall time and the part spent replaying the first half's views;
+//     the second half's images deleted: its wall time, the part spent restoring the carried cache the job's folder
+//     kept (the director's restore stage: publish, PHASE frame and setup) and the part spent replaying views
+//     (none while the folder keeps the cache);
 //   - error against path-traced references (lighting=pathtrace at --reference-spp, kept in --cache) of the first,
 //     middle and last sampled frames: the job's frame and the separate run's (relative RMSE, bench/image_error.hpp;
 //     --reference-spp 0: none).
@@ -140,18 +142,19 @@ int main(int argc, char** argv) {
   const auto again = bench::run_farm(script, look, (dir / "walk.####.exr").string());
   std::printf("resume with every frame done: %.2f s\n", again.wall_seconds);
 
-  // A resume mid-job: the second half's images deleted, the job run again. Its frames replay the views of the
-  // first half (the carried cache) before rendering.
+  // A resume mid-job: the second half's images deleted, the job run again. It restores the carried cache as kept
+  // after the first frame it renders (or, without one, replays the views of the first half) before rendering.
   for (int k = args.frames / 2 + 1; k <= args.frames; ++k)
     bench::fs::rename(frame_file(dir.string(), k), frame_file(dir.string(), k) + ".first.exr");
   const auto half = bench::run_farm(script, look, (dir / "walk.####.exr").string());
   const double replay = bench::json_number(half.stats, "replay_seconds");
+  const double restore = bench::json_number(half.stats, "restore_seconds");
   int resumed_identical = 0;
   for (int k = args.frames / 2 + 1; k <= args.frames; ++k)
     resumed_identical += same_pixels(frame_file(dir.string(), k), frame_file(dir.string(), k) + ".first.exr");
-  std::printf("resume with frames %d-%d to render: %.1f s, of which replaying the views of frames 2-%d %.2f s; %d of %d "
-              "frames identical to the uninterrupted job's\n", args.frames / 2 + 1, args.frames, half.wall_seconds,
-              args.frames / 2, replay, resumed_identical, args.frames - args.frames / 2);
+  std::printf("resume with frames %d-%d to render: %.1f s, of which restoring the kept cache %.2f s, replaying views "
+              "%.2f s; %d of %d frames identical to the uninterrupted job's\n", args.frames / 2 + 1, args.frames,
+              half.wall_seconds, restore, replay, resumed_identical, args.frames - args.frames / 2);
   std::fflush(stdout);
 
   // Quality: the job's frames and the separate runs' against path-traced references.
@@ -199,7 +202,7 @@ int main(int argc, char** argv) {
                            << ", \"separate_idle_share\": " << separate_idle << ", \"identical_frames\": " << identical
                            << ",\n  \"job_over_separate\": " << ratio << ", \"later_over_first\": " << per_frame
                            << ", \"resume_all_done_seconds\": " << again.wall_seconds
-                           << ", \"resume_half_seconds\": " << half.wall_seconds << ", \"replay_seconds\": " << replay
+                           << ", \"resume_half_seconds\": " << half.wall_seconds << ", \"replay_seconds\": " << replay << ", \"restore_seconds\": " << restore
                            << ", \"resumed_identical\": " << resumed_identical
                            << ",\n  \"reference_spp\": " << args.reference_spp << ", \"errors\": [" << errors_json << "]\n}\n";
   bench::fs::remove_all(dir);

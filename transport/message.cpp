@@ -48,6 +48,7 @@ constexpr std::pair<Op, std::string_view> kOps[] = {
     {Op::ring_poll, "ring.poll"},
     {Op::trace, "trace"},
     {Op::pool_part, "pool_part"},
+    {Op::keep_setup, "keep_setup"},
 };
 constexpr std::pair<Phase, std::string_view> kPhases[] = {
     {Phase::configure, "configure"},

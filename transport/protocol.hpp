@@ -56,6 +56,7 @@ enum class Op : uint8_t {
   ring_poll,     // idle ring node -> node at its position in another ring: lend me work
   trace,         // LightOp -> geometry actor: trace a batch of rays through this part of a partitioned scene
   pool_part,     // pool replica -> pool replica: its part of one round of the pool's setup exchange
+  keep_setup,    // LightOp -> director: its setup carried over a job's views, as extended to this frame's view
 };
 std::string_view op_name(Op op);
 Op op_from_name(std::string_view name);

@@ -76,6 +76,8 @@ Value::Map encode_frame(const FrameView& view) {
     for (const auto& n : *view.renew) names.push_back(n);
     m["renew"] = std::move(names);
   }
+  if (view.keep) m["keep"] = true;
+  if (view.restore) m["restore"] = true;
   return m;
 }
 
@@ -96,6 +98,12 @@ Result<FrameView> decode_frame(const Value& body) {
       view.renew->push_back(n.as_string());
     }
   }
+  for (auto [name, flag] : {std::pair{"keep", &view.keep}, std::pair{"restore", &view.restore}}) {
+    const Value* v = body.find(name);
+    if (v && !v->is_bool()) return bad(std::string("a PHASE frame's ") + name + " is not true or false");
+    *flag = v && v->as_bool();
+  }
+  if (view.keep && view.restore) return bad("a PHASE frame asks to keep and to restore the same setup");
   return view;
 }
 

@@ -44,11 +44,16 @@ Result<PeerMoved> decode_peer_moved(const Value& body);
 Value encode_peer_down(const std::string& name);
 Result<std::string> decode_peer_down(const Value& body);
 
-// A job's next view. `renew`: on a replayed view (no render), the actors that set themselves up for it.
+// A job's next view. `renew`: on a replayed view (no render), the actors that set themselves up for it. `keep`: an
+// op that carries its setup over the views sends it to the director once extended (REQUEST keep_setup), for the
+// job's record. `restore`: such an op takes its setup as the director publishes it ("setup/<actor>", fetch)
+// instead of extending it, and nothing else sets up for the view.
 struct FrameView {
   int frame = 0;
   CameraSpec camera;
   std::optional<std::vector<std::string>> renew;
+  bool keep = false;
+  bool restore = false;
 };
 Value::Map encode_frame(const FrameView& view);  // the body besides the phase's name (wire::make_phase adds it)
 Result<FrameView> decode_frame(const Value& body);

@@ -79,6 +79,23 @@ TEST(ControlCodec, FrameRoundTripsAndRefusesWhatIsNotAFrame) {
             std::string::npos);
   EXPECT_EQ(decode_frame(Value::Map{{"frame", 1}, {"camera", camera.to_value()}, {"renew", Value::Array{1}}}).error().message,
             "a PHASE frame's renew is not a list of names");
+  // A job's kept setups: keep (send it once extended) or restore (take the published one), never both.
+  EXPECT_FALSE(plain->keep || plain->restore);
+  FrameView kept{4, camera, std::nullopt};
+  kept.keep = true;
+  auto keep = decode_frame(Value(encode_frame(kept)));
+  ASSERT_TRUE(keep.ok());
+  EXPECT_TRUE(keep->keep && !keep->restore);
+  FrameView restored{5, camera, std::vector<std::string>{}};
+  restored.restore = true;
+  auto restore = decode_frame(Value(encode_frame(restored)));
+  ASSERT_TRUE(restore.ok());
+  EXPECT_TRUE(restore->restore && !restore->keep && restore->renew && restore->renew->empty());
+  EXPECT_EQ(decode_frame(Value::Map{{"frame", 1}, {"camera", camera.to_value()}, {"keep", 1}}).error().message,
+            "a PHASE frame's keep is not true or false");
+  EXPECT_EQ(decode_frame(Value::Map{{"frame", 1}, {"camera", camera.to_value()}, {"keep", true}, {"restore", true}})
+                .error().message,
+            "a PHASE frame asks to keep and to restore the same setup");
 }
 
 }  // namespace

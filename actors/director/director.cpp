@@ -43,7 +43,7 @@ class Director {
         launchers_(launchers),
         supervisor_(spec_, launchers_, control_, [this](const std::string& a) { return services_.needs_restart(a); }),
         tiles_(spec.image, spec.renderer_names(), options.progress_on_terminal, options.quiet),
-        frames_(spec_, tiles_, options_),
+        frames_(spec_, tiles_, exchange_, control_, options_),
         ring_(spec_, exchange_, options.quiet, options.progress_on_terminal),
         loop_(spec_, control_, supervisor_, launchers_, [this](SupervisorEvent& e) { route(e); }),
         step_progress_(options.quiet) {}
@@ -265,7 +265,7 @@ class Director {
   FrameLoop frames_;
   ExchangeService exchange_;
   RingService ring_;
-  ServiceRouter services_{&tiles_, &exchange_, &ring_};
+  ServiceRouter services_{&tiles_, &exchange_, &ring_, &frames_.carried_setups()};
   ControlLoop loop_;
   StepProgress step_progress_;
   Clock::time_point render_start_;

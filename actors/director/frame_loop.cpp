@@ -48,8 +48,8 @@ std::vector<std::string> asked_by_carried_setups(const FarmSpec& spec) {
 
 }  // namespace
 
-FrameLoop::FrameLoop(FarmSpec& spec, TileService& tiles, const RunOptions& options)
-    : spec_(spec), tiles_(tiles), options_(options) {}
+FrameLoop::FrameLoop(FarmSpec& spec, TileService& tiles, ExchangeService& exchange, Outbox& out, const RunOptions& options)
+    : spec_(spec), tiles_(tiles), exchange_(exchange), out_(out), options_(options) {}
 
 void FrameLoop::prepare(const std::string& scene_hash) {
   if (!spec_.job.declared) {
@@ -58,7 +58,7 @@ void FrameLoop::prepare(const std::string& scene_hash) {
   } else {
     record_.emplace(spec_.image.output);
     std::string note;
-    if (options_.restart) record_->clear();
+    if (options_.restart) record_->clear(), CarriedSetups::clear(record_->folder());
     else record_->load(note);
     if (!note.empty()) log_warn(note);
     for (size_t i = 0; i < spec_.frames.size(); ++i) {
@@ -68,8 +68,16 @@ void FrameLoop::prepare(const std::string& scene_hash) {
       if (record_->done(f.number, key, f.output)) ++skipped_;
       else left_.push_back({f, i, std::move(key)});
     }
-    for (const ActorSpec& a : spec_.actors) carries_views_ = carries_views_ || carries_views(a);
-    if (carries_views_) asked_by_carried_ = asked_by_carried_setups(spec_);
+    for (const ActorSpec& a : spec_.actors)
+      if (a.has_process() && carries_views(a)) carrying_.push_back(a.name);
+    carries_views_ = !carrying_.empty();
+    if (carries_views_) {
+      asked_by_carried_ = asked_by_carried_setups(spec_);
+      const std::vector<std::string> keys = setup_keys(spec_, scene_hash);
+      std::map<int, std::string> by_frame;
+      for (size_t i = 0; i < keys.size(); ++i) by_frame[spec_.frames[i].number] = keys[i];
+      carried_.begin(record_->folder(), std::move(by_frame));
+    }
     if (skipped_ > 0)
       log_info(std::to_string(skipped_) + " of the job's " + std::to_string(left_.size() + skipped_) + " frames are done (" +
                    record_->folder() + ", their images unchanged); " +
@@ -86,9 +94,57 @@ void FrameLoop::prepare(const std::string& scene_hash) {
 void FrameLoop::switch_view(const FrameSpec& f, bool replay, const std::function<void(wire::Phase, Value::Map)>& run_phase) {
   // Every actor takes the view first; then what depends on it is set up again (an op's new setup may ask others).
   // A replayed view, which nothing renders, needs only what carried setups extend to it and what they ask.
-  run_phase(wire::Phase::frame,
-            control::encode_frame({f.number, f.camera, replay ? std::optional(asked_by_carried_) : std::nullopt}));
+  control::FrameView view{f.number, f.camera, replay ? std::optional(asked_by_carried_) : std::nullopt};
+  view.keep = carries_views_ && record_.has_value();  // for a later run of the job, which then need not replay
+  run_phase(wire::Phase::frame, control::encode_frame(view));
   run_phase(wire::Phase::setup, {});
+}
+
+bool FrameLoop::catch_up(size_t holds, size_t before, const std::function<void(wire::Phase, Value::Map)>& run_phase) {
+  using Clock = std::chrono::steady_clock;
+  size_t from = holds + 1;
+  for (size_t j = before; j > holds; --j) {
+    std::vector<std::string> states;
+    for (const std::string& actor : carrying_) {
+      auto state = carried_.find(actor, spec_.frames[j].number);
+      if (!state) break;
+      states.push_back(std::move(*state));
+    }
+    if (states.size() != carrying_.size()) continue;
+    const auto start = Clock::now();
+    size_t bytes = 0;
+    for (size_t a = 0; a < carrying_.size(); ++a) {
+      bytes += states[a].size();
+      exchange_.publish("setup/" + carrying_[a], std::move(states[a]), out_);
+    }
+    // The frame about to render restored: every other op sets up for its view as usual. An earlier one: nothing
+    // else need set up for a view nothing renders.
+    control::FrameView view{spec_.frames[j].number, spec_.frames[j].camera,
+                            j == before ? std::nullopt : std::optional(std::vector<std::string>{})};
+    view.restore = true;
+    run_phase(wire::Phase::frame, control::encode_frame(view));
+    run_phase(wire::Phase::setup, {});
+    restore_seconds_ += std::chrono::duration<double>(Clock::now() - start).count();
+    if (!options_.quiet) {
+      char size[32];
+      std::snprintf(size, sizeof size, "%.1f MB", static_cast<double>(bytes) / 1e6);
+      log_info("restored the setups carried over the views to frame " + std::to_string(spec_.frames[j].number) + " (" +
+                   size + ", " + record_->folder() + "/setups)",
+               LogKind::recovery);
+    }
+    if (j == before) return true;
+    from = j + 1;
+    break;
+  }
+  if (from >= before) return false;
+  if (!options_.quiet)
+    log_info("replaying the views of the " + std::to_string(before - from) + " frames before frame " +
+             std::to_string(spec_.frames[before].number) + ", which this run does not render: a setup carried over the "
+             "frames then holds what the whole job's would");
+  const auto replay_start = Clock::now();
+  for (size_t j = from; j < before; ++j) switch_view(spec_.frames[j], true, run_phase);
+  replay_seconds_ += std::chrono::duration<double>(Clock::now() - replay_start).count();
+  return false;
 }
 
 void FrameLoop::run(const std::function<void(wire::Phase, Value::Map)>& run_phase) {
@@ -98,16 +154,8 @@ void FrameLoop::run(const std::function<void(wire::Phase, Value::Map)>& run_phas
     const Left& f = left_[i];
     const auto start = Clock::now();
     if (i > 0) tiles_.begin_frame(f.frame.output, f.key, options_.checkpoint_every, options_.restart, options_.preview_every);
-    if (carries_views_ && f.index > holds + 1) {
-      if (!options_.quiet)
-        log_info("replaying the views of the " + std::to_string(f.index - holds - 1) + " frames before frame " +
-                 std::to_string(f.frame.number) + ", which this run does not render: a setup carried over the frames "
-                 "then holds what the whole job's would");
-      const auto replay_start = Clock::now();
-      for (size_t j = holds + 1; j < f.index; ++j) switch_view(spec_.frames[j], true, run_phase);
-      replay_seconds_ += std::chrono::duration<double>(Clock::now() - replay_start).count();
-    }
-    if (f.index != holds) switch_view(f.frame, false, run_phase);
+    const bool restored = carries_views_ && f.index > holds + 1 && catch_up(holds, f.index, run_phase);
+    if (f.index != holds && !restored) switch_view(f.frame, false, run_phase);
     holds = f.index;
     run_phase(wire::Phase::render, {});
     tiles_.finish_progress();
@@ -157,7 +205,8 @@ void FrameLoop::add_figures(RunFigures& f) const {
   }
   f.render_seconds = seconds;
   f.frames = Value::Map{{"frames", std::move(frames)}, {"skipped", static_cast<int64_t>(skipped_)},
-                        {"replay_seconds", replay_seconds_}, {"record", record_->folder()}};
+                        {"replay_seconds", replay_seconds_}, {"restore_seconds", restore_seconds_},
+                        {"setups_kept", static_cast<int64_t>(carried_.kept())}, {"record", record_->folder()}};
 }
 
 }  // namespace lf

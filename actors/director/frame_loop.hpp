@@ -16,7 +16,9 @@
 #include <string>
 #include <vector>
 
+#include "actors/director/carried_setups.hpp"
 #include "actors/director/director.hpp"
+#include "actors/director/exchange_service.hpp"
 #include "actors/director/job_record.hpp"
 #include "actors/director/report.hpp"
 #include "actors/director/tile_service.hpp"
@@ -27,7 +29,10 @@ namespace lf {
 
 class FrameLoop {
  public:
-  FrameLoop(FarmSpec& spec, TileService& tiles, const RunOptions& options);
+  // `exchange` and `out`: where a resumed job's kept setups are published for the actors that restore them.
+  FrameLoop(FarmSpec& spec, TileService& tiles, ExchangeService& exchange, Outbox& out, const RunOptions& options);
+  // The service that keeps a job's carried setups (REQUEST keep_setup), for the director to route to.
+  Service& carried_setups() { return carried_; }
 
   // With the scene's content hash known: which frames are left (a job skips those its record says are done and
   // whose files are unchanged), the first of them begun in the tile service, and its camera made the farm's
@@ -56,14 +61,22 @@ class FrameLoop {
   };
   // PHASE frame and PHASE setup: the farm takes frame `f`'s view (`replay`: to extend carried setups, no render).
   void switch_view(const FrameSpec& f, bool replay, const std::function<void(wire::Phase, Value::Map)>& run_phase);
+  // Before frame spec.frames[before] when the farm holds spec.frames[holds]'s view: the newest frame after `holds`,
+  // up to `before` itself, whose carried setups are all kept is restored (PHASE frame with restore, and setup), and
+  // the views after it replayed. True: `before`'s own view was restored (the farm holds it, set up).
+  bool catch_up(size_t holds, size_t before, const std::function<void(wire::Phase, Value::Map)>& run_phase);
   FarmSpec& spec_;
   TileService& tiles_;
+  ExchangeService& exchange_;
+  Outbox& out_;
+  CarriedSetups carried_;
+  std::vector<std::string> carrying_;  // the actors (processes) whose setups are carried over the views
   const RunOptions& options_;
   std::optional<JobRecord> record_;  // a job's (frames { }); none for a farm of one frame
   std::vector<Left> left_;
   size_t skipped_ = 0, written_ = 0;
   bool carries_views_ = false;  // an op carries its setup over the views: frames skipped are replayed
-  double replay_seconds_ = 0;
+  double replay_seconds_ = 0, restore_seconds_ = 0;
   std::vector<std::string> asked_by_carried_;  // the actors a carried setup may ask: they set up for a replayed view too
   struct FrameFigures {
     int number = 0;

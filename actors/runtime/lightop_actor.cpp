@@ -8,8 +8,10 @@
 // READY setup when it finishes; PHASE render is answered READY render at once; PHASE frame (a job's next frame)
 // takes the new camera at once and, for an op whose setup depends on it (LightOp::setup_sees_camera), holds
 // requests from then on; the PHASE setup that follows builds a new op for the view and sets it up, or, for an op
-// that carries its setup over the views (LightOp::carries_views), extends it (any other op answers at once). Two steps, so that no op's new setup asks one that has not yet taken the view. PHASE
-// finish / BYE stop it.
+// that carries its setup over the views (LightOp::carries_views), extends it (any other op answers at once); with
+// the frame's `keep` it then sends its setup to the director (REQUEST keep_setup), with `restore` it fetches the one
+// the director kept instead of extending. Two steps, so that no op's new setup asks one that has not yet taken the
+// view. PHASE finish / BYE stop it.
 // Requests that arrive before setup finished wait.
 // Requests queue in arrival order and start one per loop turn, so heartbeats and replies keep flowing. A request
 // whose op asks its inputs suspends (a coroutine) while the runtime sends those batches asynchronously; other
@@ -19,6 +21,7 @@
 #include <chrono>
 #include <deque>
 #include <map>
+#include <optional>
 
 #include "actors/codecs/shade_codec.hpp"
 #include "actors/runtime/lean_points.hpp"
@@ -223,6 +226,7 @@ class LightOpActor final : public Actor {
       return make_error(e.what());
     }
     params_ = config.params;
+    name_ = rt.name();
     // In a partitioned farm an op that traces only through the parts builds no BVH of the whole scene (unless a host
     // agent shares one anyway).
     const bool parts_trace = !config.geometry.empty() && kind_.traces_through_context;
@@ -258,7 +262,7 @@ class LightOpActor final : public Actor {
 
   void on_phase(wire::Phase phase, Runtime& rt) override {
     if (phase == wire::Phase::setup) {
-      if (renew_ || extend_) setup_asked_ = true;  // a job's next frame: once nothing runs (on_progress)
+      if (renew_ || extend_ || restore_) setup_asked_ = true;  // a job's next frame: once nothing runs (on_progress)
       else if (setups_ > 0) return rt.phase_done(wire::Phase::setup);  // a job's next frame; the op is kept
       else start_setup(rt);
       on_progress(rt);
@@ -272,8 +276,12 @@ class LightOpActor final : public Actor {
     *camera_ = Camera(view.camera, width_, height_);  // what ctx.camera points at, for the op's shade() too
     // Requests from now on (another op's new setup asking this one) wait for this op's new setup. A carried setup is
     // extended to every view, replayed ones too.
-    if (op_->setup_sees_camera() && op_->carries_views()) extend_ = true, set_up_ = false;
-    else if (op_->setup_sees_camera() && view.renew) renew_ = true, set_up_ = false;
+    if (op_->setup_sees_camera() && op_->carries_views()) {
+      (view.restore ? restore_ : extend_) = true, set_up_ = false;
+      keep_frame_ = view.keep ? std::optional(view.frame) : std::nullopt;
+    } else if (op_->setup_sees_camera() && view.renew) {
+      renew_ = true, set_up_ = false;
+    }
     rt.phase_done(wire::Phase::frame);
   }
 
@@ -308,10 +316,11 @@ class LightOpActor final : public Actor {
   void on_progress(Runtime& rt) override {
     // PHASE setup after PHASE frame: a new op for the view, once the last one has answered what it started
     // (nothing, between frames).
-    if ((renew_ || extend_) && setup_asked_ && running_.empty()) {
+    if ((renew_ || extend_ || restore_) && setup_asked_ && running_.empty()) {
       if (renew_) op_ = create_lightop(kind_, ParamTable(params_, "lightop '" + rt.name() + "'"));
-      start_setup(rt, extend_);
-      renew_ = extend_ = setup_asked_ = false;
+      if (restore_) setup_ = restore_setup(), setup_running_ = true;
+      else start_setup(rt, extend_);
+      renew_ = extend_ = restore_ = setup_asked_ = false;
     }
     if (setup_running_ && setup_.done()) {
       setup_running_ = false;
@@ -322,6 +331,8 @@ class LightOpActor final : public Actor {
         return;
       }
       set_up_ = true;
+      if (keep_frame_) keep_setup(*keep_frame_, rt);
+      keep_frame_.reset();
       rt.phase_done(wire::Phase::setup);
     }
     if (!set_up_) return;
@@ -395,6 +406,25 @@ class LightOpActor final : public Actor {
     ++(extend ? extensions_ : setups_);
   }
 
+  // A resumed job: the carried setup the director kept for this actor, in place of extending it over the views.
+  Task restore_setup() {
+    std::string state;
+    co_await exchange_->fetch("setup/" + name_, &state);
+    op_->restore_carried(state);
+  }
+
+  // Sends the carried setup, as extended to `frame`'s view, to the director for the job's record (before READY
+  // setup, on the same socket: the director has it before the frame renders). A refusal costs only the resume.
+  void keep_setup(int frame, Runtime& rt) {
+    std::string state = op_->carried_state();
+    if (state.empty()) return;
+    Value::Map body{{"frame", static_cast<int64_t>(frame)}, {"state", Bytes{std::move(state)}}};
+    rt.ask_director(wire::Op::keep_setup, std::move(body), [](Result<wire::Message> r) {
+      if (!r) log_warn("the director did not keep this op's setup (a resumed job will replay the views instead): " +
+                       r.error().message);
+    });
+  }
+
   struct Job {
     std::string peer;
     uint64_t id = 0;
@@ -424,6 +454,9 @@ class LightOpActor final : public Actor {
   bool set_up_ = false;  // setup finished: requests may start
   bool renew_ = false;   // PHASE frame: a new op is due for the new view, set up at the next PHASE setup
   bool extend_ = false;  // PHASE frame: the op carries its setup to the new view, at the next PHASE setup
+  bool restore_ = false;  // PHASE frame: the op takes its carried setup from the director, at the next PHASE setup
+  std::optional<int> keep_frame_;  // PHASE frame: the carried setup goes to the director once extended to this frame
+  std::string name_;
   bool setup_asked_ = false;
   size_t frames_ = 0;    // PHASE frames taken (frames after the first)
   size_t setups_ = 0, extensions_ = 0;

@@ -252,7 +252,8 @@ void Runtime::handle_control(wire::Message& m, Actor& actor) {
         // A replayed view names the actors that must set themselves up for it (docs/PROTOCOL.md).
         const auto& renew = frame->renew;
         actor.on_frame(FrameView{frame->frame, frame->camera,
-                                 !renew || std::find(renew->begin(), renew->end(), args_.name) != renew->end()},
+                                 !renew || std::find(renew->begin(), renew->end(), args_.name) != renew->end(),
+                                 frame->keep, frame->restore},
                        *this);
       } else {
         actor.on_phase(*phase, *this);

@@ -70,6 +70,11 @@ struct FrameView {
   // setup carried over the frames asks: it need not set itself up for this view (the next rendered frame's PHASE
   // frame says true).
   bool renew = true;
+  // A job with a record: an op that carries its setup over the views keeps it with the director once extended
+  // (REQUEST keep_setup), or, `restore`, takes the one the director publishes as "setup/<actor>" instead of
+  // extending (a resumed job).
+  bool keep = false;
+  bool restore = false;
 };
 
 class Actor {

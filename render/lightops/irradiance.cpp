@@ -15,7 +15,9 @@
 // its own hemisphere samples and adds no record, so no point's value depends on which points came first.
 // Output: Kd / pi * E (the diffuse part); nothing on mirrors and glass.
 #include <algorithm>
+#include <cmath>
 
+#include "render/byte_io.hpp"
 #include "render/shading/bsdf.hpp"
 #include "render/scene/surface.hpp"
 #include "render/caches/irradiance_cache.hpp"
@@ -25,6 +27,10 @@
 
 namespace lf {
 namespace {
+
+constexpr std::string_view kCarriedTag = "LFIRRCACHE1";
+
+bool finite(Vec3 v) { return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z); }
 
 class Irradiance final : public LightOp {
  public:
@@ -71,6 +77,32 @@ class Irradiance final : public LightOp {
   Task extend_to_view(SceneContext ctx, Inputs& inputs) override {
     ctx_ = ctx;
     co_await place(ctx, camera_candidates(ctx), inputs);
+  }
+  // What a job's record keeps of the carried cache: its records in insertion order (lookups visit them in that order,
+  // so inserting them again gives the same answers), after a tag and the record's size.
+  std::string carried_state() const override {
+    std::string state(kCarriedTag);
+    bytes::put(state, static_cast<uint32_t>(sizeof(IrradianceRecord)));
+    return state + IrradianceCache::serialize(cache_->records());
+  }
+  void restore_carried(std::string_view state) override {
+    bytes::Reader in(state);
+    std::string tag;
+    uint32_t record_size = 0;
+    std::vector<IrradianceRecord> records;
+    if (!in.str(tag, static_cast<uint32_t>(kCarriedTag.size())) || tag != kCarriedTag || !in.u32(record_size) ||
+        record_size != sizeof(IrradianceRecord) ||
+        !IrradianceCache::deserialize(std::string(state.substr(kCarriedTag.size() + 4)), records))
+      throw LightOpError(
+          "irradiance: the kept cache is not one this build reads (remove the job folder's setups/ to replay the views)");
+    // Records are placed where the octree's cells are computed from them: nothing a cache could not have made.
+    for (const IrradianceRecord& r : records)
+      if (!finite(r.position) || !finite(r.normal) || !(r.harmonic_distance > 0) || !std::isfinite(r.harmonic_distance))
+        throw LightOpError("irradiance: a kept cache with a record no cache makes");
+    auto cache = std::make_unique<IrradianceCache>(a_, extent_);
+    for (const IrradianceRecord& r : records) cache->insert(r);
+    cache->freeze();
+    cache_ = std::move(cache);
   }
 
   // records: the cache's size; lookups: diffuse points asked for; served_a/_2a/_4a: answered by records valid under

@@ -1,6 +1,8 @@
 // irradiance caching against closed forms and against the path tracer.
 #include <gtest/gtest.h>
 
+#include <cstring>
+#include <limits>
 
 #include "render/shading/bsdf.hpp"
 #include "render/tracing/camera.hpp"
@@ -447,6 +449,69 @@ TEST(Irradiance, ReplicasBuildTheSingleCacheAndAnswerLikeIt) {
     run_to_completion(rep->shade(pts, out, to_direct));
     EXPECT_TRUE(out == one) << "a replica's cache answers differently from the single cache";
   }
+}
+
+// A job's record keeps a carried cache as bytes (carried_state) so that a resumed job restores it instead of
+// replaying views: an op set up for the first view and given those bytes answers bit for bit as the op that was
+// extended over the views. Bytes that are no cache are refused with an error, never half taken.
+TEST(Irradiance, ARestoredCarriedCacheAnswersAsTheExtendedOne) {
+  auto scene = Scene::builtin("room");
+  RayTracer tracer(*scene);
+  const int w = 64, h = 48;
+  Camera first(CameraSpec{{3.0, 1.55, 0.25}, {2.7, 0.9, 4.0}, {0, 1, 0}, 62}, w, h);
+  Camera second(CameraSpec{{1.0, 1.2, 3.5}, {4.0, 0.8, 1.0}, {0, 1, 0}, 62}, w, h);
+  SceneContext ctx{&*scene, &tracer};
+  ctx.width = w, ctx.height = h, ctx.camera = &first;
+  LocalInputs none;
+  auto direct = make("direct");
+  run_to_completion(direct->setup(ctx, none));
+  LocalInputs to_direct({{direct.get(), &none}});
+  const Value::Map params{{"own_rays", 4}};
+
+  auto carried = make("irradiance", params);
+  ASSERT_TRUE(carried->carries_views());
+  run_to_completion(carried->setup(ctx, to_direct));
+  const int64_t records_first = carried->stats().find("records")->as_int();
+  ctx.camera = &second;
+  run_to_completion(carried->extend_to_view(ctx, to_direct));
+  ASSERT_GT(carried->stats().find("records")->as_int(), records_first);
+  const std::string state = carried->carried_state();
+
+  ctx.camera = &first;
+  auto restored = make("irradiance", params);
+  run_to_completion(restored->setup(ctx, to_direct));
+  restored->restore_carried(state);
+  EXPECT_EQ(restored->stats().find("records")->as_int(), carried->stats().find("records")->as_int());
+  EXPECT_EQ(restored->carried_state(), state);
+
+  ImageSpec image;
+  image.width = w, image.height = h, image.spp = 1;
+  TileWork work;
+  trace_tile(*scene, tracer, second, image, TileRect{0, 0, w, h}, work);
+  std::vector<RGB> a(work.points.size()), b(work.points.size());
+  ctx.camera = &second;
+  run_to_completion(carried->shade(work.points, a, to_direct));
+  run_to_completion(restored->shade(work.points, b, to_direct));
+  EXPECT_TRUE(a == b) << "the restored cache answers differently from the one extended over the views";
+
+  auto refused = [&](std::string bytes) {
+    try {
+      restored->restore_carried(bytes);
+    } catch (const LightOpError& e) {
+      return std::string(e.what());
+    }
+    return std::string("taken");
+  };
+  EXPECT_NE(refused("").find("not one this build reads"), std::string::npos);
+  EXPECT_NE(refused(state.substr(0, state.size() - 1)).find("not one this build reads"), std::string::npos);
+  std::string nan = state;
+  const float q = std::numeric_limits<float>::quiet_NaN();
+  std::memcpy(nan.data() + 15, &q, sizeof q);  // the first record's position.x (after the 11-byte tag and its size)
+  EXPECT_NE(refused(nan).find("a record no cache makes"), std::string::npos);
+  // Refusals leave the cache as it was.
+  std::vector<RGB> c(work.points.size());
+  run_to_completion(restored->shade(work.points, c, to_direct));
+  EXPECT_TRUE(a == c);
 }
 
 }  // namespace

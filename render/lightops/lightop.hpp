@@ -18,6 +18,7 @@
 #include <span>
 #include <stdexcept>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "core/params.hpp"
@@ -250,6 +251,17 @@ class LightOp {
   virtual Task extend_to_view(SceneContext ctx, Inputs& inputs) {
     (void)ctx, (void)inputs;
     co_return;
+  }
+  // A carried setup as bytes, kept in a job's record after each view, so that a run resuming the job restores it
+  // (restore_carried) instead of replaying the views before its first frame. Empty: nothing to keep (the farm
+  // then replays).
+  virtual std::string carried_state() const { return {}; }
+  // Makes this op hold what carried_state() gave, on an op set up (setup()) with the same parameters and scene:
+  // its answers are then bit for bit those of the op that gave the bytes. Throws LightOpError on bytes it cannot
+  // use.
+  virtual void restore_carried(std::string_view state) {
+    (void)state;
+    throw LightOpError("this op keeps no carried setup");
   }
   // Writes the radiance leaving each point towards its wo into radiance[i] (radiance.size() == points.size()).
   // Emission of the point itself is not included: the renderer adds what the camera sees directly.
