@@ -124,6 +124,10 @@ std::optional<std::string> CarriedSetups::find(const std::string& actor, int num
   return state;
 }
 
+void CarriedSetups::restored(const std::string& actor, int number, const std::string& state) {
+  last_[actor] = Last{number, state.size(), content_hash(state)};
+}
+
 void CarriedSetups::clear(const std::string& folder) {
   std::error_code ec;
   fs::remove_all(folder + "/setups", ec);

@@ -34,6 +34,8 @@ class CarriedSetups final : public Service {
 
   // The state kept for `actor` at frame `number` if there is a whole one with the frame's key.
   std::optional<std::string> find(const std::string& actor, int number) const;
+  // `actor`'s setup was restored from `state`, kept for frame `number`: what this run keeps next grows from it.
+  void restored(const std::string& actor, int number, const std::string& state);
   // --restart: every kept setup is forgotten.
   static void clear(const std::string& folder);
   size_t kept() const { return kept_; }

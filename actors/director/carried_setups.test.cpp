@@ -79,6 +79,13 @@ TEST_F(CarriedSetupsTest, AGrowingSetupIsKeptAsWhatEachFrameAdded) {
   CarriedSetups later;
   later.begin(folder_.string(), {{1, "k1"}, {2, "k2"}, {3, "k3"}, {4, "k4"}});
   EXPECT_EQ(later.find("a", 3), three);
+  // A run that restored frame 3 keeps frame 4's as what it adds to it.
+  later.restored("a", 3, three);
+  RecordingOutbox later_out;
+  ASSERT_TRUE(later.on_request("a", Op::keep_setup, 6, keep(4, three + "d"), later_out).ok());
+  EXPECT_EQ(later.find("a", 4), three + "d");
+  EXPECT_LT(fs::file_size(folder_ / "setups" / "a.4.setup"), 400u);
+  ASSERT_TRUE(later.on_request("a", Op::keep_setup, 7, keep(4, other), later_out).ok());
   // A lost base: what grew from it is lost too, the rest is not.
   fs::remove(folder_ / "setups" / "a.1.setup");
   EXPECT_FALSE(later.find("a", 2));

@@ -115,6 +115,7 @@ bool FrameLoop::catch_up(size_t holds, size_t before, const std::function<void(w
     size_t bytes = 0;
     for (size_t a = 0; a < carrying_.size(); ++a) {
       bytes += states[a].size();
+      carried_.restored(carrying_[a], spec_.frames[j].number, states[a]);
       exchange_.publish("setup/" + carrying_[a], std::move(states[a]), out_);
     }
     // The frame about to render restored: every other op sets up for its view as usual. An earlier one: nothing
