@@ -7,6 +7,7 @@
 #include <set>
 
 #include "core/params.hpp"
+#include "render/scene/scene.hpp"
 
 namespace lf {
 
@@ -191,6 +192,20 @@ std::vector<FrameSpec> expand_frames(const JobSpec& job, const CameraSpec& base,
     throw ParamError("image: output '" + output + "' has no #### where the frame number goes, so every frame of the "
                      "job's " + std::to_string(numbers.size()) + " would write the same file (e.g. \"walk.####.png\")");
   const std::vector<CameraKey> keys = read_camera_keys(job.camera_keys, base);
+  // A camera the scene file animates: every frame's view at its time in the file.
+  std::vector<CameraSpec> file_views;
+  if (job.file_camera) {
+    const JobSpec::FileCameraPath& path = *job.file_camera;
+    if (!keys.empty() || !job.camera_of_frame.empty())
+      throw ParamError("camera: the scene file animates camera '" + path.name + "', and " +
+                       (keys.empty() ? "frames { camera }" : "camera { keys }") +
+                       " moves it too: give the camera animation = false to follow " + (keys.empty() ? "the function" : "the keys"));
+    std::vector<double> seconds;
+    for (int n : numbers) seconds.push_back(n / path.fps);
+    auto views = Scene::gltf_camera_views(path.file, path.index, seconds);
+    if (!views) throw ParamError("camera: " + views.error().message);
+    file_views = std::move(*views);
+  }
   std::vector<FrameSpec> frames;
   for (int n : numbers) {
     FrameSpec f;
@@ -202,6 +217,10 @@ std::vector<FrameSpec> expand_frames(const JobSpec& job, const CameraSpec& base,
     } else if (!keys.empty()) {
       f.camera = interpolate_camera(keys, n);
       check_camera(f.camera, "camera: keys at frame " + std::to_string(n));
+    } else if (!file_views.empty()) {
+      f.camera = base;
+      const CameraSpec& v = file_views[frames.size()];
+      f.camera.eye = v.eye, f.camera.at = v.at, f.camera.up = v.up;
     } else {
       f.camera = base;
     }

@@ -4,6 +4,7 @@
 // image goes (image { output = "walk.####.png" }). Data only: the script fills JobSpec, expand_frames makes the
 // list the director renders (actors/director/frame_loop.hpp).
 #include <map>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -32,6 +33,15 @@ struct JobSpec {
   std::vector<Value> camera_keys;        // camera { keys }, each key's table as written
   SourceLoc keys_loc;
   std::map<int, Value> camera_of_frame;  // frames { camera = function(frame) }: each frame's table as returned
+  // camera { gltf = ... } naming a camera the scene file animates: frame n's view is the file's at n / fps seconds
+  // (Blender exports its frame f at f / fps), its eye, at and up over camera { }'s other keys.
+  struct FileCameraPath {
+    std::string file;
+    size_t index = 0;  // in the file's catalogue of cameras
+    std::string name;
+    double fps = 24;
+  };
+  std::optional<FileCameraPath> file_camera;
   SourceLoc loc;
   // The job's frame numbers, first to last by step.
   std::vector<int> numbers() const;

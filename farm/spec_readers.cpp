@@ -82,8 +82,12 @@ HostSpec read_host(const std::string& name, const ParamTable& p, const fs::path&
   return h;
 }
 
-CameraSpec read_camera(const ParamTable& p, const SceneSpec& scene) {
-  if (!p.has("gltf")) return CameraSpec::read(p);
+CameraSpec read_camera(const ParamTable& p, const SceneSpec& scene, JobSpec* job) {
+  if (!p.has("gltf")) {
+    for (const char* key : {"fps", "animation"})
+      if (p.has(key)) throw ParamError(std::string("camera: ") + key + " is for a camera the scene file animates (gltf = ...)");
+    return CameraSpec::read(p);
+  }
   if (scene.file.empty() || !Scene::is_gltf_path(scene.file))
     throw ParamError("camera: gltf names a camera of the scene file, so it needs scene { file = \"x.gltf\" or \"x.glb\" } "
                      "before it");
@@ -107,6 +111,10 @@ CameraSpec read_camera(const ParamTable& p, const SceneSpec& scene) {
                        std::to_string(index) + " (its cameras: " + known + ")");
     found = &cameras[static_cast<size_t>(index)];
   }
+  const double fps = p.get_float("fps", 24, 1e-3, 1e6);
+  const bool follow = p.get_bool("animation", true);
+  if (job && found->animated && follow)
+    job->file_camera = JobSpec::FileCameraPath{scene.file, static_cast<size_t>(found - cameras.data()), found->name, fps};
   return CameraSpec::read(p, found->view);
 }
 

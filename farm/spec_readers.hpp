@@ -27,7 +27,8 @@ HostSpec read_host(const std::string& name, const ParamTable& p, const std::file
 // ({name, ...}), checked against `scene_materials` and by the scene's own rules (kd + ks + mirror at most 1).
 // camera { gltf = "Name" | index, ... }: a glTF scene file's perspective camera (by its node's name, or its place
 // among the file's cameras from 0), which the table's other keys then change; without `gltf`, CameraSpec::read.
-CameraSpec read_camera(const ParamTable& p, const SceneSpec& scene);
+// `job`: where a camera the file animates is noted (JobSpec::file_camera), unless the table says animation = false.
+CameraSpec read_camera(const ParamTable& p, const SceneSpec& scene, JobSpec* job = nullptr);
 
 Value read_material_change(const std::string& name, const ParamTable& p, const std::vector<std::string>& scene_materials);
 

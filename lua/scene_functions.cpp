@@ -33,7 +33,7 @@ int declare_once(lua_State* L, bool& declared, const char* name, Spec& into, Rea
   return 0;
 }
 
-// camera { eye = {x,y,z}, at = {x,y,z}, up = {0,1,0}, fov = 39.3 } | camera { gltf = "Camera", ... }
+// camera { eye = {x,y,z}, at = {x,y,z}, up = {0,1,0}, fov = 39.3 } | camera { gltf = "Camera", fps = 24, ... }
 // | camera { keys = { {frame = 1, eye = ..., at = ...}, ... }, fov = ... }: keyframes over the table's other keys
 // (farm/job.hpp; read when the script ends, with frames { }).
 int l_camera(lua_State* L) {
@@ -51,7 +51,7 @@ int l_camera(lua_State* L) {
   }
   lua_pop(L, 1);
   return declare_once(L, b.have_camera, "camera", b.spec.camera,
-                      [&b](const ParamTable& p) { return read_camera(p, b.spec.scene); });
+                      [&b](const ParamTable& p) { return read_camera(p, b.spec.scene, &b.spec.job); });
 }
 
 // image { width = 512, height = 512, spp = 16, shade_spp = 16, adaptive_spp = 64, adaptive_threshold = 0.05,

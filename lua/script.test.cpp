@@ -471,6 +471,34 @@ TEST_F(ScriptTest, TheSuggestedNetworksAreComplete) {
 }
 
 // A job: frames { } with a camera function or camera { keys }, output patterns, --frames, and their mistakes.
+// A job over a scene file whose camera is animated: frame n is the file's view at n / fps seconds (Blender's
+// export: frame f at f / fps), over camera { }'s other keys; animation = false holds the camera at rest; a camera
+// function or keys that would move it too must say which.
+TEST_F(ScriptTest, AJobFollowsTheSceneFilesCameraAnimation) {
+  const std::string file = std::string(LIGHTFARM_SOURCE_DIR) + "/render/scene/testdata/camera_walk.gltf";
+  const std::string head = "scene { file = \"" + file + "\" }\nimage { output = \"t.####.png\" }\n";
+  const std::string net = "local direct = lightop \"direct\" { }\nrenderers { count = 1, lighting = direct }\n";
+  auto r = evaluate_script(write("farm.lua", head + "camera { gltf = \"Camera\", fov = 30 }\nframes { first = 1, last = 24 }\n" + net));
+  ASSERT_TRUE(r.ok()) << r.error().message;
+  ASSERT_EQ(r->frames.size(), 24u);
+  EXPECT_NEAR(r->frames[0].camera.eye[1], 2, 1e-4);
+  EXPECT_NEAR(r->frames[11].camera.eye[0], 3.739295, 1e-4) << "frame 12 is Blender's frame 12";
+  EXPECT_NEAR(r->frames[11].camera.eye[2], 8.130353, 1e-4);
+  EXPECT_NEAR(r->frames[23].camera.eye[0], 8, 1e-4);
+  EXPECT_EQ(r->frames[11].camera.fov, 30) << "the camera table's other keys stand";
+  r = evaluate_script(write("farm.lua", head + "camera { gltf = \"Camera\", fps = 12 }\nframes { first = 1, last = 12 }\n" + net));
+  ASSERT_TRUE(r.ok()) << r.error().message;
+  EXPECT_NEAR(r->frames[11].camera.eye[0], 8, 1e-4) << "at 12 fps frame 12 is the animation's end (1 s)";
+  r = evaluate_script(write("farm.lua", head + "camera { gltf = \"Camera\", animation = false }\nframes { first = 1, last = 3 }\n" + net));
+  ASSERT_TRUE(r.ok()) << r.error().message;
+  EXPECT_EQ(r->frames[2].camera.eye, r->camera.eye) << "held at rest";
+  EXPECT_EQ(error_of(head + "camera { gltf = \"Camera\" }\nframes { first = 1, last = 3, camera = function(f) return { fov = f } end }\n" + net),
+            "farm.lua:4: camera: the scene file animates camera 'Camera', and frames { camera } moves it too: give the "
+            "camera animation = false to follow the function");
+  EXPECT_EQ(error_of(head + "camera { fps = 24 }\n" + net),
+            "farm.lua:3: camera: fps is for a camera the scene file animates (gltf = ...)");
+}
+
 TEST_F(ScriptTest, FramesMakeAJob) {
   const std::string net = "local direct = lightop \"direct\" { }\nrenderers { count = 1, lighting = direct }\n";
   const std::string head = "scene { builtin = \"cornell\" }\nimage { output = \"t.####.png\" }\n";

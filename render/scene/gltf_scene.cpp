@@ -6,6 +6,7 @@
 #include <tiny_gltf.h>
 
 #include <algorithm>
+#include <array>
 #include <cctype>
 #include <cmath>
 #include <cstring>
@@ -66,26 +67,38 @@ struct NormalTransform {
   }
 };
 
+// A node's translation, rotation (a unit quaternion x, y, z, w) and scale.
+struct Trs {
+  std::array<double, 4> t{0, 0, 0, 0}, r{0, 0, 0, 1}, s{1, 1, 1, 0};
+  Mat4 matrix() const {
+    Mat4 translate, rotate, scale;
+    for (int i = 0; i < 3; ++i) translate.m[12 + i] = t[static_cast<size_t>(i)];
+    const double x = r[0], y = r[1], z = r[2], w = r[3];
+    const double m[9] = {1 - 2 * (y * y + z * z), 2 * (x * y + z * w),     2 * (x * z - y * w),
+                         2 * (x * y - z * w),     1 - 2 * (x * x + z * z), 2 * (y * z + x * w),
+                         2 * (x * z + y * w),     2 * (y * z - x * w),     1 - 2 * (x * x + y * y)};
+    for (int c = 0; c < 3; ++c)
+      for (int row = 0; row < 3; ++row) rotate.m[c * 4 + row] = m[c * 3 + row];
+    for (int i = 0; i < 3; ++i) scale.m[i * 5] = s[static_cast<size_t>(i)];
+    return translate * rotate * scale;
+  }
+};
+
+Trs trs_of(const tinygltf::Node& node) {
+  Trs v;
+  if (node.translation.size() == 3) std::copy(node.translation.begin(), node.translation.end(), v.t.begin());
+  if (node.rotation.size() == 4) std::copy(node.rotation.begin(), node.rotation.end(), v.r.begin());
+  if (node.scale.size() == 3) std::copy(node.scale.begin(), node.scale.end(), v.s.begin());
+  return v;
+}
+
 Mat4 local_transform(const tinygltf::Node& node) {
   Mat4 t;
   if (node.matrix.size() == 16) {
     std::copy(node.matrix.begin(), node.matrix.end(), t.m);
     return t;
   }
-  Mat4 translate, rotate, scale;
-  if (node.translation.size() == 3)
-    for (int i = 0; i < 3; ++i) translate.m[12 + i] = node.translation[static_cast<size_t>(i)];
-  if (node.rotation.size() == 4) {
-    const double x = node.rotation[0], y = node.rotation[1], z = node.rotation[2], w = node.rotation[3];
-    const double r[9] = {1 - 2 * (y * y + z * z), 2 * (x * y + z * w),     2 * (x * z - y * w),
-                         2 * (x * y - z * w),     1 - 2 * (x * x + z * z), 2 * (y * z + x * w),
-                         2 * (x * z + y * w),     2 * (y * z - x * w),     1 - 2 * (x * x + y * y)};
-    for (int c = 0; c < 3; ++c)
-      for (int row = 0; row < 3; ++row) rotate.m[c * 4 + row] = r[c * 3 + row];
-  }
-  if (node.scale.size() == 3)
-    for (int i = 0; i < 3; ++i) scale.m[i * 5] = node.scale[static_cast<size_t>(i)];
-  return translate * rotate * scale;
+  return trs_of(node).matrix();
 }
 
 // An accessor's elements as floats (`width` components each), checked against its buffer: an accessor that reaches
@@ -353,6 +366,161 @@ std::optional<Texture> coverage_texture(const tinygltf::Image& image, float fact
   });
 }
 
+// The view of a perspective camera at a node whose transform to the world is `world`: a glTF camera looks down its
+// node's -z with +y up. None where the transform flattens that (a zero scale).
+std::optional<CameraSpec> view_from(const Mat4& world, const tinygltf::Camera& cam) {
+  const Vec3 eye = world.point({0, 0, 0}), ahead = world.vector({0, 0, -1}), up = world.vector({0, 1, 0});
+  if (!(length(ahead) > 0) || !(length(up) > 0) || !(length(cross(ahead, up)) > 0)) return std::nullopt;
+  const Vec3 at = eye + normalize(ahead), u = normalize(up);
+  CameraSpec view;
+  view.eye = {eye.x, eye.y, eye.z};
+  view.at = {at.x, at.y, at.z};
+  view.up = {u.x, u.y, u.z};
+  view.fov = std::clamp(cam.perspective.yfov * 180.0 / kPi, 0.1, 179.0);
+  return view;
+}
+
+// A perspective camera of the default scene: the nodes from the scene's root down to its node, and its view at rest.
+struct CameraNode {
+  std::string name;
+  std::vector<int> chain;
+  const tinygltf::Camera* camera = nullptr;
+  CameraSpec view;
+};
+
+std::vector<CameraNode> camera_nodes(const tinygltf::Model& model) {
+  std::vector<CameraNode> out;
+  std::vector<int> chain;
+  std::function<bool(int, const Mat4&)> walk = [&](int index, const Mat4& parent) {
+    if (index < 0 || static_cast<size_t>(index) >= model.nodes.size() || chain.size() > 64) return false;
+    const tinygltf::Node& node = model.nodes[static_cast<size_t>(index)];
+    const Mat4 world = parent * local_transform(node);
+    chain.push_back(index);
+    if (node.camera >= 0 && static_cast<size_t>(node.camera) < model.cameras.size()) {
+      const tinygltf::Camera& cam = model.cameras[static_cast<size_t>(node.camera)];
+      if (auto view = view_from(world, cam); view && cam.type == "perspective" && cam.perspective.yfov > 0)
+        out.push_back({!node.name.empty() ? node.name : !cam.name.empty() ? cam.name : "camera" + std::to_string(out.size()),
+                       chain, &cam, *view});
+    }
+    for (int child : node.children)
+      if (!walk(child, world)) return false;
+    chain.pop_back();
+    return true;
+  };
+  const int scene_index = model.defaultScene >= 0 ? model.defaultScene : 0;
+  if (static_cast<size_t>(scene_index) < model.scenes.size())
+    for (int root : model.scenes[static_cast<size_t>(scene_index)].nodes)
+      if (!walk(root, Mat4{})) break;
+  return out;
+}
+
+// One animation channel on a node's translation (path 0), rotation (1) or scale (2): its key times, ascending, and
+// values, 3 or 4 a key (CUBICSPLINE: in-tangent, value, out-tangent a key).
+struct Channel {
+  int node = 0, path = 0;
+  enum class Interpolation { step, linear, cubic } interpolation = Interpolation::linear;
+  std::vector<float> times, values;
+
+  std::array<double, 4> at(double t) const {
+    const size_t width = path == 1 ? 4 : 3, per_key = interpolation == Interpolation::cubic ? 3 : 1;
+    auto value = [&](size_t key, size_t part) {  // part: 0 in-tangent, 1 value, 2 out-tangent (cubic); 0 otherwise
+      std::array<double, 4> v{0, 0, 0, 0};
+      for (size_t c = 0; c < width; ++c) v[c] = values[(key * per_key + part) * width + c];
+      return v;
+    };
+    const size_t mid = per_key == 3 ? 1 : 0;
+    const size_t n = times.size();
+    if (n == 1 || t <= times.front()) return finish(value(0, mid));
+    if (t >= times.back()) return finish(value(n - 1, mid));
+    const size_t k = static_cast<size_t>(std::upper_bound(times.begin(), times.end(), static_cast<float>(t)) - times.begin()) - 1;
+    const double dt = static_cast<double>(times[k + 1]) - times[k], u = dt > 0 ? (t - times[k]) / dt : 0;
+    std::array<double, 4> a = value(k, mid), b = value(k + 1, mid), r{0, 0, 0, 0};
+    if (interpolation == Interpolation::step) return finish(a);
+    if (interpolation == Interpolation::cubic) {
+      const std::array<double, 4> out_a = value(k, 2), in_b = value(k + 1, 0);
+      const double u2 = u * u, u3 = u2 * u;
+      for (size_t c = 0; c < width; ++c)
+        r[c] = (2 * u3 - 3 * u2 + 1) * a[c] + (u3 - 2 * u2 + u) * dt * out_a[c] + (-2 * u3 + 3 * u2) * b[c] + (u3 - u2) * dt * in_b[c];
+      return finish(r);
+    }
+    if (path != 1) {
+      for (size_t c = 0; c < 3; ++c) r[c] = a[c] + u * (b[c] - a[c]);
+      return r;
+    }
+    // Rotations: spherical, the shorter way round.
+    double dot = a[0] * b[0] + a[1] * b[1] + a[2] * b[2] + a[3] * b[3];
+    if (dot < 0) {
+      for (double& c : b) c = -c;
+      dot = -dot;
+    }
+    double wa = 1 - u, wb = u;
+    if (dot < 0.9995) {
+      const double angle = std::acos(std::min(dot, 1.0));
+      wa = std::sin((1 - u) * angle) / std::sin(angle), wb = std::sin(u * angle) / std::sin(angle);
+    }
+    for (size_t c = 0; c < 4; ++c) r[c] = wa * a[c] + wb * b[c];
+    return finish(r);
+  }
+
+ private:
+  std::array<double, 4> finish(std::array<double, 4> v) const {
+    if (path != 1) return v;
+    const double norm = std::sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2] + v[3] * v[3]);
+    if (norm > 0)
+      for (double& c : v) c /= norm;
+    else
+      v = {0, 0, 0, 1};
+    return v;
+  }
+};
+
+// Every channel of every animation that moves one of `chain`'s nodes (their translation, rotation or scale; morph
+// weights move no camera). An error names a channel that cannot be played: a sampler or accessor that does not
+// exist or reaches past its buffer, key times that are not ascending, values that do not match them, a node given
+// by a matrix (glTF animates only nodes given by translation, rotation and scale).
+Result<std::vector<Channel>> channels_moving(const tinygltf::Model& model, const std::vector<int>& chain, const std::string& path) {
+  std::vector<Channel> out;
+  const AccessorReader read(model, "scene file '" + path + "'");
+  for (size_t a = 0; a < model.animations.size(); ++a) {
+    const tinygltf::Animation& anim = model.animations[a];
+    for (size_t c = 0; c < anim.channels.size(); ++c) {
+      const tinygltf::AnimationChannel& ch = anim.channels[c];
+      if (std::find(chain.begin(), chain.end(), ch.target_node) == chain.end()) continue;
+      const int which = ch.target_path == "translation" ? 0 : ch.target_path == "rotation" ? 1 : ch.target_path == "scale" ? 2 : -1;
+      if (which < 0) continue;
+      const std::string what = "animation " + std::to_string(a) + "'s channel " + std::to_string(c);
+      if (model.nodes[static_cast<size_t>(ch.target_node)].matrix.size() == 16)
+        return make_error("scene file '" + path + "': " + what + " animates a node given by a matrix");
+      if (ch.sampler < 0 || static_cast<size_t>(ch.sampler) >= anim.samplers.size())
+        return make_error("scene file '" + path + "': " + what + " names a sampler that does not exist");
+      const tinygltf::AnimationSampler& sampler = anim.samplers[static_cast<size_t>(ch.sampler)];
+      Channel out_ch;
+      out_ch.node = ch.target_node, out_ch.path = which;
+      out_ch.interpolation = sampler.interpolation == "STEP"          ? Channel::Interpolation::step
+                             : sampler.interpolation == "CUBICSPLINE" ? Channel::Interpolation::cubic
+                                                                      : Channel::Interpolation::linear;
+      auto times = read.floats(sampler.input, 1, what + "'s key times");
+      if (!times) return times.error();
+      const int width = which == 1 ? 4 : 3;
+      auto values = read.floats(sampler.output, width, what + "'s values");
+      if (!values) return values.error();
+      const size_t per_key = out_ch.interpolation == Channel::Interpolation::cubic ? 3 : 1;
+      bool ascending = !times->empty();
+      for (size_t k = 0; ascending && k < times->size(); ++k)
+        ascending = std::isfinite((*times)[k]) && (k == 0 || (*times)[k] > (*times)[k - 1]);
+      if (!ascending) return make_error("scene file '" + path + "': " + what + "'s key times are not ascending");
+      if (values->size() != times->size() * per_key * static_cast<size_t>(width))
+        return make_error("scene file '" + path + "': " + what + " has " + std::to_string(values->size() / static_cast<size_t>(width)) +
+                          " values for " + std::to_string(times->size()) + " keys");
+      for (float v : *values)
+        if (!std::isfinite(v)) return make_error("scene file '" + path + "': " + what + " has a value that is no number");
+      out_ch.times = std::move(*times), out_ch.values = std::move(*values);
+      out.push_back(std::move(out_ch));
+    }
+  }
+  return out;
+}
+
 }  // namespace
 
 bool Scene::is_gltf_path(const std::string& path) {
@@ -365,27 +533,46 @@ Result<ObjCatalogue> Scene::catalogue_gltf(const std::string& path) {
   auto model = read_model(path, out.warnings, nullptr, /*images=*/false);
   if (!model) return model.error();
   out.material_names = material_names(*model);
-  // The default scene's perspective cameras: a glTF camera looks down its node's -z with +y up. A broken node
-  // tree ends the list where it breaks (loading the scene says what is wrong).
-  (void)for_each_node(*model, path, [&](const tinygltf::Node& node, const Mat4& world) -> Status {
-    if (node.camera >= 0 && static_cast<size_t>(node.camera) < model->cameras.size()) {
-      const tinygltf::Camera& cam = model->cameras[static_cast<size_t>(node.camera)];
-      const Vec3 eye = world.point({0, 0, 0}), ahead = world.vector({0, 0, -1}), up = world.vector({0, 1, 0});
-      if (cam.type == "perspective" && length(ahead) > 0 && length(up) > 0 && cam.perspective.yfov > 0) {
-        const Vec3 at = eye + normalize(ahead);
-        ObjCatalogue::FileCamera c;
-        c.name = !node.name.empty() ? node.name : !cam.name.empty() ? cam.name : "camera" + std::to_string(out.cameras.size());
-        c.view.eye = {eye.x, eye.y, eye.z};
-        c.view.at = {at.x, at.y, at.z};
-        const Vec3 u = normalize(up);
-        c.view.up = {u.x, u.y, u.z};
-        c.view.fov = std::clamp(cam.perspective.yfov * 180.0 / kPi, 0.1, 179.0);
-        out.cameras.push_back(std::move(c));
-      }
+  // A broken node tree ends the list where it breaks (loading the scene says what is wrong); broken animations
+  // leave the cameras still (asking for their views says what is wrong).
+  for (const CameraNode& c : camera_nodes(*model)) {
+    ObjCatalogue::FileCamera fc{c.name, c.view};
+    if (auto channels = channels_moving(*model, c.chain, path); channels && !channels->empty()) {
+      fc.animated = true;
+      for (const Channel& ch : *channels) fc.animation_seconds = std::max(fc.animation_seconds, static_cast<double>(ch.times.back()));
     }
-    return Ok{};
-  });
+    out.cameras.push_back(std::move(fc));
+  }
   return out;
+}
+
+Result<std::vector<CameraSpec>> Scene::gltf_camera_views(const std::string& path, size_t index,
+                                                         const std::vector<double>& seconds) {
+  std::vector<std::string> warnings;
+  auto model = read_model(path, warnings, nullptr, /*images=*/false);
+  if (!model) return model.error();
+  const std::vector<CameraNode> cameras = camera_nodes(*model);
+  if (index >= cameras.size()) return make_error("scene file '" + path + "' has no camera " + std::to_string(index));
+  const CameraNode& camera = cameras[index];
+  auto channels = channels_moving(*model, camera.chain, path);
+  if (!channels) return channels.error();
+  std::vector<CameraSpec> views;
+  for (double t : seconds) {
+    Mat4 world;
+    for (int n : camera.chain) {
+      const tinygltf::Node& node = model->nodes[static_cast<size_t>(n)];
+      Trs local = trs_of(node);
+      bool moved = false;
+      for (const Channel& ch : *channels)
+        if (ch.node == n) (ch.path == 0 ? local.t : ch.path == 1 ? local.r : local.s) = ch.at(t), moved = true;
+      world = world * (moved ? local.matrix() : local_transform(node));
+    }
+    auto view = view_from(world, *camera.camera);
+    if (!view) return make_error("scene file '" + path + "': camera '" + camera.name + "' at " + std::to_string(t) +
+                                 " s of its animation looks nowhere (a zero scale)");
+    views.push_back(*view);
+  }
+  return views;
 }
 
 Result<Scene> Scene::load_gltf_unlit(const std::string& path) { return parse_gltf_unlit(path, nullptr); }

@@ -5,6 +5,7 @@
 #include <unistd.h>
 
 #include <array>
+#include <cmath>
 #include <cstring>
 #include <optional>
 #include <filesystem>
@@ -398,6 +399,115 @@ TEST(GltfScene, ReadsBlendersMaterialBalls) {
   for (const Material& m : s->materials()) panel = panel || (m.name == "Panel" && m.ke == RGB{12, 11, 10});
   EXPECT_TRUE(panel);
   EXPECT_TRUE(s->has_shading_normals()) << "the balls are shaded smooth";
+}
+
+// A rig ("Rig", node 0) carrying a camera ("Cam", node 1), and an animation whose channels are `channels`, with
+// samplers over accessors: 0 times {0, 2}; 1 times {0, 1}; 2 rig translation {0,0,0} -> {4,0,0}; 3 camera rotation
+// identity -> 90 degrees about +y; 4 camera translation {0,0,10} -> {0,5,10}; 5 cubic translation (in, value, out)
+// x 2 keys: value {0,0,10} -> {4,0,10}, every tangent {2,0,0} (the line's slope, 4 over 2 s); 6 times {2, 1}.
+std::string write_animated(const fs::path& dir, const std::string& samplers, const std::string& channels,
+                           const std::string& camera_node = R"({"name": "Cam", "camera": 0})") {
+  const float s = std::sqrt(0.5f);
+  const std::vector<float> data = {0, 2,  0, 1,  0, 0, 0, 4, 0, 0,  0, 0, 0, 1, 0, s, 0, s,  0, 0, 10, 0, 5, 10,
+                                   2, 0, 0, 0, 0, 10, 2, 0, 0, 2, 0, 0, 4, 0, 10, 2, 0, 0,  2, 1};
+  std::ofstream(dir / "anim.bin", std::ios::binary).write(reinterpret_cast<const char*>(data.data()), static_cast<std::streamsize>(data.size() * 4));
+  auto view = [](int first, int count) {
+    return R"({"buffer": 0, "byteOffset": )" + std::to_string(first * 4) + R"(, "byteLength": )" + std::to_string(count * 4) + "}";
+  };
+  auto accessor = [](int v, int count, const char* type) {
+    return R"({"bufferView": )" + std::to_string(v) + R"(, "componentType": 5126, "count": )" + std::to_string(count) +
+           R"(, "type": ")" + type + R"("})";
+  };
+  const std::string json = R"({"asset": {"version": "2.0"}, "scene": 0, "scenes": [{"nodes": [0]}],
+  "nodes": [{"name": "Rig", "children": [1]}, )" + camera_node + R"(],
+  "cameras": [{"type": "perspective", "perspective": {"yfov": 0.8, "znear": 0.1}}],
+  "buffers": [{"uri": "anim.bin", "byteLength": )" + std::to_string(data.size() * 4) + R"(}],
+  "bufferViews": [)" + view(0, 2) + "," + view(2, 2) + "," + view(4, 6) + "," + view(10, 8) + "," + view(18, 6) + "," +
+                           view(24, 18) + "," + view(42, 2) + R"(],
+  "accessors": [)" + accessor(0, 2, "SCALAR") + "," + accessor(1, 2, "SCALAR") + "," + accessor(2, 2, "VEC3") + "," +
+                           accessor(3, 2, "VEC4") + "," + accessor(4, 2, "VEC3") + "," + accessor(5, 6, "VEC3") + "," +
+                           accessor(6, 2, "SCALAR") + R"(],
+  "animations": [{"samplers": )" + samplers + R"(, "channels": )" + channels + R"(}]})";
+  const fs::path path = dir / "anim.gltf";
+  std::ofstream(path) << json;
+  return path.string();
+}
+
+void expect_view(const CameraSpec& v, std::array<double, 3> eye, std::array<double, 3> ahead, std::array<double, 3> up,
+                 double tolerance, const std::string& what) {
+  for (int i = 0; i < 3; ++i) {
+    EXPECT_NEAR(v.eye[i], eye[i], tolerance) << what << " eye[" << i << "]";
+    EXPECT_NEAR(v.at[i] - v.eye[i], ahead[i], tolerance) << what << " ahead[" << i << "]";
+    EXPECT_NEAR(v.up[i], up[i], tolerance) << what << " up[" << i << "]";
+  }
+}
+
+// A camera moved by its own node's channels and its parent's: LINEAR translation, rotation by the shorter slerp,
+// STEP, CUBICSPLINE with its tangents scaled by the key spacing, held before the first key and after the last.
+TEST(GltfScene, AnAnimatedCameraIsWhereItsNodesChannelsPutItAtEachTime) {
+  GltfFiles files;
+  const std::string samplers = R"([{"input": 0, "output": 2}, {"input": 0, "output": 3, "interpolation": "LINEAR"},
+                                    {"input": 1, "output": 4, "interpolation": "STEP"}])";
+  const std::string path = write_animated(files.dir, samplers, R"([{"sampler": 0, "target": {"node": 0, "path": "translation"}},
+    {"sampler": 1, "target": {"node": 1, "path": "rotation"}}, {"sampler": 2, "target": {"node": 1, "path": "translation"}}])");
+  auto catalogue = Scene::catalogue_gltf(path);
+  ASSERT_TRUE(catalogue.ok()) << catalogue.error().message;
+  ASSERT_EQ(catalogue->cameras.size(), 1u);
+  EXPECT_TRUE(catalogue->cameras[0].animated);
+  EXPECT_EQ(catalogue->cameras[0].animation_seconds, 2);
+  EXPECT_EQ(catalogue->cameras[0].view.eye, (std::array<double, 3>{0, 0, 0})) << "at rest: the nodes' own transforms";
+  auto views = Scene::gltf_camera_views(path, 0, {-1, 0.5, 1, 5});
+  ASSERT_TRUE(views.ok()) << views.error().message;
+  const double r = std::sqrt(0.5), a = kPi / 8;  // 45 degrees at 1 s, 22.5 at 0.5 s
+  expect_view((*views)[0], {0, 0, 10}, {0, 0, -1}, {0, 1, 0}, 1e-6, "before the first key");
+  expect_view((*views)[1], {1, 0, 10}, {-std::sin(a), 0, -std::cos(a)}, {0, 1, 0}, 1e-6, "0.5 s");
+  expect_view((*views)[2], {2, 5, 10}, {-r, 0, -r}, {0, 1, 0}, 1e-6, "1 s (the STEP's second key)");
+  expect_view((*views)[3], {4, 5, 10}, {-1, 0, 0}, {0, 1, 0}, 1e-6, "after the last key");
+
+  const std::string cubic = write_animated(files.dir, R"([{"input": 0, "output": 5, "interpolation": "CUBICSPLINE"}])",
+                                           R"([{"sampler": 0, "target": {"node": 1, "path": "translation"}}])");
+  views = Scene::gltf_camera_views(cubic, 0, {0.5, 1});
+  ASSERT_TRUE(views.ok()) << views.error().message;
+  // Tangents of the line's slope keep the Hermite curve on the line: x = 1 at 0.5 s (zero tangents: 0.625).
+  expect_view((*views)[0], {1, 0, 10}, {0, 0, -1}, {0, 1, 0}, 1e-6, "cubic at 0.5 s");
+  expect_view((*views)[1], {2, 0, 10}, {0, 0, -1}, {0, 1, 0}, 1e-6, "cubic at 1 s");
+
+  // What cannot be played is an error naming the channel; a camera nothing animates is still.
+  auto error_of = [&](const std::string& samplers, const std::string& channels, const std::string& node = R"({"name": "Cam", "camera": 0})") {
+    auto v = Scene::gltf_camera_views(write_animated(files.dir, samplers, channels, node), 0, {0});
+    return v.ok() ? std::string("played") : v.error().message;
+  };
+  EXPECT_NE(error_of(R"([{"input": 6, "output": 2}])", R"([{"sampler": 0, "target": {"node": 0, "path": "translation"}}])")
+                .find("animation 0's channel 0's key times are not ascending"), std::string::npos);
+  EXPECT_NE(error_of(R"([{"input": 0, "output": 5}])", R"([{"sampler": 0, "target": {"node": 1, "path": "translation"}}])")
+                .find("animation 0's channel 0 has 6 values for 2 keys"), std::string::npos);
+  EXPECT_NE(error_of(R"([{"input": 0, "output": 2}])", R"([{"sampler": 3, "target": {"node": 1, "path": "translation"}}])")
+                .find("names a sampler that does not exist"), std::string::npos);
+  EXPECT_NE(error_of(R"([{"input": 0, "output": 9}])", R"([{"sampler": 0, "target": {"node": 1, "path": "translation"}}])")
+                .find("an accessor that does not exist"), std::string::npos);
+  EXPECT_NE(error_of(R"([{"input": 0, "output": 2}])", R"([{"sampler": 0, "target": {"node": 1, "path": "translation"}}])",
+                     R"({"name": "Cam", "camera": 0, "matrix": [1,0,0,0, 0,1,0,0, 0,0,1,0, 0,0,0,1]})")
+                .find("animates a node given by a matrix"), std::string::npos);
+  EXPECT_EQ(error_of(R"([{"input": 0, "output": 2}])", R"([{"sampler": 0, "target": {"node": 0, "path": "weights"}}])"), "played");
+}
+
+// Blender's own export of a camera keyed at frames 1 and 24 (testdata/camera_walk.py made it): the views at frame /
+// fps seconds are the views Blender gives at those frames (its matrix_world, z-up turned y-up as the exporter turns
+// it). Blender puts frame f at f / fps seconds.
+TEST(GltfScene, BlendersCameraAnimationGivesBlendersViewsAtFrameOverFps) {
+  const std::string path = std::string(LIGHTFARM_SOURCE_DIR) + "/render/scene/testdata/camera_walk.gltf";
+  auto catalogue = Scene::catalogue_gltf(path);
+  ASSERT_TRUE(catalogue.ok()) << catalogue.error().message;
+  ASSERT_EQ(catalogue->cameras.size(), 1u);
+  EXPECT_EQ(catalogue->cameras[0].name, "Camera");
+  EXPECT_TRUE(catalogue->cameras[0].animated);
+  EXPECT_NEAR(catalogue->cameras[0].animation_seconds, 1.0, 1e-6);
+  auto views = Scene::gltf_camera_views(path, 0, {1 / 24.0, 12 / 24.0, 24 / 24.0});
+  ASSERT_TRUE(views.ok()) << views.error().message;
+  expect_view((*views)[0], {0, 2, 10}, {0, -0.169967, -0.985450}, {0, 0.985450, -0.169967}, 1e-4, "frame 1");
+  expect_view((*views)[1], {3.739295, 2.467412, 8.130353}, {-0.398748, -0.215826, -0.891302}, {-0.088137, 0.976432, -0.197009},
+              1e-4, "frame 12");
+  expect_view((*views)[2], {8, 3, 6}, {-0.754781, -0.267499, -0.598957}, {-0.209539, 0.963558, -0.166280}, 1e-4, "frame 24");
 }
 
 }  // namespace

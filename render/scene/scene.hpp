@@ -143,10 +143,14 @@ struct ObjCatalogue {
   };
   std::vector<std::string> material_names;
   std::vector<Texture> textures;
-  // A glTF file's perspective cameras, in node order: name (as the node or the camera names it) and view.
+  // A glTF file's perspective cameras, in node order: name (as the node or the camera names it) and view (at rest:
+  // the nodes' own transforms). `animated`: an animation of the file moves its node or one of the node's ancestors,
+  // its keys up to `animation_seconds` (Scene::gltf_camera_views gives the view at any time).
   struct FileCamera {
     std::string name;
     CameraSpec view;
+    bool animated = false;
+    double animation_seconds = 0;
   };
   std::vector<FileCamera> cameras;
   std::vector<std::string> warnings;
@@ -317,6 +321,12 @@ class Scene {
   // The same from a file's bytes in memory (the glTF fuzzer); `path` names it in messages.
   static Result<Scene> parse_gltf_unlit(const std::string& path, const std::string* bytes);
   static Result<ObjCatalogue> catalogue_gltf(const std::string& path);
+  // The view of the file's camera `index` (in catalogue order) at each of `seconds` of the file's animations, which
+  // play together as glTF players play them: translation, rotation and scale channels of the camera's node and its
+  // ancestors, with their STEP, LINEAR (rotations: shortest slerp) or CUBICSPLINE interpolation, held before the
+  // first key and after the last. An error names what in the file cannot be read.
+  static Result<std::vector<CameraSpec>> gltf_camera_views(const std::string& path, size_t index,
+                                                           const std::vector<double>& seconds);
   // A scene file of either kind, by its extension.
   static Result<Scene> load_file_unlit(const std::string& path) {
     return is_gltf_path(path) ? load_gltf_unlit(path) : load_obj_unlit(path);

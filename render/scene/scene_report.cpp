@@ -143,11 +143,12 @@ Result<std::string> describe_scene(const std::string& obj_path) {
     const auto it = used.find(m);
     if (mat.name == "(default)" && it == used.end()) continue;
     std::string line = "    " + mat.name + "  " + kind_name(mat.type) + "  kd " + vec(mat.kd);
-    if (mat.type == Material::Type::metal_rough)
+    if (mat.type == Material::Type::metal_rough) {
       line += format("  metallic %.3g  roughness %.3g", mat.metallic, mat.roughness);
       if (mat.transmission > 0) line += format("  transmission %.3g  ior %.3g", mat.transmission, mat.ior);
-    else if (mat.type != Material::Type::diffuse)
+    } else if (mat.type != Material::Type::diffuse) {
       line += "  ks " + vec(mat.ks);
+    }
     line += "  faces " + std::to_string(it == used.end() ? 0 : it->second.faces);
     if (mat.emissive() && it != used.end()) {
       const double flux = kPi * it->second.area * average(mat.ke);  // one-sided Lambertian emitter
