@@ -528,9 +528,9 @@ bool Scene::is_gltf_path(const std::string& path) {
   return ext == ".gltf" || ext == ".glb";
 }
 
-Result<ObjCatalogue> Scene::catalogue_gltf(const std::string& path) {
+Result<ObjCatalogue> Scene::catalogue_gltf(const std::string& path, const std::string* bytes) {
   ObjCatalogue out;
-  auto model = read_model(path, out.warnings, nullptr, /*images=*/false);
+  auto model = read_model(path, out.warnings, bytes, /*images=*/false);
   if (!model) return model.error();
   out.material_names = material_names(*model);
   // A broken node tree ends the list where it breaks (loading the scene says what is wrong); broken animations
@@ -547,9 +547,9 @@ Result<ObjCatalogue> Scene::catalogue_gltf(const std::string& path) {
 }
 
 Result<std::vector<CameraSpec>> Scene::gltf_camera_views(const std::string& path, size_t index,
-                                                         const std::vector<double>& seconds) {
+                                                         const std::vector<double>& seconds, const std::string* bytes) {
   std::vector<std::string> warnings;
-  auto model = read_model(path, warnings, nullptr, /*images=*/false);
+  auto model = read_model(path, warnings, bytes, /*images=*/false);
   if (!model) return model.error();
   const std::vector<CameraNode> cameras = camera_nodes(*model);
   if (index >= cameras.size()) return make_error("scene file '" + path + "' has no camera " + std::to_string(index));

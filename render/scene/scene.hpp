@@ -320,13 +320,15 @@ class Scene {
   static Result<Scene> load_gltf_unlit(const std::string& path);
   // The same from a file's bytes in memory (the glTF fuzzer); `path` names it in messages.
   static Result<Scene> parse_gltf_unlit(const std::string& path, const std::string* bytes);
-  static Result<ObjCatalogue> catalogue_gltf(const std::string& path);
+  // `bytes`: the file's content, parsed from memory (the fuzz target), instead of reading `path`.
+  static Result<ObjCatalogue> catalogue_gltf(const std::string& path, const std::string* bytes = nullptr);
   // The view of the file's camera `index` (in catalogue order) at each of `seconds` of the file's animations, which
   // play together as glTF players play them: translation, rotation and scale channels of the camera's node and its
   // ancestors, with their STEP, LINEAR (rotations: shortest slerp) or CUBICSPLINE interpolation, held before the
   // first key and after the last. An error names what in the file cannot be read.
   static Result<std::vector<CameraSpec>> gltf_camera_views(const std::string& path, size_t index,
-                                                           const std::vector<double>& seconds);
+                                                           const std::vector<double>& seconds,
+                                                           const std::string* bytes = nullptr);
   // A scene file of either kind, by its extension.
   static Result<Scene> load_file_unlit(const std::string& path) {
     return is_gltf_path(path) ? load_gltf_unlit(path) : load_obj_unlit(path);
