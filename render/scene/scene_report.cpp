@@ -192,6 +192,10 @@ Result<std::string> describe_scene(const std::string& obj_path) {
   const float distance = radius / std::sin(0.5f * 45.0f * kPi / 180.0f);  // the sphere fits the view cone
   const Vec3 eye = suggested_eye(s, centre, distance);
   out += "  camera     camera { eye = " + vec(eye) + ", at = " + vec(centre) + ", fov = 45 }\n";
+  // A glTF file's own cameras, by the names camera { gltf = ... } takes; an animated one moves over a job's frames.
+  for (const auto& c : catalogue->cameras)
+    out += "             camera { gltf = \"" + c.name + "\" }" +
+           (c.animated ? format("  (animated, %.3g s: frame n at n / fps)", c.animation_seconds) : std::string()) + "\n";
 
   // The lobes its materials have, and a network that counts every light path on them once (docs/lua-api.md,
   // "Light paths"); the farm checks whichever network the script wires against the same lobes.

@@ -107,5 +107,12 @@ TEST(SceneReport, TheSuggestedCameraLooksAtTheLitSide) {
   std::filesystem::remove_all(dir);
 }
 
+// A glTF file's own cameras are listed by the names camera { gltf = ... } takes, an animated one with its length.
+TEST(SceneReport, AGltfFilesCamerasAreListedWithTheirAnimation) {
+  auto text = describe_scene(std::string(LIGHTFARM_SOURCE_DIR) + "/render/scene/testdata/camera_walk.gltf");
+  ASSERT_TRUE(text.ok()) << text.error().message;
+  EXPECT_NE(text->find("camera { gltf = \"Camera\" }  (animated, 1 s: frame n at n / fps)"), std::string::npos) << *text;
+}
+
 }  // namespace
 }  // namespace lf
