@@ -5,8 +5,6 @@
 #include <fstream>
 #include <sstream>
 
-#include "actors/director/film_checkpoint.hpp"  // frame_key
-#include "core/log.hpp"
 #include "render/images/image.hpp"       // write_file_whole
 #include "render/scene/scene_file.hpp"   // content_hash
 
@@ -27,15 +25,7 @@ std::string file_name_part(const std::string& actor) {
 }
 }  // namespace
 
-std::vector<std::string> setup_keys(const FarmSpec& spec, const std::string& scene_hash) {
-  std::vector<std::string> keys;
-  std::string chain;
-  for (const FrameSpec& f : spec.frames) {
-    chain = content_hash(chain + frame_key(spec, scene_hash, f.camera));
-    keys.push_back(chain);
-  }
-  return keys;
-}
+std::string setup_key(const std::string& previous, const std::string& frame) { return content_hash(previous + frame); }
 
 void CarriedSetups::begin(std::string folder, std::map<int, std::string> keys_by_frame) {
   folder_ = std::move(folder);

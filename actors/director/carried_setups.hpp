@@ -21,9 +21,10 @@
 
 namespace lf {
 
-// What the carried setup after each frame of spec.frames depends on: the views of every frame up to it (the
-// setup is extended to each in turn) and what frame_key holds for each of them. Index as in spec.frames.
-std::vector<std::string> setup_keys(const FarmSpec& spec, const std::string& scene_hash);
+// What the carried setup after a frame depends on: the views of every frame of the job up to it (the setup is
+// extended to each in turn) and what frame_key holds for each. `previous`: the key of the frame before (empty for
+// the job's first), `frame`: this frame's frame_key.
+std::string setup_key(const std::string& previous, const std::string& frame);
 
 class CarriedSetups final : public Service {
  public:

@@ -61,22 +61,23 @@ void FrameLoop::prepare(const std::string& scene_hash) {
     if (options_.restart) record_->clear(), CarriedSetups::clear(record_->folder());
     else record_->load(note);
     if (!note.empty()) log_warn(note);
+    for (const ActorSpec& a : spec_.actors)
+      if (a.has_process() && carries_views(a)) carrying_.push_back(a.name);
+    // Each frame's key; a carried setup's key chains those of every frame up to its own, chosen or not.
+    std::map<int, std::string> setup_keys;
+    std::string chain;
     for (size_t i = 0; i < spec_.frames.size(); ++i) {
       const FrameSpec& f = spec_.frames[i];
-      if (!f.selected) continue;
+      if (!f.selected && !any_carried()) continue;
       std::string key = frame_key(spec_, scene_hash, f.camera);
+      if (any_carried()) setup_keys[f.number] = chain = setup_key(chain, key);
+      if (!f.selected) continue;
       if (record_->done(f.number, key, f.output)) ++skipped_;
       else left_.push_back({f, i, std::move(key)});
     }
-    for (const ActorSpec& a : spec_.actors)
-      if (a.has_process() && carries_views(a)) carrying_.push_back(a.name);
-    carries_views_ = !carrying_.empty();
-    if (carries_views_) {
+    if (any_carried()) {
       asked_by_carried_ = asked_by_carried_setups(spec_);
-      const std::vector<std::string> keys = setup_keys(spec_, scene_hash);
-      std::map<int, std::string> by_frame;
-      for (size_t i = 0; i < keys.size(); ++i) by_frame[spec_.frames[i].number] = keys[i];
-      carried_.begin(record_->folder(), std::move(by_frame));
+      carried_.begin(record_->folder(), std::move(setup_keys));
     }
     if (skipped_ > 0)
       log_info(std::to_string(skipped_) + " of the job's " + std::to_string(left_.size() + skipped_) + " frames are done (" +
@@ -95,7 +96,7 @@ void FrameLoop::switch_view(const FrameSpec& f, bool replay, const std::function
   // Every actor takes the view first; then what depends on it is set up again (an op's new setup may ask others).
   // A replayed view, which nothing renders, needs only what carried setups extend to it and what they ask.
   control::FrameView view{f.number, f.camera, replay ? std::optional(asked_by_carried_) : std::nullopt};
-  view.keep = carries_views_ && record_.has_value();  // for a later run of the job, which then need not replay
+  view.keep = any_carried();  // for a later run of the job, which then need not replay
   run_phase(wire::Phase::frame, control::encode_frame(view));
   run_phase(wire::Phase::setup, {});
 }
@@ -155,7 +156,7 @@ void FrameLoop::run(const std::function<void(wire::Phase, Value::Map)>& run_phas
     const Left& f = left_[i];
     const auto start = Clock::now();
     if (i > 0) tiles_.begin_frame(f.frame.output, f.key, options_.checkpoint_every, options_.restart, options_.preview_every);
-    const bool restored = carries_views_ && f.index > holds + 1 && catch_up(holds, f.index, run_phase);
+    const bool restored = any_carried() && f.index > holds + 1 && catch_up(holds, f.index, run_phase);
     if (f.index != holds && !restored) switch_view(f.frame, false, run_phase);
     holds = f.index;
     run_phase(wire::Phase::render, {});

@@ -70,12 +70,13 @@ class FrameLoop {
   ExchangeService& exchange_;
   Outbox& out_;
   CarriedSetups carried_;
-  std::vector<std::string> carrying_;  // the actors (processes) whose setups are carried over the views
+  std::vector<std::string> carrying_;  // the actors (processes) whose setups are carried over the views (a job's only)
+  // An op carries its setup over the views: frames skipped are restored or replayed, views kept.
+  bool any_carried() const { return !carrying_.empty(); }
   const RunOptions& options_;
   std::optional<JobRecord> record_;  // a job's (frames { }); none for a farm of one frame
   std::vector<Left> left_;
   size_t skipped_ = 0, written_ = 0;
-  bool carries_views_ = false;  // an op carries its setup over the views: frames skipped are replayed
   double replay_seconds_ = 0, restore_seconds_ = 0;
   std::vector<std::string> asked_by_carried_;  // the actors a carried setup may ask: they set up for a replayed view too
   struct FrameFigures {

@@ -226,7 +226,6 @@ class LightOpActor final : public Actor {
       return make_error(e.what());
     }
     params_ = config.params;
-    name_ = rt.name();
     // In a partitioned farm an op that traces only through the parts builds no BVH of the whole scene (unless a host
     // agent shares one anyway).
     const bool parts_trace = !config.geometry.empty() && kind_.traces_through_context;
@@ -318,7 +317,7 @@ class LightOpActor final : public Actor {
     // (nothing, between frames).
     if ((renew_ || extend_ || restore_) && setup_asked_ && running_.empty()) {
       if (renew_) op_ = create_lightop(kind_, ParamTable(params_, "lightop '" + rt.name() + "'"));
-      if (restore_) setup_ = restore_setup(), setup_running_ = true;
+      if (restore_) setup_ = restore_setup("setup/" + rt.name()), setup_running_ = true;
       else start_setup(rt, extend_);
       renew_ = extend_ = restore_ = setup_asked_ = false;
     }
@@ -407,9 +406,10 @@ class LightOpActor final : public Actor {
   }
 
   // A resumed job: the carried setup the director kept for this actor, in place of extending it over the views.
-  Task restore_setup() {
+  // `key` by value: a coroutine's reference parameter would dangle after its first co_await.
+  Task restore_setup(std::string key) {
     std::string state;
-    co_await exchange_->fetch("setup/" + name_, &state);
+    co_await exchange_->fetch(key, &state);
     op_->restore_carried(state);
   }
 
@@ -456,7 +456,6 @@ class LightOpActor final : public Actor {
   bool extend_ = false;  // PHASE frame: the op carries its setup to the new view, at the next PHASE setup
   bool restore_ = false;  // PHASE frame: the op takes its carried setup from the director, at the next PHASE setup
   std::optional<int> keep_frame_;  // PHASE frame: the carried setup goes to the director once extended to this frame
-  std::string name_;
   bool setup_asked_ = false;
   size_t frames_ = 0;    // PHASE frames taken (frames after the first)
   size_t setups_ = 0, extensions_ = 0;

@@ -14,6 +14,7 @@
 #include <functional>
 #include <optional>
 #include <set>
+#include <span>
 
 #include "core/log.hpp"
 #include "render/scene/scene.hpp"
@@ -192,24 +193,28 @@ class AccessorReader {
   std::string where_;
 };
 
-// Depth first through the default scene's node tree, each node with its transform to the world. A node index that
-// does not exist, or a tree deeper than 64 (a cycle, in a hostile file), stops the walk with an error.
+// Depth first through the default scene's node tree, each node with its transform to the world and its chain: the
+// node indices from the scene's root down to it, itself last. A node index that does not exist, or a tree deeper
+// than 64 (a cycle, in a hostile file), stops the walk with an error.
 Status for_each_node(const tinygltf::Model& model, const std::string& where,
-                     const std::function<Status(const tinygltf::Node&, const Mat4&)>& visit) {
-  std::function<Status(int, const Mat4&, int)> walk = [&](int index, const Mat4& parent, int depth) -> Status {
-    if (index < 0 || static_cast<size_t>(index) >= model.nodes.size() || depth > 64)
+                     const std::function<Status(const tinygltf::Node&, const Mat4&, std::span<const int>)>& visit) {
+  std::vector<int> chain;
+  std::function<Status(int, const Mat4&)> walk = [&](int index, const Mat4& parent) -> Status {
+    if (index < 0 || static_cast<size_t>(index) >= model.nodes.size() || chain.size() > 64)
       return make_error(where + ": a node tree that names a node that does not exist, or deeper than 64");
     const tinygltf::Node& node = model.nodes[static_cast<size_t>(index)];
     const Mat4 world = parent * local_transform(node);
-    if (auto st = visit(node, world); !st) return st;
+    chain.push_back(index);
+    if (auto st = visit(node, world, chain); !st) return st;
     for (int child : node.children)
-      if (auto st = walk(child, world, depth + 1); !st) return st;
+      if (auto st = walk(child, world); !st) return st;
+    chain.pop_back();
     return Ok{};
   };
   const int scene_index = model.defaultScene >= 0 ? model.defaultScene : 0;
   if (static_cast<size_t>(scene_index) < model.scenes.size())
     for (int root : model.scenes[static_cast<size_t>(scene_index)].nodes)
-      if (auto st = walk(root, Mat4{}, 0); !st) return st;
+      if (auto st = walk(root, Mat4{}); !st) return st;
   return Ok{};
 }
 
@@ -388,29 +393,19 @@ struct CameraNode {
   CameraSpec view;
 };
 
+// The default scene's perspective cameras in node order; a broken node tree ends the list where it breaks (loading
+// the scene says what is wrong).
 std::vector<CameraNode> camera_nodes(const tinygltf::Model& model) {
   std::vector<CameraNode> out;
-  std::vector<int> chain;
-  std::function<bool(int, const Mat4&)> walk = [&](int index, const Mat4& parent) {
-    if (index < 0 || static_cast<size_t>(index) >= model.nodes.size() || chain.size() > 64) return false;
-    const tinygltf::Node& node = model.nodes[static_cast<size_t>(index)];
-    const Mat4 world = parent * local_transform(node);
-    chain.push_back(index);
+  (void)for_each_node(model, "", [&](const tinygltf::Node& node, const Mat4& world, std::span<const int> chain) -> Status {
     if (node.camera >= 0 && static_cast<size_t>(node.camera) < model.cameras.size()) {
       const tinygltf::Camera& cam = model.cameras[static_cast<size_t>(node.camera)];
       if (auto view = view_from(world, cam); view && cam.type == "perspective" && cam.perspective.yfov > 0)
         out.push_back({!node.name.empty() ? node.name : !cam.name.empty() ? cam.name : "camera" + std::to_string(out.size()),
-                       chain, &cam, *view});
+                       {chain.begin(), chain.end()}, &cam, *view});
     }
-    for (int child : node.children)
-      if (!walk(child, world)) return false;
-    chain.pop_back();
-    return true;
-  };
-  const int scene_index = model.defaultScene >= 0 ? model.defaultScene : 0;
-  if (static_cast<size_t>(scene_index) < model.scenes.size())
-    for (int root : model.scenes[static_cast<size_t>(scene_index)].nodes)
-      if (!walk(root, Mat4{})) break;
+    return Ok{};
+  });
   return out;
 }
 
@@ -533,8 +528,7 @@ Result<ObjCatalogue> Scene::catalogue_gltf(const std::string& path, const std::s
   auto model = read_model(path, out.warnings, bytes, /*images=*/false);
   if (!model) return model.error();
   out.material_names = material_names(*model);
-  // A broken node tree ends the list where it breaks (loading the scene says what is wrong); broken animations
-  // leave the cameras still (asking for their views says what is wrong).
+  // Broken animations leave the cameras still here (asking for their views says what is wrong).
   for (const CameraNode& c : camera_nodes(*model)) {
     ObjCatalogue::FileCamera fc{c.name, c.view};
     if (auto channels = channels_moving(*model, c.chain, path); channels && !channels->empty()) {
@@ -719,7 +713,7 @@ Result<Scene> Scene::parse_gltf_unlit(const std::string& path, const std::string
     return it != model.extensions.end() && it->second.Has("lights") ? &it->second.Get("lights") : nullptr;
   }();
   bool has_sun = false;
-  const Status status = for_each_node(model, where, [&](const tinygltf::Node& node, const Mat4& world) -> Status {
+  const Status status = for_each_node(model, where, [&](const tinygltf::Node& node, const Mat4& world, std::span<const int>) -> Status {
     if (auto it = node.extensions.find("KHR_lights_punctual"); it != node.extensions.end() && lights && it->second.Has("light")) {
       const int li = it->second.Get("light").GetNumberAsInt();
       if (li >= 0 && static_cast<size_t>(li) < lights->ArrayLen()) {
