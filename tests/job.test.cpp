@@ -16,9 +16,9 @@
 namespace lf::test {
 namespace {
 
-// cornell_glass turned about its centre; a network with view-dependent setups (direct's learned lights; the camera-
-// placed irradiance cache, which carries its records over the frames, or with --set reuse=0 makes its own each
-// frame) and view-independent ones (a pool of two photon maps, an area-placed cache over the path tracer).
+// cornell_glass turned about its centre; a network with view-dependent setups (the learned lights of a pool of two
+// `direct`s, which share their learning, and the camera-placed irradiance cache, which both carry what they learned
+// over the frames, or with --set reuse=0 learn their own each frame) and view-independent ones (a pool of two photon maps, an area-placed cache over the path tracer).
 // --set frame=K renders frame K's camera as a farm of one frame, without frames { }; --set paths_learned=1 makes the
 // path tracer learn its lights where the camera looks, so the kept area-placed cache asked an op that
 // saw the first frame's camera.
@@ -31,7 +31,8 @@ local function view(f)
 end
 local single = param("frame", 0)
 if single > 0 then camera(view(single)) else frames { first = 1, last = param("last", 12), camera = view } end
-local direct   = lightop "direct" { light_sampling = "learned", light_samples = 2 }
+local direct   = multiplexer { lightop "direct" { light_sampling = "learned", light_samples = 2, reuse = param("reuse", 1) == 1 },
+                               replicas = 2 }
 local caustics = multiplexer { lightop "photonmap" { photons = 20000, k = 50 }, replicas = 2 }
 local paths    = lightop "pathtrace" { name = "paths", light_sampling = param("paths_learned", 0) == 1 and "learned" or "tree" }
 local bounce1  = lightop "irradiance" { input = paths, name = "bounce1", placement = "area", prepass = 3000 }
@@ -96,14 +97,14 @@ TEST_F(JobTest, FramesEqualSingleFrameRendersOnAnyLayoutAndRedoOnlyViewDependent
   }
   EXPECT_FALSE(same_pixels(frame("a", 1), frame("a", 2))) << "the camera did not move";
   // Setup keys: what depends on the camera was set up once a frame, the rest once for the job.
-  EXPECT_EQ(figure(one.err, "direct", "setups"), 12) << "learned lights follow the view\n" << one.err;
+  EXPECT_EQ(figure(one.err, "direct.0", "setups"), 12) << "learned lights follow the view\n" << one.err;
   EXPECT_EQ(figure(one.err, "indirect", "setups"), 12) << "a camera-placed cache follows the view";
   EXPECT_EQ(figure(one.err, "paths", "setups"), 1);
   EXPECT_EQ(figure(one.err, "bounce1", "setups"), 1) << "an area-placed cache is the scene's";
   EXPECT_EQ(figure(one.err, "photonmap.0", "setups"), 1) << "photons do not depend on the camera";
   EXPECT_EQ(figure(one.err, "photonmap.1", "setups"), 1);
   EXPECT_EQ(figure(one.err, "glossy", "setups"), 1);
-  EXPECT_EQ(figure(one.err, "direct", "frames"), 12);
+  EXPECT_EQ(figure(one.err, "direct.1", "frames"), 12);
   // The cache carried over the frames: records added where each new view needs them, the same on any layout.
   const auto carried = run("c.####.exr");
   ASSERT_EQ(carried.status, 0) << carried.err;
@@ -115,6 +116,8 @@ TEST_F(JobTest, FramesEqualSingleFrameRendersOnAnyLayoutAndRedoOnlyViewDependent
   EXPECT_FALSE(same_pixels(frame("a", 6), frame("c", 6))) << "frame 6 used no record of the frames before it";
   EXPECT_EQ(figure(carried.err, "indirect", "setups"), 1) << carried.err;
   EXPECT_EQ(figure(carried.err, "indirect", "extended"), 11);
+  EXPECT_EQ(figure(carried.err, "direct.1", "setups"), 1) << "learned lights are carried too";
+  EXPECT_EQ(figure(carried.err, "direct.0", "extended"), 11);
   const std::string stats = read_file(path("a.json"));
   EXPECT_NE(stats.find("\"job\""), std::string::npos);
   size_t frames = 0;
@@ -147,6 +150,10 @@ TEST_F(JobTest, AKilledJobResumesFromItsRecordToTheSameFrames) {
   // (where it stood after frame 5, or after frame 6 if the killed run had extended it that far) instead of replaying
   // the views it skips.
   EXPECT_TRUE(std::regex_search(resumed.err, std::regex("restored the setups carried over the views to frame [56] "))) << resumed.err;
+  // The pool's replicas hold the same learned lights: the first kept them for both.
+  EXPECT_TRUE(fs::exists(path("x.lfjob/setups/direct.0.5.setup")));
+  EXPECT_TRUE(fs::exists(path("x.lfjob/setups/indirect.5.setup")));
+  EXPECT_FALSE(fs::exists(path("x.lfjob/setups/direct.1.5.setup")));
   EXPECT_EQ(resumed.err.find("replaying the views"), std::string::npos) << resumed.err;
   EXPECT_LT(done, 8);
   EXPECT_EQ(total, 8);

@@ -1,7 +1,7 @@
 #pragma once
-// A job's carried setups (LightOp::carries_views: a camera-placed irradiance cache kept over the frames), kept in
-// its record's folder after each view, so that a run resuming the job restores them instead of replaying the views
-// of every frame before its first. Serves
+// A job's carried setups (LightOp::carries_views: a camera-placed irradiance cache, learned lights, kept over the
+// frames), kept in its record's folder after each view, so that a run resuming the job restores them instead of
+// replaying the views of every frame before its first. Serves
 //   keep_setup {frame: int, state: bin} -> {}   an actor's carried setup, as extended to that frame's view
 // One file per actor and frame, OUTPUT.lfjob/setups/<actor>.<frame>.setup:
 //   "LFSETUP1\n" <actor> "\n" <key> "\n" <checksum of the whole state> "\n" <base frame> " " <base length> "\n" <bytes>

@@ -25,6 +25,16 @@ bool carries_views(const ActorSpec& a) {
   }
 }
 
+// Whether actor i is a pool's second or later replica that shares its setup with the others: the pool's first
+// keeps the carried setup for all of them (they hold the same), and all restore the first's.
+bool kept_by_first_replica(const FarmSpec& spec, size_t i) {
+  const int pool = spec.pool_of(static_cast<int>(i));
+  if (pool < 0) return false;
+  const auto& replicas = spec.actors[static_cast<size_t>(pool)].inputs;
+  const LightOpKind* kind = find_lightop_kind(spec.actors[i].kind);
+  return replicas.size() > 1 && replicas.front() != static_cast<int>(i) && kind && kind->shares_setup_for(spec.actors[i].params);
+}
+
 // The actors a carried setup may ask while it extends to a view: every input of a carrying op, and theirs, on to the
 // end of the network. During a replay only these set themselves up for the view.
 std::vector<std::string> asked_by_carried_setups(const FarmSpec& spec) {
@@ -61,8 +71,9 @@ void FrameLoop::prepare(const std::string& scene_hash) {
     if (options_.restart) record_->clear(), CarriedSetups::clear(record_->folder());
     else record_->load(note);
     if (!note.empty()) log_warn(note);
-    for (const ActorSpec& a : spec_.actors)
-      if (a.has_process() && carries_views(a)) carrying_.push_back(a.name);
+    for (size_t i = 0; i < spec_.actors.size(); ++i)
+      if (spec_.actors[i].has_process() && carries_views(spec_.actors[i]) && !kept_by_first_replica(spec_, i))
+        carrying_.push_back(spec_.actors[i].name);
     // Each frame's key; a carried setup's key chains those of every frame up to its own, chosen or not.
     std::map<int, std::string> setup_keys;
     std::string chain;

@@ -243,6 +243,8 @@ class LightOpActor final : public Actor {
       replica_index_ = static_cast<int>(config.pool->index);
       replica_count_ = static_cast<int>(config.pool->count);
     }
+    // Replicas that share their setup hold the same carried one: the first keeps it for all, and all restore it.
+    carried_owner_ = config.pool && !config.pool->peers.empty() && replica_index_ > 0 ? config.pool->peers[0].name : rt.name();
     if (config.pool && !config.pool->peers.empty()) {
       auto peers = std::make_unique<PeerExchange>(rt, static_cast<size_t>(replica_index_), static_cast<size_t>(replica_count_));
       peer_exchange_ = peers.get();
@@ -317,7 +319,7 @@ class LightOpActor final : public Actor {
     // (nothing, between frames).
     if ((renew_ || extend_ || restore_) && setup_asked_ && running_.empty()) {
       if (renew_) op_ = create_lightop(kind_, ParamTable(params_, "lightop '" + rt.name() + "'"));
-      if (restore_) setup_ = restore_setup("setup/" + rt.name()), setup_running_ = true;
+      if (restore_) setup_ = restore_setup("setup/" + carried_owner_), setup_running_ = true;
       else start_setup(rt, extend_);
       renew_ = extend_ = restore_ = setup_asked_ = false;
     }
@@ -330,7 +332,7 @@ class LightOpActor final : public Actor {
         return;
       }
       set_up_ = true;
-      if (keep_frame_) keep_setup(*keep_frame_, rt);
+      if (keep_frame_ && carried_owner_ == rt.name()) keep_setup(*keep_frame_, rt);
       keep_frame_.reset();
       rt.phase_done(wire::Phase::setup);
     }
@@ -449,6 +451,7 @@ class LightOpActor final : public Actor {
   PeerExchange* peer_exchange_ = nullptr;  // exchange_, when the pool's replicas share their setup peer to peer
   std::unique_ptr<RemoteTracing> tracing_;  // a partitioned scene's geometry actors, or none
   int replica_index_ = 0, replica_count_ = 1;
+  std::string carried_owner_;  // the actor whose kept carried setup this one's is (itself, or its pool's first)
   Task setup_;
   bool setup_running_ = false;
   bool set_up_ = false;  // setup finished: requests may start

@@ -8,7 +8,9 @@
 // (render/shading/path_kernel.cpp with one vertex). On diffuse surfaces light sampling alone is used unless `mis = true`:
 // then they get the BSDF sample too, which tames points close to a light (a uniform point on a light seen under a
 // wide angle has a 1/d^2 weight; a cosine direction does not). Left unset, `mis` is true in a scene with an
-// environment (render/lights/environment.hpp), false otherwise. Emitters emit on the side their winding faces.
+// environment (render/lights/environment.hpp), false otherwise. In a job the learned lights are carried over the
+// frames (`reuse`, default true): a frame learns only the cells its view finds that no earlier one did. Emitters
+// emit on the side their winding faces.
 // Mirrors and glass get nothing here: that is `specular`'s job.
 #include "render/lightops/lightop_registry.hpp"
 #include "render/shading/path_kernel.hpp"
@@ -27,7 +29,8 @@ class DirectLight final : public LightOp {
         mis_set_(p.has("mis")),
         mis_(p.get_bool("mis", false)),
         seed_(static_cast<uint64_t>(p.get_int("seed", 0, 0, INT32_MAX))),
-        selection_options_(light_selection_options(p, seed_)) {}
+        selection_options_(light_selection_options(p, seed_)),
+        reuse_(p.get_bool("reuse", true)) {}
 
   Task setup(SceneContext ctx, Inputs&) override {
     ctx_ = ctx;
@@ -47,6 +50,17 @@ class DirectLight final : public LightOp {
 
   // Lights are learned where the camera looks.
   bool setup_sees_camera() const override { return light_sampling_ == LightSampling::learned; }
+  // Over a job's frames the learned cells are kept and each view learns only the cells it finds new; `reuse =
+  // false`: lights learned anew for each frame's view.
+  bool carries_views() const override { return light_sampling_ == LightSampling::learned && reuse_; }
+  Task extend_to_view(SceneContext ctx, Inputs&) override {
+    ctx_ = ctx;
+    co_await selection_.extend(ctx, selection_options_, "direct");
+  }
+  std::string carried_state() const override { return selection_.state(); }
+  void restore_carried(std::string_view state) override {
+    selection_.restore(state, ctx_.scene->emitters().size() + ctx_.scene->point_lights().size(), "direct");
+  }
 
   // Light straight from an emitter, scattered at the point by its diffuse or glossy lobe.
   std::optional<LightPaths> paths(std::span<const LightPaths>) const override {
@@ -74,6 +88,7 @@ class DirectLight final : public LightOp {
   uint64_t seed_;
   LightSelectionOptions selection_options_;
   LightSelection selection_;
+  bool reuse_;
   SceneContext ctx_;
 };
 

@@ -32,6 +32,7 @@ class PathTrace final : public LightOp {
                                : LightPoint::area;
     options_.stream = streams::pathtrace ^ (static_cast<uint64_t>(p.get_int("seed", 0, 0, INT32_MAX)) << 8);
     use_cache_ = p.get_bool("directional_cache", false);
+    reuse_ = p.get_bool("reuse", true);
     cache_options_.cells = static_cast<int>(p.get_int("cache_cells", cache_options_.cells, 1, 256));
     cache_options_.radius = static_cast<float>(p.get_float("cache_radius", cache_options_.radius, 0, 1e9));
     cache_options_.min_samples = static_cast<int>(p.get_int("cache_min_samples", cache_options_.min_samples, 2, 1 << 16));
@@ -56,6 +57,17 @@ class PathTrace final : public LightOp {
 
   // Lights are learned, and the directional cache filled, where the camera looks.
   bool setup_sees_camera() const override { return learned_ || use_cache_; }
+  // Learned lights alone are carried over a job's frames as `direct` carries them (`reuse`); a directional cache
+  // is filled anew for each view.
+  bool carries_views() const override { return learned_ && !use_cache_ && reuse_; }
+  Task extend_to_view(SceneContext ctx, Inputs&) override {
+    ctx_ = ctx;
+    co_await selection_.extend(ctx, selection_options_, "pathtrace");
+  }
+  std::string carried_state() const override { return selection_.state(); }
+  void restore_carried(std::string_view state) override {
+    selection_.restore(state, ctx_.scene->emitters().size() + ctx_.scene->point_lights().size(), "pathtrace");
+  }
 
   // Every path of up to max_depth events (Russian roulette ends paths without leaving any out).
   std::optional<LightPaths> paths(std::span<const LightPaths>) const override {
@@ -135,6 +147,7 @@ class PathTrace final : public LightOp {
   SceneContext ctx_;
   bool use_cache_ = false;
   bool learned_ = false;
+  bool reuse_ = true;
   LightSelectionOptions selection_options_;
   LightSelection selection_;
   DirectionalCacheOptions cache_options_;

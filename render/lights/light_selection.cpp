@@ -144,14 +144,23 @@ Task exchange_moments(Exchange& exchange, const std::vector<uint32_t>& mine,
 
 Task LightSelection::build(const SceneContext& ctx, const LightSelectionOptions& options, LightSelection& out,
                            const char* op) {
-  if (!ctx.camera) throw LightOpError(std::string(op) + ": light_sampling = \"learned\" needs the farm's camera");
-  const Scene& scene = *ctx.scene;
   out = LightSelection{};
   out.share_ = options.share;
-  out.inverse_size_ = 1.0f / (options.cell * scene.bounds().diagonal());
-  if (scene.emitters().empty()) co_return;
+  out.inverse_size_ = 1.0f / (options.cell * ctx.scene->bounds().diagonal());
+  co_await out.extend(ctx, options, op);
+}
 
-  // Where the camera looks: the first hit through every stride-th pixel centre, in pixel order.
+Task LightSelection::extend(const SceneContext& ctx, const LightSelectionOptions& options, const char* op) {
+  if (!ctx.camera) throw LightOpError(std::string(op) + ": light_sampling = \"learned\" needs the farm's camera");
+  const Scene& scene = *ctx.scene;
+  View view{static_cast<uint32_t>(cells_.size()), static_cast<uint32_t>(dark_.size())};
+  if (scene.emitters().empty()) {
+    views_.push_back(view);
+    co_return;
+  }
+
+  // Where the camera looks: the first hit through every stride-th pixel centre, in pixel order; points in cells an
+  // earlier view learned (or found dark) are left out.
   std::vector<Ray> rays;
   for (int y = 0; y < ctx.height; y += options.stride)
     for (int x = 0; x < ctx.width; x += options.stride)
@@ -168,7 +177,9 @@ Task LightSelection::build(const SceneContext& ctx, const LightSelectionOptions&
     const Vec3 wo = -rays[r].direction;
     const Vec3 x = rays[r].origin + rays[r].direction * hits[r].t;
     const SurfacePoint sp = surface_at(scene, tri, x, wo);
-    keyed.emplace_back(out.key_of(x, sp.ns), static_cast<uint32_t>(candidates.size()));
+    const uint64_t key = key_of(x, sp.ns);
+    if (index_.count(key)) continue;
+    keyed.emplace_back(key, static_cast<uint32_t>(candidates.size()));
     candidates.push_back(Candidate{scene.ray_origin(tri, x, sp.ng), x, sp.ns, sp.ng});
   }
   std::sort(keyed.begin(), keyed.end());
@@ -249,10 +260,10 @@ Task LightSelection::build(const SceneContext& ctx, const LightSelectionOptions&
     }
     std::vector<uint8_t> blocked(shadow.size());
     if (!shadow.empty()) co_await trace_occluded(ctx, shadow, blocked);
-    out.shadow_rays_ += shadow.size();
+    view.shadow_rays += shadow.size();
     for (size_t k = 0; k < pending.size(); ++k) {
       if (blocked[k]) {
-        ++out.blocked_rays_;
+        ++view.blocked_rays;
         continue;
       }
       // Samples of light l come with chance p_l: p_l (f / p)^2 averages to l's own second moment, whatever p_l.
@@ -260,8 +271,13 @@ Task LightSelection::build(const SceneContext& ctx, const LightSelectionOptions&
       moment[pending[k].cell][pending[k].light] += v * v * pending[k].chance;
     }
   }
-  if (replicas > 1) co_await exchange_moments(*ctx.exchange, mine, moment, out.shadow_rays_, out.blocked_rays_);
-  for (size_t c = 0; c < cell_ranges.size(); ++c) out.add_cell(keyed[cell_ranges[c].first].first, moment[c]);
+  if (replicas > 1 && !cell_ranges.empty()) co_await exchange_moments(*ctx.exchange, mine, moment, view.shadow_rays, view.blocked_rays);
+  for (size_t c = 0; c < cell_ranges.size(); ++c) add_cell(keyed[cell_ranges[c].first].first, moment[c]);
+  view.cells_end = static_cast<uint32_t>(cells_.size());
+  view.dark_end = static_cast<uint32_t>(dark_.size());
+  shadow_rays_ += view.shadow_rays;
+  blocked_rays_ += view.blocked_rays;
+  views_.push_back(view);
   ctx.report("learning lights", mine.size(), std::max<size_t>(mine.size(), 1));
 }
 
@@ -274,21 +290,118 @@ void LightSelection::add_cell(uint64_t key, std::map<uint32_t, double>& moment) 
   }
   double sum = 0;
   for (auto& [light, m] : moment) sum += (m = std::sqrt(m));
-  if (!(sum > 0)) return;
-  Cell cell{static_cast<uint32_t>(lights_.size()), static_cast<uint32_t>(moment.size())};
-  cell.environment = static_cast<float>(environment / (environment + sum));
+  if (!(sum > 0)) {
+    index_.emplace(key, -1);
+    dark_.push_back(key);
+    return;
+  }
+  std::vector<uint32_t> lights;
+  std::vector<float> cdf;
   double running = 0;
   for (const auto& [light, m] : moment) {
     running += m;
-    lights_.push_back(light);
-    cdf_.push_back(static_cast<float>(running / sum));
+    lights.push_back(light);
+    cdf.push_back(static_cast<float>(running / sum));
   }
-  cdf_.back() = 1.0f;
+  cdf.back() = 1.0f;
+  append_cell(key, static_cast<float>(environment / (environment + sum)), lights, cdf);
+}
+
+void LightSelection::append_cell(uint64_t key, float environment, std::span<const uint32_t> lights,
+                                 std::span<const float> cdf) {
+  Cell cell{static_cast<uint32_t>(lights_.size()), static_cast<uint32_t>(lights.size()), environment};
+  lights_.insert(lights_.end(), lights.begin(), lights.end());
+  cdf_.insert(cdf_.end(), cdf.begin(), cdf.end());
   // Each light's chance as the difference of the sums pick() compares u with, so that it is what pick() does.
   for (size_t i = cell.first; i < cdf_.size(); ++i)
     probability_.push_back(cdf_[i] - (i == cell.first ? 0.0f : cdf_[i - 1]));
   index_.emplace(key, static_cast<int32_t>(cells_.size()));
   cells_.push_back(cell);
+  keys_.push_back(key);
+}
+
+namespace {
+constexpr std::string_view kStateTag = "LFLIGHTSEL1";
+}
+
+// Tag, f32 inverse cell size, f32 share, then a block a view: u64 shadow rays, u64 blocked, u32 cells, per cell
+// (u64 key, f32 environment, u32 lights, that many (u32 light, f32 running sum)), u32 dark keys, that many u64.
+std::string LightSelection::state() const {
+  std::string out(kStateTag);
+  bytes::put(out, inverse_size_);
+  bytes::put(out, share_);
+  uint32_t cell = 0, dark = 0;
+  for (const View& v : views_) {
+    bytes::put(out, v.shadow_rays);
+    bytes::put(out, v.blocked_rays);
+    bytes::put(out, v.cells_end - cell);
+    for (; cell < v.cells_end; ++cell) {
+      const Cell& c = cells_[cell];
+      bytes::put(out, keys_[cell]);
+      bytes::put(out, c.environment);
+      bytes::put(out, c.count);
+      for (uint32_t i = c.first; i < c.first + c.count; ++i) {
+        bytes::put(out, lights_[i]);
+        bytes::put(out, cdf_[i]);
+      }
+    }
+    bytes::put(out, v.dark_end - dark);
+    for (; dark < v.dark_end; ++dark) bytes::put(out, dark_[dark]);
+  }
+  return out;
+}
+
+void LightSelection::restore(std::string_view state, size_t light_count, const char* op) {
+  const std::string what = std::string(op) + ": the kept learned lights ";
+  bytes::Reader in(state);
+  std::string tag;
+  float inverse_size = 0, share = 0;
+  if (!in.str(tag, static_cast<uint32_t>(kStateTag.size())) || tag != kStateTag || !in.f32(inverse_size) || !in.f32(share))
+    throw LightOpError(what + "are not ones this build reads (remove the job folder's setups/ to replay the views)");
+  if (inverse_size != inverse_size_ || share != share_)
+    throw LightOpError(what + "were learned with other settings");
+  LightSelection out;
+  out.inverse_size_ = inverse_size_;
+  out.share_ = share_;
+  const LightOpError malformed(what + "are cut short or hold what no learning makes");
+  std::vector<uint32_t> lights;
+  std::vector<float> cdf;
+  while (!in.done()) {
+    View v;
+    uint32_t cells = 0, dark = 0;
+    if (!in.u64(v.shadow_rays) || !in.u64(v.blocked_rays) || v.blocked_rays > v.shadow_rays || !in.u32(cells) ||
+        !in.room(cells, 16))
+      throw malformed;
+    for (uint32_t c = 0; c < cells; ++c) {
+      uint64_t key = 0;
+      float environment = 0;
+      uint32_t count = 0;
+      if (!in.u64(key) || !in.f32(environment) || !in.u32(count) || count == 0 || !in.room(count, 8)) throw malformed;
+      if (!(environment == -1.0f || (environment >= 0 && environment <= 1)) || out.index_.count(key)) throw malformed;
+      lights.resize(count);
+      cdf.resize(count);
+      for (uint32_t i = 0; i < count; ++i) {
+        if (!in.u32(lights[i]) || !in.f32(cdf[i])) throw malformed;
+        // Lights ascending and known; sums never falling, ending at 1 (a faint light's may round to no step).
+        if (lights[i] >= light_count || (i > 0 && lights[i] <= lights[i - 1])) throw malformed;
+        if (!(cdf[i] >= (i > 0 ? cdf[i - 1] : 0.0f)) || !(cdf[i] <= 1)) throw malformed;
+      }
+      if (cdf.back() != 1.0f) throw malformed;
+      out.append_cell(key, environment, lights, cdf);
+    }
+    if (!in.u32(dark) || !in.room(dark, 8)) throw malformed;
+    for (uint32_t d = 0; d < dark; ++d) {
+      uint64_t key = 0;
+      if (!in.u64(key) || !out.index_.emplace(key, -1).second) throw malformed;
+      out.dark_.push_back(key);
+    }
+    v.cells_end = static_cast<uint32_t>(out.cells_.size());
+    v.dark_end = static_cast<uint32_t>(out.dark_.size());
+    out.shadow_rays_ += v.shadow_rays;
+    out.blocked_rays_ += v.blocked_rays;
+    out.views_.push_back(v);
+  }
+  *this = std::move(out);
 }
 
 }  // namespace lf

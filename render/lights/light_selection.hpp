@@ -13,8 +13,16 @@
 // Determinism: a pure function of the scene, the camera, the image size and the options: the candidate points in
 // pixel order, the cells by key, every sample seeded by its cell and index. Every process that builds it builds the
 // same thing, so images do not depend on the farm's layout.
+//
+// Over a job's frames it can be carried (extend): a new view learns only the cells no earlier view learned, from
+// the new view's points, and what was learned stays as it was; so a frame's selection is a pure function of the
+// job's views up to it. As bytes (state, restore) it is a tag and the options it was learned with, then one block
+// a view, so a later view's bytes begin with an earlier's (a job's record keeps only what each view added).
 #include <cstdint>
 #include <map>
+#include <span>
+#include <string>
+#include <string_view>
 #include <unordered_map>
 #include <vector>
 
@@ -49,6 +57,14 @@ class LightSelection {
   // process learning alone would have, bit for bit, in 1/replica_count of the time.
   static Task build(const SceneContext& ctx, const LightSelectionOptions& options, LightSelection& out,
                     const char* op = "light_selection");
+  // Learns the cells of ctx's view that no earlier view learned (nor found dark), as build() would, and leaves
+  // every learned cell as it is. On a selection build() made, with the same options.
+  Task extend(const SceneContext& ctx, const LightSelectionOptions& options, const char* op = "light_selection");
+  // What was learned, as bytes; restore() on a selection built with the same options and scene makes it answer as
+  // this one, bit for bit. restore() throws LightOpError naming `op` on bytes it cannot use, and then leaves the
+  // selection as it was. `light_count`: the scene's lights (emitters and point lights).
+  std::string state() const;
+  void restore(std::string_view state, size_t light_count, const char* op = "light_selection");
 
   // The learned cell of a point at x facing n, or -1.
   int32_t cell_of(Vec3 x, Vec3 n) const;
@@ -82,17 +98,26 @@ class LightSelection {
  private:
   uint64_t key_of(Vec3 x, Vec3 n) const;
   // The cell `key`'s distribution from each light's second moment (its lights in index order); a cell whose
-  // samples all came back dark learns nothing.
+  // samples all came back dark learns nothing (it is noted dark).
   void add_cell(uint64_t key, std::map<uint32_t, double>& moment);
+  // Appends a learned cell: its lights ascending, the running sums pick() compares u with (the last 1).
+  void append_cell(uint64_t key, float environment, std::span<const uint32_t> lights, std::span<const float> cdf);
   struct Cell {
     uint32_t first = 0, count = 0;  // its lights in lights_ / cdf_, sorted by light
     float environment = -1;         // the environment's learned share of the cell's light (-1: not learned)
   };
+  // What one view added: the cells and dark keys up to these ends, and its pre-pass's rays.
+  struct View {
+    uint32_t cells_end = 0, dark_end = 0;
+    uint64_t shadow_rays = 0, blocked_rays = 0;
+  };
   float inverse_size_ = 1, share_ = 0.5f;
-  std::unordered_map<uint64_t, int32_t> index_;
+  std::unordered_map<uint64_t, int32_t> index_;  // learned cells by key; a dark one maps to -1
   std::vector<Cell> cells_;
+  std::vector<uint64_t> keys_, dark_;  // each cell's key; the keys found dark, in the order found
   std::vector<uint32_t> lights_;
   std::vector<float> probability_, cdf_;  // per entry: its chance, and the running sum up to and including it
+  std::vector<View> views_;
   uint64_t shadow_rays_ = 0, blocked_rays_ = 0;
 };
 

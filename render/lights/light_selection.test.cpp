@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstring>
 #include <map>
 #include <tuple>
 
@@ -127,6 +128,99 @@ TEST(LightSelection, ReplicasShareTheLearningAndEachHoldsWhatOneProcessLearns) {
     for (int32_t cell = 0; cell < static_cast<int32_t>(s.cell_count()); ++cell)
       for (size_t l = 0; l < lights; ++l)
         ASSERT_EQ(s.probability(cell, l), alone.probability(cell, l)) << "replica " << r << ", cell " << cell;
+  }
+}
+
+// Over a job's frames: extended to a second view, a selection keeps every cell the first view learned as it was and
+// learns the cells new to the second view as that view alone would; the same view again learns nothing. Its bytes,
+// restored, give the same answers; bytes it cannot use are refused and leave it as it was.
+TEST(LightSelection, ACarriedSelectionKeepsItsCellsAndLearnsOnlyWhatTheNewViewAdds) {
+  WalledCorridor c;
+  RayTracer tracer(c.scene);
+  const Camera moved{CameraSpec{{7, 5, 4}, {7, 0, 0}, {0, 1, 0}, 60}, 64, 48};
+  const SceneContext first_view = c.context(tracer);
+  SceneContext second_view = c.context(tracer);
+  second_view.camera = &moved;
+  LightSelection carried;
+  run_to_completion(LightSelection::build(first_view, {}, carried));
+  const LightSelection first = carried;
+  const std::string first_state = carried.state();
+  run_to_completion(carried.extend(second_view, {}));
+  LightSelection second_alone;
+  run_to_completion(LightSelection::build(second_view, {}, second_alone));
+  ASSERT_GT(carried.cell_count(), first.cell_count());
+  ASSERT_LT(carried.cell_count(), first.cell_count() + second_alone.cell_count()) << "the two views share no cell";
+  const size_t lights = c.scene.emitters().size() + c.scene.point_lights().size();
+  auto same_cell = [&](const LightSelection& a, int32_t ca, const LightSelection& b, int32_t cb) {
+    for (size_t l = 0; l < lights; ++l)
+      if (a.probability(ca, l) != b.probability(cb, l)) return false;
+    return true;
+  };
+  // Floor points and the wall's face towards the cameras.
+  std::vector<std::pair<Vec3, Vec3>> points;
+  for (float x = 0.05f; x < 16; x += 0.1f)
+    for (float z = -3.9f; z < 4; z += 0.2f) points.push_back({{x, 0, z}, {0, 1, 0}});
+  for (float y = 0.05f; y < 2; y += 0.1f)
+    for (float z = -3.9f; z < 4; z += 0.2f) points.push_back({{kWall, y, z}, {-1, 0, 0}});
+  int kept = 0, added = 0, shared_but_learned_otherwise = 0;
+  for (const auto& [x, n] : points) {
+    const int32_t cell = carried.cell_of(x, n), before = first.cell_of(x, n), alone = second_alone.cell_of(x, n);
+    if (before >= 0) {
+      ASSERT_EQ(cell, before) << "a learned cell moved";
+      ASSERT_TRUE(same_cell(carried, cell, first, before)) << "a learned cell changed at " << x.x << ", " << x.z;
+      ++kept;
+      if (alone >= 0 && !same_cell(first, before, second_alone, alone)) ++shared_but_learned_otherwise;
+    } else if (alone >= 0) {
+      ASSERT_GE(cell, static_cast<int32_t>(first.cell_count()));
+      ASSERT_TRUE(same_cell(carried, cell, second_alone, alone)) << "a new cell is not the view's at " << x.x;
+      ++added;
+    } else {
+      ASSERT_EQ(cell, -1);
+    }
+  }
+  EXPECT_GT(kept, 100);
+  EXPECT_GT(added, 100);
+  EXPECT_GT(shared_but_learned_otherwise, 0) << "the shared cells show nothing about whose points they keep";
+  // The same view again: nothing left to learn.
+  const uint64_t rays = carried.shadow_rays();
+  const size_t cells = carried.cell_count();
+  run_to_completion(carried.extend(second_view, {}));
+  EXPECT_EQ(carried.shadow_rays(), rays);
+  EXPECT_EQ(carried.cell_count(), cells);
+
+  // As bytes: a later view's begin with the earlier's; restored on a selection of the first view, the same answers.
+  const std::string state = carried.state();
+  EXPECT_EQ(state.compare(0, first_state.size(), first_state), 0);
+  LightSelection restored;
+  run_to_completion(LightSelection::build(first_view, {}, restored));
+  restored.restore(state, lights);
+  EXPECT_EQ(restored.state(), state);
+  EXPECT_EQ(restored.shadow_rays(), carried.shadow_rays());
+  for (const auto& [x, n] : points) {
+    const int32_t cell = carried.cell_of(x, n);
+    ASSERT_EQ(restored.cell_of(x, n), cell);
+    if (cell >= 0) {
+      ASSERT_TRUE(same_cell(restored, cell, carried, cell));
+    }
+  }
+  // Refusals leave the selection as it was.
+  std::string unknown_light = state;
+  const uint32_t far_light = static_cast<uint32_t>(lights) + 5;
+  std::memcpy(unknown_light.data() + 55, &far_light, 4);  // the first cell's first light: after tag, options, counts, key
+  for (const std::string& bad : {std::string("no selection"), state.substr(0, state.size() - 3), unknown_light}) {
+    EXPECT_THROW(restored.restore(bad, lights, "direct"), LightOpError);
+    EXPECT_EQ(restored.state(), state);
+  }
+  LightSelection other_share;
+  LightSelectionOptions o;
+  o.share = 0.3f;
+  run_to_completion(LightSelection::build(first_view, o, other_share));
+  try {
+    other_share.restore(state, lights, "direct");
+    FAIL() << "no error";
+  } catch (const LightOpError& e) {
+    EXPECT_NE(std::string(e.what()).find("direct: the kept learned lights were learned with other settings"), std::string::npos)
+        << e.what();
   }
 }
 
