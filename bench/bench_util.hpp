@@ -56,6 +56,20 @@ inline double json_number(const std::string& text, const std::string& key) {
   return std::strtod(text.c_str() + pos + 1, nullptr);
 }
 
+// The object after "key": in a JSON text, braces included (the director's are flat: no object inside).
+inline std::string object_of(const std::string& text, const std::string& key) {
+  const size_t at = text.find("\"" + key + "\"");
+  if (at == std::string::npos) return {};
+  const size_t open = text.find('{', at);
+  return text.substr(open, text.find('}', open) - open + 1);
+}
+
+// A stage's wall seconds from --stats-json: its phases_seconds entry, not phases_director_cpu_seconds' of the same
+// name (which comes first in the text); -1 when there is none.
+inline double phase_seconds(const std::string& stats, const std::string& stage) {
+  return json_number(object_of(stats, "phases_seconds"), stage);
+}
+
 // Every number after "key": in a JSON text, in order (one per actor for per-actor figures).
 inline std::vector<double> json_numbers(const std::string& text, const std::string& key) {
   std::vector<double> out;
@@ -111,6 +125,7 @@ struct FarmRun {
   // hold on this machine, shared pages counted once.
   double peak_actors_pss_bytes = 0;
   double number(const std::string& key) const { return json_number(stats, key); }
+  double phase(const std::string& stage) const { return phase_seconds(stats, stage); }
 };
 
 // Every live process from /proc: its children and its user + system CPU-seconds.

@@ -525,13 +525,13 @@ void run_director(int actors, int tiles_per_renderer, bool curve, int commands, 
     row.status = run_farm(spec, options, launchers);
     std::ifstream in(options.stats_json);
     const std::string stats((std::istreambuf_iterator<char>(in)), {});
-    row.hello = bench::json_number(stats, "hello");
-    row.configure = bench::json_number(stats, "configure");
+    row.hello = bench::phase_seconds(stats, "hello");
+    row.configure = bench::phase_seconds(stats, "configure");
     row.render = bench::json_number(stats, "render_seconds");
     row.launch_to_first_tile = bench::json_number(stats, "first_tile_seconds");
     for (size_t at = stats.find("\"lost\""); at != std::string::npos; at = stats.find("\"lost\"", at + 1)) ++row.lost;
-    const double before_render = bench::json_number(stats, "prepare") + bench::json_number(stats, "launch") +
-                                 row.hello + row.configure + bench::json_number(stats, "setup");
+    const double before_render = bench::phase_seconds(stats, "prepare") + bench::phase_seconds(stats, "launch") +
+                                 row.hello + row.configure + bench::phase_seconds(stats, "setup");
     render_share = sampler.share(before_render, before_render + row.render);
   }
   sim->finish();

@@ -46,7 +46,7 @@ Render render(const std::string& script, const std::vector<std::string>& sets) {
     std::fprintf(stderr, "%s\n", img.error().message.c_str());
     std::exit(1);
   }
-  return {*img, run.number("setup") + run.number("render")};
+  return {*img, run.phase("setup") + run.phase("render")};
 }
 
 }  // namespace

@@ -152,7 +152,7 @@ Watched run(const std::string& script, const std::vector<std::string>& sets, boo
   }
   std::stringstream ss;
   ss << std::ifstream(dir / "stats.json").rdbuf();
-  w.render_seconds = bench::json_number(ss.str(), "render");
+  w.render_seconds = bench::phase_seconds(ss.str(), "render");
   w.farm_cpu_seconds = bench::json_number(ss.str(), "actors_cpu_seconds") + bench::json_number(ss.str(), "director_cpu_seconds");
   // The browser's helper processes may still be writing its profile for a moment after it exited.
   std::error_code ec;

@@ -69,8 +69,8 @@ renderers { count = 1, lighting = caustics }
     const auto one = bench::run_farm(photons, {"replicas=1"}), two = bench::run_farm(photons, {"replicas=2"});
     shoot1.push_back(slowest(one, "shoot_seconds"));
     shoot2.push_back(slowest(two, "shoot_seconds"));
-    setup1.push_back(one.number("setup"));
-    setup2.push_back(two.number("setup"));
+    setup1.push_back(one.phase("setup"));
+    setup2.push_back(two.phase("setup"));
     exchange2.push_back(slowest(two, "exchange_seconds"));
 
     const std::vector<std::string> scale{"width=384", "height=384", "spp=16"};

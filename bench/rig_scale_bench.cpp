@@ -66,13 +66,6 @@ Run run_farm(const std::string& script, const std::vector<std::string>& sets) {
 }
 
 // The object after "key": in the stats text (the director's stats hold each per-stage map once).
-std::string object_of(const std::string& text, const std::string& key) {
-  const size_t at = text.find("\"" + key + "\"");
-  if (at == std::string::npos) return {};
-  const size_t open = text.find('{', at);
-  return text.substr(open, text.find('}', open) - open + 1);
-}
-
 size_t count(const std::string& text, const std::string& what) {
   size_t n = 0;
   for (size_t at = text.find(what); at != std::string::npos; at = text.find(what, at + 1)) ++n;
@@ -142,8 +135,8 @@ int main(int argc, char** argv) {
   for (int r = 0; r < runs; ++r)
     for (const Layout& l : layouts) {  // interleaved: a noisy moment hits every layout of a run
       const Run run = run_farm(l.script, l.sets);
-      const std::string phases = object_of(run.stats, "phases_seconds");
-      const std::string director = object_of(run.stats, "phases_director_cpu_seconds");
+      const std::string phases = bench::object_of(run.stats, "phases_seconds");
+      const std::string director = bench::object_of(run.stats, "phases_director_cpu_seconds");
       lf::Value::Map row{{"layout", l.label}, {"run", r}, {"exit", run.status}, {"wall_seconds", run.wall}};
       lf::Value::Map stage_seconds, stage_cpu;
       for (const char* s : stages) {
@@ -164,7 +157,7 @@ int main(int argc, char** argv) {
       row["render_msamples_per_second"] = msps;
       row["actors_lost"] = static_cast<int64_t>(lost);
       row["actors_that_heard_nothing"] = static_cast<int64_t>(silent);
-      row["scene_bytes_shipped"] = bench::json_number(object_of(run.stats, "bytes_shipped"), "h1");
+      row["scene_bytes_shipped"] = bench::json_number(bench::object_of(run.stats, "bytes_shipped"), "h1");
       std::printf("%-17s %3d", l.label.c_str(), run.status);
       for (const char* s : {"prepare", "launch", "hello", "configure", "setup", "render"})
         std::printf(" %7.2f", bench::json_number(phases, s));

@@ -97,14 +97,14 @@ int main(int argc, char** argv) {
   const auto frame_seconds = bench::json_numbers(job.stats, "seconds");  // the job's frames, in order
   std::vector<double> later(frame_seconds.begin() + (frame_seconds.empty() ? 0 : 1), frame_seconds.end());
   // The first frame's setup is the setup stage; a later frame's (what depends on the view) is in its own seconds.
-  const double first = frame_seconds.empty() ? 0 : job.number("setup") + frame_seconds.front();
+  const double first = frame_seconds.empty() ? 0 : job.phase("setup") + frame_seconds.front();
   const auto later_spread = bench::spread(later);
   const double job_idle = 1 - job.cpu_seconds / (job.wall_seconds * cpus);
   std::printf("job: %d frames in %.1f s (%.1f CPU-s; %.0f%% of %d CPUs idle); first frame %.2f s, later frames "
               "%.2f s (%.2f-%.2f)\n", args.frames, job.wall_seconds, job.cpu_seconds, 100 * job_idle, cpus, first,
               later_spread.median, later_spread.min, later_spread.max);
   std::printf("  phases: setup %.2f s, render %.2f s (the setups of frames after the first are in render)\n",
-              job.number("setup"), job.number("render"));
+              job.phase("setup"), job.phase("render"));
   std::fflush(stdout);
 
   // Separate runs of single frames, evenly spread over the walk.
