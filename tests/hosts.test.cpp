@@ -439,6 +439,34 @@ class SlurmTest : public HostsTest {
     r.err = read_file(path("salloc.err"));
     return r;
   }
+  // examples/slurm/walkthrough.sbatch as a job array of `tasks` (sbatch --wait), submitted from the test's folder
+  // with `env` set and `args` after the batch script's name; lightfarm is found on the PATH, as a user's would be.
+  RunResult submit_walkthrough(int tasks, const std::string& env, const std::vector<std::string>& args) {
+    RunResult r;
+    r.tag = unique_tag();
+    const std::string bin = std::string(LIGHTFARM_BINARY).substr(0, std::string(LIGHTFARM_BINARY).rfind('/'));
+    std::string cmd = "cd " + path("") + " && PATH=" + bin + ":$PATH LIGHTFARM_TEST_TAG=" + r.tag + " " + env +
+                      " SLURM_CONF=" + rig + "/slurm.conf sbatch --quiet --wait --array=0-" + std::to_string(tasks - 1) +
+                      " " + LIGHTFARM_SOURCE_DIR + "/examples/slurm/walkthrough.sbatch";
+    for (const auto& a : args) cmd += " '" + a + "'";
+    r.status = sh(cmd + " > " + path("sbatch.out") + " 2> " + path("sbatch.err"));
+    r.out = read_file(path("sbatch.out"));
+    r.err = read_file(path("sbatch.err"));
+    return r;
+  }
+  // The array tasks' logs (lightfarm-walk-JOB_TASK.log in the submit folder), by task, of the newest job.
+  std::map<int, std::string> task_logs() {
+    std::map<int, std::pair<long, std::string>> newest;  // task -> (job id, log)
+    for (const auto& e : fs::directory_iterator(path(""))) {
+      long job = 0;
+      int task = 0;
+      if (std::sscanf(e.path().filename().c_str(), "lightfarm-walk-%ld_%d.log", &job, &task) != 2) continue;
+      if (job >= newest[task].first) newest[task] = {job, read_file(e.path().string())};
+    }
+    std::map<int, std::string> logs;
+    for (auto& [task, log] : newest) logs[task] = log.second;
+    return logs;
+  }
   bool slurm_up = false;
 };
 
@@ -483,6 +511,68 @@ TEST_F(SlurmTest, AShippedSceneIsLoadedOncePerNodeByItsAgent) {
   EXPECT_TRUE(same_pixels(expected, *img));
   const std::string stats = read_file(path("stats.json"));
   expect_scenes_from_agents(stats);
+}
+
+// The walkthrough's batch script as a job array: each task renders its share of a job's frames with a farm on its
+// node, all record into one job folder (the nodes share this machine's file system, as a cluster's share NFS), and
+// a task that starts mid-job holds the carried cache and learned lights the uninterrupted job would (restored from
+// the folder or replayed). Together they give that job's frames bit for bit; submitted again after frames were
+// lost, the array renders only those.
+TEST_F(SlurmTest, TheWalkthroughArraysTasksTogetherGiveTheUninterruptedJobsFrames) {
+  const std::string script = write("turn.lua", R"(
+scene  { builtin = "cornell_glass" }
+image  { width = 32, height = 32, spp = 2, output = param("out", "turn.####.exr") }
+local function view(f)
+  local a = (f - 1) * 0.08
+  return { eye = {278 + 1073 * math.sin(a), 273, 273 - 1073 * math.cos(a)}, at = {278, 273, 273}, fov = 39.3 }
+end
+frames { first = 1, last = param("frames", 6), camera = view }
+farm { light_paths = "partial" }
+local direct   = lightop "direct" { light_sampling = "learned" }
+local indirect = lightop "irradiance" { input = lightop "pathtrace" { name = "paths" }, name = "indirect" }
+renderers { count = 1, lighting = lightop "combine" { inputs = { direct, indirect } } }
+)");
+  const auto whole = run_lightfarm({"run", script, "--quiet", "--checkpoint-every", "0", "--set", "out=" + path("ref.####.exr")});
+  ASSERT_EQ(whole.status, 0) << whole.err;
+  auto frame = [&](const std::string& name, int n) {
+    char file[64];
+    std::snprintf(file, sizeof file, "%s.%04d.exr", name.c_str(), n);
+    return path(file);
+  };
+  auto same_frames = [&] {
+    for (int n = 1; n <= 6; ++n) {
+      auto a = read_image(frame("ref", n)), b = read_image(frame("walk", n));
+      EXPECT_TRUE(a.ok() && b.ok() && same_pixels(*a, *b)) << "frame " << n << " differs from the uninterrupted job's";
+    }
+  };
+  const std::vector<std::string> args{"--set", "out=" + path("walk.####.exr"), "--checkpoint-every", "0"};
+  auto r = submit_walkthrough(3, "SCRIPT=turn.lua FRAMES=6", args);
+  ASSERT_EQ(r.status, 0) << r.err;
+  expect_nothing_left(r);
+  same_frames();
+  auto logs = task_logs();
+  ASSERT_EQ(logs.size(), 3u);
+  for (int task = 0; task < 3; ++task) {
+    EXPECT_NE(logs[task].find("wrote 2 frames"), std::string::npos) << "task " << task << ":\n" << logs[task];
+    // A task after the first starts mid-job: it caught up with the frames before its own.
+    if (task > 0) {
+      EXPECT_TRUE(logs[task].find("restored the setups carried over the views") != std::string::npos ||
+                  logs[task].find("replaying the views") != std::string::npos)
+          << "task " << task << ":\n" << logs[task];
+    }
+  }
+  // Frames lost (deleted, or one overwritten): the array again renders only those, to the same pixels.
+  fs::remove(frame("walk", 2));
+  fs::copy_file(frame("ref", 1), frame("walk", 5), fs::copy_options::overwrite_existing);
+  r = submit_walkthrough(3, "SCRIPT=turn.lua FRAMES=6", args);
+  ASSERT_EQ(r.status, 0) << r.err;
+  expect_nothing_left(r);
+  same_frames();
+  logs = task_logs();
+  ASSERT_EQ(logs.size(), 3u);
+  EXPECT_NE(logs[0].find("wrote 1 frame"), std::string::npos) << logs[0];
+  EXPECT_NE(logs[1].find("nothing to render"), std::string::npos) << logs[1];
+  EXPECT_NE(logs[2].find("wrote 1 frame"), std::string::npos) << logs[2];
 }
 
 }  // namespace
