@@ -105,6 +105,10 @@ ImageSpec ImageSpec::read(const ParamTable& p) {
     i.adaptive_threshold = p.get_float("adaptive_threshold", i.adaptive_threshold, 1e-6, 1);
   }
   i.tile = static_cast<int>(p.get_int("tile", i.tile, 1, 1024));
+  i.time_limit = p.get_float("time_limit", 0, 0, 1e7);
+  if (i.time_limit > 0 && i.adaptive_spp > 0)
+    throw ParamError("image: time_limit renders passes of spp samples while the time lasts; adaptive_spp, which "
+                     "shades more of one pass's samples where they are noisy, cannot be combined with it");
   i.output = p.get_string("output", i.output);
   i.exposure = p.get_float("exposure", i.exposure, -20, 20);
   i.tonemap = p.get_string("tonemap", i.tonemap, tonemaps());
@@ -116,6 +120,7 @@ Value ImageSpec::to_value() const {
   Value::Map m{{"width", width},   {"height", height},     {"spp", spp},         {"tile", tile},
                {"output", output}, {"exposure", exposure}, {"tonemap", tonemap}, {"sampler", sampler}};
   if (shade_spp > 0) m["shade_spp"] = shade_spp;
+  if (time_limit > 0) m["time_limit"] = time_limit;
   if (adaptive_spp > 0) {
     m["adaptive_spp"] = adaptive_spp;
     m["adaptive_threshold"] = adaptive_threshold;

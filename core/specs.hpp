@@ -69,6 +69,10 @@ struct ImageSpec {
   int adaptive_spp = 0;
   double adaptive_threshold = 0.05;
   int tile = 32;
+  // Seconds a frame may take (0: no limit): it renders passes of spp samples a pixel (pass p: samples p*spp up to
+  // (p+1)*spp, the continuation of each pixel's sequence) while the time lasts, and the image is the mean of the
+  // passes completed, at least one.
+  double time_limit = 0;
   std::string output = "out.png";
   // For 8-bit outputs (PNG, TIFF) only: scale by 2^exposure, then map to [0, 1] ("clamp", "reinhard", "aces").
   // EXR stays linear and untouched.

@@ -227,6 +227,10 @@ TEST_F(ScriptTest, BadParametersNameLineAndParameter) {
   EXPECT_EQ(error_of("image { spp = 8, adaptive_spp = 8 }\n"),
             "farm.lua:1: image: adaptive_spp needs shade_spp below spp (it shades more of the spp samples where the "
             "first shade_spp are noisy)");
+  EXPECT_EQ(error_of("image { spp = 8, shade_spp = 2, adaptive_spp = 8, time_limit = 60 }\n"),
+            "farm.lua:1: image: time_limit renders passes of spp samples while the time lasts; adaptive_spp, which "
+            "shades more of one pass's samples where they are noisy, cannot be combined with it");
+  EXPECT_EQ(error_of("image { time_limit = -1 }\n"), "farm.lua:1: image: parameter 'time_limit' must be in [0, 1e+07], got -1");
   EXPECT_EQ(error_of("image { spp = 8, shade_spp = 1, adaptive_spp = 8 }\n"),
             "farm.lua:1: image: adaptive_spp needs shade_spp of at least 2 (a pixel's spread needs two samples)");
   EXPECT_EQ(error_of("image { spp = 8, shade_spp = 2, adaptive_threshold = 0.1 }\n"),

@@ -5,6 +5,7 @@
 #include <signal.h>
 
 #include <algorithm>
+#include <cmath>
 #include <cstring>
 #include <map>
 
@@ -553,6 +554,53 @@ TEST_F(FarmTest, AKilledFrameResumesToTheSameImage) {
   EXPECT_TRUE(a->pixels == b->pixels) << "the resumed frame differs from the uninterrupted one";
   EXPECT_FALSE(fs::exists(path("x.png.lfresume")));
   expect_no_leftovers(resumed);
+}
+
+// image { time_limit }: passes of spp samples while the time lasts, each pass taking each pixel's next spp samples
+// (through a pool of lean inputs too, which rebuild the samples' keys from the tile), so that N passes are the
+// image of N x spp samples (up to the order of the sums); a limit no pass fits in still gives one whole pass.
+TEST_F(FarmTest, ATimeLimitedFrameIsTheMeanOfWholePassesOfTheNextSamples) {
+  const std::string script = write("limited.lua", R"(
+scene { builtin = "cornell" }
+image { width = 48, height = 48, spp = param("spp", 2), tile = 16, time_limit = param("time_limit", 0) }
+farm { light_paths = "partial" }
+renderers { count = 2, lighting = multiplexer { lightop "direct" {}, replicas = 2 } }
+)");
+  auto render = [&](const std::string& out, std::vector<std::string> sets) {
+    std::vector<std::string> args{"run", script, "--output", path(out)};
+    for (auto& s : sets) args.insert(args.end(), {"--set", s});
+    auto r = run_lightfarm(args);
+    EXPECT_EQ(r.status, 0) << r.err;
+    expect_no_leftovers(r);
+    return r;
+  };
+  const auto limited = render("limited.exr", {"time_limit=1.5"});
+  int passes = 0, samples = 0;
+  const size_t at = limited.err.find("limited.exr: ");
+  ASSERT_NE(at, std::string::npos) << limited.err;
+  ASSERT_EQ(std::sscanf(limited.err.c_str() + at, "limited.exr: %d pass%*[es] of 2 samples a pixel (%d)", &passes, &samples), 2)
+      << limited.err;
+  EXPECT_GE(passes, 2) << "a pass of this frame takes a few hundredths of a second";
+  EXPECT_EQ(samples, 2 * passes);
+  // The file says what made it.
+  auto notes = read_image_notes(path("limited.exr"));
+  ASSERT_TRUE(notes.ok()) << notes.error().message;
+  EXPECT_EQ(*notes, (ImageNotes{{"lightfarm:passes", std::to_string(passes)}, {"lightfarm:samples", std::to_string(samples)}}));
+  render("plain.exr", {"spp=" + std::to_string(samples)});
+  auto a = read_image(path("limited.exr")), b = read_image(path("plain.exr"));
+  ASSERT_TRUE(a.ok() && b.ok());
+  float worst = 0;
+  for (size_t i = 0; i < a->pixels.size(); ++i)
+    for (int c = 0; c < 3; ++c)
+      worst = std::max(worst, std::fabs(a->pixels[i][c] - b->pixels[i][c]) / std::max(1e-3f, b->pixels[i][c]));
+  EXPECT_LT(worst, 1e-4f) << passes << " passes of 2 samples are not the image of " << samples << " samples";
+
+  const auto one = render("one.exr", {"time_limit=0.000001"});
+  EXPECT_NE(one.err.find("one.exr: 1 pass of 2 samples a pixel (2)"), std::string::npos) << one.err;
+  render("two.exr", {});
+  auto c = read_image(path("one.exr")), d = read_image(path("two.exr"));
+  ASSERT_TRUE(c.ok() && d.ok());
+  EXPECT_TRUE(c->pixels == d->pixels) << "one pass is the image of spp samples";
 }
 
 TEST_F(FarmTest, GraphPrintsDotAndLaunchesNothing) {

@@ -17,7 +17,9 @@ const std::string* string_field(const Value& body, const char* key) {
 Value encode_tile_reply(const std::optional<Tile>& tile) {
   if (!tile) return Value::Map{};
   const TileRect& r = tile->rect;
-  return Value::Map{{"tile", Value::Map{{"id", tile->id}, {"x0", r.x0}, {"y0", r.y0}, {"x1", r.x1}, {"y1", r.y1}}}};
+  Value::Map t{{"id", tile->id}, {"x0", r.x0}, {"y0", r.y0}, {"x1", r.x1}, {"y1", r.y1}};
+  if (tile->first_sample > 0) t["first"] = static_cast<int64_t>(tile->first_sample);
+  return Value::Map{{"tile", std::move(t)}};
 }
 
 Result<std::optional<Tile>> decode_tile_reply(const Value& body, int width, int height) {
@@ -32,7 +34,10 @@ Result<std::optional<Tile>> decode_tile_reply(const Value& body, int width, int 
   if (get("id") < 0 || rect.x0 < 0 || rect.y0 < 0 || rect.x1 > width || rect.y1 > height || rect.width() <= 0 ||
       rect.height() <= 0)
     return bad("the render master sent a tile outside the image");
-  return std::optional<Tile>{Tile{static_cast<uint64_t>(get("id")), rect}};
+  int first = 0;
+  if (tile->find("first") && (first = get("first")) < 0)
+    return bad("the render master sent a tile whose first sample is not an index (0 to 2^31 - 1)");
+  return std::optional<Tile>{Tile{static_cast<uint64_t>(get("id")), rect, static_cast<uint32_t>(first)}};
 }
 
 Value encode_tile_done(uint64_t id, std::span<const float> rgb) {

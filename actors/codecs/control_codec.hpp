@@ -2,7 +2,8 @@
 // The director's tile and peer bodies (docs/PROTOCOL.md), defined once for the director's parts, the runtime and
 // the renderer; decoders check every field and its range, and an error says what is wrong.
 //   tile (renderer -> director): {}
-//     reply: { tile: {id, x0, y0, x1, y1} } (half-open, inside the image) | {} when no tile is left
+//     reply: { tile: {id, x0, y0, x1, y1, first?} } (half-open, inside the image; first: the pass's first sample
+//            index, 0 when absent) | {} when no tile is left
 //   tile_done (renderer -> director): { id, pixels: f32[3wh] }          reply: {}
 //   PEER_MOVED (director -> actor): { name, endpoint, key }  (key "" without CURVE or over same-host IPC)
 //   PEER_DOWN (director -> actor):  { name }
@@ -23,6 +24,8 @@ namespace lf::control {
 struct Tile {
   uint64_t id = 0;
   TileRect rect;
+  // A time-limited frame's pass: the tile's pixels take their samples from this index on (sent when not 0).
+  uint32_t first_sample = 0;
 };
 Value encode_tile_reply(const std::optional<Tile>& tile);
 // nullopt: no tile is left. An error for a tile outside a `width` x `height` image or an empty one.

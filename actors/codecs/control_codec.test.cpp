@@ -23,6 +23,15 @@ TEST(ControlCodec, TilesRoundTripAndStayInsideTheImage) {
   EXPECT_FALSE(decode_tile_reply(encode_tile_reply(Tile{1, TileRect{8, 8, 8, 16}}), 64, 48).ok()) << "empty";
   EXPECT_FALSE(decode_tile_reply(Value::Map{{"tile", Value::Map{{"id", -1}}}}, 64, 48).ok());
   EXPECT_FALSE(decode_tile_reply(Value("tile"), 64, 48).ok());
+  // A time-limited frame's later pass: its first sample travels; the first pass's says nothing (0).
+  EXPECT_EQ(encode_tile_reply(tile).find("tile")->find("first"), nullptr);
+  auto pass = decode_tile_reply(encode_tile_reply(Tile{3, TileRect{0, 0, 16, 16}, 48}), 64, 48);
+  ASSERT_TRUE(pass.ok() && pass->has_value());
+  EXPECT_EQ((*pass)->first_sample, 48u);
+  auto bad = decode_tile_reply(
+      Value::Map{{"tile", Value::Map{{"id", 1}, {"x0", 0}, {"y0", 0}, {"x1", 8}, {"y1", 8}, {"first", -2}}}}, 64, 48);
+  ASSERT_FALSE(bad.ok());
+  EXPECT_EQ(bad.error().message, "the render master sent a tile whose first sample is not an index (0 to 2^31 - 1)");
 }
 
 TEST(ControlCodec, TileDoneCarriesItsPixels) {

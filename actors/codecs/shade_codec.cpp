@@ -1,5 +1,6 @@
 #include "actors/codecs/shade_codec.hpp"
 
+#include <cstdint>
 #include <cstring>
 #include <map>
 
@@ -44,8 +45,10 @@ Value encode_tile_request(const TileWork& work, size_t begin, size_t end, PointF
   if (fields.key) {
     map["k"] = u64_to_bytes(std::span<const uint64_t>(pts.key.data() + begin, end - begin));
   } else {
-    map["tile"] = Value::Array{int64_t{work.rect.x0}, int64_t{work.rect.y0}, int64_t{work.rect.x1},
-                               int64_t{work.rect.y1}, int64_t{work.spp}};
+    Value::Array tile{int64_t{work.rect.x0}, int64_t{work.rect.y0}, int64_t{work.rect.x1}, int64_t{work.rect.y1},
+                      int64_t{work.spp}};
+    if (work.rect.first_sample > 0) tile.push_back(static_cast<int64_t>(work.rect.first_sample));
+    map["tile"] = std::move(tile);
     map["s"] = u32_to_bytes(std::span<const uint32_t>(work.sample_of_point.data() + begin, end - begin));
     if (fold) map["fold"] = true;
   }
@@ -69,17 +72,20 @@ static Result<size_t> read_count(const Value& body) {
   return static_cast<size_t>(n->as_int());
 }
 
-// The tile [x0, y0, x1, y1, spp] a request's sample indices refer to; spp within [1, kMaxTileSide].
+// The tile [x0, y0, x1, y1, spp, first?] a request's sample indices refer to; spp within [1, kMaxTileSide], first
+// (a time-limited frame's pass: the pixels' first sample index, 0 when absent) within [0, 2^31).
 constexpr int64_t kMaxTileSide = int64_t{1} << 24;  // beyond any image's pixels per side or samples per pixel
 
-static bool read_tile(const Value& body, int64_t (&v)[5]) {
+static bool read_tile(const Value& body, int64_t (&v)[6]) {
   const Value* tile = body.find("tile");
-  bool ok = tile && tile->is_array() && tile->as_array().size() == 5;
-  for (size_t i = 0; ok && i < 5; ++i) {
+  const size_t size = tile && tile->is_array() ? tile->as_array().size() : 0;
+  bool ok = size == 5 || size == 6;
+  v[5] = 0;
+  for (size_t i = 0; ok && i < size; ++i) {
     ok = tile->as_array()[i].is_int();
     if (ok) v[i] = tile->as_array()[i].as_int();
   }
-  return ok && v[4] >= 1 && v[4] <= kMaxTileSide;
+  return ok && v[4] >= 1 && v[4] <= kMaxTileSide && v[5] >= 0 && v[5] <= INT32_MAX;
 }
 
 Result<std::optional<PixelFold>> decode_pixel_fold(const Value& body) {
@@ -88,7 +94,7 @@ Result<std::optional<PixelFold>> decode_pixel_fold(const Value& body) {
   if (!fold->is_bool()) return make_error("shade request 'fold' must be true or false");
   auto n = read_count(body);
   if (!n) return make_error("shade request: " + n.error().message);
-  int64_t v[5] = {};
+  int64_t v[6] = {};
   if (!read_tile(body, v)) return make_error("shade request: 'fold' needs a tile [x0, y0, x1, y1, spp]");
   PixelFold out;
   out.spp = static_cast<int>(v[4]);
@@ -124,13 +130,14 @@ Result<ShadeRequest> decode_shade_request(const Value& body) {
       return make_error("shade request 'm' must hold " + std::to_string(*n) + " u32 material ids");
   const Value* k = body.find("k");
   if (const Value* s = body.find("s"); !k && s) {
-    int64_t v[5] = {};
+    int64_t v[6] = {};
     if (!read_tile(body, v) || v[0] < 0 || v[1] < 0 || v[0] >= v[2] || v[1] >= v[3] || v[2] > kMaxTileSide ||
         v[3] > kMaxTileSide)
       return make_error("shade request has neither 'k' nor a tile [x0, y0, x1, y1, spp]");
     if (!s->is_bytes() || !bytes_to_u32(s->as_bytes(), req.samples) || req.samples.size() != *n)
       return make_error("shade request 's' must hold " + std::to_string(*n) + " u32 sample indices");
-    req.tile = TileRect{static_cast<int>(v[0]), static_cast<int>(v[1]), static_cast<int>(v[2]), static_cast<int>(v[3])};
+    req.tile = TileRect{static_cast<int>(v[0]), static_cast<int>(v[1]), static_cast<int>(v[2]), static_cast<int>(v[3]),
+                        static_cast<uint32_t>(v[5])};
     req.spp = static_cast<int>(v[4]);
   } else if (!k || !k->is_bytes() || !bytes_to_u64(k->as_bytes(), pts.key) || pts.key.size() != *n) {
     return make_error("shade request 'k' must hold " + std::to_string(*n) + " u64 sample keys");

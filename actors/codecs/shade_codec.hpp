@@ -4,7 +4,8 @@
 //            (little-endian bins). nrm and m may be left out when tri is there and the receiver takes them from
 //            the scene (a "lean" input): they are then the triangle's shading normal at p and its material.
 //            A renderer's request to a lean input may also carry o: f32[3] and t: f32[n] instead of p (p = o - wo t)
-//            and tile: [x0, y0, x1, y1, spp] and s: u32[n] instead of k (the tile's s-th sample's key).
+//            and tile: [x0, y0, x1, y1, spp, first?] and s: u32[n] instead of k (the tile's s-th sample's key; first:
+//            a time-limited frame's pass, the index its pixels' samples start from, 0 when absent).
 //            Such a request may also say fold: true, and then holds whole pixels (no pixel's points are split
 //            between two requests): its reply holds one value per run of consecutive points in one pixel, their
 //            radiance summed (fold_by_pixel), instead of one per point.

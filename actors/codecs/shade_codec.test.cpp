@@ -78,6 +78,9 @@ TEST(ShadeCodec, InconsistentRequestsAreRefusedWithAReason) {
   EXPECT_EQ(decode_shade_request(body).error().message, "shade request has neither 'k' nor a tile [x0, y0, x1, y1, spp]");
   body.as_map()["tile"] = Value::Array{int64_t{0}, int64_t{0}, int64_t{2}, int64_t{1}, int64_t{1}};
   EXPECT_EQ(decode_shade_request(body).error().message, "shade request 's' must hold 4 u32 sample indices");
+  body.as_map()["tile"] = Value::Array{int64_t{0}, int64_t{0}, int64_t{2}, int64_t{1}, int64_t{1}, int64_t{-1}};
+  EXPECT_EQ(decode_shade_request(body).error().message, "shade request has neither 'k' nor a tile [x0, y0, x1, y1, spp]")
+      << "a pass's first sample is an index";
 }
 
 TEST(ShadeCodec, RadianceCountMustMatch) {

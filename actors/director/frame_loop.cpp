@@ -176,7 +176,7 @@ void FrameLoop::run(const std::function<void(wire::Phase, Value::Map)>& run_phas
     if (auto st = tiles_.write_frame(); !st) throw FarmFailure{st.error().message};
     ++written_;
     const double seconds = std::chrono::duration<double>(Clock::now() - start).count();
-    figures_.push_back({f.frame.number, seconds, f.frame.output});
+    figures_.push_back({f.frame.number, seconds, f.frame.output, std::max(1, tiles_.passes()) * spec_.image.spp});
     if (!record_) continue;
     if (auto st = record_->add(f.frame.number, f.key, f.frame.output); !st)
       log_warn(st.error().message + "; a later run will render frame " + std::to_string(f.frame.number) + " again");
@@ -209,11 +209,14 @@ Value FrameLoop::status(double current_done) const {
 
 void FrameLoop::add_figures(RunFigures& f) const {
   f.frames_rendered = figures_.size();
+  f.pixel_samples = 0;
+  for (const auto& fig : figures_) f.pixel_samples += static_cast<uint64_t>(fig.samples);
   if (!record_) return;
   Value::Array frames;
   double seconds = 0;
   for (const auto& fig : figures_) {
-    frames.push_back(Value::Map{{"frame", static_cast<int64_t>(fig.number)}, {"seconds", fig.seconds}, {"output", fig.output}});
+    frames.push_back(Value::Map{{"frame", static_cast<int64_t>(fig.number)}, {"seconds", fig.seconds}, {"output", fig.output},
+                                {"samples", static_cast<int64_t>(fig.samples)}});
     seconds += fig.seconds;
   }
   f.render_seconds = seconds;

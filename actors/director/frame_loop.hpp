@@ -83,6 +83,7 @@ class FrameLoop {
     int number = 0;
     double seconds = 0;
     std::string output;
+    int samples = 0;  // a pixel's: spp, or a time-limited frame's passes times spp
   };
   std::vector<FrameFigures> figures_;
 };

@@ -14,10 +14,17 @@ double num(const Value& stats, const char* key) {
   const Value* v = stats.find(key);
   return v && v->is_number() ? v->as_double() : 0.0;
 }
+
+// Every camera sample the run rendered.
+double samples_rendered(const FarmSpec& spec, const RunFigures& f) {
+  const double per_pixel = f.pixel_samples > 0 ? static_cast<double>(f.pixel_samples)
+                                                : static_cast<double>(spec.image.spp) * static_cast<double>(f.frames_rendered);
+  return static_cast<double>(spec.image.width) * spec.image.height * per_pixel;
+}
 }  // namespace
 
 void print_report(const FarmSpec& spec, const Supervisor& supervisor, const RunFigures& f) {
-  const double samples = static_cast<double>(spec.image.width) * spec.image.height * spec.image.spp * f.frames_rendered;
+  const double samples = samples_rendered(spec, f);
   std::fprintf(stderr, "\n%-12s %9s %7s\n", "phase", "seconds", "share");
   for (const auto& [name, secs] : f.stage_seconds)
     std::fprintf(stderr, "%-12s %9.3f %6.1f%%\n", name.c_str(), secs, 100.0 * secs / f.total_seconds);
@@ -73,13 +80,17 @@ void print_report(const FarmSpec& spec, const Supervisor& supervisor, const RunF
     what = std::to_string(list.size()) + " frame" + (list.size() == 1 ? ": " : "s: ") + list.front().find("output")->as_string();
     if (list.size() > 1) what += (list.size() > 2 ? " ... " : ", ") + list.back().find("output")->as_string();
   }
-  std::printf("wrote %s (%dx%d, %d spp%s)\n", what.c_str(), spec.image.width, spec.image.height, spec.image.spp,
-              shaded.c_str());
+  // A time-limited frame alone: the samples its passes gave (a job's frames each said theirs).
+  const std::string spp = spec.image.time_limit > 0 && f.frames_rendered == 1 && f.pixel_samples > 0
+                              ? std::to_string(f.pixel_samples) + " spp in " +
+                                    std::to_string(f.pixel_samples / static_cast<uint64_t>(spec.image.spp)) + " passes"
+                              : std::to_string(spec.image.spp) + " spp";
+  std::printf("wrote %s (%dx%d, %s%s)\n", what.c_str(), spec.image.width, spec.image.height, spp.c_str(), shaded.c_str());
 }
 
 Status write_stats_json(const FarmSpec& spec, const Supervisor& supervisor, const RunFigures& f,
                         const std::string& path) {
-  const double samples = static_cast<double>(spec.image.width) * spec.image.height * spec.image.spp * f.frames_rendered;
+  const double samples = samples_rendered(spec, f);
   Value::Map phases;
   Value::Map director_phases;
   for (size_t i = 0; i < f.stage_seconds.size(); ++i) {
@@ -117,6 +128,7 @@ Status write_stats_json(const FarmSpec& spec, const Supervisor& supervisor, cons
                          {"render_samples_per_second", f.render_seconds > 0 ? samples / f.render_seconds : 0.0},
                          {"first_tile_seconds", f.first_tile_seconds},
                          {"render_seconds", f.render_seconds},
+                         {"pixel_samples", samples / (static_cast<double>(spec.image.width) * spec.image.height)},
                          {"totals", Value::Map{{"renderer_shading_requests", shading_requests},
                                                {"messages_sent", messages},
                                                {"actors_cpu_seconds", actors_cpu},

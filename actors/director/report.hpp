@@ -18,6 +18,9 @@ struct RunFigures {
   double render_seconds = 0;       // a job's: every frame's, PHASE frame to image written
   double first_tile_seconds = 0;  // from the director's start
   size_t frames_rendered = 1;
+  // Samples a pixel, summed over the frames rendered: each frame's spp, a time-limited frame's passes times spp
+  // (0: spp times frames_rendered).
+  uint64_t pixel_samples = 0;
   Value frames;                   // a job's: {frames: [{frame, seconds, output}], skipped, record}; nil for one frame
   Value radiosity;                // the ring's report, or nil
   Value scene;                    // a shipped scene: {hash, bytes, bytes_shipped: {host: bytes}}, or nil

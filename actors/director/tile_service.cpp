@@ -15,6 +15,7 @@ using Clock = std::chrono::steady_clock;
 
 TileService::TileService(const ImageSpec& image, std::vector<std::string> renderers, bool terminal, bool quiet)
     : image_(image),
+      quiet_(quiet),
       renderers_(std::move(renderers)),
       master_(image.width, image.height, image.tile),
       progress_(terminal, quiet, master_.total(), static_cast<uint64_t>(image.tile) * image.tile * image.spp) {}
@@ -26,7 +27,7 @@ double TileService::render_seconds() const {
 Status TileService::on_phase(wire::Phase phase, Outbox& out) {
   if (phase != wire::Phase::render) return Ok{};
   rendering_ = true;
-  render_start_ = last_progress_ = Clock::now();
+  render_start_ = last_progress_ = pass_start_ = Clock::now();
   serve_waiting(out);
   return Ok{};
 }
@@ -52,17 +53,33 @@ std::string TileService::holders() const {
          " waiting";
 }
 
-void TileService::finish_progress() { progress_.update(master_.done(), render_seconds(), true); }
+void TileService::finish_progress() {
+  progress_.update(image_.time_limit > 0 ? master_.total() : master_.done(), render_seconds(), true);
+}
+
+size_t TileService::progress_done() const {
+  if (image_.time_limit <= 0) return master_.done();
+  // A time-limited frame's bar is its time: the tiles' share of it spent.
+  const double spent = std::min(1.0, render_seconds() / image_.time_limit);
+  return std::min(master_.total() - 1, static_cast<size_t>(spent * static_cast<double>(master_.total())));
+}
 
 Status TileService::write_frame() {
-  if (auto st = write_image(master_.film(), image_.output, display()); !st) return st;
+  // What made the image, in the file: its samples a pixel, and a time-limited frame's passes.
+  ImageNotes notes{{"lightfarm:samples", std::to_string(std::max(1, passes_) * image_.spp)}};
+  if (image_.time_limit > 0) notes.emplace_back("lightfarm:passes", std::to_string(passes_));
+  if (auto st = write_image(film(), image_.output, display(), notes); !st) return st;
+  if (image_.time_limit > 0 && !quiet_)
+    log_info(image_.output + ": " + std::to_string(passes_) + " pass" + (passes_ == 1 ? "" : "es") + " of " +
+             std::to_string(image_.spp) + " samples a pixel (" + std::to_string(passes_ * image_.spp) + ") in " +
+             seconds_text(render_seconds()) + " of rendering (time_limit " + seconds_text(image_.time_limit) + ")");
   written_ = true;
   if (checkpoint_) checkpoint_->remove();
   if (preview_every_ > 0) {
     std::error_code ec;
     std::filesystem::remove(preview_path(image_.output), ec);
   }
-  if (all_black(master_.film()))
+  if (all_black(film()))
     log_warn(image_.output + ": every pixel is 0, nothing the camera sees is lit: it may look at the back of the "
              "scene's surfaces from outside or past them (`lightfarm scene FILE.obj` suggests a camera that frames "
              "the scene), or the lights may face away from what it sees");
@@ -81,7 +98,7 @@ void TileService::write_preview() {
   const auto now = Clock::now();
   if (std::chrono::duration<double>(now - last_preview_).count() < preview_every_) return;
   last_preview_ = now;
-  if (auto st = write_image(master_.film(), preview_path(image_.output), display()); !st)
+  if (auto st = write_image(film(), preview_path(image_.output), display()); !st)
     log_warn("cannot write the preview: " + st.error().message + "; no more previews of this frame"), preview_every_ = 0;
 }
 
@@ -97,7 +114,11 @@ void TileService::begin_frame(const std::string& output, const std::string& key,
   written_ = false;
   checkpoint_.reset();
   resumed_ = 0;
-  if (interval <= 0) return;
+  passes_ = 0;
+  sum_.clear();
+  passes_finished_ = giving_up_ = false;
+  // A time-limited frame's passes are not checkpointed: which it completes depends on the time anyway.
+  if (interval <= 0 || image_.time_limit > 0) return;
   checkpoint_.emplace(output + ".lfresume", key, image_.width, image_.height, image_.tile, interval);
   if (restart) checkpoint_->remove();
   std::string note;
@@ -125,12 +146,22 @@ Status TileService::on_request(const std::string& actor, wire::Op op, uint64_t i
     return Ok{};
   }
   out.reply(actor, id, Value::Map{});
+  if (giving_up_) {
+    // A tile of the pass given up: dropped, unless it completes the pass after all. The frame is done once none is out.
+    if (master_.finished()) add_pass();
+    if (master_.held().empty()) passes_finished_ = true, serve_waiting(out);
+    return Ok{};
+  }
+  if (image_.time_limit > 0 && master_.finished()) {
+    pass_completed();
+    serve_waiting(out);
+  }
   if (checkpoint_) checkpoint_->save(master_);
   if (!master_.finished()) write_preview();
   last_progress_ = Clock::now();
   // The farm's first tile (a job's later frames keep the first frame's figure).
   if (first_tile_seconds_ == 0 && master_.done() == resumed_ + 1) first_tile_seconds_ = render_seconds();
-  progress_.update(master_.done(), render_seconds());
+  progress_.update(progress_done(), render_seconds());
   if (master_.finished()) serve_waiting(out);
   return Ok{};
 }
@@ -144,14 +175,44 @@ Status TileService::on_lost(const std::string& actor, const std::string& why, Ou
   return Ok{};
 }
 
+void TileService::add_pass() {
+  const Image& pass = master_.film();
+  if (sum_.empty()) sum_.assign(pass.pixels.size(), RGB{});
+  for (size_t i = 0; i < sum_.size(); ++i) sum_[i] += pass.pixels[i];
+  ++passes_;
+  mean_ = Image(pass.width, pass.height);
+  const float inv = 1.0f / static_cast<float>(passes_);
+  for (size_t i = 0; i < sum_.size(); ++i) mean_.pixels[i] = sum_[i] * inv;
+}
+
+void TileService::pass_completed() {
+  add_pass();
+  const auto now = Clock::now();
+  const double pass_seconds = std::chrono::duration<double>(now - pass_start_).count();
+  if (render_seconds() + pass_seconds > image_.time_limit) {
+    passes_finished_ = true;  // another pass would not fit
+    return;
+  }
+  master_ = RenderMaster(image_.width, image_.height, image_.tile);
+  pass_start_ = now;
+}
+
+bool TileService::out_of_time() const {
+  return image_.time_limit > 0 && passes_ > 0 && !passes_finished_ && render_seconds() > image_.time_limit;
+}
+
 // Answers waiting tile requests: a tile each while tiles are free; "none left" once every tile is done.
 void TileService::serve_waiting(Outbox& out) {
   if (!rendering_) return;
+  if (out_of_time()) giving_up_ = true;
+  if (giving_up_ && master_.held().empty()) passes_finished_ = true;
   while (!waiting_.empty()) {
     const auto [actor, id] = waiting_.front();
     std::optional<control::Tile> tile;
-    if (auto t = master_.next(actor)) {
-      tile = control::Tile{t->id, t->rect};
+    if (giving_up_ || passes_finished_) {
+      // none: the frame has every pass it will get
+    } else if (auto t = master_.next(actor)) {
+      tile = control::Tile{t->id, t->rect, static_cast<uint32_t>(passes_) * static_cast<uint32_t>(image_.spp)};
     } else if (!master_.finished()) {
       return;  // keep waiting
     }

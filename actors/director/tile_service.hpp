@@ -6,6 +6,10 @@
 //                                             ERROR bad_request for a body without id and pixels
 // A tile request waits while no tile is free but some are out with others (a lost renderer's tiles come back),
 // and before the render phase. A lost renderer's tiles go back in line.
+// A time-limited frame (image.time_limit) renders passes: once every tile of a pass is in, the pass joins the
+// frame's sum and, if another pass of the last one's length still fits in the time, the tiles go out again with
+// the next pass's first sample (tile.first). Past the time a pass is given up: no tile goes out, its tiles still
+// out are taken and dropped, and the frame is the mean of the passes completed (at least one).
 #include <memory>
 #include <optional>
 #include <utility>
@@ -47,8 +51,11 @@ class TileService final : public Service {
   // then. A frame whose every pixel is 0 is written with a warning naming the likely causes.
   Status write_frame();
   const std::string& output() const { return image_.output; }  // the frame's
-  bool finished() const { return master_.finished(); }
-  const Image& film() const { return master_.film(); }
+  bool finished() const { return image_.time_limit > 0 ? passes_finished_ : master_.finished(); }
+  // The frame's image: the pass being rendered, or a time-limited frame's mean of its completed passes.
+  const Image& film() const { return passes_ > 0 ? mean_ : master_.film(); }
+  // A time-limited frame's completed passes (0 for any other frame).
+  int passes() const { return passes_; }
   size_t tiles_done() const { return master_.done(); }
   size_t tiles_total() const { return master_.total(); }
   // Seconds from the render phase's start to the first finished tile, and to now.
@@ -66,8 +73,16 @@ class TileService final : public Service {
 
  private:
   void serve_waiting(Outbox& out);
+  // What the progress bar shows done: tiles, or a time-limited frame's share of its time (in tiles).
+  size_t progress_done() const;
+  // A time-limited frame's pass is complete: it joins the mean (add_pass), and the next begins if it fits in the time.
+  void pass_completed();
+  void add_pass();
+  // Past a time-limited frame's time with a pass complete: the pass under way is given up.
+  bool out_of_time() const;
 
   ImageSpec image_;  // output: the frame's
+  bool quiet_ = false;
   std::vector<std::string> renderers_;
   RenderMaster master_;
   Progress progress_;
@@ -81,6 +96,13 @@ class TileService final : public Service {
   double preview_every_ = 0;
   std::chrono::steady_clock::time_point last_preview_;
   size_t resumed_ = 0;
+  // A time-limited frame: passes completed, their sum and mean, when the pass under way began, and whether the
+  // frame has every pass it will get (the last given up, or none more fits).
+  int passes_ = 0;
+  std::vector<RGB> sum_;
+  Image mean_;
+  std::chrono::steady_clock::time_point pass_start_;
+  bool passes_finished_ = false, giving_up_ = false;
   // The partial frame to preview_path(output), if `preview_every_` has passed since the last.
   void write_preview();
   Display display() const { return {static_cast<float>(image_.exposure), image_.tonemap}; }

@@ -4,7 +4,9 @@
 
 #include <gtest/gtest.h>
 
+#include <chrono>
 #include <set>
+#include <thread>
 
 #include "actors/director/service_test_support.hpp"
 
@@ -110,6 +112,95 @@ TEST(TileService, ALostRenderersTilesGoToAWaitingOne) {
   EXPECT_EQ(sent[0].actor, "r1");
   EXPECT_EQ(sent[0].id, 2u);
   EXPECT_EQ(sent[0].body.find("tile")->find("id")->as_int(), id);
+}
+
+// A time-limited frame: its tiles go out pass after pass while the time lasts, each pass's from the sample after
+// the last pass's (tile.first), and the film is the mean of the passes completed.
+struct Passes {
+  TileService service;
+  RecordingOutbox out;
+  uint64_t req = 1;
+  explicit Passes(double time_limit) : service(limited(time_limit), {"r0", "r1"}, false, true) {
+    EXPECT_TRUE(service.on_phase(wire::Phase::render, out).ok());
+  }
+  static ImageSpec limited(double time_limit) {
+    ImageSpec i = image(32, 16, 16);  // two tiles
+    i.spp = 2;
+    i.time_limit = time_limit;
+    return i;
+  }
+  // `renderer` asks for a tile: the reply's tile (a map), or null when none is given.
+  Value ask(const char* renderer) {
+    EXPECT_TRUE(service.on_request(renderer, Op::tile, req++, Value::Map{}, out).ok());
+    auto sent = out.take();
+    if (sent.empty()) return Value();  // waiting
+    EXPECT_EQ(sent.size(), 1u);
+    return sent.back().body;
+  }
+  void finish(const char* renderer, const Value& tile, float v) {
+    ASSERT_TRUE(service.on_request(renderer, Op::tile_done, req++,
+                                   Value::Map{{"id", tile.find("tile")->find("id")->as_int()}, {"pixels", pixels_for(tile, v)}},
+                                   out)
+                    .ok());
+    for (const auto& m : out.take())
+      if (m.actor == renderer) EXPECT_FALSE(m.refused) << m.message;
+  }
+  static int64_t first(const Value& tile) {
+    const Value* f = tile.find("tile")->find("first");
+    return f ? f->as_int() : 0;
+  }
+};
+
+TEST(TileService, ATimeLimitedFrameRendersPassesWhileTheTimeLastsAndShowsTheirMean) {
+  Passes p(60);
+  for (int pass = 0; pass < 3; ++pass) {
+    const Value a = p.ask("r0"), b = p.ask("r1");
+    ASSERT_TRUE(a.find("tile") && b.find("tile")) << "pass " << pass;
+    EXPECT_EQ(Passes::first(a), 2 * pass) << "pass " << pass << " takes the next spp samples of each pixel";
+    EXPECT_EQ(Passes::first(b), 2 * pass);
+    p.finish("r0", a, static_cast<float>(pass + 1));
+    p.finish("r1", b, static_cast<float>(pass + 1));
+    EXPECT_EQ(p.service.passes(), pass + 1);
+    EXPECT_FALSE(p.service.finished()) << "time is left: another pass goes out";
+    for (const RGB& px : p.service.film().pixels) ASSERT_EQ(px.x, static_cast<float>(pass + 2) / 2) << "the mean of passes 1.." << pass + 1;
+  }
+}
+
+TEST(TileService, PastItsTimeAFrameGivesUpThePassUnderWayAndKeepsTheCompletedOnes) {
+  Passes p(0.3);
+  Value a = p.ask("r0"), b = p.ask("r1");
+  p.finish("r0", a, 1);
+  p.finish("r1", b, 1);
+  ASSERT_EQ(p.service.passes(), 1);
+  ASSERT_FALSE(p.service.finished()) << "a pass that took no time fits in 0.3 s";
+  // Pass 2: both tiles out; the time runs out before they are in.
+  a = p.ask("r0");
+  b = p.ask("r1");
+  ASSERT_EQ(Passes::first(a), 2);
+  std::this_thread::sleep_for(std::chrono::milliseconds(400));
+  p.finish("r0", a, 50);
+  EXPECT_EQ(p.ask("r0").find("tile"), nullptr) << "no tile goes out past the time";
+  EXPECT_FALSE(p.service.finished()) << "r1's tile is still out";
+  // r1's tile completes pass 2 after all: it counts. Then nothing more.
+  p.finish("r1", b, 50);
+  EXPECT_TRUE(p.service.finished());
+  EXPECT_EQ(p.service.passes(), 2);
+  for (const RGB& px : p.service.film().pixels) ASSERT_EQ(px.x, 25.5f);
+  EXPECT_EQ(p.ask("r1").find("tile"), nullptr);
+}
+
+TEST(TileService, APassLeftIncompletePastTheTimeIsDropped) {
+  Passes p(0.3);
+  Value a = p.ask("r0"), b = p.ask("r1");
+  p.finish("r0", a, 1);
+  p.finish("r1", b, 1);
+  a = p.ask("r0");  // pass 2's first tile; its second is never handed out
+  std::this_thread::sleep_for(std::chrono::milliseconds(400));
+  p.finish("r0", a, 50);
+  EXPECT_EQ(p.ask("r1").find("tile"), nullptr);
+  EXPECT_TRUE(p.service.finished());
+  EXPECT_EQ(p.service.passes(), 1);
+  for (const RGB& px : p.service.film().pixels) ASSERT_EQ(px.x, 1.0f) << "the half pass is not in the image";
 }
 
 }  // namespace

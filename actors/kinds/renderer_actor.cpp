@@ -118,7 +118,8 @@ class RendererActor final : public Actor {
   }
 
   void start_tile(const control::Tile& tile, Runtime& rt) {
-    const TileRect rect = tile.rect;
+    TileRect rect = tile.rect;
+    rect.first_sample = tile.first_sample;  // a time-limited frame's pass
     auto job = std::make_shared<TileJob>();
     job->id = tile.id;
     jobs_.push_back(job);

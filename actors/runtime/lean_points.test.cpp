@@ -167,6 +167,17 @@ TEST(LeanPoints, ACameraRequestCarriesDistancesAndSampleIndicesAndRebuildsTheRen
     ASSERT_TRUE(part.ok()) << part.error().message;
     EXPECT_EQ(part->key[0], work.points.key[7]);
     EXPECT_EQ(std::memcmp(&part->position.back(), &work.points.position[n - 6], sizeof(Vec3)), 0);
+    // A time-limited frame's later pass: the tile's samples are each pixel's from `first_sample` on, and its keys
+    // are rebuilt as such (none of them the first pass's).
+    const TileWork later = cornell.trace(image, TileRect{16, 8, 32, 24, 9});
+    ASSERT_GT(later.points.size(), 100u);
+    const Value later_body = tile_request(later, 0, later.points.size(), scene, kind, image.width);
+    ASSERT_EQ(later_body.find("tile")->as_array().size(), 6u);
+    auto later_back = read_shade_request(later_body, scene.materials().size(), scene.triangle_count(), &scene, &keys);
+    ASSERT_TRUE(later_back.ok()) << later_back.error().message;
+    EXPECT_EQ(later_back->key, later.points.key);
+    EXPECT_EQ(later.points.key[0], pixel_sample_key(kind, 8 * 64 + 16, 9)) << "pixel (16, 8), sample 9";
+    EXPECT_EQ(work.points.key[0], pixel_sample_key(kind, 8 * 64 + 16, 0));
     // Without the image's width and sampler the keys cannot be rebuilt, and the request says what it lacks.
     EXPECT_EQ(read_shade_request(body, scene.materials().size(), scene.triangle_count(), &scene).error().message,
               "shade request 'k' must hold " + std::to_string(n) + " u64 sample keys");

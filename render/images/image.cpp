@@ -108,12 +108,15 @@ void* open_module(const char* env, const char* name, const char* build_path, std
 
 // The OpenImageIO module (image_oiio.cpp), loaded on first use.
 struct ImageModule {
-  using WriteFn = int (*)(const char*, int, int, int, const float*, const unsigned char*, const char*, char*, size_t);
+  using WriteFn = int (*)(const char*, int, int, int, const float*, const unsigned char*, const char*,
+                          const char* const*, char*, size_t);
   using ReadFn = int (*)(const char*, float**, int*, int*, char*, size_t);
   using ReadTexelsFn = int (*)(const char*, unsigned char**, int*, int*, int*, int*, char*, size_t);
+  using ReadNotesFn = int (*)(const char*, const char*, char*, size_t, char*, size_t);
   WriteFn write = nullptr;
   ReadFn read = nullptr;
   ReadTexelsFn read_texels = nullptr;
+  ReadNotesFn read_notes = nullptr;
   std::string error;
 };
 
@@ -122,10 +125,11 @@ const ImageModule& image_module() {
     ImageModule m;
     void* handle = open_module("LIGHTFARM_IMAGEIO_MODULE", LIGHTFARM_IMAGEIO_NAME, LIGHTFARM_IMAGEIO_BUILD_PATH, m.error);
     if (!handle) return m;
-    m.write = reinterpret_cast<ImageModule::WriteFn>(::dlsym(handle, "lightfarm_imageio_write"));
+    m.write = reinterpret_cast<ImageModule::WriteFn>(::dlsym(handle, "lightfarm_imageio_write_annotated"));
     m.read = reinterpret_cast<ImageModule::ReadFn>(::dlsym(handle, "lightfarm_imageio_read"));
     m.read_texels = reinterpret_cast<ImageModule::ReadTexelsFn>(::dlsym(handle, "lightfarm_imageio_read_texels"));
-    if (!m.write || !m.read || !m.read_texels) {
+    m.read_notes = reinterpret_cast<ImageModule::ReadNotesFn>(::dlsym(handle, "lightfarm_imageio_read_notes"));
+    if (!m.write || !m.read || !m.read_texels || !m.read_notes) {
       m = ImageModule{};
       m.error = std::string("the image module ") + LIGHTFARM_IMAGEIO_NAME + " lacks its entry points";
     }
@@ -136,7 +140,7 @@ const ImageModule& image_module() {
 
 // The EXR and PNG writer (image_exr_png.cpp): what a farm's image needs, without OpenImageIO's load.
 struct ExrPngModule {
-  using WriteFn = int (*)(const char*, int, int, int, const float*, const unsigned char*, char*, size_t);
+  using WriteFn = int (*)(const char*, int, int, int, const float*, const unsigned char*, const char* const*, char*, size_t);
   WriteFn write = nullptr;
   std::string error;
 };
@@ -146,7 +150,7 @@ const ExrPngModule& exr_png_module() {
     ExrPngModule m;
     void* handle = open_module("LIGHTFARM_EXR_PNG_MODULE", LIGHTFARM_EXR_PNG_NAME, LIGHTFARM_EXR_PNG_BUILD_PATH, m.error);
     if (!handle) return m;
-    m.write = reinterpret_cast<ExrPngModule::WriteFn>(::dlsym(handle, "lightfarm_exr_png_write"));
+    m.write = reinterpret_cast<ExrPngModule::WriteFn>(::dlsym(handle, "lightfarm_exr_png_write_annotated"));
     if (!m.write) m.error = std::string("the image module ") + LIGHTFARM_EXR_PNG_NAME + " lacks its entry point";
     return m;
   }();
@@ -220,7 +224,7 @@ bool write_file_whole(const std::string& target, std::string_view bytes) {
   return written && !ec;
 }
 
-Status write_image(const Image& image, const std::string& path, const Display& display) {
+Status write_image(const Image& image, const std::string& path, const Display& display, const ImageNotes& notes) {
   if (auto st = check_output_path(path); !st) return st;
   const std::string ext = extension_of(path);
   const bool light = written_without_oiio(ext);
@@ -242,10 +246,13 @@ Status write_image(const Image& image, const std::string& path, const Display& d
   }
   char err[512] = {0};
   const auto* floats = reinterpret_cast<const float*>(image.pixels.data());
+  std::vector<const char*> note_strings;
+  for (const auto& [key, value] : notes) note_strings.insert(note_strings.end(), {key.c_str(), value.c_str()});
+  note_strings.push_back(nullptr);
   const int rc = light ? exr_png_module().write(temp.c_str(), image.width, image.height, linear ? 1 : 0, floats,
-                                                bytes.data(), err, sizeof err)
+                                                bytes.data(), note_strings.data(), err, sizeof err)
                        : image_module().write(temp.c_str(), image.width, image.height, linear ? 1 : 0, floats,
-                                              bytes.data(), linear ? "Linear" : "sRGB", err, sizeof err);
+                                              bytes.data(), linear ? "Linear" : "sRGB", note_strings.data(), err, sizeof err);
   std::error_code ec;
   if (rc != 0) {
     fs::remove(temp, ec);
@@ -264,6 +271,23 @@ Status write_image(const Image& image, const std::string& path, const Display& d
     return make_error("cannot write '" + path + "': " + why);
   }
   return Ok{};
+}
+
+Result<ImageNotes> read_image_notes(const std::string& path, const std::string& prefix) {
+  const auto& module = image_module();
+  if (!module.read_notes) return make_error(module.error);
+  std::vector<char> text(1 << 16);
+  char err[512] = {0};
+  if (module.read_notes(path.c_str(), prefix.c_str(), text.data(), text.size(), err, sizeof err) != 0)
+    return make_error("cannot read '" + path + "': " + err);
+  ImageNotes notes;
+  std::string_view rest(text.data());
+  for (size_t end; (end = rest.find('\n')) != std::string_view::npos; rest.remove_prefix(end + 1)) {
+    const std::string_view line = rest.substr(0, end);
+    const size_t eq = line.find('=');
+    if (eq != std::string_view::npos) notes.emplace_back(std::string(line.substr(0, eq)), std::string(line.substr(eq + 1)));
+  }
+  return notes;
 }
 
 Result<Image> read_image(const std::string& path) {

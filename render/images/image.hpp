@@ -5,6 +5,7 @@
 #include <cstdint>
 #include <string>
 #include <string_view>
+#include <utility>
 #include <vector>
 
 #include "core/result.hpp"
@@ -45,7 +46,12 @@ float display_value(float linear, const Display& display);
 // The same, sRGB-encoded: what an 8-bit output stores, over 255.
 float display_srgb(float linear, const Display& display);
 
-Status write_image(const Image& image, const std::string& path, const Display& display = {});
+// Text kept in the file beside the pixels (EXR string attributes, PNG tEXt chunks), e.g. {"lightfarm:samples",
+// "64"}: what produced the image.
+using ImageNotes = std::vector<std::pair<std::string, std::string>>;
+Status write_image(const Image& image, const std::string& path, const Display& display = {}, const ImageNotes& notes = {});
+// The notes an image file keeps whose names begin with `prefix` (read through OpenImageIO).
+Result<ImageNotes> read_image_notes(const std::string& path, const std::string& prefix = "lightfarm:");
 Result<Image> read_image(const std::string& path);  // linear RGB (sRGB files are decoded)
 // An image file's pixels as 8-bit texels, every channel, top row first, for textures. `linear` when the file held
 // floats (EXR, HDR): their values are then linear, clamped to [0, 1], not sRGB-encoded.

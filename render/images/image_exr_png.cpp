@@ -8,6 +8,7 @@
 #include <OpenEXR/ImfChannelList.h>
 #include <OpenEXR/ImfFrameBuffer.h>
 #include <OpenEXR/ImfHeader.h>
+#include <OpenEXR/ImfStringAttribute.h>
 #include <OpenEXR/ImfOutputFile.h>
 #include <png.h>
 
@@ -25,9 +26,11 @@ void set_error(char* err, size_t len, const std::string& what) {
 }
 
 // Linear float RGB, ZIP-compressed (OpenEXR's default, and what OpenImageIO wrote).
-int write_exr(const char* path, int width, int height, const float* rgb, char* err, size_t err_len) {
+int write_exr(const char* path, int width, int height, const float* rgb, const char* const* notes, char* err,
+              size_t err_len) {
   try {
     Imf::Header header(width, height);
+    for (const char* const* n = notes; n && n[0] && n[1]; n += 2) header.insert(n[0], Imf::StringAttribute(n[1]));
     for (const char* c : {"R", "G", "B"}) header.channels().insert(c, Imf::Channel(Imf::FLOAT));
     Imf::FrameBuffer frame;
     const size_t pixel = 3 * sizeof(float), row = pixel * static_cast<size_t>(width);
@@ -67,7 +70,16 @@ void png_flush_data(png_structp png) {
 }
 
 // 8-bit sRGB RGB. No C++ object lives across the setjmp: libpng reports errors by longjmp.
-int write_png(const char* path, int width, int height, const unsigned char* rgb, char* err, size_t err_len) {
+int write_png(const char* path, int width, int height, const unsigned char* rgb, const char* const* notes, char* err,
+              size_t err_len) {
+  // tEXt chunks; libpng keeps pointers to the strings until the info is written, and they outlive it here.
+  png_text texts[8] = {};
+  int text_count = 0;
+  for (const char* const* n = notes; n && n[0] && n[1] && text_count < 8; n += 2, ++text_count) {
+    texts[text_count].compression = PNG_TEXT_COMPRESSION_NONE;
+    texts[text_count].key = const_cast<char*>(n[0]);
+    texts[text_count].text = const_cast<char*>(n[1]);
+  }
   FILE* file = std::fopen(path, "wb");
   if (!file) {
     set_error(err, err_len, std::strerror(errno));
@@ -92,6 +104,7 @@ int write_png(const char* path, int width, int height, const unsigned char* rgb,
   png_set_IHDR(png, info, static_cast<png_uint_32>(width), static_cast<png_uint_32>(height), 8, PNG_COLOR_TYPE_RGB,
                PNG_INTERLACE_NONE, PNG_COMPRESSION_TYPE_DEFAULT, PNG_FILTER_TYPE_DEFAULT);
   png_set_sRGB_gAMA_and_cHRM(png, info, PNG_sRGB_INTENT_PERCEPTUAL);
+  if (text_count > 0) png_set_text(png, info, texts, text_count);
   png_write_info(png, info);
   const size_t row = 3 * static_cast<size_t>(width);
   for (int y = 0; y < height; ++y) png_write_row(png, rgb + row * static_cast<size_t>(y));
@@ -108,10 +121,11 @@ int write_png(const char* path, int width, int height, const unsigned char* rgb,
 
 extern "C" {
 
-// Writes width*height RGB pixels to `path`: an EXR of `floats` if `as_float`, else a PNG of `bytes`. 0 on success.
-int lightfarm_exr_png_write(const char* path, int width, int height, int as_float, const float* floats,
-                            const unsigned char* bytes, char* err, size_t err_len) {
-  return as_float ? write_exr(path, width, height, floats, err, err_len)
-                  : write_png(path, width, height, bytes, err, err_len);
+// Writes width*height RGB pixels to `path`: an EXR of `floats` if `as_float`, else a PNG of `bytes`, with `notes`
+// (key, value, key, value, ..., null; may be null) as string attributes or tEXt chunks. 0 on success.
+int lightfarm_exr_png_write_annotated(const char* path, int width, int height, int as_float, const float* floats,
+                                     const unsigned char* bytes, const char* const* notes, char* err, size_t err_len) {
+  return as_float ? write_exr(path, width, height, floats, notes, err, err_len)
+                  : write_png(path, width, height, bytes, notes, err, err_len);
 }
 }

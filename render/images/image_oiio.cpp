@@ -19,9 +19,11 @@ void set_error(char* err, size_t len, const std::string& what) {
 
 extern "C" {
 
-// Writes width*height RGB pixels: as float if `as_float`, else as 8-bit from `bytes`. 0 on success.
-int lightfarm_imageio_write(const char* path, int width, int height, int as_float, const float* floats,
-                            const unsigned char* bytes, const char* colorspace, char* err, size_t err_len) {
+// Writes width*height RGB pixels: as float if `as_float`, else as 8-bit from `bytes`, with `notes` (key, value, ...,
+// null; may be null) as string attributes. 0 on success.
+int lightfarm_imageio_write_annotated(const char* path, int width, int height, int as_float, const float* floats,
+                                      const unsigned char* bytes, const char* colorspace, const char* const* notes,
+                                      char* err, size_t err_len) {
   auto out = OIIO::ImageOutput::create(path);
   if (!out) {
     set_error(err, err_len, "no writer for this file name");
@@ -29,6 +31,7 @@ int lightfarm_imageio_write(const char* path, int width, int height, int as_floa
   }
   OIIO::ImageSpec spec(width, height, 3, as_float ? OIIO::TypeDesc::FLOAT : OIIO::TypeDesc::UINT8);
   spec.attribute("oiio:ColorSpace", colorspace);
+  for (const char* const* n = notes; n && n[0] && n[1]; n += 2) spec.attribute(n[0], n[1]);
   if (!out->open(path, spec)) {
     set_error(err, err_len, out->geterror());
     return 1;
@@ -39,6 +42,23 @@ int lightfarm_imageio_write(const char* path, int width, int height, int as_floa
     set_error(err, err_len, out->geterror());
     return 1;
   }
+  return 0;
+}
+
+// The file's string attributes whose names begin with `prefix`, as "name=value" lines, into out (cut at out_len).
+int lightfarm_imageio_read_notes(const char* path, const char* prefix, char* out, size_t out_len, char* err,
+                                 size_t err_len) {
+  auto in = OIIO::ImageInput::open(path);
+  if (!in) {
+    set_error(err, err_len, OIIO::geterror());
+    return 1;
+  }
+  std::string lines;
+  for (const auto& a : in->spec().extra_attribs)
+    if (a.type() == OIIO::TypeDesc::STRING && a.name().string().rfind(prefix, 0) == 0)
+      lines += a.name().string() + "=" + a.get_string() + "\n";
+  in->close();
+  if (out_len) std::snprintf(out, out_len, "%s", lines.c_str());
   return 0;
 }
 

@@ -195,7 +195,7 @@ uint64_t tile_sample_key(SamplerKind kind, int64_t image_width, const TileRect& 
   const uint64_t per_pixel = static_cast<uint64_t>(spp), local = sample / per_pixel;
   const uint64_t w = static_cast<uint64_t>(rect.width());
   const uint64_t x = static_cast<uint64_t>(rect.x0) + local % w, y = static_cast<uint64_t>(rect.y0) + local / w;
-  return pixel_sample_key(kind, y * static_cast<uint64_t>(image_width) + x, sample % per_pixel);
+  return pixel_sample_key(kind, y * static_cast<uint64_t>(image_width) + x, rect.first_sample + sample % per_pixel);
 }
 
 void fold_by_pixel(std::span<const RGB> radiance, std::span<const uint32_t> samples, int spp, std::vector<RGB>& sums) {

@@ -14,6 +14,8 @@ namespace lf {
 
 struct TileRect {
   int x0 = 0, y0 = 0, x1 = 0, y1 = 0;  // half-open
+  // A time-limited frame's pass (ImageSpec::time_limit): each pixel's samples are its sequence's from this index on.
+  uint32_t first_sample = 0;
   int width() const { return x1 - x0; }
   int height() const { return y1 - y0; }
   int pixel_count() const { return width() * height(); }
@@ -49,7 +51,8 @@ struct TileWork {
 // renderer and a LightOp rebuilding its points from a lean request (actors/codecs/shade_codec.hpp) compute it with
 // the same instructions, bit for bit.
 Vec3 point_on_ray(Vec3 origin, Vec3 wo, float t);
-// The sample key of a tile's `sample`-th camera sample (pixel-major, then sample index), as trace_tile gives it.
+// The sample key of a tile's `sample`-th camera sample (pixel-major, then sample index), as trace_tile gives it: its
+// pixel's sample rect.first_sample + sample % spp.
 uint64_t tile_sample_key(SamplerKind kind, int64_t image_width, const TileRect& rect, int spp, uint32_t sample);
 
 // A tile's camera rays, one per sample (pixel-major, then sample index), and their sample keys.
