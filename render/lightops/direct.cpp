@@ -9,8 +9,8 @@
 // then they get the BSDF sample too, which tames points close to a light (a uniform point on a light seen under a
 // wide angle has a 1/d^2 weight; a cosine direction does not). Left unset, `mis` is true in a scene with an
 // environment (render/lights/environment.hpp), false otherwise. In a job the learned lights are carried over the
-// frames (`reuse`, default true): a frame learns only the cells its view finds that no earlier one did. Emitters
-// emit on the side their winding faces.
+// frames (`reuse`, default true): a frame learns only the cells its view finds new or sees much better
+// (LightSelection::extend). Emitters emit on the side their winding faces.
 // Mirrors and glass get nothing here: that is `specular`'s job.
 #include "render/lightops/lightop_registry.hpp"
 #include "render/shading/path_kernel.hpp"
@@ -50,8 +50,8 @@ class DirectLight final : public LightOp {
 
   // Lights are learned where the camera looks.
   bool setup_sees_camera() const override { return light_sampling_ == LightSampling::learned; }
-  // Over a job's frames the learned cells are kept and each view learns only the cells it finds new; `reuse =
-  // false`: lights learned anew for each frame's view.
+  // Over a job's frames the learned cells are kept and each view learns only the cells it finds new or sees much
+  // better; `reuse = false`: lights learned anew for each frame's view.
   bool carries_views() const override { return light_sampling_ == LightSampling::learned && reuse_; }
   Task extend_to_view(SceneContext ctx, Inputs&) override {
     ctx_ = ctx;

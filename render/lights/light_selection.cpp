@@ -55,8 +55,12 @@ bool learns_lights(const Value::Map& params) {
 }
 
 void LightSelection::add_stats(Value::Map& m) const {
-  m["learned_cells"] = static_cast<int64_t>(cells_.size());
-  m["learned_lights_per_cell"] = cells_.empty() ? 0.0 : static_cast<double>(lights_.size()) / static_cast<double>(cells_.size());
+  // The cells as they stand (one learned again counts once).
+  size_t cells = 0, lights = 0;
+  for (const auto& [key, known] : index_)
+    if (known.cell >= 0) ++cells, lights += cells_[static_cast<size_t>(known.cell)].count;
+  m["learned_cells"] = static_cast<int64_t>(cells);
+  m["learned_lights_per_cell"] = cells == 0 ? 0.0 : static_cast<double>(lights) / static_cast<double>(cells);
   m["learned_blocked"] = shadow_rays_ ? static_cast<double>(blocked_rays_) / static_cast<double>(shadow_rays_) : 0.0;
 }
 
@@ -72,7 +76,7 @@ uint64_t LightSelection::key_of(Vec3 x, Vec3 n) const {
 int32_t LightSelection::cell_of(Vec3 x, Vec3 n) const {
   if (cells_.empty()) return -1;
   const auto it = index_.find(key_of(x, n));
-  return it == index_.end() ? -1 : it->second;
+  return it == index_.end() ? -1 : it->second.cell;
 }
 
 void LightSelection::pick(int32_t cell, float u, size_t& light, float& probability, float* remainder) const {
@@ -159,8 +163,7 @@ Task LightSelection::extend(const SceneContext& ctx, const LightSelectionOptions
     co_return;
   }
 
-  // Where the camera looks: the first hit through every stride-th pixel centre, in pixel order; points in cells an
-  // earlier view learned (or found dark) are left out.
+  // Where the camera looks: the first hit through every stride-th pixel centre, in pixel order.
   std::vector<Ray> rays;
   for (int y = 0; y < ctx.height; y += options.stride)
     for (int x = 0; x < ctx.width; x += options.stride)
@@ -177,18 +180,19 @@ Task LightSelection::extend(const SceneContext& ctx, const LightSelectionOptions
     const Vec3 wo = -rays[r].direction;
     const Vec3 x = rays[r].origin + rays[r].direction * hits[r].t;
     const SurfacePoint sp = surface_at(scene, tri, x, wo);
-    const uint64_t key = key_of(x, sp.ns);
-    if (index_.count(key)) continue;
-    keyed.emplace_back(key, static_cast<uint32_t>(candidates.size()));
+    keyed.emplace_back(key_of(x, sp.ns), static_cast<uint32_t>(candidates.size()));
     candidates.push_back(Candidate{scene.ray_origin(tri, x, sp.ng), x, sp.ns, sp.ng});
   }
   std::sort(keyed.begin(), keyed.end());
 
-  std::vector<std::pair<size_t, size_t>> cell_ranges;  // per cell, in key order: its points' range in keyed
+  // The cells to learn, in key order, and their points' range in keyed: those never learned, and those learned
+  // from far fewer points than this view has in them.
+  std::vector<std::pair<size_t, size_t>> cell_ranges;
   for (size_t i = 0; i < keyed.size();) {
     size_t j = i;
     while (j < keyed.size() && keyed[j].first == keyed[i].first) ++j;
-    cell_ranges.emplace_back(i, j);
+    const auto known = index_.find(keyed[i].first);
+    if (known == index_.end() || learns_again(j - i, known->second.points)) cell_ranges.emplace_back(i, j);
     i = j;
   }
 
@@ -272,7 +276,10 @@ Task LightSelection::extend(const SceneContext& ctx, const LightSelectionOptions
     }
   }
   if (replicas > 1 && !cell_ranges.empty()) co_await exchange_moments(*ctx.exchange, mine, moment, view.shadow_rays, view.blocked_rays);
-  for (size_t c = 0; c < cell_ranges.size(); ++c) add_cell(keyed[cell_ranges[c].first].first, moment[c]);
+  for (size_t c = 0; c < cell_ranges.size(); ++c) {
+    const auto [first, last] = cell_ranges[c];
+    add_cell(keyed[first].first, static_cast<uint32_t>(std::min<size_t>(last - first, UINT32_MAX)), moment[c]);
+  }
   view.cells_end = static_cast<uint32_t>(cells_.size());
   view.dark_end = static_cast<uint32_t>(dark_.size());
   shadow_rays_ += view.shadow_rays;
@@ -281,7 +288,7 @@ Task LightSelection::extend(const SceneContext& ctx, const LightSelectionOptions
   ctx.report("learning lights", mine.size(), std::max<size_t>(mine.size(), 1));
 }
 
-void LightSelection::add_cell(uint64_t key, std::map<uint32_t, double>& moment) {
+void LightSelection::add_cell(uint64_t key, uint32_t points, std::map<uint32_t, double>& moment) {
   // The environment's entry (the map's last key) is its share of the cell, not a light of the distribution.
   double environment = 0;
   if (auto it = moment.find(kEnvironmentEntry); it != moment.end()) {
@@ -291,8 +298,8 @@ void LightSelection::add_cell(uint64_t key, std::map<uint32_t, double>& moment) 
   double sum = 0;
   for (auto& [light, m] : moment) sum += (m = std::sqrt(m));
   if (!(sum > 0)) {
-    index_.emplace(key, -1);
-    dark_.push_back(key);
+    index_[key] = Known{-1, points};
+    dark_.emplace_back(key, points);
     return;
   }
   std::vector<uint32_t> lights;
@@ -304,18 +311,18 @@ void LightSelection::add_cell(uint64_t key, std::map<uint32_t, double>& moment) 
     cdf.push_back(static_cast<float>(running / sum));
   }
   cdf.back() = 1.0f;
-  append_cell(key, static_cast<float>(environment / (environment + sum)), lights, cdf);
+  append_cell(key, points, static_cast<float>(environment / (environment + sum)), lights, cdf);
 }
 
-void LightSelection::append_cell(uint64_t key, float environment, std::span<const uint32_t> lights,
+void LightSelection::append_cell(uint64_t key, uint32_t points, float environment, std::span<const uint32_t> lights,
                                  std::span<const float> cdf) {
-  Cell cell{static_cast<uint32_t>(lights_.size()), static_cast<uint32_t>(lights.size()), environment};
+  Cell cell{static_cast<uint32_t>(lights_.size()), static_cast<uint32_t>(lights.size()), environment, points};
   lights_.insert(lights_.end(), lights.begin(), lights.end());
   cdf_.insert(cdf_.end(), cdf.begin(), cdf.end());
   // Each light's chance as the difference of the sums pick() compares u with, so that it is what pick() does.
   for (size_t i = cell.first; i < cdf_.size(); ++i)
     probability_.push_back(cdf_[i] - (i == cell.first ? 0.0f : cdf_[i - 1]));
-  index_.emplace(key, static_cast<int32_t>(cells_.size()));
+  index_[key] = Known{static_cast<int32_t>(cells_.size()), points};
   cells_.push_back(cell);
   keys_.push_back(key);
 }
@@ -325,7 +332,8 @@ constexpr std::string_view kStateTag = "LFLIGHTSEL1";
 }
 
 // Tag, f32 inverse cell size, f32 share, then a block a view: u64 shadow rays, u64 blocked, u32 cells, per cell
-// (u64 key, f32 environment, u32 lights, that many (u32 light, f32 running sum)), u32 dark keys, that many u64.
+// (u64 key, u32 points, f32 environment, u32 lights, that many (u32 light, f32 running sum)), u32 dark keys, that
+// many (u64 key, u32 points).
 std::string LightSelection::state() const {
   std::string out(kStateTag);
   bytes::put(out, inverse_size_);
@@ -338,6 +346,7 @@ std::string LightSelection::state() const {
     for (; cell < v.cells_end; ++cell) {
       const Cell& c = cells_[cell];
       bytes::put(out, keys_[cell]);
+      bytes::put(out, c.points);
       bytes::put(out, c.environment);
       bytes::put(out, c.count);
       for (uint32_t i = c.first; i < c.first + c.count; ++i) {
@@ -346,7 +355,10 @@ std::string LightSelection::state() const {
       }
     }
     bytes::put(out, v.dark_end - dark);
-    for (; dark < v.dark_end; ++dark) bytes::put(out, dark_[dark]);
+    for (; dark < v.dark_end; ++dark) {
+      bytes::put(out, dark_[dark].first);
+      bytes::put(out, dark_[dark].second);
+    }
   }
   return out;
 }
@@ -370,14 +382,21 @@ void LightSelection::restore(std::string_view state, size_t light_count, const c
     View v;
     uint32_t cells = 0, dark = 0;
     if (!in.u64(v.shadow_rays) || !in.u64(v.blocked_rays) || v.blocked_rays > v.shadow_rays || !in.u32(cells) ||
-        !in.room(cells, 16))
+        !in.room(cells, 20))
       throw malformed;
+    // A key learned before comes again only learned from enough more points.
+    auto relearned = [&](uint64_t key, uint32_t points) {
+      const auto known = out.index_.find(key);
+      return known == out.index_.end() || learns_again(points, known->second.points);
+    };
     for (uint32_t c = 0; c < cells; ++c) {
       uint64_t key = 0;
       float environment = 0;
-      uint32_t count = 0;
-      if (!in.u64(key) || !in.f32(environment) || !in.u32(count) || count == 0 || !in.room(count, 8)) throw malformed;
-      if (!(environment == -1.0f || (environment >= 0 && environment <= 1)) || out.index_.count(key)) throw malformed;
+      uint32_t count = 0, points = 0;
+      if (!in.u64(key) || !in.u32(points) || !in.f32(environment) || !in.u32(count) || count == 0 || !in.room(count, 8))
+        throw malformed;
+      if (!(environment == -1.0f || (environment >= 0 && environment <= 1)) || points == 0 || !relearned(key, points))
+        throw malformed;
       lights.resize(count);
       cdf.resize(count);
       for (uint32_t i = 0; i < count; ++i) {
@@ -387,13 +406,15 @@ void LightSelection::restore(std::string_view state, size_t light_count, const c
         if (!(cdf[i] >= (i > 0 ? cdf[i - 1] : 0.0f)) || !(cdf[i] <= 1)) throw malformed;
       }
       if (cdf.back() != 1.0f) throw malformed;
-      out.append_cell(key, environment, lights, cdf);
+      out.append_cell(key, points, environment, lights, cdf);
     }
-    if (!in.u32(dark) || !in.room(dark, 8)) throw malformed;
+    if (!in.u32(dark) || !in.room(dark, 12)) throw malformed;
     for (uint32_t d = 0; d < dark; ++d) {
       uint64_t key = 0;
-      if (!in.u64(key) || !out.index_.emplace(key, -1).second) throw malformed;
-      out.dark_.push_back(key);
+      uint32_t points = 0;
+      if (!in.u64(key) || !in.u32(points) || points == 0 || !relearned(key, points)) throw malformed;
+      out.index_[key] = Known{-1, points};
+      out.dark_.emplace_back(key, points);
     }
     v.cells_end = static_cast<uint32_t>(out.cells_.size());
     v.dark_end = static_cast<uint32_t>(out.dark_.size());
