@@ -35,6 +35,22 @@ inline double relative_rmse(const lf::Image& a, const lf::Image& ref, bool ring 
   return std::sqrt(se / static_cast<double>(n)) / (mean / static_cast<double>(n));
 }
 
+// Flicker: the relative RMSE of the change from frame a0 to a1 against the references' change from r0 to r1, over
+// r0's mean (the light's pixels in either reference left out): a change the true image does not make.
+inline double relative_temporal_rmse(const lf::Image& a0, const lf::Image& a1, const lf::Image& r0, const lf::Image& r1) {
+  double se = 0, mean = 0;
+  size_t n = 0;
+  for (size_t i = 0; i < r0.pixels.size(); ++i) {
+    if (r0.pixels[i].x > 1.0f || r1.pixels[i].x > 1.0f) continue;
+    const double d = (lf::average(a1.pixels[i]) - lf::average(a0.pixels[i])) -
+                     (lf::average(r1.pixels[i]) - lf::average(r0.pixels[i]));
+    se += d * d;
+    mean += lf::average(r0.pixels[i]);
+    ++n;
+  }
+  return std::sqrt(se / static_cast<double>(n)) / (mean / static_cast<double>(n));
+}
+
 // Renders `script` with `sets` to `out` and reads it back; `seconds` gets the farm's wall time.
 inline lf::Image render_image(const std::string& script, const std::vector<std::string>& sets, const std::string& out,
                               double& seconds) {

@@ -18,7 +18,10 @@
 //     (none while the folder keeps the cache);
 //   - error against path-traced references (lighting=pathtrace at --reference-spp, kept in --cache) of the first,
 //     middle and last sampled frames: the job's frame and the separate run's (relative RMSE, bench/image_error.hpp;
-//     --reference-spp 0: none).
+//     --reference-spp 0: none);
+//   - flicker between the middle sampled frame and the next: the temporal RMSE (what changed from one frame to the
+//     next that the references do not change) of the job's two frames and of two separate runs, and how much each
+//     one's error changed.
 //
 //   build/bench/walkthrough_bench [--frames N] [--separate K] [--lighting network|direct] [--width W --height H]
 //                                 [--spp S] [--reference-spp S] [--cache DIR] [--json FILE]
@@ -158,24 +161,28 @@ int main(int argc, char** argv) {
   std::fflush(stdout);
 
   // Quality: the job's frames and the separate runs' against path-traced references.
-  std::string errors_json;
+  std::string errors_json, flicker_json;
+  // Frame k's path-traced reference, rendered once into --cache.
+  auto reference_of = [&](int k) {
+    char name[160];
+    std::snprintf(name, sizeof name, "/walk%d_frame%d_%dx%d_%dspp.exr", args.frames, k, args.width, args.height,
+                  args.reference_spp);
+    const std::string ref_path = args.cache + name;
+    if (!bench::fs::exists(ref_path)) {
+      std::vector<std::string> sets = look;
+      sets[0] = "lighting=pathtrace";
+      sets[3] = "spp=" + std::to_string(args.reference_spp);
+      sets.push_back("frame=" + std::to_string(k));
+      bench::run_farm(script, sets, ref_path);
+    }
+    return lf::read_image(ref_path);
+  };
+  auto separate_of = [&](int k) { return lf::read_image((dir / ("single." + std::to_string(k) + ".exr")).string()); };
   if (args.reference_spp > 0) {
     bench::fs::create_directories(args.cache);
     for (size_t i : {size_t{0}, sampled.size() / 2, sampled.size() - 1}) {
       const int k = sampled[i];
-      char name[160];
-      std::snprintf(name, sizeof name, "/walk%d_frame%d_%dx%d_%dspp.exr", args.frames, k, args.width, args.height,
-                    args.reference_spp);
-      const std::string ref_path = args.cache + name;
-      if (!bench::fs::exists(ref_path)) {
-        std::vector<std::string> sets = look;
-        sets[0] = "lighting=pathtrace";
-        sets[3] = "spp=" + std::to_string(args.reference_spp);
-        sets.push_back("frame=" + std::to_string(k));
-        bench::run_farm(script, sets, ref_path);
-      }
-      auto ref = lf::read_image(ref_path), in_job = lf::read_image(frame_file(dir.string(), k)),
-           alone = lf::read_image((dir / ("single." + std::to_string(k) + ".exr")).string());
+      auto ref = reference_of(k), in_job = lf::read_image(frame_file(dir.string(), k)), alone = separate_of(k);
       if (!ref || !in_job || !alone) continue;
       const double e_job = bench::relative_rmse(*in_job, *ref), e_alone = bench::relative_rmse(*alone, *ref);
       std::printf("frame %d against a %d-spp path-traced reference: job %.4f, separate run %.4f (job / separate %.3f)\n",
@@ -184,6 +191,28 @@ int main(int argc, char** argv) {
       std::snprintf(entry, sizeof entry, "%s{\"frame\": %d, \"job\": %.5f, \"separate\": %.5f}",
                     errors_json.empty() ? "" : ", ", k, e_job, e_alone);
       errors_json += entry;
+    }
+    // Flicker: between the middle sampled frame and the next, what changed from one frame to the other that the
+    // references do not change (the temporal RMSE), and how much the error itself changed. The next frame's
+    // separate run is rendered here.
+    const int k = sampled[sampled.size() / 2], next = k < args.frames ? k + 1 : k - 1;
+    std::vector<std::string> sets = look;
+    sets.push_back("frame=" + std::to_string(next));
+    bench::run_farm(script, sets, (dir / ("single." + std::to_string(next) + ".exr")).string());
+    auto r0 = reference_of(k), r1 = reference_of(next), j0 = lf::read_image(frame_file(dir.string(), k)),
+         j1 = lf::read_image(frame_file(dir.string(), next)), s0 = separate_of(k), s1 = separate_of(next);
+    if (r0 && r1 && j0 && j1 && s0 && s1) {
+      const double t_job = bench::relative_temporal_rmse(*j0, *j1, *r0, *r1);
+      const double t_alone = bench::relative_temporal_rmse(*s0, *s1, *r0, *r1);
+      const double d_job = bench::relative_rmse(*j1, *r1) - bench::relative_rmse(*j0, *r0);
+      const double d_alone = bench::relative_rmse(*s1, *r1) - bench::relative_rmse(*s0, *r0);
+      std::printf("flicker, frames %d to %d: temporal error job %.4f, separate runs %.4f (job / separate %.3f); "
+                  "change of the error job %+.4f, separate runs %+.4f\n", k, next, t_job, t_alone, t_job / t_alone,
+                  d_job, d_alone);
+      char entry[240];
+      std::snprintf(entry, sizeof entry, "{\"frames\": [%d, %d], \"temporal_job\": %.5f, \"temporal_separate\": %.5f, "
+                    "\"error_change_job\": %.5f, \"error_change_separate\": %.5f}", k, next, t_job, t_alone, d_job, d_alone);
+      flicker_json = entry;
     }
   }
 
@@ -204,7 +233,8 @@ int main(int argc, char** argv) {
                            << ", \"resume_all_done_seconds\": " << again.wall_seconds
                            << ", \"resume_half_seconds\": " << half.wall_seconds << ", \"replay_seconds\": " << replay << ", \"restore_seconds\": " << restore
                            << ", \"resumed_identical\": " << resumed_identical
-                           << ",\n  \"reference_spp\": " << args.reference_spp << ", \"errors\": [" << errors_json << "]\n}\n";
+                           << ",\n  \"reference_spp\": " << args.reference_spp << ", \"errors\": [" << errors_json << "]"
+                           << (flicker_json.empty() ? "" : ",\n  \"flicker\": " + flicker_json) << "\n}\n";
   bench::fs::remove_all(dir);
   return 0;
 }
