@@ -59,7 +59,7 @@ class DirectLight final : public LightOp {
   }
   std::string carried_state() const override { return selection_.state(); }
   void restore_carried(std::string_view state) override {
-    selection_.restore(state, ctx_.scene->emitters().size() + ctx_.scene->point_lights().size(), "direct");
+    selection_.restore(state, *ctx_.scene, "direct");
   }
 
   // Light straight from an emitter, scattered at the point by its diffuse or glossy lobe.

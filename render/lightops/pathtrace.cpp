@@ -66,7 +66,7 @@ class PathTrace final : public LightOp {
   }
   std::string carried_state() const override { return selection_.state(); }
   void restore_carried(std::string_view state) override {
-    selection_.restore(state, ctx_.scene->emitters().size() + ctx_.scene->point_lights().size(), "pathtrace");
+    selection_.restore(state, *ctx_.scene, "pathtrace");
   }
 
   // Every path of up to max_depth events (Russian roulette ends paths without leaving any out).

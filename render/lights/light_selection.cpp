@@ -297,11 +297,7 @@ void LightSelection::add_cell(uint64_t key, uint32_t points, std::map<uint32_t, 
   }
   double sum = 0;
   for (auto& [light, m] : moment) sum += (m = std::sqrt(m));
-  if (!(sum > 0)) {
-    index_[key] = Known{-1, points};
-    dark_.emplace_back(key, points);
-    return;
-  }
+  if (!(sum > 0)) return append_dark(key, points);
   std::vector<uint32_t> lights;
   std::vector<float> cdf;
   double running = 0;
@@ -325,6 +321,11 @@ void LightSelection::append_cell(uint64_t key, uint32_t points, float environmen
   index_[key] = Known{static_cast<int32_t>(cells_.size()), points};
   cells_.push_back(cell);
   keys_.push_back(key);
+}
+
+void LightSelection::append_dark(uint64_t key, uint32_t points) {
+  index_[key] = Known{-1, points};
+  dark_.emplace_back(key, points);
 }
 
 namespace {
@@ -363,7 +364,8 @@ std::string LightSelection::state() const {
   return out;
 }
 
-void LightSelection::restore(std::string_view state, size_t light_count, const char* op) {
+void LightSelection::restore(std::string_view state, const Scene& scene, const char* op) {
+  const size_t light_count = scene.emitters().size() + scene.point_lights().size();
   const std::string what = std::string(op) + ": the kept learned lights ";
   bytes::Reader in(state);
   std::string tag;
@@ -413,8 +415,7 @@ void LightSelection::restore(std::string_view state, size_t light_count, const c
       uint64_t key = 0;
       uint32_t points = 0;
       if (!in.u64(key) || !in.u32(points) || points == 0 || !relearned(key, points)) throw malformed;
-      out.index_[key] = Known{-1, points};
-      out.dark_.emplace_back(key, points);
+      out.append_dark(key, points);
     }
     v.cells_end = static_cast<uint32_t>(out.cells_.size());
     v.dark_end = static_cast<uint32_t>(out.dark_.size());

@@ -71,9 +71,9 @@ class LightSelection {
   Task extend(const SceneContext& ctx, const LightSelectionOptions& options, const char* op = "light_selection");
   // What was learned, as bytes; restore() on a selection built with the same options and scene makes it answer as
   // this one, bit for bit. restore() throws LightOpError naming `op` on bytes it cannot use, and then leaves the
-  // selection as it was. `light_count`: the scene's lights (emitters and point lights).
+  // selection as it was.
   std::string state() const;
-  void restore(std::string_view state, size_t light_count, const char* op = "light_selection");
+  void restore(std::string_view state, const Scene& scene, const char* op = "light_selection");
 
   // The learned cell of a point at x facing n, or -1.
   int32_t cell_of(Vec3 x, Vec3 n) const;
@@ -114,6 +114,8 @@ class LightSelection {
   // pick() compares u with (the last 1), and how many points it was learned from.
   void append_cell(uint64_t key, uint32_t points, float environment, std::span<const uint32_t> lights,
                    std::span<const float> cdf);
+  // Notes a cell whose samples all came back dark (it replaces one learned before under its key).
+  void append_dark(uint64_t key, uint32_t points);
   struct Cell {
     uint32_t first = 0, count = 0;  // its lights in lights_ / cdf_, sorted by light
     float environment = -1;         // the environment's learned share of the cell's light (-1: not learned)

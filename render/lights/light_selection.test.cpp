@@ -198,7 +198,7 @@ TEST(LightSelection, ACarriedSelectionKeepsItsCellsAndLearnsOnlyWhatTheNewViewAd
   EXPECT_EQ(state.compare(0, first_state.size(), first_state), 0);
   LightSelection restored;
   run_to_completion(LightSelection::build(first_view, {}, restored));
-  restored.restore(state, lights);
+  restored.restore(state, c.scene);
   EXPECT_EQ(restored.state(), state);
   EXPECT_EQ(restored.shadow_rays(), carried.shadow_rays());
   for (const auto& [x, n] : points) {
@@ -213,7 +213,7 @@ TEST(LightSelection, ACarriedSelectionKeepsItsCellsAndLearnsOnlyWhatTheNewViewAd
   const uint32_t far_light = static_cast<uint32_t>(lights) + 5;
   std::memcpy(unknown_light.data() + 59, &far_light, 4);  // the first cell's first light: after tag, options, counts, key, points
   for (const std::string& bad : {std::string("no selection"), state.substr(0, state.size() - 3), unknown_light}) {
-    EXPECT_THROW(restored.restore(bad, lights, "direct"), LightOpError);
+    EXPECT_THROW(restored.restore(bad, c.scene, "direct"), LightOpError);
     EXPECT_EQ(restored.state(), state);
   }
   LightSelection other_share;
@@ -221,7 +221,7 @@ TEST(LightSelection, ACarriedSelectionKeepsItsCellsAndLearnsOnlyWhatTheNewViewAd
   o.share = 0.3f;
   run_to_completion(LightSelection::build(first_view, o, other_share));
   try {
-    other_share.restore(state, lights, "direct");
+    other_share.restore(state, c.scene, "direct");
     FAIL() << "no error";
   } catch (const LightOpError& e) {
     EXPECT_NE(std::string(e.what()).find("direct: the kept learned lights were learned with other settings"), std::string::npos)
