@@ -108,8 +108,15 @@ void FrameLoop::switch_view(const FrameSpec& f, bool replay, const std::function
   // A replayed view, which nothing renders, needs only what carried setups extend to it and what they ask.
   control::FrameView view{f.number, f.camera, replay ? std::optional(asked_by_carried_) : std::nullopt};
   view.keep = any_carried();  // for a later run of the job, which then need not replay
+  const auto start = std::chrono::steady_clock::now();
   run_phase(wire::Phase::frame, control::encode_frame(view));
+  const auto taken = std::chrono::steady_clock::now();
   run_phase(wire::Phase::setup, {});
+  char line[96];
+  std::snprintf(line, sizeof line, ": view taken in %.3f s, set up in %.3f s",
+                std::chrono::duration<double>(taken - start).count(),
+                std::chrono::duration<double>(std::chrono::steady_clock::now() - taken).count());
+  log_debug("frame " + std::to_string(f.number) + (replay ? " (replayed)" : "") + line);
 }
 
 bool FrameLoop::catch_up(size_t holds, size_t before, const std::function<void(wire::Phase, Value::Map)>& run_phase) {
