@@ -1,14 +1,17 @@
 // The director alone against simulated actors: how far its control plane goes. The director runs here, unchanged
 // (run_farm with a launcher of its own); the actors are simulated in one child process, each over its own TCP
 // connection with its own routing id (one ZeroMQ ROUTER that connects once per actor), and answer as real actors
-// do: HELLO, READY of every phase, HEARTBEAT every second, renderers' tiles (one being "rendered" for --tile-ms
-// while the next is asked for, like a renderer's tiles in flight; the pixels are a grey of the tile's size), STATS
+// do: HELLO, READY of every phase, HEARTBEAT every second (left out, as the runtime does, after anything else was
+// sent since the last, up to three in a row), renderers' tiles (one being "rendered" for --tile-ms
+// while the next is asked for, like a renderer's tiles in flight; the pixels are a grey of the tile's size, and
+// the next tile is asked for with them, as the built-in renderer does — or, with --tile-requests alone (or both,
+// each count run twice), by a request of its own, as a renderer that does not use tile_done's `next`), STATS
 // and BYE. Nothing is rendered, so what is measured is the director: launch to last HELLO, configure, tiles per
 // second against the tiles offered, its CPU share while tiles flow, its memory, and whether any actor was lost or
 // went without the director's heartbeat.
 //
 //   build/bench/control_plane_bench [--curve] [--actors 100,1000,10000] [--tile-ms 200] [--tiles-per-renderer 6]
-//                                   [--json bench-control-plane.json]
+//                                   [--tile-requests with-pixels|alone|both] [--json bench-control-plane.json]
 #include <fcntl.h>
 #include <sys/prctl.h>
 #include <sys/resource.h>
@@ -98,7 +101,8 @@ struct LineReader {
 
 class Simulator {
  public:
-  Simulator(int commands, int reports, double tile_ms) : commands_{commands}, reports_(reports), tile_ms_(tile_ms) {
+  Simulator(int commands, int reports, double tile_ms, bool next_with_pixels)
+      : commands_{commands}, reports_(reports), tile_ms_(tile_ms), next_with_pixels_(next_with_pixels) {
     ctx_ = zmq_ctx_new();
     zmq_ctx_set(ctx_, ZMQ_IO_THREADS, 1);
     zmq_ctx_set(ctx_, ZMQ_MAX_SOCKETS, 64);
@@ -143,6 +147,8 @@ class Simulator {
     bool none_left = false, said_ready = false;
     std::deque<control::Tile> assigned;  // the first is being rendered
     Clock::time_point last_from_director;
+    Clock::time_point last_sent, last_beat;  // anything, a beat (or its slot)
+    int left_out = 0;                         // beats left out in a row
     double longest_silence = 0;  // the director's, seen by this actor
   };
   enum class What { beat, tile_finished };
@@ -209,6 +215,7 @@ class Simulator {
     zmq_send(router_, header.data(), header.size(), ZMQ_SNDMORE);
     zmq_send(router_, body.data(), body.size(), 0);
     ++sent_;
+    actors_[i].last_sent = Clock::now();
   }
 
   void ask_tile(size_t i) {
@@ -316,7 +323,14 @@ class Simulator {
       Actor& a = actors_[t.actor];
       if (a.gone) continue;
       if (t.what == What::beat) {
-        send(t.actor, wire::make(wire::MsgType::heartbeat, a.name));
+        // As the runtime beats: left out after anything else was sent since the last beat, up to three in a row.
+        if (a.left_out < 3 && a.last_sent > a.last_beat) {
+          ++a.left_out;
+        } else {
+          send(t.actor, wire::make(wire::MsgType::heartbeat, a.name));
+          a.left_out = 0;
+        }
+        a.last_beat = Clock::now();  // after the beat's own send
         timers_.push({t.due + std::chrono::seconds(1), t.actor, What::beat});
       } else {
         const control::Tile tile = a.assigned.front();
@@ -324,9 +338,12 @@ class Simulator {
         a.rendering = false;
         grey_.resize(std::max(grey_.size(), static_cast<size_t>(3 * tile.rect.pixel_count())), 0.5f);
         const uint64_t id = a.next_id++;
+        const bool next = next_with_pixels_ && !a.none_left && a.asked + static_cast<int>(a.assigned.size()) < 2;
+        if (next) ++a.asked, a.tile_asks.insert(id);
         send(t.actor, wire::make_request(a.name, wire::Op::tile_done,
-                                         control::encode_tile_done(tile.id, std::span<const float>(
-                                                                                grey_.data(), 3 * tile.rect.pixel_count())),
+                                         control::encode_tile_done(tile.id,
+                                                                   std::span<const float>(grey_.data(), 3 * tile.rect.pixel_count()),
+                                                                   next),
                                          id));
         ++tiles_;
         keep_busy(t.actor);
@@ -344,6 +361,7 @@ class Simulator {
   LineReader commands_;
   int reports_;
   double tile_ms_;
+  bool next_with_pixels_;  // the next tile asked for in tile_done (the built-in renderer), else by a request of its own
   void* ctx_ = nullptr;
   void* router_ = nullptr;
   bool quit_ = false;
@@ -444,6 +462,7 @@ class SimulatedLauncher final : public Launcher {
 
 struct Row {
   int actors = 0, renderers = 0, tiles = 0;
+  bool next_with_pixels = true;
   int status = 0;
   double hello = 0, configure = 0, render = 0, launch_to_first_tile = 0;
   double offered_tiles_per_second = 0, tiles_per_second = 0;
@@ -543,7 +562,7 @@ void run_director(int actors, int tiles_per_renderer, bool curve, int commands, 
   write_line(result, line.str());
 }
 
-Row measure(int actors, double tile_ms, int tiles_per_renderer, bool curve) {
+Row measure(int actors, double tile_ms, int tiles_per_renderer, bool curve, bool next_with_pixels) {
   int commands[2], reports[2], result[2];
   if (pipe(commands) != 0 || pipe(reports) != 0 || pipe(result) != 0) std::exit(1);
   std::fflush(stdout);
@@ -555,7 +574,7 @@ Row measure(int actors, double tile_ms, int tiles_per_renderer, bool curve) {
     close(result[0]);
     close(result[1]);
     fcntl(commands[0], F_SETFL, O_NONBLOCK);
-    Simulator sim(commands[0], reports[1], tile_ms);
+    Simulator sim(commands[0], reports[1], tile_ms, next_with_pixels);
     _exit(sim.run());
   }
   close(commands[0]);
@@ -581,6 +600,7 @@ Row measure(int actors, double tile_ms, int tiles_per_renderer, bool curve) {
   waitpid(simulator, nullptr, 0);
   Row row;
   row.actors = actors;
+  row.next_with_pixels = next_with_pixels;
   row.renderers = actors - 1;
   std::istringstream in(text);
   in >> row.status >> row.tiles >> row.hello >> row.configure >> row.render >> row.launch_to_first_tile >>
@@ -602,17 +622,26 @@ int main(int argc, char** argv) {
   int tiles_per_renderer = 6;
   std::string json_path = "bench-control-plane.json";
   bool curve = false;
+  std::string tile_requests = "with-pixels";
   for (int i = 1; i < argc; ++i) {
     if (!std::strcmp(argv[i], "--actors") && i + 1 < argc) counts = argv[++i];
     else if (!std::strcmp(argv[i], "--tile-ms") && i + 1 < argc) tile_ms = std::atof(argv[++i]);
     else if (!std::strcmp(argv[i], "--tiles-per-renderer") && i + 1 < argc) tiles_per_renderer = std::atoi(argv[++i]);
     else if (!std::strcmp(argv[i], "--json") && i + 1 < argc) json_path = argv[++i];
     else if (!std::strcmp(argv[i], "--curve")) curve = true;
+    else if (!std::strcmp(argv[i], "--tile-requests") && i + 1 < argc) tile_requests = argv[++i];
     else {
       std::fprintf(stderr, "usage: control_plane_bench [--curve] [--actors 100,1000] [--tile-ms MS] [--tiles-per-renderer N] "
-                           "[--json FILE]\n");
+                           "[--tile-requests with-pixels|alone|both] [--json FILE]\n");
       return 2;
     }
+  }
+  std::vector<bool> modes;  // the next tile with the pixels, or alone
+  if (tile_requests != "alone") modes.push_back(true);
+  if (tile_requests != "with-pixels") modes.push_back(false);
+  if (tile_requests != "alone" && tile_requests != "with-pixels" && tile_requests != "both") {
+    std::fprintf(stderr, "--tile-requests is with-pixels, alone or both\n");
+    return 2;
   }
   // Every actor is a TCP connection at each end.
   rlimit files{};
@@ -622,31 +651,35 @@ int main(int argc, char** argv) {
   std::printf("lightfarm control-plane benchmark: the director against simulated actors (one `direct`, the rest "
               "renderers), a tile every %.0f ms per renderer, %d tiles per renderer, 16x16 tiles, security %s\n\n",
               tile_ms, tiles_per_renderer, curve ? "CURVE" : "none");
-  std::printf("%7s %6s %8s %8s %10s %12s %12s %12s %10s %10s %8s %6s\n", "actors", "exit", "hello s", "config s",
+  std::printf("%-12s %7s %6s %8s %8s %10s %12s %12s %12s %10s %10s %8s %6s\n", "next tile", "actors", "exit", "hello s", "config s",
               "1st tile s", "tiles/s", "offered/s", "dir CPU rnd", "dir MB", "sim CPU s", "max gap", "lost");
   lf::Value::Array runs;
   std::stringstream list(counts);
   for (std::string item; std::getline(list, item, ',');) {
-    const Row r = measure(std::atoi(item.c_str()), tile_ms, tiles_per_renderer, curve);
-    std::printf("%7d %6d %8.2f %8.2f %10.2f %12.0f %12.0f %12.3f %10.0f %10.1f %8.2f %6d\n", r.actors, r.status,
-                r.hello, r.configure, r.launch_to_first_tile, r.tiles_per_second, r.offered_tiles_per_second,
-                r.director_cpu_render, r.director_peak_mb, r.simulator_cpu, r.longest_director_silence, r.lost);
-    std::fflush(stdout);
-    runs.push_back(lf::Value::Map{{"actors", r.actors},
-                                  {"exit_status", r.status},
-                                  {"tiles", r.tiles},
-                                  {"hello_seconds", r.hello},
-                                  {"configure_seconds", r.configure},
-                                  {"render_seconds", r.render},
-                                  {"launch_to_first_tile_seconds", r.launch_to_first_tile},
-                                  {"tiles_per_second", r.tiles_per_second},
-                                  {"offered_tiles_per_second", r.offered_tiles_per_second},
-                                  {"director_cpu_share_render", r.director_cpu_render},
-                                  {"director_cpu_seconds", r.director_cpu_total},
-                                  {"director_peak_rss_mb", r.director_peak_mb},
-                                  {"simulator_cpu_seconds", r.simulator_cpu},
-                                  {"longest_director_silence_seconds", r.longest_director_silence},
-                                  {"lost", r.lost}});
+    for (const bool next_with_pixels : modes) {
+      const Row r = measure(std::atoi(item.c_str()), tile_ms, tiles_per_renderer, curve, next_with_pixels);
+      std::printf("%-12s %7d %6d %8.2f %8.2f %10.2f %12.0f %12.0f %12.3f %10.0f %10.1f %8.2f %6d\n",
+                  r.next_with_pixels ? "with pixels" : "alone", r.actors, r.status,
+                  r.hello, r.configure, r.launch_to_first_tile, r.tiles_per_second, r.offered_tiles_per_second,
+                  r.director_cpu_render, r.director_peak_mb, r.simulator_cpu, r.longest_director_silence, r.lost);
+      std::fflush(stdout);
+      runs.push_back(lf::Value::Map{{"actors", r.actors},
+                                    {"next_tile", r.next_with_pixels ? "with_pixels" : "alone"},
+                                    {"exit_status", r.status},
+                                    {"tiles", r.tiles},
+                                    {"hello_seconds", r.hello},
+                                    {"configure_seconds", r.configure},
+                                    {"render_seconds", r.render},
+                                    {"launch_to_first_tile_seconds", r.launch_to_first_tile},
+                                    {"tiles_per_second", r.tiles_per_second},
+                                    {"offered_tiles_per_second", r.offered_tiles_per_second},
+                                    {"director_cpu_share_render", r.director_cpu_render},
+                                    {"director_cpu_seconds", r.director_cpu_total},
+                                    {"director_peak_rss_mb", r.director_peak_mb},
+                                    {"simulator_cpu_seconds", r.simulator_cpu},
+                                    {"longest_director_silence_seconds", r.longest_director_silence},
+                                    {"lost", r.lost}});
+    }
   }
   const lf::Value doc = lf::Value::Map{{"benchmark", "control_plane"},
                                        {"security", curve ? "curve" : "none"},

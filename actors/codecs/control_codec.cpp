@@ -40,8 +40,10 @@ Result<std::optional<Tile>> decode_tile_reply(const Value& body, int width, int 
   return std::optional<Tile>{Tile{static_cast<uint64_t>(get("id")), rect, static_cast<uint32_t>(first)}};
 }
 
-Value encode_tile_done(uint64_t id, std::span<const float> rgb) {
-  return Value::Map{{"id", id}, {"pixels", floats_to_bytes(rgb)}};
+Value encode_tile_done(uint64_t id, std::span<const float> rgb, bool next) {
+  Value::Map m{{"id", id}, {"pixels", floats_to_bytes(rgb)}};
+  if (next) m["next"] = true;
+  return m;
 }
 
 Result<TileDone> decode_tile_done(const Value& body) {
@@ -52,6 +54,10 @@ Result<TileDone> decode_tile_done(const Value& body) {
       !bytes_to_floats(pixels->as_bytes(), done.rgb) || done.rgb.size() % 3 != 0)
     return bad("tile_done needs id and pixels");
   done.id = static_cast<uint64_t>(id->as_int());
+  if (const Value* next = body.find("next")) {
+    if (!next->is_bool()) return bad("tile_done's next must be true or false");
+    done.next = next->as_bool();
+  }
   return done;
 }
 

@@ -4,7 +4,8 @@
 //   tile (renderer -> director): {}
 //     reply: { tile: {id, x0, y0, x1, y1, first?} } (half-open, inside the image; first: the pass's first sample
 //            index, 0 when absent) | {} when no tile is left
-//   tile_done (renderer -> director): { id, pixels: f32[3wh] }          reply: {}
+//   tile_done (renderer -> director): { id, pixels: f32[3wh], next? }  reply: {}; with next: true, the reply is
+//            a tile request's (the renderer's next tile, or {} when none is left)
 //   PEER_MOVED (director -> actor): { name, endpoint, key }  (key "" without CURVE or over same-host IPC)
 //   PEER_DOWN (director -> actor):  { name }
 //   PHASE frame (director -> actor): { frame, camera: {eye, at, ...} (CameraSpec), renew?: [names] }
@@ -34,8 +35,9 @@ Result<std::optional<Tile>> decode_tile_reply(const Value& body, int width, int 
 struct TileDone {
   uint64_t id = 0;
   std::vector<float> rgb;  // 3 per pixel, rows of the tile top first
+  bool next = false;       // the renderer's next tile is asked for too: one round trip a tile instead of two
 };
-Value encode_tile_done(uint64_t id, std::span<const float> rgb);
+Value encode_tile_done(uint64_t id, std::span<const float> rgb, bool next = false);
 Result<TileDone> decode_tile_done(const Value& body);
 
 struct PeerMoved {

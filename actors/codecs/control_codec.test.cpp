@@ -46,6 +46,14 @@ TEST(ControlCodec, TileDoneCarriesItsPixels) {
   EXPECT_EQ(partial.error().message, "tile_done needs id and pixels");
   EXPECT_FALSE(decode_tile_done(Value::Map{{"id", 1}}).ok());
   EXPECT_FALSE(decode_tile_done(Value::Map{{"id", "one"}, {"pixels", floats_to_bytes(rgb)}}).ok());
+  EXPECT_FALSE(back->next);
+  EXPECT_FALSE(encode_tile_done(9, rgb).find("next")) << "a renderer that asks for no tile sends what it always did";
+  auto asking = decode_tile_done(encode_tile_done(9, rgb, true));
+  ASSERT_TRUE(asking.ok());
+  EXPECT_TRUE(asking->next);
+  auto odd = decode_tile_done(Value::Map{{"id", 1}, {"pixels", floats_to_bytes(rgb)}, {"next", 1}});
+  ASSERT_FALSE(odd.ok());
+  EXPECT_EQ(odd.error().message, "tile_done's next must be true or false");
 }
 
 TEST(ControlCodec, PeerMessagesRoundTrip) {

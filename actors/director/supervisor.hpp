@@ -159,6 +159,7 @@ class Supervisor {
   std::map<std::string, std::string> agent_sockets_;
   Stage stage_ = Stage::prepare;
   Clock::time_point last_heartbeat_ = Clock::now();
+  Clock::time_point last_silence_check_{};
   RateLimitedLog strangers_;  // bad or foreign control messages: logged, never flooding
 };
 

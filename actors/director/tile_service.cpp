@@ -145,11 +145,14 @@ Status TileService::on_request(const std::string& actor, wire::Op op, uint64_t i
     out.refuse(actor, id, ErrorCode::refused, RenderMaster::describe(outcome));
     return Ok{};
   }
-  out.reply(actor, id, Value::Map{});
+  // Asked for the renderer's next tile too: the reply is a tile request's, answered like one (it may wait).
+  if (done->next) waiting_.emplace_back(actor, id);
+  else out.reply(actor, id, Value::Map{});
   if (giving_up_) {
     // A tile of the pass given up: dropped, unless it completes the pass after all. The frame is done once none is out.
     if (master_.finished()) add_pass();
-    if (master_.held().empty()) passes_finished_ = true, serve_waiting(out);
+    if (master_.held().empty()) passes_finished_ = true;
+    serve_waiting(out);
     return Ok{};
   }
   if (image_.time_limit > 0 && master_.finished()) {
@@ -162,7 +165,7 @@ Status TileService::on_request(const std::string& actor, wire::Op op, uint64_t i
   // The farm's first tile (a job's later frames keep the first frame's figure).
   if (first_tile_seconds_ == 0 && master_.done() == resumed_ + 1) first_tile_seconds_ = render_seconds();
   progress_.update(progress_done(), render_seconds());
-  if (master_.finished()) serve_waiting(out);
+  if (master_.finished() || done->next) serve_waiting(out);
   return Ok{};
 }
 

@@ -44,6 +44,48 @@ TEST(TileService, TileRequestsWaitForTheRenderPhase) {
   EXPECT_TRUE(sent[0].body.find("tile"));
 }
 
+// A tile_done that asks for the next tile (the built-in renderer's): its reply is a tile request's. With tiles free
+// it is the next one; with none free but one still out it waits, and that tile's pixels answer it with no tile.
+TEST(TileService, ATileDoneAskingForTheNextIsAnsweredAsATileRequest) {
+  TileService s(image(48, 16, 16), {"r0", "r1"}, false, true);
+  RecordingOutbox out;
+  ASSERT_TRUE(s.on_phase(wire::Phase::render, out).ok());
+  auto first_of = [&](const char* r, uint64_t req) {
+    EXPECT_TRUE(s.on_request(r, Op::tile, req, Value::Map{}, out).ok());
+    auto sent = out.take();
+    EXPECT_EQ(sent.size(), 1u);
+    return sent.empty() ? Value() : sent[0].body;
+  };
+  const Value a = first_of("r0", 1), b = first_of("r1", 2);
+  auto done_asking = [&](const char* r, uint64_t req, const Value& tile) {
+    return s.on_request(r, Op::tile_done, req,
+                        Value::Map{{"id", tile.find("tile")->find("id")->as_int()}, {"pixels", pixels_for(tile, 0.5f)},
+                                   {"next", true}},
+                        out);
+  };
+  ASSERT_TRUE(done_asking("r0", 3, a).ok());
+  auto sent = out.take();
+  ASSERT_EQ(sent.size(), 1u);
+  EXPECT_EQ(sent[0].id, 3u);
+  ASSERT_TRUE(sent[0].body.find("tile")) << "the third tile, with the first's acknowledgement";
+  const Value c = sent[0].body;
+  ASSERT_TRUE(done_asking("r0", 4, c).ok());
+  EXPECT_TRUE(out.take().empty()) << "no tile is free, r1's is still out: the reply waits";
+  ASSERT_TRUE(done_asking("r1", 5, b).ok());
+  sent = out.take();
+  ASSERT_EQ(sent.size(), 2u);
+  for (const auto& m : sent) {
+    EXPECT_FALSE(m.refused);
+    EXPECT_FALSE(m.body.find("tile")) << "every tile is done";
+  }
+  EXPECT_TRUE(s.finished());
+  // Pixels from a renderer that does not hold the tile are refused, the next tile with them.
+  ASSERT_TRUE(done_asking("r1", 6, c).ok());
+  sent = out.take();
+  ASSERT_EQ(sent.size(), 1u);
+  EXPECT_TRUE(sent[0].refused);
+}
+
 TEST(TileService, EveryTileOnceThenNoneLeftAndTheFilmIsFilled) {
   TileService s(image(32, 16, 16), {"r0", "r1"}, false, true);
   RecordingOutbox out;

@@ -2,7 +2,7 @@
 //
 // Sends to the director (the render master):
 //   REQUEST op="tile"       {}                        -> REPLY { tile: {id, x0, y0, x1, y1} } or {} when none remain
-//   REQUEST op="tile_done"  { id, pixels: f32[3wh] }  -> REPLY {}
+//   REQUEST op="tile_done"  { id, pixels: f32[3wh], next? } -> REPLY {}, or with next: true a tile request's reply
 // Sends to its one input (the MasterLightOp): REQUEST op="shade" batches, several in flight (the input's window).
 // PHASE frame (a job's next frame) brings a new camera.
 // Ready for "render" once configured (scene loaded, BVH built); in a partitioned farm (partition { parts = N }) its
@@ -104,17 +104,22 @@ class RendererActor final : public Actor {
       rt.ask_director(wire::Op::tile, Value::Map{}, [this, &rt](Result<wire::Message> r) {
         --tile_requests_out_;
         if (!r) return rt.fail("the render master refused a tile request: " + r.error().message);
-        auto tile = control::decode_tile_reply(r->body, image_.width, image_.height);
-        if (!tile) return rt.fail(tile.error().message);
-        if (!*tile) {
-          no_more_tiles_ = true;
-          check_finished(rt);
-          return;
-        }
-        start_tile(**tile, rt);
-        ask_for_tiles(rt);
+        take_tile(r->body, rt);
       });
     }
+  }
+
+  // A tile request's reply (or a tile_done's that asked for the next tile): the tile started, or none left.
+  void take_tile(const Value& reply, Runtime& rt) {
+    auto tile = control::decode_tile_reply(reply, image_.width, image_.height);
+    if (!tile) return rt.fail(tile.error().message);
+    if (!*tile) {
+      no_more_tiles_ = true;
+      check_finished(rt);
+      return;
+    }
+    start_tile(**tile, rt);
+    ask_for_tiles(rt);
   }
 
   void start_tile(const control::Tile& tile, Runtime& rt) {
@@ -195,12 +200,24 @@ class RendererActor final : public Actor {
     ++rt.stats().tiles;
     ++done_acks_out_;
     std::erase(jobs_, job);
+    // The next tile, if one is wanted, is asked for with the pixels: two messages at the director instead of four.
+    const bool next = rendering_ && !no_more_tiles_ &&
+                      jobs_.size() + tile_requests_out_ < static_cast<size_t>(params_.tiles_in_flight);
+    if (next) ++tile_requests_out_;
     rt.ask_director(wire::Op::tile_done,
-                    control::encode_tile_done(job->id, std::span<const float>(
-                                                           reinterpret_cast<const float*>(pixels.data()), 3 * pixels.size())),
-                    [this, &rt](Result<wire::Message> r) {
+                    control::encode_tile_done(job->id,
+                                              std::span<const float>(reinterpret_cast<const float*>(pixels.data()),
+                                                                     3 * pixels.size()),
+                                              next),
+                    [this, next, &rt](Result<wire::Message> r) {
                       --done_acks_out_;
-                      if (!r) log_warn("the render master did not take a tile: " + r.error().message);
+                      if (next) --tile_requests_out_;
+                      if (!r) {
+                        log_warn("the render master did not take a tile: " + r.error().message);
+                        ask_for_tiles(rt);  // the next tile, asked for alone
+                        return check_finished(rt);
+                      }
+                      if (next) return take_tile(r->body, rt);
                       check_finished(rt);
                     });
     ask_for_tiles(rt);

@@ -218,6 +218,10 @@ class Runtime {
   Value live_;
   std::chrono::steady_clock::time_point live_refreshed_{};
   std::atomic<double> heartbeat_interval_{1.0};
+  // When this actor last sent the director anything (steady clock ticks): a beat is left out on a link that carried
+  // something within the interval, up to kBeatsLeftOut in a row (the monitor's figures ride on beats).
+  std::atomic<std::chrono::steady_clock::rep> last_control_send_{0};
+  static constexpr int kBeatsLeftOut = 3;
   bool configured_ = false;
   bool stopping_ = false;
   std::atomic<bool> stop_asked_{false};
