@@ -219,7 +219,7 @@ void TileService::serve_waiting(Outbox& out) {
     } else if (!master_.finished()) {
       return;  // keep waiting
     }
-    waiting_.erase(waiting_.begin());
+    waiting_.pop_front();
     out.reply(actor, id, control::encode_tile_reply(tile));
   }
 }

@@ -10,6 +10,7 @@
 // frame's sum and, if another pass of the last one's length still fits in the time, the tiles go out again with
 // the next pass's first sample (tile.first). Past the time a pass is given up: no tile goes out, its tiles still
 // out are taken and dropped, and the frame is the mean of the passes completed (at least one).
+#include <deque>
 #include <memory>
 #include <optional>
 #include <utility>
@@ -90,7 +91,8 @@ class TileService final : public Service {
   std::chrono::steady_clock::time_point render_start_;
   double first_tile_seconds_ = 0;
   std::chrono::steady_clock::time_point last_progress_;
-  std::vector<std::pair<std::string, uint64_t>> waiting_;  // tile requests not yet answered, oldest first
+  // Tile requests not yet answered, oldest first, answered from the front (thousands may wait at once).
+  std::deque<std::pair<std::string, uint64_t>> waiting_;
   bool written_ = false;
   std::optional<FilmCheckpoint> checkpoint_;
   double preview_every_ = 0;
