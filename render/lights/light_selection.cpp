@@ -185,14 +185,21 @@ Task LightSelection::extend(const SceneContext& ctx, const LightSelectionOptions
   }
   std::sort(keyed.begin(), keyed.end());
 
-  // The cells to learn, in key order, and their points' range in keyed: those never learned, and those learned
-  // from far fewer points than this view has in them.
+  // The cells to learn, in key order, their points' range in keyed and their centre: those never learned, and
+  // those learned from far fewer points than this view has in them or from points around another centre.
   std::vector<std::pair<size_t, size_t>> cell_ranges;
+  std::vector<Vec3> centres;
   for (size_t i = 0; i < keyed.size();) {
     size_t j = i;
-    while (j < keyed.size() && keyed[j].first == keyed[i].first) ++j;
+    Vec3 sum{};
+    for (; j < keyed.size() && keyed[j].first == keyed[i].first; ++j) sum = sum + candidates[keyed[j].second].x;
+    const Vec3 centre = sum * (1.0f / static_cast<float>(j - i));
     const auto known = index_.find(keyed[i].first);
-    if (known == index_.end() || learns_again(j - i, known->second.points)) cell_ranges.emplace_back(i, j);
+    if (known == index_.end() ||
+        learns_again(j - i, centre, known->second.points, known->second.centre, inverse_size_)) {
+      cell_ranges.emplace_back(i, j);
+      centres.push_back(centre);
+    }
     i = j;
   }
 
@@ -278,7 +285,7 @@ Task LightSelection::extend(const SceneContext& ctx, const LightSelectionOptions
   if (replicas > 1 && !cell_ranges.empty()) co_await exchange_moments(*ctx.exchange, mine, moment, view.shadow_rays, view.blocked_rays);
   for (size_t c = 0; c < cell_ranges.size(); ++c) {
     const auto [first, last] = cell_ranges[c];
-    add_cell(keyed[first].first, static_cast<uint32_t>(std::min<size_t>(last - first, UINT32_MAX)), moment[c]);
+    add_cell(keyed[first].first, static_cast<uint32_t>(std::min<size_t>(last - first, UINT32_MAX)), centres[c], moment[c]);
   }
   view.cells_end = static_cast<uint32_t>(cells_.size());
   view.dark_end = static_cast<uint32_t>(dark_.size());
@@ -288,7 +295,7 @@ Task LightSelection::extend(const SceneContext& ctx, const LightSelectionOptions
   ctx.report("learning lights", mine.size(), std::max<size_t>(mine.size(), 1));
 }
 
-void LightSelection::add_cell(uint64_t key, uint32_t points, std::map<uint32_t, double>& moment) {
+void LightSelection::add_cell(uint64_t key, uint32_t points, Vec3 centre, std::map<uint32_t, double>& moment) {
   // The environment's entry (the map's last key) is its share of the cell, not a light of the distribution.
   double environment = 0;
   if (auto it = moment.find(kEnvironmentEntry); it != moment.end()) {
@@ -297,7 +304,7 @@ void LightSelection::add_cell(uint64_t key, uint32_t points, std::map<uint32_t, 
   }
   double sum = 0;
   for (auto& [light, m] : moment) sum += (m = std::sqrt(m));
-  if (!(sum > 0)) return append_dark(key, points);
+  if (!(sum > 0)) return append_dark(key, points, centre);
   std::vector<uint32_t> lights;
   std::vector<float> cdf;
   double running = 0;
@@ -307,34 +314,43 @@ void LightSelection::add_cell(uint64_t key, uint32_t points, std::map<uint32_t, 
     cdf.push_back(static_cast<float>(running / sum));
   }
   cdf.back() = 1.0f;
-  append_cell(key, points, static_cast<float>(environment / (environment + sum)), lights, cdf);
+  append_cell(key, points, centre, static_cast<float>(environment / (environment + sum)), lights, cdf);
 }
 
-void LightSelection::append_cell(uint64_t key, uint32_t points, float environment, std::span<const uint32_t> lights,
-                                 std::span<const float> cdf) {
-  Cell cell{static_cast<uint32_t>(lights_.size()), static_cast<uint32_t>(lights.size()), environment, points};
+void LightSelection::append_cell(uint64_t key, uint32_t points, Vec3 centre, float environment,
+                                 std::span<const uint32_t> lights, std::span<const float> cdf) {
+  Cell cell{static_cast<uint32_t>(lights_.size()), static_cast<uint32_t>(lights.size()), environment, points, centre};
   lights_.insert(lights_.end(), lights.begin(), lights.end());
   cdf_.insert(cdf_.end(), cdf.begin(), cdf.end());
   // Each light's chance as the difference of the sums pick() compares u with, so that it is what pick() does.
   for (size_t i = cell.first; i < cdf_.size(); ++i)
     probability_.push_back(cdf_[i] - (i == cell.first ? 0.0f : cdf_[i - 1]));
-  index_[key] = Known{static_cast<int32_t>(cells_.size()), points};
+  index_[key] = Known{static_cast<int32_t>(cells_.size()), points, centre};
   cells_.push_back(cell);
   keys_.push_back(key);
 }
 
-void LightSelection::append_dark(uint64_t key, uint32_t points) {
-  index_[key] = Known{-1, points};
-  dark_.emplace_back(key, points);
+void LightSelection::append_dark(uint64_t key, uint32_t points, Vec3 centre) {
+  index_[key] = Known{-1, points, centre};
+  dark_.push_back(Dark{key, points, centre});
 }
 
 namespace {
-constexpr std::string_view kStateTag = "LFLIGHTSEL1";
+constexpr std::string_view kStateTag = "LFLIGHTSEL2";
+
+void put_centre(std::string& out, Vec3 c) {
+  bytes::put(out, c.x);
+  bytes::put(out, c.y);
+  bytes::put(out, c.z);
+}
+bool read_centre(bytes::Reader& in, Vec3& c) {
+  return in.f32(c.x) && in.f32(c.y) && in.f32(c.z) && std::isfinite(c.x) && std::isfinite(c.y) && std::isfinite(c.z);
+}
 }
 
 // Tag, f32 inverse cell size, f32 share, then a block a view: u64 shadow rays, u64 blocked, u32 cells, per cell
-// (u64 key, u32 points, f32 environment, u32 lights, that many (u32 light, f32 running sum)), u32 dark keys, that
-// many (u64 key, u32 points).
+// (u64 key, u32 points, 3 f32 centre, f32 environment, u32 lights, that many (u32 light, f32 running sum)), u32
+// dark keys, that many (u64 key, u32 points, 3 f32 centre).
 std::string LightSelection::state() const {
   std::string out(kStateTag);
   bytes::put(out, inverse_size_);
@@ -348,6 +364,7 @@ std::string LightSelection::state() const {
       const Cell& c = cells_[cell];
       bytes::put(out, keys_[cell]);
       bytes::put(out, c.points);
+      put_centre(out, c.centre);
       bytes::put(out, c.environment);
       bytes::put(out, c.count);
       for (uint32_t i = c.first; i < c.first + c.count; ++i) {
@@ -357,8 +374,9 @@ std::string LightSelection::state() const {
     }
     bytes::put(out, v.dark_end - dark);
     for (; dark < v.dark_end; ++dark) {
-      bytes::put(out, dark_[dark].first);
-      bytes::put(out, dark_[dark].second);
+      bytes::put(out, dark_[dark].key);
+      bytes::put(out, dark_[dark].points);
+      put_centre(out, dark_[dark].centre);
     }
   }
   return out;
@@ -384,20 +402,24 @@ void LightSelection::restore(std::string_view state, const Scene& scene, const c
     View v;
     uint32_t cells = 0, dark = 0;
     if (!in.u64(v.shadow_rays) || !in.u64(v.blocked_rays) || v.blocked_rays > v.shadow_rays || !in.u32(cells) ||
-        !in.room(cells, 20))
+        !in.room(cells, 32))
       throw malformed;
-    // A key learned before comes again only learned from enough more points.
-    auto relearned = [&](uint64_t key, uint32_t points) {
+    // A key learned before comes again only learned from enough more points, or from points around another centre.
+    auto relearned = [&](uint64_t key, uint32_t points, Vec3 centre) {
       const auto known = out.index_.find(key);
-      return known == out.index_.end() || learns_again(points, known->second.points);
+      return known == out.index_.end() ||
+             learns_again(points, centre, known->second.points, known->second.centre, out.inverse_size_);
     };
     for (uint32_t c = 0; c < cells; ++c) {
       uint64_t key = 0;
       float environment = 0;
       uint32_t count = 0, points = 0;
-      if (!in.u64(key) || !in.u32(points) || !in.f32(environment) || !in.u32(count) || count == 0 || !in.room(count, 8))
+      Vec3 centre;
+      if (!in.u64(key) || !in.u32(points) || !read_centre(in, centre) || !in.f32(environment) || !in.u32(count) ||
+          count == 0 || !in.room(count, 8))
         throw malformed;
-      if (!(environment == -1.0f || (environment >= 0 && environment <= 1)) || points == 0 || !relearned(key, points))
+      if (!(environment == -1.0f || (environment >= 0 && environment <= 1)) || points == 0 ||
+          !relearned(key, points, centre))
         throw malformed;
       lights.resize(count);
       cdf.resize(count);
@@ -408,14 +430,16 @@ void LightSelection::restore(std::string_view state, const Scene& scene, const c
         if (!(cdf[i] >= (i > 0 ? cdf[i - 1] : 0.0f)) || !(cdf[i] <= 1)) throw malformed;
       }
       if (cdf.back() != 1.0f) throw malformed;
-      out.append_cell(key, points, environment, lights, cdf);
+      out.append_cell(key, points, centre, environment, lights, cdf);
     }
-    if (!in.u32(dark) || !in.room(dark, 12)) throw malformed;
+    if (!in.u32(dark) || !in.room(dark, 24)) throw malformed;
     for (uint32_t d = 0; d < dark; ++d) {
       uint64_t key = 0;
       uint32_t points = 0;
-      if (!in.u64(key) || !in.u32(points) || points == 0 || !relearned(key, points)) throw malformed;
-      out.append_dark(key, points);
+      Vec3 centre;
+      if (!in.u64(key) || !in.u32(points) || !read_centre(in, centre) || points == 0 || !relearned(key, points, centre))
+        throw malformed;
+      out.append_dark(key, points, centre);
     }
     v.cells_end = static_cast<uint32_t>(out.cells_.size());
     v.dark_end = static_cast<uint32_t>(out.dark_.size());

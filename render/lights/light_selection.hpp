@@ -15,9 +15,11 @@
 // same thing, so images do not depend on the farm's layout.
 //
 // Over a job's frames it can be carried (extend): a new view learns the cells no earlier view learned, and learns
-// again a cell it sees with at least kRelearnPoints times the points it was learned from (a cell first seen from
-// afar was learned from a corner of it: on Lost Empire's walk keeping such cells left the direct light of frame 24
-// 1.29x noisier than a farm of that frame alone); every other cell stays as it was. A frame's selection is a pure
+// again a cell it sees with at least kRelearnPoints times the points it was learned from, or whose points' centre
+// lies more than kRelearnMoved of a cell's edge from the centre of those it was learned from (a cell first seen
+// from afar was learned from a corner of it, and one seen from elsewhere may be lit by other lights: on Lost
+// Empire's walk keeping such cells left the direct light of frame 24 1.29x noisier than a farm of that frame alone,
+// and with the points rule alone frame 13 was 1.08x); every other cell stays as it was. A frame's selection is a pure
 // function of the job's views up to it. As bytes (state, restore) it is a tag and the options it was learned with,
 // then one block a view, so a later view's bytes begin with an earlier's (a job's record keeps only what each view
 // added); a cell learned again is in a later block under the same key.
@@ -63,10 +65,14 @@ class LightSelection {
   // Learns the cells of ctx's view that no earlier view learned (nor found dark), and those the view sees with at
   // least kRelearnPoints times the points they were learned from, as build() would; every other cell stays as it
   // is. On a selection build() made, with the same options.
-  // Whether a view with `points` in a cell learned from `learned` learns it again: at least kRelearnPoints times.
+  // Whether a view with `points` in a cell, centred at `centre`, learns again a cell learned from `learned` points
+  // centred at `learned_centre`: at least kRelearnPoints times the points, or centres more than kRelearnMoved cell
+  // edges apart (`inverse_size`: one over a cell's edge).
   static constexpr double kRelearnPoints = 1.5;
-  static bool learns_again(uint64_t points, uint32_t learned) {
-    return static_cast<double>(points) >= kRelearnPoints * static_cast<double>(learned);
+  static constexpr float kRelearnMoved = 0.25f;
+  static bool learns_again(uint64_t points, Vec3 centre, uint32_t learned, Vec3 learned_centre, float inverse_size) {
+    return static_cast<double>(points) >= kRelearnPoints * static_cast<double>(learned) ||
+           length(centre - learned_centre) * inverse_size > kRelearnMoved;
   }
   Task extend(const SceneContext& ctx, const LightSelectionOptions& options, const char* op = "light_selection");
   // What was learned, as bytes; restore() on a selection built with the same options and scene makes it answer as
@@ -98,6 +104,8 @@ class LightSelection {
 
   size_t cell_count() const { return cells_.size(); }  // every cell learned, a cell learned again included
   uint32_t cell_points(int32_t cell) const { return cells_[static_cast<size_t>(cell)].points; }
+  Vec3 cell_centre(int32_t cell) const { return cells_[static_cast<size_t>(cell)].centre; }
+  float inverse_cell_size() const { return inverse_size_; }
   size_t entry_count() const { return lights_.size(); }
   // Pre-pass figures for STATS: its shadow rays and how many were blocked.
   uint64_t shadow_rays() const { return shadow_rays_; }
@@ -109,21 +117,28 @@ class LightSelection {
   uint64_t key_of(Vec3 x, Vec3 n) const;
   // The cell `key`'s distribution from each light's second moment (its lights in index order); a cell whose
   // samples all came back dark learns nothing (it is noted dark).
-  void add_cell(uint64_t key, uint32_t points, std::map<uint32_t, double>& moment);
+  void add_cell(uint64_t key, uint32_t points, Vec3 centre, std::map<uint32_t, double>& moment);
   // Appends a learned cell (it replaces one learned before under its key): its lights ascending, the running sums
-  // pick() compares u with (the last 1), and how many points it was learned from.
-  void append_cell(uint64_t key, uint32_t points, float environment, std::span<const uint32_t> lights,
+  // pick() compares u with (the last 1), and how many points it was learned from and their centre.
+  void append_cell(uint64_t key, uint32_t points, Vec3 centre, float environment, std::span<const uint32_t> lights,
                    std::span<const float> cdf);
   // Notes a cell whose samples all came back dark (it replaces one learned before under its key).
-  void append_dark(uint64_t key, uint32_t points);
+  void append_dark(uint64_t key, uint32_t points, Vec3 centre);
   struct Cell {
     uint32_t first = 0, count = 0;  // its lights in lights_ / cdf_, sorted by light
     float environment = -1;         // the environment's learned share of the cell's light (-1: not learned)
     uint32_t points = 0;            // the view's points it was learned from
+    Vec3 centre{};                  // and their mean position
   };
   struct Known {
     int32_t cell = -1;  // its index in cells_, -1: learned dark
     uint32_t points = 0;
+    Vec3 centre{};
+  };
+  struct Dark {
+    uint64_t key = 0;
+    uint32_t points = 0;
+    Vec3 centre{};
   };
   // What one view added: the cells and dark keys up to these ends, and its pre-pass's rays.
   struct View {
@@ -134,7 +149,7 @@ class LightSelection {
   std::unordered_map<uint64_t, Known> index_;  // what each key's cell was last learned as
   std::vector<Cell> cells_;
   std::vector<uint64_t> keys_;                      // each cell's key
-  std::vector<std::pair<uint64_t, uint32_t>> dark_;  // the keys found dark and their points, in the order found
+  std::vector<Dark> dark_;  // the keys found dark, with their points and centre, in the order found
   std::vector<uint32_t> lights_;
   std::vector<float> probability_, cdf_;  // per entry: its chance, and the running sum up to and including it
   std::vector<View> views_;

@@ -132,7 +132,8 @@ TEST(LightSelection, ReplicasShareTheLearningAndEachHoldsWhatOneProcessLearns) {
 }
 
 // Over a job's frames: extended to a second view, a selection learns the cells new to the second view, and those the
-// second view sees with enough more points (LightSelection::learns_again), as that view alone would; it keeps every other cell the first
+// second view sees with enough more points or around another centre (LightSelection::learns_again), as that view
+// alone would; it keeps every other cell the first
 // view learned as it was; the same view again learns nothing. Its bytes, restored, give the same answers; bytes it
 // cannot use are refused and leave it as it was.
 TEST(LightSelection, ACarriedSelectionKeepsItsCellsAndLearnsOnlyWhatTheNewViewAdds) {
@@ -162,13 +163,18 @@ TEST(LightSelection, ACarriedSelectionKeepsItsCellsAndLearnsOnlyWhatTheNewViewAd
     for (float z = -3.9f; z < 4; z += 0.2f) points.push_back({{x, 0, z}, {0, 1, 0}});
   for (float y = 0.05f; y < 2; y += 0.1f)
     for (float z = -3.9f; z < 4; z += 0.2f) points.push_back({{kWall, y, z}, {-1, 0, 0}});
-  int kept = 0, added = 0, relearned = 0, shared_but_learned_otherwise = 0;
+  int kept = 0, added = 0, relearned = 0, moved_only = 0, shared_but_learned_otherwise = 0;
   for (const auto& [x, n] : points) {
     const int32_t cell = carried.cell_of(x, n), before = first.cell_of(x, n), alone = second_alone.cell_of(x, n);
-    if (before >= 0 && alone >= 0 && LightSelection::learns_again(second_alone.cell_points(alone), first.cell_points(before))) {
-      ASSERT_GE(cell, static_cast<int32_t>(first.cell_count())) << "a cell seen with enough more points is learned again";
+    if (before >= 0 && alone >= 0 &&
+        LightSelection::learns_again(second_alone.cell_points(alone), second_alone.cell_centre(alone),
+                                     first.cell_points(before), first.cell_centre(before), first.inverse_cell_size())) {
+      ASSERT_GE(cell, static_cast<int32_t>(first.cell_count()))
+          << "a cell seen with enough more points, or around another centre, is learned again";
       ASSERT_TRUE(same_cell(carried, cell, second_alone, alone));
       ++relearned;
+      // Learned again for its centre alone: as many points as before, or fewer.
+      moved_only += second_alone.cell_points(alone) < LightSelection::kRelearnPoints * first.cell_points(before);
     } else if (before >= 0) {
       ASSERT_EQ(cell, before) << "a learned cell moved";
       ASSERT_TRUE(same_cell(carried, cell, first, before)) << "a learned cell changed at " << x.x << ", " << x.z;
@@ -185,6 +191,7 @@ TEST(LightSelection, ACarriedSelectionKeepsItsCellsAndLearnsOnlyWhatTheNewViewAd
   EXPECT_GT(kept, 100);
   EXPECT_GT(added, 100);
   EXPECT_GT(relearned, 10);
+  EXPECT_GT(moved_only, 0) << "no cell was learned again for where the view sees it";
   EXPECT_GT(shared_but_learned_otherwise, 0) << "the shared cells show nothing about whose points they keep";
   // The same view again: nothing left to learn.
   const uint64_t rays = carried.shadow_rays();
@@ -211,7 +218,8 @@ TEST(LightSelection, ACarriedSelectionKeepsItsCellsAndLearnsOnlyWhatTheNewViewAd
   // Refusals leave the selection as it was.
   std::string unknown_light = state;
   const uint32_t far_light = static_cast<uint32_t>(lights) + 5;
-  std::memcpy(unknown_light.data() + 59, &far_light, 4);  // the first cell's first light: after tag, options, counts, key, points
+  // The first cell's first light: after tag, options, counts, key, points, centre, environment and count.
+  std::memcpy(unknown_light.data() + 71, &far_light, 4);
   for (const std::string& bad : {std::string("no selection"), state.substr(0, state.size() - 3), unknown_light}) {
     EXPECT_THROW(restored.restore(bad, c.scene, "direct"), LightOpError);
     EXPECT_EQ(restored.state(), state);
