@@ -44,6 +44,7 @@
 #include "actors/director/director.hpp"
 #include "actors/launchers/launcher.hpp"
 #include "actors/runtime/hello.hpp"
+#include "actors/runtime/runtime.hpp"
 #include "bench_util.hpp"
 #include "core/value.hpp"
 #include "farm/builders.hpp"
@@ -324,7 +325,7 @@ class Simulator {
       if (a.gone) continue;
       if (t.what == What::beat) {
         // As the runtime beats: left out after anything else was sent since the last beat, up to three in a row.
-        if (a.left_out < 3 && a.last_sent > a.last_beat) {
+        if (a.left_out < Runtime::kBeatsLeftOut && a.last_sent > a.last_beat) {
           ++a.left_out;
         } else {
           send(t.actor, wire::make(wire::MsgType::heartbeat, a.name));
@@ -636,13 +637,13 @@ int main(int argc, char** argv) {
       return 2;
     }
   }
-  std::vector<bool> modes;  // the next tile with the pixels, or alone
-  if (tile_requests != "alone") modes.push_back(true);
-  if (tile_requests != "with-pixels") modes.push_back(false);
   if (tile_requests != "alone" && tile_requests != "with-pixels" && tile_requests != "both") {
     std::fprintf(stderr, "--tile-requests is with-pixels, alone or both\n");
     return 2;
   }
+  std::vector<bool> modes;  // the next tile with the pixels, or alone
+  if (tile_requests != "alone") modes.push_back(true);
+  if (tile_requests != "with-pixels") modes.push_back(false);
   // Every actor is a TCP connection at each end.
   rlimit files{};
   getrlimit(RLIMIT_NOFILE, &files);

@@ -115,6 +115,8 @@ class Actor {
 
 class Runtime {
  public:
+  // Heartbeats left out in a row on a control link that carried something else since the last (start_heartbeats).
+  static constexpr int kBeatsLeftOut = 3;
   explicit Runtime(ActorArgs args);
   ~Runtime();
   // Runs until the farm ends; returns the process exit status.
@@ -221,7 +223,6 @@ class Runtime {
   // When this actor last sent the director anything (steady clock ticks): a beat is left out on a link that carried
   // something within the interval, up to kBeatsLeftOut in a row (the monitor's figures ride on beats).
   std::atomic<std::chrono::steady_clock::rep> last_control_send_{0};
-  static constexpr int kBeatsLeftOut = 3;
   bool configured_ = false;
   bool stopping_ = false;
   std::atomic<bool> stop_asked_{false};

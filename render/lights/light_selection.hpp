@@ -62,9 +62,9 @@ class LightSelection {
   // process learning alone would have, bit for bit, in 1/replica_count of the time.
   static Task build(const SceneContext& ctx, const LightSelectionOptions& options, LightSelection& out,
                     const char* op = "light_selection");
-  // Learns the cells of ctx's view that no earlier view learned (nor found dark), and those the view sees with at
-  // least kRelearnPoints times the points they were learned from, as build() would; every other cell stays as it
-  // is. On a selection build() made, with the same options.
+  // Learns the cells of ctx's view that no earlier view learned (nor found dark), and those learns_again() says the
+  // view sees better, as build() would; every other cell stays as it is. On a selection build() made, with the same
+  // options.
   // Whether a view with `points` in a cell, centred at `centre`, learns again a cell learned from `learned` points
   // centred at `learned_centre`: at least kRelearnPoints times the points, or centres more than kRelearnMoved cell
   // edges apart (`inverse_size`: one over a cell's edge).
