@@ -4,6 +4,15 @@
 
 namespace lf {
 
+bool is_material_change_list(const Value& v) {
+  if (!v.is_array()) return false;
+  for (const Value& change : v.as_array()) {
+    const Value* name = change.find("name");
+    if (!change.is_map() || !name || !name->is_string()) return false;
+  }
+  return true;
+}
+
 static Value vec3(const std::array<double, 3>& a) { return Value::Array{a[0], a[1], a[2]}; }
 
 static std::string str(const Value& v, const char* key) {

@@ -18,6 +18,10 @@ struct SourceLoc {
   std::string str() const { return line > 0 ? file + ":" + std::to_string(line) : file; }
 };
 
+// Whether `v` has the form of a list of material changes (SceneSpec::materials, a job frame's): maps, each with a
+// string "name". What each change says is the scene's to check (Scene::apply_material_overrides).
+bool is_material_change_list(const Value& v);
+
 struct SceneSpec {
   std::string builtin;  // e.g. "cornell"; empty when file is set
   std::string file;     // absolute path of an OBJ or glTF file

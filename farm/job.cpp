@@ -212,6 +212,7 @@ std::vector<FrameSpec> expand_frames(const JobSpec& job, const CameraSpec& base,
     f.number = n;
     f.selected = chosen.empty() || chosen.count(n) > 0;
     f.output = frame_output(output, n);
+    if (auto it = job.materials_of_frame.find(n); it != job.materials_of_frame.end()) f.materials = it->second;
     if (auto it = job.camera_of_frame.find(n); it != job.camera_of_frame.end()) {
       f.camera = read_camera_table(it->second, base, "frames: the camera function's table for frame " + std::to_string(n));
     } else if (!keys.empty()) {

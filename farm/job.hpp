@@ -19,6 +19,9 @@ struct FrameSpec {
   CameraSpec camera;
   std::string output;     // the image's output with the frame number in place of its ####
   bool selected = true;   // to render (--frames); the job's first frame is kept either way, for its camera
+  // frames { materials }: the frame's changes to named materials over the script's scene (each as material { }
+  // reads it, by name), whole for every frame (not a change from the frame before). Empty: the scene as shipped.
+  Value::Array materials;
 };
 
 // A camera keyframe: camera { keys = { {frame = 1, eye = ..., at = ...}, ... } }.
@@ -33,6 +36,7 @@ struct JobSpec {
   std::vector<Value> camera_keys;        // camera { keys }, each key's table as written
   SourceLoc keys_loc;
   std::map<int, Value> camera_of_frame;  // frames { camera = function(frame) }: each frame's table as returned
+  std::map<int, Value::Array> materials_of_frame;  // frames { materials = function(frame) }: FrameSpec::materials
   // camera { gltf = ... } naming a camera the scene file animates: frame n's view is the file's at n / fps seconds
   // (Blender exports its frame f at f / fps), its eye, at and up over camera { }'s other keys.
   struct FileCameraPath {

@@ -1,38 +1,70 @@
-// The script function that makes a farm a job of frames: frames { first, last, step, camera = function(frame) }.
+// The script function that makes a farm a job of frames: frames { first, last, step, camera = function(frame),
+// materials = function(frame) }.
 // What it means, and camera { keys }, is farm/job.hpp; the frames to render are made when the script ends
 // (script.cpp, with --frames).
+#include "farm/spec_readers.hpp"
 #include "lua/binding.hpp"
 
 namespace lf::lua_binding {
 namespace {
 
-// frames { first = 1, last = 240, step = 1, camera = function(frame) return { eye = ..., at = ... } end }
+// A frame's materials as the script's function returned them ({ Name = { emission = ..., kd = ... }, ... }): each
+// read as material "Name" { } reads its table, in name order.
+Value::Array read_frame_materials(const Value& returned, const std::vector<std::string>& names, int frame) {
+  const std::string what = "frames: the materials function's table for frame " + std::to_string(frame);
+  if (!returned.is_map()) throw ParamError(what + " is not a table of materials by name");
+  Value::Array changes;
+  for (const auto& [name, table] : returned.as_map()) {
+    if (!table.is_map()) throw ParamError(what + ": material '" + name + "' is not given a table");
+    changes.push_back(read_material_change(name, ParamTable(table.as_map(), what + ", material '" + name + "'"), names));
+  }
+  return changes;
+}
+
+// frames { first = 1, last = 240, step = 1, camera = function(frame) return { eye = ..., at = ... } end,
+//          materials = function(frame) return { Torch = { emission = ... } } end }
 int l_frames(lua_State* L) {
   Builder& b = builder(L);
   if (b.spec.job.declared) luaL_error(L, "frames is declared twice");
   luaL_checktype(L, 1, LUA_TTABLE);
-  // The camera function is called for each frame here, while the script runs (under its budget); its tables are
+  // The functions are called for each frame here, while the script runs (under its budget); the cameras' tables are
   // read over camera { } when the script ends.
   lua_settop(L, 1);
-  lua_getfield(L, 1, "camera");  // stays at index 2
-  const bool has_function = lua_isfunction(L, 2);
-  if (!has_function && !lua_isnil(L, 2)) luaL_error(L, "frames: camera must be a function of the frame number");
-  lua_pushnil(L);
-  lua_setfield(L, 1, "camera");
+  int functions[2] = {0, 0};  // stack index of the camera and the materials function, or 0
+  const char* names[2] = {"camera", "materials"};
+  for (int i = 0; i < 2; ++i) {
+    lua_getfield(L, 1, names[i]);
+    if (lua_isfunction(L, -1)) functions[i] = lua_gettop(L);
+    else if (!lua_isnil(L, -1)) luaL_error(L, "frames: %s must be a function of the frame number", names[i]);
+    else lua_pop(L, 1);
+    lua_pushnil(L);
+    lua_setfield(L, 1, names[i]);
+  }
   ParamTable p = table_params(L, 1, "frames");
   JobSpec& job = b.spec.job;
   with_params(L, [&] { read_frames(p, job); });
   job.declared = true;
   job.loc = caller_loc(L);
-  if (!has_function) return 0;
+  if (functions[1] && !b.have_scene) luaL_error(L, "frames: materials needs scene { ... } before it");
+  std::vector<std::string> material_names;
+  if (functions[1]) {
+    material_names = scene_material_names(b.spec.scene);
+    for (const Value& shape : b.spec.scene.shapes) material_names.push_back(shape.find("name")->as_string());
+  }
   for (int frame : job.numbers()) {
-    lua_pushvalue(L, 2);
-    lua_pushinteger(L, frame);
-    lua_call(L, 1, 1);
-    if (!lua_istable(L, -1))
-      luaL_error(L, "frames: the camera function returned a %s for frame %d, not a camera table", luaL_typename(L, -1), frame);
-    job.camera_of_frame[frame] = to_value(L, -1, "frames: the camera function's table for frame " + std::to_string(frame));
-    lua_pop(L, 1);
+    for (int i = 0; i < 2; ++i) {
+      if (!functions[i]) continue;
+      lua_pushvalue(L, functions[i]);
+      lua_pushinteger(L, frame);
+      lua_call(L, 1, 1);
+      if (!lua_istable(L, -1))
+        luaL_error(L, "frames: the %s function returned a %s for frame %d, not a %s", names[i], luaL_typename(L, -1),
+                   frame, i == 0 ? "camera table" : "table of materials by name");
+      const Value returned = to_value(L, -1, std::string("frames: the ") + names[i] + " function's table for frame " + std::to_string(frame));
+      lua_pop(L, 1);
+      if (i == 0) job.camera_of_frame[frame] = returned;
+      else with_params(L, [&] { job.materials_of_frame[frame] = read_frame_materials(returned, material_names, frame); });
+    }
   }
   return 0;
 }

@@ -536,6 +536,30 @@ TEST_F(ScriptTest, FramesMakeAJob) {
             "farm.lua:3: frames: the camera function returned a number for frame 1, not a camera table");
   EXPECT_EQ(error_of(head + "frames { last = 3, camera = function(f) return { eye = {0, 0, 0}, at = {0, 0, 0} } end }\n" + net),
             "farm.lua:3: frames: the camera function's table for frame 1: camera: eye and at are the same point");
+
+  // frames { materials }: each frame's changes, read as material { } reads them, in name order.
+  r = evaluate_script(write("farm.lua", head + "frames { last = 3, materials = function(f)\n"
+                                 "  if f == 1 then return {} end\n"
+                                 "  return { white = { kd = {0.1 * f, 0.1, 0.1} }, light = { emission = {f, f, f} } }\n"
+                                 "end }\n" + net));
+  ASSERT_TRUE(r.ok()) << r.error().message;
+  ASSERT_EQ(r->frames.size(), 3u);
+  EXPECT_TRUE(r->frames[0].materials.empty());
+  ASSERT_EQ(r->frames[2].materials.size(), 2u);
+  EXPECT_EQ(r->frames[2].materials[0].find("name")->as_string(), "light");
+  EXPECT_EQ(r->frames[2].materials[0].find("emission")->as_array()[0].as_double(), 3);
+  EXPECT_EQ(r->frames[2].materials[1].find("name")->as_string(), "white");
+  EXPECT_EQ(error_of(head + "frames { last = 3, materials = 5 }\n" + net),
+            "farm.lua:3: frames: materials must be a function of the frame number");
+  EXPECT_EQ(error_of(head + "frames { last = 3, materials = function(f) return f end }\n" + net),
+            "farm.lua:3: frames: the materials function returned a number for frame 1, not a table of materials by name");
+  EXPECT_EQ(error_of(head + "frames { last = 3, materials = function(f) return { glass = { kd = {1, 1, 1} } } end }\n" + net),
+            "farm.lua:3: material 'glass' is not in the scene (its materials: white, red, green, light)");
+  EXPECT_EQ(error_of(head + "frames { last = 3, materials = function(f) return { white = { kd = {f, 0, 0} } } end }\n" + net),
+            "farm.lua:3: material 'white': kd must be between 0 and 1 in each channel");
+  EXPECT_EQ(error_of(head + "frames { last = 3, materials = function(f) return { white = { shine = 1 } } end }\n" + net)
+                .substr(0, 50),
+            "farm.lua:3: frames: the materials function's table");
   EXPECT_EQ(error_of("scene { builtin = \"cornell\" }\nimage { output = \"t.png\" }\nframes { last = 3 }\n" + net),
             "farm.lua:3: image: output 't.png' has no #### where the frame number goes, so every frame of the job's 3 "
             "would write the same file (e.g. \"walk.####.png\")");

@@ -30,7 +30,19 @@ local function view(f)
   return { eye = {278 + 1073 * math.sin(a), 273, 273 - 1073 * math.cos(a)}, at = {278, 273, 273}, fov = 39.3 }
 end
 local single = param("frame", 0)
-if single > 0 then camera(view(single)) else frames { first = 1, last = param("last", 12), camera = view } end
+-- --set lit_from=K: from frame K on the light is brighter and whiter (frames { materials }; with --set frame=N,
+-- material "light" { } says the same for a farm of frame N alone); --set dark_from=K turns it off from frame K.
+local lit_from, dark_from = param("lit_from", 0), param("dark_from", 0)
+local function lamp(f)
+  if dark_from > 0 and f >= dark_from then return { light = { emission = {0, 0, 0} } } end
+  return lit_from > 0 and f >= lit_from and { light = { emission = {30, 27, 20} } } or {}
+end
+if single > 0 then
+  camera(view(single))
+  for name, change in pairs(lamp(single)) do material(name)(change) end
+else
+  frames { first = 1, last = param("last", 12), camera = view, materials = lamp }
+end
 local direct   = multiplexer { lightop "direct" { light_sampling = "learned", light_samples = 2, reuse = param("reuse", 1) == 1 },
                                replicas = 2 }
 local caustics = multiplexer { lightop "photonmap" { photons = 20000, k = 50 }, replicas = 2 }
@@ -194,6 +206,48 @@ TEST_F(JobTest, AKilledJobResumesFromItsRecordToTheSameFrames) {
   EXPECT_NE(whole.err.find("8 of the job's 8 frames are done"), std::string::npos) << whole.err;
 }
 
+// frames { materials }: where a frame changes materials every setup starts anew, seen from that frame (it equals
+// a farm of that frame alone whose script makes the same changes), carried setups are carried on from there, and a
+// run that skips to a later frame takes the change's frame first: resumed or not, every frame is the job's.
+TEST_F(JobTest, MaterialsChangedByAFrameSetEverythingUpAnewFromThatFrame) {
+  const std::vector<std::string> job{"--set", "last=5", "--set", "lit_from=3"};
+  auto with = [&](std::vector<std::string> more) {
+    more.insert(more.begin(), job.begin(), job.end());
+    return more;
+  };
+  const auto whole = run("m.####.exr", with({}));
+  ASSERT_EQ(whole.status, 0) << whole.err;
+  expect_no_leftovers(whole);
+  for (const char* op : {"photonmap.0", "paths", "bounce1", "glossy", "indirect", "direct.0"})
+    EXPECT_EQ(figure(whole.err, op, "setups"), 2) << op << ": set up for frame 1 and again for frame 3\n" << whole.err;
+  EXPECT_EQ(figure(whole.err, "indirect", "extended"), 3) << "carried to frames 2, 4 and 5";
+  auto mean = [](const std::string& file) {
+    double sum = 0;
+    auto img = read_image(file);
+    for (const RGB& p : img->pixels) sum += p.x + p.y + p.z;
+    return sum / static_cast<double>(img->pixels.size());
+  };
+  EXPECT_GT(mean(frame("m", 3)), 1.5 * mean(frame("m", 2))) << "the light did not brighten at frame 3";
+
+  const auto alone = run("alone.exr", {"--set", "frame=3", "--set", "lit_from=3"});
+  ASSERT_EQ(alone.status, 0) << alone.err;
+  EXPECT_TRUE(same_pixels(frame("m", 3), path("alone.exr"))) << "frame 3 is not the farm of frame 3 alone";
+
+  // Frame 5 alone: the run takes frame 3 first (no render), then replays frame 4.
+  const auto skipped = run("s.####.exr", with({"--frames", "5"}));
+  ASSERT_EQ(skipped.status, 0) << skipped.err;
+  EXPECT_NE(skipped.err.find("taking frame 3 first, where the materials change"), std::string::npos) << skipped.err;
+  EXPECT_TRUE(same_pixels(frame("m", 5), frame("s", 5))) << "frame 5 of --frames 5 is not the job's";
+  // Frames 1-4, then 5 in a run of its own: frame 3 first, then the setups kept after frame 4 restored.
+  ASSERT_EQ(run("r.####.exr", with({"--frames", "1-4"})).status, 0);
+  const auto resumed = run("r.####.exr", with({"--frames", "5"}));
+  ASSERT_EQ(resumed.status, 0) << resumed.err;
+  EXPECT_NE(resumed.err.find("restored the setups carried over the views to frame 4 "), std::string::npos) << resumed.err;
+  expect_no_leftovers(resumed);
+  for (int n = 1; n <= 5; ++n)
+    EXPECT_TRUE(same_pixels(frame("m", n), frame("r", n))) << "frame " << n << " differs from the job run in one go";
+}
+
 // --preview-every: while a frame renders its partial image (finished tiles, the rest black) is beside the output;
 // it goes once the frame is written.
 TEST_F(JobTest, APreviewShowsTheFrameWhileItRenders) {
@@ -231,6 +285,11 @@ TEST_F(JobTest, BadJobsAreRefusedBeforeAnythingStarts) {
   r = run_lightfarm({"run", script, "--frames", "3-1"});
   EXPECT_EQ(r.status, 2);
   EXPECT_NE(r.err.find("range 3-1 runs backwards"), std::string::npos) << r.err;
+  expect_no_leftovers(r);
+  r = run("dark.####.exr", {"--set", "last=3", "--set", "dark_from=2"});
+  EXPECT_EQ(r.status, 2);
+  EXPECT_NE(r.err.find("turn.lua:20: frames: frame 2's materials leave the scene without light"), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(frame("dark", 1))) << "refused before anything rendered";
   expect_no_leftovers(r);
 }
 

@@ -89,6 +89,8 @@ Value::Map encode_frame(const FrameView& view) {
   }
   if (view.keep) m["keep"] = true;
   if (view.restore) m["restore"] = true;
+  if (!view.materials.empty()) m["materials"] = view.materials;
+  if (view.new_materials) m["new_materials"] = true;
   return m;
 }
 
@@ -109,12 +111,19 @@ Result<FrameView> decode_frame(const Value& body) {
       view.renew->push_back(n.as_string());
     }
   }
-  for (auto [name, flag] : {std::pair{"keep", &view.keep}, std::pair{"restore", &view.restore}}) {
+  for (auto [name, flag] : {std::pair{"keep", &view.keep}, std::pair{"restore", &view.restore},
+                            std::pair{"new_materials", &view.new_materials}}) {
     const Value* v = body.find(name);
     if (v && !v->is_bool()) return bad(std::string("a PHASE frame's ") + name + " is not true or false");
     *flag = v && v->as_bool();
   }
+  if (const Value* changes = body.find("materials")) {
+    if (!is_material_change_list(*changes))
+      return bad("a PHASE frame's materials are not a list of material changes, each a map with a name");
+    view.materials = changes->as_array();
+  }
   if (view.keep && view.restore) return bad("a PHASE frame asks to keep and to restore the same setup");
+  if (view.new_materials && view.restore) return bad("a PHASE frame restores a kept setup where the materials change");
   return view;
 }
 

@@ -59,6 +59,8 @@ struct FrameView {
   std::optional<std::vector<std::string>> renew;
   bool keep = false;
   bool restore = false;
+  Value::Array materials;  // the frame's material changes over the shipped scene (FrameSpec::materials)
+  bool new_materials = false;  // the materials change at this frame: every actor sets up anew
 };
 Value::Map encode_frame(const FrameView& view);  // the body besides the phase's name (wire::make_phase adds it)
 Result<FrameView> decode_frame(const Value& body);

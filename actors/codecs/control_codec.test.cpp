@@ -113,6 +113,21 @@ TEST(ControlCodec, FrameRoundTripsAndRefusesWhatIsNotAFrame) {
   EXPECT_EQ(decode_frame(Value::Map{{"frame", 1}, {"camera", camera.to_value()}, {"keep", true}, {"restore", true}})
                 .error().message,
             "a PHASE frame asks to keep and to restore the same setup");
+  // A frame's materials (frames { materials }) and where they change.
+  FrameView lit{6, camera, std::nullopt};
+  lit.materials = {Value::Map{{"name", "light"}, {"emission", Value::Array{1.0, 2.0, 3.0}}}};
+  lit.new_materials = true;
+  auto with = decode_frame(Value(encode_frame(lit)));
+  ASSERT_TRUE(with.ok()) << with.error().message;
+  EXPECT_EQ(with->materials, lit.materials);
+  EXPECT_TRUE(with->new_materials);
+  EXPECT_TRUE(plain->materials.empty() && !plain->new_materials);
+  EXPECT_EQ(decode_frame(Value::Map{{"frame", 1}, {"camera", camera.to_value()}, {"materials", Value::Array{Value::Map{{"kd", 1}}}}})
+                .error().message,
+            "a PHASE frame's materials are not a list of material changes, each a map with a name");
+  EXPECT_EQ(decode_frame(Value::Map{{"frame", 1}, {"camera", camera.to_value()}, {"restore", true}, {"new_materials", true}})
+                .error().message,
+            "a PHASE frame restores a kept setup where the materials change");
 }
 
 }  // namespace

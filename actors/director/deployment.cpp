@@ -45,6 +45,38 @@ Value Deployment::scene_figures() const {
                     {"bytes_shipped", std::move(sent)}};
 }
 
+namespace {
+
+// A job whose frames change materials (frames { materials }): each distinct frame's changes are checked before
+// launch as the script's own are (the scene takes them, some light is left, the network counts every light path
+// of those materials once), and every actor must be one that takes a frame's materials.
+void check_frame_materials(const FarmSpec& spec, const Scene& scene) {
+  std::set<std::string> checked;
+  for (const FrameSpec& f : spec.frames) {
+    if (f.materials.empty() || !checked.insert(to_json(Value(f.materials))).second) continue;
+    const std::string what = spec.job.loc.str() + ": frames: frame " + std::to_string(f.number) + "'s materials";
+    std::vector<Material> materials = scene.materials();
+    if (auto st = Scene::change_materials(materials, f.materials); !st) throw FarmFailure{what + ": " + st.error().message, 2};
+    const SceneLobes lobes = scene_lobes(scene, &materials);
+    if (!lobes.emits) throw FarmFailure{what + " leave the scene without light (nothing emits)", 2};
+    if (const LightPathReport paths = check_light_paths(spec, lobes); !paths.errors.empty())
+      throw FarmFailure{what + ": " + paths.error_text(), 2};
+  }
+  if (checked.empty()) return;
+  for (const ActorSpec& a : spec.actors) {
+    if (a.is_ring_node())
+      throw FarmFailure{spec.job.loc.str() + ": frames: materials change over the job, which a radiosity ring's "
+                        "solution, made once for the farm, cannot follow ('" + a.name + "'): use lightop \"radiosity\", "
+                        "which solves again where they change", 2};
+    if (a.runtime.count("cmd"))
+      log_warn("frames: the materials change over the job: '" + a.name + "' runs a process of its own (lightop.exec), "
+               "which must take each frame's materials from PHASE frame (docs/PROTOCOL.md), or it lights the "
+               "script's scene throughout");
+  }
+}
+
+}  // namespace
+
 Scene load_checked_scene(const FarmSpec& spec, bool quiet) {
   if (!spec.scene.file.empty())
     if (auto catalogue = Scene::catalogue_file(spec.scene.file))
@@ -59,6 +91,7 @@ Scene load_checked_scene(const FarmSpec& spec, bool quiet) {
   const LightPathReport paths = check_light_paths(spec, scene_lobes(*scene));
   for (const auto& warning : paths.warnings) log_warn(warning);
   if (!paths.errors.empty()) throw FarmFailure{paths.error_text(), 2};
+  check_frame_materials(spec, *scene);
   return std::move(*scene);
 }
 

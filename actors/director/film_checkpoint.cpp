@@ -21,7 +21,8 @@ namespace {
 constexpr std::string_view kMagic = "LFRESUME1";
 }
 
-std::string frame_key(const FarmSpec& spec, const std::string& scene_hash, const CameraSpec& camera) {
+std::string frame_key(const FarmSpec& spec, const std::string& scene_hash, const CameraSpec& camera,
+                      const Value::Array& materials) {
   // The renderers and the hosts are left out: which process renders a tile, and where, changes no pixel.
   Value::Array actors;
   for (const ActorSpec& a : spec.actors) {
@@ -33,7 +34,7 @@ std::string frame_key(const FarmSpec& spec, const std::string& scene_hash, const
   }
   Value::Map image = spec.image.to_value().as_map();
   image.erase("output");  // where the image goes is not what it is (the file sits beside it anyway)
-  const Value what = Value::Map{{"protocol", static_cast<int64_t>(wire::kProtocolVersion)},
+  Value what = Value::Map{{"protocol", static_cast<int64_t>(wire::kProtocolVersion)},
                                 {"scene", spec.scene.to_value()},
                                 {"scene_hash", scene_hash},
                                 {"camera", camera.to_value()},
@@ -41,6 +42,8 @@ std::string frame_key(const FarmSpec& spec, const std::string& scene_hash, const
                                 {"lighting", spec.lighting >= 0 ? Value(spec.actors[static_cast<size_t>(spec.lighting)].name) : Value()},
                                 {"actors", Value(actors)},
                                 {"partition", static_cast<int64_t>(spec.partition_parts)}};
+  // Only where a frame changes materials: the keys of every other frame stay those earlier builds recorded.
+  if (!materials.empty()) what.as_map()["materials"] = materials;
   return content_hash(to_json(what));
 }
 

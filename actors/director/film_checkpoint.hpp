@@ -43,7 +43,9 @@ class FilmCheckpoint {
 };
 
 // The key of a frame seen by `camera`: a content hash of what its pixels depend on (`scene_hash`: a file scene's
-// shipped content, textures and environment map included; empty for a built-in one).
-std::string frame_key(const FarmSpec& spec, const std::string& scene_hash, const CameraSpec& camera);
+// shipped content, textures and environment map included; empty for a built-in one; `materials`: the frame's
+// changes over it, FrameSpec::materials).
+std::string frame_key(const FarmSpec& spec, const std::string& scene_hash, const CameraSpec& camera,
+                      const Value::Array& materials = {});
 
 }  // namespace lf

@@ -80,7 +80,7 @@ void FrameLoop::prepare(const std::string& scene_hash) {
     for (size_t i = 0; i < spec_.frames.size(); ++i) {
       const FrameSpec& f = spec_.frames[i];
       if (!f.selected && !any_carried()) continue;
-      std::string key = frame_key(spec_, scene_hash, f.camera);
+      std::string key = frame_key(spec_, scene_hash, f.camera, f.materials);
       if (any_carried()) setup_keys[f.number] = chain = setup_key(chain, key);
       if (!f.selected) continue;
       if (record_->done(f.number, key, f.output)) ++skipped_;
@@ -103,11 +103,19 @@ void FrameLoop::prepare(const std::string& scene_hash) {
   spec_.camera = spec_.job.declared ? spec_.frames.front().camera : left_[0].frame.camera;
 }
 
-void FrameLoop::switch_view(const FrameSpec& f, bool replay, const std::function<void(wire::Phase, Value::Map)>& run_phase) {
+size_t FrameLoop::materials_change(size_t index) const {
+  while (index > 0 && spec_.frames[index].materials == spec_.frames[index - 1].materials) --index;
+  return index;
+}
+
+void FrameLoop::switch_view(const FrameSpec& f, bool replay, const std::function<void(wire::Phase, Value::Map)>& run_phase,
+                            bool new_materials) {
   // Every actor takes the view first; then what depends on it is set up again (an op's new setup may ask others).
   // A replayed view, which nothing renders, needs only what carried setups extend to it and what they ask.
   control::FrameView view{f.number, f.camera, replay ? std::optional(asked_by_carried_) : std::nullopt};
   view.keep = any_carried();  // for a later run of the job, which then need not replay
+  view.materials = f.materials;
+  view.new_materials = new_materials;
   const auto start = std::chrono::steady_clock::now();
   run_phase(wire::Phase::frame, control::encode_frame(view));
   const auto taken = std::chrono::steady_clock::now();
@@ -142,6 +150,7 @@ bool FrameLoop::catch_up(size_t holds, size_t before, const std::function<void(w
     control::FrameView view{spec_.frames[j].number, spec_.frames[j].camera,
                             j == before ? std::nullopt : std::optional(std::vector<std::string>{})};
     view.restore = true;
+    view.materials = spec_.frames[j].materials;  // those the farm holds (no change lies between holds and j)
     run_phase(wire::Phase::frame, control::encode_frame(view));
     run_phase(wire::Phase::setup, {});
     restore_seconds_ += std::chrono::duration<double>(Clock::now() - start).count();
@@ -174,8 +183,19 @@ void FrameLoop::run(const std::function<void(wire::Phase, Value::Map)>& run_phas
     const Left& f = left_[i];
     const auto start = Clock::now();
     if (i > 0) tiles_.begin_frame(f.frame.output, f.key, options_.checkpoint_every, options_.restart, options_.preview_every);
-    const bool restored = any_carried() && f.index > holds + 1 && catch_up(holds, f.index, run_phase);
-    if (f.index != holds && !restored) switch_view(f.frame, false, run_phase);
+    // Where the materials change, every setup starts anew, seen from that frame: a run that skips to a later frame
+    // takes the change's frame first (no render), so its setups are those of the job run in one go.
+    const size_t change = materials_change(f.index);
+    if (change > holds && change < f.index) {
+      if (!options_.quiet)
+        log_info("taking frame " + std::to_string(spec_.frames[change].number) + " first, where the materials change "
+                 "(every setup starts anew there), for frame " + std::to_string(f.frame.number),
+                 LogKind::recovery);
+      switch_view(spec_.frames[change], true, run_phase, /*new_materials=*/true);
+      holds = change;
+    }
+    const bool restored = any_carried() && change <= holds && f.index > holds + 1 && catch_up(holds, f.index, run_phase);
+    if (f.index != holds && !restored) switch_view(f.frame, false, run_phase, change == f.index && change > 0);
     holds = f.index;
     run_phase(wire::Phase::render, {});
     tiles_.finish_progress();

@@ -59,8 +59,12 @@ class FrameLoop {
     size_t index = 0;  // in spec.frames
     std::string key;
   };
-  // PHASE frame and PHASE setup: the farm takes frame `f`'s view (`replay`: to extend carried setups, no render).
-  void switch_view(const FrameSpec& f, bool replay, const std::function<void(wire::Phase, Value::Map)>& run_phase);
+  // PHASE frame and PHASE setup: the farm takes frame `f`'s view (`replay`: to extend carried setups, no render;
+  // `new_materials`: the job's materials change at `f`, and every actor sets up anew).
+  void switch_view(const FrameSpec& f, bool replay, const std::function<void(wire::Phase, Value::Map)>& run_phase,
+                   bool new_materials = false);
+  // The newest frame (index in spec.frames) at or before `index` where the job's materials change (0: none).
+  size_t materials_change(size_t index) const;
   // Before frame spec.frames[before] when the farm holds spec.frames[holds]'s view: the newest frame after `holds`,
   // up to `before` itself, whose carried setups are all kept is restored (PHASE frame with restore, and setup), and
   // the views after it replayed. True: `before`'s own view was restored (the farm holds it, set up).

@@ -16,6 +16,7 @@
 
 #include "actors/codecs/shade_codec.hpp"
 #include "actors/kinds/tile_plan.hpp"
+#include "actors/runtime/frame_scene.hpp"
 #include "actors/runtime/lean_points.hpp"
 #include "actors/runtime/remote_tracing.hpp"
 #include "farm/kind_params.hpp"
@@ -42,7 +43,9 @@ class RendererActor final : public Actor {
     // whole scene (unless a host agent shares one anyway).
     auto loaded = load_scene_for_actor(config.scene, /*with_tracer=*/config.geometry.empty());
     if (!loaded) return loaded.error();
-    scene_ = std::move(loaded->scene);
+    frame_scene_ = FrameScene(std::move(loaded->scene));
+    if (auto taken = frame_scene_.take(config.frame_materials, "the job's first frame"); !taken) return taken.error();
+    scene_ = frame_scene_.scene();
     tracer_ = std::move(loaded->tracer);
     image_ = config.image;
     sampler_ = sampler_of(image_);
@@ -74,6 +77,9 @@ class RendererActor final : public Actor {
   // this renderer said READY render).
   void on_frame(const FrameView& view, Runtime& rt) override {
     *camera_ = Camera(view.camera, image_.width, image_.height);
+    auto changed = frame_scene_.take(view.materials, "frame " + std::to_string(view.frame));
+    if (!changed) return rt.fail(changed.error().message);
+    scene_ = frame_scene_.scene();  // what the camera sees emit, and the points' materials
     no_more_tiles_ = false;
     rt.phase_done(wire::Phase::frame);
   }
@@ -250,6 +256,7 @@ class RendererActor final : public Actor {
     }
   }
 
+  FrameScene frame_scene_;  // the shipped scene and the frame's, if it changes materials
   std::shared_ptr<const Scene> scene_;
   std::shared_ptr<const RayTracer> tracer_;       // none in a partitioned farm
   std::unique_ptr<RemoteTracing> tracing_;        // a partitioned scene's geometry actors, or none

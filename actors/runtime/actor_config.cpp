@@ -125,6 +125,7 @@ Value ActorConfig::to_value() const {
   }
   if (!part_triangles.empty()) m["part_triangles"] = u32_to_bytes(part_triangles);
   if (local_part >= 0) m["local_part"] = local_part;
+  if (!frame_materials.empty()) m["frame_materials"] = frame_materials;
   return m;
 }
 
@@ -190,6 +191,12 @@ Result<ActorConfig> ActorConfig::from_value(const Value& body) {
                             " parts, with its part_triangles",
                         ErrorCode::bad_request);
     c.local_part = local->as_int();
+  }
+  if (const Value* changes = body.find("frame_materials"); changes && !changes->is_nil()) {
+    if (!is_material_change_list(*changes))
+      return make_error("CONFIG 'frame_materials' must be a list of material changes, each a map with a name",
+                        ErrorCode::bad_request);
+    c.frame_materials = changes->as_array();
   }
   if (const Value* pool = body.find("pool"); pool && !pool->is_nil()) {
     const Value* name = pool->find("name");

@@ -51,6 +51,9 @@ struct ActorConfig {
   Value::Map params;  // the actor's parameters from the script
   SceneSpec scene;
   CameraSpec camera;
+  // A job whose first frame changes materials (frames { materials }): its changes over the shipped scene, which the
+  // actor makes before it sets up (FrameSpec::materials; later frames' come with PHASE frame). Empty: none.
+  Value::Array frame_materials;
   ImageSpec image;
   std::vector<InputSpec> inputs;  // in script order
   Value::Map runtime;             // how it was started: {cmd, cwd} for lightop.exec actors; informational

@@ -22,6 +22,7 @@ TEST(ActorConfig, RoundTripsEveryField) {
   c.part_boxes = {0, 0, 0, 1, 1, 1, 1, 0, 0, 2, 1, 1};
   c.part_triangles = {3, 5, 8};
   c.local_part = 1;
+  c.frame_materials = {Value::Map{{"name", "light"}, {"emission", Value::Array{1.0, 1.0, 1.0}}}};
   InputSpec pool{"pathtrace", "", 4, ""};
   pool.strategy = "least_loaded";
   pool.replicas = {{"pathtrace.0", "tcp://127.0.0.1:5004", 4}, {"pathtrace.1", "tcp://127.0.0.1:5005", 4}};
@@ -37,6 +38,7 @@ TEST(ActorConfig, RoundTripsEveryField) {
   EXPECT_EQ(back->part_boxes, c.part_boxes);
   EXPECT_EQ(back->part_triangles, c.part_triangles);
   EXPECT_EQ(back->local_part, 1);
+  EXPECT_EQ(back->frame_materials, c.frame_materials);
   EXPECT_EQ(back->inputs[2].replicas[0].part, -1);
   EXPECT_EQ(back->inputs[2].replicas[1].part, 1);
 }
@@ -57,6 +59,8 @@ TEST(ActorConfig, RefusesMalformedFieldsByName) {
             "CONFIG 'part_boxes' must hold 6 floats for each of the 1 parts");
   EXPECT_EQ(refused({{"part_triangles", "abc"}}), "CONFIG 'part_triangles' must be u32 triangle ids");
   EXPECT_EQ(refused({{"local_part", 0}}), "CONFIG 'local_part' must name one of the 0 parts, with its part_triangles");
+  EXPECT_EQ(refused({{"frame_materials", Value::Array{3}}}),
+            "CONFIG 'frame_materials' must be a list of material changes, each a map with a name");
   EXPECT_EQ(refused({{"heartbeat_timeout", "soon"}}), "CONFIG 'heartbeat_timeout' must be a positive number of seconds");
   EXPECT_FALSE(ActorConfig::from_value(Value(3)).ok());
   // The minimal CONFIG of an older director: everything optional has its default.

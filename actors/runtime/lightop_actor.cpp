@@ -24,6 +24,7 @@
 #include <optional>
 
 #include "actors/codecs/shade_codec.hpp"
+#include "actors/runtime/frame_scene.hpp"
 #include "actors/runtime/lean_points.hpp"
 #include "actors/runtime/remote_tracing.hpp"
 #include "core/log.hpp"
@@ -231,7 +232,9 @@ class LightOpActor final : public Actor {
     const bool parts_trace = !config.geometry.empty() && kind_.traces_through_context;
     auto loaded = load_scene_for_actor(config.scene, /*with_tracer=*/!parts_trace);
     if (!loaded) return loaded.error();
-    scene_ = std::move(loaded->scene);
+    frame_scene_ = FrameScene(std::move(loaded->scene));
+    if (auto taken = frame_scene_.take(config.frame_materials, "the job's first frame"); !taken) return taken.error();
+    scene_ = frame_scene_.scene();
     tracer_ = std::move(loaded->tracer);
     camera_ = std::make_unique<Camera>(config.camera, config.image.width, config.image.height);
     width_ = config.image.width;
@@ -277,10 +280,17 @@ class LightOpActor final : public Actor {
     *camera_ = Camera(view.camera, width_, height_);  // what ctx.camera points at, for the op's shade() too
     // Requests from now on (another op's new setup asking this one) wait for this op's new setup. A carried setup is
     // extended to every view, replayed ones too.
+    // New materials: every op is made and set up anew over the frame's scene, carried or not, asked for by the view
+    // or not (the director never restores a kept setup there: it takes the frame of the change first).
+    auto changed = frame_scene_.take(view.materials, "frame " + std::to_string(view.frame));
+    if (!changed) return rt.fail(changed.error().message);
+    const bool anew = *changed || view.new_materials;
+    if (anew && view.restore) return rt.fail("PHASE frame restores a kept setup where the materials change");
+    scene_ = frame_scene_.scene();
     if (op_->setup_sees_camera() && op_->carries_views()) {
-      (view.restore ? restore_ : extend_) = true, set_up_ = false;
+      (view.restore ? restore_ : anew ? renew_ : extend_) = true, set_up_ = false;
       keep_frame_ = view.keep ? std::optional(view.frame) : std::nullopt;
-    } else if (op_->setup_sees_camera() && view.renew) {
+    } else if (anew || (op_->setup_sees_camera() && view.renew)) {
       renew_ = true, set_up_ = false;
     }
     rt.phase_done(wire::Phase::frame);
@@ -440,7 +450,8 @@ class LightOpActor final : public Actor {
   const LightOpKind& kind_;
   Value::Map params_;  // the op's parameters, for a new op each frame whose setup depends on the view
   std::unique_ptr<LightOp> op_;
-  std::shared_ptr<const Scene> scene_;
+  FrameScene frame_scene_;               // the shipped scene and the frame's, if it changes materials
+  std::shared_ptr<const Scene> scene_;  // the frame's: what the op sees
   std::shared_ptr<const RayTracer> tracer_;
   SamplerKind sampler_ = SamplerKind::independent;
   int lit_samples_ = 0;

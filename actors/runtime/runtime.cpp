@@ -263,7 +263,8 @@ void Runtime::handle_control(wire::Message& m, Actor& actor) {
         const auto& renew = frame->renew;
         actor.on_frame(FrameView{frame->frame, frame->camera,
                                  !renew || std::find(renew->begin(), renew->end(), args_.name) != renew->end(),
-                                 frame->keep, frame->restore},
+                                 frame->keep, frame->restore, std::move(frame->materials),
+                                 frame->new_materials},
                        *this);
       } else {
         actor.on_phase(*phase, *this);

@@ -75,6 +75,13 @@ struct FrameView {
   // extending (a resumed job).
   bool keep = false;
   bool restore = false;
+  // The frame's material changes over the shipped scene (frames { materials }; empty: none). An actor holding the
+  // scene makes them (actors/runtime/frame_scene.hpp) where they differ from those it holds.
+  Value::Array materials;
+  // The materials change at this frame (they differ from the frame before's in the job): every actor sets up anew
+  // whatever it set up over the scene, renew or not, as a farm of this frame alone would (a resumed run that skips
+  // frames gets this at the change it skipped to, taken before the frame it renders).
+  bool new_materials = false;
 };
 
 class Actor {

@@ -136,14 +136,20 @@ Status Scene::finalize(const std::string& what) {
   bounds_ = bounds_of(vertices_);
   epsilon_ = std::max(1e-4f * bounds_.diagonal(), 1e-6f);
 
+  view_owned_arrays();
+  if (auto st = settle_lights(what); !st) return st;
+  settle_normal_maps();
+  return Ok{};
+}
+
+Status Scene::settle_lights(const std::string& what) {
   emitters_.clear();
   emitter_cdf_.clear();
   emitter_pdf_.clear();
   double total = 0;
   std::vector<double> power;  // emitted flux: pi * area * Le for triangles, 4 pi I for points
-  view_owned_arrays();
-  for (uint32_t t = 0; t < triangles_.size(); ++t) {
-    const Material& m = materials_[material_of_[t]];
+  for (uint32_t t = 0; t < triangle_count(); ++t) {
+    const Material& m = materials_[material_view_[t]];
     if (!m.emissive()) continue;
     emitters_.push_back(t);
     power.push_back(emitted_power(t));
@@ -171,14 +177,27 @@ Status Scene::finalize(const std::string& what) {
     emitter_pdf_.push_back(static_cast<float>(p / total));
   }
   if (!power.empty()) emitter_cdf_.back() = 1.0f;
-  triangle_light_pdf_.assign(triangles_.size(), 0.0f);
+  triangle_light_pdf_.assign(triangle_count(), 0.0f);
   for (size_t i = 0; i < emitters_.size(); ++i) triangle_light_pdf_[emitters_[i]] = emitter_pdf_[i];
-  view_owned_arrays();
+  light_pdf_view_ = triangle_light_pdf_;
   light_tree_ = std::make_shared<const LightTree>(*this);
   emitter_cutouts_ = std::make_shared<const EmitterCutouts>(*this);
   settle_environment_share();
-  settle_normal_maps();
   return Ok{};
+}
+
+Result<std::shared_ptr<const Scene>> Scene::with_material_changes(const Value::Array& changes,
+                                                                  const std::string& what) const {
+  std::shared_ptr<Scene> changed(new Scene(*this));
+  // A scene of its own arrays: the copy's views and texels point at its own copies, not at this scene's.
+  if (!storage_) {
+    changed->view_owned_arrays();
+    for (Texture& t : changed->textures_)
+      if (!t.owned.empty()) t.texels = t.owned;
+  }
+  if (auto st = changed->apply_material_overrides(changes); !st) return make_error(what + ": " + st.error().message);
+  if (auto st = changed->settle_lights(what); !st) return st.error();
+  return std::shared_ptr<const Scene>(std::move(changed));
 }
 
 void Scene::settle_normal_maps() {

@@ -162,7 +162,6 @@ class Scene {
   // Moving keeps the per-triangle views valid (a vector's move keeps its buffer); a copy would not, so none.
   Scene(Scene&&) = default;
   Scene& operator=(Scene&&) = default;
-  Scene(const Scene&) = delete;
   Scene& operator=(const Scene&) = delete;
 
   uint32_t add_material(Material m);
@@ -186,6 +185,15 @@ class Scene {
   // Applies the script's changes to named materials (SceneSpec::materials): emission, kd, ks, ns, ior, type. An
   // unknown name, or kd + ks above 1 (a surface that creates energy), is an error naming the material.
   Status apply_material_overrides(const Value::Array& overrides);
+  // The same changes to a list of materials (a frame's changes checked against the scene's, without a scene).
+  static Status change_materials(std::vector<Material>& materials, const Value::Array& overrides);
+  // A job frame's material changes (frames { materials }) over this scene's materials: a scene that shares this one's
+  // geometry and textures (its mapped image, or copies of its arrays), with the materials changed as
+  // apply_material_overrides changes them and the lights settled again from them exactly as finalize() settles a
+  // scene loaded with those changes (so frame k equals a farm whose script changes the materials as frame k does).
+  // Geometry and cut-outs are this scene's: a BVH built over this scene serves the new one. `what` names the frame
+  // in an error (a frame that leaves the scene without light).
+  Result<std::shared_ptr<const Scene>> with_material_changes(const Value::Array& changes, const std::string& what) const;
   // Builds the light distribution. An error if the scene has no triangles or no light.
   Status finalize(const std::string& what);
 
@@ -339,12 +347,16 @@ class Scene {
 
  private:
   friend class SceneImage;
+  // Copies are made on purpose only (with_material_changes): a scene can weigh gigabytes.
+  Scene(const Scene&) = default;
   // What tinyobjloader read, as one of our scenes; `path` names it in messages, textures are read from
   // `texture_dir` (none when it is empty).
   static Result<Scene> from_obj_reader(const tinyobj::ObjReader& reader, const std::string& path,
                                        const std::string& texture_dir);
   // Points the per-triangle views at the vectors below (a scene being built, or loaded the ordinary way).
   void view_owned_arrays();
+  // The lights from the materials (finalize()'s second half): emitters, their choice by flux, the light tree.
+  Status settle_lights(const std::string& what);
 
   // Per-triangle arrays while building; a mapped scene leaves them empty and views its image instead.
   std::vector<Vec3> vertices_;

@@ -82,6 +82,57 @@ TEST_F(ImageDir, AMappedImageIsTheSameSceneBitForBit) {
   EXPECT_EQ(SceneImage::encode(*m, "0123456789abcdef"), SceneImage::encode(s, "0123456789abcdef"));
 }
 
+// A job frame's material changes (Scene::with_material_changes), over a mapped scene and over one of its own
+// arrays: the lights come out bit for bit as those of the scene loaded with the same changes (a farm of that frame
+// alone), and the scene they were made over keeps its own.
+TEST_F(ImageDir, MaterialChangesSettleTheLightsAsTheSceneLoadedWithThemWould) {
+  const Value::Array changes{Value::Map{{"name", "light"}, {"emission", Value::Array{30.0, 27.0, 20.0}}},
+                             Value::Map{{"name", "red"}, {"emission", Value::Array{0.5, 0.0, 0.0}}, {"kd", Value::Array{0.4, 0.0, 0.0}}}};
+  auto loaded = Scene::builtin_unlit("cornell_glass");
+  loaded->add_point_light({0.1f, 1.2f, 0.3f}, {4, 5, 6});
+  ASSERT_TRUE(loaded->apply_material_overrides(changes).ok());
+  ASSERT_TRUE(loaded->finalize("test").ok());
+  const Scene own = glass_with_point_light();
+  const auto path = dir / "glass.image";
+  std::ofstream(path, std::ios::binary) << SceneImage::encode(own, "0123456789abcdef");
+  auto mapped = SceneImage::map(path.string(), "0123456789abcdef", "x");
+  ASSERT_TRUE(mapped.ok()) << mapped.error().message;
+  const std::vector<uint32_t> emitters_before = mapped->emitters();
+  for (const Scene* base : {&own, static_cast<const Scene*>(&*mapped)}) {
+    auto changed = base->with_material_changes(changes, "frame 2");
+    ASSERT_TRUE(changed.ok()) << changed.error().message;
+    const Scene& c = **changed;
+    EXPECT_EQ(c.shares_storage(), base->shares_storage());
+    EXPECT_EQ(c.emitters(), loaded->emitters());
+    EXPECT_GT(c.emitters().size(), base->emitters().size()) << "the red wall emits";
+    for (uint32_t t = 0; t < c.triangle_count(); ++t)
+      ASSERT_TRUE(same_bits(c.emitter_probability_of_triangle(t), loaded->emitter_probability_of_triangle(t))) << t;
+    for (float u : {0.0f, 0.3f, 0.77f, 0.999f}) {
+      float pa = 0, pb = 0;
+      EXPECT_EQ(c.pick_emitter(u, pa), loaded->pick_emitter(u, pb));
+      EXPECT_TRUE(same_bits(pa, pb));
+    }
+    for (size_t i = 0; i < c.materials().size(); ++i) {
+      EXPECT_TRUE(same_bits(c.materials()[i].ke, loaded->materials()[i].ke)) << c.materials()[i].name;
+      EXPECT_TRUE(same_bits(c.materials()[i].kd, loaded->materials()[i].kd)) << c.materials()[i].name;
+    }
+    EXPECT_TRUE(same_bits(c.vertex(5, 1), base->vertex(5, 1)));
+  }
+  EXPECT_EQ(mapped->emitters(), emitters_before);
+  for (const Material& m : mapped->materials())
+    if (m.name == "red") EXPECT_TRUE(is_black(m.ke)) << "the mapped scene's own materials changed";
+  // A frame that turns every light off (the point light stays): still lit; without it, an error naming the frame.
+  const Value::Array dark{Value::Map{{"name", "light"}, {"emission", Value::Array{0.0, 0.0, 0.0}}}};
+  EXPECT_TRUE(mapped->with_material_changes(dark, "frame 3").ok());
+  auto unlit = Scene::builtin("cornell");
+  ASSERT_TRUE(unlit.ok());
+  auto refused = unlit->with_material_changes(dark, "frame 3");
+  ASSERT_FALSE(refused.ok());
+  EXPECT_EQ(refused.error().message.rfind("frame 3: the scene has no light", 0), 0u) << refused.error().message;
+  EXPECT_EQ(unlit->with_material_changes({Value::Map{{"name", "mist"}}}, "frame 4").error().message,
+            "frame 4: material 'mist' is not in the scene");
+}
+
 TEST_F(ImageDir, EmbreeOverTheMappedArraysFindsTheSameHits) {
   const Scene s = glass_with_point_light();
   const auto path = dir / "glass.image";

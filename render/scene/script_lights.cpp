@@ -171,12 +171,14 @@ Status Scene::add_script_shapes(const Value::Array& shapes) {
   return Ok{};
 }
 
-Status Scene::apply_material_overrides(const Value::Array& overrides) {
+Status Scene::apply_material_overrides(const Value::Array& overrides) { return change_materials(materials_, overrides); }
+
+Status Scene::change_materials(std::vector<Material>& materials, const Value::Array& overrides) {
   for (const Value& o : overrides) {
     const Value* name = o.find("name");
     if (!name || !name->is_string()) return make_error("a material change names no material");
     Material* m = nullptr;
-    for (auto& candidate : materials_)
+    for (auto& candidate : materials)
       if (candidate.name == name->as_string()) m = &candidate;
     if (!m) return make_error("material '" + name->as_string() + "' is not in the scene");
     const std::string which = "material '" + m->name + "'";

@@ -8,14 +8,14 @@
 
 namespace lf {
 
-SceneLobes scene_lobes(const Scene& scene) {
+SceneLobes scene_lobes(const Scene& scene, const std::vector<Material>* materials) {
   std::vector<bool> used(scene.materials().size(), false);
   for (uint32_t t = 0; t < scene.triangle_count(); ++t) used[scene.material_of(t)] = true;
   SceneLobes out;
   out.emits = !scene.point_lights().empty() || (scene.environment() && scene.environment()->emits());
   for (size_t id = 0; id < used.size(); ++id) {
     if (!used[id]) continue;
-    const Material& m = scene.material(static_cast<uint32_t>(id));
+    const Material& m = materials ? (*materials)[id] : scene.material(static_cast<uint32_t>(id));
     out.emits = out.emits || m.emissive();
     const bool has[kLobeCount] = {
         (m.type == Material::Type::diffuse || m.type == Material::Type::glossy) && (!is_black(m.kd) || m.kd_map >= 0),

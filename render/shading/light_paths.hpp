@@ -34,6 +34,7 @@ struct Lobes {
 };
 
 class Scene;
+struct Material;
 
 // The lobes the scene's materials have where at least one triangle uses them, and whether anything emits.
 struct SceneLobes {
@@ -41,7 +42,8 @@ struct SceneLobes {
   bool emits = false;
   std::vector<std::string> materials[kLobeCount];  // names of the materials with each lobe, in material order
 };
-SceneLobes scene_lobes(const Scene& scene);
+// `materials`: the scene's materials as a job's frame changes them (the same list, in the same order).
+SceneLobes scene_lobes(const Scene& scene, const std::vector<Material>* materials = nullptr);
 
 class LightPaths {
  public:
