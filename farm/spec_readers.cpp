@@ -154,8 +154,14 @@ Value read_material_change(const std::string& name, const ParamTable& p, const s
 Value read_light(const Value& light) {
   if (!light.is_map()) throw ParamError("light needs quad, sphere or point");
   for (const auto& [key, v] : light.as_map())
-    if (key != "quad" && key != "sphere" && key != "radius" && key != "point" && key != "radiance" && key != "intensity")
-      throw ParamError("light: unknown parameter '" + key + "' (known: quad, sphere, radius, radiance, point, intensity)");
+    if (key != "quad" && key != "sphere" && key != "radius" && key != "point" && key != "radiance" && key != "intensity" &&
+        key != "name")
+      throw ParamError("light: unknown parameter '" + key + "' (known: quad, sphere, radius, radiance, point, intensity, name)");
+  if (const Value* name = light.find("name")) {
+    if (!name->is_string() || name->as_string().empty()) throw ParamError("light: name must be a non-empty string");
+    if (light.find("point"))
+      throw ParamError("light: name is for quad and sphere lights, whose material it names (a point light has none)");
+  }
   const int shapes = (light.find("quad") != nullptr) + (light.find("sphere") != nullptr) + (light.find("point") != nullptr);
   if (shapes != 1) throw ParamError("light needs exactly one of quad, sphere or point");
   for (const char* colour : {"radiance", "intensity"})

@@ -50,6 +50,8 @@ int l_frames(lua_State* L) {
   if (functions[1]) {
     material_names = scene_material_names(b.spec.scene);
     for (const Value& shape : b.spec.scene.shapes) material_names.push_back(shape.find("name")->as_string());
+    for (const Value& light : b.spec.scene.lights)
+      if (const Value* name = light.find("name")) material_names.push_back(name->as_string());
   }
   for (int frame : job.numbers()) {
     for (int i = 0; i < 2; ++i) {

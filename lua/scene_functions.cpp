@@ -63,12 +63,23 @@ int l_image(lua_State* L) {
 
 // light { quad = {c1, c2, c3, c4}, radiance = {r,g,b} } | light { sphere = {x,y,z}, radius = r, radiance = ... }
 // | light { point = {x,y,z}, intensity = {r,g,b} }: a light added to the scene (any number of them). A quad emits
-// on the side its corners wind counter-clockwise around.
+// on the side its corners wind counter-clockwise around. `name` names a quad's or sphere's material, for a job's
+// frames to change (frames { materials }).
 int l_light(lua_State* L) {
   Builder& b = builder(L);
   luaL_checktype(L, 1, LUA_TTABLE);
   Value light;
   with_params(L, [&] { light = read_light(to_value(L, 1, "light")); });
+  if (const Value* name = light.find("name")) {
+    for (const Value& other : b.spec.scene.lights)
+      if (const Value* n = other.find("name"); n && *n == *name)
+        luaL_error(L, "light: name '%s' is given twice", name->as_string().c_str());
+    if (b.have_scene) {
+      if (!b.material_names) b.material_names = scene_material_names(b.spec.scene);
+      for (const auto& m : *b.material_names)
+        if (m == name->as_string()) luaL_error(L, "light: name '%s' is a material of the scene already", m.c_str());
+    }
+  }
   if (const SourceLoc at = caller_loc(L); at.line > 0) light.as_map()["at"] = at.str();
   b.spec.scene.lights.push_back(std::move(light));
   return 0;

@@ -284,7 +284,7 @@ TEST_F(ScriptTest, LightsAreCheckedAtTheirLine) {
   EXPECT_EQ(error_of("light { point = {0, 0, 0}, sphere = {0, 0, 0}, intensity = {1, 1, 1} }\n"),
             "farm.lua:1: light needs exactly one of quad, sphere or point");
   EXPECT_EQ(error_of("light { point = {0, 0, 0}, intensty = {1, 1, 1} }\n"),
-            "farm.lua:1: light: unknown parameter 'intensty' (known: quad, sphere, radius, radiance, point, intensity)");
+            "farm.lua:1: light: unknown parameter 'intensty' (known: quad, sphere, radius, radiance, point, intensity, name)");
   EXPECT_EQ(error_of("light { point = {0, 0, 0}, intensity = {1, -1, 1} }\n"), "farm.lua:1: light: intensity must not be negative");
 }
 
@@ -549,6 +549,18 @@ TEST_F(ScriptTest, FramesMakeAJob) {
   EXPECT_EQ(r->frames[2].materials[0].find("name")->as_string(), "light");
   EXPECT_EQ(r->frames[2].materials[0].find("emission")->as_array()[0].as_double(), 3);
   EXPECT_EQ(r->frames[2].materials[1].find("name")->as_string(), "white");
+  // A script light by its name.
+  r = evaluate_script(write("farm.lua", head + "light { name = \"lamp\", sphere = {0, 500, 0}, radius = 20, radiance = {1, 1, 1} }\n"
+                                 "frames { last = 2, materials = function(f) return { lamp = { emission = {f, f, f} } } end }\n" + net));
+  ASSERT_TRUE(r.ok()) << r.error().message;
+  EXPECT_EQ(r->frames[1].materials[0].find("name")->as_string(), "lamp");
+  EXPECT_EQ(error_of(head + "light { name = \"lamp\", point = {0, 500, 0}, intensity = {1, 1, 1} }\n" + net),
+            "farm.lua:3: light: name is for quad and sphere lights, whose material it names (a point light has none)");
+  EXPECT_EQ(error_of(head + "light { name = \"white\", sphere = {0, 500, 0}, radius = 20, radiance = {1, 1, 1} }\n" + net),
+            "farm.lua:3: light: name 'white' is a material of the scene already");
+  EXPECT_EQ(error_of(head + "light { name = \"a\", sphere = {0, 500, 0}, radius = 20, radiance = {1, 1, 1} }\n"
+                     "light { name = \"a\", sphere = {0, 400, 0}, radius = 20, radiance = {1, 1, 1} }\n" + net),
+            "farm.lua:4: light: name 'a' is given twice");
   EXPECT_EQ(error_of(head + "frames { last = 3, materials = 5 }\n" + net),
             "farm.lua:3: frames: materials must be a function of the frame number");
   EXPECT_EQ(error_of(head + "frames { last = 3, materials = function(f) return f end }\n" + net),

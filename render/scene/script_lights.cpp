@@ -72,7 +72,10 @@ Status Scene::add_script_lights(const Value::Array& lights) {
     const std::string which = "light " + std::to_string(i + 1);
     // Where the script said it ("farm.lua:12"), for diagnostics about what it lights (light_checks.hpp).
     const Value* at = l.find("at");
-    const std::string material_name = at && at->is_string() ? "light at " + at->as_string() : "light (script)";
+    const Value* given = l.find("name");  // what a job's frames change it by (frames { materials })
+    const std::string material_name = given && given->is_string() ? given->as_string()
+                                      : at && at->is_string()     ? "light at " + at->as_string()
+                                                                  : "light (script)";
     Vec3 colour;
     if (const Value* q = l.find("quad")) {
       if (!vec3_of(l.find("radiance"), colour)) return make_error(which + ": radiance must be {r, g, b}");
