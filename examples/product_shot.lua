@@ -6,6 +6,8 @@
 --   lightfarm run examples/product_shot.lua                         -> product_shot.png
 --   lightfarm run examples/product_shot.lua --set aperture=0       (a pinhole: everything sharp)
 --   lightfarm run examples/product_shot.lua --set hdri=forest --set rotation=90
+--   lightfarm run examples/product_shot.lua --set variants=4        (the blue balls in four colours, one frame each:
+--                                                                    product_shot.0001.png ... 0004.png)
 
 scene       { file = "../../shared/scenes/gltf/balls.glb" }
 environment { map = "../../shared/scenes/gltf/hdri/" .. param("hdri", "sunset") .. ".exr",
@@ -15,8 +17,22 @@ shape "ground" { plane = {0, -0.001, 0}, size = 200, base_color = {0.35, 0.33, 0
 -- From the front left, low: the rows run away diagonally, the front-left ball (3.1 units off) in focus.
 camera { eye = {-3.5, 0.7, 3.0}, at = {-0.5, 0.4, 0}, fov = 32,
          aperture = param("aperture", 0.06), focus_distance = 3.13 }
+local variants = param("variants", 0)
 image  { width = param("width", 640), height = param("height", 360), spp = param("spp", 64),
-         output = param("output", "product_shot.png"), tonemap = "aces", exposure = param("exposure", 0.5) }
+         output = param("output", variants > 0 and "product_shot.####.png" or "product_shot.png"), tonemap = "aces",
+         exposure = param("exposure", 0.5) }
+-- Colour variants as a job: one farm, each frame the dielectric balls (the file's Ball_m0_*) in another base colour
+-- (frames { materials }: a frame's changes to named materials, over the scene as the script leaves it).
+if variants > 0 then
+  local colours = { {0.2, 0.35, 0.8}, {0.8, 0.15, 0.1}, {0.15, 0.6, 0.25}, {0.85, 0.85, 0.82} }
+  frames { first = 1, last = variants, materials = function(f)
+    local changes = {}
+    for _, roughness in ipairs({"0.05", "0.3", "0.6", "0.9"}) do
+      changes["Ball_m0_r" .. roughness] = { base_color = colours[(f - 1) % #colours + 1] }
+    end
+    return changes
+  end }
+end
 
 local paths = lightop "pathtrace" { name = "bounces" }
 renderers { count = param("renderers", 2),

@@ -116,6 +116,8 @@ void FrameLoop::switch_view(const FrameSpec& f, bool replay, const std::function
   view.keep = any_carried();  // for a later run of the job, which then need not replay
   view.materials = f.materials;
   view.new_materials = new_materials;
+  if (new_materials && !replay && !options_.quiet)
+    log_info("frame " + std::to_string(f.number) + ": the materials change, and every setup starts anew");
   const auto start = std::chrono::steady_clock::now();
   run_phase(wire::Phase::frame, control::encode_frame(view));
   const auto taken = std::chrono::steady_clock::now();
