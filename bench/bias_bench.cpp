@@ -61,7 +61,9 @@ int main(int argc, char** argv) {
       }
       return bench::temp_script(tag + ".lua", text);
     };
-    const std::string out = (bench::fs::temp_directory_path() / "lightfarm-bias.exr").string();
+    // Its own name: two runs at once (another scene list) must not read each other's image.
+    const std::string out =
+        (bench::fs::temp_directory_path() / ("lightfarm-bias-" + std::to_string(::getpid()) + ".exr")).string();
     std::vector<std::string> sets = frame;
     sets.push_back("spp=" + std::to_string(args.reference_spp));
     double reference_seconds = 0;
