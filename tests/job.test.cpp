@@ -291,6 +291,20 @@ TEST_F(JobTest, BadJobsAreRefusedBeforeAnythingStarts) {
   EXPECT_NE(r.err.find("turn.lua:20: frames: frame 2's materials leave the scene without light"), std::string::npos) << r.err;
   EXPECT_FALSE(fs::exists(frame("dark", 1))) << "refused before anything rendered";
   expect_no_leftovers(r);
+  // A radiosity ring's solution is made once: it cannot follow a job's change of materials.
+  const std::string ring = write("ring.lua", R"(
+scene { builtin = "cornell_glass" }
+image { width = 16, height = 16, spp = 1, output = "ring.####.png" }
+frames { last = 2, materials = function(f) return { light = { emission = {f, f, f} } } end }
+farm { light_paths = "partial" }
+renderers { count = 1, lighting = radiosity { rings = 1, ring_length = 2, patch_size = 140, element_size = 70 } }
+)");
+  r = run_lightfarm({"run", ring});
+  EXPECT_EQ(r.status, 2);
+  EXPECT_NE(r.err.find("ring.lua:4: frames: materials change over the job, which the radiosity ring's solution, made "
+                       "once for the farm, cannot follow"),
+            std::string::npos) << r.err;
+  expect_no_leftovers(r);
 }
 
 }  // namespace

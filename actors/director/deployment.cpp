@@ -65,9 +65,9 @@ void check_frame_materials(const FarmSpec& spec, const Scene& scene) {
   if (checked.empty()) return;
   for (const ActorSpec& a : spec.actors) {
     if (a.is_ring_node())
-      throw FarmFailure{spec.job.loc.str() + ": frames: materials change over the job, which a radiosity ring's "
-                        "solution, made once for the farm, cannot follow ('" + a.name + "'): use lightop \"radiosity\", "
-                        "which solves again where they change", 2};
+      throw FarmFailure{spec.job.loc.str() + ": frames: materials change over the job, which the radiosity ring's "
+                        "solution, made once for the farm, cannot follow ('" + a.name + "'): render such a job without "
+                        "radiosity { }, or one job for each set of materials", 2};
     if (a.runtime.count("cmd"))
       log_warn("frames: the materials change over the job: '" + a.name + "' runs a process of its own (lightop.exec), "
                "which must take each frame's materials from PHASE frame (docs/PROTOCOL.md), or it lights the "
