@@ -48,7 +48,8 @@ int l_frames(lua_State* L) {
   if (functions[1] && !b.have_scene) luaL_error(L, "frames: materials needs scene { ... } before it");
   std::vector<std::string> material_names;
   if (functions[1]) {
-    material_names = scene_material_names(b.spec.scene);
+    if (!b.material_names) b.material_names = scene_material_names(b.spec.scene);  // the catalogue, read once
+    material_names = *b.material_names;
     for (const Value& shape : b.spec.scene.shapes) material_names.push_back(shape.find("name")->as_string());
     for (const Value& light : b.spec.scene.lights)
       if (const Value* name = light.find("name")) material_names.push_back(name->as_string());

@@ -32,9 +32,9 @@ end
 local single = param("frame", 0)
 -- --set lit_from=K: from frame K on the light is brighter and whiter (frames { materials }; with --set frame=N,
 -- material "light" { } says the same for a farm of frame N alone); --set dark_from=K turns it off from frame K.
-local lit_from, dark_from = param("lit_from", 0), param("dark_from", 0)
+local lit_from, dark_from, warm_from = param("lit_from", 0), param("dark_from", 0), param("warm_from", 0)  -- warm: redder
 local function lamp(f)
-  if dark_from > 0 and f >= dark_from then return { light = { emission = {0, 0, 0} } } end
+  if dark_from > 0 and f >= dark_from then return { light = { emission = {0, 0, 0} } } elseif warm_from > 0 and f >= warm_from then return { light = { emission = {40, 20, 10} } } end
   return lit_from > 0 and f >= lit_from and { light = { emission = {30, 27, 20} } } or {}
 end
 if single > 0 then
@@ -246,6 +246,16 @@ TEST_F(JobTest, MaterialsChangedByAFrameSetEverythingUpAnewFromThatFrame) {
   expect_no_leftovers(resumed);
   for (int n = 1; n <= 5; ++n)
     EXPECT_TRUE(same_pixels(frame("m", n), frame("r", n))) << "frame " << n << " differs from the job run in one go";
+
+  // The job's first frame changes materials (set up with them, CONFIG frame_materials), and the next changes them
+  // again: each frame equals its farm alone.
+  const auto twice = run("w.####.exr", {"--set", "last=2", "--set", "lit_from=1", "--set", "warm_from=2"});
+  ASSERT_EQ(twice.status, 0) << twice.err;
+  for (int n : {1, 2}) {
+    const auto single = run("w_alone.exr", {"--set", "frame=" + std::to_string(n), "--set", "lit_from=1", "--set", "warm_from=2"});
+    ASSERT_EQ(single.status, 0) << single.err;
+    EXPECT_TRUE(same_pixels(frame("w", n), path("w_alone.exr"))) << "frame " << n << " is not its farm alone";
+  }
 }
 
 // --preview-every: while a frame renders its partial image (finished tiles, the rest black) is beside the output;

@@ -45,12 +45,11 @@ class RendererActor final : public Actor {
     if (!loaded) return loaded.error();
     frame_scene_ = FrameScene(std::move(loaded->scene));
     if (auto taken = frame_scene_.take(config.frame_materials, "the job's first frame"); !taken) return taken.error();
-    scene_ = frame_scene_.scene();
     tracer_ = std::move(loaded->tracer);
     image_ = config.image;
     sampler_ = sampler_of(image_);
     camera_ = std::make_unique<Camera>(config.camera, image_.width, image_.height);
-    tracing_ = RemoteTracing::for_config(config, rt, *scene_);
+    tracing_ = RemoteTracing::for_config(config, rt, frame_scene_.shipped());
     colocate_ = tracing_ && rt.input_holds_parts(0);
     if (image_.adaptive_spp > 0 && tracing_)
       return make_error("image: adaptive_spp is not available with partition (a tile's second round traces here)");
@@ -79,7 +78,6 @@ class RendererActor final : public Actor {
     *camera_ = Camera(view.camera, image_.width, image_.height);
     auto changed = frame_scene_.take(view.materials, "frame " + std::to_string(view.frame));
     if (!changed) return rt.fail(changed.error().message);
-    scene_ = frame_scene_.scene();  // what the camera sees emit, and the points' materials
     no_more_tiles_ = false;
     rt.phase_done(wire::Phase::frame);
   }
@@ -139,7 +137,7 @@ class RendererActor final : public Actor {
       tracing_tasks_.push_back(trace_through_parts(job, rect, rt));
       return;
     }
-    trace_tile(*scene_, *tracer_, *camera_, image_, rect, job->work);
+    trace_tile(scene(), *tracer_, *camera_, image_, rect, job->work);
     shade_tile(job, rt);
   }
 
@@ -156,7 +154,7 @@ class RendererActor final : public Actor {
       rt.fail(std::string("tracing camera rays through the scene's parts failed: ") + e.what());
       co_return;
     }
-    tile_points(*scene_, *camera_, image_, rect, rays, hits, keys, job->work);
+    tile_points(scene(), *camera_, image_, rect, rays, hits, keys, job->work);
     shade_tile(job, rt);
   }
 
@@ -181,7 +179,7 @@ class RendererActor final : public Actor {
       ++rt.stats().requests;
       // A lean input gets only what it cannot rebuild; a reply comes folded where the keys travel as samples.
       const PointFields fields =
-          lean ? fields_to_send(sent, b.begin, b.end, *scene_, sampler_, image_.width) : PointFields{};
+          lean ? fields_to_send(sent, b.begin, b.end, scene(), sampler_, image_.width) : PointFields{};
       const bool folded = b.foldable && !fields.key;
       rt.ask_input(
           0, wire::Op::shade, encode_tile_request(sent, b.begin, b.end, fields, folded),
@@ -244,7 +242,7 @@ class RendererActor final : public Actor {
     job->first = std::move(job->work);
     job->first_radiance = std::move(job->radiance.point);
     job->work = TileWork{};
-    trace_more_samples(*scene_, *tracer_, *camera_, image_, job->first.rect, job->shaded_of_pixel, job->work);
+    trace_more_samples(scene(), *tracer_, *camera_, image_, job->first.rect, job->shaded_of_pixel, job->work);
     shade_tile(job, rt);
     return true;
   }
@@ -257,7 +255,8 @@ class RendererActor final : public Actor {
   }
 
   FrameScene frame_scene_;  // the shipped scene and the frame's, if it changes materials
-  std::shared_ptr<const Scene> scene_;
+  // The frame's: what the camera sees emit, and the points' materials.
+  const Scene& scene() const { return *frame_scene_.scene(); }
   std::shared_ptr<const RayTracer> tracer_;       // none in a partitioned farm
   std::unique_ptr<RemoteTracing> tracing_;        // a partitioned scene's geometry actors, or none
   bool colocate_ = false;                         // the lighting pool's replicas hold parts: send points by part

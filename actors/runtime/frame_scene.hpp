@@ -34,6 +34,9 @@ class FrameScene {
     return true;
   }
   const std::shared_ptr<const Scene>& scene() const { return current_; }
+  // The scene as shipped, alive as long as this: what is built over its geometry (inputs' lean requests, remote
+  // tracing) binds to it, never to a frame's copy, which a later frame drops.
+  const Scene& shipped() const { return *shipped_; }
 
  private:
   std::shared_ptr<const Scene> shipped_;

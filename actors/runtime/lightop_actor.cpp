@@ -234,14 +234,13 @@ class LightOpActor final : public Actor {
     if (!loaded) return loaded.error();
     frame_scene_ = FrameScene(std::move(loaded->scene));
     if (auto taken = frame_scene_.take(config.frame_materials, "the job's first frame"); !taken) return taken.error();
-    scene_ = frame_scene_.scene();
     tracer_ = std::move(loaded->tracer);
     camera_ = std::make_unique<Camera>(config.camera, config.image.width, config.image.height);
     width_ = config.image.width;
     height_ = config.image.height;
     sampler_ = sampler_of(config.image);
     lit_samples_ = config.image.shaded_per_pixel();
-    inputs_ = std::make_unique<RemoteInputs>(rt, 4096, *scene_);
+    inputs_ = std::make_unique<RemoteInputs>(rt, 4096, frame_scene_.shipped());
     if (config.pool) {
       replica_index_ = static_cast<int>(config.pool->index);
       replica_count_ = static_cast<int>(config.pool->count);
@@ -260,7 +259,7 @@ class LightOpActor final : public Actor {
       exchange_ = std::make_unique<DirectorExchange>(rt);
     }
     // A partitioned scene: rays go to the parts' geometry actors (ops that trace through ctx.tracing do).
-    tracing_ = RemoteTracing::for_config(config, rt, *scene_);
+    tracing_ = RemoteTracing::for_config(config, rt, frame_scene_.shipped());
     return Ok{};
   }
 
@@ -278,15 +277,14 @@ class LightOpActor final : public Actor {
   void on_frame(const FrameView& view, Runtime& rt) override {
     ++frames_;
     *camera_ = Camera(view.camera, width_, height_);  // what ctx.camera points at, for the op's shade() too
-    // Requests from now on (another op's new setup asking this one) wait for this op's new setup. A carried setup is
-    // extended to every view, replayed ones too.
     // New materials: every op is made and set up anew over the frame's scene, carried or not, asked for by the view
     // or not (the director never restores a kept setup there: it takes the frame of the change first).
     auto changed = frame_scene_.take(view.materials, "frame " + std::to_string(view.frame));
     if (!changed) return rt.fail(changed.error().message);
     const bool anew = *changed || view.new_materials;
     if (anew && view.restore) return rt.fail("PHASE frame restores a kept setup where the materials change");
-    scene_ = frame_scene_.scene();
+    // Requests from now on (another op's new setup asking this one) wait for this op's new setup. A carried setup is
+    // extended to every view, replayed ones too.
     if (op_->setup_sees_camera() && op_->carries_views()) {
       (view.restore ? restore_ : anew ? renew_ : extend_) = true, set_up_ = false;
       keep_frame_ = view.keep ? std::optional(view.frame) : std::nullopt;
@@ -306,7 +304,7 @@ class LightOpActor final : public Actor {
     // Requests that arrive before this op's setup finished (another op's setup may ask it, e.g. an irradiance
     // pre-pass) wait in the queue until it has.
     const PixelKeys keys{width_, sampler_};
-    auto points = read_shade_request(m.body, scene_->materials().size(), scene_->triangle_count(), scene_.get(), &keys);
+    auto points = read_shade_request(m.body, scene().materials().size(), scene().triangle_count(), &scene(), &keys);
     if (!points) {
       rt.reply_error(peer, m.header.id, ErrorCode::bad_request, points.error().message);
       return;
@@ -404,7 +402,7 @@ class LightOpActor final : public Actor {
   // Starts op.setup() (or, `extend`: op.extend_to_view()) over this actor's context; on_progress answers READY
   // setup once it finishes.
   void start_setup(Runtime& rt, bool extend = false) {
-    SceneContext ctx{scene_.get(), tracer_.get(), replica_index_, replica_count_, exchange_.get()};
+    SceneContext ctx{&scene(), tracer_.get(), replica_index_, replica_count_, exchange_.get()};
     ctx.camera = camera_.get();
     ctx.width = width_;
     ctx.height = height_;
@@ -450,8 +448,8 @@ class LightOpActor final : public Actor {
   const LightOpKind& kind_;
   Value::Map params_;  // the op's parameters, for a new op each frame whose setup depends on the view
   std::unique_ptr<LightOp> op_;
-  FrameScene frame_scene_;               // the shipped scene and the frame's, if it changes materials
-  std::shared_ptr<const Scene> scene_;  // the frame's: what the op sees
+  FrameScene frame_scene_;  // the shipped scene and the frame's, if it changes materials
+  const Scene& scene() const { return *frame_scene_.scene(); }  // the frame's: what the op sees
   std::shared_ptr<const RayTracer> tracer_;
   SamplerKind sampler_ = SamplerKind::independent;
   int lit_samples_ = 0;
