@@ -48,6 +48,7 @@ Status Supervisor::launch(const std::string& director_endpoint, const std::strin
     if (!pid) return pid.error();
     ActorRecord& r = actors_.at(a.name);
     r.pid = *pid;
+    by_pid_[r.pid] = &r;
     r.last_seen = Clock::now();
   }
   return Ok{};
@@ -92,9 +93,17 @@ void Supervisor::send_bye_to_all() {
 }
 
 bool Supervisor::all(const std::function<bool(const ActorRecord&)>& done) const {
-  for (const auto& [name, a] : actors_)
-    if (!a.lost && a.spec->has_process() && !done(a)) return false;
-  return true;
+  // Every actor is looked at, from the last one found not done round to it again: any order gives the same answer.
+  const auto start = actors_.lower_bound(first_not_done_);
+  auto check = [&](auto from, auto to) {
+    for (auto it = from; it != to; ++it)
+      if (!it->second.lost && it->second.spec->has_process() && !done(it->second)) {
+        first_not_done_ = it->first;
+        return false;
+      }
+    return true;
+  };
+  return check(start, actors_.end()) && check(actors_.begin(), start);
 }
 
 std::string Supervisor::late(const std::function<bool(const ActorRecord&)>& done) const {
@@ -198,14 +207,14 @@ bool Supervisor::recoverable(const ActorRecord& a) const {
 }
 
 bool Supervisor::may_still_speak(pid_t pid) const {
-  for (const auto& [name, a] : actors_)
-    if (a.pid == pid) return !a.said_bye;
-  return false;
+  const auto it = by_pid_.find(pid);
+  return it != by_pid_.end() && it->second->pid == pid && !it->second->said_bye;
 }
 
 Status Supervisor::on_exit(const ExitReport& r) {
-  for (auto& [name, a] : actors_) {
-    if (a.pid != r.pid) continue;
+  if (const auto it = by_pid_.find(r.pid); it != by_pid_.end() && it->second->pid == r.pid) {
+    ActorRecord& a = *it->second;
+    const std::string& name = a.name();
     a.exited = true;
     if (a.lost) return Ok{};  // already accounted for (we killed it)
     // In the finish stage a clean exit is an actor finishing, even if its BYE is still on the way.
@@ -251,6 +260,7 @@ Status Supervisor::restart(ActorRecord& a, const std::string& why) {
   if (!pid) return make_error("cannot restart ring node '" + a.name() + "': " + pid.error().message);
   const bool was_configured = a.configured;
   a.pid = *pid;
+  by_pid_[a.pid] = &a;
   a.said_hello = a.said_bye = a.exited = a.configured = a.killed_hung = false;
   a.ready.reset();
   a.last_seen = Clock::now();

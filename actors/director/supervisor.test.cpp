@@ -3,6 +3,8 @@
 #include "actors/director/supervisor.hpp"
 
 #include <gtest/gtest.h>
+
+#include <set>
 #include <signal.h>
 
 #include <deque>
@@ -187,6 +189,28 @@ TEST_F(SupervisorTest, ADeathDuringStartUpStopsTheFarmUnlessAnotherTakesOver) {
   ASSERT_FALSE(st.ok());
   EXPECT_EQ(st.error().message,
             "actor 'direct' (pid " + std::to_string(pid("direct")) + ") exited with status 3 during start-up");
+}
+
+// all() looks first where it last found an actor not done; the answer is still over every actor, whichever comes
+// first, and an exit is found by its pid (an unknown pid is nobody's).
+TEST_F(SupervisorTest, AllAsksEveryActorWhereverItLastStopped) {
+  std::set<std::string> done;
+  auto all_done = [&] { return sup->all([&](const ActorRecord& a) { return done.count(a.name()) > 0; }); };
+  std::vector<std::string> names;
+  for (const auto& [name, a] : sup->actors())
+    if (a.spec->has_process()) names.push_back(name);
+  ASSERT_GE(names.size(), 3u);
+  done.insert(names.begin(), names.end());
+  done.erase(names[1]);
+  EXPECT_FALSE(all_done());  // stops at names[1]
+  done.insert(names[1]);
+  done.erase(names[0]);
+  EXPECT_FALSE(all_done()) << "the actor before the last stop is still asked";
+  done.insert(names[0]);
+  EXPECT_TRUE(all_done());
+  EXPECT_TRUE(sup->on_exit(ExitReport{987654, status_exited(1)}).ok()) << "no actor has that pid";
+  EXPECT_FALSE(sup->may_still_speak(987654));
+  EXPECT_TRUE(sup->may_still_speak(pid(names[0])));
 }
 
 TEST_F(SupervisorTest, ALostReplicaGoesToItsPoolAndTheLastOneStopsTheFarm) {
