@@ -5,13 +5,16 @@
 // sent since the last, up to three in a row), renderers' tiles (one being "rendered" for --tile-ms
 // while the next is asked for, like a renderer's tiles in flight; the pixels are a grey of the tile's size, and
 // the next tile is asked for with them, as the built-in renderer does — or, with --tile-requests alone (or both,
-// each count run twice), by a request of its own, as a renderer that does not use tile_done's `next`), STATS
+// each count run twice), by a request of its own, as a renderer that does not use tile_done's `next`; with
+// --tiles-per-message 2 (the built-in renderer's default) a finished tile waits for the next and both go in one
+// tile_done asking for two, with three tiles held at most as the built-in renderer's tiles_in_flight), STATS
 // and BYE. Nothing is rendered, so what is measured is the director: launch to last HELLO, configure, tiles per
 // second against the tiles offered, its CPU share while tiles flow, its memory, and whether any actor was lost or
 // went without the director's heartbeat.
 //
 //   build/bench/control_plane_bench [--curve] [--actors 100,1000,10000] [--tile-ms 200] [--tiles-per-renderer 6]
-//                                   [--tile-requests with-pixels|alone|both] [--json bench-control-plane.json]
+//                                   [--tile-requests with-pixels|alone|both] [--tiles-per-message 1,2]
+//                                   [--json bench-control-plane.json]
 #include <fcntl.h>
 #include <sys/prctl.h>
 #include <sys/resource.h>
@@ -102,8 +105,13 @@ struct LineReader {
 
 class Simulator {
  public:
-  Simulator(int commands, int reports, double tile_ms, bool next_with_pixels)
-      : commands_{commands}, reports_(reports), tile_ms_(tile_ms), next_with_pixels_(next_with_pixels) {
+  Simulator(int commands, int reports, double tile_ms, bool next_with_pixels, int per_message)
+      : commands_{commands},
+        reports_(reports),
+        tile_ms_(tile_ms),
+        next_with_pixels_(next_with_pixels),
+        per_message_(per_message),
+        capacity_(per_message + 1) {
     ctx_ = zmq_ctx_new();
     zmq_ctx_set(ctx_, ZMQ_IO_THREADS, 1);
     zmq_ctx_set(ctx_, ZMQ_MAX_SOCKETS, 64);
@@ -143,10 +151,11 @@ class Simulator {
     bool renderer = false, gone = false, rendering = false;
     int width = 0, height = 0;
     uint64_t next_id = 1;
-    int asked = 0;                      // tile requests unanswered
-    std::unordered_set<uint64_t> tile_asks;
+    int asked = 0;                               // tiles asked for and not yet answered
+    std::unordered_map<uint64_t, int> tile_asks;  // request id -> tiles it asked for
     bool none_left = false, said_ready = false;
     std::deque<control::Tile> assigned;  // the first is being rendered
+    std::vector<control::FinishedTile> finished;  // rendered, waiting to go with the next
     Clock::time_point last_from_director;
     Clock::time_point last_sent, last_beat;  // anything, a beat (or its slot)
     int left_out = 0;                         // beats left out in a row
@@ -219,22 +228,28 @@ class Simulator {
     actors_[i].last_sent = Clock::now();
   }
 
-  void ask_tile(size_t i) {
-    Actor& a = actors_[i];
-    ++a.asked;
-    a.tile_asks.insert(a.next_id);
-    send(i, wire::make_request(a.name, wire::Op::tile, Value::Map{}, a.next_id++));
+  int free_slots(const Actor& a) const {
+    return a.none_left ? 0 : std::max(0, capacity_ - a.asked - static_cast<int>(a.assigned.size() + a.finished.size()));
   }
 
-  // Keeps two tiles with this renderer (one rendering, the next asked for ahead); READY render once none is left.
+  void ask_tiles(size_t i, int count) {
+    Actor& a = actors_[i];
+    a.asked += count;
+    a.tile_asks[a.next_id] = count;
+    send(i, wire::make_request(a.name, wire::Op::tile, control::encode_tile_request(per_message_ > 1 ? count : 0),
+                               a.next_id++));
+  }
+
+  // Keeps `capacity_` tiles with this renderer (one rendering, the rest asked for ahead or finished and waiting to
+  // be sent); READY render once none is left.
   void keep_busy(size_t i) {
     Actor& a = actors_[i];
-    while (!a.none_left && a.asked + static_cast<int>(a.assigned.size()) < 2) ask_tile(i);
+    while (int free = free_slots(a)) ask_tiles(i, per_message_ > 1 ? free : 1);
     if (!a.rendering && !a.assigned.empty()) {
       a.rendering = true;
       timers_.push({Clock::now() + std::chrono::microseconds(static_cast<long>(tile_ms_ * 1000)), i, What::tile_finished});
     }
-    if (a.none_left && a.asked == 0 && a.assigned.empty() && !a.rendering && !a.said_ready) {
+    if (a.none_left && a.asked == 0 && a.assigned.empty() && a.finished.empty() && !a.rendering && !a.said_ready) {
       a.said_ready = true;
       send(i, wire::make_ready(a.name, wire::Phase::render));
     }
@@ -297,11 +312,13 @@ class Simulator {
         break;
       }
       case wire::MsgType::reply: {
-        if (!a.tile_asks.erase(m.header.id)) break;  // a tile_done's
-        --a.asked;
-        auto tile = control::decode_tile_reply(m.body, a.width, a.height);
-        if (tile && *tile)
-          a.assigned.push_back(**tile);
+        auto ask = a.tile_asks.find(m.header.id);
+        if (ask == a.tile_asks.end()) break;  // a tile_done's
+        a.asked -= ask->second;
+        a.tile_asks.erase(ask);
+        auto tiles = control::decode_tile_reply(m.body, a.width, a.height);
+        if (tiles && !tiles->empty())
+          a.assigned.insert(a.assigned.end(), tiles->begin(), tiles->end());
         else
           a.none_left = true;
         keep_busy(i);
@@ -337,16 +354,20 @@ class Simulator {
         const control::Tile tile = a.assigned.front();
         a.assigned.pop_front();
         a.rendering = false;
-        grey_.resize(std::max(grey_.size(), static_cast<size_t>(3 * tile.rect.pixel_count())), 0.5f);
-        const uint64_t id = a.next_id++;
-        const bool next = next_with_pixels_ && !a.none_left && a.asked + static_cast<int>(a.assigned.size()) < 2;
-        if (next) ++a.asked, a.tile_asks.insert(id);
-        send(t.actor, wire::make_request(a.name, wire::Op::tile_done,
-                                         control::encode_tile_done(tile.id,
-                                                                   std::span<const float>(grey_.data(), 3 * tile.rect.pixel_count()),
-                                                                   next),
-                                         id));
+        a.finished.push_back({tile.id, std::vector<float>(static_cast<size_t>(3 * tile.rect.pixel_count()), 0.5f)});
         ++tiles_;
+        // As the built-in renderer: a finished tile waits for the next while another is held.
+        if (static_cast<int>(a.finished.size()) >= per_message_ || a.assigned.empty()) {
+          const std::vector<control::FinishedTile> sending = std::move(a.finished);
+          a.finished.clear();
+          const uint64_t id = a.next_id++;
+          const int next = next_with_pixels_ ? (per_message_ > 1 ? free_slots(a) : std::min(1, free_slots(a))) : 0;
+          if (next > 0) a.asked += next, a.tile_asks[id] = next;
+          send(t.actor, wire::make_request(a.name, wire::Op::tile_done,
+                                           per_message_ > 1 ? control::encode_tile_done(sending, next)
+                                                            : control::encode_tile_done(sending[0].id, sending[0].rgb, next > 0),
+                                           id));
+        }
         keep_busy(t.actor);
       }
     }
@@ -363,13 +384,14 @@ class Simulator {
   int reports_;
   double tile_ms_;
   bool next_with_pixels_;  // the next tile asked for in tile_done (the built-in renderer), else by a request of its own
+  int per_message_;        // finished tiles a tile_done carries (and tiles asked for at once)
+  int capacity_;           // tiles held at once: rendering, asked for, finished and not yet sent
   void* ctx_ = nullptr;
   void* router_ = nullptr;
   bool quit_ = false;
   std::vector<Actor> actors_;
   std::unordered_map<std::string, size_t> by_name_;
   std::priority_queue<Timer, std::vector<Timer>, std::greater<>> timers_;
-  std::vector<float> grey_;
   uint64_t sent_ = 0, received_ = 0, tiles_ = 0;
 };
 
@@ -464,6 +486,7 @@ class SimulatedLauncher final : public Launcher {
 struct Row {
   int actors = 0, renderers = 0, tiles = 0;
   bool next_with_pixels = true;
+  int per_message = 1;
   int status = 0;
   double hello = 0, configure = 0, render = 0, launch_to_first_tile = 0;
   double offered_tiles_per_second = 0, tiles_per_second = 0;
@@ -563,7 +586,7 @@ void run_director(int actors, int tiles_per_renderer, bool curve, int commands, 
   write_line(result, line.str());
 }
 
-Row measure(int actors, double tile_ms, int tiles_per_renderer, bool curve, bool next_with_pixels) {
+Row measure(int actors, double tile_ms, int tiles_per_renderer, bool curve, bool next_with_pixels, int per_message) {
   int commands[2], reports[2], result[2];
   if (pipe(commands) != 0 || pipe(reports) != 0 || pipe(result) != 0) std::exit(1);
   std::fflush(stdout);
@@ -575,7 +598,7 @@ Row measure(int actors, double tile_ms, int tiles_per_renderer, bool curve, bool
     close(result[0]);
     close(result[1]);
     fcntl(commands[0], F_SETFL, O_NONBLOCK);
-    Simulator sim(commands[0], reports[1], tile_ms, next_with_pixels);
+    Simulator sim(commands[0], reports[1], tile_ms, next_with_pixels, per_message);
     _exit(sim.run());
   }
   close(commands[0]);
@@ -602,6 +625,7 @@ Row measure(int actors, double tile_ms, int tiles_per_renderer, bool curve, bool
   Row row;
   row.actors = actors;
   row.next_with_pixels = next_with_pixels;
+  row.per_message = per_message;
   row.renderers = actors - 1;
   std::istringstream in(text);
   in >> row.status >> row.tiles >> row.hello >> row.configure >> row.render >> row.launch_to_first_tile >>
@@ -624,6 +648,7 @@ int main(int argc, char** argv) {
   std::string json_path = "bench-control-plane.json";
   bool curve = false;
   std::string tile_requests = "with-pixels";
+  std::string per_message_text = "1,2";
   for (int i = 1; i < argc; ++i) {
     if (!std::strcmp(argv[i], "--actors") && i + 1 < argc) counts = argv[++i];
     else if (!std::strcmp(argv[i], "--tile-ms") && i + 1 < argc) tile_ms = std::atof(argv[++i]);
@@ -631,9 +656,10 @@ int main(int argc, char** argv) {
     else if (!std::strcmp(argv[i], "--json") && i + 1 < argc) json_path = argv[++i];
     else if (!std::strcmp(argv[i], "--curve")) curve = true;
     else if (!std::strcmp(argv[i], "--tile-requests") && i + 1 < argc) tile_requests = argv[++i];
+    else if (!std::strcmp(argv[i], "--tiles-per-message") && i + 1 < argc) per_message_text = argv[++i];
     else {
       std::fprintf(stderr, "usage: control_plane_bench [--curve] [--actors 100,1000] [--tile-ms MS] [--tiles-per-renderer N] "
-                           "[--tile-requests with-pixels|alone|both] [--json FILE]\n");
+                           "[--tile-requests with-pixels|alone|both] [--tiles-per-message 1,2] [--json FILE]\n");
       return 2;
     }
   }
@@ -644,6 +670,18 @@ int main(int argc, char** argv) {
   std::vector<bool> modes;  // the next tile with the pixels, or alone
   if (tile_requests != "alone") modes.push_back(true);
   if (tile_requests != "with-pixels") modes.push_back(false);
+  std::vector<int> per_messages;
+  {
+    std::stringstream in(per_message_text);
+    for (std::string item; std::getline(in, item, ',');) {
+      const int k = std::atoi(item.c_str());
+      if (k < 1 || k > control::kMaxTilesPerMessage) {
+        std::fprintf(stderr, "--tiles-per-message takes counts from 1 to %d\n", control::kMaxTilesPerMessage);
+        return 2;
+      }
+      per_messages.push_back(k);
+    }
+  }
   // Every actor is a TCP connection at each end.
   rlimit files{};
   getrlimit(RLIMIT_NOFILE, &files);
@@ -652,20 +690,22 @@ int main(int argc, char** argv) {
   std::printf("lightfarm control-plane benchmark: the director against simulated actors (one `direct`, the rest "
               "renderers), a tile every %.0f ms per renderer, %d tiles per renderer, 16x16 tiles, security %s\n\n",
               tile_ms, tiles_per_renderer, curve ? "CURVE" : "none");
-  std::printf("%-12s %7s %6s %8s %8s %10s %12s %12s %12s %10s %10s %8s %6s\n", "next tile", "actors", "exit", "hello s", "config s",
+  std::printf("%-12s %8s %7s %6s %8s %8s %10s %12s %12s %12s %10s %10s %8s %6s\n", "next tile", "tiles/msg", "actors", "exit", "hello s", "config s",
               "1st tile s", "tiles/s", "offered/s", "dir CPU rnd", "dir MB", "sim CPU s", "max gap", "lost");
   lf::Value::Array runs;
   std::stringstream list(counts);
   for (std::string item; std::getline(list, item, ',');) {
+    for (const int per_message : per_messages)
     for (const bool next_with_pixels : modes) {
-      const Row r = measure(std::atoi(item.c_str()), tile_ms, tiles_per_renderer, curve, next_with_pixels);
-      std::printf("%-12s %7d %6d %8.2f %8.2f %10.2f %12.0f %12.0f %12.3f %10.0f %10.1f %8.2f %6d\n",
-                  r.next_with_pixels ? "with pixels" : "alone", r.actors, r.status,
+      const Row r = measure(std::atoi(item.c_str()), tile_ms, tiles_per_renderer, curve, next_with_pixels, per_message);
+      std::printf("%-12s %8d %7d %6d %8.2f %8.2f %10.2f %12.0f %12.0f %12.3f %10.0f %10.1f %8.2f %6d\n",
+                  r.next_with_pixels ? "with pixels" : "alone", r.per_message, r.actors, r.status,
                   r.hello, r.configure, r.launch_to_first_tile, r.tiles_per_second, r.offered_tiles_per_second,
                   r.director_cpu_render, r.director_peak_mb, r.simulator_cpu, r.longest_director_silence, r.lost);
       std::fflush(stdout);
       runs.push_back(lf::Value::Map{{"actors", r.actors},
                                     {"next_tile", r.next_with_pixels ? "with_pixels" : "alone"},
+                                    {"tiles_per_message", r.per_message},
                                     {"exit_status", r.status},
                                     {"tiles", r.tiles},
                                     {"hello_seconds", r.hello},

@@ -7,12 +7,17 @@ RendererParams RendererParams::read(const ParamTable& p) {
   r.batch = p.get_int("batch", r.batch, 1, 1 << 20);
   r.window = p.get_int("window", r.window, 1, 64);
   r.tiles_in_flight = p.get_int("tiles_in_flight", r.tiles_in_flight, 1, 64);
-  if (p.get_string("mode", "async", {"async", "sync"}) == "sync") r.batch = r.window = r.tiles_in_flight = 1;
+  r.tiles_per_message = p.get_int("tiles_per_message", r.tiles_per_message, 1, 64);
+  if (p.get_string("mode", "async", {"async", "sync"}) == "sync")
+    r.batch = r.window = r.tiles_in_flight = r.tiles_per_message = 1;
   return r;
 }
 
 Value::Map RendererParams::to_map() const {
-  return Value::Map{{"batch", batch}, {"window", window}, {"tiles_in_flight", tiles_in_flight}};
+  return Value::Map{{"batch", batch},
+                    {"window", window},
+                    {"tiles_in_flight", tiles_in_flight},
+                    {"tiles_per_message", tiles_per_message}};
 }
 
 MultiplexerParams MultiplexerParams::read(const ParamTable& p) {

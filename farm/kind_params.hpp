@@ -11,13 +11,17 @@
 
 namespace lf {
 
-// renderers { batch = 16384, window = 4, tiles_in_flight = 3, mode = "async" }
+// renderers { batch = 16384, window = 4, tiles_in_flight = 3, tiles_per_message = 1, mode = "async" }
 struct RendererParams {
   int64_t batch = 16384;        // shading points per request
   int64_t window = 4;           // requests in flight to the lighting
   int64_t tiles_in_flight = 3;  // tiles traced ahead while earlier ones are shaded
+  // Finished tiles handed to the director in one message, which asks for as many next (at most tiles_in_flight):
+  // fewer messages at a director serving thousands of renderers with fast tiles (docs/SCALE.md), at the cost of
+  // pixels landing later (the progress bar and preview move by batches). 1: a tile at a time.
+  int64_t tiles_per_message = 1;
   // Throws ParamError. mode = "sync" (one point per request, one request and one tile at a time: what packets buy)
-  // sets the other three to 1.
+  // sets the other four to 1.
   static RendererParams read(const ParamTable& p);
   Value::Map to_map() const;
 };

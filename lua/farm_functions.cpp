@@ -153,7 +153,8 @@ int l_multiplexer(lua_State* L) {
   return 1;
 }
 
-// renderers { count = 2, lighting = op, batch = 16384, window = 4, tiles_in_flight = 3, mode = "async", host = h }
+// renderers { count = 2, lighting = op, batch = 16384, window = 4, tiles_in_flight = 3, tiles_per_message = 1,
+//             mode = "async", host = h }
 int l_renderers(lua_State* L) {
   Builder& b = builder(L);
   if (b.have_renderers) luaL_error(L, "renderers is declared twice");

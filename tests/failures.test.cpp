@@ -142,6 +142,21 @@ TEST_F(FailureTest, KilledRendererReplicaOrStoppedReplicaLeaveTheImageUnchanged)
   }
 }
 
+// Renderers that hand in their tiles two to a message (and ask for two) render the same pixels, and a renderer
+// killed while it held a finished tile not yet sent loses nothing: its tiles go to the other.
+TEST_F(FailureTest, TilesInBatchesRenderTheSamePixelsAndSurviveAKilledRenderer) {
+  Image reference = render(small(kSlowPool, {"spp=64", "renderers=1"}), "reference.exr");
+  Image batched = render(small(kSlowPool, {"spp=64", "renderers=3", "tiles_per_message=2"}), "batched.exr");
+  EXPECT_TRUE(batched.pixels == reference.pixels) << "tiles in batches changed the image";
+  auto r = render_with_fault(small(kSlowPool, {"spp=64", "slowdown=6", "renderers=2", "tiles_per_message=2"}),
+                             "killed.exr", "renderer-1", SIGKILL);
+  ASSERT_EQ(r.status, 0) << r.err;
+  EXPECT_NE(r.err.find("renderer 'renderer-1' was killed by signal 9 (Killed); its "), std::string::npos) << r.err;
+  auto img = read_image(path("killed.exr"));
+  ASSERT_TRUE(img.ok());
+  EXPECT_TRUE(img->pixels == reference.pixels) << "the image changed after losing a renderer holding a batch";
+}
+
 // Clients of a pool that connect to a subset of its replicas (subset = 1 of 4: renderer-0 to direct.0, renderer-1
 // to direct.1) render the pixels of clients that connect to all; when direct.0 is killed mid-frame, renderer-0
 // connects its next spare and the image is still the same. Only renderer-0 held direct.0, so only it says so.

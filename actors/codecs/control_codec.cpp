@@ -14,30 +14,93 @@ const std::string* string_field(const Value& body, const char* key) {
 
 }  // namespace
 
-Value encode_tile_reply(const std::optional<Tile>& tile) {
-  if (!tile) return Value::Map{};
-  const TileRect& r = tile->rect;
-  Value::Map t{{"id", tile->id}, {"x0", r.x0}, {"y0", r.y0}, {"x1", r.x1}, {"y1", r.y1}};
-  if (tile->first_sample > 0) t["first"] = static_cast<int64_t>(tile->first_sample);
-  return Value::Map{{"tile", std::move(t)}};
+namespace {
+
+Value::Map tile_map(const Tile& tile) {
+  const TileRect& r = tile.rect;
+  Value::Map t{{"id", tile.id}, {"x0", r.x0}, {"y0", r.y0}, {"x1", r.x1}, {"y1", r.y1}};
+  if (tile.first_sample > 0) t["first"] = static_cast<int64_t>(tile.first_sample);
+  return t;
 }
 
-Result<std::optional<Tile>> decode_tile_reply(const Value& body, int width, int height) {
-  if (!body.is_map()) return bad("a tile reply must be a map");
-  const Value* tile = body.find("tile");
-  if (!tile) return std::optional<Tile>{};
+Result<Tile> read_tile(const Value& tile, int width, int height) {
+  if (!tile.is_map()) return bad("the render master sent a tile outside the image");
   auto get = [&](const char* k) {
-    const Value* v = tile->find(k);
+    const Value* v = tile.find(k);
     return v && v->is_int() && v->as_int() >= 0 && v->as_int() <= INT32_MAX ? static_cast<int>(v->as_int()) : -1;
   };
   const TileRect rect{get("x0"), get("y0"), get("x1"), get("y1")};
-  if (get("id") < 0 || rect.x0 < 0 || rect.y0 < 0 || rect.x1 > width || rect.y1 > height || rect.width() <= 0 ||
-      rect.height() <= 0)
+  if (get("id") < 0 || rect.x0 < 0 || rect.y0 < 0 || rect.x1 > width || rect.y1 > height ||
+      rect.width() <= 0 || rect.height() <= 0)
     return bad("the render master sent a tile outside the image");
   int first = 0;
-  if (tile->find("first") && (first = get("first")) < 0)
+  if (tile.find("first") && (first = get("first")) < 0)
     return bad("the render master sent a tile whose first sample is not an index (0 to 2^31 - 1)");
-  return std::optional<Tile>{Tile{static_cast<uint64_t>(get("id")), rect, static_cast<uint32_t>(first)}};
+  return Tile{static_cast<uint64_t>(get("id")), rect, static_cast<uint32_t>(first)};
+}
+
+// A tile request's or tile_done's count: absent 0, else 1 to kMaxTilesPerMessage.
+Result<int> read_count(const Value& body, const char* what) {
+  const Value* count = body.find("count");
+  if (!count) return 0;
+  if (!count->is_int() || count->as_int() < 1 || count->as_int() > kMaxTilesPerMessage)
+    return bad(std::string(what) + "'s count must be a whole number from 1 to " + std::to_string(kMaxTilesPerMessage));
+  return static_cast<int>(count->as_int());
+}
+
+Result<FinishedTile> read_finished(const Value& body) {
+  const Value* id = body.find("id");
+  const Value* pixels = body.find("pixels");
+  FinishedTile done;
+  if (!id || !id->is_int() || id->as_int() < 0 || !pixels || !pixels->is_bytes() ||
+      !bytes_to_floats(pixels->as_bytes(), done.rgb) || done.rgb.size() % 3 != 0)
+    return bad("tile_done needs id and pixels");
+  done.id = static_cast<uint64_t>(id->as_int());
+  return done;
+}
+
+}  // namespace
+
+Value encode_tile_reply(const std::optional<Tile>& tile) {
+  if (!tile) return Value::Map{};
+  return Value::Map{{"tile", tile_map(*tile)}};
+}
+
+Value encode_tiles_reply(std::span<const Tile> tiles) {
+  if (tiles.empty()) return Value::Map{};
+  Value::Array list;
+  for (const Tile& t : tiles) list.push_back(tile_map(t));
+  return Value::Map{{"tiles", std::move(list)}};
+}
+
+Result<std::vector<Tile>> decode_tile_reply(const Value& body, int width, int height) {
+  if (!body.is_map()) return bad("a tile reply must be a map");
+  std::vector<Tile> out;
+  if (const Value* tile = body.find("tile")) {
+    auto t = read_tile(*tile, width, height);
+    if (!t) return t.error();
+    out.push_back(*t);
+  } else if (const Value* tiles = body.find("tiles")) {
+    if (!tiles->is_array() || tiles->as_array().empty() ||
+        tiles->as_array().size() > static_cast<size_t>(kMaxTilesPerMessage))
+      return bad("the render master's tiles must be a list of 1 to " + std::to_string(kMaxTilesPerMessage) + " tiles");
+    for (const Value& v : tiles->as_array()) {
+      auto t = read_tile(v, width, height);
+      if (!t) return t.error();
+      out.push_back(*t);
+    }
+  }
+  return out;
+}
+
+Result<int> decode_tile_count(const Value& body) {
+  if (!body.is_map()) return bad("a tile request must be a map");
+  return read_count(body, "a tile request");
+}
+
+Value encode_tile_request(int count) {
+  if (count <= 0) return Value::Map{};
+  return Value::Map{{"count", count}};
 }
 
 Value encode_tile_done(uint64_t id, std::span<const float> rgb, bool next) {
@@ -46,18 +109,39 @@ Value encode_tile_done(uint64_t id, std::span<const float> rgb, bool next) {
   return m;
 }
 
+Value encode_tile_done(std::span<const FinishedTile> tiles, int count) {
+  Value::Array list;
+  for (const FinishedTile& t : tiles) list.push_back(Value::Map{{"id", t.id}, {"pixels", floats_to_bytes(t.rgb)}});
+  Value::Map m{{"tiles", std::move(list)}};
+  if (count > 0) m["next"] = true, m["count"] = count;
+  return m;
+}
+
 Result<TileDone> decode_tile_done(const Value& body) {
-  const Value* id = body.find("id");
-  const Value* pixels = body.find("pixels");
+  if (!body.is_map()) return bad("tile_done needs id and pixels");
   TileDone done;
-  if (!id || !id->is_int() || id->as_int() < 0 || !pixels || !pixels->is_bytes() ||
-      !bytes_to_floats(pixels->as_bytes(), done.rgb) || done.rgb.size() % 3 != 0)
-    return bad("tile_done needs id and pixels");
-  done.id = static_cast<uint64_t>(id->as_int());
+  if (const Value* tiles = body.find("tiles")) {
+    if (!tiles->is_array() || tiles->as_array().empty() ||
+        tiles->as_array().size() > static_cast<size_t>(kMaxTilesPerMessage))
+      return bad("tile_done's tiles must be a list of 1 to " + std::to_string(kMaxTilesPerMessage) +
+                 " maps of id and pixels");
+    for (const Value& v : tiles->as_array()) {
+      auto t = read_finished(v);
+      if (!t) return t.error();
+      done.tiles.push_back(std::move(*t));
+    }
+  } else {
+    auto t = read_finished(body);
+    if (!t) return t.error();
+    done.tiles.push_back(std::move(*t));
+  }
   if (const Value* next = body.find("next")) {
     if (!next->is_bool()) return bad("tile_done's next must be true or false");
     done.next = next->as_bool();
   }
+  auto count = read_count(body, "tile_done");
+  if (!count) return count.error();
+  done.count = *count;
   return done;
 }
 

@@ -1,11 +1,13 @@
 #pragma once
 // The director's tile and peer bodies (docs/PROTOCOL.md), defined once for the director's parts, the runtime and
 // the renderer; decoders check every field and its range, and an error says what is wrong.
-//   tile (renderer -> director): {}
+//   tile (renderer -> director): { count? }
 //     reply: { tile: {id, x0, y0, x1, y1, first?} } (half-open, inside the image; first: the pass's first sample
-//            index, 0 when absent) | {} when no tile is left
-//   tile_done (renderer -> director): { id, pixels: f32[3wh], next? }  reply: {}; with next: true, the reply is
-//            a tile request's (the renderer's next tile, or {} when none is left)
+//            index, 0 when absent) | {} when no tile is left; asked with count (1-64): { tiles: [tile, ...] },
+//            1 to count of them, or {}
+//   tile_done (renderer -> director): { id, pixels: f32[3wh], next?, count? }, or several tiles' pixels at once,
+//            { tiles: [{id, pixels}, ...], next?, count? }  reply: {}; with next: true, the reply is a tile
+//            request's (the renderer's next tile or tiles, or {} when none is left)
 //   PEER_MOVED (director -> actor): { name, endpoint, key }  (key "" without CURVE or over same-host IPC)
 //   PEER_DOWN (director -> actor):  { name }
 //   PHASE frame (director -> actor): { frame, camera: {eye, at, ...} (CameraSpec), renew?: [names] }
@@ -28,16 +30,29 @@ struct Tile {
   // A time-limited frame's pass: the tile's pixels take their samples from this index on (sent when not 0).
   uint32_t first_sample = 0;
 };
+// The most tiles one message asks for or carries.
+inline constexpr int kMaxTilesPerMessage = 64;
 Value encode_tile_reply(const std::optional<Tile>& tile);
-// nullopt: no tile is left. An error for a tile outside a `width` x `height` image or an empty one.
-Result<std::optional<Tile>> decode_tile_reply(const Value& body, int width, int height);
+// The reply to a request with a count: `tiles` (empty: none is left).
+Value encode_tiles_reply(std::span<const Tile> tiles);
+// Either form; empty: no tile is left. An error for a tile outside a `width` x `height` image or an empty one.
+Result<std::vector<Tile>> decode_tile_reply(const Value& body, int width, int height);
+// A tile request's count: 0 when the request asks in the one-tile form (no count), else 1 to kMaxTilesPerMessage.
+Result<int> decode_tile_count(const Value& body);
+Value encode_tile_request(int count);
 
-struct TileDone {
+struct FinishedTile {
   uint64_t id = 0;
   std::vector<float> rgb;  // 3 per pixel, rows of the tile top first
-  bool next = false;       // the renderer's next tile is asked for too: one round trip a tile instead of two
 };
+struct TileDone {
+  std::vector<FinishedTile> tiles;  // one, or a batch's
+  bool next = false;  // the renderer's next tile is asked for too: one round trip a tile instead of two
+  int count = 0;      // with next: how many (0: the one-tile form)
+};
+// One tile's pixels in the one-tile form; several in the batch form. `count` > 0 asks for that many next tiles.
 Value encode_tile_done(uint64_t id, std::span<const float> rgb, bool next = false);
+Value encode_tile_done(std::span<const FinishedTile> tiles, int count);
 Result<TileDone> decode_tile_done(const Value& body);
 
 struct PeerMoved {

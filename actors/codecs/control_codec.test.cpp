@@ -10,13 +10,13 @@ TEST(ControlCodec, TilesRoundTripAndStayInsideTheImage) {
   const Tile tile{7, TileRect{32, 0, 64, 16}};
   auto back = decode_tile_reply(encode_tile_reply(tile), 64, 48);
   ASSERT_TRUE(back.ok()) << back.error().message;
-  ASSERT_TRUE(back->has_value());
-  EXPECT_EQ((*back)->id, 7u);
-  EXPECT_EQ((*back)->rect.x0, 32);
-  EXPECT_EQ((*back)->rect.y1, 16);
+  ASSERT_EQ(back->size(), 1u);
+  EXPECT_EQ((*back)[0].id, 7u);
+  EXPECT_EQ((*back)[0].rect.x0, 32);
+  EXPECT_EQ((*back)[0].rect.y1, 16);
   auto none = decode_tile_reply(encode_tile_reply(std::nullopt), 64, 48);
   ASSERT_TRUE(none.ok());
-  EXPECT_FALSE(none->has_value()) << "no tile left";
+  EXPECT_TRUE(none->empty()) << "no tile left";
   auto outside = decode_tile_reply(encode_tile_reply(tile), 48, 48);
   ASSERT_FALSE(outside.ok());
   EXPECT_EQ(outside.error().message, "the render master sent a tile outside the image");
@@ -26,8 +26,8 @@ TEST(ControlCodec, TilesRoundTripAndStayInsideTheImage) {
   // A time-limited frame's later pass: its first sample travels; the first pass's says nothing (0).
   EXPECT_EQ(encode_tile_reply(tile).find("tile")->find("first"), nullptr);
   auto pass = decode_tile_reply(encode_tile_reply(Tile{3, TileRect{0, 0, 16, 16}, 48}), 64, 48);
-  ASSERT_TRUE(pass.ok() && pass->has_value());
-  EXPECT_EQ((*pass)->first_sample, 48u);
+  ASSERT_TRUE(pass.ok() && pass->size() == 1);
+  EXPECT_EQ((*pass)[0].first_sample, 48u);
   auto bad = decode_tile_reply(
       Value::Map{{"tile", Value::Map{{"id", 1}, {"x0", 0}, {"y0", 0}, {"x1", 8}, {"y1", 8}, {"first", -2}}}}, 64, 48);
   ASSERT_FALSE(bad.ok());
@@ -38,8 +38,10 @@ TEST(ControlCodec, TileDoneCarriesItsPixels) {
   const std::vector<float> rgb{0.1f, 0.2f, 0.3f, 1, 2, 3};
   auto back = decode_tile_done(encode_tile_done(9, rgb));
   ASSERT_TRUE(back.ok());
-  EXPECT_EQ(back->id, 9u);
-  EXPECT_EQ(back->rgb, rgb);
+  ASSERT_EQ(back->tiles.size(), 1u);
+  EXPECT_EQ(back->tiles[0].id, 9u);
+  EXPECT_EQ(back->tiles[0].rgb, rgb);
+  EXPECT_EQ(back->count, 0) << "the one-tile form";
   auto partial = decode_tile_done(encode_tile_done(9, std::span<const float>(rgb).first(4)));
   ASSERT_FALSE(partial.ok()) << "pixels come in threes";
   EXPECT_EQ(partial.error().code, ErrorCode::bad_request);
@@ -54,6 +56,60 @@ TEST(ControlCodec, TileDoneCarriesItsPixels) {
   auto odd = decode_tile_done(Value::Map{{"id", 1}, {"pixels", floats_to_bytes(rgb)}, {"next", 1}});
   ASSERT_FALSE(odd.ok());
   EXPECT_EQ(odd.error().message, "tile_done's next must be true or false");
+}
+
+TEST(ControlCodec, TilesTravelInBatches) {
+  // A request for several tiles, answered with a list; the one-tile form stays what it was.
+  EXPECT_EQ(encode_tile_request(0), Value(Value::Map{}));
+  auto count = decode_tile_count(encode_tile_request(2));
+  ASSERT_TRUE(count.ok());
+  EXPECT_EQ(*count, 2);
+  EXPECT_EQ(*decode_tile_count(Value::Map{}), 0);
+  for (const Value& bad : {Value(Value::Map{{"count", 0}}), Value(Value::Map{{"count", 65}}),
+                           Value(Value::Map{{"count", "two"}})}) {
+    auto refused = decode_tile_count(bad);
+    ASSERT_FALSE(refused.ok());
+    EXPECT_EQ(refused.error().message, "a tile request's count must be a whole number from 1 to 64");
+  }
+  const std::vector<Tile> tiles{{4, TileRect{0, 0, 16, 16}}, {5, TileRect{16, 0, 32, 16}, 8}};
+  auto back = decode_tile_reply(encode_tiles_reply(tiles), 64, 48);
+  ASSERT_TRUE(back.ok()) << back.error().message;
+  ASSERT_EQ(back->size(), 2u);
+  EXPECT_EQ((*back)[1].id, 5u);
+  EXPECT_EQ((*back)[1].rect.x1, 32);
+  EXPECT_EQ((*back)[1].first_sample, 8u);
+  EXPECT_TRUE(decode_tile_reply(encode_tiles_reply({}), 64, 48)->empty()) << "none left: {}";
+  auto outside = decode_tile_reply(encode_tiles_reply(tiles), 24, 48);
+  ASSERT_FALSE(outside.ok()) << "every tile of the list is checked";
+  EXPECT_EQ(outside.error().message, "the render master sent a tile outside the image");
+  auto empty = decode_tile_reply(Value::Map{{"tiles", Value::Array{}}}, 64, 48);
+  ASSERT_FALSE(empty.ok());
+  EXPECT_EQ(empty.error().message, "the render master's tiles must be a list of 1 to 64 tiles");
+  EXPECT_FALSE(decode_tile_reply(Value::Map{{"tiles", Value::Array{Value(3)}}}, 64, 48).ok());
+
+  // Several tiles' pixels in one tile_done, asking for as many next.
+  const std::vector<FinishedTile> finished{{4, {0.5f, 0.5f, 0.5f}}, {5, {1, 2, 3, 4, 5, 6}}};
+  auto done = decode_tile_done(encode_tile_done(finished, 2));
+  ASSERT_TRUE(done.ok()) << done.error().message;
+  ASSERT_EQ(done->tiles.size(), 2u);
+  EXPECT_EQ(done->tiles[1].id, 5u);
+  EXPECT_EQ(done->tiles[1].rgb, finished[1].rgb);
+  EXPECT_TRUE(done->next);
+  EXPECT_EQ(done->count, 2);
+  auto last = decode_tile_done(encode_tile_done(finished, 0));
+  ASSERT_TRUE(last.ok());
+  EXPECT_FALSE(last->next) << "no count: no next tile asked for";
+  auto broken = decode_tile_done(Value::Map{
+      {"tiles", Value::Array{Value::Map{{"id", 4}, {"pixels", floats_to_bytes(finished[0].rgb)}}, Value::Map{{"id", 5}}}}});
+  ASSERT_FALSE(broken.ok()) << "every tile of the batch needs its pixels";
+  EXPECT_EQ(broken.error().message, "tile_done needs id and pixels");
+  auto none = decode_tile_done(Value::Map{{"tiles", Value::Array{}}});
+  ASSERT_FALSE(none.ok());
+  EXPECT_EQ(none.error().message, "tile_done's tiles must be a list of 1 to 64 maps of id and pixels");
+  auto too_many = decode_tile_done(Value::Map{{"id", 1}, {"pixels", floats_to_bytes(finished[0].rgb)}, {"next", true},
+                                              {"count", 100}});
+  ASSERT_FALSE(too_many.ok());
+  EXPECT_EQ(too_many.error().message, "tile_done's count must be a whole number from 1 to 64");
 }
 
 TEST(ControlCodec, PeerMessagesRoundTrip) {

@@ -36,6 +36,7 @@ class RenderMaster {
   const TileRect& rect(uint64_t id) const { return tiles_[static_cast<size_t>(id)]; }
 
   size_t total() const { return tiles_.size(); }
+  size_t unassigned() const { return unassigned_.size(); }
   size_t done() const { return done_count_; }
   // The tiles each worker holds and has not finished, by worker.
   std::map<std::string, std::vector<uint64_t>> held() const {

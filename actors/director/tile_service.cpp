@@ -130,7 +130,12 @@ void TileService::begin_frame(const std::string& output, const std::string& key,
 
 Status TileService::on_request(const std::string& actor, wire::Op op, uint64_t id, Value body, Outbox& out) {
   if (op == wire::Op::tile) {
-    waiting_.emplace_back(actor, id);
+    auto count = control::decode_tile_count(body);
+    if (!count) {
+      out.refuse(actor, id, count.error().code, count.error().message);
+      return Ok{};
+    }
+    waiting_.push_back({actor, id, *count});
     serve_waiting(out);
     return Ok{};
   }
@@ -139,15 +144,30 @@ Status TileService::on_request(const std::string& actor, wire::Op op, uint64_t i
     out.refuse(actor, id, done.error().code, done.error().message);
     return Ok{};
   }
-  auto outcome = master_.complete(actor, done->id, done->rgb);
-  if (outcome != RenderMaster::Outcome::accepted) {
-    log_warn("refused tile " + std::to_string(done->id) + " from '" + actor + "': " + RenderMaster::describe(outcome));
-    out.refuse(actor, id, ErrorCode::refused, RenderMaster::describe(outcome));
-    return Ok{};
+  // Each tile of a batch counts on its own: one refused (a tile given to another after this renderer seemed lost)
+  // does not lose the others' pixels.
+  std::string refused;
+  size_t accepted = 0;
+  for (const control::FinishedTile& tile : done->tiles) {
+    const auto outcome = master_.complete(actor, tile.id, tile.rgb);
+    if (outcome == RenderMaster::Outcome::accepted) {
+      ++accepted;
+      continue;
+    }
+    log_warn("refused tile " + std::to_string(tile.id) + " from '" + actor + "': " + RenderMaster::describe(outcome));
+    refused += (refused.empty() ? "" : "; ") +
+               (done->tiles.size() == 1 ? std::string() : "tile " + std::to_string(tile.id) + ": ") +
+               RenderMaster::describe(outcome);
   }
-  // Asked for the renderer's next tile too: the reply is a tile request's, answered like one (it may wait).
-  if (done->next) waiting_.emplace_back(actor, id);
-  else out.reply(actor, id, Value::Map{});
+  if (!refused.empty()) {
+    out.refuse(actor, id, ErrorCode::refused, refused);
+    if (accepted == 0) return Ok{};
+  } else if (done->next) {
+    // Asked for the renderer's next tiles too: the reply is a tile request's, answered like one (it may wait).
+    waiting_.push_back({actor, id, done->count});
+  } else {
+    out.reply(actor, id, Value::Map{});
+  }
   if (giving_up_) {
     // A tile of the pass given up: dropped, unless it completes the pass after all. The frame is done once none is out.
     if (master_.finished()) add_pass();
@@ -163,7 +183,7 @@ Status TileService::on_request(const std::string& actor, wire::Op op, uint64_t i
   if (!master_.finished()) write_preview();
   last_progress_ = Clock::now();
   // The farm's first tile (a job's later frames keep the first frame's figure).
-  if (first_tile_seconds_ == 0 && master_.done() == resumed_ + 1) first_tile_seconds_ = render_seconds();
+  if (first_tile_seconds_ == 0 && master_.done() >= resumed_ + 1) first_tile_seconds_ = render_seconds();
   progress_.update(progress_done(), render_seconds());
   if (master_.finished() || done->next) serve_waiting(out);
   return Ok{};
@@ -171,7 +191,7 @@ Status TileService::on_request(const std::string& actor, wire::Op op, uint64_t i
 
 Status TileService::on_lost(const std::string& actor, const std::string& why, Outbox& out) {
   if (std::find(renderers_.begin(), renderers_.end(), actor) == renderers_.end()) return Ok{};
-  std::erase_if(waiting_, [&](const auto& w) { return w.first == actor; });
+  std::erase_if(waiting_, [&](const Waiting& w) { return w.actor == actor; });
   const size_t tiles = master_.release(actor);
   log_warn("renderer '" + actor + "' " + why + "; its " + std::to_string(tiles) + " tiles go to the others", LogKind::loss);
   serve_waiting(out);
@@ -204,23 +224,28 @@ bool TileService::out_of_time() const {
   return image_.time_limit > 0 && passes_ > 0 && !passes_finished_ && render_seconds() > image_.time_limit;
 }
 
-// Answers waiting tile requests: a tile each while tiles are free; "none left" once every tile is done.
+// Answers waiting tile requests: tiles while tiles are free; "none left" once every tile is done.
 void TileService::serve_waiting(Outbox& out) {
   if (!rendering_) return;
   if (out_of_time()) giving_up_ = true;
   if (giving_up_ && master_.held().empty()) passes_finished_ = true;
   while (!waiting_.empty()) {
-    const auto [actor, id] = waiting_.front();
-    std::optional<control::Tile> tile;
-    if (giving_up_ || passes_finished_) {
-      // none: the frame has every pass it will get
-    } else if (auto t = master_.next(actor)) {
-      tile = control::Tile{t->id, t->rect, static_cast<uint32_t>(passes_) * static_cast<uint32_t>(image_.spp)};
-    } else if (!master_.finished()) {
-      return;  // keep waiting
+    const Waiting w = waiting_.front();
+    std::vector<control::Tile> tiles;
+    if (!giving_up_ && !passes_finished_) {
+      // Several only while every renderer could take as many of the tiles still free.
+      const size_t share = std::max<size_t>(1, master_.unassigned() / std::max<size_t>(1, renderers_.size()));
+      const size_t give = std::min<size_t>(static_cast<size_t>(std::max(1, w.count)), share);
+      while (tiles.size() < give) {
+        auto t = master_.next(w.actor);
+        if (!t) break;
+        tiles.push_back(control::Tile{t->id, t->rect, static_cast<uint32_t>(passes_) * static_cast<uint32_t>(image_.spp)});
+      }
+      if (tiles.empty() && !master_.finished()) return;  // keep waiting
     }
     waiting_.pop_front();
-    out.reply(actor, id, control::encode_tile_reply(tile));
+    if (w.count > 0) out.reply(w.actor, w.id, control::encode_tiles_reply(tiles));
+    else out.reply(w.actor, w.id, control::encode_tile_reply(tiles.empty() ? std::nullopt : std::optional(tiles[0])));
   }
 }
 

@@ -1,9 +1,12 @@
 #pragma once
 // The tile service: the render master and the film (Kipfer's MasterRenderer), its checkpoint beside the output
 // and, once every tile is in, the image. Serves
-//   tile       {}                          -> {tile: {id, x0, y0, x1, y1}}, or {} once every tile is done
+//   tile       {count?}                    -> {tile: {id, x0, y0, x1, y1}} ({tiles: [...]} asked with a count), or
+//                                             {} once every tile is done
 //   tile_done  {id, pixels: f32[3 w h]}    -> {}; ERROR refused unless the sender holds the tile (and only once);
-//                                             ERROR bad_request for a body without id and pixels
+//              or {tiles: [...]}              ERROR bad_request for a body without id and pixels
+// A request with a count gets up to that many while every renderer could still take as many; the frame's last
+// tiles go one to a request, so no renderer holds two while another waits with none.
 // A tile request waits while no tile is free but some are out with others (a lost renderer's tiles come back),
 // and before the render phase. A lost renderer's tiles go back in line.
 // A time-limited frame (image.time_limit) renders passes: once every tile of a pass is in, the pass joins the
@@ -92,7 +95,12 @@ class TileService final : public Service {
   double first_tile_seconds_ = 0;
   std::chrono::steady_clock::time_point last_progress_;
   // Tile requests not yet answered, oldest first, answered from the front (thousands may wait at once).
-  std::deque<std::pair<std::string, uint64_t>> waiting_;
+  struct Waiting {
+    std::string actor;
+    uint64_t id;
+    int count;  // 0: the one-tile form
+  };
+  std::deque<Waiting> waiting_;
   bool written_ = false;
   std::optional<FilmCheckpoint> checkpoint_;
   double preview_every_ = 0;

@@ -8,6 +8,7 @@
 #include <set>
 #include <thread>
 
+#include "actors/codecs/control_codec.hpp"
 #include "actors/director/service_test_support.hpp"
 
 namespace lf {
@@ -84,6 +85,79 @@ TEST(TileService, ATileDoneAskingForTheNextIsAnsweredAsATileRequest) {
   sent = out.take();
   ASSERT_EQ(sent.size(), 1u);
   EXPECT_TRUE(sent[0].refused);
+}
+
+// Tiles in batches: a request with a count gets up to that many while every renderer could take as many of the
+// free tiles, the frame's last ones one at a time; a tile_done carrying several counts each on its own, and one
+// refused does not lose the others.
+TEST(TileService, TilesGoAndComeBackInBatchesAndTheLastOnesOneAtATime) {
+  TileService s(image(128, 16, 16), {"r0", "r1"}, false, true);  // 8 tiles, 2 renderers
+  RecordingOutbox out;
+  ASSERT_TRUE(s.on_phase(wire::Phase::render, out).ok());
+  auto tiles_of = [](const Value& body) {
+    std::vector<control::Tile> t;
+    if (auto d = control::decode_tile_reply(body, 128, 16)) t = *d;
+    return t;
+  };
+  auto finished = [](const std::vector<control::Tile>& tiles, float v) {
+    std::vector<control::FinishedTile> f;
+    for (const auto& t : tiles) f.push_back({t.id, std::vector<float>(3 * t.rect.pixel_count(), v)});
+    return f;
+  };
+  ASSERT_TRUE(s.on_request("r0", Op::tile, 1, control::encode_tile_request(3), out).ok());
+  auto sent = out.take();
+  ASSERT_EQ(sent.size(), 1u);
+  const auto first = tiles_of(sent[0].body);
+  EXPECT_EQ(first.size(), 3u) << "8 free for 2 renderers: 3 of them fit the share of 4";
+  ASSERT_TRUE(s.on_request("r1", Op::tile, 2, control::encode_tile_request(3), out).ok());
+  const auto second = tiles_of(out.take()[0].body);
+  EXPECT_EQ(second.size(), 2u) << "5 free for 2 renderers: a share of 2";
+  // r0 hands in two with one message and asks for two: 1 free for 2 renderers, so one.
+  const std::vector<control::Tile> two{first[0], first[1]};
+  ASSERT_TRUE(s.on_request("r0", Op::tile_done, 3, control::encode_tile_done(finished(two, 0.5f), 2), out).ok());
+  sent = out.take();
+  ASSERT_EQ(sent.size(), 1u);
+  ASSERT_FALSE(sent[0].refused) << sent[0].message;
+  const auto third = tiles_of(sent[0].body);
+  ASSERT_EQ(third.size(), 1u) << "the last tile alone";
+  EXPECT_EQ(s.tiles_done(), 2u);
+  // A batch with a tile its sender does not hold: that one is refused by name, the other counts.
+  const std::vector<control::Tile> mixed{second[0], first[2]};
+  ASSERT_TRUE(s.on_request("r1", Op::tile_done, 4, control::encode_tile_done(finished(mixed, 0.5f), 0), out).ok());
+  sent = out.take();
+  ASSERT_EQ(sent.size(), 1u);
+  EXPECT_TRUE(sent[0].refused);
+  EXPECT_EQ(sent[0].message, "tile " + std::to_string(first[2].id) + ": the tile is not assigned to this renderer");
+  EXPECT_EQ(s.tiles_done(), 3u);
+  // The rest. Two tiles are free for two renderers: one to each request, whatever its count.
+  ASSERT_TRUE(s.on_request("r1", Op::tile_done, 5, control::encode_tile_done(finished({second[1]}, 0.5f), 0), out).ok());
+  ASSERT_TRUE(s.on_request("r0", Op::tile_done, 6, control::encode_tile_done(finished({first[2]}, 0.5f), 0), out).ok());
+  ASSERT_TRUE(
+      s.on_request("r0", Op::tile_done, 7, control::encode_tile_done(finished({third[0]}, 0.5f), 2), out).ok());
+  sent = out.take();
+  ASSERT_EQ(sent.size(), 3u);
+  for (const auto& m : sent) EXPECT_FALSE(m.refused) << m.message;
+  const auto r0_last = tiles_of(sent[2].body);
+  ASSERT_EQ(r0_last.size(), 1u);
+  ASSERT_TRUE(s.on_request("r1", Op::tile, 8, control::encode_tile_request(4), out).ok());
+  const auto r1_last = tiles_of(out.take()[0].body);
+  ASSERT_EQ(r1_last.size(), 1u);
+  EXPECT_EQ(s.tiles_done(), 6u);
+  // r0's request for more waits while r1's tile is out; r1's pixels answer both with none left.
+  ASSERT_TRUE(s.on_request("r0", Op::tile_done, 9, control::encode_tile_done(finished(r0_last, 0.5f), 2), out).ok());
+  EXPECT_TRUE(out.take().empty());
+  ASSERT_TRUE(s.on_request("r1", Op::tile_done, 10, control::encode_tile_done(finished(r1_last, 0.5f), 2), out).ok());
+  sent = out.take();
+  ASSERT_EQ(sent.size(), 2u);
+  for (const auto& m : sent) EXPECT_EQ(m.body, Value(Value::Map{})) << "none left";
+  EXPECT_TRUE(s.finished());
+  for (const RGB& p : s.film().pixels) EXPECT_EQ(p, (RGB{0.5f, 0.5f, 0.5f}));
+  // A bad count is refused with its reason.
+  ASSERT_TRUE(s.on_request("r1", Op::tile, 11, Value::Map{{"count", 0}}, out).ok());
+  sent = out.take();
+  ASSERT_EQ(sent.size(), 1u);
+  EXPECT_EQ(sent[0].code, ErrorCode::bad_request);
+  EXPECT_EQ(sent[0].message, "a tile request's count must be a whole number from 1 to 64");
 }
 
 TEST(TileService, EveryTileOnceThenNoneLeftAndTheFilmIsFilled) {

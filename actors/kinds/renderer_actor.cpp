@@ -1,14 +1,17 @@
 // renderer: traces camera rays for tiles the render master hands out and asks the lighting network to shade them.
 //
 // Sends to the director (the render master):
-//   REQUEST op="tile"       {}                        -> REPLY { tile: {id, x0, y0, x1, y1} } or {} when none remain
-//   REQUEST op="tile_done"  { id, pixels: f32[3wh], next? } -> REPLY {}, or with next: true a tile request's reply
+//   REQUEST op="tile"       { count? }                -> REPLY { tile: {...} } ({ tiles: [...] }) or {} when none remain
+//   REQUEST op="tile_done"  { id, pixels: f32[3wh], next? } or { tiles: [{id, pixels}, ...], next?, count? }
+//                                                      -> REPLY {}, or with next: true a tile request's reply
 // Sends to its one input (the MasterLightOp): REQUEST op="shade" batches, several in flight (the input's window).
 // PHASE frame (a job's next frame) brings a new camera.
 // Ready for "render" once configured (scene loaded, BVH built); in a partitioned farm (partition { parts = N }) its
 // camera rays go to the geometry actors instead, through RemoteTracing. Answers READY render when the master has no tiles
 // left and every finished tile was acknowledged. Keeps up to `tiles_in_flight` tiles going, so it traces the next
-// tile while the lighting network shades the last.
+// tile while the lighting network shades the last. With tiles_per_message > 1 a finished tile waits for the next
+// to finish (while another is going) and both go in one tile_done that asks for as many: fewer messages at a
+// director serving thousands of renderers with fast tiles (docs/SCALE.md).
 #include "actors/codecs/control_codec.hpp"
 #include "actors/kinds/renderer_actor.hpp"
 
@@ -101,28 +104,44 @@ class RendererActor final : public Actor {
     std::vector<uint32_t> shaded_of_pixel;
   };
 
+  // Finished tiles sent together, and tiles asked for together (a count); 1: the one-tile forms.
+  size_t tiles_per_message() const {
+    return static_cast<size_t>(std::min(params_.tiles_per_message, params_.tiles_in_flight));
+  }
+  // Tiles this renderer could take now: tiles_in_flight less those going, finished and not yet sent, and asked for.
+  size_t free_slots() const {
+    const size_t used = jobs_.size() + finished_.size() + tiles_asked_;
+    return rendering_ && !no_more_tiles_ && used < static_cast<size_t>(params_.tiles_in_flight)
+               ? static_cast<size_t>(params_.tiles_in_flight) - used
+               : 0;
+  }
+
   void ask_for_tiles(Runtime& rt) {
-    while (rendering_ && !no_more_tiles_ &&
-           jobs_.size() + tile_requests_out_ < static_cast<size_t>(params_.tiles_in_flight)) {
+    while (size_t free = free_slots()) {
+      // One request for every free slot, or one a tile in the one-tile form.
+      const size_t count = tiles_per_message() > 1 ? std::min<size_t>(free, control::kMaxTilesPerMessage) : 1;
       ++tile_requests_out_;
-      rt.ask_director(wire::Op::tile, Value::Map{}, [this, &rt](Result<wire::Message> r) {
-        --tile_requests_out_;
-        if (!r) return rt.fail("the render master refused a tile request: " + r.error().message);
-        take_tile(r->body, rt);
-      });
+      tiles_asked_ += count;
+      rt.ask_director(wire::Op::tile, control::encode_tile_request(tiles_per_message() > 1 ? static_cast<int>(count) : 0),
+                      [this, count, &rt](Result<wire::Message> r) {
+                        --tile_requests_out_;
+                        tiles_asked_ -= count;
+                        if (!r) return rt.fail("the render master refused a tile request: " + r.error().message);
+                        take_tiles(r->body, rt);
+                      });
     }
   }
 
-  // A tile request's reply (or a tile_done's that asked for the next tile): the tile started, or none left.
-  void take_tile(const Value& reply, Runtime& rt) {
-    auto tile = control::decode_tile_reply(reply, image_.width, image_.height);
-    if (!tile) return rt.fail(tile.error().message);
-    if (!*tile) {
+  // A tile request's reply (or a tile_done's that asked for the next tiles): the tiles started, or none left.
+  void take_tiles(const Value& reply, Runtime& rt) {
+    auto tiles = control::decode_tile_reply(reply, image_.width, image_.height);
+    if (!tiles) return rt.fail(tiles.error().message);
+    if (tiles->empty()) {
       no_more_tiles_ = true;
       check_finished(rt);
       return;
     }
-    start_tile(**tile, rt);
+    for (const control::Tile& tile : *tiles) start_tile(tile, rt);
     ask_for_tiles(rt);
   }
 
@@ -202,26 +221,36 @@ class RendererActor final : public Actor {
     if (job->shaded_of_pixel.empty()) resolve_tile(job->work, r.point, r.pixel, r.folded, pixels);
     else resolve_adaptive_tile(job->first, job->first_radiance, job->work, r.point, job->shaded_of_pixel, pixels);
     ++rt.stats().tiles;
-    ++done_acks_out_;
     std::erase(jobs_, job);
-    // The next tile, if one is wanted, is asked for with the pixels: two messages at the director instead of four.
-    const bool next = rendering_ && !no_more_tiles_ &&
-                      jobs_.size() + tile_requests_out_ < static_cast<size_t>(params_.tiles_in_flight);
-    if (next) ++tile_requests_out_;
+    finished_.push_back(control::FinishedTile{
+        job->id, std::vector<float>(reinterpret_cast<const float*>(pixels.data()),
+                                    reinterpret_cast<const float*>(pixels.data()) + 3 * pixels.size())});
+    // A finished tile waits for the next while another is going; the last goes as soon as nothing else is.
+    if (finished_.size() < tiles_per_message() && !jobs_.empty()) return;
+    send_finished(rt);
+  }
+
+  // The finished tiles to the director, asking for as many next as there are free slots then.
+  void send_finished(Runtime& rt) {
+    std::vector<control::FinishedTile> sending = std::move(finished_);
+    finished_.clear();
+    const size_t next = std::min<size_t>(free_slots(), control::kMaxTilesPerMessage);
+    const bool one_tile_form = tiles_per_message() == 1;
+    const size_t asked = one_tile_form ? std::min<size_t>(next, 1) : next;
+    ++done_acks_out_;
+    if (asked > 0) ++tile_requests_out_, tiles_asked_ += asked;
     rt.ask_director(wire::Op::tile_done,
-                    control::encode_tile_done(job->id,
-                                              std::span<const float>(reinterpret_cast<const float*>(pixels.data()),
-                                                                     3 * pixels.size()),
-                                              next),
-                    [this, next, &rt](Result<wire::Message> r) {
+                    one_tile_form ? control::encode_tile_done(sending[0].id, sending[0].rgb, asked > 0)
+                                  : control::encode_tile_done(sending, static_cast<int>(asked)),
+                    [this, asked, &rt](Result<wire::Message> r) {
                       --done_acks_out_;
-                      if (next) --tile_requests_out_;
+                      if (asked > 0) --tile_requests_out_, tiles_asked_ -= asked;
                       if (!r) {
                         log_warn("the render master did not take a tile: " + r.error().message);
-                        ask_for_tiles(rt);  // the next tile, asked for alone
+                        ask_for_tiles(rt);  // the next tiles, asked for alone
                         return check_finished(rt);
                       }
-                      if (next) return take_tile(r->body, rt);
+                      if (asked > 0) return take_tiles(r->body, rt);
                       check_finished(rt);
                     });
     ask_for_tiles(rt);
@@ -248,7 +277,8 @@ class RendererActor final : public Actor {
   }
 
   void check_finished(Runtime& rt) {
-    if (rendering_ && no_more_tiles_ && jobs_.empty() && done_acks_out_ == 0 && tile_requests_out_ == 0) {
+    if (rendering_ && no_more_tiles_ && jobs_.empty() && finished_.empty() && done_acks_out_ == 0 &&
+        tile_requests_out_ == 0) {
       rendering_ = false;
       rt.phase_done(wire::Phase::render);
     }
@@ -268,7 +298,9 @@ class RendererActor final : public Actor {
   bool rendering_ = false;
   bool no_more_tiles_ = false;
   size_t tile_requests_out_ = 0;
+  size_t tiles_asked_ = 0;  // tiles those requests asked for
   size_t done_acks_out_ = 0;
+  std::vector<control::FinishedTile> finished_;  // finished tiles waiting to go with the next
   std::vector<std::shared_ptr<TileJob>> jobs_;
   uint64_t adaptive_pixels_ = 0;   // pixels that got a second round
   uint64_t adaptive_samples_ = 0;  // the shaded samples those rounds added

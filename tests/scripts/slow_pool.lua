@@ -8,4 +8,4 @@ local direct = multiplexer {
   replicas = 2,
   slowdown = { param("slowdown", 1), param("slowdown", 1) },
 }
-renderers { count = param("renderers", 2), lighting = direct, batch = 1024 }
+renderers { count = param("renderers", 2), lighting = direct, batch = 1024, tiles_per_message = param("tiles_per_message", 1) }
