@@ -261,9 +261,9 @@ bool traces_through_parts(const ActorSpec& a) {
 
 int64_t colocated_part(const FarmSpec& spec, int i) {
   const ActorSpec& a = spec.actors.at(static_cast<size_t>(i));
+  if (!spec.partition_colocate || spec.partition_parts <= 0) return -1;
   const int pool = spec.pool_of(i);
-  if (!spec.partition_colocate || spec.partition_parts <= 0 || pool < 0 || !traces_through_parts(a))
-    return -1;
+  if (pool < 0 || !traces_through_parts(a)) return -1;
   const auto& replicas = spec.actors[static_cast<size_t>(pool)].inputs;
   const auto j = std::find(replicas.begin(), replicas.end(), i) - replicas.begin();
   return static_cast<int64_t>(j % spec.partition_parts);

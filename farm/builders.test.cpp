@@ -65,6 +65,16 @@ TEST(Builders, NestedPoolsRenameInnerReplicasUnderTheOuterOnes) {
   std::sort(n.begin(), n.end());
   EXPECT_EQ(n, (std::vector<std::string>{"direct", "direct.0", "direct.0.0", "direct.0.1", "direct.1", "direct.1.0",
                                          "direct.1.1"}));
+  // Every actor's pool at once says what pool_of says of each: the inner replicas' inner pools, the inner pools'
+  // outer one, nothing for the outer pool.
+  const std::vector<int> pools = s.pools();
+  ASSERT_EQ(pools.size(), s.actors.size());
+  int replicas = 0;
+  for (size_t i = 0; i < s.actors.size(); ++i) {
+    EXPECT_EQ(pools[i], s.pool_of(static_cast<int>(i))) << s.actors[i].name;
+    replicas += pools[i] >= 0;
+  }
+  EXPECT_EQ(replicas, 6);
 }
 
 TEST(Builders, ReplicateRefusesWiredOpsAndBadSlowdowns) {

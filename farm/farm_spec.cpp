@@ -12,6 +12,15 @@ int FarmSpec::pool_of(int i) const {
   return -1;
 }
 
+std::vector<int> FarmSpec::pools() const {
+  std::vector<int> pool(actors.size(), -1);
+  // Searched from the last multiplexer back, so that an actor listed by two gets the first, as pool_of says.
+  for (size_t m = actors.size(); m-- > 0;)
+    if (actors[m].is_multiplexer())
+      for (int in : actors[m].inputs) pool.at(static_cast<size_t>(in)) = static_cast<int>(m);
+  return pool;
+}
+
 ActorRole ActorSpec::role() const {
   if (runtime.count("cmd")) return ActorRole::plugin;
   const auto k = find_actor_kind(kind);

@@ -83,8 +83,10 @@ struct FarmSpec {
 
   int renderer_count() const;
   std::vector<std::string> renderer_names() const;
-  // Index of the multiplexer whose replica actor `i` is, or -1.
+  // Index of the multiplexer whose replica actor `i` is, or -1 (a look at every actor: for all of them, pools()).
   int pool_of(int i) const;
+  // pool_of of every actor, in one pass.
+  std::vector<int> pools() const;
   // Index of the actor named `name`, or -1.
   int find(const std::string& name) const;
   // The host an actor runs on ("local" unless declared); nullptr for an undeclared name.

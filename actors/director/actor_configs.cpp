@@ -11,7 +11,7 @@
 namespace lf {
 
 ActorConfig config_for(const FarmSpec& spec, int actor, const std::function<std::string(int)>& endpoint_of,
-                       const std::function<std::string(int)>& key_of) {
+                       const std::function<std::string(int)>& key_of, std::optional<int> pool_index) {
   const ActorSpec& a = spec.actors[static_cast<size_t>(actor)];
   ActorConfig config;
   config.params = a.params;
@@ -66,7 +66,7 @@ ActorConfig config_for(const FarmSpec& spec, int actor, const std::function<std:
   config.debug = a.debug;
   config.heartbeat_timeout = spec.heartbeat_timeout;
   config.request_timeout = spec.request_timeout;
-  if (const int pool = spec.pool_of(actor); pool >= 0) {
+  if (const int pool = pool_index ? *pool_index : spec.pool_of(actor); pool >= 0) {
     const auto& replicas = spec.actors[static_cast<size_t>(pool)].inputs;
     const auto at = std::find(replicas.begin(), replicas.end(), actor) - replicas.begin();
     config.pool = PoolPlace{spec.actors[static_cast<size_t>(pool)].name, at, static_cast<int64_t>(replicas.size())};
@@ -95,7 +95,7 @@ ActorConfig ConfigBuilder::build(const ActorRecord& a, const ActorTable& actors)
   auto endpoint_of = [&](int i) { return actors.at(name_of(i)).endpoint; };
   std::function<std::string(int)> key_of;
   if (d_.curve()) key_of = [&](int i) { return d_.public_key_of(name_of(i)); };
-  ActorConfig config = config_for(spec_, a.index, endpoint_of, key_of);
+  ActorConfig config = config_for(spec_, a.index, endpoint_of, key_of, pools_.at(static_cast<size_t>(a.index)));
   std::vector<InputSpec> inputs;
   for (auto& in : config.inputs) {
     if (actors.at(in.name).lost) continue;
@@ -152,7 +152,7 @@ void ConfigBuilder::add_pool_peers(const ActorRecord& a, const ActorTable& actor
   if (!config.pool || config.pool->count <= 1) return;
   const LightOpKind* kind = find_lightop_kind(a.spec->kind);
   if (!kind || !kind->shares_setup_for(a.spec->params)) return;
-  for (int r : spec_.actors[static_cast<size_t>(spec_.pool_of(a.index))].inputs) {
+  for (int r : spec_.actors[static_cast<size_t>(pools_.at(static_cast<size_t>(a.index)))].inputs) {
     const ActorRecord& sibling = actors.at(spec_.actors[static_cast<size_t>(r)].name);
     if (sibling.name() == a.name()) continue;
     const auto [endpoint, key] = endpoint_for(a, sibling);

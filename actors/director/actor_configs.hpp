@@ -4,6 +4,7 @@
 // processes (actor_configs.test.cpp).
 #include <functional>
 #include <map>
+#include <optional>
 #include <string>
 #include <utility>
 #include <vector>
@@ -15,16 +16,18 @@
 
 namespace lf {
 
-// `endpoint_of(i)`: the data endpoint actor i said in its HELLO; `key_of(i)` (for a CURVE farm): its public key.
+// `endpoint_of(i)`: the data endpoint actor i said in its HELLO; `key_of(i)` (for a CURVE farm): its public key;
+// `pool`: the actor's pool (FarmSpec::pools), if known: a farm's every CONFIG looking it up was quadratic.
 ActorConfig config_for(const FarmSpec& spec, int actor, const std::function<std::string(int)>& endpoint_of,
-                       const std::function<std::string(int)>& key_of = {});
+                       const std::function<std::string(int)>& key_of = {}, std::optional<int> pool = std::nullopt);
 
 // CONFIG as the director sends it: config_for() over the actor table (where each actor said it listens, who is
 // lost) and the deployment (scene caches, a partitioned scene's parts, CURVE keys).
 class ConfigBuilder {
  public:
   using ActorTable = std::map<std::string, ActorRecord>;
-  ConfigBuilder(const FarmSpec& spec, const Deployment& deployment) : spec_(spec), d_(deployment) {}
+  ConfigBuilder(const FarmSpec& spec, const Deployment& deployment)
+      : spec_(spec), d_(deployment), pools_(spec.pools()) {}
   // What actor `a` is told; inputs lost before it was configured are left out (they may never have said where
   // they listen).
   ActorConfig build(const ActorRecord& a, const ActorTable& actors) const;
@@ -42,6 +45,7 @@ class ConfigBuilder {
 
   const FarmSpec& spec_;
   const Deployment& d_;
+  std::vector<int> pools_;  // each actor's pool (FarmSpec::pools)
 };
 
 }  // namespace lf
