@@ -6,7 +6,7 @@
 // while the next is asked for, like a renderer's tiles in flight; the pixels are a grey of the tile's size, and
 // the next tile is asked for with them, as the built-in renderer does — or, with --tile-requests alone (or both,
 // each count run twice), by a request of its own, as a renderer that does not use tile_done's `next`; with
-// --tiles-per-message 2 (the built-in renderer's default) a finished tile waits for the next and both go in one
+// --tiles-per-message 2 (renderers { tiles_per_message = 2 }) a finished tile waits for the next and both go in one
 // tile_done asking for two, with three tiles held at most as the built-in renderer's tiles_in_flight), STATS
 // and BYE. Nothing is rendered, so what is measured is the director: launch to last HELLO, configure, tiles per
 // second against the tiles offered, its CPU share while tiles flow, its memory, and whether any actor was lost or
@@ -40,7 +40,6 @@
 #include <string>
 #include <set>
 #include <unordered_map>
-#include <unordered_set>
 #include <vector>
 
 #include "actors/codecs/control_codec.hpp"

@@ -120,11 +120,9 @@ class RendererActor final : public Actor {
     while (size_t free = free_slots()) {
       // One request for every free slot, or one a tile in the one-tile form.
       const size_t count = tiles_per_message() > 1 ? std::min<size_t>(free, control::kMaxTilesPerMessage) : 1;
-      ++tile_requests_out_;
       tiles_asked_ += count;
       rt.ask_director(wire::Op::tile, control::encode_tile_request(tiles_per_message() > 1 ? static_cast<int>(count) : 0),
                       [this, count, &rt](Result<wire::Message> r) {
-                        --tile_requests_out_;
                         tiles_asked_ -= count;
                         if (!r) return rt.fail("the render master refused a tile request: " + r.error().message);
                         take_tiles(r->body, rt);
@@ -238,13 +236,13 @@ class RendererActor final : public Actor {
     const bool one_tile_form = tiles_per_message() == 1;
     const size_t asked = one_tile_form ? std::min<size_t>(next, 1) : next;
     ++done_acks_out_;
-    if (asked > 0) ++tile_requests_out_, tiles_asked_ += asked;
+    tiles_asked_ += asked;
     rt.ask_director(wire::Op::tile_done,
                     one_tile_form ? control::encode_tile_done(sending[0].id, sending[0].rgb, asked > 0)
                                   : control::encode_tile_done(sending, static_cast<int>(asked)),
                     [this, asked, &rt](Result<wire::Message> r) {
                       --done_acks_out_;
-                      if (asked > 0) --tile_requests_out_, tiles_asked_ -= asked;
+                      tiles_asked_ -= asked;
                       if (!r) {
                         log_warn("the render master did not take a tile: " + r.error().message);
                         ask_for_tiles(rt);  // the next tiles, asked for alone
@@ -278,7 +276,7 @@ class RendererActor final : public Actor {
 
   void check_finished(Runtime& rt) {
     if (rendering_ && no_more_tiles_ && jobs_.empty() && finished_.empty() && done_acks_out_ == 0 &&
-        tile_requests_out_ == 0) {
+        tiles_asked_ == 0) {
       rendering_ = false;
       rt.phase_done(wire::Phase::render);
     }
@@ -297,8 +295,7 @@ class RendererActor final : public Actor {
   RendererParams params_;
   bool rendering_ = false;
   bool no_more_tiles_ = false;
-  size_t tile_requests_out_ = 0;
-  size_t tiles_asked_ = 0;  // tiles those requests asked for
+  size_t tiles_asked_ = 0;  // tiles asked for and not yet answered (0: no tile request is out)
   size_t done_acks_out_ = 0;
   std::vector<control::FinishedTile> finished_;  // finished tiles waiting to go with the next
   std::vector<std::shared_ptr<TileJob>> jobs_;
