@@ -29,7 +29,9 @@ inline BareFrame bare_pathtrace_frame(const lf::Scene& scene, const lf::RayTrace
   image.width = image.height = size;
   image.spp = spp;
   image.sampler = sampler;
+  image.edge_spp = lf::ImageSpec::default_edge_spp(spp);  // as a farm's image { } has it
   lf::Camera camera(cam, size, size);
+  const lf::EmitterEdges edges = lf::emitter_edges(scene, camera, image);
   auto op = lf::create_lightop(*lf::find_lightop_kind("pathtrace"),
                                lf::ParamTable(lf::Value::Map{{"max_depth", 12}}, "pathtrace"));
   lf::LocalInputs none;
@@ -42,7 +44,7 @@ inline BareFrame bare_pathtrace_frame(const lf::Scene& scene, const lf::RayTrace
   f.hash = 0xcbf29ce484222325ull;
   const auto t0 = std::chrono::steady_clock::now();
   for (const auto& tile : lf::make_tiles(size, size, image.tile)) {
-    lf::trace_tile(scene, tracer, camera, image, tile, work);
+    lf::trace_tile(scene, tracer, camera, image, tile, work, edges);
     radiance.assign(work.points.size(), {});
     lf::run_to_completion(op->shade(work.points, radiance, none));
     lf::resolve_tile(work, radiance, pixels);

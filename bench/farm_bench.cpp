@@ -47,7 +47,9 @@ double bare_loop(const OpCase& c, int threads) {
   lf::ImageSpec image;
   image.width = image.height = c.size;
   image.spp = c.spp;
+  image.edge_spp = lf::ImageSpec::default_edge_spp(c.spp);  // as the scripts' image { } has it
   lf::Camera camera(lf::CameraSpec{}, c.size, c.size);  // the scripts' camera (the Cornell box's default)
+  const lf::EmitterEdges edges = lf::emitter_edges(*scene, camera, image);
   const auto tiles = lf::make_tiles(c.size, c.size, image.tile);
   std::vector<std::unique_ptr<lf::LightOp>> ops;
   lf::LocalInputs none;
@@ -66,7 +68,7 @@ double bare_loop(const OpCase& c, int threads) {
       lf::LocalInputs mine;
       double sum = 0;
       for (size_t i = next++; i < tiles.size(); i = next++) {
-        lf::trace_tile(*scene, tracer, camera, image, tiles[i], work);
+        lf::trace_tile(*scene, tracer, camera, image, tiles[i], work, edges);
         radiance.assign(work.points.size(), {});
         lf::run_to_completion(ops[static_cast<size_t>(t)]->shade(work.points, radiance, mine));
         lf::resolve_tile(work, radiance, pixels);

@@ -95,6 +95,10 @@ const std::vector<std::string>& ImageSpec::tonemaps() {
   return names;
 }
 
+// A lit sample costs the network's whole work, a seen one a camera ray: 16 seen for each of the spp (measured on
+// Lost Empire and the Cornell boxes, docs/lua-api.md "image").
+int ImageSpec::default_edge_spp(int spp) { return std::max(spp, std::min(4096, 16 * spp)); }
+
 ImageSpec ImageSpec::read(const ParamTable& p) {
   ImageSpec i;
   i.width = static_cast<int>(p.get_int("width", i.width, 1, 16384));
@@ -113,6 +117,7 @@ ImageSpec ImageSpec::read(const ParamTable& p) {
     i.adaptive_spp = static_cast<int>(p.get_int("adaptive_spp", i.spp, i.shade_spp + 1, i.spp));
     i.adaptive_threshold = p.get_float("adaptive_threshold", i.adaptive_threshold, 1e-6, 1);
   }
+  i.edge_spp = static_cast<int>(p.get_int("edge_spp", default_edge_spp(i.spp), 0, 1 << 20));
   i.tile = static_cast<int>(p.get_int("tile", i.tile, 1, 1024));
   i.time_limit = p.get_float("time_limit", 0, 0, 1e7);
   if (i.time_limit > 0 && i.adaptive_spp > 0)
@@ -129,6 +134,7 @@ Value ImageSpec::to_value() const {
   Value::Map m{{"width", width},   {"height", height},     {"spp", spp},         {"tile", tile},
                {"output", output}, {"exposure", exposure}, {"tonemap", tonemap}, {"sampler", sampler}};
   if (shade_spp > 0) m["shade_spp"] = shade_spp;
+  m["edge_spp"] = edge_spp;
   if (time_limit > 0) m["time_limit"] = time_limit;
   if (adaptive_spp > 0) {
     m["adaptive_spp"] = adaptive_spp;

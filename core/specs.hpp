@@ -72,6 +72,11 @@ struct ImageSpec {
   // shaded, in doublings of shade_spp, up to adaptive_spp (render/shading/tile_kernel.hpp, adaptive_shaded_counts).
   int adaptive_spp = 0;
   double adaptive_threshold = 0.05;
+  // Seen samples a pixel on a light's outline takes in all (render/shading/emitter_edges.hpp): its spp, then more
+  // that only see what the camera sees directly, where whether a sample lands on a small light is the pixel's
+  // largest noise. Default 16 x spp, at most 4096 (default_edge_spp); spp or fewer: none.
+  int edge_spp = 0;
+  static int default_edge_spp(int spp);
   int tile = 32;
   // Seconds a frame may take (0: no limit): it renders passes of spp samples a pixel (pass p: samples p*spp up to
   // (p+1)*spp, the continuation of each pixel's sequence) while the time lasts, and the image is the mean of the

@@ -59,6 +59,8 @@ local shade_spp = param("shade_spp", spp)
 -- samples lit, up to adaptive_spp (docs/lua-api.md, image).
 local look = { width = param("width", 320), height = param("height", 240), spp = spp, shade_spp = shade_spp,
                exposure = param("exposure", 2), output = param("output", walk > 0 and at_frame == 0 and "lost_empire.####.png" or "lost_empire.png") }
+-- edge_spp: seen samples a pixel on a light's outline takes in all (default 16 x spp; 0: none; docs/lua-api.md).
+if param("edge_spp", -1) >= 0 then look.edge_spp = param("edge_spp", -1) end
 if param("adaptive_spp", 0) > 0 then
   look.adaptive_spp = param("adaptive_spp", 0)
   look.adaptive_threshold = param("adaptive_threshold", 0.05)

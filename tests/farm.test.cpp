@@ -558,11 +558,13 @@ TEST_F(FarmTest, AKilledFrameResumesToTheSameImage) {
 
 // image { time_limit }: passes of spp samples while the time lasts, each pass taking each pixel's next spp samples
 // (through a pool of lean inputs too, which rebuild the samples' keys from the tile), so that N passes are the
-// image of N x spp samples (up to the order of the sums); a limit no pass fits in still gives one whole pass.
+// image of N x spp samples (and N x edge_spp at a light's outline; up to the order of the sums); a limit no pass
+// fits in still gives one whole pass.
 TEST_F(FarmTest, ATimeLimitedFrameIsTheMeanOfWholePassesOfTheNextSamples) {
   const std::string script = write("limited.lua", R"(
 scene { builtin = "cornell" }
-image { width = 48, height = 48, spp = param("spp", 2), tile = 16, time_limit = param("time_limit", 0) }
+image { width = 48, height = 48, spp = param("spp", 2), tile = 16, time_limit = param("time_limit", 0),
+        edge_spp = param("edge_spp", 32) }
 farm { light_paths = "partial" }
 renderers { count = 2, lighting = multiplexer { lightop "direct" {}, replicas = 2 } }
 )");
@@ -586,7 +588,8 @@ renderers { count = 2, lighting = multiplexer { lightop "direct" {}, replicas = 
   auto notes = read_image_notes(path("limited.exr"));
   ASSERT_TRUE(notes.ok()) << notes.error().message;
   EXPECT_EQ(*notes, (ImageNotes{{"lightfarm:passes", std::to_string(passes)}, {"lightfarm:samples", std::to_string(samples)}}));
-  render("plain.exr", {"spp=" + std::to_string(samples)});
+  // Each pass also took 30 more seen samples at the light's outline, the next 30 of each such pixel's own.
+  render("plain.exr", {"spp=" + std::to_string(samples), "edge_spp=" + std::to_string(16 * samples)});
   auto a = read_image(path("limited.exr")), b = read_image(path("plain.exr"));
   ASSERT_TRUE(a.ok() && b.ok());
   float worst = 0;

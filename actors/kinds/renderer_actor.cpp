@@ -52,6 +52,7 @@ class RendererActor final : public Actor {
     image_ = config.image;
     sampler_ = sampler_of(image_);
     camera_ = std::make_unique<Camera>(config.camera, image_.width, image_.height);
+    edges_ = emitter_edges(scene(), *camera_, image_);
     tracing_ = RemoteTracing::for_config(config, rt, frame_scene_.shipped());
     colocate_ = tracing_ && rt.input_holds_parts(0);
     if (image_.adaptive_spp > 0 && tracing_)
@@ -81,6 +82,7 @@ class RendererActor final : public Actor {
     *camera_ = Camera(view.camera, image_.width, image_.height);
     auto changed = frame_scene_.take(view.materials, "frame " + std::to_string(view.frame));
     if (!changed) return rt.fail(changed.error().message);
+    edges_ = emitter_edges(scene(), *camera_, image_);
     no_more_tiles_ = false;
     rt.phase_done(wire::Phase::frame);
   }
@@ -154,7 +156,7 @@ class RendererActor final : public Actor {
       tracing_tasks_.push_back(trace_through_parts(job, rect, rt));
       return;
     }
-    trace_tile(scene(), *tracer_, *camera_, image_, rect, job->work);
+    trace_tile(scene(), *tracer_, *camera_, image_, rect, job->work, edges_);
     shade_tile(job, rt);
   }
 
@@ -162,7 +164,7 @@ class RendererActor final : public Actor {
   Task trace_through_parts(std::shared_ptr<TileJob> job, TileRect rect, Runtime& rt) {
     std::vector<Ray> rays;
     std::vector<uint64_t> keys;
-    tile_camera_rays(*camera_, image_, rect, rays, keys);
+    tile_camera_rays(*camera_, image_, rect, rays, keys, edges_);
     std::vector<Hit> hits(rays.size());
     if (colocate_) job->sample_part.resize(rays.size());
     try {
@@ -171,7 +173,7 @@ class RendererActor final : public Actor {
       rt.fail(std::string("tracing camera rays through the scene's parts failed: ") + e.what());
       co_return;
     }
-    tile_points(scene(), *camera_, image_, rect, rays, hits, keys, job->work);
+    tile_points(scene(), *camera_, image_, rect, rays, hits, keys, job->work, edges_);
     shade_tile(job, rt);
   }
 
@@ -290,6 +292,7 @@ class RendererActor final : public Actor {
   bool colocate_ = false;                         // the lighting pool's replicas hold parts: send points by part
   std::vector<Task> tracing_tasks_;               // tiles whose camera rays are out at the parts (finished ones kept until the next tile)
   std::unique_ptr<Camera> camera_;
+  EmitterEdges edges_;  // the frame's pixels on a light's outline
   ImageSpec image_;
   SamplerKind sampler_ = SamplerKind::independent;
   RendererParams params_;

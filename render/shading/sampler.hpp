@@ -205,6 +205,7 @@ inline constexpr uint64_t photons = 5;
 inline constexpr uint64_t irradiance = 6;
 inline constexpr uint64_t light_check = 7;  // render/lights/light_checks.cpp
 inline constexpr uint64_t glossy = 8;
+inline constexpr uint64_t outline = 9;  // the extra seen samples of pixels on a light's outline (emitter_edges.hpp)
 }  // namespace streams
 
 }  // namespace lf

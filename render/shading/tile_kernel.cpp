@@ -16,8 +16,13 @@ std::vector<TileRect> make_tiles(int width, int height, int tile_size) {
   return tiles;
 }
 
+const EmitterEdges& no_edges() {
+  static const EmitterEdges none;
+  return none;
+}
+
 void tile_camera_rays(const Camera& camera, const ImageSpec& image, const TileRect& rect, std::vector<Ray>& rays,
-                      std::vector<uint64_t>& keys) {
+                      std::vector<uint64_t>& keys, const EmitterEdges& edges) {
   const size_t samples = static_cast<size_t>(rect.pixel_count()) * image.spp;
   rays.resize(samples);
   keys.resize(samples);
@@ -38,11 +43,61 @@ void tile_camera_rays(const Camera& camera, const ImageSpec& image, const TileRe
         }
       }
     }
+  if (edges.samples <= image.spp) return;
+  // The outline's pixels' seen samples, after all the others: their own stream, numbered on from pass to pass of a
+  // time-limited frame, so that no two passes repeat one.
+  const uint32_t extra = static_cast<uint32_t>(edges.samples - image.spp);
+  const uint32_t first = rect.first_sample / static_cast<uint32_t>(image.spp) * extra;
+  for (int y = rect.y0; y < rect.y1; ++y)
+    for (int x = rect.x0; x < rect.x1; ++x) {
+      if (!edges.at(x, y)) continue;
+      const uint64_t pixel = static_cast<uint64_t>(y) * static_cast<uint64_t>(image.width) + static_cast<uint64_t>(x);
+      for (uint32_t j = 0; j < extra; ++j) {
+        Sampler sampler(kind, pixel_sample_key(kind, pixel, first + j), streams::outline);
+        const Uniform2 jitter = sampler.uniform2();
+        const float px = static_cast<float>(x) + jitter.u, py = static_cast<float>(y) + jitter.v;
+        if (camera.has_lens()) {
+          const Uniform2 lens = sampler.uniform2();
+          rays.push_back(camera.ray(px, py, lens.u, lens.v));
+        } else {
+          rays.push_back(camera.ray(px, py));
+        }
+      }
+    }
 }
 
+namespace {
+
+// What the camera sees directly along a ray that hit nothing or a surface: the environment, or an emitter's front.
+RGB seen_along(const Scene& scene, const Ray& ray, const Hit& hit) {
+  if (!hit.valid()) return scene.environment() ? scene.background(ray.direction) : RGB{};
+  const uint32_t tri = hit.triangle;
+  const Vec3 wo = -ray.direction;
+  if (!scene.material(scene.material_of(tri)).emissive() || dot(scene.normal(tri), wo) <= 0) return RGB{};
+  return scene.emission_at(tri, point_on_ray(ray.origin, wo, hit.t));
+}
+
+}  // namespace
+
 void tile_points(const Scene& scene, const Camera& camera, const ImageSpec& image, const TileRect& rect,
-                 std::span<const Ray> rays, std::span<const Hit> hits, std::span<const uint64_t> keys, TileWork& work) {
-  tile_points(scene, camera, image, rect, rays, hits, keys, {}, work);
+                 std::span<const Ray> rays, std::span<const Hit> hits, std::span<const uint64_t> keys, TileWork& work,
+                 const EmitterEdges& edges) {
+  const size_t samples = keys.size();
+  tile_points(scene, camera, image, rect, rays.first(samples), hits.first(samples), keys, {}, work);
+  if (rays.size() == samples) return;
+  // Each outline pixel's emission is the mean over all its seen samples, written to each of its spp samples so that
+  // whatever averages a pixel's samples' emission averages them all.
+  const size_t spp = static_cast<size_t>(image.spp), extra = static_cast<size_t>(edges.samples - image.spp);
+  const float inv = 1.0f / static_cast<float>(edges.samples);
+  size_t r = samples, p = 0;
+  for (int y = rect.y0; y < rect.y1; ++y)
+    for (int x = rect.x0; x < rect.x1; ++x, ++p) {
+      if (!edges.at(x, y)) continue;
+      RGB seen{};
+      for (size_t k = p * spp; k < (p + 1) * spp; ++k) seen += work.emitted[k];
+      for (size_t j = 0; j < extra; ++j, ++r) seen += seen_along(scene, rays[r], hits[r]);
+      for (size_t k = p * spp; k < (p + 1) * spp; ++k) work.emitted[k] = seen * inv;
+    }
 }
 
 void tile_points(const Scene& scene, const Camera& camera, const ImageSpec& image, const TileRect& rect,
@@ -92,16 +147,16 @@ void tile_points(const Scene& scene, const Camera& camera, const ImageSpec& imag
 }
 
 void trace_tile(const Scene& scene, const RayTracer& tracer, const Camera& camera, const ImageSpec& image,
-                const TileRect& rect, TileWork& work) {
+                const TileRect& rect, TileWork& work, const EmitterEdges& edges) {
   thread_local std::vector<Ray> rays;
   thread_local std::vector<Hit> hits;
   thread_local std::vector<uint64_t> keys;
-  tile_camera_rays(camera, image, rect, rays, keys);
+  tile_camera_rays(camera, image, rect, rays, keys, edges);
   hits.resize(rays.size());
   // One coherent stream (SIMD packets), the same batch on any layout; a ray's hit is the same as traced alone
   // (partition.test: CameraRaysInPacketsHitWhatTheyHitOneByOne), which camera rays through a partitioned scene are.
   tracer.intersect(rays, hits, /*coherent=*/true);
-  tile_points(scene, camera, image, rect, rays, hits, keys, work);
+  tile_points(scene, camera, image, rect, rays, hits, keys, work, edges);
 }
 
 void trace_more_samples(const Scene& scene, const RayTracer& tracer, const Camera& camera, const ImageSpec& image,

@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "core/specs.hpp"
+#include "render/shading/emitter_edges.hpp"
 #include "render/tracing/camera.hpp"
 #include "render/lightops/lightop.hpp"
 
@@ -55,12 +56,17 @@ Vec3 point_on_ray(Vec3 origin, Vec3 wo, float t);
 // pixel's sample rect.first_sample + sample % spp.
 uint64_t tile_sample_key(SamplerKind kind, int64_t image_width, const TileRect& rect, int spp, uint32_t sample);
 
-// A tile's camera rays, one per sample (pixel-major, then sample index), and their sample keys.
+// No pixel on a light's outline: tiles traced without extra seen samples.
+const EmitterEdges& no_edges();
+// A tile's camera rays, one per sample (pixel-major, then sample index), and their sample keys; then, without keys,
+// the extra seen samples of the tile's pixels on a light's outline (edges.samples - spp each, pixel by pixel).
 void tile_camera_rays(const Camera& camera, const ImageSpec& image, const TileRect& rect, std::vector<Ray>& rays,
-                      std::vector<uint64_t>& keys);
-// The tile's shading points from its camera rays' hits (rays, hits and keys as tile_camera_rays gave them).
+                      std::vector<uint64_t>& keys, const EmitterEdges& edges = no_edges());
+// The tile's shading points from its camera rays' hits (rays, hits and keys as tile_camera_rays gave them, with
+// the same edges): an outline pixel's emission is the mean over all its seen samples, in each of its samples.
 void tile_points(const Scene& scene, const Camera& camera, const ImageSpec& image, const TileRect& rect,
-                 std::span<const Ray> rays, std::span<const Hit> hits, std::span<const uint64_t> keys, TileWork& work);
+                 std::span<const Ray> rays, std::span<const Hit> hits, std::span<const uint64_t> keys, TileWork& work,
+                 const EmitterEdges& edges = no_edges());
 // As above, for an adaptive tile's second round: only the samples of pixel p from shaded_per_pixel() up to
 // more_shaded[p] become points (nothing else is touched in `work` but its points).
 void tile_points(const Scene& scene, const Camera& camera, const ImageSpec& image, const TileRect& rect,
@@ -68,7 +74,7 @@ void tile_points(const Scene& scene, const Camera& camera, const ImageSpec& imag
                  std::span<const uint32_t> more_shaded, TileWork& work);
 // Both, with the rays traced by `tracer`.
 void trace_tile(const Scene& scene, const RayTracer& tracer, const Camera& camera, const ImageSpec& image,
-                const TileRect& rect, TileWork& work);
+                const TileRect& rect, TileWork& work, const EmitterEdges& edges = no_edges());
 
 // Adaptive sampling (ImageSpec::adaptive_spp). After a tile's first round, each pixel's count of shaded samples:
 // shade_spp where the standard error of its lighting's mean (from its shaded samples' spread) is within

@@ -25,6 +25,24 @@ Ray Camera::ray(float image_x, float image_y) const {
   return Ray{eye_, normalize(forward_ + right_ * sx + up_ * sy)};
 }
 
+Vec3 Camera::to_view(Vec3 p) const {
+  const Vec3 d = p - eye_;
+  return {dot(d, right_), dot(d, up_), dot(d, forward_)};
+}
+
+Vec2 Camera::to_image(Vec3 view) const {
+  const float sx = view.x / view.z / half_width_, sy = view.y / view.z / half_height_;
+  return {(sx + 1.0f) * 0.5f * static_cast<float>(width_), (1.0f - sy) * 0.5f * static_cast<float>(height_)};
+}
+
+float Camera::blur_radius(float depth) const {
+  if (lens_radius_ <= 0) return 0;
+  // Through lens point l a point at depth z lands l (1 - focus / z) away from its pinhole image on the focus plane,
+  // where a pixel is 2 half_height focus / height wide.
+  const float pixel_on_focus_plane = 2.0f * half_height_ * focus_distance_ / static_cast<float>(height_);
+  return lens_radius_ * std::abs(1.0f - focus_distance_ / depth) / pixel_on_focus_plane;
+}
+
 }  // namespace lf
 
 namespace lf {
