@@ -109,12 +109,10 @@ ImageSpec ImageSpec::read(const ParamTable& p) {
   if (p.has("adaptive_threshold") && !p.has("adaptive_spp"))
     throw ParamError("image: adaptive_threshold needs adaptive_spp (the most shaded samples a noisy pixel may get)");
   if (p.has("adaptive_spp")) {
-    if (i.shade_spp == 1)
-      throw ParamError("image: adaptive_spp needs shade_spp of at least 2 (a pixel's spread needs two samples)");
-    if (i.shade_spp == 0)
-      throw ParamError("image: adaptive_spp needs shade_spp below spp (it shades more of the spp samples where the "
-                       "first shade_spp are noisy)");
-    i.adaptive_spp = static_cast<int>(p.get_int("adaptive_spp", i.spp, i.shade_spp + 1, i.spp));
+    if (i.shaded_per_pixel() == 1)
+      throw ParamError("image: adaptive_spp needs shade_spp (or spp) of at least 2 (a pixel's spread needs two samples)");
+    // Past spp the extra samples go on along each pixel's sequence, lit only.
+    i.adaptive_spp = static_cast<int>(p.get_int("adaptive_spp", i.spp, i.shaded_per_pixel() + 1, 65536));
     i.adaptive_threshold = p.get_float("adaptive_threshold", i.adaptive_threshold, 1e-6, 1);
   }
   i.edge_spp = static_cast<int>(p.get_int("edge_spp", default_edge_spp(i.spp), 0, 1 << 20));

@@ -68,8 +68,9 @@ struct ImageSpec {
   int shade_spp = 0;
   int shaded_per_pixel() const { return shade_spp > 0 && shade_spp < spp ? shade_spp : spp; }
   // Adaptive sampling (0: off): a pixel whose lighting is still noisy after its shade_spp samples (the standard
-  // error of their mean above adaptive_threshold of display white at `exposure`) gets more of its spp samples
-  // shaded, in doublings of shade_spp, up to adaptive_spp (render/shading/tile_kernel.hpp, adaptive_shaded_counts).
+  // error its mean would have, from its neighbours' spread, above adaptive_threshold of display white at
+  // `exposure`) gets more of its samples shaded, in doublings of shade_spp, up to adaptive_spp: the rest of its spp
+  // first, then the next of its sequence (render/shading/tile_kernel.hpp, adaptive_shaded_counts).
   int adaptive_spp = 0;
   double adaptive_threshold = 0.05;
   // Seen samples a pixel on a light's outline takes in all (render/shading/emitter_edges.hpp): its spp, then more
@@ -90,8 +91,8 @@ struct ImageSpec {
   // The numbers camera, direct light and path tracing draw: "independent" (PCG32) or "sobol" (Owen-scrambled
   // Sobol points, render/shading/sampler.hpp).
   std::string sampler = "sobol";
-  // image { } with its ranges, defaults and rules (shade_spp at most spp; adaptive sampling needs shade_spp of 2 or
-  // more below spp): how a script is read and how an actor reads CONFIG back. Throws ParamError.
+  // image { } with its ranges, defaults and rules (shade_spp at most spp; adaptive sampling needs 2 or more shaded
+  // samples): how a script is read and how an actor reads CONFIG back. Throws ParamError.
   static ImageSpec read(const ParamTable& p);
   static const std::vector<std::string>& tonemaps();  // clamp, reinhard, aces
   Value to_value() const;  // what read() takes back

@@ -39,9 +39,11 @@ TEST(ImageReader, DefaultsRangesAndAdaptiveSamplingRules) {
   EXPECT_EQ(error_of([] { ImageSpec::read(table({{"adaptive_threshold", 0.1}}, "image")); }),
             "image: adaptive_threshold needs adaptive_spp (the most shaded samples a noisy pixel may get)");
   EXPECT_EQ(error_of([] { ImageSpec::read(table({{"spp", 8}, {"shade_spp", 1}, {"adaptive_spp", 8}}, "image")); }),
-            "image: adaptive_spp needs shade_spp of at least 2 (a pixel's spread needs two samples)");
-  EXPECT_NE(error_of([] { ImageSpec::read(table({{"spp", 8}, {"adaptive_spp", 8}}, "image")); }).find("below spp"),
-            std::string::npos);
+            "image: adaptive_spp needs shade_spp (or spp) of at least 2 (a pixel's spread needs two samples)");
+  EXPECT_EQ(error_of([] { ImageSpec::read(table({{"spp", 8}, {"adaptive_spp", 8}}, "image")); }),
+            "image: parameter 'adaptive_spp' must be in [9, 65536], got 8");
+  // Past spp: the next samples of each pixel's sequence.
+  EXPECT_EQ(ImageSpec::read(table({{"spp", 8}, {"adaptive_spp", 64}}, "image")).adaptive_spp, 64);
   EXPECT_NE(error_of([] { ImageSpec::read(table({{"tonemap", "filmic"}}, "image")); }).find("filmic"), std::string::npos);
   const ImageSpec adaptive =
       ImageSpec::read(table({{"spp", 64}, {"shade_spp", 4}, {"adaptive_spp", 32}, {"adaptive_threshold", 0.02}}, "image"));

@@ -225,18 +225,19 @@ TEST_F(ScriptTest, BadParametersNameLineAndParameter) {
   EXPECT_EQ(error_of("image { spp = 8,\n shade_spp = 16 }\n"),
             "farm.lua:1: image: parameter 'shade_spp' must be in [1, 8], got 16");
   EXPECT_EQ(error_of("image { spp = 8, adaptive_spp = 8 }\n"),
-            "farm.lua:1: image: adaptive_spp needs shade_spp below spp (it shades more of the spp samples where the "
-            "first shade_spp are noisy)");
+            "farm.lua:1: image: parameter 'adaptive_spp' must be in [9, 65536], got 8");
   EXPECT_EQ(error_of("image { spp = 8, shade_spp = 2, adaptive_spp = 8, time_limit = 60 }\n"),
             "farm.lua:1: image: time_limit renders passes of spp samples while the time lasts; adaptive_spp, which "
             "shades more of one pass's samples where they are noisy, cannot be combined with it");
   EXPECT_EQ(error_of("image { time_limit = -1 }\n"), "farm.lua:1: image: parameter 'time_limit' must be in [0, 1e+07], got -1");
   EXPECT_EQ(error_of("image { spp = 8, shade_spp = 1, adaptive_spp = 8 }\n"),
-            "farm.lua:1: image: adaptive_spp needs shade_spp of at least 2 (a pixel's spread needs two samples)");
+            "farm.lua:1: image: adaptive_spp needs shade_spp (or spp) of at least 2 (a pixel's spread needs two samples)");
   EXPECT_EQ(error_of("image { spp = 8, shade_spp = 2, adaptive_threshold = 0.1 }\n"),
             "farm.lua:1: image: adaptive_threshold needs adaptive_spp (the most shaded samples a noisy pixel may get)");
-  EXPECT_EQ(error_of("image { spp = 8, shade_spp = 2, adaptive_spp = 16 }\n"),
-            "farm.lua:1: image: parameter 'adaptive_spp' must be in [3, 8], got 16");
+  EXPECT_EQ(error_of("image { spp = 8, shade_spp = 2, adaptive_spp = 100000 }\n"),
+            "farm.lua:1: image: parameter 'adaptive_spp' must be in [3, 65536], got 100000");
+  EXPECT_EQ(error_of("image { spp = 1, adaptive_spp = 8 }\n"),
+            "farm.lua:1: image: adaptive_spp needs shade_spp (or spp) of at least 2 (a pixel's spread needs two samples)");
   EXPECT_EQ(error_of("scene { builtin = \"cornell\" }\nlight { quad = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0.5}, {0, 1, 0}}, "
                      "radiance = {1, 1, 1} }\n")
                 .rfind("farm.lua:2: light: the quad is not planar (its 4th corner is 0.447214 off the plane", 0),

@@ -163,8 +163,13 @@ void trace_more_samples(const Scene& scene, const RayTracer& tracer, const Camer
                         const TileRect& rect, std::span<const uint32_t> shaded_of_pixel, TileWork& work) {
   std::vector<Ray> rays;
   std::vector<uint64_t> keys;
-  tile_camera_rays(camera, image, rect, rays, keys);
-  const size_t per_pixel = static_cast<size_t>(image.spp), shaded = static_cast<size_t>(image.shaded_per_pixel());
+  // Up to adaptive_spp samples a pixel: past spp they go on along each pixel's sequence (lit, not seen: the
+  // pixel's emission stays the first round's). The second round's tile counts that many a pixel.
+  ImageSpec wide = image;
+  wide.spp = std::max(image.spp, image.adaptive_spp);
+  wide.shade_spp = image.shaded_per_pixel();
+  tile_camera_rays(camera, wide, rect, rays, keys);
+  const size_t per_pixel = static_cast<size_t>(wide.spp), shaded = static_cast<size_t>(image.shaded_per_pixel());
   std::vector<uint32_t> wanted;
   for (size_t i = 0; i < rays.size(); ++i)
     if (const size_t k = i % per_pixel; k >= shaded && k < shaded_of_pixel[i / per_pixel])
@@ -175,7 +180,7 @@ void trace_more_samples(const Scene& scene, const RayTracer& tracer, const Camer
   tracer.intersect(some, some_hits, /*coherent=*/true);
   std::vector<Hit> hits(rays.size());
   for (size_t j = 0; j < wanted.size(); ++j) hits[wanted[j]] = some_hits[j];
-  tile_points(scene, camera, image, rect, rays, hits, keys, shaded_of_pixel, work);
+  tile_points(scene, camera, wide, rect, rays, hits, keys, shaded_of_pixel, work);
 }
 
 std::vector<uint32_t> adaptive_shaded_counts(const ImageSpec& image, const TileWork& work, std::span<const RGB> radiance) {
@@ -188,23 +193,44 @@ std::vector<uint32_t> adaptive_shaded_counts(const ImageSpec& image, const TileW
     sum[p] += v;
     sum_sq[p] += v * v;
   }
-  std::vector<uint32_t> counts(pixels, static_cast<uint32_t>(shaded));
   const double n = shaded;
-  // The noise allowed, in radiance: adaptive_threshold of display white at the image's exposure.
-  const double allowed = image.adaptive_threshold / std::exp2(image.exposure);
+  // Each pixel's sample variance of its lighting (samples that hit nothing are zeros).
+  std::vector<double> variance(pixels);
   for (size_t p = 0; p < pixels; ++p) {
     const double mean = sum[p] / n;
-    // The standard error of the lighting's mean, from the sample variance (samples that hit nothing are zeros).
-    const double variance = std::max(0.0, (sum_sq[p] - n * mean * mean) / (n - 1));
-    const double error = std::sqrt(variance / n);
-    if (!(error > allowed)) continue;
-    // Enough samples to bring the error to the threshold, as a doubling of shade_spp (a prefix of the pixel's
-    // samples whose length is a power of two times shade_spp stays stratified), at most adaptive_spp.
-    const double wanted = allowed > 0 ? n * (error / allowed) * (error / allowed) : 1e30;
-    int count = shaded;
-    while (count < image.adaptive_spp && count < wanted) count *= 2;
-    counts[p] = static_cast<uint32_t>(std::min(count, image.adaptive_spp));
+    variance[p] = std::max(0.0, (sum_sq[p] - n * mean * mean) / (n - 1));
   }
+  std::vector<uint32_t> counts(pixels, static_cast<uint32_t>(shaded));
+  // The noise allowed, in radiance: adaptive_threshold of display white at the image's exposure.
+  const double allowed = image.adaptive_threshold / std::exp2(image.exposure);
+  const int width = work.rect.width(), height = work.rect.height();
+  for (int y = 0; y < height; ++y)
+    for (int x = 0; x < width; ++x) {
+      // The standard error a pixel's mean would have, from the spread of its neighbours' samples in the tile, never
+      // its own: its samples are then independent of whether it gets more, and its mean stays unbiased. A pixel
+      // that decided on its own samples got more when they happened to spread (a bright sample among its first)
+      // and kept its low mean when they did not: darker on average where light is rare and bright (the test).
+      // Noise gathers in regions (around a light, in a caustic), so the neighbours see what the pixel would.
+      double pooled = 0;
+      int neighbours = 0;
+      for (int dy = -1; dy <= 1; ++dy)
+        for (int dx = -1; dx <= 1; ++dx) {
+          const int u = x + dx, v = y + dy;
+          if ((dx == 0 && dy == 0) || u < 0 || v < 0 || u >= width || v >= height) continue;
+          pooled += variance[static_cast<size_t>(v) * static_cast<size_t>(width) + static_cast<size_t>(u)];
+          ++neighbours;
+        }
+      if (neighbours == 0) continue;
+      const double error = std::sqrt(pooled / neighbours / n);
+      if (!(error > allowed)) continue;
+      // Enough samples to bring the error to the threshold, as a doubling of shade_spp (a prefix of the pixel's
+      // samples whose length is a power of two times shade_spp stays stratified), at most adaptive_spp.
+      const double wanted = allowed > 0 ? n * (error / allowed) * (error / allowed) : 1e30;
+      int count = shaded;
+      while (count < image.adaptive_spp && count < wanted) count *= 2;
+      counts[static_cast<size_t>(y) * static_cast<size_t>(width) + static_cast<size_t>(x)] =
+          static_cast<uint32_t>(std::min(count, image.adaptive_spp));
+    }
   return counts;
 }
 
@@ -215,7 +241,8 @@ void resolve_adaptive_tile(const TileWork& first, std::span<const RGB> first_rad
   pixels.assign(count, RGB{});
   std::vector<RGB> lit(count);
   for (size_t j = 0; j < first.sample_of_point.size(); ++j) lit[first.sample_of_point[j] / spp] += first_radiance[j];
-  for (size_t j = 0; j < more.sample_of_point.size(); ++j) lit[more.sample_of_point[j] / spp] += more_radiance[j];
+  const size_t more_spp = static_cast<size_t>(more.spp);  // the second round's tile may count more a pixel
+  for (size_t j = 0; j < more.sample_of_point.size(); ++j) lit[more.sample_of_point[j] / more_spp] += more_radiance[j];
   const float inv = 1.0f / static_cast<float>(spp);
   for (size_t p = 0; p < count; ++p) {
     RGB seen{};

@@ -77,14 +77,15 @@ void trace_tile(const Scene& scene, const RayTracer& tracer, const Camera& camer
                 const TileRect& rect, TileWork& work, const EmitterEdges& edges = no_edges());
 
 // Adaptive sampling (ImageSpec::adaptive_spp). After a tile's first round, each pixel's count of shaded samples:
-// shade_spp where the standard error of its lighting's mean (from its shaded samples' spread) is within
-// adaptive_threshold / 2^exposure (that share of display white), else shade_spp doubled until it would be (as
-// estimated), at most
-// adaptive_spp. A function of the pixel's own samples only, so the image does not depend on the farm's layout.
+// shade_spp where the standard error its lighting's mean would have (from the spread of the shaded samples of its
+// neighbours in the tile, not its own, so that its mean stays unbiased) is within adaptive_threshold / 2^exposure
+// (that share of display white), else shade_spp doubled until it would be (as estimated), at most adaptive_spp.
+// A function of the tile's samples only (tiles are the image's), so the image does not depend on the farm's layout.
 // `radiance` is one value a point of `work` (a tile with shaded_per_pixel() < spp).
 std::vector<uint32_t> adaptive_shaded_counts(const ImageSpec& image, const TileWork& work, std::span<const RGB> radiance);
 // The second round's points: pixel p's samples from shaded_per_pixel() up to shaded_of_pixel[p], traced again
-// (their camera rays are the first round's, so their hits are too).
+// (below spp their camera rays are the first round's, so their hits are too; past it, the next of the pixel's
+// sequence). `work` is a tile of max(spp, adaptive_spp) samples a pixel.
 void trace_more_samples(const Scene& scene, const RayTracer& tracer, const Camera& camera, const ImageSpec& image,
                         const TileRect& rect, std::span<const uint32_t> shaded_of_pixel, TileWork& work);
 // pixels[p] = mean of emission over all spp samples + the lighting of both rounds' points over shaded_of_pixel[p].
