@@ -21,6 +21,20 @@ const EmitterEdges& no_edges() {
   return none;
 }
 
+namespace {
+
+// The camera ray through pixel (x, y) of the sample with this key, drawn from `stream`.
+Ray sample_ray(const Camera& camera, SamplerKind kind, uint64_t key, uint64_t stream, int x, int y) {
+  Sampler sampler(kind, key, stream);
+  const Uniform2 jitter = sampler.uniform2();
+  const float px = static_cast<float>(x) + jitter.u, py = static_cast<float>(y) + jitter.v;
+  if (!camera.has_lens()) return camera.ray(px, py);
+  const Uniform2 lens = sampler.uniform2();  // drawn only with a lens: pinhole images keep their numbers
+  return camera.ray(px, py, lens.u, lens.v);
+}
+
+}  // namespace
+
 void tile_camera_rays(const Camera& camera, const ImageSpec& image, const TileRect& rect, std::vector<Ray>& rays,
                       std::vector<uint64_t>& keys, const EmitterEdges& edges) {
   const size_t samples = static_cast<size_t>(rect.pixel_count()) * image.spp;
@@ -29,20 +43,11 @@ void tile_camera_rays(const Camera& camera, const ImageSpec& image, const TileRe
   const SamplerKind kind = sampler_of(image);
   size_t s = 0;
   for (int y = rect.y0; y < rect.y1; ++y)
-    for (int x = rect.x0; x < rect.x1; ++x) {
+    for (int x = rect.x0; x < rect.x1; ++x)
       for (int k = 0; k < image.spp; ++k, ++s) {
         keys[s] = tile_sample_key(kind, image.width, rect, image.spp, static_cast<uint32_t>(s));
-        Sampler sampler(kind, keys[s], streams::camera);
-        const Uniform2 jitter = sampler.uniform2();
-        const float px = static_cast<float>(x) + jitter.u, py = static_cast<float>(y) + jitter.v;
-        if (camera.has_lens()) {
-          const Uniform2 lens = sampler.uniform2();  // drawn only with a lens: pinhole images keep their numbers
-          rays[s] = camera.ray(px, py, lens.u, lens.v);
-        } else {
-          rays[s] = camera.ray(px, py);
-        }
+        rays[s] = sample_ray(camera, kind, keys[s], streams::camera, x, y);
       }
-    }
   if (edges.samples <= image.spp) return;
   // The outline's pixels' seen samples, after all the others: their own stream, numbered on from pass to pass of a
   // time-limited frame, so that no two passes repeat one.
@@ -52,17 +57,8 @@ void tile_camera_rays(const Camera& camera, const ImageSpec& image, const TileRe
     for (int x = rect.x0; x < rect.x1; ++x) {
       if (!edges.at(x, y)) continue;
       const uint64_t pixel = static_cast<uint64_t>(y) * static_cast<uint64_t>(image.width) + static_cast<uint64_t>(x);
-      for (uint32_t j = 0; j < extra; ++j) {
-        Sampler sampler(kind, pixel_sample_key(kind, pixel, first + j), streams::outline);
-        const Uniform2 jitter = sampler.uniform2();
-        const float px = static_cast<float>(x) + jitter.u, py = static_cast<float>(y) + jitter.v;
-        if (camera.has_lens()) {
-          const Uniform2 lens = sampler.uniform2();
-          rays.push_back(camera.ray(px, py, lens.u, lens.v));
-        } else {
-          rays.push_back(camera.ray(px, py));
-        }
-      }
+      for (uint32_t j = 0; j < extra; ++j)
+        rays.push_back(sample_ray(camera, kind, pixel_sample_key(kind, pixel, first + j), streams::outline, x, y));
     }
 }
 
@@ -161,19 +157,27 @@ void trace_tile(const Scene& scene, const RayTracer& tracer, const Camera& camer
 
 void trace_more_samples(const Scene& scene, const RayTracer& tracer, const Camera& camera, const ImageSpec& image,
                         const TileRect& rect, std::span<const uint32_t> shaded_of_pixel, TileWork& work) {
-  std::vector<Ray> rays;
-  std::vector<uint64_t> keys;
   // Up to adaptive_spp samples a pixel: past spp they go on along each pixel's sequence (lit, not seen: the
-  // pixel's emission stays the first round's). The second round's tile counts that many a pixel.
+  // pixel's emission stays the first round's). The second round's tile counts that many a pixel; only the wanted
+  // samples' rays are made (a tile of 256 a pixel has 262,144 others), the rest stay unread.
   ImageSpec wide = image;
   wide.spp = std::max(image.spp, image.adaptive_spp);
   wide.shade_spp = image.shaded_per_pixel();
-  tile_camera_rays(camera, wide, rect, rays, keys);
+  const SamplerKind kind = sampler_of(image);
   const size_t per_pixel = static_cast<size_t>(wide.spp), shaded = static_cast<size_t>(image.shaded_per_pixel());
+  const size_t samples = static_cast<size_t>(rect.pixel_count()) * per_pixel;
+  std::vector<Ray> rays(samples);
+  std::vector<uint64_t> keys(samples);
   std::vector<uint32_t> wanted;
-  for (size_t i = 0; i < rays.size(); ++i)
-    if (const size_t k = i % per_pixel; k >= shaded && k < shaded_of_pixel[i / per_pixel])
-      wanted.push_back(static_cast<uint32_t>(i));
+  size_t p = 0;
+  for (int y = rect.y0; y < rect.y1; ++y)
+    for (int x = rect.x0; x < rect.x1; ++x, ++p)
+      for (size_t k = shaded; k < shaded_of_pixel[p]; ++k) {
+        const size_t i = p * per_pixel + k;
+        keys[i] = tile_sample_key(kind, image.width, rect, wide.spp, static_cast<uint32_t>(i));
+        rays[i] = sample_ray(camera, kind, keys[i], streams::camera, x, y);
+        wanted.push_back(static_cast<uint32_t>(i));
+      }
   std::vector<Ray> some(wanted.size());
   std::vector<Hit> some_hits(wanted.size());
   for (size_t j = 0; j < wanted.size(); ++j) some[j] = rays[wanted[j]];
