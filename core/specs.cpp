@@ -95,8 +95,8 @@ const std::vector<std::string>& ImageSpec::tonemaps() {
   return names;
 }
 
-// A lit sample costs the network's whole work, a seen one a camera ray: 16 seen for each of the spp (measured on
-// Lost Empire and the Cornell boxes, docs/lua-api.md "image").
+// A lit sample costs the network's whole work, a seen one a camera ray: 16 seen for each of the spp. Chosen by that
+// cost, not against other ratios; on Lost Empire it did not show in the farm's time (docs/lua-api.md, "image").
 int ImageSpec::default_edge_spp(int spp) { return std::max(spp, std::min(4096, 16 * spp)); }
 
 ImageSpec ImageSpec::read(const ParamTable& p) {

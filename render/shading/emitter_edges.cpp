@@ -84,15 +84,26 @@ class Marker {
   EmitterEdges& edges_;
 };
 
-// The part of a polygon (camera frame) in front of the plane z = near (Sutherland-Hodgman).
+// Where segment a-b (camera frame, one end on each side) crosses the plane z = near.
+Vec3 at_near(Vec3 a, Vec3 b, float near) { return a + (b - a) * ((near - a.z) / (b.z - a.z)); }
+
+// The part of a triangle (camera frame) in front of the plane z = near (Sutherland-Hodgman).
 std::vector<Vec3> in_front(const std::array<Vec3, 3>& corners, float near) {
   std::vector<Vec3> out;
   for (size_t i = 0; i < 3; ++i) {
     const Vec3 a = corners[i], b = corners[(i + 1) % 3];
     if (a.z >= near) out.push_back(a);
-    if ((a.z >= near) != (b.z >= near)) out.push_back(a + (b - a) * ((near - a.z) / (b.z - a.z)));
+    if ((a.z >= near) != (b.z >= near)) out.push_back(at_near(a, b, near));
   }
   return out;
+}
+
+// The same for a segment: false when none of it is in front.
+bool in_front(Vec3& a, Vec3& b, float near) {
+  if (a.z < near && b.z < near) return false;
+  if (a.z < near) a = at_near(a, b, near);
+  if (b.z < near) b = at_near(b, a, near);
+  return true;
 }
 
 using EdgeKey = std::array<float, 7>;  // the material, then both corners in a fixed order
@@ -137,12 +148,9 @@ EmitterEdges emitter_edges(const Scene& scene, const Camera& camera, const Image
       if (polygon.size() >= 3) marker.fill(polygon);
     }
     for (int c = 0; c < 3; ++c) {
-      if (!whole && shared[edge_key(scene.material_of(t), world[c], world[(c + 1) % 3])] > 1) continue;
+      if (!whole && shared.at(edge_key(scene.material_of(t), world[c], world[(c + 1) % 3])) > 1) continue;
       Vec3 a = view[c], b = view[(c + 1) % 3];
-      if (a.z < near && b.z < near) continue;
-      if (a.z < near) a = a + (b - a) * ((near - a.z) / (b.z - a.z));
-      if (b.z < near) b = b + (a - b) * ((near - b.z) / (a.z - b.z));
-      marker.segment(a, b);
+      if (in_front(a, b, near)) marker.segment(a, b);
     }
   }
   return edges;

@@ -81,7 +81,7 @@ void trace_tile(const Scene& scene, const RayTracer& tracer, const Camera& camer
 // neighbours in the tile, not its own, so that its mean stays unbiased) is within adaptive_threshold / 2^exposure
 // (that share of display white), else shade_spp doubled until it would be (as estimated), at most adaptive_spp.
 // A function of the tile's samples only (tiles are the image's), so the image does not depend on the farm's layout.
-// `radiance` is one value a point of `work` (a tile with shaded_per_pixel() < spp).
+// `radiance` is one value a point of `work` (the first round's: shaded_per_pixel() samples a pixel lit).
 std::vector<uint32_t> adaptive_shaded_counts(const ImageSpec& image, const TileWork& work, std::span<const RGB> radiance);
 // The second round's points: pixel p's samples from shaded_per_pixel() up to shaded_of_pixel[p], traced again
 // (below spp their camera rays are the first round's, so their hits are too; past it, the next of the pixel's
