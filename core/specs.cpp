@@ -1,6 +1,8 @@
 #include "core/specs.hpp"
 
 #include <cmath>
+#include <cstdio>
+#include <string>
 
 namespace lf {
 
@@ -99,6 +101,14 @@ const std::vector<std::string>& ImageSpec::tonemaps() {
 // cost, not against other ratios; on Lost Empire it did not show in the farm's time (docs/lua-api.md, "image").
 int ImageSpec::default_edge_spp(int spp) { return std::max(spp, std::min(4096, 16 * spp)); }
 
+// Adaptive sampling is on wherever it can be: a pixel's spread needs two lit samples, and a time-limited frame's
+// passes take every pixel's next spp samples, which a second round would have taken already. Up to 16 x spp lit
+// samples, as the outline's seen ones; the threshold (a share of display white) stops most pixels long before.
+int ImageSpec::default_adaptive_spp(const ImageSpec& i) {
+  if (i.shaded_per_pixel() < 2 || i.time_limit > 0) return 0;
+  return std::max(i.shaded_per_pixel() + 1, std::min(4096, 16 * i.spp));
+}
+
 ImageSpec ImageSpec::read(const ParamTable& p) {
   ImageSpec i;
   i.width = static_cast<int>(p.get_int("width", i.width, 1, 16384));
@@ -106,21 +116,40 @@ ImageSpec ImageSpec::read(const ParamTable& p) {
   i.spp = static_cast<int>(p.get_int("spp", i.spp, 1, 65536));
   i.shade_spp = static_cast<int>(p.get_int("shade_spp", i.spp, 1, i.spp));
   if (i.shade_spp == i.spp) i.shade_spp = 0;  // all of them: the plain pixel mean
-  if (p.has("adaptive_threshold") && !p.has("adaptive_spp"))
-    throw ParamError("image: adaptive_threshold needs adaptive_spp (the most shaded samples a noisy pixel may get)");
-  if (p.has("adaptive_spp")) {
+  i.time_limit = p.get_float("time_limit", 0, 0, 1e7);
+  // Read as a number first: 0 (off) is outside the range of counts it may otherwise be.
+  const double asked = p.get_float("adaptive_spp", -1, -1e300, 1e300);  // -1: not given
+  if (asked == 0) {
+    i.adaptive_spp = 0;  // off
+    if (p.has("adaptive_threshold"))
+      throw ParamError("image: adaptive_threshold needs adaptive sampling, which adaptive_spp = 0 turns off");
+  } else if (p.has("adaptive_spp")) {
     if (i.shaded_per_pixel() == 1)
       throw ParamError("image: adaptive_spp needs shade_spp (or spp) of at least 2 (a pixel's spread needs two samples)");
+    if (i.time_limit > 0)
+      throw ParamError("image: time_limit renders passes of spp samples while the time lasts; adaptive_spp, which "
+                       "shades more of one pass's samples where they are noisy, cannot be combined with it");
     // Past spp the extra samples go on along each pixel's sequence, lit only.
-    i.adaptive_spp = static_cast<int>(p.get_int("adaptive_spp", i.spp, i.shaded_per_pixel() + 1, 65536));
-    i.adaptive_threshold = p.get_float("adaptive_threshold", i.adaptive_threshold, 1e-6, 1);
+    const int least = i.shaded_per_pixel() + 1;
+    if (asked != std::floor(asked) || asked < least || asked > 65536) {
+      char got[32];
+      std::snprintf(got, sizeof got, "%.17g", asked);
+      throw ParamError("image: parameter 'adaptive_spp' must be 0 (off) or an integer in [" + std::to_string(least) +
+                       ", 65536], got " + got);
+    }
+    i.adaptive_spp = static_cast<int>(asked);
+  } else {
+    i.adaptive_spp = default_adaptive_spp(i);
+    if (p.has("adaptive_threshold") && i.adaptive_spp == 0)
+      throw ParamError(i.time_limit > 0
+                           ? "image: adaptive_threshold needs adaptive sampling, which time_limit turns off"
+                           : "image: adaptive_threshold needs adaptive sampling, which needs shade_spp (or spp) of at "
+                             "least 2 (a pixel's spread needs two samples)");
   }
+  if (p.has("adaptive_threshold"))
+    i.adaptive_threshold = p.get_float("adaptive_threshold", i.adaptive_threshold, 1e-6, 1);
   i.edge_spp = static_cast<int>(p.get_int("edge_spp", default_edge_spp(i.spp), 0, 1 << 20));
   i.tile = static_cast<int>(p.get_int("tile", i.tile, 1, 1024));
-  i.time_limit = p.get_float("time_limit", 0, 0, 1e7);
-  if (i.time_limit > 0 && i.adaptive_spp > 0)
-    throw ParamError("image: time_limit renders passes of spp samples while the time lasts; adaptive_spp, which "
-                     "shades more of one pass's samples where they are noisy, cannot be combined with it");
   i.output = p.get_string("output", i.output);
   i.exposure = p.get_float("exposure", i.exposure, -20, 20);
   i.tonemap = p.get_string("tonemap", i.tonemap, tonemaps());
@@ -134,10 +163,8 @@ Value ImageSpec::to_value() const {
   if (shade_spp > 0) m["shade_spp"] = shade_spp;
   m["edge_spp"] = edge_spp;
   if (time_limit > 0) m["time_limit"] = time_limit;
-  if (adaptive_spp > 0) {
-    m["adaptive_spp"] = adaptive_spp;
-    m["adaptive_threshold"] = adaptive_threshold;
-  }
+  m["adaptive_spp"] = adaptive_spp;  // 0 too: read back, its absence would be the default
+  if (adaptive_spp > 0) m["adaptive_threshold"] = adaptive_threshold;
   return m;
 }
 

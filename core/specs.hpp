@@ -71,8 +71,10 @@ struct ImageSpec {
   // error its mean would have, from its neighbours' spread, above adaptive_threshold of display white at
   // `exposure`) gets more of its samples shaded, in doublings of shade_spp, up to adaptive_spp: the rest of its spp
   // first, then the next of its sequence (render/shading/tile_kernel.hpp, adaptive_shaded_counts).
+  // Default: on, up to 16 x spp (default_adaptive_spp); 0 turns it off.
   int adaptive_spp = 0;
   double adaptive_threshold = 0.05;
+  static int default_adaptive_spp(const ImageSpec& image);
   // Seen samples a pixel on a light's outline takes in all (render/shading/emitter_edges.hpp): its spp, then more
   // that only see what the camera sees directly, where whether a sample lands on a small light is the pixel's
   // largest noise. Default 16 x spp, at most 4096 (default_edge_spp); spp or fewer: none.

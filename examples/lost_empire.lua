@@ -55,16 +55,15 @@ end
 -- flames, whose sub-pixel shapes need many camera samples but no light (docs/lua-api.md, image).
 local spp = param("spp", 16)
 local shade_spp = param("shade_spp", spp)
--- adaptive_spp: pixels still noisy after shade_spp lit samples (near the torches, mostly) get more of their spp
--- samples lit, up to adaptive_spp (docs/lua-api.md, image).
 local look = { width = param("width", 320), height = param("height", 240), spp = spp, shade_spp = shade_spp,
                exposure = param("exposure", 2), output = param("output", walk > 0 and at_frame == 0 and "lost_empire.####.png" or "lost_empire.png") }
 -- edge_spp: seen samples a pixel on a light's outline takes in all (default 16 x spp; 0: none; docs/lua-api.md).
 if param("edge_spp", -1) >= 0 then look.edge_spp = param("edge_spp", -1) end
-if param("adaptive_spp", 0) > 0 then
-  look.adaptive_spp = param("adaptive_spp", 0)
-  look.adaptive_threshold = param("adaptive_threshold", 0.05)
-end
+-- adaptive_spp: pixels still noisy after shade_spp lit samples (near the torches, mostly) get more lit samples, up
+-- to adaptive_spp, at most adaptive_threshold of display white at the exposure (defaults 16 x spp and 0.05; 0: off;
+-- docs/lua-api.md, image).
+if param("adaptive_spp", -1) >= 0 then look.adaptive_spp = param("adaptive_spp", -1) end
+if param("adaptive_threshold", 0) > 0 then look.adaptive_threshold = param("adaptive_threshold", 0) end
 image(look)
 
 if param("parts", 0) > 0 then partition { parts = param("parts", 0) } end

@@ -30,18 +30,32 @@ TEST(ImageReader, DefaultsRangesAndAdaptiveSamplingRules) {
   const ImageSpec d = ImageSpec::read(table({}, "image"));
   EXPECT_EQ(d.width, 256);
   EXPECT_EQ(d.shade_spp, 0);  // every sample shaded
-  EXPECT_EQ(d.adaptive_spp, 0);
+  EXPECT_EQ(d.adaptive_spp, 64) << "adaptive sampling is on by default, up to 16 x spp";
+  EXPECT_EQ(ImageSpec::read(table({{"spp", 4}, {"adaptive_spp", 0}}, "image")).adaptive_spp, 0) << "0 turns it off";
+  EXPECT_EQ(ImageSpec::read(table({{"spp", 1}}, "image")).adaptive_spp, 0) << "one lit sample has no spread";
+  EXPECT_EQ(ImageSpec::read(table({{"spp", 8}, {"shade_spp", 1}}, "image")).adaptive_spp, 0);
+  EXPECT_EQ(ImageSpec::read(table({{"spp", 8}, {"time_limit", 5}}, "image")).adaptive_spp, 0)
+      << "a time-limited frame's passes take every pixel's next spp samples";
+  EXPECT_EQ(ImageSpec::read(table({{"spp", 1024}}, "image")).adaptive_spp, 4096);
   const ImageSpec all = ImageSpec::read(table({{"spp", 8}, {"shade_spp", 8}}, "image"));
   EXPECT_EQ(all.shade_spp, 0) << "shade_spp = spp is the plain mean";
   EXPECT_NE(error_of([] { ImageSpec::read(table({{"width", 0}}, "image")); }).find("width"), std::string::npos);
   EXPECT_NE(error_of([] { ImageSpec::read(table({{"spp", 4}, {"shade_spp", 5}}, "image")); }).find("shade_spp"),
             std::string::npos);
-  EXPECT_EQ(error_of([] { ImageSpec::read(table({{"adaptive_threshold", 0.1}}, "image")); }),
-            "image: adaptive_threshold needs adaptive_spp (the most shaded samples a noisy pixel may get)");
+  EXPECT_DOUBLE_EQ(ImageSpec::read(table({{"adaptive_threshold", 0.1}}, "image")).adaptive_threshold, 0.1);
+  EXPECT_EQ(error_of([] { ImageSpec::read(table({{"adaptive_spp", 0}, {"adaptive_threshold", 0.1}}, "image")); }),
+            "image: adaptive_threshold needs adaptive sampling, which adaptive_spp = 0 turns off");
+  EXPECT_EQ(error_of([] { ImageSpec::read(table({{"spp", 1}, {"adaptive_threshold", 0.1}}, "image")); }),
+            "image: adaptive_threshold needs adaptive sampling, which needs shade_spp (or spp) of at least 2 (a "
+            "pixel's spread needs two samples)");
+  EXPECT_EQ(error_of([] { ImageSpec::read(table({{"time_limit", 5}, {"adaptive_threshold", 0.1}}, "image")); }),
+            "image: adaptive_threshold needs adaptive sampling, which time_limit turns off");
+  EXPECT_EQ(error_of([] { ImageSpec::read(table({{"spp", 8}, {"adaptive_spp", 12.5}}, "image")); }),
+            "image: parameter 'adaptive_spp' must be 0 (off) or an integer in [9, 65536], got 12.5");
   EXPECT_EQ(error_of([] { ImageSpec::read(table({{"spp", 8}, {"shade_spp", 1}, {"adaptive_spp", 8}}, "image")); }),
             "image: adaptive_spp needs shade_spp (or spp) of at least 2 (a pixel's spread needs two samples)");
   EXPECT_EQ(error_of([] { ImageSpec::read(table({{"spp", 8}, {"adaptive_spp", 8}}, "image")); }),
-            "image: parameter 'adaptive_spp' must be in [9, 65536], got 8");
+            "image: parameter 'adaptive_spp' must be 0 (off) or an integer in [9, 65536], got 8");
   // Past spp: the next samples of each pixel's sequence.
   EXPECT_EQ(ImageSpec::read(table({{"spp", 8}, {"adaptive_spp", 64}}, "image")).adaptive_spp, 64);
   EXPECT_NE(error_of([] { ImageSpec::read(table({{"tonemap", "filmic"}}, "image")); }).find("filmic"), std::string::npos);
@@ -60,6 +74,8 @@ TEST(ImageReader, CONFIGCarriesWhatTheScriptSaidAndRefusesWhatItCouldNot) {
   ASSERT_TRUE(back.ok()) << back.error().message;
   EXPECT_EQ(back->to_value(), a.to_value());
   EXPECT_EQ(back->shaded_per_pixel(), 4);
+  const ImageSpec off = ImageSpec::read(table({{"spp", 16}, {"adaptive_spp", 0}}, "image"));
+  EXPECT_EQ(ImageSpec::from_value(off.to_value())->adaptive_spp, 0) << "adaptive sampling turned off stays off";
   Value::Map bad = a.to_value().as_map();
   bad["spp"] = int64_t{0};
   auto refused = ImageSpec::from_value(bad);

@@ -225,17 +225,17 @@ TEST_F(ScriptTest, BadParametersNameLineAndParameter) {
   EXPECT_EQ(error_of("image { spp = 8,\n shade_spp = 16 }\n"),
             "farm.lua:1: image: parameter 'shade_spp' must be in [1, 8], got 16");
   EXPECT_EQ(error_of("image { spp = 8, adaptive_spp = 8 }\n"),
-            "farm.lua:1: image: parameter 'adaptive_spp' must be in [9, 65536], got 8");
+            "farm.lua:1: image: parameter 'adaptive_spp' must be 0 (off) or an integer in [9, 65536], got 8");
   EXPECT_EQ(error_of("image { spp = 8, shade_spp = 2, adaptive_spp = 8, time_limit = 60 }\n"),
             "farm.lua:1: image: time_limit renders passes of spp samples while the time lasts; adaptive_spp, which "
             "shades more of one pass's samples where they are noisy, cannot be combined with it");
   EXPECT_EQ(error_of("image { time_limit = -1 }\n"), "farm.lua:1: image: parameter 'time_limit' must be in [0, 1e+07], got -1");
   EXPECT_EQ(error_of("image { spp = 8, shade_spp = 1, adaptive_spp = 8 }\n"),
             "farm.lua:1: image: adaptive_spp needs shade_spp (or spp) of at least 2 (a pixel's spread needs two samples)");
-  EXPECT_EQ(error_of("image { spp = 8, shade_spp = 2, adaptive_threshold = 0.1 }\n"),
-            "farm.lua:1: image: adaptive_threshold needs adaptive_spp (the most shaded samples a noisy pixel may get)");
+  EXPECT_EQ(error_of("image { spp = 8, shade_spp = 2, adaptive_spp = 0, adaptive_threshold = 0.1 }\n"),
+            "farm.lua:1: image: adaptive_threshold needs adaptive sampling, which adaptive_spp = 0 turns off");
   EXPECT_EQ(error_of("image { spp = 8, shade_spp = 2, adaptive_spp = 100000 }\n"),
-            "farm.lua:1: image: parameter 'adaptive_spp' must be in [3, 65536], got 100000");
+            "farm.lua:1: image: parameter 'adaptive_spp' must be 0 (off) or an integer in [3, 65536], got 100000");
   EXPECT_EQ(error_of("image { spp = 1, adaptive_spp = 8 }\n"),
             "farm.lua:1: image: adaptive_spp needs shade_spp (or spp) of at least 2 (a pixel's spread needs two samples)");
   EXPECT_EQ(error_of("scene { builtin = \"cornell\" }\nlight { quad = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0.5}, {0, 1, 0}}, "

@@ -209,8 +209,9 @@ scene { builtin = "cornell" }
 camera { eye = {278, 273, -800}, at = {278, 273, 0}, fov = 39.3 }
 -- edge_spp = 0: the emission op sees only the spp samples, where the renderer's own emission would also average
 -- the outline's extra ones (render.emitter_edges tests those)
+-- adaptive_spp = 0: the images compared shade exactly shade_spp samples a pixel
 image { width = 48, height = 48, spp = param("spp", 4), shade_spp = param("shade_spp", param("spp", 4)), tile = 16,
-        edge_spp = 0 }
+        edge_spp = 0, adaptive_spp = 0 }
 farm { light_paths = "off" }  -- "emission" lights the frame with what the renderers add already: on purpose here
 local lit = param("lighting", "direct") == "direct" and lightop "direct" { light_samples = 1 } or lightop "emission" {}
 renderers { count = param("renderers", 1), lighting = lit }
@@ -246,7 +247,7 @@ TEST_F(NetworkTest, AdaptiveSamplingLightsMoreSamplesOnlyWhereThePixelIsNoisy) {
   const std::string script = write("adaptive.lua", R"(
 scene { builtin = "cornell" }
 local look = { width = 48, height = 48, spp = 16, shade_spp = param("shade_spp", 2), tile = 16 }
-if param("adaptive", false) then look.adaptive_spp = 16; look.adaptive_threshold = 0.02 end
+if param("adaptive", false) then look.adaptive_spp = 16; look.adaptive_threshold = 0.02 else look.adaptive_spp = 0 end
 image(look)
 renderers { count = param("renderers", 1), lighting = lightop "direct" { light_samples = 1 } }
 )");
@@ -289,7 +290,7 @@ TEST_F(NetworkTest, AdaptiveSamplingGoesOnPastTheImagesSamples) {
   const std::string script = write("past.lua", R"(
 scene { builtin = "cornell" }
 local look = { width = 48, height = 48, spp = param("spp", 4), tile = 16, edge_spp = 0 }
-if param("adaptive", false) then look.adaptive_spp = 16; look.adaptive_threshold = 0.005 end
+if param("adaptive", false) then look.adaptive_spp = 16; look.adaptive_threshold = 0.005 else look.adaptive_spp = 0 end
 image(look)
 renderers { count = param("renderers", 1), lighting = lightop "direct" { light_samples = 1 } }
 )");

@@ -177,10 +177,17 @@ renderers { count = 1, lighting = lightop "combine" { inputs = { direct, lightop
   };
   EXPECT_NE(at("direct").find("\"whole_scene_bvh\": false"), std::string::npos) << stats;
   EXPECT_NE(at("irradiance").find("\"whole_scene_bvh\": true"), std::string::npos) << stats;
-  // The renderer's camera rays went to the parts too: 32 x 32 pixels x 2 samples.
+  // The renderer's camera rays went to the parts too: 32 x 32 pixels x 2 samples, and one for each sample adaptive
+  // sampling added in the tiles' second rounds.
   const std::string renderer = at("renderer-0");
   EXPECT_NE(renderer.find("\"whole_scene_bvh\": false"), std::string::npos) << stats;
-  EXPECT_NE(renderer.find("\"traced_rays\": 2048,"), std::string::npos) << stats;
+  const auto figure = [&](const std::string& name) {
+    const auto from = renderer.find("\"" + name + "\": ");
+    return from == std::string::npos ? -1 : std::stol(renderer.substr(from + name.size() + 4));
+  };
+  const long added = figure("adaptive_samples");
+  EXPECT_GT(added, 0) << "no second round: nothing was traced through the parts for it\n" << stats;
+  EXPECT_EQ(figure("traced_rays"), 2048 + added) << stats;
 }
 
 // A real interior with thin double-sided blocks (coplanar back-to-back faces, which the tie rule settles) and a

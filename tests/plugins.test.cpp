@@ -152,11 +152,12 @@ TEST_F(PluginTest, AnActorEndingBadlyAfterTheImageIsWrittenIsAWarning) {
 }
 
 TEST_F(PluginTest, PythonTintMultipliesItsInputsLight) {
+  // adaptive_spp = 0: which pixels get more samples would follow the tinted light, not the plain one
   auto plain_script = write("plain.lua", "scene { builtin = \"cornell\" }\n"
-                                         "image { width = 48, height = 48, spp = 2, tile = 16 }\n"
+                                         "image { width = 48, height = 48, spp = 2, tile = 16, adaptive_spp = 0 }\n"
                                          "renderers { count = 2, lighting = lightop \"direct\" { light_samples = 2 } }\n");
   auto tint_script = write("tint.lua", "scene { builtin = \"cornell\" }\n"
-                                       "image { width = 48, height = 48, spp = 2, tile = 16 }\n"
+                                       "image { width = 48, height = 48, spp = 2, tile = 16, adaptive_spp = 0 }\n"
                                        "local d = lightop \"direct\" { light_samples = 2 }\n"
                                        "local t = multiplexer { lightop.exec { cmd = {\"" + kTint +
                                        "\"}, input = d, color = {1, 0, 0} }, replicas = 2 }\n"

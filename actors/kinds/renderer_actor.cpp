@@ -55,16 +55,18 @@ class RendererActor final : public Actor {
     edges_ = emitter_edges(scene(), *camera_, image_);
     tracing_ = RemoteTracing::for_config(config, rt, frame_scene_.shipped());
     colocate_ = tracing_ && rt.input_holds_parts(0);
-    if (image_.adaptive_spp > 0 && tracing_)
-      return make_error("image: adaptive_spp is not available with partition (a tile's second round traces here)");
     return Ok{};
   }
 
   Value extra_stats() const override {
-    if (tracing_) return tracing_->stats(tracer_ != nullptr);
-    if (image_.adaptive_spp == 0) return Value();
-    return Value::Map{{"adaptive_pixels", static_cast<int64_t>(adaptive_pixels_)},
-                      {"adaptive_samples", static_cast<int64_t>(adaptive_samples_)}};
+    Value::Map stats;
+    if (tracing_) stats = tracing_->stats(tracer_ != nullptr).as_map();
+    if (image_.adaptive_spp > 0) {
+      stats["adaptive_pixels"] = static_cast<int64_t>(adaptive_pixels_);
+      stats["adaptive_samples"] = static_cast<int64_t>(adaptive_samples_);
+    }
+    if (stats.empty()) return Value();
+    return stats;
   }
 
   void on_phase(wire::Phase phase, Runtime& rt) override {
@@ -271,9 +273,36 @@ class RendererActor final : public Actor {
     job->first = std::move(job->work);
     job->first_radiance = std::move(job->radiance.point);
     job->work = TileWork{};
+    if (tracing_) {
+      std::erase_if(tracing_tasks_, [](const Task& t) { return t.done(); });
+      tracing_tasks_.push_back(trace_more_through_parts(job, rt));
+      return true;
+    }
     trace_more_samples(scene(), *tracer_, *camera_, image_, job->first.rect, job->shaded_of_pixel, job->work);
     shade_tile(job, rt);
     return true;
+  }
+
+  // A partitioned scene's second round: its rays answered by the geometry actors, as the first round's.
+  Task trace_more_through_parts(std::shared_ptr<TileJob> job, Runtime& rt) {
+    const TileRect& rect = job->first.rect;
+    const MoreSamples more = more_sample_rays(*camera_, image_, rect, job->shaded_of_pixel);
+    std::vector<Hit> hits(more.rays.size());
+    std::vector<uint32_t> parts(colocate_ ? more.rays.size() : 0);
+    try {
+      co_await tracing_->intersect(more.rays, hits, parts);
+    } catch (const std::exception& e) {
+      rt.fail(std::string("tracing camera rays through the scene's parts failed: ") + e.what());
+      co_return;
+    }
+    more_sample_points(scene(), *camera_, image_, rect, more, hits, job->shaded_of_pixel, job->work);
+    if (colocate_) {
+      // Indexed as the second round's tile counts samples: max(spp, adaptive_spp) a pixel.
+      job->sample_part.assign(static_cast<size_t>(rect.pixel_count()) * static_cast<size_t>(job->work.spp),
+                              RemoteTracing::kNoPart);
+      for (size_t j = 0; j < parts.size(); ++j) job->sample_part[more.sample[j]] = parts[j];
+    }
+    shade_tile(job, rt);
   }
 
   void check_finished(Runtime& rt) {

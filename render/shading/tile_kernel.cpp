@@ -155,36 +155,54 @@ void trace_tile(const Scene& scene, const RayTracer& tracer, const Camera& camer
   tile_points(scene, camera, image, rect, rays, hits, keys, work, edges);
 }
 
-void trace_more_samples(const Scene& scene, const RayTracer& tracer, const Camera& camera, const ImageSpec& image,
-                        const TileRect& rect, std::span<const uint32_t> shaded_of_pixel, TileWork& work) {
+MoreSamples more_sample_rays(const Camera& camera, const ImageSpec& image, const TileRect& rect,
+                             std::span<const uint32_t> shaded_of_pixel) {
   // Up to adaptive_spp samples a pixel: past spp they go on along each pixel's sequence (lit, not seen: the
-  // pixel's emission stays the first round's). The second round's tile counts that many a pixel; only the wanted
-  // samples' rays are made (a tile of 256 a pixel has 262,144 others), the rest stay unread.
+  // pixel's emission stays the first round's). Only the wanted samples' rays are made (a tile of 256 a pixel has
+  // 262,144 others).
+  const SamplerKind kind = sampler_of(image);
+  const uint32_t per_pixel = static_cast<uint32_t>(std::max(image.spp, image.adaptive_spp));
+  const uint32_t shaded = static_cast<uint32_t>(image.shaded_per_pixel());
+  MoreSamples more;
+  uint32_t p = 0;
+  for (int y = rect.y0; y < rect.y1; ++y)
+    for (int x = rect.x0; x < rect.x1; ++x, ++p)
+      for (uint32_t k = shaded; k < shaded_of_pixel[p]; ++k) {
+        const uint32_t i = p * per_pixel + k;
+        const uint64_t key = tile_sample_key(kind, image.width, rect, static_cast<int>(per_pixel), i);
+        more.rays.push_back(sample_ray(camera, kind, key, streams::camera, x, y));
+        more.keys.push_back(key);
+        more.sample.push_back(i);
+      }
+  return more;
+}
+
+void more_sample_points(const Scene& scene, const Camera& camera, const ImageSpec& image, const TileRect& rect,
+                        const MoreSamples& more, std::span<const Hit> hits, std::span<const uint32_t> shaded_of_pixel,
+                        TileWork& work) {
+  // The second round's tile counts max(spp, adaptive_spp) samples a pixel; tile_points reads the wanted ones by
+  // their index in it, and the rest stay unread.
   ImageSpec wide = image;
   wide.spp = std::max(image.spp, image.adaptive_spp);
   wide.shade_spp = image.shaded_per_pixel();
-  const SamplerKind kind = sampler_of(image);
-  const size_t per_pixel = static_cast<size_t>(wide.spp), shaded = static_cast<size_t>(image.shaded_per_pixel());
-  const size_t samples = static_cast<size_t>(rect.pixel_count()) * per_pixel;
+  const size_t samples = static_cast<size_t>(rect.pixel_count()) * static_cast<size_t>(wide.spp);
   std::vector<Ray> rays(samples);
+  std::vector<Hit> all_hits(samples);
   std::vector<uint64_t> keys(samples);
-  std::vector<uint32_t> wanted;
-  size_t p = 0;
-  for (int y = rect.y0; y < rect.y1; ++y)
-    for (int x = rect.x0; x < rect.x1; ++x, ++p)
-      for (size_t k = shaded; k < shaded_of_pixel[p]; ++k) {
-        const size_t i = p * per_pixel + k;
-        keys[i] = tile_sample_key(kind, image.width, rect, wide.spp, static_cast<uint32_t>(i));
-        rays[i] = sample_ray(camera, kind, keys[i], streams::camera, x, y);
-        wanted.push_back(static_cast<uint32_t>(i));
-      }
-  std::vector<Ray> some(wanted.size());
-  std::vector<Hit> some_hits(wanted.size());
-  for (size_t j = 0; j < wanted.size(); ++j) some[j] = rays[wanted[j]];
-  tracer.intersect(some, some_hits, /*coherent=*/true);
-  std::vector<Hit> hits(rays.size());
-  for (size_t j = 0; j < wanted.size(); ++j) hits[wanted[j]] = some_hits[j];
-  tile_points(scene, camera, wide, rect, rays, hits, keys, shaded_of_pixel, work);
+  for (size_t j = 0; j < more.sample.size(); ++j) {
+    rays[more.sample[j]] = more.rays[j];
+    all_hits[more.sample[j]] = hits[j];
+    keys[more.sample[j]] = more.keys[j];
+  }
+  tile_points(scene, camera, wide, rect, rays, all_hits, keys, shaded_of_pixel, work);
+}
+
+void trace_more_samples(const Scene& scene, const RayTracer& tracer, const Camera& camera, const ImageSpec& image,
+                        const TileRect& rect, std::span<const uint32_t> shaded_of_pixel, TileWork& work) {
+  const MoreSamples more = more_sample_rays(camera, image, rect, shaded_of_pixel);
+  std::vector<Hit> hits(more.rays.size());
+  tracer.intersect(more.rays, hits, /*coherent=*/true);
+  more_sample_points(scene, camera, image, rect, more, hits, shaded_of_pixel, work);
 }
 
 std::vector<uint32_t> adaptive_shaded_counts(const ImageSpec& image, const TileWork& work, std::span<const RGB> radiance) {

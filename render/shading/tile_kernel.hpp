@@ -88,6 +88,18 @@ std::vector<uint32_t> adaptive_shaded_counts(const ImageSpec& image, const TileW
 // sequence). `work` is a tile of max(spp, adaptive_spp) samples a pixel.
 void trace_more_samples(const Scene& scene, const RayTracer& tracer, const Camera& camera, const ImageSpec& image,
                         const TileRect& rect, std::span<const uint32_t> shaded_of_pixel, TileWork& work);
+// The same in two steps, for rays traced elsewhere (a partitioned scene's parts): the wanted samples' camera rays,
+// each with its key and its sample's index in the second round's tile; then the points from those rays' hits.
+struct MoreSamples {
+  std::vector<Ray> rays;
+  std::vector<uint64_t> keys;
+  std::vector<uint32_t> sample;
+};
+MoreSamples more_sample_rays(const Camera& camera, const ImageSpec& image, const TileRect& rect,
+                             std::span<const uint32_t> shaded_of_pixel);
+void more_sample_points(const Scene& scene, const Camera& camera, const ImageSpec& image, const TileRect& rect,
+                        const MoreSamples& more, std::span<const Hit> hits, std::span<const uint32_t> shaded_of_pixel,
+                        TileWork& work);
 // pixels[p] = mean of emission over all spp samples + the lighting of both rounds' points over shaded_of_pixel[p].
 void resolve_adaptive_tile(const TileWork& first, std::span<const RGB> first_radiance, const TileWork& more,
                            std::span<const RGB> more_radiance, std::span<const uint32_t> shaded_of_pixel,
