@@ -295,7 +295,7 @@ class RendererActor final : public Actor {
       rt.fail(std::string("tracing camera rays through the scene's parts failed: ") + e.what());
       co_return;
     }
-    more_sample_points(scene(), *camera_, image_, rect, more, hits, job->shaded_of_pixel, job->work);
+    more_sample_points(scene(), *camera_, image_, rect, more, hits, job->work);
     if (colocate_) {
       // Indexed as the second round's tile counts samples: max(spp, adaptive_spp) a pixel.
       job->sample_part.assign(static_cast<size_t>(rect.pixel_count()) * static_cast<size_t>(job->work.spp),

@@ -79,7 +79,7 @@ void tile_points(const Scene& scene, const Camera& camera, const ImageSpec& imag
                  std::span<const Ray> rays, std::span<const Hit> hits, std::span<const uint64_t> keys, TileWork& work,
                  const EmitterEdges& edges) {
   const size_t samples = keys.size();
-  tile_points(scene, camera, image, rect, rays.first(samples), hits.first(samples), keys, {}, work);
+  first_round_points(scene, camera, image, rect, rays.first(samples), hits.first(samples), keys, work);
   if (rays.size() == samples) return;
   // Each outline pixel's emission is the mean over all its seen samples, written to each of its spp samples so that
   // whatever averages a pixel's samples' emission averages them all.
@@ -96,49 +96,61 @@ void tile_points(const Scene& scene, const Camera& camera, const ImageSpec& imag
     }
 }
 
-void tile_points(const Scene& scene, const Camera& camera, const ImageSpec& image, const TileRect& rect,
-                 std::span<const Ray> rays, std::span<const Hit> hits, std::span<const uint64_t> keys,
-                 std::span<const uint32_t> more_shaded, TileWork& work) {
-  const size_t samples = rays.size();
+namespace {
+
+// A tile's points start empty, with what says how to read them.
+void start_points(const Camera& camera, const ImageSpec& image, const TileRect& rect, size_t samples, TileWork& work) {
   work.rect = rect;
   work.spp = image.spp;
   work.shaded = image.shade_spp;
-  const size_t per_pixel = static_cast<size_t>(image.spp), shaded = static_cast<size_t>(image.shaded_per_pixel());
   work.points.clear();
-  work.points.reserve(samples);
   work.sample_of_point.clear();
   work.distance.clear();
   work.eye = camera.eye();
   work.emitted.assign(samples, RGB{});
-  work.rebuildable = true;  // every point below is pushed as surface_at, point_on_ray and tile_sample_key give it
+  work.rebuildable = true;  // every point is pushed as surface_at, point_on_ray and tile_sample_key give it
   work.sampler = sampler_of(image);
   work.image_width = image.width;
+}
+
+// Sample `sample`'s shading point, where its camera ray hit; returns the emission the camera sees there.
+RGB push_point(const Scene& scene, const Camera& camera, const Ray& ray, const Hit& hit, uint64_t key, uint32_t sample,
+               TileWork& work) {
+  const uint32_t tri = hit.triangle;
+  const Vec3 wo = -ray.direction;
+  const Vec3 p = point_on_ray(ray.origin, wo, hit.t);
+  const SurfacePoint sp = surface_at(scene, tri, p, wo);
+  work.points.push_back(p, sp.ns, wo, scene.material_of(tri), key, tri);
+  work.sample_of_point.push_back(sample);
+  // Rays through a lens leave from points other than the eye: their points travel as positions, not as
+  // distances from the eye (actors/runtime/lean_points.cpp rebuilds a point only from the eye).
+  if (!camera.has_lens()) work.distance.push_back(hit.t);
+  return sp.front && scene.material(scene.material_of(tri)).emissive() ? scene.emission_at(tri, p) : RGB{};
+}
+
+}  // namespace
+
+void first_round_points(const Scene& scene, const Camera& camera, const ImageSpec& image, const TileRect& rect,
+                        std::span<const Ray> rays, std::span<const Hit> hits, std::span<const uint64_t> keys,
+                        TileWork& work) {
+  const size_t samples = rays.size();
+  start_points(camera, image, rect, samples, work);
+  work.points.reserve(samples);
+  const size_t per_pixel = static_cast<size_t>(image.spp), shaded = static_cast<size_t>(image.shaded_per_pixel());
   for (size_t i = 0; i < samples; ++i) {
     if (!hits[i].valid()) {
-      // What the camera sees beyond the scene: the environment, if it shows it. (An adaptive second round's rays
-      // that were not traced again have no hit either; its emission is never read.)
-      if (more_shaded.empty() && scene.environment()) work.emitted[i] = scene.background(rays[i].direction);
+      // What the camera sees beyond the scene: the environment, if it shows it.
+      if (scene.environment()) work.emitted[i] = scene.background(rays[i].direction);
       continue;
     }
-    const uint32_t tri = hits[i].triangle;
-    const Vec3 wo = -rays[i].direction;
-    const Material& m = scene.material(scene.material_of(tri));
-    if (!more_shaded.empty()) {  // the samples from `shaded` up to the pixel's own count, and only those
-      const size_t k = i % per_pixel;
-      if (k < shaded || k >= more_shaded[i / per_pixel]) continue;
-    } else if (i % per_pixel >= shaded) {  // seen, not shaded: only its emission counts (surface_at's front)
-      if (m.emissive() && dot(scene.normal(tri), wo) > 0)
+    if (i % per_pixel >= shaded) {  // seen, not shaded: only its emission counts (surface_at's front)
+      const uint32_t tri = hits[i].triangle;
+      const Vec3 wo = -rays[i].direction;
+      if (scene.material(scene.material_of(tri)).emissive() && dot(scene.normal(tri), wo) > 0)
         work.emitted[i] = scene.emission_at(tri, point_on_ray(rays[i].origin, wo, hits[i].t));
       continue;
     }
-    const Vec3 p = point_on_ray(rays[i].origin, wo, hits[i].t);
-    const SurfacePoint sp = surface_at(scene, tri, p, wo);
-    if (sp.front && m.emissive()) work.emitted[i] = scene.emission_at(tri, p);
-    work.points.push_back(p, sp.ns, wo, scene.material_of(tri), keys[i], tri);
-    work.sample_of_point.push_back(static_cast<uint32_t>(i));
-    // Rays through a lens leave from points other than the eye: their points travel as positions, not as
-    // distances from the eye (actors/runtime/lean_points.cpp rebuilds a point only from the eye).
-    if (!camera.has_lens()) work.distance.push_back(hits[i].t);
+    work.emitted[i] = push_point(scene, camera, rays[i], hits[i], keys[i], static_cast<uint32_t>(i), work);
   }
 }
 
@@ -178,23 +190,17 @@ MoreSamples more_sample_rays(const Camera& camera, const ImageSpec& image, const
 }
 
 void more_sample_points(const Scene& scene, const Camera& camera, const ImageSpec& image, const TileRect& rect,
-                        const MoreSamples& more, std::span<const Hit> hits, std::span<const uint32_t> shaded_of_pixel,
-                        TileWork& work) {
-  // The second round's tile counts max(spp, adaptive_spp) samples a pixel; tile_points reads the wanted ones by
-  // their index in it, and the rest stay unread.
+                        const MoreSamples& more, std::span<const Hit> hits, TileWork& work) {
+  // The second round's tile counts max(spp, adaptive_spp) samples a pixel, so that each point's sample index (and
+  // the key a lean input rebuilds from it) is its place in the pixel's sequence. Only the wanted samples are
+  // held; the tile has no emission, which is the first round's.
   ImageSpec wide = image;
   wide.spp = std::max(image.spp, image.adaptive_spp);
   wide.shade_spp = image.shaded_per_pixel();
-  const size_t samples = static_cast<size_t>(rect.pixel_count()) * static_cast<size_t>(wide.spp);
-  std::vector<Ray> rays(samples);
-  std::vector<Hit> all_hits(samples);
-  std::vector<uint64_t> keys(samples);
-  for (size_t j = 0; j < more.sample.size(); ++j) {
-    rays[more.sample[j]] = more.rays[j];
-    all_hits[more.sample[j]] = hits[j];
-    keys[more.sample[j]] = more.keys[j];
-  }
-  tile_points(scene, camera, wide, rect, rays, all_hits, keys, shaded_of_pixel, work);
+  start_points(camera, wide, rect, 0, work);
+  work.points.reserve(more.sample.size());
+  for (size_t j = 0; j < more.sample.size(); ++j)
+    if (hits[j].valid()) push_point(scene, camera, more.rays[j], hits[j], more.keys[j], more.sample[j], work);
 }
 
 void trace_more_samples(const Scene& scene, const RayTracer& tracer, const Camera& camera, const ImageSpec& image,
@@ -202,7 +208,7 @@ void trace_more_samples(const Scene& scene, const RayTracer& tracer, const Camer
   const MoreSamples more = more_sample_rays(camera, image, rect, shaded_of_pixel);
   std::vector<Hit> hits(more.rays.size());
   tracer.intersect(more.rays, hits, /*coherent=*/true);
-  more_sample_points(scene, camera, image, rect, more, hits, shaded_of_pixel, work);
+  more_sample_points(scene, camera, image, rect, more, hits, work);
 }
 
 std::vector<uint32_t> adaptive_shaded_counts(const ImageSpec& image, const TileWork& work, std::span<const RGB> radiance) {

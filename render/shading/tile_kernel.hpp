@@ -38,7 +38,8 @@ struct TileWork {
   std::vector<uint32_t> sample_of_point;  // which sample (pixel-major, then sample index) each point is
   std::vector<float> distance;          // per point: how far along its camera ray from `eye` it lies
   Vec3 eye{};                           // where every camera ray starts (a pinhole's; through a lens, `distance` is empty)
-  std::vector<RGB> emitted;             // per sample: emission the camera sees directly
+  std::vector<RGB> emitted;             // per sample: emission the camera sees directly (none in an adaptive
+                                        // second round's tile: its pixels' emission is the first round's)
   // Set by trace_tile: every point is exactly what a lean input rebuilds from the scene and the tile (position by
   // point_on_ray from eye and distance, key by tile_sample_key, normal by surface_at, material by material_of), so
   // a request need not check it point by point (actors/codecs/shade_codec.hpp). Keys are rebuildable only with the
@@ -67,11 +68,10 @@ void tile_camera_rays(const Camera& camera, const ImageSpec& image, const TileRe
 void tile_points(const Scene& scene, const Camera& camera, const ImageSpec& image, const TileRect& rect,
                  std::span<const Ray> rays, std::span<const Hit> hits, std::span<const uint64_t> keys, TileWork& work,
                  const EmitterEdges& edges = no_edges());
-// As above, for an adaptive tile's second round: only the samples of pixel p from shaded_per_pixel() up to
-// more_shaded[p] become points (nothing else is touched in `work` but its points).
-void tile_points(const Scene& scene, const Camera& camera, const ImageSpec& image, const TileRect& rect,
-                 std::span<const Ray> rays, std::span<const Hit> hits, std::span<const uint64_t> keys,
-                 std::span<const uint32_t> more_shaded, TileWork& work);
+// As above without the outline's extra samples (rays, hits and keys: one a sample of the tile).
+void first_round_points(const Scene& scene, const Camera& camera, const ImageSpec& image, const TileRect& rect,
+                        std::span<const Ray> rays, std::span<const Hit> hits, std::span<const uint64_t> keys,
+                        TileWork& work);
 // Both, with the rays traced by `tracer`.
 void trace_tile(const Scene& scene, const RayTracer& tracer, const Camera& camera, const ImageSpec& image,
                 const TileRect& rect, TileWork& work, const EmitterEdges& edges = no_edges());
@@ -98,8 +98,7 @@ struct MoreSamples {
 MoreSamples more_sample_rays(const Camera& camera, const ImageSpec& image, const TileRect& rect,
                              std::span<const uint32_t> shaded_of_pixel);
 void more_sample_points(const Scene& scene, const Camera& camera, const ImageSpec& image, const TileRect& rect,
-                        const MoreSamples& more, std::span<const Hit> hits, std::span<const uint32_t> shaded_of_pixel,
-                        TileWork& work);
+                        const MoreSamples& more, std::span<const Hit> hits, TileWork& work);
 // pixels[p] = mean of emission over all spp samples + the lighting of both rounds' points over shaded_of_pixel[p].
 void resolve_adaptive_tile(const TileWork& first, std::span<const RGB> first_radiance, const TileWork& more,
                            std::span<const RGB> more_radiance, std::span<const uint32_t> shaded_of_pixel,
