@@ -288,8 +288,13 @@ Result<Environment> Environment::read(std::string_view in) {
   if (has_sun) {
     Sun s;
     if (!r.vec(s.direction) || !r.f32(s.angle) || !r.vec(s.irradiance)) return bad("cut short");
-    if (!(length(s.direction) > 0) || !(s.angle > 0) || !(s.angle < kPi)) return bad("its sun is malformed");
-    env.set_sun(s);
+    if (!(std::fabs(length(s.direction) - 1) <= 1e-5f) || !(s.angle > 0) || !(s.angle < kPi))
+      return bad("its sun is malformed");
+    // Written as set_sun made it: kept as it is, so that a shipped scene's sun is the director's bit for bit (set_sun
+    // would normalize the direction again, which can move it by an ulp, and a job's frame moves the sun by set_sun).
+    s.irradiance = non_negative(s.irradiance);
+    env.sun_ = s;
+    env.build();
   }
   if (!r.done()) return bad("has bytes after its end");
   return env;
