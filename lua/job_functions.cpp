@@ -1,5 +1,5 @@
 // The script function that makes a farm a job of frames: frames { first, last, step, camera = function(frame),
-// materials = function(frame) }.
+// materials = function(frame), sun = function(frame) }.
 // What it means, and camera { keys }, is farm/job.hpp; the frames to render are made when the script ends
 // (script.cpp, with --frames).
 #include "farm/spec_readers.hpp"
@@ -22,7 +22,9 @@ Value::Array read_frame_materials(const Value& returned, const std::vector<std::
 }
 
 // frames { first = 1, last = 240, step = 1, camera = function(frame) return { eye = ..., at = ... } end,
-//          materials = function(frame) return { Torch = { emission = ... } } end }
+//          materials = function(frame) return { Torch = { emission = ... } } end,
+//          sun = function(frame) return { direction = ..., irradiance = ... } end }
+// A frame's sun travels with its material changes, as an entry {name = "sun", sun = {...}} (Scene::apply_sun_changes).
 int l_frames(lua_State* L) {
   Builder& b = builder(L);
   if (b.spec.job.declared) luaL_error(L, "frames is declared twice");
@@ -30,9 +32,10 @@ int l_frames(lua_State* L) {
   // The functions are called for each frame here, while the script runs (under its budget); the cameras' tables are
   // read over camera { } when the script ends.
   lua_settop(L, 1);
-  int functions[2] = {0, 0};  // stack index of the camera and the materials function, or 0
-  const char* names[2] = {"camera", "materials"};
-  for (int i = 0; i < 2; ++i) {
+  int functions[3] = {0, 0, 0};  // stack index of the camera, the materials and the sun function, or 0
+  const char* names[3] = {"camera", "materials", "sun"};
+  static const char* returns[3] = {"camera table", "table of materials by name", "sun table"};
+  for (int i = 0; i < 3; ++i) {
     lua_getfield(L, 1, names[i]);
     if (lua_isfunction(L, -1)) functions[i] = lua_gettop(L);
     else if (!lua_isnil(L, -1)) luaL_error(L, "frames: %s must be a function of the frame number", names[i]);
@@ -55,18 +58,29 @@ int l_frames(lua_State* L) {
       if (const Value* name = light.find("name")) material_names.push_back(name->as_string());
   }
   for (int frame : job.numbers()) {
-    for (int i = 0; i < 2; ++i) {
+    for (int i = 0; i < 3; ++i) {
       if (!functions[i]) continue;
       lua_pushvalue(L, functions[i]);
       lua_pushinteger(L, frame);
       lua_call(L, 1, 1);
       if (!lua_istable(L, -1))
         luaL_error(L, "frames: the %s function returned a %s for frame %d, not a %s", names[i], luaL_typename(L, -1),
-                   frame, i == 0 ? "camera table" : "table of materials by name");
+                   frame, returns[i]);
       const Value returned = to_value(L, -1, std::string("frames: the ") + names[i] + " function's table for frame " + std::to_string(frame));
       lua_pop(L, 1);
       if (i == 0) job.camera_of_frame[frame] = returned;
-      else with_params(L, [&] { job.materials_of_frame[frame] = read_frame_materials(returned, material_names, frame); });
+      else if (i == 1) with_params(L, [&] { job.materials_of_frame[frame] = read_frame_materials(returned, material_names, frame); });
+      else
+        with_params(L, [&] {
+          // Read as sun { } reads its table (after the materials, which it joins).
+          Value sun;
+          try {
+            sun = read_sun(ParamTable(returned.as_map(), "sun"));
+          } catch (const ParamError& e) {
+            throw ParamError("frames: frame " + std::to_string(frame) + ": " + e.what());
+          }
+          job.materials_of_frame[frame].push_back(Value::Map{{"name", "sun"}, {"sun", *sun.find("sun")}});
+        });
     }
   }
   return 0;

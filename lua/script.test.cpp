@@ -562,6 +562,19 @@ TEST_F(ScriptTest, FramesMakeAJob) {
   EXPECT_EQ(error_of(head + "light { name = \"a\", sphere = {0, 500, 0}, radius = 20, radiance = {1, 1, 1} }\n"
                      "light { name = \"a\", sphere = {0, 400, 0}, radius = 20, radiance = {1, 1, 1} }\n" + net),
             "farm.lua:4: light: name 'a' is given twice");
+  // frames { sun }: each frame's sun, read as sun { } reads it, after that frame's materials.
+  r = evaluate_script(write("farm.lua", head + "sun { direction = {0, 1, 0}, irradiance = {1, 1, 1} }\n"
+                                 "frames { last = 2, materials = function(f) return { light = { emission = {f, f, f} } } end,\n"
+                                 "  sun = function(f) return { direction = {f, 1, 0}, irradiance = {2, 2, 2} } end }\n" + net));
+  ASSERT_TRUE(r.ok()) << r.error().message;
+  ASSERT_EQ(r->frames[1].materials.size(), 2u);
+  EXPECT_EQ(r->frames[1].materials[0].find("name")->as_string(), "light");
+  EXPECT_EQ(r->frames[1].materials[1].find("name")->as_string(), "sun");
+  EXPECT_EQ(r->frames[1].materials[1].find("sun")->find("direction")->as_array()[0].as_double(), 2);
+  EXPECT_EQ(error_of(head + "frames { last = 3, sun = function(f) return { irradiance = {1, 1, 1} } end }\n" + net),
+            "farm.lua:3: frames: frame 1: sun needs a direction = {x, y, z} (towards the sun)");
+  EXPECT_EQ(error_of(head + "frames { last = 3, sun = function(f) return f end }\n" + net),
+            "farm.lua:3: frames: the sun function returned a number for frame 1, not a sun table");
   EXPECT_EQ(error_of(head + "frames { last = 3, materials = 5 }\n" + net),
             "farm.lua:3: frames: materials must be a function of the frame number");
   EXPECT_EQ(error_of(head + "frames { last = 3, materials = function(f) return f end }\n" + net),

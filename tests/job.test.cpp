@@ -258,6 +258,53 @@ TEST_F(JobTest, MaterialsChangedByAFrameSetEverythingUpAnewFromThatFrame) {
   }
 }
 
+// frames { sun }: the sun moves from frame to frame (here across the sky over a block on the ground), and each
+// frame equals the farm of that frame alone whose script declares the sun where the job's frame puts it. A job
+// that moves a sun the script never declared is refused before launch, at the frames line.
+TEST_F(JobTest, TheSunMovesFromFrameToFrame) {
+  write("yard.obj", "v -5 0 -5\nv 5 0 -5\nv 5 0 5\nv -5 0 5\nf 1 4 3 2\n"
+                    "v -0.5 0 -0.5\nv 0.5 0 -0.5\nv 0.5 0 0.5\nv -0.5 0 0.5\n"
+                    "v -0.5 1 -0.5\nv 0.5 1 -0.5\nv 0.5 1 0.5\nv -0.5 1 0.5\n"
+                    "f 9 10 11 12\nf 5 6 7 8\nf 5 9 10 6\nf 6 10 11 7\nf 7 11 12 8\nf 8 12 9 5\n");
+  const std::string sun_script = write("sun.lua", R"(
+scene  { file = "yard.obj" }
+camera { eye = {0, 4, 7}, at = {0, 0.3, 0}, fov = 50 }
+image  { width = 32, height = 32, spp = 2, tile = 16, output = param("out", "sun.####.exr") }
+farm   { light_paths = "partial" }  -- direct light alone
+local function sun_at(f) return { direction = {f - 2, 1.5, 0.5}, irradiance = {3, 3, 3} } end
+local single = param("frame", 0)
+if param("declared", true) then sun(sun_at(single > 0 and single or 1)) else light { point = {0, 5, 0}, intensity = {20, 20, 20} } end
+if single == 0 then frames { first = 1, last = 3, sun = sun_at } end
+renderers { count = 2, lighting = lightop "direct" {} }
+)");
+  auto run_sun = [&](const std::string& out, std::vector<std::string> extra) {
+    std::vector<std::string> a{"run", sun_script, "--set", "out=" + path(out), "--quiet"};
+    a.insert(a.end(), extra.begin(), extra.end());
+    return run_lightfarm(a);
+  };
+  const auto job = run_sun("sun.####.exr", {});
+  ASSERT_EQ(job.status, 0) << job.err;
+  expect_no_leftovers(job);
+  for (int n = 1; n <= 3; ++n) {
+    const auto alone = run_sun("alone.exr", {"--set", "frame=" + std::to_string(n)});
+    ASSERT_EQ(alone.status, 0) << alone.err;
+    EXPECT_TRUE(same_pixels(frame("sun", n), path("alone.exr"))) << "frame " << n << " is not its farm alone";
+  }
+  auto a = read_image(frame("sun", 1)), b = read_image(frame("sun", 3));
+  ASSERT_TRUE(a.ok() && b.ok());
+  size_t differ = 0;
+  for (size_t i = 0; i < a->pixels.size(); ++i) differ += !(a->pixels[i] == b->pixels[i]);
+  EXPECT_GT(differ, a->pixels.size() / 4) << "the block's shadow did not move with the sun";
+
+  const auto undeclared = run_sun("u.####.exr", {"--set", "declared=false"});
+  EXPECT_EQ(undeclared.status, 2) << undeclared.err;
+  EXPECT_NE(undeclared.err.find("sun.lua:9: frames: the sun changes from frame to frame, but the scene has no sun: "
+                                "declare its first state with sun { }"),
+            std::string::npos)
+      << undeclared.err;
+  expect_no_leftovers(undeclared);
+}
+
 // --preview-every: while a frame renders its partial image (finished tiles, the rest black) is beside the output;
 // it goes once the frame is written.
 TEST_F(JobTest, APreviewShowsTheFrameWhileItRenders) {

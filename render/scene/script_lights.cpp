@@ -45,6 +45,18 @@ static Result<Environment> script_environment(const Value& e) {
   return env;
 }
 
+// A sun as sun { } gives it (farm/spec_readers.hpp, read_sun): towards it, its irradiance, its angle in degrees.
+static Result<Sun> sun_of(const Value& sv) {
+  Sun made;
+  if (!vec3_of(sv.find("direction"), made.direction) || !(length(made.direction) > 0))
+    return make_error("sun needs a direction {x, y, z} (towards the sun) that is not 0");
+  if (!vec3_of(sv.find("irradiance"), made.irradiance)) return make_error("sun needs irradiance = {r, g, b}");
+  const float degrees = number_or(sv, "angle", made.angle * 180 / kPi);
+  if (!(degrees > 0 && degrees < 90)) return make_error("sun: angle must be above 0 and below 90 degrees");
+  made.angle = degrees * kPi / 180;
+  return made;
+}
+
 Status Scene::add_script_lights(const Value::Array& lights) {
   std::optional<Environment> environment;
   std::optional<Sun> sun;
@@ -59,14 +71,9 @@ Status Scene::add_script_lights(const Value::Array& lights) {
     }
     if (const Value* sv = l.find("sun")) {
       if (sun) return make_error("sun is declared twice");
-      Sun made;
-      if (!vec3_of(sv->find("direction"), made.direction) || !(length(made.direction) > 0))
-        return make_error("sun needs a direction {x, y, z} (towards the sun) that is not 0");
-      if (!vec3_of(sv->find("irradiance"), made.irradiance)) return make_error("sun needs irradiance = {r, g, b}");
-      const float degrees = number_or(*sv, "angle", made.angle * 180 / kPi);
-      if (!(degrees > 0 && degrees < 90)) return make_error("sun: angle must be above 0 and below 90 degrees");
-      made.angle = degrees * kPi / 180;
-      sun = made;
+      auto made = sun_of(*sv);
+      if (!made) return made.error();
+      sun = *made;
       continue;
     }
     const std::string which = "light " + std::to_string(i + 1);
@@ -176,8 +183,24 @@ Status Scene::add_script_shapes(const Value::Array& shapes) {
 
 Status Scene::apply_material_overrides(const Value::Array& overrides) { return change_materials(materials_, overrides); }
 
+Status Scene::apply_sun_changes(const Value::Array& changes) {
+  for (const Value& c : changes) {
+    const Value* sv = c.find("sun");
+    if (!sv) continue;
+    if (!environment_ || !environment_->sun())
+      return make_error("the sun changes, but the scene has none (declare its first state with sun { })");
+    auto made = sun_of(*sv);
+    if (!made) return made.error();
+    Environment sky = *environment_;  // the map and its distribution are kept; the sun's share is built again
+    sky.set_sun(*made);
+    set_environment(std::move(sky));
+  }
+  return Ok{};
+}
+
 Status Scene::change_materials(std::vector<Material>& materials, const Value::Array& overrides) {
   for (const Value& o : overrides) {
+    if (o.find("sun")) continue;  // a frame's sun (apply_sun_changes), not a material
     const Value* name = o.find("name");
     if (!name || !name->is_string()) return make_error("a material change names no material");
     Material* m = nullptr;
