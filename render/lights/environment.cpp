@@ -68,7 +68,7 @@ void Environment::set_sun(const Sun& sun) {
   sun_ = sun;
   sun_->direction = normalize(sun.direction);
   sun_->irradiance = non_negative(sun.irradiance);
-  build();
+  build_sun();  // the map's distribution does not depend on the sun
 }
 
 Vec3 Environment::direction_of(float u, float v) {
@@ -129,6 +129,10 @@ void Environment::build() {
   } else {
     map_power_ = average(constant_) * 4 * kPiD;
   }
+  build_sun();
+}
+
+void Environment::build_sun() {
   sun_power_ = 0;
   sun_share_ = 0;
   if (sun_) {
@@ -294,7 +298,7 @@ Result<Environment> Environment::read(std::string_view in) {
     // would normalize the direction again, which can move it by an ulp, and a job's frame moves the sun by set_sun).
     s.irradiance = non_negative(s.irradiance);
     env.sun_ = s;
-    env.build();
+    env.build_sun();
   }
   if (!r.done()) return bad("has bytes after its end");
   return env;

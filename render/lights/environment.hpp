@@ -81,7 +81,8 @@ class Environment {
   std::string describe() const;  // for the scene report
 
  private:
-  void build();
+  void build();      // the map's distribution, then build_sun()
+  void build_sun();  // the sun's disc and its share of the samples (over the map's power)
   Vec3 to_map(Vec3 wi) const;    // scene direction -> the unrotated map's frame
   Vec3 from_map(Vec3 d) const;
   float map_pdf(Vec3 wi) const;

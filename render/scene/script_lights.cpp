@@ -191,7 +191,7 @@ Status Scene::apply_sun_changes(const Value::Array& changes) {
       return make_error("the sun changes, but the scene has none (declare its first state with sun { })");
     auto made = sun_of(*sv);
     if (!made) return made.error();
-    Environment sky = *environment_;  // the map and its distribution are kept; the sun's share is built again
+    Environment sky = *environment_;  // the map and its distribution are copied as they are; only the sun is built
     sky.set_sun(*made);
     set_environment(std::move(sky));
   }
