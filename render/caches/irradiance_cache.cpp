@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstring>
+#include <stdexcept>
 
 namespace lf {
 
@@ -89,9 +90,9 @@ void IrradianceCache::insert(const IrradianceRecord& r) {
   grid_cell_ = 0;  // a frozen grid no longer lists everything
   grid_.clear();
   grid_levels_.clear();
-  // Valid where |x - x_i| / R_i < a (up to kMaxRelax * a for relaxed lookups): the deepest level whose cells are
+  // Valid where |x - x_i| / R_i < a (up to max_relax * a for relaxed lookups): the deepest level whose cells are
   // at least that wide.
-  const float valid = kMaxRelax * a_ * r.harmonic_distance;
+  const float valid = max_relax_ * a_ * r.harmonic_distance;
   int level = 0;
   while (level < 20 && cell_size(level + 1) >= valid) ++level;
   if (std::find(levels_.begin(), levels_.end(), level) == levels_.end()) {
@@ -116,7 +117,7 @@ void IrradianceCache::freeze() {
   // on Lost Empire 1726 of 5635 records, 1700 candidates a lookup, ~10 us.)
   constexpr double kMaxCells = 512;
   std::vector<float> radius;
-  for (const auto& r : records_) radius.push_back(kMaxRelax * a_ * r.harmonic_distance);
+  for (const auto& r : records_) radius.push_back(max_relax_ * a_ * r.harmonic_distance);
   std::vector<float> sorted = radius;
   std::nth_element(sorted.begin(), sorted.begin() + static_cast<long>(sorted.size() / 2), sorted.end());
   grid_cell_ = std::max(0.5f * sorted[sorted.size() / 2], 1e-6f * root_);
@@ -190,6 +191,8 @@ int IrradianceCache::lookup_first(Vec3 x, Vec3 n, std::span<const float> relax, 
   double weight_sum[kMaxBounds] = {};
   uint32_t count[kMaxBounds] = {};
   RGB sum[kMaxBounds] = {};
+  if (relax[bounds - 1] > max_relax_ * 1.0001f)
+    throw std::invalid_argument("irradiance cache: a lookup wider than the cache was built for");
   const float widest = a_ * relax[bounds - 1];
   for_candidates(x, [&](const IrradianceRecord& r) {
     const Vec3 d = x - r.position;

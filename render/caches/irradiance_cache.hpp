@@ -1,6 +1,7 @@
 #pragma once
 // Ward's irradiance cache with Ward & Heckbert's irradiance gradients: the data structure and its arithmetic, apart
 // from the LightOp that fills it (lightops/irradiance.cpp).
+#include <algorithm>
 #include <cstdint>
 #include <span>
 #include <string>
@@ -37,15 +38,18 @@ Vec3 stratum_direction(int j, int k, int m, int n, float a, float b, Vec3 u, Vec
 
 class IrradianceCache {
  public:
-  // `a`: Ward's error bound; `extent`: the scene's size (sets the octree's root cell).
-  IrradianceCache(float a, float extent) : a_(a), root_(extent) {}
+  // `a`: Ward's error bound; `extent`: the scene's size (sets the octree's root cell); `max_relax`: the widest
+  // bound any lookup will use, as a multiple of a (at most kMaxRelax). Records are listed only where that bound
+  // reaches, so a cache whose lookups never relax lists each record in far fewer cells.
+  IrradianceCache(float a, float extent, float max_relax = kMaxRelax)
+      : a_(a), root_(extent), max_relax_(std::clamp(max_relax, 1.0f, kMaxRelax)) {}
 
   void insert(const IrradianceRecord& r);
   // Weighted, gradient-extrapolated irradiance at (x, n) from the records whose error there is below relax * a;
-  // false when there is none. relax may be at most kMaxRelax.
+  // false when there is none. relax may be at most max_relax.
   bool lookup(Vec3 x, Vec3 n, RGB& irradiance, float relax = 1.0f) const;
   // The lookups under bounds relax[0] * a, relax[1] * a, ... (ascending, at most 4 of them, each at most
-  // kMaxRelax) in one pass over the records: the index of the first that found records, its irradiance in
+  // max_relax) in one pass over the records: the index of the first that found records, its irradiance in
   // `irradiance`, or -1. Gives exactly what the separate lookups would. `records`, if given: how many records that
   // answer averaged.
   int lookup_first(Vec3 x, Vec3 n, std::span<const float> relax, RGB& irradiance, uint32_t* records = nullptr) const;
@@ -78,6 +82,7 @@ class IrradianceCache {
 
   float a_;
   float root_;
+  float max_relax_;
   std::vector<IrradianceRecord> records_;
   std::unordered_map<Key, std::vector<uint32_t>, KeyHash> cells_;
   std::vector<int> levels_;  // levels that hold records, ascending: lookups visit only these

@@ -60,7 +60,7 @@ class Irradiance final : public LightOp {
     if (m_ == 0) m_ = derived.theta;
     if (n_ == 0) n_ = derived.phi;
     extent_ = scene.bounds().diagonal();
-    cache_ = std::make_unique<IrradianceCache>(a_, extent_);
+    cache_ = std::make_unique<IrradianceCache>(a_, extent_, bounds_.back());
     if (inputs.count() != 1) throw LightOpError("irradiance needs one input");
 
     if (placement_ == Placement::camera) {
@@ -101,7 +101,7 @@ class Irradiance final : public LightOp {
     for (const IrradianceRecord& r : records)
       if (!finite(r.position) || !finite(r.normal) || !(r.harmonic_distance > 0) || !std::isfinite(r.harmonic_distance))
         throw LightOpError("irradiance: a kept cache with a record no cache makes");
-    auto cache = std::make_unique<IrradianceCache>(a_, extent_);
+    auto cache = std::make_unique<IrradianceCache>(a_, extent_, bounds_.back());
     for (const IrradianceRecord& r : records) cache->insert(r);
     cache->freeze();
     cache_ = std::move(cache);
