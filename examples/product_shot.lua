@@ -10,9 +10,11 @@
 --                                                                    product_shot.0001.png ... 0004.png)
 --   lightfarm run examples/product_shot.lua --set day=5             (the sun crossing the sky over the grid, morning
 --                                                                    to evening, under a dimmed sky: 5 frames)
+--   lightfarm run examples/product_shot.lua --set turn=8            (the HDRI turned once around the grid: 8 frames,
+--                                                                    the reflections and shadows going round)
 
 scene       { file = "../../shared/scenes/gltf/balls.glb" }
-local day = param("day", 0)
+local day, turn = param("day", 0), param("turn", 0)
 environment { map = "../../shared/scenes/gltf/hdri/" .. param("hdri", "sunset") .. ".exr",
               rotation = param("rotation", 200), intensity = day > 0 and 0.25 or 1 }
 -- --set day=N: a sun that rises at the left, stands highest at the middle frame and sets at the right (frames { sun }:
@@ -32,12 +34,15 @@ camera { eye = {-3.5, 0.7, 3.0}, at = {-0.5, 0.4, 0}, fov = 32,
          aperture = param("aperture", 0.06), focus_distance = 3.13 }
 local variants = param("variants", 0)
 image  { width = param("width", 640), height = param("height", 360), spp = param("spp", 64),
-         output = param("output", (variants > 0 or day > 0) and "product_shot.####.png" or "product_shot.png"), tonemap = "aces",
+         output = param("output", (variants > 0 or day > 0 or turn > 0) and "product_shot.####.png" or "product_shot.png"), tonemap = "aces",
          exposure = param("exposure", 0.5) }
 -- Colour variants as a job: one farm, each frame the dielectric balls (the file's Ball_m0_*) in another base colour
 -- (frames { materials }: a frame's changes to named materials, over the scene as the script leaves it).
 if day > 0 then
   frames { first = 1, last = day, sun = sun_of }
+elseif turn > 0 then
+  -- frames { environment }: each frame's rotation of the map (the map itself is shipped once).
+  frames { first = 1, last = turn, environment = function(f) return { rotation = (param("rotation", 200) + 360 * (f - 1) / turn) % 360 } end }
 elseif variants > 0 then
   local colours = { {0.2, 0.35, 0.8}, {0.8, 0.15, 0.1}, {0.15, 0.6, 0.25}, {0.85, 0.85, 0.82} }
   frames { first = 1, last = variants, materials = function(f)

@@ -198,6 +198,25 @@ Value read_environment(const ParamTable& p, const fs::path& script_dir) {
   return Value(Value::Map{{"environment", Value(std::move(e))}});
 }
 
+Value read_frame_environment(const ParamTable& p) {
+  if (p.has("map"))
+    throw ParamError("environment: a frame cannot change the map (it is shipped with the scene once): declare it with "
+                     "environment { map = ... } and change its intensity or rotation");
+  if (p.has("camera")) throw ParamError("environment: whether the camera sees it is the declared environment's, for every frame");
+  Value::Map e;
+  if (p.has("radiance")) {
+    const auto c = p.get_vec3("radiance", {0, 0, 0});
+    for (double v : c)
+      if (!(v >= 0 && v <= 1e6)) throw ParamError("environment: radiance must be between 0 and 1e6 in each channel");
+    e["radiance"] = Value::Array{c[0], c[1], c[2]};
+  }
+  if (p.has("rotation")) e["rotation"] = p.get_float("rotation", 0, -360, 360);
+  if (p.has("intensity")) e["intensity"] = p.get_float("intensity", 1, 0, 1e6);
+  if (e.empty()) throw ParamError("environment: a frame's table gives its intensity, rotation or radiance");
+  p.report_unused();
+  return Value(Value::Map{{"environment", Value(std::move(e))}});
+}
+
 Value read_sun(const ParamTable& p) {
   Value::Map sun;
   if (!p.has("direction")) throw ParamError("sun needs a direction = {x, y, z} (towards the sun)");

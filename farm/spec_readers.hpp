@@ -39,6 +39,10 @@ Value read_light(const Value& light);
 // intensity, camera }: the light at infinity (render/lights/environment.hpp), the map there; rotation in degrees
 // about the up axis; camera = false hides it from camera rays. As the scene adds it: {environment = {...}}.
 Value read_environment(const ParamTable& p, const std::filesystem::path& script_dir);
+// A job frame's environment (frames { environment = function(frame) }): a map's intensity and rotation (degrees),
+// or a constant one's radiance and intensity; the map and whether the camera sees it are the declared
+// environment's. {environment = {...}} with only the keys given.
+Value read_frame_environment(const ParamTable& p);
 // sun { direction = {x, y, z}, irradiance = {r, g, b}, angle = 0.526 }: a disc towards `direction`, `angle` degrees
 // across, giving `irradiance` (W/m^2) to a surface facing it. As the scene adds it: {sun = {...}}.
 Value read_sun(const ParamTable& p);

@@ -1,5 +1,5 @@
 // The script function that makes a farm a job of frames: frames { first, last, step, camera = function(frame),
-// materials = function(frame), sun = function(frame) }.
+// materials = function(frame), sun = function(frame), environment = function(frame) }.
 // What it means, and camera { keys }, is farm/job.hpp; the frames to render are made when the script ends
 // (script.cpp, with --frames).
 #include "farm/spec_readers.hpp"
@@ -23,8 +23,10 @@ Value::Array read_frame_materials(const Value& returned, const std::vector<std::
 
 // frames { first = 1, last = 240, step = 1, camera = function(frame) return { eye = ..., at = ... } end,
 //          materials = function(frame) return { Torch = { emission = ... } } end,
-//          sun = function(frame) return { direction = ..., irradiance = ... } end }
-// A frame's sun travels with its material changes, as an entry {name = "sun", sun = {...}} (Scene::apply_sun_changes).
+//          sun = function(frame) return { direction = ..., irradiance = ... } end,
+//          environment = function(frame) return { rotation = ..., intensity = ... } end }
+// A frame's sun and environment travel with its material changes, as entries {name = "sun", sun = {...}} and
+// {name = "environment", environment = {...}} (Scene::apply_sky_changes).
 int l_frames(lua_State* L) {
   Builder& b = builder(L);
   if (b.spec.job.declared) luaL_error(L, "frames is declared twice");
@@ -32,10 +34,11 @@ int l_frames(lua_State* L) {
   // The functions are called for each frame here, while the script runs (under its budget); the cameras' tables are
   // read over camera { } when the script ends.
   lua_settop(L, 1);
-  int functions[3] = {0, 0, 0};  // stack index of the camera, the materials and the sun function, or 0
-  const char* names[3] = {"camera", "materials", "sun"};
-  static const char* returns[3] = {"camera table", "table of materials by name", "sun table"};
-  for (int i = 0; i < 3; ++i) {
+  constexpr int kFunctions = 4;
+  int functions[kFunctions] = {0, 0, 0, 0};  // stack index of the camera, materials, sun, environment function, or 0
+  const char* names[kFunctions] = {"camera", "materials", "sun", "environment"};
+  static const char* returns[kFunctions] = {"camera table", "table of materials by name", "sun table", "environment table"};
+  for (int i = 0; i < kFunctions; ++i) {
     lua_getfield(L, 1, names[i]);
     if (lua_isfunction(L, -1)) functions[i] = lua_gettop(L);
     else if (!lua_isnil(L, -1)) luaL_error(L, "frames: %s must be a function of the frame number", names[i]);
@@ -58,7 +61,7 @@ int l_frames(lua_State* L) {
       if (const Value* name = light.find("name")) material_names.push_back(name->as_string());
   }
   for (int frame : job.numbers()) {
-    for (int i = 0; i < 3; ++i) {
+    for (int i = 0; i < kFunctions; ++i) {
       if (!functions[i]) continue;
       lua_pushvalue(L, functions[i]);
       lua_pushinteger(L, frame);
@@ -72,14 +75,16 @@ int l_frames(lua_State* L) {
       else if (i == 1) with_params(L, [&] { job.materials_of_frame[frame] = read_frame_materials(returned, material_names, frame); });
       else
         with_params(L, [&] {
-          // Read as sun { } reads its table (after the materials, which it joins).
-          Value sun;
+          // Read as sun { } reads its table, or as a frame's environment (after the materials, which it joins).
+          const std::string key = names[i];
+          Value read;
           try {
-            sun = read_sun(ParamTable(returned.as_map(), "sun"));
+            ParamTable t(returned.as_map(), key);
+            read = i == 2 ? read_sun(t) : read_frame_environment(t);
           } catch (const ParamError& e) {
             throw ParamError("frames: frame " + std::to_string(frame) + ": " + e.what());
           }
-          job.materials_of_frame[frame].push_back(Value::Map{{"name", "sun"}, {"sun", *sun.find("sun")}});
+          job.materials_of_frame[frame].push_back(Value::Map{{"name", key}, {key, *read.find(key)}});
         });
     }
   }

@@ -575,6 +575,22 @@ TEST_F(ScriptTest, FramesMakeAJob) {
             "farm.lua:3: frames: frame 1: sun needs a direction = {x, y, z} (towards the sun)");
   EXPECT_EQ(error_of(head + "frames { last = 3, sun = function(f) return f end }\n" + net),
             "farm.lua:3: frames: the sun function returned a number for frame 1, not a sun table");
+  // frames { environment }: the keys a frame gives, after the sun.
+  r = evaluate_script(write("farm.lua", head + "environment { radiance = {1, 1, 1} }\n"
+                                 "frames { last = 2, environment = function(f) return { rotation = 30 * f, intensity = f } end }\n" + net));
+  ASSERT_TRUE(r.ok()) << r.error().message;
+  ASSERT_EQ(r->frames[1].materials.size(), 1u);
+  EXPECT_EQ(r->frames[1].materials[0].find("name")->as_string(), "environment");
+  EXPECT_EQ(r->frames[1].materials[0].find("environment")->find("rotation")->as_double(), 60);
+  EXPECT_EQ(r->frames[1].materials[0].find("environment")->find("intensity")->as_double(), 2);
+  EXPECT_EQ(r->frames[1].materials[0].find("environment")->find("radiance"), nullptr);
+  EXPECT_EQ(error_of(head + "frames { last = 3, environment = function(f) return { map = \"sky.exr\" } end }\n" + net),
+            "farm.lua:3: frames: frame 1: environment: a frame cannot change the map (it is shipped with the scene once): "
+            "declare it with environment { map = ... } and change its intensity or rotation");
+  EXPECT_EQ(error_of(head + "frames { last = 3, environment = function(f) return {} end }\n" + net),
+            "farm.lua:3: frames: frame 1: environment: a frame's table gives its intensity, rotation or radiance");
+  EXPECT_EQ(error_of(head + "frames { last = 3, environment = function(f) return { rotation = 400 } end }\n" + net).substr(0, 36),
+            "farm.lua:3: frames: frame 1: environ");
   EXPECT_EQ(error_of(head + "frames { last = 3, materials = 5 }\n" + net),
             "farm.lua:3: frames: materials must be a function of the frame number");
   EXPECT_EQ(error_of(head + "frames { last = 3, materials = function(f) return f end }\n" + net),

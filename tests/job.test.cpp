@@ -305,6 +305,63 @@ renderers { count = 2, lighting = lightop "direct" {} }
   expect_no_leftovers(undeclared);
 }
 
+// frames { environment }: the sky map turns from frame to frame (a turntable lit by its HDRI), and each frame equals
+// the farm of that frame alone whose script declares the map turned as the job's frame turns it. A change that does
+// not fit the declared environment is refused before launch, at the frames line.
+TEST_F(JobTest, TheEnvironmentTurnsFromFrameToFrame) {
+  write("yard.obj", "v -5 0 -5\nv 5 0 -5\nv 5 0 5\nv -5 0 5\nf 1 4 3 2\n"
+                    "v -0.5 0 -0.5\nv 0.5 0 -0.5\nv 0.5 0 0.5\nv -0.5 0 0.5\n"
+                    "v -0.5 1 -0.5\nv 0.5 1 -0.5\nv 0.5 1 0.5\nv -0.5 1 0.5\n"
+                    "f 9 10 11 12\nf 5 6 7 8\nf 5 9 10 6\nf 6 10 11 7\nf 7 11 12 8\nf 8 12 9 5\n");
+  // A dim sky with one bright patch low in the east: the block's shadow points away from it.
+  Image sky;
+  sky.width = 16;
+  sky.height = 8;
+  sky.pixels.assign(16 * 8, RGB{0.05f, 0.05f, 0.08f});
+  sky.pixels[3 * 16 + 8] = {400, 380, 300};
+  ASSERT_TRUE(write_image(sky, path("sky.exr")).ok());
+  const std::string script = write("sky.lua", R"(
+scene  { file = "yard.obj" }
+camera { eye = {0, 4, 7}, at = {0, 0.3, 0}, fov = 50 }
+image  { width = 32, height = 32, spp = 2, tile = 16, output = param("out", "sky.####.exr") }
+farm   { light_paths = "partial" }  -- direct light alone
+local function turned(f) return { rotation = 90 * (f - 1), intensity = 1 + f / 4 } end
+local single = param("frame", 0)
+if param("map", true) then
+  local first = turned(single > 0 and single or 1)
+  environment { map = "sky.exr", rotation = first.rotation, intensity = first.intensity }
+else environment { radiance = {1, 1, 1} } end
+if single == 0 then frames { first = 1, last = 3, environment = turned } end
+renderers { count = 2, lighting = lightop "direct" {} }
+)");
+  auto run_sky = [&](const std::string& out, std::vector<std::string> extra) {
+    std::vector<std::string> a{"run", script, "--set", "out=" + path(out), "--quiet"};
+    a.insert(a.end(), extra.begin(), extra.end());
+    return run_lightfarm(a);
+  };
+  const auto job = run_sky("sky.####.exr", {});
+  ASSERT_EQ(job.status, 0) << job.err;
+  expect_no_leftovers(job);
+  for (int n = 1; n <= 3; ++n) {
+    const auto alone = run_sky("alone.exr", {"--set", "frame=" + std::to_string(n)});
+    ASSERT_EQ(alone.status, 0) << alone.err;
+    EXPECT_TRUE(same_pixels(frame("sky", n), path("alone.exr"))) << "frame " << n << " is not its farm alone";
+  }
+  auto a = read_image(frame("sky", 1)), b = read_image(frame("sky", 3));
+  ASSERT_TRUE(a.ok() && b.ok());
+  size_t differ = 0;
+  for (size_t i = 0; i < a->pixels.size(); ++i) differ += !(a->pixels[i] == b->pixels[i]);
+  EXPECT_GT(differ, a->pixels.size() / 4) << "the light did not turn with the sky";
+
+  const auto constant = run_sky("c.####.exr", {"--set", "map=false"});
+  EXPECT_EQ(constant.status, 2) << constant.err;
+  EXPECT_NE(constant.err.find("sky.lua:12: frames: frame 1: the environment is one radiance: a frame gives its "
+                              "radiance (and intensity), it has no map to rotate"),
+            std::string::npos)
+      << constant.err;
+  expect_no_leftovers(constant);
+}
+
 // --preview-every: while a frame renders its partial image (finished tiles, the rest black) is beside the output;
 // it goes once the frame is written.
 TEST_F(JobTest, APreviewShowsTheFrameWhileItRenders) {

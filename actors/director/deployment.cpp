@@ -47,7 +47,7 @@ Value Deployment::scene_figures() const {
 
 namespace {
 
-// A job whose frames change materials or the sun (frames { materials, sun }): each distinct frame's changes are checked before
+// A job whose frames change materials or the sky (frames { materials, sun, environment }): each distinct frame's changes are checked before
 // launch as the script's own are (the scene takes them, some light is left, the network counts every light path
 // of those materials once), and every actor must be one that takes a frame's materials.
 void check_frame_materials(const FarmSpec& spec, const Scene& scene) {
@@ -55,10 +55,16 @@ void check_frame_materials(const FarmSpec& spec, const Scene& scene) {
   for (const FrameSpec& f : spec.frames) {
     if (f.materials.empty() || !checked.insert(to_json(Value(f.materials))).second) continue;
     const std::string what = spec.job.loc.str() + ": frames: frame " + std::to_string(f.number) + "'s materials";
-    for (const Value& change : f.materials)
+    for (const Value& change : f.materials) {
       if (change.find("sun") && !(scene.environment() && scene.environment()->sun()))
         throw FarmFailure{spec.job.loc.str() + ": frames: the sun changes from frame to frame, but the scene has no "
                           "sun: declare its first state with sun { }", 2};
+      if (change.find("environment") && !scene.environment())
+        throw FarmFailure{spec.job.loc.str() + ": frames: the environment changes from frame to frame, but the scene "
+                          "has none: declare its first state with environment { }", 2};
+    }
+    if (auto st = scene.check_sky_changes(f.materials); !st)
+      throw FarmFailure{spec.job.loc.str() + ": frames: frame " + std::to_string(f.number) + ": " + st.error().message, 2};
     std::vector<Material> materials = scene.materials();
     if (auto st = Scene::change_materials(materials, f.materials); !st) throw FarmFailure{what + ": " + st.error().message, 2};
     const SceneLobes lobes = scene_lobes(scene, &materials);

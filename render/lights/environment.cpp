@@ -90,9 +90,7 @@ Vec3 Environment::from_map(Vec3 d) const {
 }
 
 void Environment::build() {
-  cos_rot_ = std::cos(rotation_);
-  sin_rot_ = std::sin(rotation_);
-  map_power_ = 0;
+  map_weight_total_ = 0;
   if (has_map()) {
     // Each texel's weight is the integral of radiance()'s bilinear interpolation over it (9/16 of the texel, 3/32
     // of each side neighbour, 1/64 of each corner one), times sin(theta) at its centre: the texels of a row near a
@@ -119,17 +117,34 @@ void Environment::build() {
       }
       row_weights[y] = tabulate(weights.data(), w, &col_cdf_[y * w], &col_pdf_[y * w]);
     }
-    const double total = tabulate(row_weights.data(), h, row_cdf_.data(), row_pdf_.data());
+    map_weight_total_ = tabulate(row_weights.data(), h, row_cdf_.data(), row_pdf_.data());
     row_guide_.assign(kGuide + 1, 0);
     guide(row_cdf_.data(), h, kGuide, row_guide_.data());
     col_guide_.assign(h * (kGuide + 1), 0);
     for (size_t y = 0; y < h; ++y) guide(&col_cdf_[y * w], w, kGuide, &col_guide_[y * (kGuide + 1)]);
-    // The integral of brightness over the sphere: each texel spans (2 pi / w) (pi / h) sin(theta) steradians.
-    map_power_ = total * intensity_ * (2 * kPiD / static_cast<double>(w)) * (kPiD / static_cast<double>(h));
-  } else {
-    map_power_ = average(constant_) * 4 * kPiD;
   }
+  build_power();
+}
+
+void Environment::build_power() {
+  cos_rot_ = std::cos(rotation_);
+  sin_rot_ = std::sin(rotation_);
+  // The integral of brightness over the sphere: each texel spans (2 pi / w) (pi / h) sin(theta) steradians.
+  map_power_ = has_map() ? map_weight_total_ * intensity_ * (2 * kPiD / static_cast<double>(width_)) *
+                               (kPiD / static_cast<double>(height_))
+                         : average(constant_) * 4 * kPiD;
   build_sun();
+}
+
+void Environment::set_map_look(float intensity, float rotation) {
+  intensity_ = intensity;
+  rotation_ = rotation;
+  build_power();
+}
+
+void Environment::set_constant(RGB radiance) {
+  constant_ = non_negative(radiance);
+  build_power();
 }
 
 void Environment::build_sun() {

@@ -37,6 +37,13 @@ class Environment {
   Environment(int width, int height, std::vector<RGB> pixels, float intensity, float rotation);
 
   void set_sun(const Sun& sun);
+  // A job frame's change of a map's intensity and rotation (radians), or of a constant environment's radiance.
+  // The map's sampling distribution does not depend on either, so it is kept: the result equals an environment
+  // made with these values, bit for bit.
+  void set_map_look(float intensity, float rotation);
+  void set_constant(RGB radiance);
+  float intensity() const { return intensity_; }
+  float rotation() const { return rotation_; }
   // Whether camera rays that leave the scene see it (else they see black; it still lights the scene).
   void set_camera_visible(bool visible) { camera_visible_ = visible; }
   bool camera_visible() const { return camera_visible_; }
@@ -81,7 +88,8 @@ class Environment {
   std::string describe() const;  // for the scene report
 
  private:
-  void build();      // the map's distribution, then build_sun()
+  void build();      // the map's distribution, then map_power() and build_sun()
+  void build_power();  // map_power_ from the distribution's total, the intensity or the constant; then build_sun()
   void build_sun();  // the sun's disc and its share of the samples (over the map's power)
   Vec3 to_map(Vec3 wi) const;    // scene direction -> the unrotated map's frame
   Vec3 from_map(Vec3 d) const;
@@ -113,6 +121,7 @@ class Environment {
   static constexpr size_t kGuide = 64;
   std::vector<uint32_t> row_guide_, col_guide_;
   double map_power_ = 0, sun_power_ = 0;
+  double map_weight_total_ = 0;  // the texels' weights summed (map_power_ before intensity and texel area)
   float sun_share_ = 0;
   // The sun's half angle a as 1 - cos a and sin^2 a (each computed where it is precise); Le = E * scale.
   float sun_one_minus_cos_ = 0, sun_sin2_ = 0, sun_radiance_scale_ = 0;

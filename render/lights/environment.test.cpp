@@ -19,7 +19,7 @@ namespace {
 
 // A 32 x 16 sky: a gradient, darker below the horizon, and one texel 2000 times brighter than the rest (a sun
 // painted into the map, as HDR skies have).
-Environment painted_sky(float rotation = 0) {
+Environment painted_sky(float rotation = 0, float intensity = 1.5f) {
   const int w = 32, h = 16;
   std::vector<RGB> px(static_cast<size_t>(w) * h);
   for (int y = 0; y < h; ++y)
@@ -28,7 +28,7 @@ Environment painted_sky(float rotation = 0) {
       px[static_cast<size_t>(y) * w + x] = RGB{0.3f, 0.5f, 0.9f} * (up * (1.0f + 0.5f * std::sin(0.4f * static_cast<float>(x))));
     }
   px[static_cast<size_t>(3) * w + 20] = {2000, 1800, 1500};
-  return Environment(w, h, std::move(px), 1.5f, rotation);
+  return Environment(w, h, std::move(px), intensity, rotation);
 }
 
 // The integral of f over the sphere on an n x 2n grid in (theta, phi) (midpoints).
@@ -151,6 +151,46 @@ TEST(Environment, RotationTurnsTheMapAboutTheUpAxis) {
       EXPECT_NEAR(a.x, b.x, 1e-4f * a.x) << u << " " << v;
       EXPECT_NEAR(a.z, b.z, 1e-4f * a.z) << u << " " << v;
     }
+}
+
+// A job frame turns the map or changes its intensity (frames { environment }) without building its distribution
+// again: the environment is then the one a script declaring those values makes, bit for bit, sun included.
+TEST(Environment, AFramesIntensityAndRotationEqualAnEnvironmentMadeWithThem) {
+  const Sun sun{normalize(Vec3{1, 2, 3}), 0.01f, {5, 6, 7}};
+  Environment changed = painted_sky(0.3f);
+  changed.set_sun(sun);
+  const float intensity = 2.75f, rotation = 1.9f;
+  changed.set_map_look(intensity, rotation);
+  Environment fresh = painted_sky(rotation, intensity);
+  fresh.set_sun(sun);
+  EXPECT_EQ(changed.map_power(), fresh.map_power());
+  EXPECT_EQ(changed.sun_share(), fresh.sun_share());
+  for (float u = 0.013f; u < 1; u += 0.071f)
+    for (float v = 0.007f; v < 1; v += 0.093f) {
+      const Environment::Sample a = changed.sample(u, v), b = fresh.sample(u, v);
+      ASSERT_EQ(a.wi.x, b.wi.x);
+      ASSERT_EQ(a.wi.z, b.wi.z);
+      ASSERT_EQ(a.pdf, b.pdf);
+      ASSERT_EQ(a.radiance.y, b.radiance.y);
+      const Vec3 d = Environment::direction_of(u, v);
+      ASSERT_EQ(changed.pdf(d), fresh.pdf(d));
+      ASSERT_EQ(changed.radiance(d).x, fresh.radiance(d).x);
+    }
+  // The change did something: the radiance towards a direction follows the intensity.
+  const Vec3 d = Environment::direction_of(0.4f, 0.3f);
+  const Environment before = painted_sky(rotation);
+  EXPECT_NEAR(changed.radiance(d).y, before.radiance(d).y * intensity / 1.5f, 1e-5f * changed.radiance(d).y);
+
+  // One radiance in every direction: a frame gives it anew.
+  Environment overcast(RGB{1, 1, 1});
+  overcast.set_sun(sun);
+  overcast.set_constant({0.2f, 0.4f, 0.8f});
+  Environment grey(RGB{0.2f, 0.4f, 0.8f});
+  grey.set_sun(sun);
+  EXPECT_EQ(overcast.map_power(), grey.map_power());
+  EXPECT_EQ(overcast.sun_share(), grey.sun_share());
+  EXPECT_EQ(overcast.radiance(d).z, grey.radiance(d).z);
+  EXPECT_EQ(overcast.pdf(d), grey.pdf(d));
 }
 
 TEST(Environment, BinaryFormRebuildsTheSameLightAndRefusesDamage) {

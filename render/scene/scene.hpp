@@ -186,11 +186,15 @@ class Scene {
   // unknown name, or kd + ks above 1 (a surface that creates energy), is an error naming the material.
   Status apply_material_overrides(const Value::Array& overrides);
   // The same changes to a list of materials (a frame's changes checked against the scene's, without a scene).
-  // A frame's sun ({name = "sun", sun = {direction, irradiance, angle}}) is not a material: left to apply_sun_changes.
+  // A frame's sun ({name = "sun", sun = {...}}) or environment ({name = "environment", environment = {...}}) is not
+  // a material: left to apply_sky_changes.
   static Status change_materials(std::vector<Material>& materials, const Value::Array& overrides);
-  // A job frame's sun (frames { sun }): the scene's sun, declared by the script, moved or changed as sun { } would
-  // give it. An error when the scene has no sun.
-  Status apply_sun_changes(const Value::Array& changes);
+  // A job frame's sky (frames { sun, environment }): the scene's sun, declared by the script, moved or changed as
+  // sun { } would give it; the environment's intensity and rotation (a map's) or radiance (a constant one's), the
+  // map itself kept. An error when the scene has no sun, or no environment, to change, or the change does not fit
+  // the environment's kind; check_sky_changes says so without changing anything.
+  Status apply_sky_changes(const Value::Array& changes);
+  Status check_sky_changes(const Value::Array& changes) const;
   // A job frame's material changes (frames { materials }) over this scene's materials: a scene that shares this one's
   // geometry and textures (its mapped image, or copies of its arrays), with the materials changed as
   // apply_material_overrides changes them and the lights settled again from them exactly as finalize() settles a

@@ -183,16 +183,51 @@ Status Scene::add_script_shapes(const Value::Array& shapes) {
 
 Status Scene::apply_material_overrides(const Value::Array& overrides) { return change_materials(materials_, overrides); }
 
-Status Scene::apply_sun_changes(const Value::Array& changes) {
+// A frame's environment as read_frame_environment gives it: a map's intensity and rotation (degrees), each
+// defaulting to the declared environment's, or a constant environment's radiance times its intensity.
+static Status environment_change(const Environment& declared, const Value& change, Environment* out) {
+  RGB radiance;
+  const bool constant = change.find("radiance") != nullptr;
+  if (declared.has_map() == constant)
+    return make_error(declared.has_map() ? "the environment is a map: a frame changes its intensity and rotation, not its radiance"
+                                         : "the environment is one radiance: a frame gives its radiance (and intensity), it has no map to rotate");
+  if (constant && !vec3_of(change.find("radiance"), radiance)) return make_error("environment: radiance must be {r, g, b}");
+  if (!out) return Ok{};
+  if (constant) {
+    out->set_constant(radiance * number_or(change, "intensity", 1));
+  } else {
+    // Degrees to radians as script_environment converts them, so the frame equals a farm that declares it.
+    const float rotation = change.find("rotation") ? number_or(change, "rotation", 0) * kPi / 180 : declared.rotation();
+    out->set_map_look(number_or(change, "intensity", declared.intensity()), rotation);
+  }
+  return Ok{};
+}
+
+Status Scene::check_sky_changes(const Value::Array& changes) const {
   for (const Value& c : changes) {
     const Value* sv = c.find("sun");
-    if (!sv) continue;
-    if (!environment_ || !environment_->sun())
+    const Value* ev = c.find("environment");
+    if (sv && (!environment_ || !environment_->sun()))
       return make_error("the sun changes, but the scene has none (declare its first state with sun { })");
-    auto made = sun_of(*sv);
-    if (!made) return made.error();
-    Environment sky = *environment_;  // the map and its distribution are copied as they are; only the sun is built
-    sky.set_sun(*made);
+    if (ev && !environment_)
+      return make_error("the environment changes, but the scene has none (declare its first state with environment { })");
+    if (sv)
+      if (auto made = sun_of(*sv); !made) return made.error();
+    if (ev)
+      if (auto st = environment_change(*environment_, *ev, nullptr); !st) return st;
+  }
+  return Ok{};
+}
+
+Status Scene::apply_sky_changes(const Value::Array& changes) {
+  if (auto st = check_sky_changes(changes); !st) return st;
+  for (const Value& c : changes) {
+    const Value* sv = c.find("sun");
+    const Value* ev = c.find("environment");
+    if (!sv && !ev) continue;
+    Environment sky = *environment_;  // the map and its distribution are copied as they are; only what changes is built
+    if (sv) sky.set_sun(*sun_of(*sv));
+    if (ev) environment_change(*environment_, *ev, &sky);
     set_environment(std::move(sky));
   }
   return Ok{};
@@ -200,7 +235,7 @@ Status Scene::apply_sun_changes(const Value::Array& changes) {
 
 Status Scene::change_materials(std::vector<Material>& materials, const Value::Array& overrides) {
   for (const Value& o : overrides) {
-    if (o.find("sun")) continue;  // a frame's sun (apply_sun_changes), not a material
+    if (o.find("sun") || o.find("environment")) continue;  // a frame's sky (apply_sky_changes), not a material
     const Value* name = o.find("name");
     if (!name || !name->is_string()) return make_error("a material change names no material");
     Material* m = nullptr;
