@@ -60,6 +60,13 @@ renderers { count = param("renderers", 1),
             lighting = lightop "combine" { inputs = { direct, specular, caustics, indirect, glossy } } }
 )";
 
+// A 10-wide ground with a unit block on it: the sky tests' yard, whose shadow shows where the light comes from.
+constexpr const char* kYard =
+    "v -5 0 -5\nv 5 0 -5\nv 5 0 5\nv -5 0 5\nf 1 4 3 2\n"
+    "v -0.5 0 -0.5\nv 0.5 0 -0.5\nv 0.5 0 0.5\nv -0.5 0 0.5\n"
+    "v -0.5 1 -0.5\nv 0.5 1 -0.5\nv 0.5 1 0.5\nv -0.5 1 0.5\n"
+    "f 9 10 11 12\nf 5 6 7 8\nf 5 9 10 6\nf 6 10 11 7\nf 7 11 12 8\nf 8 12 9 5\n";
+
 class JobTest : public FarmFixture {
  protected:
   std::string script;
@@ -69,6 +76,12 @@ class JobTest : public FarmFixture {
   }
   RunResult run(const std::string& out, std::vector<std::string> extra = {}) {
     std::vector<std::string> a{"run", script, "--set", "out=" + path(out), "--checkpoint-every", "0"};
+    a.insert(a.end(), extra.begin(), extra.end());
+    return run_lightfarm(a);
+  }
+  // `script_file` run quietly with `out` as its output parameter.
+  RunResult run_quiet(const std::string& script_file, const std::string& out, std::vector<std::string> extra) {
+    std::vector<std::string> a{"run", script_file, "--set", "out=" + path(out), "--quiet"};
     a.insert(a.end(), extra.begin(), extra.end());
     return run_lightfarm(a);
   }
@@ -262,10 +275,7 @@ TEST_F(JobTest, MaterialsChangedByAFrameSetEverythingUpAnewFromThatFrame) {
 // frame equals the farm of that frame alone whose script declares the sun where the job's frame puts it. A job
 // that moves a sun the script never declared is refused before launch, at the frames line.
 TEST_F(JobTest, TheSunMovesFromFrameToFrame) {
-  write("yard.obj", "v -5 0 -5\nv 5 0 -5\nv 5 0 5\nv -5 0 5\nf 1 4 3 2\n"
-                    "v -0.5 0 -0.5\nv 0.5 0 -0.5\nv 0.5 0 0.5\nv -0.5 0 0.5\n"
-                    "v -0.5 1 -0.5\nv 0.5 1 -0.5\nv 0.5 1 0.5\nv -0.5 1 0.5\n"
-                    "f 9 10 11 12\nf 5 6 7 8\nf 5 9 10 6\nf 6 10 11 7\nf 7 11 12 8\nf 8 12 9 5\n");
+  write("yard.obj", kYard);
   const std::string sun_script = write("sun.lua", R"(
 scene  { file = "yard.obj" }
 camera { eye = {0, 4, 7}, at = {0, 0.3, 0}, fov = 50 }
@@ -277,11 +287,7 @@ if param("declared", true) then sun(sun_at(single > 0 and single or 1)) else lig
 if single == 0 then frames { first = 1, last = 3, sun = sun_at } end
 renderers { count = 2, lighting = lightop "direct" {} }
 )");
-  auto run_sun = [&](const std::string& out, std::vector<std::string> extra) {
-    std::vector<std::string> a{"run", sun_script, "--set", "out=" + path(out), "--quiet"};
-    a.insert(a.end(), extra.begin(), extra.end());
-    return run_lightfarm(a);
-  };
+  auto run_sun = [&](const std::string& out, std::vector<std::string> extra) { return run_quiet(sun_script, out, extra); };
   const auto job = run_sun("sun.####.exr", {});
   ASSERT_EQ(job.status, 0) << job.err;
   expect_no_leftovers(job);
@@ -309,10 +315,7 @@ renderers { count = 2, lighting = lightop "direct" {} }
 // the farm of that frame alone whose script declares the map turned as the job's frame turns it. A change that does
 // not fit the declared environment is refused before launch, at the frames line.
 TEST_F(JobTest, TheEnvironmentTurnsFromFrameToFrame) {
-  write("yard.obj", "v -5 0 -5\nv 5 0 -5\nv 5 0 5\nv -5 0 5\nf 1 4 3 2\n"
-                    "v -0.5 0 -0.5\nv 0.5 0 -0.5\nv 0.5 0 0.5\nv -0.5 0 0.5\n"
-                    "v -0.5 1 -0.5\nv 0.5 1 -0.5\nv 0.5 1 0.5\nv -0.5 1 0.5\n"
-                    "f 9 10 11 12\nf 5 6 7 8\nf 5 9 10 6\nf 6 10 11 7\nf 7 11 12 8\nf 8 12 9 5\n");
+  write("yard.obj", kYard);
   // A dim sky with one bright patch low in the east: the block's shadow points away from it.
   Image sky;
   sky.width = 16;
@@ -334,11 +337,7 @@ else environment { radiance = {1, 1, 1} } end
 if single == 0 then frames { first = 1, last = 3, environment = turned } end
 renderers { count = 2, lighting = lightop "direct" {} }
 )");
-  auto run_sky = [&](const std::string& out, std::vector<std::string> extra) {
-    std::vector<std::string> a{"run", script, "--set", "out=" + path(out), "--quiet"};
-    a.insert(a.end(), extra.begin(), extra.end());
-    return run_lightfarm(a);
-  };
+  auto run_sky = [&](const std::string& out, std::vector<std::string> extra) { return run_quiet(script, out, extra); };
   const auto job = run_sky("sky.####.exr", {});
   ASSERT_EQ(job.status, 0) << job.err;
   expect_no_leftovers(job);
