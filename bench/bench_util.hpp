@@ -79,6 +79,27 @@ inline std::vector<double> json_numbers(const std::string& text, const std::stri
   return out;
 }
 
+// The numbers of the array after "key": in a JSON text (e.g. the radiosity ring's "iteration_seconds").
+inline std::vector<double> json_array(const std::string& text, const std::string& key) {
+  std::vector<double> out;
+  size_t at = text.find("\"" + key + "\"");
+  if (at == std::string::npos) return out;
+  at = text.find('[', at);
+  const size_t end = text.find(']', at);
+  const char* p = text.c_str() + at + 1;
+  while (p < text.c_str() + end) {
+    char* next = nullptr;
+    const double v = std::strtod(p, &next);
+    if (next == p) {
+      ++p;
+      continue;
+    }
+    out.push_back(v);
+    p = next;
+  }
+  return out;
+}
+
 // Every string after "key": in a JSON text, in order (one per actor for per-actor figures such as "kind").
 inline std::vector<std::string> json_strings(const std::string& text, const std::string& key) {
   std::vector<std::string> out;

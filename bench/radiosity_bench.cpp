@@ -49,25 +49,10 @@ double imbalance(const std::vector<NodeFigures>& nodes, double NodeFigures::*fie
 
 // Mean of the "iteration_seconds" array.
 double mean_iteration_seconds(const std::string& stats) {
-  size_t at = stats.find("\"iteration_seconds\"");
-  if (at == std::string::npos) return 0;
-  at = stats.find('[', at);
-  const size_t end = stats.find(']', at);
+  const std::vector<double> seconds = bench::json_array(stats, "iteration_seconds");
   double sum = 0;
-  int n = 0;
-  const char* p = stats.c_str() + at + 1;
-  while (p < stats.c_str() + end) {
-    char* next = nullptr;
-    const double v = std::strtod(p, &next);
-    if (next == p) {
-      ++p;
-      continue;
-    }
-    sum += v;
-    ++n;
-    p = next;
-  }
-  return n ? sum / n : 0;
+  for (double v : seconds) sum += v;
+  return seconds.empty() ? 0 : sum / static_cast<double>(seconds.size());
 }
 
 struct Layout {

@@ -3,13 +3,15 @@
 # slurmctld in this namespace on the bridge address, one slurmd per host in its namespace (with a private cgroup v1
 # mount, since `ip netns exec` gives it a fresh /sys). Nodes are named h1..hN, partition "lf".
 #
-#   slurm.sh up DIR      DIR holds a rig made by `hosts.sh up DIR N`; writes DIR/slurm.conf (export SLURM_CONF)
+#   slurm.sh up DIR [K]  DIR holds a rig made by `hosts.sh up DIR N`; slurmd on its first K hosts (default all N);
+#                        writes DIR/slurm.conf (export SLURM_CONF)
 #   slurm.sh down DIR    stops the daemons (always safe)
 #
 # Exits 77 with a message when Slurm or munge is not installed, or slurmd cannot run in a namespace here.
 set -euo pipefail
 cmd=${1:?usage: slurm.sh up|down DIR}
 dir=${2:?usage: slurm.sh up|down DIR}
+nodes=${3:-}
 
 down() {
   for f in "$dir"/slurmd-*.pid "$dir/slurmctld.pid" "$dir/munged.pid"; do
@@ -32,6 +34,7 @@ up() {
   ctl=$(cat "$dir/director_address")
   subnet=${ctl%.1}
   n=$(wc -l < "$dir/hosts")
+  n=${nodes:-$n}
   down
   mkdir -p "$dir/slurm/ctld" "$dir/slurm/log"
   [ -f "$dir/munge.key" ] || mungekey -c -k "$dir/munge.key"
@@ -85,6 +88,7 @@ up() {
   local i=0
   for ns in $namespaces; do
     i=$((i + 1))
+    [ "$i" -le "$n" ] || break
     ip netns exec "$ns" sh -c "$mounts; exec slurmd -f '$dir/slurm.conf' -N h$i"
   done
   # Every node idle before anyone asks for it.
