@@ -196,9 +196,15 @@ int IrradianceCache::lookup_first(Vec3 x, Vec3 n, std::span<const float> relax, 
   const float widest = a_ * relax[bounds - 1];
   for_candidates(x, [&](const IrradianceRecord& r) {
     const Vec3 d = x - r.position;
-    // Not from behind: a record does not serve points in front of its surface's other side.
-    if (dot(d, (n + r.normal) * 0.5f) < -0.05f * r.harmonic_distance) return;
+    // Not from behind: a record does not serve a point that lies behind its tangent plane by more than a surface
+    // curving between their normals would put it (about half the distance times the angle between them), plus a
+    // little. A parallel surface just behind the record's (the ceiling above a light panel hung under it, the
+    // panel's records below) is then another surface, however far the record reaches; a fixed share of R let a
+    // panel's records, which see the open room, light the ceiling in the gap above it.
     const float cos_n = std::min(1.0f, dot(n, r.normal));
+    const float behind = -dot(d, (n + r.normal) * 0.5f);
+    if (behind > 0 && behind > 0.5f * length(d) * std::sqrt(2.0f * std::max(0.0f, 1.0f - cos_n)) + kBehindSlack * r.harmonic_distance)
+      return;
     const float error = length(d) / r.harmonic_distance + std::sqrt(std::max(0.0f, 1.0f - cos_n));
     if (error >= widest) return;  // weight 1/error at most 1/a: not valid here
     const float w = 1.0f / std::max(error, 1e-4f);

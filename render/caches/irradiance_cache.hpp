@@ -54,6 +54,9 @@ class IrradianceCache {
   // answer averaged.
   int lookup_first(Vec3 x, Vec3 n, std::span<const float> relax, RGB& irradiance, uint32_t* records = nullptr) const;
   static constexpr float kMaxRelax = 4.0f;
+  // How far behind a record's tangent plane, as a share of its R, a point may lie beyond what the surface's
+  // curvature explains (rounding, meshes' facets).
+  static constexpr float kBehindSlack = 0.002f;
   static constexpr int kMaxGridLevel = 12;  // the coarsest frozen grid: cells 4^12 times the finest
   // No more inserts: builds grids in which every record is listed in each cell its widest valid sphere touches,
   // so that a lookup reads one cell per grid instead of 27 per octree level. The finest grid's cells are half the

@@ -2,6 +2,7 @@
 // lookups that never relax answers them exactly as one built for the widest.
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <random>
 #include <stdexcept>
 
@@ -106,6 +107,33 @@ TEST(IrradianceCache, ACacheBuiltForItsOwnBoundAnswersAsTheWidestOne) {
     RGB e;
     EXPECT_THROW(own.lookup_first(queries(1, 5)[0].x, queries(1, 5)[0].n, four, e), std::invalid_argument);
   }
+}
+
+// A record does not serve a parallel surface just behind its own (the ceiling above a light panel hung 1 cm under
+// it, where the panel's records, which see the open room, made a bright rim), but does serve points of a curved
+// surface that lie behind its tangent plane as far as the curvature between their normals explains.
+TEST(IrradianceCache, ARecordDoesNotServeTheSurfaceBehindItsOwn) {
+  IrradianceRecord panel{};
+  panel.position = {0, 0, 0};
+  panel.normal = {0, -1, 0};  // facing down, as a panel's emitting face
+  panel.irradiance = {1, 1, 1};
+  panel.harmonic_distance = 1.0f;  // it sees the open room: it reaches a * R = 20 cm
+  IrradianceCache cache(0.2f, 10.0f, 1.0f);
+  cache.insert(panel);
+  cache.freeze();
+  RGB e;
+  // The ceiling 1 cm above, facing down too, 5 cm along: behind the panel's plane, not curving.
+  EXPECT_FALSE(cache.lookup({0.05f, 0.01f, 0}, {0, -1, 0}, e));
+  // The panel's own plane, 5 cm along: served.
+  EXPECT_TRUE(cache.lookup({0.05f, 0, 0}, {0, -1, 0}, e));
+  // In front of it (below): served.
+  EXPECT_TRUE(cache.lookup({0.05f, -0.01f, 0}, {0, -1, 0}, e));
+  // A sphere of radius 1 through the record, 10 cm along its surface: behind the tangent plane by 1 - cos(0.1), with
+  // its normal turned by 0.1 rad. Served.
+  const float t = 0.1f;
+  const Vec3 on_sphere{std::sin(t), 1 - std::cos(t), 0};  // the sphere's centre at (0, 1, 0), below it the record
+  const Vec3 normal{std::sin(t), -std::cos(t), 0};
+  EXPECT_TRUE(cache.lookup(on_sphere, normal, e));
 }
 
 }  // namespace
