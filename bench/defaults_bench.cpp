@@ -4,7 +4,8 @@
 //
 // Scenes: Lost Empire as examples/lost_empire.lua sets it up; Lost Empire with its main blocks given a glossy lobe
 // from the script; McGuire's CornellBox-Glossy with the light quad of tests/bias_matrix.hpp, and with its walls
-// glossy too; the built-in Cornell box. The network is examples/lost_empire.lua's (`lighting = "network"`), with
+// glossy too; McGuire's other boxes as their files give them (original, glossy floor, mirror, sphere, water and
+// the four empty ones); the built-in Cornell box. The network is examples/lost_empire.lua's (`lighting = "network"`), with
 // each scene's lines swapped in as bias_matrix.hpp swaps them; the path tracer is examples/pathtrace.lua's (Lost
 // Empire: its own script's `lighting = "pathtrace"`). Each is rendered at a low and a high sample count; the
 // network's time to the path tracer's 256-spp error is read off the line through its two points in log-log (error
@@ -89,19 +90,38 @@ std::vector<Case> cases(const std::string& src, const std::string& pid) {
     const std::string shiny = bench::temp_script(pid + "lost_empire_glossy.lua", glossy);
     out.push_back({"lost_empire_glossy", shiny, shiny, network, pathtrace});
   }
-  if (!mcguire.empty())
+  if (!mcguire.empty()) {
+    std::vector<lf::bias::Scene> boxes;
     for (const lf::bias::Scene& s : lf::bias::scenes(mcguire)) {
       const std::string name = s.name;
-      if (name != "glossy" && name != "glossy_walls" && name != "cornell") continue;
+      if (name == "glossy" || name == "glossy_walls" || name == "cornell") boxes.push_back(s);
+    }
+    // McGuire's other boxes as their files give them (each MTL has its own emitting light), seen as the glossy one.
+    static const std::vector<std::pair<const char*, const char*>> files{
+        {"cornellbox_original", "CornellBox-Original"}, {"cornellbox_glossy_floor", "CornellBox-Glossy-Floor"},
+        {"cornellbox_mirror", "CornellBox-Mirror"},     {"cornellbox_sphere", "CornellBox-Sphere"},
+        {"cornellbox_water", "CornellBox-Water"},       {"cornellbox_empty_co", "CornellBox-Empty-CO"},
+        {"cornellbox_empty_rg", "CornellBox-Empty-RG"}, {"cornellbox_empty_squashed", "CornellBox-Empty-Squashed"},
+        {"cornellbox_empty_white", "CornellBox-Empty-White"}};
+    for (const auto& [name, file] : files) {
+      std::string lines = "scene { file = \"" + mcguire + file + ".obj\" }\ncamera { eye = {0, 1, 3.6}, at = {0, 1, 0}, fov = 38 }\n";
+      // Its OBJ names CornellBox-Glossy.mtl, which has no light: the glossy box's light quad, as bias_matrix.hpp adds it.
+      if (std::string(file) == "CornellBox-Glossy-Floor")
+        lines += "light { quad = {{-0.2, 1.57, 0.2}, {-0.2, 1.57, -0.2}, {0.2, 1.57, -0.2}, {0.2, 1.57, 0.2}}, radiance = {17, 12, 4} }\n";
+      boxes.push_back({name, lines});
+    }
+    for (const lf::bias::Scene& s : boxes) {
+      const std::string name = s.name;
       const std::string net = lf::bias::with_scene(src + "/examples/lost_empire.lua", s);
       const std::string pt = lf::bias::with_scene(src + "/examples/pathtrace.lua", s);
-      const std::string shown = name == "cornell" ? "cornell" : "cornellbox_" + name;
+      const std::string shown = name == "cornell" || name.rfind("cornellbox_", 0) == 0 ? name : "cornellbox_" + name;
       out.push_back({shown, bench::temp_script(pid + shown + "_network.lua", net),
                      bench::temp_script(pid + shown + "_pathtrace.lua", pt),
                      // exposure 0: examples/pathtrace.lua's, where the lost_empire.lua network would be at 2
                      {"lighting=network", "exposure=0", "width=256", "height=256"},
                      {"width=256", "height=256"}});
     }
+  }
   return out;
 }
 
