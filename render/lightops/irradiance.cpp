@@ -15,6 +15,8 @@
 // its own hemisphere samples and adds no record, so no point's value depends on which points came first.
 // Output: Kd / pi * E (the diffuse part); nothing on mirrors and glass.
 #include <algorithm>
+#include <array>
+#include <limits>
 #include <cmath>
 
 #include "render/byte_io.hpp"
@@ -425,13 +427,54 @@ class Irradiance final : public LightOp {
       // near a small bright thing extrapolates its steep gradient over the pixels it now reaches (fireflies: 80 % of
       // the squared error on Lost Empire without the scaling).
       const float reach = placement_ == Placement::camera ? min_reach_ : 0.0f;
-      const float floor_r = std::max(min_r, record_radius_floor(ctx_, candidates[c].x, frames[c][2], reach, a_));
+      float floor_r = std::max(min_r, record_radius_floor(ctx_, candidates[c].x, frames[c][2], reach, a_));
+      // A record must not reach under something that overhangs its surface (the ceiling in the gap above a panel
+      // hung 1 cm under it), which its hemisphere, cosine-weighted, hardly sees at such grazing angles; widened to
+      // reach the camera's pixels, neither.
+      const float overhang = overhang_distance(candidates[c], frames[c], a_ * std::max(floor_r, rec.harmonic_distance));
+      rec.harmonic_distance = std::min(rec.harmonic_distance, overhang / a_);
+      floor_r = std::min(floor_r, overhang / a_);
       const float unclamped = rec.harmonic_distance;
       rec.harmonic_distance = std::clamp(rec.harmonic_distance, std::min(floor_r, max_r), max_r);
       if (rec.harmonic_distance > unclamped)
         for (Vec3& g : rec.translational) g = g * (unclamped / rec.harmonic_distance);
       out.push_back(rec);
     }
+  }
+
+  // How far along its surface, within `reach`, candidate c's point is surely clear of anything overhanging it: a
+  // surface facing back at it (within 45 degrees of parallel) met by rays at low elevations (tan 1, 1/2, 1/4, 1/8)
+  // in 8 directions. A wall beside it (perpendicular) does not count; infinity where nothing overhangs.
+  float overhang_distance(const Candidate& c, const std::array<Vec3, 3>& frame, float reach) const {
+    constexpr int kAzimuths = 8;
+    constexpr float kSlopes[] = {1.0f, 0.7071f, 0.5f, 0.3536f, 0.25f, 0.1768f, 0.125f};
+    const Scene& scene = *ctx_.scene;
+    const Vec3 origin = scene.ray_origin(c.triangle, c.x, c.ng);
+    std::vector<Ray> rays;
+    std::vector<float> cosines;
+    for (int k = 0; k < kAzimuths; ++k) {
+      const float phi = 2 * kPi * (static_cast<float>(k) + 0.5f) / kAzimuths;
+      const Vec3 along = frame[0] * std::cos(phi) + frame[1] * std::sin(phi);
+      for (float slope : kSlopes) {
+        const float cos_e = 1 / std::sqrt(1 + slope * slope);
+        Ray r{origin, normalize(along + frame[2] * slope)};
+        r.tfar = reach / cos_e;
+        rays.push_back(r);
+        cosines.push_back(cos_e);
+      }
+    }
+    std::vector<Hit> hits(rays.size());
+    ctx_.tracer->intersect(rays, hits);
+    float nearest = std::numeric_limits<float>::infinity();
+    for (size_t i = 0; i < rays.size(); ++i) {
+      if (!hits[i].valid() || !(hits[i].t <= rays[i].tfar)) continue;
+      const Vec3 x = rays[i].origin + rays[i].direction * hits[i].t;
+      const Vec3 ng = surface_at(scene, hits[i].triangle, x, -rays[i].direction).ng;
+      if (dot(ng, frame[2]) < -0.7071f) nearest = std::min(nearest, hits[i].t * cosines[i]);
+    }
+    // The ray one slope steeper crossed that height at half the distance and did not meet the overhang there (or it
+    // would be the nearest): its edge lies beyond half the distance, which is where the record stops.
+    return 0.7071f * nearest;
   }
 
   // A hemisphere's strata as set, or 0 (unset, or set to 0): derived in setup.
