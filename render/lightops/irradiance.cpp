@@ -433,7 +433,7 @@ class Irradiance final : public LightOp {
       // reach the camera's pixels, neither.
       const float overhang = overhang_distance(candidates[c], frames[c], a_ * std::max(floor_r, rec.harmonic_distance));
       rec.harmonic_distance = std::min(rec.harmonic_distance, overhang / a_);
-      floor_r = std::min(floor_r, overhang / a_);
+      floor_r = std::max(min_r, std::min(floor_r, overhang / a_));
       const float unclamped = rec.harmonic_distance;
       rec.harmonic_distance = std::clamp(rec.harmonic_distance, std::min(floor_r, max_r), max_r);
       if (rec.harmonic_distance > unclamped)
@@ -443,8 +443,9 @@ class Irradiance final : public LightOp {
   }
 
   // How far along its surface, within `reach`, candidate c's point is surely clear of anything overhanging it: a
-  // surface facing back at it (within 45 degrees of parallel) met by rays at low elevations (tan 1, 1/2, 1/4, 1/8)
-  // in 8 directions. A wall beside it (perpendicular) does not count; infinity where nothing overhangs.
+  // surface facing back at it (within 45 degrees of parallel) met by rays at low elevations (slopes 1 down to 1/8,
+  // a factor of sqrt 2 apart) in 8 directions. A wall beside it (perpendicular) does not count; infinity where
+  // nothing overhangs.
   float overhang_distance(const Candidate& c, const std::array<Vec3, 3>& frame, float reach) const {
     constexpr int kAzimuths = 8;
     constexpr float kSlopes[] = {1.0f, 0.7071f, 0.5f, 0.3536f, 0.25f, 0.1768f, 0.125f};
@@ -472,8 +473,8 @@ class Irradiance final : public LightOp {
       const Vec3 ng = surface_at(scene, hits[i].triangle, x, -rays[i].direction).ng;
       if (dot(ng, frame[2]) < -0.7071f) nearest = std::min(nearest, hits[i].t * cosines[i]);
     }
-    // The ray one slope steeper crossed that height at half the distance and did not meet the overhang there (or it
-    // would be the nearest): its edge lies beyond half the distance, which is where the record stops.
+    // The ray one slope steeper crossed the overhang's height at 1/sqrt 2 of that distance without meeting it (or it
+    // would be the nearest): its edge lies beyond that, which is where the record stops.
     return 0.7071f * nearest;
   }
 
