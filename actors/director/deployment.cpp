@@ -55,14 +55,10 @@ void check_frame_materials(const FarmSpec& spec, const Scene& scene) {
   for (const FrameSpec& f : spec.frames) {
     if (f.materials.empty() || !checked.insert(to_json(Value(f.materials))).second) continue;
     const std::string what = spec.job.loc.str() + ": frames: frame " + std::to_string(f.number) + "'s materials";
-    for (const Value& change : f.materials) {
+    for (const Value& change : f.materials)
       if (change.find("sun") && !(scene.environment() && scene.environment()->sun()))
         throw FarmFailure{spec.job.loc.str() + ": frames: the sun changes from frame to frame, but the scene has no "
                           "sun: declare its first state with sun { }", 2};
-      if (change.find("environment") && !scene.environment())
-        throw FarmFailure{spec.job.loc.str() + ": frames: the environment changes from frame to frame, but the scene "
-                          "has none: declare its first state with environment { }", 2};
-    }
     if (auto st = scene.check_sky_changes(f.materials); !st)
       throw FarmFailure{spec.job.loc.str() + ": frames: frame " + std::to_string(f.number) + ": " + st.error().message, 2};
     std::vector<Material> materials = scene.materials();

@@ -221,15 +221,16 @@ Status Scene::check_sky_changes(const Value::Array& changes) const {
 
 Status Scene::apply_sky_changes(const Value::Array& changes) {
   if (auto st = check_sky_changes(changes); !st) return st;
+  std::optional<Environment> sky;  // one copy for all of a frame's changes: the map and its distribution as they are
   for (const Value& c : changes) {
     const Value* sv = c.find("sun");
     const Value* ev = c.find("environment");
     if (!sv && !ev) continue;
-    Environment sky = *environment_;  // the map and its distribution are copied as they are; only what changes is built
-    if (sv) sky.set_sun(*sun_of(*sv));
-    if (ev) environment_change(*environment_, *ev, &sky);
-    set_environment(std::move(sky));
+    if (!sky) sky = *environment_;
+    if (sv) sky->set_sun(*sun_of(*sv));
+    if (ev) environment_change(*environment_, *ev, &*sky);
   }
+  if (sky) set_environment(std::move(*sky));
   return Ok{};
 }
 
