@@ -191,7 +191,8 @@ template <class Visit>
 void GlobalBsp::walk(int index, Vec3 a, Vec3 d, float t0, float t1, Visit&& visit) const {
   const Node& n = nodes_[static_cast<size_t>(index)];
   if (n.axis < 0) {
-    visit(n.leaf);
+    // A leaf that holds no surface can block nothing, so nobody need test the segment there.
+    if (!leaves_[static_cast<size_t>(n.leaf)].empty()) visit(n.leaf);
     return;
   }
   const float o = a[n.axis], dir = d[n.axis];
@@ -221,32 +222,56 @@ uint64_t GlobalBsp::route(Vec3 a, Vec3 b) const {
 
 Crossing GlobalBsp::cross(Vec3 a, Vec3 b, const ShotPlan& shot) const {
   Crossing c;
-  if (shot.home_leaf.empty()) {
+  if (shot.inert_leaf.empty() || dot(shot.plane_normal, a) - shot.plane_offset < shot.clear) {
     c.positions = route(a, b);
     return c;
   }
   walk(0, a, b - a, 0.0f, 1.0f, [&](int leaf) {
-    if (shot.home_leaf[static_cast<size_t>(leaf)])
+    const size_t l = static_cast<size_t>(leaf);
+    if (shot.inert_leaf[l]) return;
+    if (!shot.home_leaf.empty() && shot.home_leaf[l])
       c.home = true;
     else
-      c.positions |= uint64_t{1} << owner_[static_cast<size_t>(leaf)];
+      c.positions |= uint64_t{1} << owner_[l];
   });
   return c;
 }
 
-ShotPlan GlobalBsp::plan_shot(const Mesh& mesh, const Polygon& shooter, std::span<const Vec3> targets,
-                              ShotEstimate* estimate) const {
-  ShotPlan plan;
-  if (!balanced_ || positions_ < 2 || targets.empty()) return plan;
+std::vector<uint8_t> GlobalBsp::surfaces_that_can_block(const Mesh& mesh, const Polygon& shooter) {
+  // Segments end mesh.epsilon in front of the shooter's plane; a surface counts as behind it if no vertex is a
+  // quarter of that in front (and cross() routes statically a segment starting within three quarters of it): half
+  // an epsilon between the two, far more than a float's rounding at the scene's size.
+  const Vec3 n = shooter.normal();
+  const float offset = dot(n, shooter.v[0]);
+  std::vector<uint8_t> can_block(mesh.surfaces.size(), 0);
+  for (size_t s = 0; s < mesh.surfaces.size(); ++s) {
+    const Polygon& q = mesh.surfaces[s].polygon;
+    for (int i = 0; i < q.count; ++i)
+      if (dot(n, q.v[static_cast<size_t>(i)]) - offset >= 0.25f * mesh.epsilon) can_block[s] = 1;
+  }
+  return can_block;
+}
+
+std::vector<uint8_t> GlobalBsp::inert_leaves(const std::vector<uint8_t>& can_block) const {
+  std::vector<uint8_t> inert(leaves_.size(), 1);
+  for (size_t leaf = 0; leaf < leaves_.size(); ++leaf)
+    for (uint32_t s : leaves_[leaf])
+      if (can_block[s]) {
+        inert[leaf] = 0;
+        break;
+      }
+  return inert;
+}
+
+GlobalBsp::ShotProbe GlobalBsp::probe_shot(const Mesh& mesh, const Polygon& shooter, std::span<const Vec3> targets,
+                                           const std::vector<uint8_t>& inert) const {
+  // From patches facing the shooter to its sub-areas, weighted by the patch's elements (its samples).
+  ShotProbe probe;
+  probe.crossed_by.resize(leaves_.size());
   const size_t P = static_cast<size_t>(positions_);
-  // The probe: from patches facing the shooter to its sub-areas, weighted by the patch's elements (its samples).
   const size_t per_patch =
       std::clamp<size_t>(kProbeSegments / std::max<size_t>(1, mesh.patches.size()), 1, targets.size());
   const Vec3 shooter_normal = shooter.normal();
-  std::vector<std::vector<uint32_t>> crossed_by(leaves_.size());
-  std::vector<double> weight;
-  std::vector<uint32_t> home_of;      // per segment: the position its packet starts from
-  std::vector<uint32_t> own_crossed;  // per segment and position: how many of the position's leaves it crosses
   for (size_t i = 0; i < mesh.patches.size(); ++i) {
     const Polygon& q = mesh.patches[i].polygon;
     const Vec3 c = q.centroid(), n = q.normal();
@@ -254,16 +279,36 @@ ShotPlan GlobalBsp::plan_shot(const Mesh& mesh, const Polygon& shooter, std::spa
       const Vec3 t = targets[(i * per_patch + j) % targets.size()];
       if (dot(n, t - c) <= 0 || dot(shooter_normal, c - t) <= 0) continue;
       const Vec3 a = c + n * mesh.epsilon, b = t + shooter_normal * mesh.epsilon;
-      const uint32_t k = static_cast<uint32_t>(weight.size());
-      weight.push_back(static_cast<double>(mesh.patches[i].element_count()) / static_cast<double>(per_patch));
-      home_of.push_back(static_cast<uint32_t>(i < patch_position_.size() ? static_cast<size_t>(patch_position_[i]) : k % P));
-      own_crossed.resize(own_crossed.size() + P, 0);
+      const uint32_t k = static_cast<uint32_t>(probe.weight.size());
+      probe.weight.push_back(static_cast<double>(mesh.patches[i].element_count()) / static_cast<double>(per_patch));
+      probe.home_of.push_back(
+          static_cast<uint32_t>(i < patch_position_.size() ? static_cast<size_t>(patch_position_[i]) : k % P));
       walk(0, a, b - a, 0.0f, 1.0f, [&](int leaf) {
-        crossed_by[static_cast<size_t>(leaf)].push_back(k);
-        ++own_crossed[k * P + static_cast<size_t>(owner_[static_cast<size_t>(leaf)])];
+        if (!inert[static_cast<size_t>(leaf)]) probe.crossed_by[static_cast<size_t>(leaf)].push_back(k);
       });
     }
   }
+  return probe;
+}
+
+ShotPlan GlobalBsp::plan_shot(const Mesh& mesh, const Polygon& shooter, std::span<const Vec3> targets,
+                              ShotEstimate* estimate) const {
+  ShotPlan plan;
+  if (targets.empty()) return plan;
+  plan.plane_normal = shooter.normal();
+  plan.plane_offset = dot(plan.plane_normal, shooter.v[0]);
+  plan.clear = 0.75f * mesh.epsilon;
+  const std::vector<uint8_t> can_block = surfaces_that_can_block(mesh, shooter);
+  plan.inert_leaf = inert_leaves(can_block);
+  if (!balanced_ || positions_ < 2) return plan;
+  const size_t P = static_cast<size_t>(positions_);
+  const ShotProbe probe = probe_shot(mesh, shooter, targets, plan.inert_leaf);
+  const auto& crossed_by = probe.crossed_by;
+  const auto& weight = probe.weight;
+  const auto& home_of = probe.home_of;
+  std::vector<uint32_t> own_crossed(weight.size() * P, 0);  // per segment and position: its leaves it crosses
+  for (size_t leaf = 0; leaf < leaves_.size(); ++leaf)
+    for (uint32_t k : crossed_by[leaf]) ++own_crossed[k * P + static_cast<size_t>(owner_[leaf])];
   // Estimated work per position: the segments crossing its leaves, plus those crossing home leaves whose packets
   // start there.
   std::vector<double> work(P, 0);
@@ -297,6 +342,7 @@ ShotPlan GlobalBsp::plan_shot(const Mesh& mesh, const Polygon& shooter, std::spa
       }
     }
     for (uint32_t surface : leaves_[leaf]) {
+      if (!can_block[surface]) continue;
       if (to_home && home_uses[surface]++ == 0) ++home_surfaces;
       if (!to_home && --home_uses[surface] == 0) --home_surfaces;
     }
@@ -350,7 +396,9 @@ ShotPlan GlobalBsp::plan_shot(const Mesh& mesh, const Polygon& shooter, std::spa
     moved = best_run(busiest_first(mine));
   }
   for (size_t leaf = 0; leaf < leaves_.size(); ++leaf)
-    if (plan.home_leaf[leaf]) plan.surfaces.insert(plan.surfaces.end(), leaves_[leaf].begin(), leaves_[leaf].end());
+    if (plan.home_leaf[leaf])
+      for (uint32_t s : leaves_[leaf])
+        if (can_block[s]) plan.surfaces.push_back(s);
   if (estimate) {
     const auto r = ranked();
     estimate->busiest = r.front();

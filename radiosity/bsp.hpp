@@ -18,9 +18,18 @@ struct Box {
 // The leaves a shot leaves to each packet's home (GlobalBsp::plan_shot): every segment of the shot crossing one of
 // them is tested there by the node the packet circulates for, against these surfaces, instead of by the leaf's
 // position.
+//
+// Every segment of a shot ends just in front of the shooter's plane, so a surface lying wholly on or behind that
+// plane (the ceiling around a light, the wall a lit patch is part of) can block none of them; a leaf holding only
+// such surfaces is skipped. Only segments that start clear of the plane are routed so; the few that start almost in
+// it keep the static route.
 struct ShotPlan {
   std::vector<uint8_t> home_leaf;  // per leaf; empty: none
+  std::vector<uint8_t> inert_leaf;  // per leaf: nothing in it can block a segment of the shot; empty: none
   std::vector<uint32_t> surfaces;  // the surfaces overlapping those leaves, sorted (none: nothing there can block)
+  Vec3 plane_normal;               // the shooter's plane: dot(plane_normal, p) = plane_offset
+  float plane_offset = 0;
+  float clear = 0;                 // a segment starting nearer the plane than this is routed statically
 };
 
 // Where a segment must be tested: the positions owning the leaves it crosses, and whether it crosses a leaf left to
@@ -77,6 +86,18 @@ class GlobalBsp {
     int leaf = -1;
   };
   int build_node(const Mesh& mesh, const std::vector<uint32_t>& surfaces, Box box, int depth, int max_depth);
+  // Per surface: whether any part of it lies in front of the shooter's plane, where a segment of its shot can be.
+  static std::vector<uint8_t> surfaces_that_can_block(const Mesh& mesh, const Polygon& shooter);
+  std::vector<uint8_t> inert_leaves(const std::vector<uint8_t>& can_block) const;
+  // A shot's probe: per leaf, the segments that cross it (inert leaves left out), each segment's weight (the
+  // samples it stands for) and the position its packet starts from.
+  struct ShotProbe {
+    std::vector<std::vector<uint32_t>> crossed_by;
+    std::vector<double> weight;
+    std::vector<uint32_t> home_of;
+  };
+  ShotProbe probe_shot(const Mesh& mesh, const Polygon& shooter, std::span<const Vec3> targets,
+                       const std::vector<uint8_t>& inert) const;
   template <class Visit>
   void walk(int node, Vec3 a, Vec3 d, float t0, float t1, Visit&& visit) const;
 

@@ -80,6 +80,10 @@ void RingNode::make_packets() {
         const Crossing c = bsp_.cross(s.from, s.to, shot_);
         route |= c.positions | (c.home ? uint64_t{1} << position() : 0);
       }
+    if (!route) {
+      round_visible_[i] = mask;  // nothing anywhere can block its segments
+      continue;
+    }
     if (!packet.points.empty() && (static_cast<int>(packet.points.size()) >= ring_.samples_per_packet ||
                                    std::popcount(packet.route | route) > ring_.max_visits))
       close();
