@@ -111,6 +111,39 @@ TEST(GlobalBsp, HomeLeavesNeverSkipABlocker) {
   }
 }
 
+// Static balancing of visibility complexity: positions get even shares of the rays that cross space (measured by
+// the probe the tree is balanced with, and by a second, independent set of segments).
+TEST(GlobalBsp, StaticBalancingEvensVisibilityWork) {
+  auto scene = Scene::builtin("room");
+  ASSERT_TRUE(scene) << scene.error().message;
+  auto mesh = build_mesh(*scene, {});
+  ASSERT_TRUE(mesh);
+  auto imbalance = [](const std::vector<size_t>& c) {
+    double sum = 0, most = 0;
+    for (size_t x : c) {
+      sum += static_cast<double>(x);
+      most = std::max(most, static_cast<double>(x));
+    }
+    return most / (sum / static_cast<double>(c.size()));
+  };
+  for (int positions : {2, 4, 8}) {
+    const GlobalBsp plain = GlobalBsp::build(*mesh, positions, false), even = GlobalBsp::build(*mesh, positions, true);
+    EXPECT_LE(imbalance(even.probe_load(*mesh)), imbalance(plain.probe_load(*mesh))) << positions;
+    EXPECT_LT(imbalance(even.probe_load(*mesh)), 1.1) << positions;
+    // Fresh segments the tree never saw: random pairs of surface points from another seed.
+    std::mt19937 rng(99);
+    std::vector<size_t> fresh(static_cast<size_t>(positions), 0);
+    const auto probe = probe_segments(*mesh, 20000);
+    for (size_t i = 0; i < 3000; ++i) {
+      const auto& [a, _] = probe[std::uniform_int_distribution<size_t>(0, probe.size() - 1)(rng)];
+      const auto& [__, b] = probe[std::uniform_int_distribution<size_t>(0, probe.size() - 1)(rng)];
+      const uint64_t bits = even.route(a, b);
+      for (int p = 0; p < positions; ++p) fresh[static_cast<size_t>(p)] += bits >> p & 1;
+    }
+    EXPECT_LT(imbalance(fresh), 1.25) << positions;
+  }
+}
+
 // Static balancing of visibility complexity: in each shot, positions get even shares of the rays, counted as a ring
 // counts them (once per position a segment's route names, and once at its packet's home if it crosses a home leaf),
 // for the solve's first shooters and for shooters the tree was not built with, on segments it never saw.
