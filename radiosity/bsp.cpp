@@ -98,7 +98,9 @@ GlobalBsp GlobalBsp::build(const Mesh& mesh, int positions, bool balanced, std::
   const Box root{mesh.lo - Vec3{slack, slack, slack}, mesh.hi + Vec3{slack, slack, slack}};
   std::vector<GlobalBsp> trees;
   std::vector<ShotEstimate> estimates;
-  const auto probe = balanced ? probe_segments(mesh, kProbeSegments) : std::vector<std::pair<Vec3, Vec3>>{};
+  std::vector<uint32_t> probe_end;
+  const auto probe =
+      balanced ? probe_segments(mesh, kProbeSegments, &probe_end) : std::vector<std::pair<Vec3, Vec3>>{};
   const auto shooters = balanced && positions > 1 ? trial_shooters(mesh) : std::vector<Shooter>{};
   // A deeper tree lets leaves be dealt, and each shot's home leaves be chosen, more evenly, but a ray then crosses
   // more positions and is cast more often (and every node stores the tree, Stürzlinger et al. §5.2): try each depth
@@ -114,11 +116,17 @@ GlobalBsp GlobalBsp::build(const Mesh& mesh, int positions, bool balanced, std::
     t.build_node(mesh, all, root, 0, depth);
     t.owner_.assign(t.leaves_.size(), 0);
     if (balanced) {
-      // Which probe segments cross each leaf.
+      // Which probe segments cross each leaf. A segment stands for a ray of a shot from the surface it ends on,
+      // which a leaf holding only surfaces on or behind that surface's plane cannot block (plan_shot).
       std::vector<std::vector<uint32_t>> crossing(t.leaves_.size());
       for (uint32_t k = 0; k < probe.size(); ++k) {
         const auto& [a, b] = probe[k];
-        t.walk(0, a, b - a, 0.0f, 1.0f, [&](int leaf) { crossing[static_cast<size_t>(leaf)].push_back(k); });
+        const Polygon& end = mesh.surfaces[probe_end[k]].polygon;
+        const Vec3 n = end.normal();
+        const float offset = dot(n, end.v[0]);
+        t.walk(0, a, b - a, 0.0f, 1.0f, [&](int leaf) {
+          if (t.leaf_can_block(mesh, static_cast<size_t>(leaf), n, offset)) crossing[static_cast<size_t>(leaf)].push_back(k);
+        });
       }
       std::vector<size_t> order(t.leaves_.size());
       std::iota(order.begin(), order.end(), 0);
@@ -237,19 +245,27 @@ Crossing GlobalBsp::cross(Vec3 a, Vec3 b, const ShotPlan& shot) const {
   return c;
 }
 
+// Segments end mesh.epsilon in front of the shooter's plane; a surface counts as behind it if no vertex is a quarter
+// of that in front (and cross() routes statically a segment starting within three quarters of it): half an epsilon
+// between the two, far more than a float's rounding at the scene's size.
+static bool in_front(const Mesh& mesh, const Polygon& q, Vec3 n, float offset) {
+  for (int i = 0; i < q.count; ++i)
+    if (dot(n, q.v[static_cast<size_t>(i)]) - offset >= 0.25f * mesh.epsilon) return true;
+  return false;
+}
+
 std::vector<uint8_t> GlobalBsp::surfaces_that_can_block(const Mesh& mesh, const Polygon& shooter) {
-  // Segments end mesh.epsilon in front of the shooter's plane; a surface counts as behind it if no vertex is a
-  // quarter of that in front (and cross() routes statically a segment starting within three quarters of it): half
-  // an epsilon between the two, far more than a float's rounding at the scene's size.
   const Vec3 n = shooter.normal();
   const float offset = dot(n, shooter.v[0]);
   std::vector<uint8_t> can_block(mesh.surfaces.size(), 0);
-  for (size_t s = 0; s < mesh.surfaces.size(); ++s) {
-    const Polygon& q = mesh.surfaces[s].polygon;
-    for (int i = 0; i < q.count; ++i)
-      if (dot(n, q.v[static_cast<size_t>(i)]) - offset >= 0.25f * mesh.epsilon) can_block[s] = 1;
-  }
+  for (size_t s = 0; s < mesh.surfaces.size(); ++s) can_block[s] = in_front(mesh, mesh.surfaces[s].polygon, n, offset);
   return can_block;
+}
+
+bool GlobalBsp::leaf_can_block(const Mesh& mesh, size_t leaf, Vec3 n, float offset) const {
+  for (uint32_t s : leaves_[leaf])
+    if (in_front(mesh, mesh.surfaces[s].polygon, n, offset)) return true;
+  return false;
 }
 
 std::vector<uint8_t> GlobalBsp::inert_leaves(const std::vector<uint8_t>& can_block) const {
@@ -409,16 +425,25 @@ ShotPlan GlobalBsp::plan_shot(const Mesh& mesh, const Polygon& shooter, std::spa
   return plan;
 }
 
-std::vector<size_t> GlobalBsp::probe_load(const Mesh& mesh) const {
+std::vector<size_t> GlobalBsp::probe_load(const Mesh& mesh, size_t first, size_t count) const {
+  std::vector<uint32_t> ends;
+  const auto probe = probe_segments(mesh, first + count, &ends);
   std::vector<size_t> load(static_cast<size_t>(positions_), 0);
-  for (const auto& [a, b] : probe_segments(mesh, kProbeSegments)) {
-    const uint64_t bits = route(a, b);
+  for (size_t k = first; k < probe.size(); ++k) {
+    const auto& [a, b] = probe[k];
+    const Polygon& end = mesh.surfaces[ends[k]].polygon;
+    const Vec3 n = end.normal();
+    const float offset = dot(n, end.v[0]);
+    uint64_t bits = 0;
+    walk(0, a, b - a, 0.0f, 1.0f, [&](int leaf) {
+      if (leaf_can_block(mesh, static_cast<size_t>(leaf), n, offset)) bits |= uint64_t{1} << owner_[static_cast<size_t>(leaf)];
+    });
     for (int p = 0; p < positions_; ++p) load[static_cast<size_t>(p)] += bits >> p & 1;
   }
   return load;
 }
 
-std::vector<std::pair<Vec3, Vec3>> probe_segments(const Mesh& mesh, size_t count) {
+std::vector<std::pair<Vec3, Vec3>> probe_segments(const Mesh& mesh, size_t count, std::vector<uint32_t>* end_surface) {
   std::vector<double> cdf;
   double total = 0;
   for (const auto& s : mesh.surfaces) cdf.push_back(total += s.polygon.area());
@@ -462,6 +487,7 @@ std::vector<std::pair<Vec3, Vec3>> probe_segments(const Mesh& mesh, size_t count
     if (dot(mesh.surfaces[sa].polygon.normal(), b - a) <= 0 || dot(mesh.surfaces[sb].polygon.normal(), a - b) <= 0)
       continue;
     out.emplace_back(a, b);
+    if (end_surface) end_surface->push_back(static_cast<uint32_t>(sb));
   }
   return out;
 }

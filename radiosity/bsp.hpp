@@ -73,8 +73,10 @@ class GlobalBsp {
                      ShotEstimate* estimate = nullptr) const;
   // The surfaces position p holds: those overlapping any of its leaves (a surface can be in several).
   const std::vector<uint32_t>& surfaces_of(int position) const { return held_[static_cast<size_t>(position)]; }
-  // Per position, how many of the mesh's probe segments cross its space (the balanced tree's cost model).
-  std::vector<size_t> probe_load(const Mesh& mesh) const;
+  // The balanced tree's cost model, per position: of segments [first, first + count) of probe_segments() (a tree is
+  // dealt by the first 4000), how many it would test, each once: those crossing one of its leaves that holds a
+  // surface in front of the plane of the surface the segment ends on.
+  std::vector<size_t> probe_load(const Mesh& mesh, size_t first = 0, size_t count = 4000) const;
   // The leaf that contains point p, and its position (for tests).
   int position_of_point(Vec3 p) const;
 
@@ -89,6 +91,8 @@ class GlobalBsp {
   // Per surface: whether any part of it lies in front of the shooter's plane, where a segment of its shot can be.
   static std::vector<uint8_t> surfaces_that_can_block(const Mesh& mesh, const Polygon& shooter);
   std::vector<uint8_t> inert_leaves(const std::vector<uint8_t>& can_block) const;
+  // Whether the leaf holds a surface in front of the plane dot(n, p) = offset (as surfaces_that_can_block).
+  bool leaf_can_block(const Mesh& mesh, size_t leaf, Vec3 n, float offset) const;
   // A shot's probe: per leaf, the segments that cross it (inert leaves left out), each segment's weight (the
   // samples it stands for) and the position its packet starts from.
   struct ShotProbe {
@@ -116,6 +120,8 @@ class GlobalBsp {
 Box bounds(const Polygon& p);
 // Segments between random points (area-weighted, fixed seed) of surfaces that face each other: a stand-in for the
 // visibility rays a solve will cast, the same in every process.
-std::vector<std::pair<Vec3, Vec3>> probe_segments(const Mesh& mesh, size_t count);
+// `end_surface`, if given, gets per segment the surface it ends on.
+std::vector<std::pair<Vec3, Vec3>> probe_segments(const Mesh& mesh, size_t count,
+                                                  std::vector<uint32_t>* end_surface = nullptr);
 
 }  // namespace lf::radiosity
