@@ -157,11 +157,8 @@ Value read_light(const Value& light) {
     if (key != "quad" && key != "sphere" && key != "radius" && key != "point" && key != "radiance" && key != "intensity" &&
         key != "name")
       throw ParamError("light: unknown parameter '" + key + "' (known: quad, sphere, radius, radiance, point, intensity, name)");
-  if (const Value* name = light.find("name")) {
+  if (const Value* name = light.find("name"))
     if (!name->is_string() || name->as_string().empty()) throw ParamError("light: name must be a non-empty string");
-    if (light.find("point"))
-      throw ParamError("light: name is for quad and sphere lights, whose material it names (a point light has none)");
-  }
   const int shapes = (light.find("quad") != nullptr) + (light.find("sphere") != nullptr) + (light.find("point") != nullptr);
   if (shapes != 1) throw ParamError("light needs exactly one of quad, sphere or point");
   for (const char* colour : {"radiance", "intensity"})
@@ -215,6 +212,23 @@ Value read_frame_environment(const ParamTable& p) {
   if (e.empty()) throw ParamError("environment: a frame's table gives its intensity, rotation or radiance");
   p.report_unused();
   return Value(Value::Map{{"environment", Value(std::move(e))}});
+}
+
+Value read_frame_point_light(const ParamTable& p) {
+  Value::Map light;
+  if (!p.has("point") && !p.has("intensity")) throw ParamError(p.owner() + " gives neither point nor intensity");
+  if (p.has("point")) {
+    const auto at = p.get_vec3("point", {0, 0, 0});
+    light["point"] = Value::Array{at[0], at[1], at[2]};
+  }
+  if (p.has("intensity")) {
+    const auto i = p.get_vec3("intensity", {0, 0, 0});
+    for (double v : i)
+      if (!(v >= 0 && v <= 1e9)) throw ParamError(p.owner() + ": intensity must be between 0 and 1e9 in each channel");
+    light["intensity"] = Value::Array{i[0], i[1], i[2]};
+  }
+  p.report_unused();
+  return Value(std::move(light));
 }
 
 Value read_sun(const ParamTable& p) {

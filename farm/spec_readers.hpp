@@ -43,6 +43,9 @@ Value read_environment(const ParamTable& p, const std::filesystem::path& script_
 // or a constant one's radiance and intensity; the map and whether the camera sees it are the declared
 // environment's. {environment = {...}} with only the keys given.
 Value read_frame_environment(const ParamTable& p);
+// A job frame's point light (frames { lights = function(frame) }): its new position (`point`) and/or `intensity`
+// (W/sr); {point?, intensity?} with only the keys given.
+Value read_frame_point_light(const ParamTable& p);
 // sun { direction = {x, y, z}, irradiance = {r, g, b}, angle = 0.526 }: a disc towards `direction`, `angle` degrees
 // across, giving `irradiance` (W/m^2) to a surface facing it. As the scene adds it: {sun = {...}}.
 Value read_sun(const ParamTable& p);

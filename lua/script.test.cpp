@@ -555,8 +555,27 @@ TEST_F(ScriptTest, FramesMakeAJob) {
                                  "frames { last = 2, materials = function(f) return { lamp = { emission = {f, f, f} } } end }\n" + net));
   ASSERT_TRUE(r.ok()) << r.error().message;
   EXPECT_EQ(r->frames[1].materials[0].find("name")->as_string(), "lamp");
-  EXPECT_EQ(error_of(head + "light { name = \"lamp\", point = {0, 500, 0}, intensity = {1, 1, 1} }\n" + net),
-            "farm.lua:3: light: name is for quad and sphere lights, whose material it names (a point light has none)");
+  // frames { lights }: a named point light, as the index-th of the script's point lights; it is no material.
+  r = evaluate_script(write("farm.lua", head + "light { point = {0, 400, 0}, intensity = {1, 1, 1} }\n"
+                                 "light { name = \"bulb\", point = {0, 500, 0}, intensity = {1, 1, 1} }\n"
+                                 "frames { last = 2, lights = function(f) return { bulb = { point = {f, 500, 0} } } end }\n" + net));
+  ASSERT_TRUE(r.ok()) << r.error().message;
+  ASSERT_EQ(r->frames[1].materials.size(), 1u);
+  EXPECT_EQ(r->frames[1].materials[0].find("name")->as_string(), "bulb");
+  EXPECT_EQ(r->frames[1].materials[0].find("light")->find("index")->as_int(), 1);
+  EXPECT_EQ(r->frames[1].materials[0].find("light")->find("of")->as_int(), 2);
+  EXPECT_EQ(r->frames[1].materials[0].find("light")->find("point")->as_array()[0].as_double(), 2);
+  EXPECT_EQ(r->frames[1].materials[0].find("light")->find("intensity"), nullptr);
+  EXPECT_EQ(error_of(head + "light { name = \"bulb\", point = {0, 500, 0}, intensity = {1, 1, 1} }\n"
+                     "frames { last = 2, materials = function(f) return { bulb = { emission = {f, f, f} } } end }\n" + net),
+            "farm.lua:4: material 'bulb' is not in the scene (its materials: white, red, green, light)");
+  EXPECT_EQ(error_of(head + "light { name = \"bulb\", point = {0, 500, 0}, intensity = {1, 1, 1} }\n"
+                     "frames { last = 2, lights = function(f) return { bulb = { intensity = {-1, 0, 0} } } end }\n" + net),
+            "farm.lua:4: frames: the lights function's table for frame 1, point light 'bulb': intensity must be between 0 "
+            "and 1e9 in each channel");
+  EXPECT_EQ(error_of(head + "light { name = \"bulb\", point = {0, 500, 0}, intensity = {1, 1, 1} }\n"
+                     "frames { last = 2, lights = function(f) return { bulb = { radiance = {1, 1, 1} } } end }\n" + net),
+            "farm.lua:4: frames: the lights function's table for frame 1, point light 'bulb' gives neither point nor intensity");
   EXPECT_EQ(error_of(head + "light { name = \"white\", sphere = {0, 500, 0}, radius = 20, radiance = {1, 1, 1} }\n" + net),
             "farm.lua:3: light: name 'white' is a material of the scene already");
   EXPECT_EQ(error_of(head + "light { name = \"a\", sphere = {0, 500, 0}, radius = 20, radiance = {1, 1, 1} }\n"

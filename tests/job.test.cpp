@@ -311,6 +311,47 @@ renderers { count = 2, lighting = lightop "direct" {} }
   expect_no_leftovers(undeclared);
 }
 
+// frames { lights }: a named point light moves and brightens from frame to frame, and each frame equals the farm of
+// that frame alone whose script declares the light where the job's frame puts it. A name that is no point light of
+// the script is refused before launch, at the frames line, naming those it has.
+TEST_F(JobTest, APointLightMovesFromFrameToFrame) {
+  write("yard.obj", kYard);
+  const std::string script = write("bulb.lua", R"(
+scene  { file = "yard.obj" }
+camera { eye = {0, 4, 7}, at = {0, 0.3, 0}, fov = 50 }
+image  { width = 32, height = 32, spp = 2, tile = 16, output = param("out", "bulb.####.exr") }
+farm   { light_paths = "partial" }  -- direct light alone
+local function bulb_at(f) return { point = {3 * f - 4.5, 2, 1}, intensity = {10 * f, 10 * f, 10 * f} } end
+local single = param("frame", 0)
+local first = bulb_at(single > 0 and single or 1)
+light { name = param("name", "bulb"), point = first.point, intensity = first.intensity }
+if single == 0 then frames { first = 1, last = 2, lights = function(f) return { bulb = bulb_at(f) } end } end
+renderers { count = 2, lighting = lightop "direct" {} }
+)");
+  auto run_bulb = [&](const std::string& out, std::vector<std::string> extra) { return run_quiet(script, out, extra); };
+  const auto job = run_bulb("bulb.####.exr", {});
+  ASSERT_EQ(job.status, 0) << job.err;
+  expect_no_leftovers(job);
+  for (int n = 1; n <= 2; ++n) {
+    const auto alone = run_bulb("alone.exr", {"--set", "frame=" + std::to_string(n)});
+    ASSERT_EQ(alone.status, 0) << alone.err;
+    EXPECT_TRUE(same_pixels(frame("bulb", n), path("alone.exr"))) << "frame " << n << " is not its farm alone";
+  }
+  auto a = read_image(frame("bulb", 1)), b = read_image(frame("bulb", 2));
+  ASSERT_TRUE(a.ok() && b.ok());
+  size_t differ = 0;
+  for (size_t i = 0; i < a->pixels.size(); ++i) differ += !(a->pixels[i] == b->pixels[i]);
+  EXPECT_GT(differ, a->pixels.size() / 4) << "the light did not move";
+
+  const auto unnamed = run_bulb("u.####.exr", {"--set", "name=lamp"});
+  EXPECT_EQ(unnamed.status, 2) << unnamed.err;
+  EXPECT_NE(unnamed.err.find("bulb.lua:10: frames: the lights function's table for frame 1: 'bulb' is not a named "
+                             "point light of the script (named: lamp)"),
+            std::string::npos)
+      << unnamed.err;
+  expect_no_leftovers(unnamed);
+}
+
 // frames { environment }: the sky map turns from frame to frame (a turntable lit by its HDRI), and each frame equals
 // the farm of that frame alone whose script declares the map turned as the job's frame turns it. A change that does
 // not fit the declared environment is refused before launch, at the frames line.

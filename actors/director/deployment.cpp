@@ -59,7 +59,7 @@ void check_frame_materials(const FarmSpec& spec, const Scene& scene) {
       if (change.find("sun") && !(scene.environment() && scene.environment()->sun()))
         throw FarmFailure{spec.job.loc.str() + ": frames: the sun changes from frame to frame, but the scene has no "
                           "sun: declare its first state with sun { }", 2};
-    if (auto st = scene.check_sky_changes(f.materials); !st)
+    if (auto st = scene.check_light_changes(f.materials); !st)
       throw FarmFailure{spec.job.loc.str() + ": frames: frame " + std::to_string(f.number) + ": " + st.error().message, 2};
     std::vector<Material> materials = scene.materials();
     if (auto st = Scene::change_materials(materials, f.materials); !st) throw FarmFailure{what + ": " + st.error().message, 2};

@@ -196,7 +196,7 @@ Result<std::shared_ptr<const Scene>> Scene::with_material_changes(const Value::A
       if (!t.owned.empty()) t.texels = t.owned;
   }
   if (auto st = changed->apply_material_overrides(changes); !st) return make_error(what + ": " + st.error().message);
-  if (auto st = changed->apply_sky_changes(changes); !st) return make_error(what + ": " + st.error().message);
+  if (auto st = changed->apply_light_changes(changes); !st) return make_error(what + ": " + st.error().message);
   if (auto st = changed->settle_lights(what); !st) return st.error();
   return std::shared_ptr<const Scene>(std::move(changed));
 }

@@ -186,15 +186,16 @@ class Scene {
   // unknown name, or kd + ks above 1 (a surface that creates energy), is an error naming the material.
   Status apply_material_overrides(const Value::Array& overrides);
   // The same changes to a list of materials (a frame's changes checked against the scene's, without a scene).
-  // A frame's sun ({name = "sun", sun = {...}}) or environment ({name = "environment", environment = {...}}) is not
-  // a material: left to apply_sky_changes.
+  // A frame's sun ({name = "sun", sun = {...}}), environment ({name = "environment", environment = {...}}) or point
+  // light ({name = "bulb", light = {...}}) is not a material: left to apply_light_changes.
   static Status change_materials(std::vector<Material>& materials, const Value::Array& overrides);
-  // A job frame's sky (frames { sun, environment }): the scene's sun, declared by the script, moved or changed as
-  // sun { } would give it; the environment's intensity and rotation (a map's) or radiance (a constant one's), the
-  // map itself kept. An error when the scene has no sun, or no environment, to change, or the change does not fit
-  // the environment's kind; check_sky_changes says so without changing anything.
-  Status apply_sky_changes(const Value::Array& changes);
-  Status check_sky_changes(const Value::Array& changes) const;
+  // A job frame's lights (frames { sun, environment, lights }): the scene's sun, declared by the script, moved or
+  // changed as sun { } would give it; the environment's intensity and rotation (a map's) or radiance (a constant
+  // one's), the map itself kept; a named point light of the script moved or its intensity changed. An error when the
+  // scene has no sun, no environment or no such point light to change, or the change does not fit the environment's
+  // kind; check_light_changes says so without changing anything.
+  Status apply_light_changes(const Value::Array& changes);
+  Status check_light_changes(const Value::Array& changes) const;
   // A job frame's material changes (frames { materials }) over this scene's materials: a scene that shares this one's
   // geometry and textures (its mapped image, or copies of its arrays), with the materials changed as
   // apply_material_overrides changes them and the lights settled again from them exactly as finalize() settles a

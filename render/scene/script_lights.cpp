@@ -203,8 +203,32 @@ static Status environment_change(const Environment& declared, const Value& chang
   return Ok{};
 }
 
-Status Scene::check_sky_changes(const Value::Array& changes) const {
+// A frame's point light as job_functions reads it: {index, of, point?, intensity?}, the index-th of the script's `of`
+// point lights, which are the scene's last (the scene file's own come before them). Checked; into `out` if given.
+static Status point_light_change(const std::vector<PointLight>& lights, const Value& change, const std::string& name,
+                                 PointLight* out) {
+  const Value* index = change.find("index");
+  const Value* of = change.find("of");
+  if (!index || !of || !index->is_number() || !of->is_number() || index->as_double() < 0 ||
+      index->as_double() >= of->as_double() || of->as_double() > static_cast<double>(lights.size()))
+    return make_error("point light '" + name + "' is not among the scene's point lights");
+  PointLight light = lights[lights.size() - static_cast<size_t>(of->as_double()) + static_cast<size_t>(index->as_double())];
+  if (change.find("point") && !vec3_of(change.find("point"), light.position))
+    return make_error("point light '" + name + "': point must be {x, y, z}");
+  if (change.find("intensity") && !vec3_of(change.find("intensity"), light.intensity))
+    return make_error("point light '" + name + "': intensity must be {r, g, b}");
+  if (out) *out = light;
+  return Ok{};
+}
+
+Status Scene::check_light_changes(const Value::Array& changes) const {
   for (const Value& c : changes) {
+    if (const Value* lv = c.find("light")) {
+      const Value* name = c.find("name");
+      if (auto st = point_light_change(point_lights_, *lv, name && name->is_string() ? name->as_string() : "?", nullptr); !st)
+        return st;
+      continue;
+    }
     const Value* sv = c.find("sun");
     const Value* ev = c.find("environment");
     if (sv && (!environment_ || !environment_->sun()))
@@ -219,10 +243,17 @@ Status Scene::check_sky_changes(const Value::Array& changes) const {
   return Ok{};
 }
 
-Status Scene::apply_sky_changes(const Value::Array& changes) {
-  if (auto st = check_sky_changes(changes); !st) return st;
+Status Scene::apply_light_changes(const Value::Array& changes) {
+  if (auto st = check_light_changes(changes); !st) return st;
   std::optional<Environment> sky;  // one copy for all of a frame's changes: the map and its distribution as they are
   for (const Value& c : changes) {
+    if (const Value* lv = c.find("light")) {
+      const Value& change = *lv;
+      const size_t at = point_lights_.size() - static_cast<size_t>(change.find("of")->as_double()) +
+                        static_cast<size_t>(change.find("index")->as_double());
+      point_light_change(point_lights_, change, "", &point_lights_[at]);
+      continue;
+    }
     const Value* sv = c.find("sun");
     const Value* ev = c.find("environment");
     if (!sv && !ev) continue;
@@ -236,7 +267,7 @@ Status Scene::apply_sky_changes(const Value::Array& changes) {
 
 Status Scene::change_materials(std::vector<Material>& materials, const Value::Array& overrides) {
   for (const Value& o : overrides) {
-    if (o.find("sun") || o.find("environment")) continue;  // a frame's sky (apply_sky_changes), not a material
+    if (o.find("sun") || o.find("environment") || o.find("light")) continue;  // a frame's lights (apply_light_changes)
     const Value* name = o.find("name");
     if (!name || !name->is_string()) return make_error("a material change names no material");
     Material* m = nullptr;
