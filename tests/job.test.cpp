@@ -95,6 +95,24 @@ class JobTest : public FarmFixture {
     auto x = read_image(a), y = read_image(b);
     return x.ok() && y.ok() && x->width == y->width && x->pixels == y->pixels;
   }
+  // `script_file` as a job of frames 1..last to NAME.####.exr, then each frame alone (--set frame=N): each job frame
+  // must equal its farm alone, and the first and last differ in a quarter of their pixels (`what` did change).
+  void expect_frames_are_their_farms_alone(const std::string& script_file, const std::string& name, int last,
+                                           const char* what) {
+    const auto job = run_quiet(script_file, name + ".####.exr", {});
+    ASSERT_EQ(job.status, 0) << job.err;
+    expect_no_leftovers(job);
+    for (int n = 1; n <= last; ++n) {
+      const auto alone = run_quiet(script_file, "alone.exr", {"--set", "frame=" + std::to_string(n)});
+      ASSERT_EQ(alone.status, 0) << alone.err;
+      EXPECT_TRUE(same_pixels(frame(name, n), path("alone.exr"))) << "frame " << n << " is not its farm alone";
+    }
+    auto a = read_image(frame(name, 1)), b = read_image(frame(name, last));
+    ASSERT_TRUE(a.ok() && b.ok());
+    size_t differ = 0;
+    for (size_t i = 0; i < a->pixels.size(); ++i) differ += !(a->pixels[i] == b->pixels[i]);
+    EXPECT_GT(differ, a->pixels.size() / 4) << what << " did not change";
+  }
   // A LightOp's figure `key` from the end-of-run table ("NAME   a 1, b 2, ..."); -1 if it is not there.
   static int figure(const std::string& err, const std::string& actor, const std::string& key) {
     std::smatch m;
@@ -287,20 +305,8 @@ if param("declared", true) then sun(sun_at(single > 0 and single or 1)) else lig
 if single == 0 then frames { first = 1, last = 3, sun = sun_at } end
 renderers { count = 2, lighting = lightop "direct" {} }
 )");
+  expect_frames_are_their_farms_alone(sun_script, "sun", 3, "the block's shadow");
   auto run_sun = [&](const std::string& out, std::vector<std::string> extra) { return run_quiet(sun_script, out, extra); };
-  const auto job = run_sun("sun.####.exr", {});
-  ASSERT_EQ(job.status, 0) << job.err;
-  expect_no_leftovers(job);
-  for (int n = 1; n <= 3; ++n) {
-    const auto alone = run_sun("alone.exr", {"--set", "frame=" + std::to_string(n)});
-    ASSERT_EQ(alone.status, 0) << alone.err;
-    EXPECT_TRUE(same_pixels(frame("sun", n), path("alone.exr"))) << "frame " << n << " is not its farm alone";
-  }
-  auto a = read_image(frame("sun", 1)), b = read_image(frame("sun", 3));
-  ASSERT_TRUE(a.ok() && b.ok());
-  size_t differ = 0;
-  for (size_t i = 0; i < a->pixels.size(); ++i) differ += !(a->pixels[i] == b->pixels[i]);
-  EXPECT_GT(differ, a->pixels.size() / 4) << "the block's shadow did not move with the sun";
 
   const auto undeclared = run_sun("u.####.exr", {"--set", "declared=false"});
   EXPECT_EQ(undeclared.status, 2) << undeclared.err;
@@ -328,20 +334,8 @@ light { name = param("name", "bulb"), point = first.point, intensity = first.int
 if single == 0 then frames { first = 1, last = 2, lights = function(f) return { bulb = bulb_at(f) } end } end
 renderers { count = 2, lighting = lightop "direct" {} }
 )");
+  expect_frames_are_their_farms_alone(script, "bulb", 2, "the light");
   auto run_bulb = [&](const std::string& out, std::vector<std::string> extra) { return run_quiet(script, out, extra); };
-  const auto job = run_bulb("bulb.####.exr", {});
-  ASSERT_EQ(job.status, 0) << job.err;
-  expect_no_leftovers(job);
-  for (int n = 1; n <= 2; ++n) {
-    const auto alone = run_bulb("alone.exr", {"--set", "frame=" + std::to_string(n)});
-    ASSERT_EQ(alone.status, 0) << alone.err;
-    EXPECT_TRUE(same_pixels(frame("bulb", n), path("alone.exr"))) << "frame " << n << " is not its farm alone";
-  }
-  auto a = read_image(frame("bulb", 1)), b = read_image(frame("bulb", 2));
-  ASSERT_TRUE(a.ok() && b.ok());
-  size_t differ = 0;
-  for (size_t i = 0; i < a->pixels.size(); ++i) differ += !(a->pixels[i] == b->pixels[i]);
-  EXPECT_GT(differ, a->pixels.size() / 4) << "the light did not move";
 
   const auto unnamed = run_bulb("u.####.exr", {"--set", "name=lamp"});
   EXPECT_EQ(unnamed.status, 2) << unnamed.err;
@@ -378,20 +372,8 @@ else environment { radiance = {1, 1, 1} } end
 if single == 0 then frames { first = 1, last = 3, environment = turned } end
 renderers { count = 2, lighting = lightop "direct" {} }
 )");
+  expect_frames_are_their_farms_alone(script, "sky", 3, "the light from the sky");
   auto run_sky = [&](const std::string& out, std::vector<std::string> extra) { return run_quiet(script, out, extra); };
-  const auto job = run_sky("sky.####.exr", {});
-  ASSERT_EQ(job.status, 0) << job.err;
-  expect_no_leftovers(job);
-  for (int n = 1; n <= 3; ++n) {
-    const auto alone = run_sky("alone.exr", {"--set", "frame=" + std::to_string(n)});
-    ASSERT_EQ(alone.status, 0) << alone.err;
-    EXPECT_TRUE(same_pixels(frame("sky", n), path("alone.exr"))) << "frame " << n << " is not its farm alone";
-  }
-  auto a = read_image(frame("sky", 1)), b = read_image(frame("sky", 3));
-  ASSERT_TRUE(a.ok() && b.ok());
-  size_t differ = 0;
-  for (size_t i = 0; i < a->pixels.size(); ++i) differ += !(a->pixels[i] == b->pixels[i]);
-  EXPECT_GT(differ, a->pixels.size() / 4) << "the light did not turn with the sky";
 
   const auto constant = run_sky("c.####.exr", {"--set", "map=false"});
   EXPECT_EQ(constant.status, 2) << constant.err;
