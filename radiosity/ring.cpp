@@ -72,7 +72,6 @@ void RingNode::make_packets() {
   for (size_t i = 0; i < part_.sample_count(); ++i) {
     const uint64_t mask = part_.sample_mask(i);
     if (!mask) continue;
-    ++work_.samples;
     uint64_t route = 0;
     for (int m = 0; m < 64; ++m)
       if (mask >> m & 1) {
@@ -84,6 +83,7 @@ void RingNode::make_packets() {
       round_visible_[i] = mask;  // nothing anywhere can block its segments
       continue;
     }
+    ++work_.samples;
     if (!packet.points.empty() && (static_cast<int>(packet.points.size()) >= ring_.samples_per_packet ||
                                    std::popcount(packet.route | route) > ring_.max_visits))
       close();
