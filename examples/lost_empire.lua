@@ -90,7 +90,7 @@ elseif lighting == "network" then
   -- Two processes trace the cache's hemisphere rays (most of the pre-pass), one per core.
   local bounce_replicas = param("bounce_replicas", 2)
   if bounce_replicas > 1 then paths = multiplexer { paths, replicas = bounce_replicas } end
-  local indirect = lightop "irradiance" { input = paths, a = param("a", 0.2), stride = param("stride", 8),
+  local indirect = lightop "irradiance" { input = paths, a = param("a", 0), stride = param("stride", 8),
                                           finest = param("finest", 2), own_rays = param("own_rays", 8),
                                           relax = param("relax", 1), nearest = param("nearest", 1.5),
                                           theta = param("theta", 0), phi = param("phi", 0),

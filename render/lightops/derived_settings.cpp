@@ -14,6 +14,10 @@ HemisphereStrata cache_hemisphere(int lit_samples) {
   return {theta, 3 * theta};
 }
 
+float cache_accuracy(int lit_samples) {
+  return static_cast<float>(std::clamp(0.2 * std::sqrt(16.0 / std::max(1, lit_samples)), 0.05, 0.3));
+}
+
 float record_radius_floor(const SceneContext& ctx, Vec3 x, Vec3 n, float reach_pixels, float a) {
   if (!ctx.camera || reach_pixels <= 0) return 0;
   const Vec3 to_eye = ctx.camera->eye() - x;

@@ -18,6 +18,9 @@ struct HemisphereStrata {
 // A record's hemisphere from the lit samples a pixel (image shade_spp, else spp): about 12 rays per lit sample, so
 // that the record's noise, which every sample of the pixels it serves shares, stays at or below the pixel's own
 // noise from its lit samples; 8 x 24 at 16 lit samples, at least 6 x 18 and at most 24 x 72.
+// The cache's error bound a where the script leaves it unset (0): 0.2 at 16 lit samples a pixel, halved for every
+// fourfold more (the interpolation error then stays under the pixel's noise as that noise falls), within 0.05-0.3.
+float cache_accuracy(int lit_samples);
 HemisphereStrata cache_hemisphere(int lit_samples);
 
 // The least R a cache record at x (shading normal n) may have so that it reaches `reach_pixels` of the camera's

@@ -1,5 +1,5 @@
-// Settings derived from the scene and the image: the hemisphere follows the lit samples a pixel, and a record's
-// least radius is the reach of a few of the camera's pixels there.
+// Settings derived from the scene and the image: the hemisphere and the error bound follow the lit samples a pixel,
+// and a record's least radius is the reach of a few of the camera's pixels there.
 #include "render/lightops/derived_settings.hpp"
 
 #include <gtest/gtest.h>
@@ -24,6 +24,16 @@ TEST(DerivedSettings, CacheHemisphereFollowsTheLitSamples) {
   EXPECT_EQ(cache_hemisphere(0).theta, 6);
   EXPECT_EQ(cache_hemisphere(1).theta, 6);
   EXPECT_EQ(cache_hemisphere(100000).theta, 24);
+}
+
+TEST(DerivedSettings, CacheAccuracyTightensAsThePixelsNoiseFalls) {
+  EXPECT_FLOAT_EQ(cache_accuracy(16), 0.2f);  // the constant default it replaces, at 16 lit samples
+  EXPECT_FLOAT_EQ(cache_accuracy(64), 0.1f);  // halved for four times the samples
+  EXPECT_NEAR(cache_accuracy(32), 0.2f / std::sqrt(2.0f), 1e-6f);
+  EXPECT_FLOAT_EQ(cache_accuracy(256), 0.05f);
+  EXPECT_FLOAT_EQ(cache_accuracy(4096), 0.05f);  // no finer than 0.05
+  EXPECT_FLOAT_EQ(cache_accuracy(4), 0.3f);      // no coarser than 0.3
+  EXPECT_FLOAT_EQ(cache_accuracy(0), 0.3f);
 }
 
 TEST(DerivedSettings, RecordRadiusFloorIsAFewPixelsThere) {

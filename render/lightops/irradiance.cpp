@@ -37,7 +37,7 @@ bool finite(Vec3 v) { return std::isfinite(v.x) && std::isfinite(v.y) && std::is
 class Irradiance final : public LightOp {
  public:
   explicit Irradiance(const ParamTable& p)
-      : a_(static_cast<float>(p.get_float("a", 0.2, 0.01, 2.0))),
+      : a_(accuracy(p)),
         m_(strata(p, "theta", 2, 256)),
         n_(strata(p, "phi", 3, 1024)),
         prepass_(static_cast<uint32_t>(p.get_int("prepass", 20000, 0, 10000000))),
@@ -61,6 +61,7 @@ class Irradiance final : public LightOp {
     const HemisphereStrata derived = cache_hemisphere(ctx.lit_samples > 0 ? ctx.lit_samples : 16);
     if (m_ == 0) m_ = derived.theta;
     if (n_ == 0) n_ = derived.phi;
+    if (a_ == 0) a_ = cache_accuracy(ctx.lit_samples > 0 ? ctx.lit_samples : 16);
     extent_ = scene.bounds().diagonal();
     cache_ = std::make_unique<IrradianceCache>(a_, extent_, bounds_.back());
     if (inputs.count() != 1) throw LightOpError("irradiance needs one input");
@@ -479,6 +480,12 @@ class Irradiance final : public LightOp {
   }
 
   // A hemisphere's strata as set, or 0 (unset, or set to 0): derived in setup.
+  // a as set, or 0 (unset, or set to 0): derived from the image's lit samples in setup.
+  static float accuracy(const ParamTable& p) {
+    const double a = p.get_float("a", 0, 0, 2.0);
+    if (a != 0) p.get_float("a", 0.2, 0.01, 2.0);  // below 0.01: the range error
+    return static_cast<float>(a);
+  }
   static int strata(const ParamTable& p, const char* name, int64_t min, int64_t max) {
     const int64_t v = p.get_int(name, 0, 0, max);
     if (v != 0) p.get_int(name, 0, min, max);  // below min: the range error
