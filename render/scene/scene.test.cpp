@@ -3,6 +3,7 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
@@ -238,6 +239,46 @@ TEST(Scene, ScriptLightsLightASceneWithoutEmitters) {
   size_t glossy = 0;
   for (const auto& m : s->materials()) glossy += m.type == Material::Type::glossy;
   EXPECT_GT(glossy, 0u) << "the Glossy box's MTL has glossy materials";
+}
+
+// A job frame's point-light change (frames { lights }) moves the named one of the script's point lights, and a change
+// that does not name one as a packet must (a whole index within the script's count) is an error, never a crash.
+TEST(Scene, AFramesPointLightChangeMovesThatLightOnly) {
+  SceneSpec spec;
+  spec.builtin = "cornell";
+  spec.lights = Value::Array{Value::Map{{"point", Value::Array{100, 500, 100}}, {"intensity", Value::Array{1, 1, 1}}},
+                             Value::Map{{"name", "bulb"}, {"point", Value::Array{200, 500, 200}},
+                                        {"intensity", Value::Array{2, 2, 2}}}};
+  auto s = Scene::load(spec);
+  ASSERT_TRUE(s.ok()) << s.error().message;
+  const size_t n = s->point_lights().size();
+  ASSERT_GE(n, 2u);
+  auto change = [](Value index, Value of, Value point) {
+    return Value::Array{Value::Map{{"name", "bulb"},
+                                   {"light", Value::Map{{"index", std::move(index)}, {"of", std::move(of)},
+                                                        {"point", std::move(point)}}}}};
+  };
+  auto moved = s->with_material_changes(change(int64_t{1}, int64_t{2}, Value::Array{1, 2, 3}), "frame 2");
+  ASSERT_TRUE(moved.ok()) << moved.error().message;
+  const auto& lights = (*moved)->point_lights();
+  EXPECT_EQ(lights[n - 1].position.x, 1);
+  EXPECT_EQ(lights[n - 1].position.z, 3);
+  EXPECT_EQ(lights[n - 1].intensity.x, 2);  // left out: the declared one
+  EXPECT_EQ(lights[n - 2].position.x, s->point_lights()[n - 2].position.x);
+  for (const auto& [index, of] : std::vector<std::pair<Value, Value>>{{std::nan(""), int64_t{2}},
+                                                                      {0.5, int64_t{2}},
+                                                                      {int64_t{2}, int64_t{2}},
+                                                                      {int64_t{-1}, int64_t{2}},
+                                                                      {int64_t{0}, static_cast<int64_t>(n + 1)},
+                                                                      {Value("one"), int64_t{2}}}) {
+    auto bad = s->with_material_changes(change(index, of, Value::Array{1, 2, 3}), "frame 2");
+    ASSERT_FALSE(bad.ok());
+    EXPECT_NE(bad.error().message.find("point light 'bulb' is not among the scene's point lights"), std::string::npos)
+        << bad.error().message;
+  }
+  auto bad_point = s->with_material_changes(change(int64_t{1}, int64_t{2}, Value("up")), "frame 2");
+  ASSERT_FALSE(bad_point.ok());
+  EXPECT_NE(bad_point.error().message.find("point light 'bulb': point must be {x, y, z}"), std::string::npos);
 }
 
 TEST(Scene, EveryMcGuireSceneWithALightLoads) {

@@ -204,29 +204,33 @@ static Status environment_change(const Environment& declared, const Value& chang
 }
 
 // A frame's point light as job_functions reads it: {index, of, point?, intensity?}, the index-th of the script's `of`
-// point lights, which are the scene's last (the scene file's own come before them). Checked; into `out` if given.
-static Status point_light_change(const std::vector<PointLight>& lights, const Value& change, const std::string& name,
-                                 PointLight* out) {
-  const Value* index = change.find("index");
-  const Value* of = change.find("of");
-  if (!index || !of || !index->is_number() || !of->is_number() || index->as_double() < 0 ||
-      index->as_double() >= of->as_double() || of->as_double() > static_cast<double>(lights.size()))
+// point lights, which are the scene's last (the scene file's own come before them). Checked: where it is among
+// `lights`, and the light as the change leaves it.
+static Result<std::pair<size_t, PointLight>> point_light_change(const std::vector<PointLight>& lights,
+                                                                const Value& change, const std::string& name) {
+  // A count as a packet may carry it: a whole number (not NaN, not 0.5), else -1.
+  auto whole = [](const Value* v) {
+    const double x = v && v->is_number() ? v->as_double() : -1;
+    return x >= 0 && x <= 1e9 && std::floor(x) == x ? static_cast<int64_t>(x) : int64_t{-1};
+  };
+  const int64_t index = whole(change.find("index")), of = whole(change.find("of"));
+  if (index < 0 || index >= of || of > static_cast<int64_t>(lights.size()))
     return make_error("point light '" + name + "' is not among the scene's point lights");
-  PointLight light = lights[lights.size() - static_cast<size_t>(of->as_double()) + static_cast<size_t>(index->as_double())];
+  const size_t at = lights.size() - static_cast<size_t>(of) + static_cast<size_t>(index);
+  PointLight light = lights[at];
   if (change.find("point") && !vec3_of(change.find("point"), light.position))
     return make_error("point light '" + name + "': point must be {x, y, z}");
   if (change.find("intensity") && !vec3_of(change.find("intensity"), light.intensity))
     return make_error("point light '" + name + "': intensity must be {r, g, b}");
-  if (out) *out = light;
-  return Ok{};
+  return std::pair{at, light};
 }
 
 Status Scene::check_light_changes(const Value::Array& changes) const {
   for (const Value& c : changes) {
     if (const Value* lv = c.find("light")) {
       const Value* name = c.find("name");
-      if (auto st = point_light_change(point_lights_, *lv, name && name->is_string() ? name->as_string() : "?", nullptr); !st)
-        return st;
+      if (auto made = point_light_change(point_lights_, *lv, name && name->is_string() ? name->as_string() : "?"); !made)
+        return made.error();
       continue;
     }
     const Value* sv = c.find("sun");
@@ -248,10 +252,8 @@ Status Scene::apply_light_changes(const Value::Array& changes) {
   std::optional<Environment> sky;  // one copy for all of a frame's changes: the map and its distribution as they are
   for (const Value& c : changes) {
     if (const Value* lv = c.find("light")) {
-      const Value& change = *lv;
-      const size_t at = point_lights_.size() - static_cast<size_t>(change.find("of")->as_double()) +
-                        static_cast<size_t>(change.find("index")->as_double());
-      point_light_change(point_lights_, change, "", &point_lights_[at]);
+      const auto made = point_light_change(point_lights_, *lv, "");  // checked above
+      point_lights_[made->first] = made->second;
       continue;
     }
     const Value* sv = c.find("sun");
