@@ -9,8 +9,6 @@
 
 namespace lf::radiosity {
 
-static constexpr size_t kProbeSegments = 4000;
-
 bool Box::overlaps(const Box& b, float slack) const {
   for (int a = 0; a < 3; ++a)
     if (lo[a] > b.hi[a] + slack || b.lo[a] > hi[a] + slack) return false;
@@ -119,15 +117,9 @@ GlobalBsp GlobalBsp::build(const Mesh& mesh, int positions, bool balanced, std::
       // Which probe segments cross each leaf. A segment stands for a ray of a shot from the surface it ends on,
       // which a leaf holding only surfaces on or behind that surface's plane cannot block (plan_shot).
       std::vector<std::vector<uint32_t>> crossing(t.leaves_.size());
-      for (uint32_t k = 0; k < probe.size(); ++k) {
-        const auto& [a, b] = probe[k];
-        const Polygon& end = mesh.surfaces[probe_end[k]].polygon;
-        const Vec3 n = end.normal();
-        const float offset = dot(n, end.v[0]);
-        t.walk(0, a, b - a, 0.0f, 1.0f, [&](int leaf) {
-          if (t.leaf_can_block(mesh, static_cast<size_t>(leaf), n, offset)) crossing[static_cast<size_t>(leaf)].push_back(k);
-        });
-      }
+      for (uint32_t k = 0; k < probe.size(); ++k)
+        t.walk_blocking(mesh, probe[k].first, probe[k].second, probe_end[k],
+                        [&](size_t leaf) { crossing[leaf].push_back(k); });
       std::vector<size_t> order(t.leaves_.size());
       std::iota(order.begin(), order.end(), 0);
       std::stable_sort(order.begin(), order.end(),
@@ -254,40 +246,49 @@ static bool in_front(const Mesh& mesh, const Polygon& q, Vec3 n, float offset) {
   return false;
 }
 
-std::vector<uint8_t> GlobalBsp::surfaces_that_can_block(const Mesh& mesh, const Polygon& shooter) {
-  const Vec3 n = shooter.normal();
-  const float offset = dot(n, shooter.v[0]);
-  std::vector<uint8_t> can_block(mesh.surfaces.size(), 0);
-  for (size_t s = 0; s < mesh.surfaces.size(); ++s) can_block[s] = in_front(mesh, mesh.surfaces[s].polygon, n, offset);
-  return can_block;
-}
-
 bool GlobalBsp::leaf_can_block(const Mesh& mesh, size_t leaf, Vec3 n, float offset) const {
   for (uint32_t s : leaves_[leaf])
     if (in_front(mesh, mesh.surfaces[s].polygon, n, offset)) return true;
   return false;
 }
 
-std::vector<uint8_t> GlobalBsp::inert_leaves(const std::vector<uint8_t>& can_block) const {
-  std::vector<uint8_t> inert(leaves_.size(), 1);
+template <class Visit>
+void GlobalBsp::walk_blocking(const Mesh& mesh, Vec3 a, Vec3 b, uint32_t end_surface, Visit&& visit) const {
+  const Polygon& end = mesh.surfaces[end_surface].polygon;
+  const Vec3 n = end.normal();
+  const float offset = dot(n, end.v[0]);
+  walk(0, a, b - a, 0.0f, 1.0f, [&](int leaf) {
+    if (leaf_can_block(mesh, static_cast<size_t>(leaf), n, offset)) visit(static_cast<size_t>(leaf));
+  });
+}
+
+ShotPlan GlobalBsp::plan_shot(const Mesh& mesh, const Polygon& shooter, std::span<const Vec3> targets,
+                              ShotEstimate* estimate) const {
+  ShotPlan plan;
+  if (targets.empty()) return plan;
+  const Vec3 shooter_normal = shooter.normal();
+  plan.plane_normal = shooter_normal;
+  plan.plane_offset = dot(shooter_normal, shooter.v[0]);
+  plan.clear = 0.75f * mesh.epsilon;
+  std::vector<uint8_t> can_block(mesh.surfaces.size(), 0);
+  for (size_t s = 0; s < mesh.surfaces.size(); ++s)
+    can_block[s] = in_front(mesh, mesh.surfaces[s].polygon, plan.plane_normal, plan.plane_offset);
+  plan.inert_leaf.assign(leaves_.size(), 1);
   for (size_t leaf = 0; leaf < leaves_.size(); ++leaf)
     for (uint32_t s : leaves_[leaf])
       if (can_block[s]) {
-        inert[leaf] = 0;
+        plan.inert_leaf[leaf] = 0;
         break;
       }
-  return inert;
-}
-
-GlobalBsp::ShotProbe GlobalBsp::probe_shot(const Mesh& mesh, const Polygon& shooter, std::span<const Vec3> targets,
-                                           const std::vector<uint8_t>& inert) const {
-  // From patches facing the shooter to its sub-areas, weighted by the patch's elements (its samples).
-  ShotProbe probe;
-  probe.crossed_by.resize(leaves_.size());
+  if (!balanced_ || positions_ < 2) return plan;
   const size_t P = static_cast<size_t>(positions_);
+  // The probe: from patches facing the shooter to its sub-areas, weighted by the patch's elements (its samples).
   const size_t per_patch =
       std::clamp<size_t>(kProbeSegments / std::max<size_t>(1, mesh.patches.size()), 1, targets.size());
-  const Vec3 shooter_normal = shooter.normal();
+  std::vector<std::vector<uint32_t>> crossed_by(leaves_.size());
+  std::vector<double> weight;
+  std::vector<uint32_t> home_of;      // per segment: the position its packet starts from
+  std::vector<uint32_t> own_crossed;  // per segment and position: how many of the position's leaves it crosses
   for (size_t i = 0; i < mesh.patches.size(); ++i) {
     const Polygon& q = mesh.patches[i].polygon;
     const Vec3 c = q.centroid(), n = q.normal();
@@ -295,36 +296,17 @@ GlobalBsp::ShotProbe GlobalBsp::probe_shot(const Mesh& mesh, const Polygon& shoo
       const Vec3 t = targets[(i * per_patch + j) % targets.size()];
       if (dot(n, t - c) <= 0 || dot(shooter_normal, c - t) <= 0) continue;
       const Vec3 a = c + n * mesh.epsilon, b = t + shooter_normal * mesh.epsilon;
-      const uint32_t k = static_cast<uint32_t>(probe.weight.size());
-      probe.weight.push_back(static_cast<double>(mesh.patches[i].element_count()) / static_cast<double>(per_patch));
-      probe.home_of.push_back(
-          static_cast<uint32_t>(i < patch_position_.size() ? static_cast<size_t>(patch_position_[i]) : k % P));
+      const uint32_t k = static_cast<uint32_t>(weight.size());
+      weight.push_back(static_cast<double>(mesh.patches[i].element_count()) / static_cast<double>(per_patch));
+      home_of.push_back(static_cast<uint32_t>(i < patch_position_.size() ? static_cast<size_t>(patch_position_[i]) : k % P));
+      own_crossed.resize(own_crossed.size() + P, 0);
       walk(0, a, b - a, 0.0f, 1.0f, [&](int leaf) {
-        if (!inert[static_cast<size_t>(leaf)]) probe.crossed_by[static_cast<size_t>(leaf)].push_back(k);
+        if (plan.inert_leaf[static_cast<size_t>(leaf)]) return;
+        crossed_by[static_cast<size_t>(leaf)].push_back(k);
+        ++own_crossed[k * P + static_cast<size_t>(owner_[static_cast<size_t>(leaf)])];
       });
     }
   }
-  return probe;
-}
-
-ShotPlan GlobalBsp::plan_shot(const Mesh& mesh, const Polygon& shooter, std::span<const Vec3> targets,
-                              ShotEstimate* estimate) const {
-  ShotPlan plan;
-  if (targets.empty()) return plan;
-  plan.plane_normal = shooter.normal();
-  plan.plane_offset = dot(plan.plane_normal, shooter.v[0]);
-  plan.clear = 0.75f * mesh.epsilon;
-  const std::vector<uint8_t> can_block = surfaces_that_can_block(mesh, shooter);
-  plan.inert_leaf = inert_leaves(can_block);
-  if (!balanced_ || positions_ < 2) return plan;
-  const size_t P = static_cast<size_t>(positions_);
-  const ShotProbe probe = probe_shot(mesh, shooter, targets, plan.inert_leaf);
-  const auto& crossed_by = probe.crossed_by;
-  const auto& weight = probe.weight;
-  const auto& home_of = probe.home_of;
-  std::vector<uint32_t> own_crossed(weight.size() * P, 0);  // per segment and position: its leaves it crosses
-  for (size_t leaf = 0; leaf < leaves_.size(); ++leaf)
-    for (uint32_t k : crossed_by[leaf]) ++own_crossed[k * P + static_cast<size_t>(owner_[leaf])];
   // Estimated work per position: the segments crossing its leaves, plus those crossing home leaves whose packets
   // start there.
   std::vector<double> work(P, 0);
@@ -430,14 +412,9 @@ std::vector<size_t> GlobalBsp::probe_load(const Mesh& mesh, size_t first, size_t
   const auto probe = probe_segments(mesh, first + count, &ends);
   std::vector<size_t> load(static_cast<size_t>(positions_), 0);
   for (size_t k = first; k < probe.size(); ++k) {
-    const auto& [a, b] = probe[k];
-    const Polygon& end = mesh.surfaces[ends[k]].polygon;
-    const Vec3 n = end.normal();
-    const float offset = dot(n, end.v[0]);
     uint64_t bits = 0;
-    walk(0, a, b - a, 0.0f, 1.0f, [&](int leaf) {
-      if (leaf_can_block(mesh, static_cast<size_t>(leaf), n, offset)) bits |= uint64_t{1} << owner_[static_cast<size_t>(leaf)];
-    });
+    walk_blocking(mesh, probe[k].first, probe[k].second, ends[k],
+                  [&](size_t leaf) { bits |= uint64_t{1} << owner_[leaf]; });
     for (int p = 0; p < positions_; ++p) load[static_cast<size_t>(p)] += bits >> p & 1;
   }
   return load;

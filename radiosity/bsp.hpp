@@ -73,10 +73,12 @@ class GlobalBsp {
                      ShotEstimate* estimate = nullptr) const;
   // The surfaces position p holds: those overlapping any of its leaves (a surface can be in several).
   const std::vector<uint32_t>& surfaces_of(int position) const { return held_[static_cast<size_t>(position)]; }
-  // The balanced tree's cost model, per position: of segments [first, first + count) of probe_segments() (a tree is
-  // dealt by the first 4000), how many it would test, each once: those crossing one of its leaves that holds a
-  // surface in front of the plane of the surface the segment ends on.
-  std::vector<size_t> probe_load(const Mesh& mesh, size_t first = 0, size_t count = 4000) const;
+  // Probe segments a tree is dealt by (probe_segments), and each shot's probe.
+  static constexpr size_t kProbeSegments = 4000;
+  // The balanced tree's cost model, per position: of segments [first, first + count) of probe_segments() (a tree
+  // is dealt by the first kProbeSegments), how many it would test, each once: those crossing one of its leaves that
+  // holds a surface in front of the plane of the surface the segment ends on.
+  std::vector<size_t> probe_load(const Mesh& mesh, size_t first = 0, size_t count = kProbeSegments) const;
   // The leaf that contains point p, and its position (for tests).
   int position_of_point(Vec3 p) const;
 
@@ -88,20 +90,13 @@ class GlobalBsp {
     int leaf = -1;
   };
   int build_node(const Mesh& mesh, const std::vector<uint32_t>& surfaces, Box box, int depth, int max_depth);
-  // Per surface: whether any part of it lies in front of the shooter's plane, where a segment of its shot can be.
-  static std::vector<uint8_t> surfaces_that_can_block(const Mesh& mesh, const Polygon& shooter);
-  std::vector<uint8_t> inert_leaves(const std::vector<uint8_t>& can_block) const;
-  // Whether the leaf holds a surface in front of the plane dot(n, p) = offset (as surfaces_that_can_block).
+  // Whether the leaf holds a surface in front of the plane dot(n, p) = offset, where a segment ending just in front of
+  // it can be blocked.
   bool leaf_can_block(const Mesh& mesh, size_t leaf, Vec3 n, float offset) const;
-  // A shot's probe: per leaf, the segments that cross it (inert leaves left out), each segment's weight (the
-  // samples it stands for) and the position its packet starts from.
-  struct ShotProbe {
-    std::vector<std::vector<uint32_t>> crossed_by;
-    std::vector<double> weight;
-    std::vector<uint32_t> home_of;
-  };
-  ShotProbe probe_shot(const Mesh& mesh, const Polygon& shooter, std::span<const Vec3> targets,
-                       const std::vector<uint8_t>& inert) const;
+  // Visits the leaves segment a-b crosses that hold a surface in front of the plane of `end_surface`, which it ends
+  // on: the leaves a ray of a shot from that surface is tested in (plan_shot).
+  template <class Visit>
+  void walk_blocking(const Mesh& mesh, Vec3 a, Vec3 b, uint32_t end_surface, Visit&& visit) const;
   template <class Visit>
   void walk(int node, Vec3 a, Vec3 d, float t0, float t1, Visit&& visit) const;
 
