@@ -11,7 +11,8 @@
 // and that busiest work itself ("critical path"), over the same layout's without balancing: an even ring that
 // casts many more rays is no faster.
 //
-//   build/bench/ring_balance_bench [--iterations 6] [--layouts 1x8,2x4,...] [--json bench-ring-balance.json]
+//   build/bench/ring_balance_bench [--iterations 6] [--layouts 1x8,2x4,...] [--per-shot] [--json bench-ring-balance.json]
+// --per-shot also prints, for each shot, the busiest node against the plan's own estimate of it.
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
@@ -46,6 +47,7 @@ double max_over_mean(const std::vector<double>& v) {
 }
 
 float patch_size = 0.25f, element_size = 0.125f;
+bool per_shot = false;
 
 LayoutResult run(const Scene& scene, RingLayout layout, const std::string& scheme, int iterations) {
   RingConfig config;
@@ -145,6 +147,16 @@ LayoutResult run(const Scene& scene, RingLayout layout, const std::string& schem
     }
     double sum = 0, most = 0;
     for (double w : work) sum += w, most = std::max(most, w);
+    if (per_shot) {
+      // The plan's own estimate beside what the nodes then cast: how far the cost model is from the ring.
+      GlobalBsp::ShotEstimate e;
+      (void)plan->bsp.plan_shot(plan->mesh, shooter.polygon, shooter.targets, &e);
+      double off = 0;
+      for (int i = 0; i < n && e.mean > 0 && e.per_node.size() == work.size(); ++i)
+        off = std::max(off, std::abs(e.per_node[static_cast<size_t>(i)] / e.mean - work[static_cast<size_t>(i)] / (sum / n)));
+      std::printf("  shot %d (patch %u): busiest node %.3f of the mean, estimated %.3f; a node's share at most %.3f "
+                  "from its estimate\n", it + 1, best.patch, most / (sum / n), e.mean > 0 ? e.busiest / e.mean : 1.0, off);
+    }
     busiest_sum += most;
     mean_sum += sum / n;
   }
@@ -186,11 +198,12 @@ int main(int argc, char** argv) {
     else if (!std::strcmp(argv[i], "--layouts") && i + 1 < argc) layouts_text = argv[++i];
     else if (!std::strcmp(argv[i], "--schemes") && i + 1 < argc) schemes_text = argv[++i];
     else if (!std::strcmp(argv[i], "--json") && i + 1 < argc) json_path = argv[++i];
+    else if (!std::strcmp(argv[i], "--per-shot")) per_shot = true;
     else if (!std::strcmp(argv[i], "--patch-size") && i + 1 < argc) patch_size = std::strtof(argv[++i], nullptr);
     else if (!std::strcmp(argv[i], "--element-size") && i + 1 < argc) element_size = std::strtof(argv[++i], nullptr);
     else {
       std::fprintf(stderr, "usage: ring_balance_bench [--iterations N] [--layouts 1x8,2x4] [--schemes none,static] "
-                           "[--patch-size M] [--element-size M] [--json FILE]\n");
+                           "[--patch-size M] [--element-size M] [--per-shot] [--json FILE]\n");
       return 2;
     }
   }

@@ -88,7 +88,7 @@ static std::vector<Shooter> trial_shooters(const Mesh& mesh) {
   return out;
 }
 
-GlobalBsp GlobalBsp::build(const Mesh& mesh, int positions, bool balanced, std::span<const int> patch_positions) {
+GlobalBsp GlobalBsp::build(const Mesh& mesh, int positions, bool balanced, std::span<const int> patch_nodes) {
   const int base = positions <= 1 ? 0 : static_cast<int>(std::ceil(std::log2(static_cast<double>(positions))));
   std::vector<uint32_t> all(mesh.surfaces.size());
   std::iota(all.begin(), all.end(), 0u);
@@ -109,7 +109,8 @@ GlobalBsp GlobalBsp::build(const Mesh& mesh, int positions, bool balanced, std::
     t.positions_ = positions;
     t.depth_ = depth;
     t.balanced_ = balanced;
-    t.patch_position_.assign(patch_positions.begin(), patch_positions.end());
+    t.patch_node_.assign(patch_nodes.begin(), patch_nodes.end());
+    for (int node : patch_nodes) t.rings_ = std::max(t.rings_, node / positions + 1);
     t.slack_ = slack;
     t.build_node(mesh, all, root, 0, depth);
     t.owner_.assign(t.leaves_.size(), 0);
@@ -246,6 +247,20 @@ static bool in_front(const Mesh& mesh, const Polygon& q, Vec3 n, float offset) {
   return false;
 }
 
+// Whether segment a-b crosses polygon q (a convex polygon, corners in order round its normal): the planning's own
+// test, for a handful of surfaces per probe segment.
+static bool segment_hits(const Polygon& q, Vec3 a, Vec3 b) {
+  const Vec3 n = q.normal();
+  const float da = dot(n, a - q.v[0]), db = dot(n, b - q.v[0]);
+  if ((da > 0) == (db > 0) || da == db) return false;
+  const Vec3 x = a + (b - a) * (da / (da - db));
+  for (int i = 0; i < q.count; ++i) {
+    const Vec3 from = q.v[static_cast<size_t>(i)], to = q.v[static_cast<size_t>((i + 1) % q.count)];
+    if (dot(cross(to - from, x - from), n) < 0) return false;
+  }
+  return true;
+}
+
 bool GlobalBsp::leaf_can_block(const Mesh& mesh, size_t leaf, Vec3 n, float offset) const {
   for (uint32_t s : leaves_[leaf])
     if (in_front(mesh, mesh.surfaces[s].polygon, n, offset)) return true;
@@ -285,10 +300,13 @@ ShotPlan GlobalBsp::plan_shot(const Mesh& mesh, const Polygon& shooter, std::spa
   // The probe: from patches facing the shooter to its sub-areas, weighted by the patch's elements (its samples).
   const size_t per_patch =
       std::clamp<size_t>(kProbeSegments / std::max<size_t>(1, mesh.patches.size()), 1, targets.size());
-  std::vector<std::vector<uint32_t>> crossed_by(leaves_.size());
+  std::vector<std::vector<uint32_t>> crossed_by(leaves_.size());  // per leaf: the probe segments crossing it
+  std::vector<std::vector<uint32_t>> leaves_of;                    // per segment: the leaves it crosses
+  std::vector<std::vector<uint32_t>> hits;                         // per segment: the surfaces that block it
+  std::vector<std::vector<uint32_t>> hit_by(mesh.surfaces.size());  // per surface: the segments it blocks
   std::vector<double> weight;
-  std::vector<uint32_t> home_of;      // per segment: the position its packet starts from
-  std::vector<uint32_t> own_crossed;  // per segment and position: how many of the position's leaves it crosses
+  std::vector<uint32_t> home_of;  // per segment: the node whose packet carries it
+  std::vector<uint32_t> tried(mesh.surfaces.size(), UINT32_MAX);
   for (size_t i = 0; i < mesh.patches.size(); ++i) {
     const Polygon& q = mesh.patches[i].polygon;
     const Vec3 c = q.centroid(), n = q.normal();
@@ -298,58 +316,90 @@ ShotPlan GlobalBsp::plan_shot(const Mesh& mesh, const Polygon& shooter, std::spa
       const Vec3 a = c + n * mesh.epsilon, b = t + shooter_normal * mesh.epsilon;
       const uint32_t k = static_cast<uint32_t>(weight.size());
       weight.push_back(static_cast<double>(mesh.patches[i].element_count()) / static_cast<double>(per_patch));
-      home_of.push_back(static_cast<uint32_t>(i < patch_position_.size() ? static_cast<size_t>(patch_position_[i]) : k % P));
-      own_crossed.resize(own_crossed.size() + P, 0);
+      home_of.push_back(static_cast<uint32_t>(i < patch_node_.size() ? static_cast<size_t>(patch_node_[i]) : k % P));
+      leaves_of.emplace_back();
+      hits.emplace_back();
       walk(0, a, b - a, 0.0f, 1.0f, [&](int leaf) {
-        if (plan.inert_leaf[static_cast<size_t>(leaf)]) return;
-        crossed_by[static_cast<size_t>(leaf)].push_back(k);
-        ++own_crossed[k * P + static_cast<size_t>(owner_[static_cast<size_t>(leaf)])];
+        const size_t l = static_cast<size_t>(leaf);
+        if (plan.inert_leaf[l]) return;
+        crossed_by[l].push_back(k);
+        leaves_of[k].push_back(static_cast<uint32_t>(l));
+        // Whatever blocks the segment overlaps a leaf it crosses.
+        for (uint32_t surface : leaves_[l]) {
+          if (!can_block[surface] || tried[surface] == k) continue;
+          tried[surface] = k;
+          if (segment_hits(mesh.surfaces[surface].polygon, a, b)) hits[k].push_back(surface), hit_by[surface].push_back(k);
+        }
       });
     }
   }
-  // Estimated work per position: the segments crossing its leaves, plus those crossing home leaves whose packets
-  // start there.
-  std::vector<double> work(P, 0);
-  for (size_t k = 0; k < weight.size(); ++k)
-    for (size_t p = 0; p < P; ++p)
-      if (own_crossed[k * P + p]) work[p] += weight[k];
-  std::vector<double> at_home(P, 0);
-  std::vector<uint32_t> home_crossed(weight.size(), 0);
-  auto busiest = [&] {
-    size_t p = 0;
-    for (size_t q = 1; q < P; ++q)
-      if (work[q] + at_home[q] > work[p] + at_home[p]) p = q;
-    return p;
-  };
+  // Which positions hold each surface (a position tests a segment against all it holds).
+  std::vector<uint64_t> held_by(mesh.surfaces.size(), 0);
+  for (size_t p = 0; p < P; ++p)
+    for (uint32_t surface : held_[p]) held_by[surface] |= uint64_t{1} << p;
   // Surfaces held at home: at most as many as the fullest position holds, so no node holds more than twice that
   // (the ring exists to divide the scene).
   size_t budget = 0;
   for (const auto& h : held_) budget = std::max(budget, h.size());
-  std::vector<uint32_t> home_uses(mesh.surfaces.size(), 0);
+  std::vector<uint32_t> home_uses(mesh.surfaces.size(), 0);  // per surface: the home leaves holding it
   size_t home_surfaces = 0;
-  auto move = [&](size_t leaf, bool to_home) {
-    const size_t o = static_cast<size_t>(owner_[leaf]);
-    for (uint32_t k : crossed_by[leaf]) {
-      uint32_t& own = own_crossed[k * P + o];
-      if (to_home) {
-        if (--own == 0) work[o] -= weight[k];
-        if (home_crossed[k]++ == 0) at_home[home_of[k]] += weight[k];
-      } else {
-        if (own++ == 0) work[o] += weight[k];
-        if (--home_crossed[k] == 0) at_home[home_of[k]] -= weight[k];
-      }
+  std::vector<uint8_t> at_home(leaves_.size(), 0);
+  // Estimated work per position, as a ring does it: a packet's home tests a segment first (against its own
+  // position's surfaces and, if it crosses a home leaf, the home leaves'); then each position it crosses, in ring
+  // order, while nothing has blocked it. A segment blocked early costs the positions after it nothing, so where
+  // the blockers are matters as much as where the segments go.
+  std::vector<double> work(P * static_cast<size_t>(rings_), 0);  // per node: ring x P + position
+  auto count = [&](size_t k, double sign) {
+    uint64_t crossed = 0, blocked = 0;
+    bool home_crossed = false, home_blocked = false;
+    for (uint32_t l : leaves_of[k])
+      if (at_home[l]) home_crossed = true;
+      else crossed |= uint64_t{1} << owner_[l];
+    for (uint32_t surface : hits[k]) {
+      blocked |= held_by[surface];
+      home_blocked = home_blocked || (home_crossed && home_uses[surface] > 0);
     }
+    const size_t h = home_of[k] % P;
+    double* ring = work.data() + (home_of[k] - h);
+    const double w = sign * weight[k];
+    if (crossed >> h & 1) ring[h] += w;
+    if (home_crossed) ring[h] += w;
+    if ((crossed & blocked) >> h & 1 || home_blocked) return;
+    for (size_t step = 1; step < P; ++step) {
+      const size_t q = (h + step) % P;
+      if (!(crossed >> q & 1)) continue;
+      ring[q] += w;
+      if (blocked >> q & 1) return;
+    }
+  };
+  for (size_t k = 0; k < weight.size(); ++k) count(k, 1);
+  auto busiest = [&] { return static_cast<size_t>(std::max_element(work.begin(), work.end()) - work.begin()); };
+  std::vector<uint32_t> stamp(weight.size(), UINT32_MAX);
+  uint32_t moves = 0;
+  auto move = [&](size_t leaf, bool to_home) {
+    // The segments whose count changes: those crossing the leaf, and those its surfaces block.
+    std::vector<uint32_t> touched;
+    auto touch = [&](uint32_t k) {
+      if (stamp[k] != moves) stamp[k] = moves, touched.push_back(k);
+    };
+    for (uint32_t k : crossed_by[leaf]) touch(k);
+    for (uint32_t surface : leaves_[leaf])
+      if (can_block[surface])
+        for (uint32_t k : hit_by[surface]) touch(k);
+    ++moves;
+    for (uint32_t k : touched) count(k, -1);
+    at_home[leaf] = to_home;
     for (uint32_t surface : leaves_[leaf]) {
       if (!can_block[surface]) continue;
       if (to_home && home_uses[surface]++ == 0) ++home_surfaces;
       if (!to_home && --home_uses[surface] == 0) --home_surfaces;
     }
+    for (uint32_t k : touched) count(k, 1);
   };
-  // Positions' estimated work, busiest first: one plan beats another if it is lower at the first place they differ
+  // Nodes' estimated work, busiest first: one plan beats another if it is lower at the first place they differ
   // (so relieving one of two equally busy positions counts).
   auto ranked = [&] {
-    std::vector<double> r(P);
-    for (size_t q = 0; q < P; ++q) r[q] = work[q] + at_home[q];
+    std::vector<double> r = work;
     std::sort(r.begin(), r.end(), std::greater<>());
     return r;
   };
@@ -386,12 +436,29 @@ ShotPlan GlobalBsp::plan_shot(const Mesh& mesh, const Polygon& shooter, std::spa
   std::iota(all.begin(), all.end(), size_t{0});
   best_run(busiest_first(all));
   for (bool moved = true; moved;) {
-    const size_t p = busiest();
+    const size_t p = busiest() % P;
     std::vector<size_t> mine;
     for (size_t leaf = 0; leaf < leaves_.size(); ++leaf)
       if (!plan.home_leaf[leaf] && static_cast<size_t>(owner_[leaf]) == p && !crossed_by[leaf].empty())
         mine.push_back(leaf);
     moved = best_run(busiest_first(mine));
+  }
+  // Then single leaves either way while that ranks lower: the runs above never take a leaf back, and with blocking
+  // in the estimate a leaf's worth depends on which others are at home.
+  std::vector<size_t> crossed;
+  for (size_t leaf = 0; leaf < leaves_.size(); ++leaf)
+    if (!crossed_by[leaf].empty()) crossed.push_back(leaf);
+  crossed = busiest_first(std::move(crossed));
+  for (int pass = 0; pass < 4; ++pass) {
+    bool improved = false;
+    for (size_t leaf : crossed) {
+      const bool to_home = !at_home[leaf];
+      const std::vector<double> before = ranked();
+      move(leaf, to_home);
+      if (home_surfaces <= budget && lower(ranked(), before)) plan.home_leaf[leaf] = to_home, improved = true;
+      else move(leaf, !to_home);
+    }
+    if (!improved) break;
   }
   for (size_t leaf = 0; leaf < leaves_.size(); ++leaf)
     if (plan.home_leaf[leaf])
@@ -400,7 +467,8 @@ ShotPlan GlobalBsp::plan_shot(const Mesh& mesh, const Polygon& shooter, std::spa
   if (estimate) {
     const auto r = ranked();
     estimate->busiest = r.front();
-    estimate->mean = std::accumulate(r.begin(), r.end(), 0.0) / static_cast<double>(P);
+    estimate->mean = std::accumulate(r.begin(), r.end(), 0.0) / static_cast<double>(r.size());
+    estimate->per_node = work;
   }
   std::sort(plan.surfaces.begin(), plan.surfaces.end());
   plan.surfaces.erase(std::unique(plan.surfaces.begin(), plan.surfaces.end()), plan.surfaces.end());

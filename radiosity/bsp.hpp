@@ -47,8 +47,9 @@ class GlobalBsp {
   // has to cast it at all, so work is measured with a fixed probe of segments (between facing surfaces, half of
   // them ending on an emitter) counted once per position they cross. Otherwise: one level per doubling of
   // positions, planes through the middle of the box, leaves dealt round-robin.
-  // `patch_positions`: the ring position whose nodes compute each patch (their packets start there), if known.
-  static GlobalBsp build(const Mesh& mesh, int positions, bool balanced, std::span<const int> patch_positions = {});
+  // `patch_nodes`: the node that computes each patch (ring x positions + position: its packets start there and
+  // circulate in its ring), if known.
+  static GlobalBsp build(const Mesh& mesh, int positions, bool balanced, std::span<const int> patch_nodes = {});
 
   int positions() const { return positions_; }
   size_t leaf_count() const { return leaves_.size(); }
@@ -60,14 +61,16 @@ class GlobalBsp {
   // Static balancing of visibility per shot, for a balanced tree (else empty). Every segment of a shot ends on the
   // shooter, so whichever position holds the space around it tests nearly every segment of the shot, whatever the
   // dealing of leaves: a static split cannot even out a ring whose shooters keep moving. Once the shooter is known
-  // (every node knows it, and nothing else is needed), the leaves that load some position most are left to each
+  // (every node knows it, and nothing else is needed), the leaves that load some node most are left to each
   // packet's home instead, which spreads their tests over all positions as the samples are spread. The choice is
-  // estimated with a probe (one segment from each patch facing the shooter to one of its sub-areas), greedily,
-  // busiest leaves first, keeping a leaf only if the busiest position's estimated work goes down. Deterministic,
-  // so every node of the ring makes the same plan.
-  // `estimate`, if given, gets the positions' estimated work under the plan.
+  // estimated with a probe (one segment from each patch facing the shooter to one of its sub-areas) that each
+  // node's packets would carry: tested at home, then at each position it crosses in ring order until one holds a
+  // surface that blocks it. Leaves go home greedily, busiest first, while the busiest node's estimated work goes
+  // down; then single leaves either way while that lowers it. Deterministic, so every node makes the same plan.
+  // `estimate`, if given, gets the nodes' estimated work under the plan (per node: ring x positions + position).
   struct ShotEstimate {
     double busiest = 0, mean = 0;
+    std::vector<double> per_node;
   };
   ShotPlan plan_shot(const Mesh& mesh, const Polygon& shooter, std::span<const Vec3> targets,
                      ShotEstimate* estimate = nullptr) const;
@@ -108,7 +111,8 @@ class GlobalBsp {
   int positions_ = 1;
   int depth_ = 0;
   bool balanced_ = false;
-  std::vector<int> patch_position_;
+  std::vector<int> patch_node_;
+  int rings_ = 1;
   float slack_ = 0;
 };
 

@@ -50,9 +50,7 @@ Result<RingPlan> plan_ring(const Scene& scene, const RingConfig& config) {
   plan.mesh = std::move(*mesh);
   if (config.static_balance) split_for_balance(plan.mesh, config.layout.nodes());
   plan.owner = assign_patches(plan.mesh, config.layout.nodes(), config.static_balance);
-  std::vector<int> patch_positions;
-  for (int node : plan.owner) patch_positions.push_back(config.layout.position_of(node));
-  plan.bsp = GlobalBsp::build(plan.mesh, config.layout.length, config.static_balance, patch_positions);
+  plan.bsp = GlobalBsp::build(plan.mesh, config.layout.length, config.static_balance, plan.owner);
   return plan;
 }
 
