@@ -63,7 +63,7 @@ class GlobalBsp {
   // dealing of leaves: a static split cannot even out a ring whose shooters keep moving. Once the shooter is known
   // (every node knows it, and nothing else is needed), the leaves that load some node most are left to each
   // packet's home instead, which spreads their tests over all positions as the samples are spread. The choice is
-  // estimated with a probe (one segment from each patch facing the shooter to one of its sub-areas) that each
+  // estimated with a probe (segments from the elements of each patch facing the shooter to its sub-areas) that each
   // node's packets would carry: tested at home, then at each position it crosses in ring order until one holds a
   // surface that blocks it. Leaves go home greedily, busiest first, while the busiest node's estimated work goes
   // down; then single leaves either way while that lowers it. Deterministic, so every node makes the same plan.

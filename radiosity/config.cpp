@@ -49,7 +49,7 @@ Result<RingPlan> plan_ring(const Scene& scene, const RingConfig& config) {
   RingPlan plan;
   plan.mesh = std::move(*mesh);
   if (config.static_balance) split_for_balance(plan.mesh, config.layout.nodes());
-  plan.owner = assign_patches(plan.mesh, config.layout.nodes(), config.static_balance);
+  plan.owner = assign_patches(plan.mesh, config.layout.nodes(), config.static_balance, config.layout.rings);
   plan.bsp = GlobalBsp::build(plan.mesh, config.layout.length, config.static_balance, plan.owner);
   return plan;
 }

@@ -101,7 +101,7 @@ void split_for_balance(Mesh& mesh, int nodes) {
   mesh.patches = std::move(out);
 }
 
-std::vector<int> assign_patches(const Mesh& mesh, int nodes, bool balanced) {
+std::vector<int> assign_patches(const Mesh& mesh, int nodes, bool balanced, int rings) {
   const size_t n = mesh.patches.size();
   std::vector<int> owner(n, 0);
   if (nodes <= 1) return owner;
@@ -114,14 +114,19 @@ std::vector<int> assign_patches(const Mesh& mesh, int nodes, bool balanced) {
   std::stable_sort(order.begin(), order.end(), [&](size_t a, size_t b) {
     return mesh.patches[a].element_count() > mesh.patches[b].element_count();
   });
-  using Load = std::pair<size_t, int>;  // elements, node: the lightest node first, ties to the lowest index
+  // Ties go to the lowest rank, which takes the rings in turn at each position (rank = position x rings + ring):
+  // neighbouring patches of equal size then go to the same position of different rings, so that each ring's
+  // patches lie where the others' do and the rings' packets need about as many rays in every shot.
+  if (rings < 1 || nodes % rings != 0) rings = 1;
+  const int length = nodes / rings;
+  using Load = std::pair<size_t, int>;  // elements, rank: the lightest node first
   std::priority_queue<Load, std::vector<Load>, std::greater<>> loads;
   for (int i = 0; i < nodes; ++i) loads.push({0, i});
   for (size_t p : order) {
-    auto [elements, node] = loads.top();
+    auto [elements, rank] = loads.top();
     loads.pop();
-    owner[p] = node;
-    loads.push({elements + static_cast<size_t>(mesh.patches[p].element_count()), node});
+    owner[p] = (rank % rings) * length + rank / rings;
+    loads.push({elements + static_cast<size_t>(mesh.patches[p].element_count()), rank});
   }
   return owner;
 }

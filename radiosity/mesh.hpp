@@ -46,6 +46,7 @@ Result<Mesh> build_mesh(const Scene& scene, const MeshSettings& settings);
 void split_for_balance(Mesh& mesh, int nodes);
 // Which node computes each patch: contiguous runs of equal patch counts (`balanced` false, the plain scheme), or
 // largest-first onto the node with the fewest elements (`balanced` true).
-std::vector<int> assign_patches(const Mesh& mesh, int nodes, bool balanced);
+// With `rings`, nodes are numbered ring x (nodes / rings) + position.
+std::vector<int> assign_patches(const Mesh& mesh, int nodes, bool balanced, int rings = 1);
 
 }  // namespace lf::radiosity
