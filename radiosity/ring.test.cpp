@@ -343,12 +343,6 @@ TEST(Ring, StaticBalancingKeepsALongRingEven) {
   EXPECT_LT(even.busiest, 0.75 * plain.busiest);
 }
 
-}  // namespace
-}  // namespace lf::radiosity
-
-namespace lf::radiosity {
-namespace {
-
 // Each shot's plan estimates what every node will cast, blocking included (a segment blocked at one position is not
 // cast at the positions after it): on the furnished room's first shot, each node's estimated share of the work is
 // on average within 3 % of the rays the ring then casts there (leaving blocking out of the estimate: 4.0 % at 1x16,
