@@ -462,6 +462,11 @@ ShotPlan GlobalBsp::plan_shot(const Mesh& mesh, const Polygon& shooter, std::spa
     bool improved = false;
     for (size_t leaf : crossed) {
       const bool to_home = !at_home[leaf];
+      if (to_home) {  // over the cap whatever it would save: not worth recounting
+        size_t joining = 0;
+        for (uint32_t surface : leaves_[leaf]) joining += can_block[surface] && home_uses[surface] == 0;
+        if (home_surfaces + joining > budget) continue;
+      }
       const std::vector<double> before = ranked();
       move(leaf, to_home);
       if (home_surfaces <= budget && lower(ranked(), before)) plan.home_leaf[leaf] = to_home, improved = true;
