@@ -346,7 +346,7 @@ TEST(Ring, StaticBalancingKeepsALongRingEven) {
 // Each shot's plan estimates what every node will cast, blocking included (a segment blocked at one position is not
 // cast at the positions after it): on the furnished room's first shot, each node's estimated share of the work is
 // on average within 3 % of the rays the ring then casts there (leaving blocking out of the estimate: 4.0 % at 1x16,
-// 3.0 % at 2x8), and none is 10 % off.
+// 2.7 % at 2x8), and none is 10 % off.
 TEST(Ring, EachShotsPlanEstimatesWhatEachNodeCasts) {
   auto scene = Scene::builtin("room");
   ASSERT_TRUE(scene) << scene.error().message;
