@@ -104,12 +104,20 @@ GlobalBsp GlobalBsp::build(const Mesh& mesh, int positions, bool balanced, std::
   // more positions and is cast more often (and every node stores the tree, Stürzlinger et al. §5.2): try each depth
   // and keep the one whose busiest position has the least work, over a few trial shots as each would be planned.
   const int deepest = balanced ? base + 6 : base;
+  // Where each patch's elements are, which each shot's probe starts from (plan_shot), the same for every shot.
+  std::vector<std::vector<Vec3>> element_centres;
+  if (balanced && positions > 1)
+    for (const Patch& patch : mesh.patches) {
+      element_centres.emplace_back();
+      for (const Polygon& e : tile(patch.polygon, patch.element_tiles)) element_centres.back().push_back(e.centroid());
+    }
   for (int depth = base; depth <= deepest; ++depth) {
     GlobalBsp t;
     t.positions_ = positions;
     t.depth_ = depth;
     t.balanced_ = balanced;
     t.patch_node_.assign(patch_nodes.begin(), patch_nodes.end());
+    t.element_centres_ = element_centres;
     for (int node : patch_nodes) t.rings_ = std::max(t.rings_, node / positions + 1);
     t.slack_ = slack;
     t.build_node(mesh, all, root, 0, depth);
@@ -312,9 +320,9 @@ ShotPlan GlobalBsp::plan_shot(const Mesh& mesh, const Polygon& shooter, std::spa
     const Vec3 n = q.normal();
     // From the patch's elements, where its samples are, in turn (not all from its centre: at 64 nodes that left a
     // node's estimate 0.1-0.15 off the rays it then cast).
-    const std::vector<Polygon> elements = tile(q, mesh.patches[i].element_tiles);
+    const std::vector<Vec3>* elements = i < element_centres_.size() ? &element_centres_[i] : nullptr;
     for (size_t j = 0; j < per_patch; ++j) {
-      const Vec3 c = elements[(i + j) % elements.size()].centroid();
+      const Vec3 c = elements ? (*elements)[(i + j) % elements->size()] : q.centroid();
       const Vec3 t = targets[(i * per_patch + j) % targets.size()];
       if (dot(n, t - c) <= 0 || dot(shooter_normal, c - t) <= 0) continue;
       const Vec3 a = c + n * mesh.epsilon, b = t + shooter_normal * mesh.epsilon;
@@ -469,7 +477,7 @@ ShotPlan GlobalBsp::plan_shot(const Mesh& mesh, const Polygon& shooter, std::spa
       }
       const std::vector<double> before = ranked();
       move(leaf, to_home);
-      if (home_surfaces <= budget && lower(ranked(), before)) plan.home_leaf[leaf] = to_home, improved = true;
+      if (lower(ranked(), before)) plan.home_leaf[leaf] = to_home, improved = true;
       else move(leaf, !to_home);
     }
     if (!improved) break;

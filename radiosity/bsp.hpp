@@ -112,6 +112,7 @@ class GlobalBsp {
   int depth_ = 0;
   bool balanced_ = false;
   std::vector<int> patch_node_;
+  std::vector<std::vector<Vec3>> element_centres_;  // per patch (a balanced tree of 2 positions or more)
   int rings_ = 1;
   float slack_ = 0;
 };
