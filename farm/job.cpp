@@ -79,6 +79,7 @@ void read_frames(const ParamTable& p, JobSpec& job) {
   job.first = static_cast<int>(p.get_int("first", 1, -kMaxFrame, kMaxFrame));
   job.last = static_cast<int>(p.get_int("last", job.first, -kMaxFrame, kMaxFrame));
   job.step = static_cast<int>(p.get_int("step", 1, 1, kMaxFrame));
+  job.in_flight = p.get_bool("in_flight", true);
   p.report_unused();
   if (job.last < job.first)
     throw ParamError("frames: last (" + std::to_string(job.last) + ") comes before first (" + std::to_string(job.first) + ")");

@@ -33,6 +33,9 @@ struct CameraKey {
 struct JobSpec {
   bool declared = false;  // frames { } was given: a job, with a record of finished frames (even of one frame)
   int first = 1, last = 1, step = 1;
+  // frames { in_flight }: a frame may begin while the last one's final tiles are out (where the farm can:
+  // actors/director/frame_loop.hpp); false: one frame at a time.
+  bool in_flight = true;
   std::vector<Value> camera_keys;        // camera { keys }, each key's table as written
   SourceLoc keys_loc;
   std::map<int, Value> camera_of_frame;  // frames { camera = function(frame) }: each frame's table as returned

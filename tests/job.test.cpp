@@ -41,7 +41,7 @@ if single > 0 then
   camera(view(single))
   for name, change in pairs(lamp(single)) do material(name)(change) end
 else
-  frames { first = 1, last = param("last", 12), camera = view, materials = lamp }
+  frames { first = 1, last = param("last", 12), camera = view, materials = lamp, in_flight = param("in_flight", 1) == 1 }
 end
 local direct   = multiplexer { lightop "direct" { light_sampling = "learned", light_samples = 2, reuse = param("reuse", 1) == 1 },
                                replicas = 2 }
@@ -166,6 +166,28 @@ TEST_F(JobTest, FramesEqualSingleFrameRendersOnAnyLayoutAndRedoOnlyViewDependent
   size_t frames = 0;
   for (size_t at = stats.find("\"frame\":"); at != std::string::npos; at = stats.find("\"frame\":", at + 1)) ++frames;
   EXPECT_EQ(frames, 12u) << stats;
+}
+
+// Frames in flight: each frame begins while the last one's final tiles render, every actor answering both views at
+// once (the carried cache and learned lights as they were for the frame before). The frames are those of the job
+// rendered one frame at a time, bit for bit.
+TEST_F(JobTest, FramesInFlightEqualFramesRenderedOneAtATime) {
+  // The path tracer learns its lights too (paths_learned): an op whose copy must not share what the original holds.
+  const auto flying = run("f.####.exr", {"--set", "renderers=3", "--set", "paths_learned=1", "--stats-json", path("f.json")});
+  ASSERT_EQ(flying.status, 0) << flying.err;
+  expect_no_leftovers(flying);
+  const auto one = run("o.####.exr", {"--set", "in_flight=0", "--set", "paths_learned=1", "--stats-json", path("o.json")});
+  ASSERT_EQ(one.status, 0) << one.err;
+  for (int n = 1; n <= 12; ++n)
+    EXPECT_TRUE(same_pixels(frame("f", n), frame("o", n))) << "frame " << n << ": in flight and one at a time differ";
+  EXPECT_FALSE(same_pixels(frame("f", 1), frame("f", 2))) << "the camera did not move";
+  const std::regex begun("\"begun_in_flight\": *([0-9]+)");
+  std::smatch m;
+  const std::string flying_stats = read_file(path("f.json")), one_stats = read_file(path("o.json"));
+  ASSERT_TRUE(std::regex_search(flying_stats, m, begun)) << flying_stats;
+  EXPECT_EQ(m[1], "11") << "every frame after the first begins beside the one before";
+  ASSERT_TRUE(std::regex_search(one_stats, m, begun)) << one_stats;
+  EXPECT_EQ(m[1], "0");
 }
 
 TEST_F(JobTest, AKilledJobResumesFromItsRecordToTheSameFrames) {

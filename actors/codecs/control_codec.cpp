@@ -20,6 +20,7 @@ Value::Map tile_map(const Tile& tile) {
   const TileRect& r = tile.rect;
   Value::Map t{{"id", tile.id}, {"x0", r.x0}, {"y0", r.y0}, {"x1", r.x1}, {"y1", r.y1}};
   if (tile.first_sample > 0) t["first"] = static_cast<int64_t>(tile.first_sample);
+  if (tile.frame) t["frame"] = static_cast<int64_t>(*tile.frame);
   return t;
 }
 
@@ -36,7 +37,13 @@ Result<Tile> read_tile(const Value& tile, int width, int height) {
   int first = 0;
   if (tile.find("first") && (first = get("first")) < 0)
     return bad("the render master sent a tile whose first sample is not an index (0 to 2^31 - 1)");
-  return Tile{static_cast<uint64_t>(get("id")), rect, static_cast<uint32_t>(first)};
+  std::optional<int> frame;
+  if (const Value* f = tile.find("frame")) {
+    if (!f->is_int() || f->as_int() < INT32_MIN || f->as_int() > INT32_MAX)
+      return bad("the render master sent a tile whose frame is not a frame number");
+    frame = static_cast<int>(f->as_int());
+  }
+  return Tile{static_cast<uint64_t>(get("id")), rect, static_cast<uint32_t>(first), frame};
 }
 
 // A tile request's or tile_done's count: absent 0, else 1 to kMaxTilesPerMessage.
@@ -175,6 +182,7 @@ Value::Map encode_frame(const FrameView& view) {
   if (view.restore) m["restore"] = true;
   if (!view.materials.empty()) m["materials"] = view.materials;
   if (view.new_materials) m["new_materials"] = true;
+  if (view.in_flight) m["in_flight"] = static_cast<int64_t>(*view.in_flight);
   return m;
 }
 
@@ -208,6 +216,14 @@ Result<FrameView> decode_frame(const Value& body) {
   }
   if (view.keep && view.restore) return bad("a PHASE frame asks to keep and to restore the same setup");
   if (view.new_materials && view.restore) return bad("a PHASE frame restores a kept setup where the materials change");
+  if (const Value* earlier = body.find("in_flight")) {
+    if (!earlier->is_int() || earlier->as_int() < INT_MIN || earlier->as_int() > INT_MAX || earlier->as_int() == view.frame)
+      return bad("a PHASE frame's in_flight is not the number of another frame");
+    view.in_flight = static_cast<int>(earlier->as_int());
+  }
+  if (view.in_flight && (view.restore || view.new_materials || view.renew))
+    return bad("a PHASE frame in flight (the frame before still rendering) must be the job's next view, with the "
+               "same materials, set up by every actor");
   return view;
 }
 

@@ -29,6 +29,8 @@ struct Tile {
   TileRect rect;
   // A time-limited frame's pass: the tile's pixels take their samples from this index on (sent when not 0).
   uint32_t first_sample = 0;
+  // A job's frames in flight: the number of the frame the tile is of (sent in a job; none: the renderer's latest).
+  std::optional<int> frame;
 };
 // The most tiles one message asks for or carries.
 inline constexpr int kMaxTilesPerMessage = 64;
@@ -76,6 +78,8 @@ struct FrameView {
   bool restore = false;
   Value::Array materials;  // the frame's material changes over the shipped scene (FrameSpec::materials)
   bool new_materials = false;  // the materials change at this frame: every actor sets up anew
+  // The frame before, still rendering (frames in flight): its requests, which name it, are answered as before.
+  std::optional<int> in_flight;
 };
 Value::Map encode_frame(const FrameView& view);  // the body besides the phase's name (wire::make_phase adds it)
 Result<FrameView> decode_frame(const Value& body);

@@ -148,6 +148,16 @@ Result<ShadeRequest> decode_shade_request(const Value& body) {
   return req;
 }
 
+void set_shade_view(Value& body, int frame) { body.as_map()["view"] = static_cast<int64_t>(frame); }
+
+Result<std::optional<int>> decode_shade_view(const Value& body) {
+  const Value* view = body.find("view");
+  if (!view) return std::optional<int>();
+  if (!view->is_int() || view->as_int() < INT32_MIN || view->as_int() > INT32_MAX)
+    return make_error("shade request 'view' must be a frame number");
+  return std::optional<int>(static_cast<int>(view->as_int()));
+}
+
 Result<Value> slice_shade_request(const Value& body, size_t begin, size_t end) {
   auto n = read_count(body);
   if (!n) return make_error("shade request: " + n.error().message);

@@ -9,6 +9,8 @@
 //            Such a request may also say fold: true, and then holds whole pixels (no pixel's points are split
 //            between two requests): its reply holds one value per run of consecutive points in one pixel, their
 //            radiance summed (fold_by_pixel), instead of one per point.
+//            A job's frames in flight: view: the number of the frame whose view the points are shaded for (as
+//            PHASE frame gave it), when a receiver may hold two; absent: its latest view.
 //   reply:   { n: count, L: f32[3n] }
 #include <cstdint>
 #include <optional>
@@ -55,6 +57,9 @@ struct PixelFold {
   size_t runs() const { return pixel_runs(samples, spp); }
 };
 Result<std::optional<PixelFold>> decode_pixel_fold(const Value& body);
+// The frame whose view a request's points are shaded for (`view`), or std::nullopt: the receiver's latest.
+void set_shade_view(Value& body, int frame);
+Result<std::optional<int>> decode_shade_view(const Value& body);
 // Points [begin, end) of a request body, cut from its arrays as bytes (no decoding, nothing dropped): a pool
 // splits a request this way. Refuses a body whose arrays do not hold n entries each.
 Result<Value> slice_shade_request(const Value& body, size_t begin, size_t end);

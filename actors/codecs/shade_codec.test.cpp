@@ -139,3 +139,26 @@ TEST(ShadeCodec, AFoldWithoutItsTileOrSamplesIsRefused) {
 }
 
 }  // namespace lf
+
+namespace lf {
+
+// Frames in flight: a request names the frame whose view it is shaded for, every slice a pool cuts keeps it, and a
+// view that is no frame number is refused.
+TEST(ShadeCodec, AViewTravelsWithTheRequestAndItsSlices) {
+  ShadingPoints pts = test::numbered_points(8);
+  Value body = encode_shade_request(pts, 0, pts.size());
+  EXPECT_EQ(*decode_shade_view(body), std::nullopt);
+  set_shade_view(body, 7);
+  EXPECT_EQ(*decode_shade_view(body), std::optional<int>(7));
+  auto slice = slice_shade_request(body, 2, 5);
+  ASSERT_TRUE(slice.ok()) << slice.error().message;
+  EXPECT_EQ(*decode_shade_view(*slice), std::optional<int>(7));
+  body.as_map()["view"] = -3;  // frame numbers may be negative
+  EXPECT_EQ(*decode_shade_view(body), std::optional<int>(-3));
+  body.as_map()["view"] = int64_t{1} << 40;
+  EXPECT_EQ(decode_shade_view(body).error().message, "shade request 'view' must be a frame number");
+  body.as_map()["view"] = "seven";
+  EXPECT_FALSE(decode_shade_view(body).ok());
+}
+
+}  // namespace lf

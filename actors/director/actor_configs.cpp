@@ -18,7 +18,7 @@ ActorConfig config_for(const FarmSpec& spec, int actor, const std::function<std:
   config.scene = spec.scene;
   config.camera = spec.camera;
   // Set up as the job's first frame (spec.camera is its camera): with its materials too.
-  if (!spec.frames.empty()) config.frame_materials = spec.frames.front().materials;
+  if (!spec.frames.empty()) config.frame_materials = spec.frames.front().materials, config.frame = spec.frames.front().number;
   config.image = spec.image;
   const int64_t window = input_window(a);
   // A built-in LightOp holds the farm's scene: asked about points on its triangles, it needs no normals or

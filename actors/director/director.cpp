@@ -103,7 +103,8 @@ class Director {
     stage(Stage::setup, [&] { run_phase(Phase::setup); });
     stage(Stage::render, [&] {
       render_start_ = Clock::now();
-      frames_.run([&](Phase phase, Value::Map body) { run_phase(phase, std::move(body)); });
+      frames_.run({[&](Phase phase, Value::Map body) { run_phase(phase, std::move(body)); },
+                   [&](const std::function<bool()>& done) { render_until(done); }, [&] { end_render(); }});
       timeline_.image_written = true;
     });
     stage(Stage::finish, [&] { finish(); });
@@ -173,21 +174,31 @@ class Director {
     return Ok{};
   }
 
-  // PHASE to everyone, then wait for every READY of it. Setup (and a job's frame) takes what it takes; so does
-  // rendering, after which every actor has had PHASE render for the whole frame and must have said READY render.
+  // PHASE to everyone, then wait for every READY of it. Setup (and a job's frame) takes what it takes. Render is
+  // awaited apart (render_until, end_render): a job's next frame may begin while it goes on.
   void run_phase(Phase phase, Value::Map body = {}) {
     supervisor_.broadcast(wire::make_phase("director", phase, std::move(body)));
     check(services_.phase(phase, control_));
     // READY frame only says the view is taken (docs/PROTOCOL.md): an actor silent for a minute never will say it.
     if (phase == Phase::frame) return wait_all(60.0, [](const ActorRecord& a) { return a.ready == Phase::frame; });
-    if (phase != Phase::render) {
-      // A READY sent before a rollback counts for nothing: the services say when the phase's work is really in.
-      while (!services_.phase_complete(phase) || !supervisor_.all([phase](const ActorRecord& a) { return a.ready == phase; }))
-        pump(100);
-      return;
-    }
-    auto last_report = Clock::now();
-    while (!supervisor_.all([](const ActorRecord& a) { return !a.spec->is_renderer() || a.ready == Phase::render; })) {
+    // A READY sent before a rollback counts for nothing: the services say when the phase's work is really in.
+    while (phase != Phase::render &&
+           (!services_.phase_complete(phase) || !supervisor_.all([phase](const ActorRecord& a) { return a.ready == phase; })))
+      pump(100);
+  }
+
+  // Every renderer said READY render (every tile is done); every actor, which had PHASE render, must say it too.
+  void end_render() {
+    const auto said = [](const ActorRecord& a) { return a.ready == Phase::render; };
+    render_until([&] { return supervisor_.all([&](const ActorRecord& a) { return !a.spec->is_renderer() || said(a); }); });
+    for (const auto deadline = Clock::now() + std::chrono::seconds(kReadyRenderGraceSeconds); !supervisor_.all(said); pump(100))
+      if (Clock::now() > deadline)
+        throw FarmFailure{"every tile is done, but " + supervisor_.late(said) + " never answered PHASE render with "
+                          "READY render (every actor must; docs/PROTOCOL.md, \"Life of an actor\")"};
+  }
+
+  void render_until(const std::function<bool()>& done) {
+    for (auto last_report = Clock::now(); !done();) {
       pump(100);
       // A frame that makes no progress for a long while says, every so often, what it is waiting on: who holds
       // which tiles and what each actor has in flight. It changes nothing; a stall is then diagnosable.
@@ -196,11 +207,6 @@ class Director {
       last_report = Clock::now();
       log_warn(tiles_.stall_report(supervisor_.in_flight()));
     }
-    const auto deadline = Clock::now() + std::chrono::seconds(kReadyRenderGraceSeconds);
-    for (const auto said = [](const ActorRecord& a) { return a.ready == Phase::render; }; !supervisor_.all(said); pump(100))
-      if (Clock::now() > deadline)
-        throw FarmFailure{"every tile is done, but " + supervisor_.late(said) + " never answered PHASE render with "
-                          "READY render (every actor must; docs/PROTOCOL.md, \"Life of an actor\")"};
   }
   static constexpr int kReadyRenderGraceSeconds = 5;
   static constexpr double kStallReportSeconds = 30;
@@ -208,11 +214,8 @@ class Director {
   void finish() {
     supervisor_.broadcast(wire::make_phase("director", Phase::finish));
     // Wait for every actor's STATS and BYE, and for its process to end.
-    const auto deadline = Clock::now() + std::chrono::seconds(10);
-    while (Clock::now() < deadline) {
+    for (const auto deadline = Clock::now() + std::chrono::seconds(10); Clock::now() < deadline; pump(50))
       if (supervisor_.all([](const ActorRecord& a) { return a.said_bye && a.exited; })) return;
-      pump(50);
-    }
     log_warn("some actors did not stop within 10 s; stopping them");
   }
 

@@ -56,6 +56,21 @@ std::vector<std::string> asked_by_carried_setups(const FarmSpec& spec) {
   return names;
 }
 
+// Whether actor `a` answers two frames' views at once (frames in flight). The farm's own kinds do, but geometry
+// actors' rays resume ops without their view; a built-in op does unless it carries its setup over the views and
+// cannot be copied (LightOp::fork_view); a plug-in's own process cannot say: no.
+bool answers_two_views(const ActorSpec& a) {
+  if (a.runtime.count("cmd") || a.is_geometry()) return false;
+  const LightOpKind* kind = find_lightop_kind(a.kind);
+  if (!kind || a.is_renderer() || a.is_multiplexer() || a.is_ring_node()) return true;
+  try {
+    const auto op = create_lightop(*kind, ParamTable(a.params, a.name));
+    return !(op->setup_sees_camera() && op->carries_views()) || op->fork_view() != nullptr;
+  } catch (const std::exception&) {
+    return false;
+  }
+}
+
 }  // namespace
 
 FrameLoop::FrameLoop(FarmSpec& spec, TileService& tiles, ExchangeService& exchange, Outbox& out, const RunOptions& options)
@@ -86,6 +101,8 @@ void FrameLoop::prepare(const std::string& scene_hash) {
       if (record_->done(f.number, key, f.output)) ++skipped_;
       else left_.push_back({f, i, std::move(key)});
     }
+    flyable_ = spec_.job.in_flight && options_.preview_every <= 0 && spec_.image.time_limit <= 0 &&
+               std::all_of(spec_.actors.begin(), spec_.actors.end(), [](const ActorSpec& a) { return answers_two_views(a); });
     if (any_carried()) {
       asked_by_carried_ = asked_by_carried_setups(spec_);
       carried_.begin(record_->folder(), std::move(setup_keys));
@@ -97,7 +114,8 @@ void FrameLoop::prepare(const std::string& scene_hash) {
                LogKind::recovery);
   }
   if (left_.empty()) return;
-  tiles_.begin_frame(left_[0].frame.output, left_[0].key, options_.checkpoint_every, options_.restart, options_.preview_every);
+  tiles_.begin_frame(left_[0].frame.output, left_[0].key, options_.checkpoint_every, options_.restart, options_.preview_every,
+                     frame_number(left_[0]));
   // Set up seen from the job's first frame, whichever frame renders first: a setup kept over the frames (one
   // that does not see the camera, but may have asked ops that do) is then the same in every run of the job.
   spec_.camera = spec_.job.declared ? spec_.frames.front().camera : left_[0].frame.camera;
@@ -109,13 +127,14 @@ size_t FrameLoop::materials_change(size_t index) const {
 }
 
 void FrameLoop::switch_view(const FrameSpec& f, bool replay, const std::function<void(wire::Phase, Value::Map)>& run_phase,
-                            bool new_materials) {
+                            bool new_materials, std::optional<int> in_flight) {
   // Every actor takes the view first; then what depends on it is set up again (an op's new setup may ask others).
   // A replayed view, which nothing renders, needs only what carried setups extend to it and what they ask.
   control::FrameView view{f.number, f.camera, replay ? std::optional(asked_by_carried_) : std::nullopt};
   view.keep = any_carried();  // for a later run of the job, which then need not replay
   view.materials = f.materials;
   view.new_materials = new_materials;
+  view.in_flight = in_flight;
   if (new_materials && !replay && !options_.quiet)
     log_info("frame " + std::to_string(f.number) + ": the materials change, and every setup starts anew");
   const auto start = std::chrono::steady_clock::now();
@@ -178,46 +197,83 @@ bool FrameLoop::catch_up(size_t holds, size_t before, const std::function<void(w
   return false;
 }
 
-void FrameLoop::run(const std::function<void(wire::Phase, Value::Map)>& run_phase) {
+bool FrameLoop::flies(size_t i) const {
+  return flyable_ && i + 1 < left_.size() && left_[i + 1].index == left_[i].index + 1 &&
+         spec_.frames[left_[i + 1].index].materials == spec_.frames[left_[i].index].materials;
+}
+
+void FrameLoop::run(const FrameStages& stages) {
   using Clock = std::chrono::steady_clock;
-  size_t holds = 0;  // the frame (in spec.frames) whose view the farm holds: set up from the first
+  size_t holds = 0;        // the frame (in spec.frames) whose view the farm holds: set up from the first
+  bool began = false;      // left_[i] began in flight, beside the frame before
+  bool rendering = false;  // PHASE render is out, and the renderers have not all answered READY render
+  const auto start = Clock::now();
   for (size_t i = 0; i < left_.size(); ++i) {
     const Left& f = left_[i];
-    const auto start = Clock::now();
-    if (i > 0) tiles_.begin_frame(f.frame.output, f.key, options_.checkpoint_every, options_.restart, options_.preview_every);
-    // Where the materials change, every setup starts anew, seen from that frame: a run that skips to a later frame
-    // takes the change's frame first (no render), so its setups are those of the job run in one go.
-    const size_t change = materials_change(f.index);
-    if (change > holds && change < f.index) {
-      if (!options_.quiet)
-        log_info("taking frame " + std::to_string(spec_.frames[change].number) + " first, where the materials change "
-                 "(every setup starts anew there), for frame " + std::to_string(f.frame.number),
-                 LogKind::recovery);
-      switch_view(spec_.frames[change], true, run_phase, /*new_materials=*/true);
-      holds = change;
+    if (!began) {
+      if (i > 0)
+        tiles_.begin_frame(f.frame.output, f.key, options_.checkpoint_every, options_.restart, options_.preview_every,
+                           frame_number(f));
+      // Where the materials change, every setup starts anew, seen from that frame: a run that skips to a later frame
+      // takes the change's frame first (no render), so its setups are those of the job run in one go.
+      const size_t change = materials_change(f.index);
+      if (change > holds && change < f.index) {
+        if (!options_.quiet)
+          log_info("taking frame " + std::to_string(spec_.frames[change].number) + " first, where the materials change "
+                   "(every setup starts anew there), for frame " + std::to_string(f.frame.number),
+                   LogKind::recovery);
+        switch_view(spec_.frames[change], true, stages.run_phase, /*new_materials=*/true);
+        holds = change;
+      }
+      const bool restored = any_carried() && change <= holds && f.index > holds + 1 && catch_up(holds, f.index, stages.run_phase);
+      if (f.index != holds && !restored) switch_view(f.frame, false, stages.run_phase, change == f.index && change > 0);
+      holds = f.index;
     }
-    const bool restored = any_carried() && change <= holds && f.index > holds + 1 && catch_up(holds, f.index, run_phase);
-    if (f.index != holds && !restored) switch_view(f.frame, false, run_phase, change == f.index && change > 0);
-    holds = f.index;
-    run_phase(wire::Phase::render, {});
-    tiles_.finish_progress();
-    if (!tiles_.finished()) throw FarmFailure{"the renderers stopped before every tile was done"};
-    if (auto st = tiles_.write_frame(); !st) throw FarmFailure{st.error().message};
-    ++written_;
-    const double seconds = std::chrono::duration<double>(Clock::now() - start).count();
-    figures_.push_back({f.frame.number, seconds, f.frame.output, std::max(1, tiles_.passes()) * spec_.image.spp});
-    if (!record_) continue;
-    if (auto st = record_->add(f.frame.number, f.key, f.frame.output); !st)
-      log_warn(st.error().message + "; a later run will render frame " + std::to_string(f.frame.number) + " again");
-    if (!options_.quiet) {
-      char line[96];
-      std::snprintf(line, sizeof line, " (%zu of %zu) in %.1f s", written_ + skipped_, left_.size() + skipped_, seconds);
-      std::string text = "frame " + std::to_string(f.frame.number) + " written to " + f.frame.output + line;
-      if (const Value* eta = status(0).find("eta_seconds"); eta && written_ < left_.size())
-        std::snprintf(line, sizeof line, "; the job's frames left: about %.0f s", eta->as_double()), text += line;
-      log_info(text);
+    if (!rendering) stages.run_phase(wire::Phase::render, {}), rendering = true;
+    began = two_in_flight_ = flies(i);
+    begun_in_flight_ += began;
+    tiles_.expect_next_frame(began);
+    if (began) {
+      // Once every tile of this frame is out, the next frame's view goes out, set up while this one's last tiles
+      // render; then its tiles. This frame is written when its last tile is in.
+      stages.render_until([this] { return tiles_.all_handed_out(); });
+      const Left& next = left_[i + 1];
+      switch_view(next.frame, false, stages.run_phase, false, f.frame.number);
+      stages.run_phase(wire::Phase::render, {});  // every actor has PHASE render for each frame, and answers it
+      tiles_.begin_frame(next.frame.output, next.key, options_.checkpoint_every, options_.restart, 0, frame_number(next),
+                         /*in_flight=*/true);
+      tiles_.serve(out_);
+      holds = next.index;
+      stages.render_until([this] { return tiles_.earlier_finished(); });
+      if (auto st = tiles_.write_earlier(); !st) throw FarmFailure{st.error().message};
+      two_in_flight_ = false;
+    } else {
+      stages.end_render();
+      rendering = false;
+      tiles_.finish_progress();
+      if (!tiles_.finished()) throw FarmFailure{"the renderers stopped before every tile was done"};
+      if (auto st = tiles_.write_frame(); !st) throw FarmFailure{st.error().message};
     }
+    // A frame's time is from the last image written (or its own start) to its own: frames in flight overlap.
+    const auto now = Clock::now();
+    written(f, std::chrono::duration<double>(now - last_written_.value_or(start)).count());
+    last_written_ = now;
   }
+}
+
+void FrameLoop::written(const Left& f, double seconds) {
+  ++written_;
+  figures_.push_back({f.frame.number, seconds, f.frame.output, std::max(1, tiles_.passes()) * spec_.image.spp});
+  if (!record_) return;
+  if (auto st = record_->add(f.frame.number, f.key, f.frame.output); !st)
+    log_warn(st.error().message + "; a later run will render frame " + std::to_string(f.frame.number) + " again");
+  if (options_.quiet) return;
+  char line[96];
+  std::snprintf(line, sizeof line, " (%zu of %zu) in %.1f s", written_ + skipped_, left_.size() + skipped_, seconds);
+  std::string text = "frame " + std::to_string(f.frame.number) + " written to " + f.frame.output + line;
+  if (const Value* eta = status(0).find("eta_seconds"); eta && written_ < left_.size())
+    std::snprintf(line, sizeof line, "; the job's frames left: about %.0f s", eta->as_double()), text += line;
+  log_info(text);
 }
 
 Value FrameLoop::status(double current_done) const {
@@ -230,6 +286,7 @@ Value FrameLoop::status(double current_done) const {
   Value::Map m{{"frames_total", static_cast<int64_t>(left_.size() + skipped_)},
                {"frames_done", static_cast<int64_t>(written_ + skipped_)},
                {"frame", static_cast<int64_t>(rendering ? left_[written_].frame.number : 0)},
+               {"frames_in_flight", static_cast<int64_t>(rendering + (two_in_flight_ ? 1 : 0))},
                {"frame_seconds", mean}};
   if (counted > 0)
     m["eta_seconds"] = mean * (static_cast<double>(left_.size() - written_) - rendering * std::min(1.0, current_done));
@@ -251,6 +308,7 @@ void FrameLoop::add_figures(RunFigures& f) const {
   f.render_seconds = seconds;
   f.frames = Value::Map{{"frames", std::move(frames)}, {"skipped", static_cast<int64_t>(skipped_)},
                         {"replay_seconds", replay_seconds_}, {"restore_seconds", restore_seconds_},
+                        {"begun_in_flight", static_cast<int64_t>(begun_in_flight_)},
                         {"setups_kept", static_cast<int64_t>(carried_.kept())}, {"record", record_->folder()}};
 }
 

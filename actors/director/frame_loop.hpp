@@ -11,6 +11,11 @@
 // renders. Each frame is written as soon as it is complete and recorded in the job's record (JobRecord),
 // which a later run of the same job reads to skip the frames done; the frame in progress resumes from its film
 // checkpoint (FilmCheckpoint).
+// Frames in flight: once every tile of frame k is out, frame k+1's view goes out (PHASE frame with in_flight = k,
+// and setup) and its tiles follow, while k's last tiles still render; k is written when its last tile lands. The
+// actors answer k's requests as before meanwhile (each request names its frame), so the images are those of one
+// frame at a time. Where the farm cannot (see flies()), the frames go one at a time.
+#include <chrono>
 #include <functional>
 #include <optional>
 #include <string>
@@ -27,6 +32,16 @@
 
 namespace lf {
 
+// What the frame loop asks of the director.
+struct FrameStages {
+  // PHASE to every actor. Frame and setup then wait for every READY; render does not (render_until does).
+  std::function<void(wire::Phase, Value::Map)> run_phase;
+  // Turns the farm's loop while it renders, until `done` (a render that makes no progress says so now and then).
+  std::function<void(const std::function<bool()>&)> render_until;
+  // Waits for every renderer's READY render: no tile is left.
+  std::function<void()> end_render;
+};
+
 class FrameLoop {
  public:
   // `exchange` and `out`: where a resumed job's kept setups are published for the actors that restore them.
@@ -40,11 +55,11 @@ class FrameLoop {
   void prepare(const std::string& scene_hash);
   bool nothing_left() const { return left_.empty(); }
 
-  // Renders every frame left. `run_phase(phase, body)` sends PHASE to every actor and waits for each READY; throws
-  // FarmFailure when a frame cannot be finished or written.
-  void run(const std::function<void(wire::Phase, Value::Map)>& run_phase);
-  // A job's progress for the monitor: {frames_total, frames_done, frame, frame_seconds (the mean of the frames
-  // after the first, else the first's), eta_seconds}, given how much of the current frame is done (0..1); nil for
+  // Renders every frame left; throws FarmFailure when a frame cannot be finished or written.
+  void run(const FrameStages& stages);
+  // A job's progress for the monitor: {frames_total, frames_done, frame (the oldest not written), frames_in_flight
+  // (rendering: 1, or 2 while the next began beside it), frame_seconds (the mean of the frames after the first, else
+  // the first's; a frame's time runs from the image before it), eta_seconds}, given how much of the current frame is done (0..1); nil for
   // a farm of one frame.
   Value status(double current_done) const;
 
@@ -62,13 +77,24 @@ class FrameLoop {
   // PHASE frame and PHASE setup: the farm takes frame `f`'s view (`replay`: to extend carried setups, no render;
   // `new_materials`: the job's materials change at `f`, and every actor sets up anew).
   void switch_view(const FrameSpec& f, bool replay, const std::function<void(wire::Phase, Value::Map)>& run_phase,
-                   bool new_materials = false);
+                   bool new_materials = false, std::optional<int> in_flight = std::nullopt);
   // The newest frame (index in spec.frames) at or before `index` where the job's materials change (0: none).
   size_t materials_change(size_t index) const;
   // Before frame spec.frames[before] when the farm holds spec.frames[holds]'s view: the newest frame after `holds`,
   // up to `before` itself, whose carried setups are all kept is restored (PHASE frame with restore, and setup), and
   // the views after it replayed. True: `before`'s own view was restored (the farm holds it, set up).
   bool catch_up(size_t holds, size_t before, const std::function<void(wire::Phase, Value::Map)>& run_phase);
+  // Whether left_[i + 1] may begin while left_[i] renders: the job's next frame with the same materials, on a farm
+  // whose every actor answers two views at once (flyable_), with no preview or time limit.
+  bool flies(size_t i) const;
+  // A frame's image is complete and written: its figures, its line, the job's record.
+  void written(const Left& f, double seconds);
+  bool flyable_ = false;
+  bool two_in_flight_ = false;  // the next frame began beside the one not yet written
+  size_t begun_in_flight_ = 0;  // frames that began beside the one before
+  // The number each tile and request names a job's frame by (none for a farm of one frame).
+  std::optional<int> frame_number(const Left& f) const { return record_ ? std::optional(f.frame.number) : std::nullopt; }
+  std::optional<std::chrono::steady_clock::time_point> last_written_;
   FarmSpec& spec_;
   TileService& tiles_;
   ExchangeService& exchange_;

@@ -48,6 +48,9 @@ std::string TileService::holders() const {
     text += (text.empty() ? "" : "; ") + worker + " holds tile" + (tiles.size() == 1 ? "" : "s");
     for (size_t i = 0; i < tiles.size(); ++i) text += (i ? ", " : " ") + std::to_string(tiles[i]);
   }
+  if (earlier_)
+    for (const auto& [worker, tiles] : earlier_->master.held())
+      text += (text.empty() ? "" : "; ") + worker + " holds " + std::to_string(tiles.size()) + " of the frame before's tiles";
   if (text.empty()) text = "no renderer holds a tile";
   return text + "; " + std::to_string(waiting_.size()) + " tile request" + (waiting_.size() == 1 ? "" : "s") +
          " waiting";
@@ -68,7 +71,7 @@ Status TileService::write_frame() {
   // What made the image, in the file: its samples a pixel, and a time-limited frame's passes.
   ImageNotes notes{{"lightfarm:samples", std::to_string(std::max(1, passes_) * image_.spp)}};
   if (image_.time_limit > 0) notes.emplace_back("lightfarm:passes", std::to_string(passes_));
-  if (auto st = write_image(film(), image_.output, display(), notes); !st) return st;
+  if (auto st = write(film(), image_.output, notes); !st) return st;
   if (image_.time_limit > 0 && !quiet_)
     log_info(image_.output + ": " + std::to_string(passes_) + " pass" + (passes_ == 1 ? "" : "es") + " of " +
              std::to_string(image_.spp) + " samples a pixel (" + std::to_string(passes_ * image_.spp) + ") in " +
@@ -79,8 +82,22 @@ Status TileService::write_frame() {
     std::error_code ec;
     std::filesystem::remove(preview_path(image_.output), ec);
   }
-  if (all_black(film()))
-    log_warn(image_.output + ": every pixel is 0, nothing the camera sees is lit: it may look at the back of the "
+  return Ok{};
+}
+
+Status TileService::write_earlier() {
+  if (!earlier_) return Ok{};
+  Earlier frame = std::move(*earlier_);
+  earlier_.reset();
+  if (auto st = write(frame.master.film(), frame.output, {{"lightfarm:samples", std::to_string(image_.spp)}}); !st) return st;
+  if (frame.checkpoint) frame.checkpoint->remove();
+  return Ok{};
+}
+
+Status TileService::write(const Image& film, const std::string& output, const ImageNotes& notes) {
+  if (auto st = write_image(film, output, display(), notes); !st) return st;
+  if (all_black(film))
+    log_warn(output + ": every pixel is 0, nothing the camera sees is lit: it may look at the back of the "
              "scene's surfaces from outside or past them (`lightfarm scene FILE.obj` suggests a camera that frames "
              "the scene), or the lights may face away from what it sees");
   return Ok{};
@@ -103,14 +120,25 @@ void TileService::write_preview() {
 }
 
 void TileService::begin_frame(const std::string& output, const std::string& key, double interval, bool restart,
-                              double preview_every) {
+                              double preview_every, std::optional<int> frame, bool in_flight) {
+  if (in_flight) {
+    earlier_.emplace(Earlier{std::move(master_), image_.output, frame_, base_, std::move(checkpoint_)});
+    base_ = base_ == 0 ? earlier_->master.total() : 0;
+  } else {
+    earlier_.reset();
+    base_ = 0;
+  }
+  frame_ = frame;
+  next_frame_coming_ = false;
   image_.output = output;
   preview_every_ = preview_every;
   last_preview_ = Clock::now();
   master_ = RenderMaster(image_.width, image_.height, image_.tile);
   progress_.restart();
-  rendering_ = false;
-  waiting_.clear();  // none: every renderer said the last frame had no tile left
+  if (!in_flight) {
+    rendering_ = false;
+    waiting_.clear();  // none: every renderer said the last frame had no tile left
+  }  // else still rendering: the waiting requests get this frame's tiles (serve)
   written_ = false;
   checkpoint_.reset();
   resumed_ = 0;
@@ -149,7 +177,11 @@ Status TileService::on_request(const std::string& actor, wire::Op op, uint64_t i
   std::string refused;
   size_t accepted = 0;
   for (const control::FinishedTile& tile : done->tiles) {
-    const auto outcome = master_.complete(actor, tile.id, tile.rgb);
+    // Of the frame in flight before the latest, by its ids, or of the latest.
+    const bool earlier = earlier_ && tile.id >= earlier_->base && tile.id - earlier_->base < earlier_->master.total();
+    const auto outcome = earlier ? earlier_->master.complete(actor, tile.id - earlier_->base, tile.rgb)
+                                 : master_.complete(actor, tile.id - base_, tile.rgb);
+    if (earlier && earlier_->checkpoint && outcome == RenderMaster::Outcome::accepted) earlier_->checkpoint->save(earlier_->master);
     if (outcome == RenderMaster::Outcome::accepted) {
       ++accepted;
       continue;
@@ -192,7 +224,7 @@ Status TileService::on_request(const std::string& actor, wire::Op op, uint64_t i
 Status TileService::on_lost(const std::string& actor, const std::string& why, Outbox& out) {
   if (std::find(renderers_.begin(), renderers_.end(), actor) == renderers_.end()) return Ok{};
   std::erase_if(waiting_, [&](const Waiting& w) { return w.actor == actor; });
-  const size_t tiles = master_.release(actor);
+  const size_t tiles = master_.release(actor) + (earlier_ ? earlier_->master.release(actor) : 0);
   log_warn("renderer '" + actor + "' " + why + "; its " + std::to_string(tiles) + " tiles go to the others", LogKind::loss);
   serve_waiting(out);
   return Ok{};
@@ -236,12 +268,20 @@ void TileService::serve_waiting(Outbox& out) {
       // Several only while every renderer could take as many of the tiles still free.
       const size_t share = std::max<size_t>(1, master_.unassigned() / std::max<size_t>(1, renderers_.size()));
       const size_t give = std::min<size_t>(static_cast<size_t>(std::max(1, w.count)), share);
+      // The frame in flight before the latest first: a lost renderer's tiles of it came back.
+      while (earlier_ && tiles.size() < give) {
+        auto t = earlier_->master.next(w.actor);
+        if (!t) break;
+        tiles.push_back(control::Tile{t->id + earlier_->base, t->rect, 0, earlier_->frame});
+      }
       while (tiles.size() < give) {
         auto t = master_.next(w.actor);
         if (!t) break;
-        tiles.push_back(control::Tile{t->id, t->rect, static_cast<uint32_t>(passes_) * static_cast<uint32_t>(image_.spp)});
+        tiles.push_back(control::Tile{t->id + base_, t->rect, static_cast<uint32_t>(passes_) * static_cast<uint32_t>(image_.spp),
+                                      frame_});
       }
-      if (tiles.empty() && !master_.finished()) return;  // keep waiting
+      // Keep waiting while a tile may come back, or the next frame's tiles are to come.
+      if (tiles.empty() && (!master_.finished() || next_frame_coming_ || !earlier_finished())) return;
     }
     waiting_.pop_front();
     if (w.count > 0) out.reply(w.actor, w.id, control::encode_tiles_reply(tiles));

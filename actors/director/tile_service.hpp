@@ -13,6 +13,10 @@
 // frame's sum and, if another pass of the last one's length still fits in the time, the tiles go out again with
 // the next pass's first sample (tile.first). Past the time a pass is given up: no tile goes out, its tiles still
 // out are taken and dropped, and the frame is the mean of the passes completed (at least one).
+// A job's frames in flight: the next frame may begin while the last one's tiles are still out (begin_frame with
+// in_flight). Its tiles then go out, the last frame's still land in its own film (tile ids of the two frames
+// differ), and a tile the last frame gets back from a lost renderer goes out before the next frame's. Each tile
+// says its frame (tile.frame).
 #include <deque>
 #include <memory>
 #include <optional>
@@ -45,11 +49,25 @@ class TileService final : public Service {
   // the same frame (`key`, frame_key) finished are done now, said in the log, and it is written as tiles land.
   // `restart`: it is dropped first. `preview_every` > 0: the partial image goes to preview_path(output) at most
   // that often while tiles land (removed once the frame is written).
+  // `frame`: the job's frame number, which each tile names. `in_flight`: the frame under way is not done; it goes on
+  // beside this one (no preview or time limit then; each keeps its own checkpoint) until earlier_finished().
   void begin_frame(const std::string& output, const std::string& key, double interval, bool restart,
-                   double preview_every = 0);
+                   double preview_every = 0, std::optional<int> frame = std::nullopt, bool in_flight = false);
+  // A job's next frame will begin in flight: a tile request this frame cannot serve waits for it, even once every
+  // tile is done (renderers are not told that no tile is left).
+  void expect_next_frame(bool coming) { next_frame_coming_ = coming; }
+  // Every tile of the frame is out or done: the next frame may begin in flight.
+  bool all_handed_out() const { return master_.unassigned() == 0; }
+  // The frame that went on beside the latest (begin_frame in_flight): whether every tile is in, and its image
+  // written (then it is gone).
+  bool earlier_finished() const { return !earlier_ || earlier_->master.finished(); }
+  Status write_earlier();
+  // Tile requests that waited for a frame begun in flight get its tiles.
+  void serve(Outbox& out) { serve_waiting(out); }
   // The farm stops early: what is done goes to the checkpoint now (nothing once the image is written).
   void save_checkpoint() {
     if (checkpoint_ && !written_) checkpoint_->save(master_, true);
+    if (earlier_ && earlier_->checkpoint) earlier_->checkpoint->save(earlier_->master, true);
   }
   // Writes the finished frame to the image's output (with its exposure and tone map); the checkpoint has served
   // then. A frame whose every pixel is 0 is written with a warning naming the likely causes.
@@ -84,6 +102,21 @@ class TileService final : public Service {
   void add_pass();
   // Past a time-limited frame's time with a pass complete: the pass under way is given up.
   bool out_of_time() const;
+
+  // The image (its film, with the exposure and tone map) to `output`, with `notes`.
+  Status write(const Image& film, const std::string& output, const ImageNotes& notes);
+  // Tile ids: the latest frame's are its master's plus base_, those of the frame in flight beside it another base.
+  struct Earlier {
+    RenderMaster master;
+    std::string output;
+    std::optional<int> frame;
+    uint64_t base = 0;
+    std::optional<FilmCheckpoint> checkpoint;
+  };
+  std::optional<Earlier> earlier_;
+  uint64_t base_ = 0;
+  std::optional<int> frame_;
+  bool next_frame_coming_ = false;
 
   ImageSpec image_;  // output: the frame's
   bool quiet_ = false;

@@ -319,5 +319,70 @@ TEST(TileService, APassLeftIncompletePastTheTimeIsDropped) {
   for (const RGB& px : p.service.film().pixels) ASSERT_EQ(px.x, 1.0f) << "the half pass is not in the image";
 }
 
+
+// A job's frames in flight: with the next frame coming, a request that finds every tile of frame 1 out waits
+// instead of hearing "none left"; frame 2 begins beside frame 1 and its tiles (which name frame 2, with ids of their
+// own) answer it; frame 1's last tile still lands in frame 1's film, a tile frame 1 gets back from a lost renderer
+// goes out before frame 2's, and frame 1 is written to its own output once complete.
+TEST(TileService, TheNextFrameBeginsWhileTheLastTilesOfOneAreOut) {
+  const std::string dir = ::testing::TempDir();
+  TileService s(image(32, 16, 16), {"r0", "r1"}, false, true);  // two tiles a frame
+  RecordingOutbox out;
+  s.begin_frame(dir + "/fly.0001.exr", "k1", 0, false, 0, 1);
+  s.expect_next_frame(true);
+  ASSERT_TRUE(s.on_phase(wire::Phase::render, out).ok());
+  uint64_t req = 1;
+  auto ask = [&](const char* r) {
+    EXPECT_TRUE(s.on_request(r, Op::tile, req++, Value::Map{}, out).ok());
+    auto sent = out.take();
+    EXPECT_LE(sent.size(), 1u);
+    return sent.empty() ? Value() : sent[0].body;
+  };
+  auto finish = [&](const char* r, const Value& tile, float v) {
+    ASSERT_TRUE(s.on_request(r, Op::tile_done, req++,
+                             Value::Map{{"id", tile.find("tile")->find("id")->as_int()}, {"pixels", pixels_for(tile, v)}}, out)
+                    .ok());
+    for (const auto& m : out.take()) EXPECT_FALSE(m.refused) << m.message;
+  };
+  auto frame_of = [](const Value& tile) { return tile.find("tile")->find("frame")->as_int(); };
+  const Value a = ask("r0"), b = ask("r1");
+  ASSERT_TRUE(a.find("tile") && b.find("tile"));
+  EXPECT_EQ(frame_of(a), 1);
+  EXPECT_TRUE(s.all_handed_out());
+  finish("r0", a, 1.0f);
+  EXPECT_TRUE(ask("r0").is_nil()) << "told no tile is left while the next frame is coming";
+  // Frame 2 begins in flight: the waiting request gets its first tile.
+  s.begin_frame(dir + "/fly.0002.exr", "k2", 0, false, 0, 2, /*in_flight=*/true);
+  s.serve(out);
+  auto sent = out.take();
+  ASSERT_EQ(sent.size(), 1u);
+  const Value c = sent[0].body;
+  EXPECT_EQ(frame_of(c), 2);
+  EXPECT_NE(c.find("tile")->find("id")->as_int(), a.find("tile")->find("id")->as_int());
+  EXPECT_NE(c.find("tile")->find("id")->as_int(), b.find("tile")->find("id")->as_int());
+  // r1 is lost holding frame 1's last tile: it goes out again before frame 2's second tile.
+  ASSERT_TRUE(s.on_lost("r1", "was killed", out).ok());
+  const Value again = ask("r0");
+  ASSERT_TRUE(again.find("tile"));
+  EXPECT_EQ(frame_of(again), 1);
+  EXPECT_EQ(again.find("tile")->find("id")->as_int(), b.find("tile")->find("id")->as_int());
+  EXPECT_FALSE(s.earlier_finished());
+  finish("r0", again, 2.0f);
+  EXPECT_TRUE(s.earlier_finished());
+  EXPECT_FALSE(s.finished()) << "frame 1's tiles counted in frame 2";
+  ASSERT_TRUE(s.write_earlier().ok());
+  auto one = read_image(dir + "/fly.0001.exr");
+  ASSERT_TRUE(one.ok()) << one.error().message;
+  EXPECT_EQ(one->pixels.front(), (RGB{1, 1, 1}));
+  EXPECT_EQ(one->pixels.back(), (RGB{2, 2, 2}));
+  const Value d = ask("r0");
+  EXPECT_EQ(frame_of(d), 2);
+  finish("r0", c, 3.0f);
+  finish("r0", d, 3.0f);
+  EXPECT_TRUE(s.finished());
+  for (const RGB& p : s.film().pixels) EXPECT_EQ(p, (RGB{3, 3, 3}));
+  EXPECT_EQ(ask("r0").find("tile"), nullptr) << "the job's last frame done: no tile left";
+}
+
 }  // namespace
 }  // namespace lf

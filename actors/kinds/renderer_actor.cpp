@@ -5,7 +5,8 @@
 //   REQUEST op="tile_done"  { id, pixels: f32[3wh], next? } or { tiles: [{id, pixels}, ...], next?, count? }
 //                                                      -> REPLY {}, or with next: true a tile request's reply
 // Sends to its one input (the MasterLightOp): REQUEST op="shade" batches, several in flight (the input's window).
-// PHASE frame (a job's next frame) brings a new camera.
+// PHASE frame (a job's next frame) brings a new camera. In flight (the frame before still rendering) the last
+// frame's camera stays for the tiles that name its frame; every shade request names its tile's frame (`view`).
 // Ready for "render" once configured (scene loaded, BVH built); in a partitioned farm (partition { parts = N }) its
 // camera rays go to the geometry actors instead, through RemoteTracing. Answers READY render when the master has no tiles
 // left and every finished tile was acknowledged. Keeps up to `tiles_in_flight` tiles going, so it traces the next
@@ -51,8 +52,8 @@ class RendererActor final : public Actor {
     tracer_ = std::move(loaded->tracer);
     image_ = config.image;
     sampler_ = sampler_of(image_);
-    camera_ = std::make_unique<Camera>(config.camera, image_.width, image_.height);
-    edges_ = emitter_edges(scene(), *camera_, image_);
+    const Camera camera(config.camera, image_.width, image_.height);
+    latest_ = std::make_shared<const View>(View{camera, emitter_edges(scene(), camera, image_), config.frame});
     tracing_ = RemoteTracing::for_config(config, rt, frame_scene_.shipped());
     colocate_ = tracing_ && rt.input_holds_parts(0);
     return Ok{};
@@ -78,13 +79,15 @@ class RendererActor final : public Actor {
     }
   }
 
-  // A job's next frame: its tiles are traced from the new camera (the last frame's are all done and acknowledged:
-  // this renderer said READY render).
+  // A job's next frame: its tiles are traced from the new camera. The last frame's are all done and acknowledged
+  // (this renderer said READY render), or, in flight, some are still going: they keep the view they began with.
   void on_frame(const FrameView& view, Runtime& rt) override {
-    *camera_ = Camera(view.camera, image_.width, image_.height);
     auto changed = frame_scene_.take(view.materials, "frame " + std::to_string(view.frame));
     if (!changed) return rt.fail(changed.error().message);
-    edges_ = emitter_edges(scene(), *camera_, image_);
+    if (*changed && view.in_flight) return rt.fail("PHASE frame in flight where the materials change");
+    earlier_ = view.in_flight ? latest_ : nullptr;
+    const Camera camera(view.camera, image_.width, image_.height);
+    latest_ = std::make_shared<const View>(View{camera, emitter_edges(scene(), camera, image_), view.frame});
     no_more_tiles_ = false;
     rt.phase_done(wire::Phase::frame);
   }
@@ -94,8 +97,15 @@ class RendererActor final : public Actor {
   }
 
  private:
+  // A frame's view: its camera, its pixels on a light's outline, and its frame's number (none outside a job).
+  struct View {
+    Camera camera;
+    EmitterEdges edges;
+    std::optional<int> frame;
+  };
   struct TileJob {
     uint64_t id = 0;
+    std::shared_ptr<const View> view;  // the frame's the tile is of
     TileWork work;
     std::vector<uint32_t> sample_part;  // partition { colocate = true }: the part each camera sample's hit is in
     TilePlan plan;                      // how the points went out, and where their replies go
@@ -152,13 +162,15 @@ class RendererActor final : public Actor {
     rect.first_sample = tile.first_sample;  // a time-limited frame's pass
     auto job = std::make_shared<TileJob>();
     job->id = tile.id;
+    // A tile names its frame while two are in flight; else it is the latest frame's.
+    job->view = earlier_ && tile.frame && earlier_->frame == tile.frame ? earlier_ : latest_;
     jobs_.push_back(job);
     if (tracing_) {
       std::erase_if(tracing_tasks_, [](const Task& t) { return t.done(); });
       tracing_tasks_.push_back(trace_through_parts(job, rect, rt));
       return;
     }
-    trace_tile(scene(), *tracer_, *camera_, image_, rect, job->work, edges_);
+    trace_tile(scene(), *tracer_, job->view->camera, image_, rect, job->work, job->view->edges);
     shade_tile(job, rt);
   }
 
@@ -166,7 +178,7 @@ class RendererActor final : public Actor {
   Task trace_through_parts(std::shared_ptr<TileJob> job, TileRect rect, Runtime& rt) {
     std::vector<Ray> rays;
     std::vector<uint64_t> keys;
-    tile_camera_rays(*camera_, image_, rect, rays, keys, edges_);
+    tile_camera_rays(job->view->camera, image_, rect, rays, keys, job->view->edges);
     std::vector<Hit> hits(rays.size());
     if (colocate_) job->sample_part.resize(rays.size());
     try {
@@ -175,7 +187,7 @@ class RendererActor final : public Actor {
       rt.fail(std::string("tracing camera rays through the scene's parts failed: ") + e.what());
       co_return;
     }
-    tile_points(scene(), *camera_, image_, rect, rays, hits, keys, job->work, edges_);
+    tile_points(scene(), job->view->camera, image_, rect, rays, hits, keys, job->work, job->view->edges);
     shade_tile(job, rt);
   }
 
@@ -202,8 +214,10 @@ class RendererActor final : public Actor {
       const PointFields fields =
           lean ? fields_to_send(sent, b.begin, b.end, scene(), sampler_, image_.width) : PointFields{};
       const bool folded = b.foldable && !fields.key;
+      Value body = encode_tile_request(sent, b.begin, b.end, fields, folded);
+      if (job->view->frame) set_shade_view(body, *job->view->frame);
       rt.ask_input(
-          0, wire::Op::shade, encode_tile_request(sent, b.begin, b.end, fields, folded),
+          0, wire::Op::shade, std::move(body),
           [this, job, i, folded, &rt](Result<wire::Message> r) {
             if (!r) return rt.fail("lighting failed: " + r.error().message);
             const Batch& b = job->plan.batches[i];
@@ -278,7 +292,7 @@ class RendererActor final : public Actor {
       tracing_tasks_.push_back(trace_more_through_parts(job, rt));
       return true;
     }
-    trace_more_samples(scene(), *tracer_, *camera_, image_, job->first.rect, job->shaded_of_pixel, job->work);
+    trace_more_samples(scene(), *tracer_, job->view->camera, image_, job->first.rect, job->shaded_of_pixel, job->work);
     shade_tile(job, rt);
     return true;
   }
@@ -286,7 +300,7 @@ class RendererActor final : public Actor {
   // A partitioned scene's second round: its rays answered by the geometry actors, as the first round's.
   Task trace_more_through_parts(std::shared_ptr<TileJob> job, Runtime& rt) {
     const TileRect& rect = job->first.rect;
-    const MoreSamples more = more_sample_rays(*camera_, image_, rect, job->shaded_of_pixel);
+    const MoreSamples more = more_sample_rays(job->view->camera, image_, rect, job->shaded_of_pixel);
     std::vector<Hit> hits(more.rays.size());
     std::vector<uint32_t> parts(colocate_ ? more.rays.size() : 0);
     try {
@@ -295,7 +309,7 @@ class RendererActor final : public Actor {
       rt.fail(std::string("tracing camera rays through the scene's parts failed: ") + e.what());
       co_return;
     }
-    more_sample_points(scene(), *camera_, image_, rect, more, hits, job->work);
+    more_sample_points(scene(), job->view->camera, image_, rect, more, hits, job->work);
     if (colocate_) {
       // Indexed as the second round's tile counts samples: max(spp, adaptive_spp) a pixel.
       job->sample_part.assign(static_cast<size_t>(rect.pixel_count()) * static_cast<size_t>(job->work.spp),
@@ -320,8 +334,8 @@ class RendererActor final : public Actor {
   std::unique_ptr<RemoteTracing> tracing_;        // a partitioned scene's geometry actors, or none
   bool colocate_ = false;                         // the lighting pool's replicas hold parts: send points by part
   std::vector<Task> tracing_tasks_;               // tiles whose camera rays are out at the parts (finished ones kept until the next tile)
-  std::unique_ptr<Camera> camera_;
-  EmitterEdges edges_;  // the frame's pixels on a light's outline
+  std::shared_ptr<const View> latest_;   // the latest PHASE frame's view (CONFIG's before any)
+  std::shared_ptr<const View> earlier_;  // in flight: the last frame's, for its tiles still to come
   ImageSpec image_;
   SamplerKind sampler_ = SamplerKind::independent;
   RendererParams params_;

@@ -142,7 +142,7 @@ function render(s) {
   setText($("elapsed"), num(f.elapsed_seconds, 1) + " s");
   // A job of frames: which frame, how many are done, and what the rest should take.
   const j = s.job;
-  const job = j ? `frame ${j.frame || "-"} (${j.frames_done} of ${j.frames_total} done` +
+  const job = j ? `frame ${j.frame || "-"}${j.frames_in_flight > 1 ? " and the next" : ""} (${j.frames_done} of ${j.frames_total} done` +
     (j.eta_seconds === undefined ? ") · " : `, ~${num(j.eta_seconds)} s left) · `) : "";
   setText($("tiles"), job + `tiles ${f.tiles_done ?? 0} / ${f.tiles_total ?? 0}`);
   const actors = s.actors || [];

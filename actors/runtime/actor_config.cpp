@@ -126,6 +126,7 @@ Value ActorConfig::to_value() const {
   if (!part_triangles.empty()) m["part_triangles"] = u32_to_bytes(part_triangles);
   if (local_part >= 0) m["local_part"] = local_part;
   if (!frame_materials.empty()) m["frame_materials"] = frame_materials;
+  if (frame) m["frame"] = static_cast<int64_t>(*frame);
   return m;
 }
 
@@ -197,6 +198,11 @@ Result<ActorConfig> ActorConfig::from_value(const Value& body) {
       return make_error("CONFIG 'frame_materials' must be a list of material changes, each a map with a name",
                         ErrorCode::bad_request);
     c.frame_materials = changes->as_array();
+  }
+  if (const Value* frame = body.find("frame"); frame && !frame->is_nil()) {
+    if (!frame->is_int() || frame->as_int() < INT32_MIN || frame->as_int() > INT32_MAX)
+      return make_error("CONFIG 'frame' must be a frame number", ErrorCode::bad_request);
+    c.frame = static_cast<int>(frame->as_int());
   }
   if (const Value* pool = body.find("pool"); pool && !pool->is_nil()) {
     const Value* name = pool->find("name");

@@ -54,6 +54,8 @@ struct ActorConfig {
   // A job whose first frame changes materials (frames { materials }): its changes over the shipped scene, which the
   // actor makes before it sets up (FrameSpec::materials; later frames' come with PHASE frame). Empty: none.
   Value::Array frame_materials;
+  // A job's first frame's number, whose view `camera` is: what shade requests name that view by (frames in flight).
+  std::optional<int> frame;
   ImageSpec image;
   std::vector<InputSpec> inputs;  // in script order
   Value::Map runtime;             // how it was started: {cmd, cwd} for lightop.exec actors; informational

@@ -12,12 +12,16 @@
 // the frame's `keep` it then sends its setup to the director (REQUEST keep_setup), with `restore` it fetches the one
 // the director kept instead of extending. Two steps, so that no op's new setup asks one that has not yet taken the
 // view. PHASE finish / BYE stop it.
+// A PHASE frame in flight (the frame before is still rendering): requests that name the last frame's view (shade
+// `view`) go on to the op as it was, under that view's camera; this view's setup goes to a copy
+// (LightOp::fork_view) or a new op, and the requests that name it wait for it.
 // Requests that arrive before setup finished wait.
 // Requests queue in arrival order and start one per loop turn, so heartbeats and replies keep flowing. A request
 // whose op asks its inputs suspends (a coroutine) while the runtime sends those batches asynchronously; other
 // requests run meanwhile. The LightOp class sees none of this.
 #include "actors/runtime/lightop_actor.hpp"
 
+#include <algorithm>
 #include <chrono>
 #include <deque>
 #include <map>
@@ -27,6 +31,7 @@
 #include "actors/runtime/frame_scene.hpp"
 #include "actors/runtime/lean_points.hpp"
 #include "actors/runtime/remote_tracing.hpp"
+#include "actors/runtime/views_in_flight.hpp"
 #include "core/log.hpp"
 #include "render/scene/loaded_scene.hpp"
 #include "render/lightops/lightop_registry.hpp"
@@ -38,11 +43,14 @@ namespace {
 // Predecessors reached over the wire: each query becomes one or more batched, asynchronous requests.
 class RemoteInputs final : public Inputs {
  public:
-  RemoteInputs(Runtime& rt, size_t batch, const Scene& scene) : rt_(rt), batch_(batch), scene_(scene) {}
+  RemoteInputs(Runtime& rt, size_t batch, const Scene& scene, ViewsInFlight& views)
+      : rt_(rt), batch_(batch), scene_(scene), views_(views) {}
   size_t count() const override { return rt_.input_count(); }
 
   Gather gather(std::vector<InputQuery> queries) override {
     auto state = std::make_shared<GatherState>();
+    state->before_resume = views_.restorer();
+    const std::optional<int> view = views_.active_frame();  // the asking request's, for what it asks in turn
     for (const auto& q : queries) {
       if (q.input >= rt_.input_count()) {
         state->error = "input " + std::to_string(q.input) + " does not exist";
@@ -54,10 +62,11 @@ class RemoteInputs final : public Inputs {
         ++state->remaining;
         auto* out = q.radiance;
         const std::string input_name = rt_.input_name(q.input);
+        Value body = encode_shade_request(
+            *q.points, begin, end, rt_.input_is_lean(q.input) ? fields_to_send(*q.points, begin, end, scene_) : PointFields{});
+        if (view) set_shade_view(body, *view);
         rt_.ask_input(
-            q.input, wire::Op::shade,
-            encode_shade_request(*q.points, begin, end,
-                                 rt_.input_is_lean(q.input) ? fields_to_send(*q.points, begin, end, scene_) : PointFields{}),
+            q.input, wire::Op::shade, std::move(body),
             [state, out, begin, end, input_name](Result<wire::Message> r) {
               if (!r) return state->complete_one(r.error().message);
               auto radiance = decode_radiance(r->body, end - begin);
@@ -74,12 +83,13 @@ class RemoteInputs final : public Inputs {
   Runtime& rt_;
   size_t batch_;
   const Scene& scene_;
+  ViewsInFlight& views_;
 };
 
 // A LightOp alone (no pool, or a pool of one): its all_gather is its own part; fetch asks the director.
 class DirectorExchange final : public Exchange {
  public:
-  explicit DirectorExchange(Runtime& rt) : rt_(rt) {}
+  DirectorExchange(Runtime& rt, ViewsInFlight& views) : rt_(rt), views_(views) {}
   Gather all_gather(std::string part, std::vector<std::string>* parts) override {
     return SoloExchange().all_gather(std::move(part), parts);
   }
@@ -87,6 +97,7 @@ class DirectorExchange final : public Exchange {
   Gather fetch(const std::string& key, std::string* blob) override {
     auto state = std::make_shared<GatherState>();
     state->remaining = 1;
+    state->before_resume = views_.restorer();
     rt_.ask_director(wire::Op::fetch, Value::Map{{"key", key}}, [state, blob, key](Result<wire::Message> r) {
       if (!r) return state->complete_one("fetch '" + key + "': " + r.error().message);
       Value* b = r->body.find("blob");
@@ -99,6 +110,7 @@ class DirectorExchange final : public Exchange {
 
  private:
   Runtime& rt_;
+  ViewsInFlight& views_;
 };
 
 // All-gather straight between the replicas of a pool (CONFIG pool.peers): each round, a replica sends its part to
@@ -108,13 +120,15 @@ class DirectorExchange final : public Exchange {
 // A lost peer fails the farm in the director (its share exists nowhere else); fetch still goes to the director.
 class PeerExchange final : public Exchange {
  public:
-  PeerExchange(Runtime& rt, size_t index, size_t count) : rt_(rt), index_(index), count_(count), director_(rt) {}
+  PeerExchange(Runtime& rt, size_t index, size_t count, ViewsInFlight& views)
+      : rt_(rt), index_(index), count_(count), director_(rt, views), views_(views) {}
 
   Gather all_gather(std::string part, std::vector<std::string>* parts) override {
     const uint64_t round = next_round_++;
     Round& r = round_(round);
     r.state = std::make_shared<GatherState>();
     r.state->remaining = 1;
+    r.state->before_resume = views_.restorer();
     r.out = parts;
     r.acks_left = count_ - 1;
     for (size_t k = 0; k + 1 < count_; ++k)
@@ -211,6 +225,7 @@ class PeerExchange final : public Exchange {
   Runtime& rt_;
   size_t index_, count_;
   DirectorExchange director_;
+  ViewsInFlight& views_;
   uint64_t next_round_ = 0;
   uint64_t completed_ = 0;  // every round below this one is over
   std::map<uint64_t, Round> rounds_;
@@ -236,11 +251,12 @@ class LightOpActor final : public Actor {
     if (auto taken = frame_scene_.take(config.frame_materials, "the job's first frame"); !taken) return taken.error();
     tracer_ = std::move(loaded->tracer);
     camera_ = std::make_unique<Camera>(config.camera, config.image.width, config.image.height);
+    views_ = std::make_unique<ViewsInFlight>(*camera_, config.frame);
     width_ = config.image.width;
     height_ = config.image.height;
     sampler_ = sampler_of(config.image);
     lit_samples_ = config.image.shaded_per_pixel();
-    inputs_ = std::make_unique<RemoteInputs>(rt, 4096, frame_scene_.shipped());
+    inputs_ = std::make_unique<RemoteInputs>(rt, 4096, frame_scene_.shipped(), *views_);
     if (config.pool) {
       replica_index_ = static_cast<int>(config.pool->index);
       replica_count_ = static_cast<int>(config.pool->count);
@@ -248,7 +264,7 @@ class LightOpActor final : public Actor {
     // Replicas that share their setup hold the same carried one: the first keeps it for all, and all restore it.
     carried_owner_ = config.pool && !config.pool->peers.empty() && replica_index_ > 0 ? config.pool->peers[0].name : rt.name();
     if (config.pool && !config.pool->peers.empty()) {
-      auto peers = std::make_unique<PeerExchange>(rt, static_cast<size_t>(replica_index_), static_cast<size_t>(replica_count_));
+      auto peers = std::make_unique<PeerExchange>(rt, static_cast<size_t>(replica_index_), static_cast<size_t>(replica_count_), *views_);
       peer_exchange_ = peers.get();
       exchange_ = std::move(peers);
     } else if (replica_count_ > 1 && kind_.shares_setup_for(config.params)) {
@@ -256,7 +272,7 @@ class LightOpActor final : public Actor {
                         std::to_string(replica_count_) + " without naming the others (pool.peers), with whom " +
                         std::string(kind_.name) + " shares its setup");
     } else {
-      exchange_ = std::make_unique<DirectorExchange>(rt);
+      exchange_ = std::make_unique<DirectorExchange>(rt, *views_);
     }
     // A partitioned scene: rays go to the parts' geometry actors (ops that trace through ctx.tracing do).
     tracing_ = RemoteTracing::for_config(config, rt, frame_scene_.shipped());
@@ -276,16 +292,26 @@ class LightOpActor final : public Actor {
 
   void on_frame(const FrameView& view, Runtime& rt) override {
     ++frames_;
-    *camera_ = Camera(view.camera, width_, height_);  // what ctx.camera points at, for the op's shade() too
     // New materials: every op is made and set up anew over the frame's scene, carried or not, asked for by the view
     // or not (the director never restores a kept setup there: it takes the frame of the change first).
     auto changed = frame_scene_.take(view.materials, "frame " + std::to_string(view.frame));
     if (!changed) return rt.fail(changed.error().message);
     const bool anew = *changed || view.new_materials;
     if (anew && view.restore) return rt.fail("PHASE frame restores a kept setup where the materials change");
+    if (anew && view.in_flight) return rt.fail("PHASE frame in flight where the materials change");
+    // ctx.camera shows the new view from now on, and, in flight, the last one to the requests that name its frame.
+    views_->take(view.frame, Camera(view.camera, width_, height_), view.in_flight);
+    earlier_op_ = view.in_flight ? op_ : nullptr;
     // Requests from now on (another op's new setup asking this one) wait for this op's new setup. A carried setup is
-    // extended to every view, replayed ones too.
+    // extended to every view, replayed ones too; in flight, a copy of it is, while the op answers the last frame.
     if (op_->setup_sees_camera() && op_->carries_views()) {
+      if (view.in_flight) {
+        std::unique_ptr<LightOp> fork = op_->fork_view();
+        if (!fork)
+          return rt.fail("'" + rt.name() + "' (" + std::string(kind_.name) + ") cannot answer the last frame while it carries its "
+                         "setup to the next: a job with this op renders one frame at a time");
+        op_ = std::move(fork);
+      }
       (view.restore ? restore_ : anew ? renew_ : extend_) = true, set_up_ = false;
       keep_frame_ = view.keep ? std::optional(view.frame) : std::nullopt;
     } else if (anew || (op_->setup_sees_camera() && view.renew)) {
@@ -314,18 +340,25 @@ class LightOpActor final : public Actor {
       rt.reply_error(peer, m.header.id, ErrorCode::bad_request, fold.error().message);
       return;
     }
+    auto view = decode_shade_view(m.body);
+    if (!view) {
+      rt.reply_error(peer, m.header.id, ErrorCode::bad_request, view.error().message);
+      return;
+    }
     auto job = std::make_unique<Job>();
     job->peer = peer;
     job->id = m.header.id;
     job->points = std::move(*points);
     job->fold = std::move(*fold);
+    job->view = *view;
     waiting_.push_back(std::move(job));
   }
 
   void on_progress(Runtime& rt) override {
     // PHASE setup after PHASE frame: a new op for the view, once the last one has answered what it started
     // (nothing, between frames).
-    if ((renew_ || extend_ || restore_) && setup_asked_ && running_.empty()) {
+    // In flight, requests still running answer the last frame with the op they hold: the new one need not wait.
+    if ((renew_ || extend_ || restore_) && setup_asked_ && (running_.empty() || earlier_op_)) {
       if (renew_) op_ = create_lightop(kind_, ParamTable(params_, "lightop '" + rt.name() + "'"));
       if (restore_) setup_ = restore_setup("setup/" + carried_owner_), setup_running_ = true;
       else start_setup(rt, extend_);
@@ -344,13 +377,17 @@ class LightOpActor final : public Actor {
       keep_frame_.reset();
       rt.phase_done(wire::Phase::setup);
     }
-    if (!set_up_) return;
-    // Start one waiting request per turn; the loop polls sockets between requests.
-    if (!waiting_.empty() && running_.size() < kMaxRunning) {
-      auto job = std::move(waiting_.front());
-      waiting_.pop_front();
+    // Start one waiting request per turn (the loop polls sockets between requests): the oldest that can start, which
+    // is any for the last frame's view in flight, and one for the latest view once it is set up.
+    const auto startable = std::find_if(waiting_.begin(), waiting_.end(), [this](const auto& j) { return can_start(*j); });
+    if (startable != waiting_.end() && running_.size() < kMaxRunning) {
+      auto job = std::move(*startable);
+      waiting_.erase(startable);
       job->radiance.assign(job->points.size(), RGB{});
-      job->task = op_->shade(job->points, job->radiance, *inputs_);
+      // Which view is the earlier is decided now: a request that came before PHASE frame may be for it now.
+      job->op = views_->is_earlier(job->view) ? earlier_op_ : op_;
+      views_->enter(job->view);
+      job->task = job->op->shade(job->points, job->radiance, *inputs_);
       running_.push_back(std::move(job));
     }
     for (size_t i = 0; i < running_.size();) {
@@ -379,7 +416,9 @@ class LightOpActor final : public Actor {
   }
 
   size_t queue_length() const override { return waiting_.size(); }
-  bool has_local_work() const override { return set_up_ && !waiting_.empty(); }
+  bool has_local_work() const override {
+    return std::any_of(waiting_.begin(), waiting_.end(), [this](const auto& j) { return can_start(*j); });
+  }
   // The op's own figures (cache hits, photons, ...) under STATS "detail"; in a job of several frames, how many
   // frames, setups and extensions to a view there were (the op's figures are then the last setup's).
   Value extra_stats() const override {
@@ -403,6 +442,7 @@ class LightOpActor final : public Actor {
   // setup once it finishes.
   void start_setup(Runtime& rt, bool extend = false) {
     SceneContext ctx{&scene(), tracer_.get(), replica_index_, replica_count_, exchange_.get()};
+    views_->enter_latest();
     ctx.camera = camera_.get();
     ctx.width = width_;
     ctx.height = height_;
@@ -441,19 +481,26 @@ class LightOpActor final : public Actor {
     ShadingPoints points;
     std::vector<RGB> radiance;
     std::optional<PixelFold> fold;  // the asker wants the radiance summed by pixel
+    std::optional<int> view;        // the frame whose view it names (none: the latest)
+    std::shared_ptr<LightOp> op;    // the op it runs on: the latest, or the last frame's
     Task task;
   };
+  // A request for the last frame's view, still rendering (frames in flight), may start at once; one for the latest
+  // once it is set up.
+  bool can_start(const Job& job) const { return views_->is_earlier(job.view) ? earlier_op_ != nullptr : set_up_; }
   static constexpr size_t kMaxRunning = 16;
 
   const LightOpKind& kind_;
   Value::Map params_;  // the op's parameters, for a new op each frame whose setup depends on the view
-  std::unique_ptr<LightOp> op_;
+  std::shared_ptr<LightOp> op_;
+  std::shared_ptr<LightOp> earlier_op_;  // frames in flight: the op as it answers the last frame's requests
   FrameScene frame_scene_;  // the shipped scene and the frame's, if it changes materials
   const Scene& scene() const { return *frame_scene_.scene(); }  // the frame's: what the op sees
   std::shared_ptr<const RayTracer> tracer_;
   SamplerKind sampler_ = SamplerKind::independent;
   int lit_samples_ = 0;
-  std::unique_ptr<Camera> camera_;
+  std::unique_ptr<Camera> camera_;  // what ctx.camera points at: the view of the code that runs (views_)
+  std::unique_ptr<ViewsInFlight> views_;
   int width_ = 0, height_ = 0;
   std::unique_ptr<RemoteInputs> inputs_;
   std::unique_ptr<Exchange> exchange_;

@@ -264,7 +264,7 @@ void Runtime::handle_control(wire::Message& m, Actor& actor) {
         actor.on_frame(FrameView{frame->frame, frame->camera,
                                  !renew || std::find(renew->begin(), renew->end(), args_.name) != renew->end(),
                                  frame->keep, frame->restore, std::move(frame->materials),
-                                 frame->new_materials},
+                                 frame->new_materials, frame->in_flight},
                        *this);
       } else {
         actor.on_phase(*phase, *this);

@@ -82,6 +82,9 @@ struct FrameView {
   // whatever it set up over the scene, renew or not, as a farm of this frame alone would (a resumed run that skips
   // frames gets this at the change it skipped to, taken before the frame it renders).
   bool new_materials = false;
+  // A job's frames in flight: the frame before, this number, is still rendering. Its requests (those that name it as
+  // their view) are answered as they would have been, while this view is set up; this view's wait for that setup.
+  std::optional<int> in_flight;
 };
 
 class Actor {

@@ -57,6 +57,7 @@ class DirectLight final : public LightOp {
     ctx_ = ctx;
     co_await selection_.extend(ctx, selection_options_, "direct");
   }
+  std::unique_ptr<LightOp> fork_view() const override { return std::make_unique<DirectLight>(*this); }
   std::string carried_state() const override { return selection_.state(); }
   void restore_carried(std::string_view state) override {
     selection_.restore(state, *ctx_.scene, "direct");

@@ -83,6 +83,11 @@ class Irradiance final : public LightOp {
     ctx_ = ctx;
     co_await place_seen(ctx, inputs);
   }
+  std::unique_ptr<LightOp> fork_view() const override {
+    auto copy = std::make_unique<Irradiance>(*this);
+    if (cache_) copy->cache_ = std::make_shared<IrradianceCache>(*cache_);  // the copy's records are its own
+    return copy;
+  }
   // What a job's record keeps of the carried cache: its records in insertion order (lookups visit them in that order,
   // so inserting them again gives the same answers), after a tag and the record's size.
   std::string carried_state() const override {
@@ -516,7 +521,7 @@ class Irradiance final : public LightOp {
   uint64_t seed_;
   float extent_ = 1;
   SceneContext ctx_;
-  std::unique_ptr<IrradianceCache> cache_;
+  std::shared_ptr<IrradianceCache> cache_;  // shared only between fork_view() and the copy's first insert
 };
 
 }  // namespace

@@ -547,3 +547,60 @@ TEST(Irradiance, ARestoredCarriedCacheAnswersAsTheExtendedOne) {
 
 }  // namespace
 }  // namespace lf
+
+namespace lf {
+
+// A job's frames in flight: the op that answers frame k's last requests is forked (fork_view) and the copy is
+// extended to frame k+1's view meanwhile. The original must answer exactly as before the fork, and the copy exactly
+// as an op extended in place. Every carried op: the camera-placed cache, and learned lights in direct and pathtrace.
+TEST(Irradiance, AForkedOpExtendsToTheNextViewWhileTheOriginalAnswersAsBefore) {
+  auto scene = Scene::builtin("room");
+  RayTracer tracer(*scene);
+  const int w = 64, h = 48;
+  Camera first(CameraSpec{{3.0, 1.55, 0.25}, {2.7, 0.9, 4.0}, {0, 1, 0}, 62}, w, h);
+  Camera second(CameraSpec{{1.0, 1.2, 3.5}, {4.0, 0.8, 1.0}, {0, 1, 0}, 62}, w, h);
+  SceneContext ctx{&*scene, &tracer};
+  ctx.width = w, ctx.height = h, ctx.camera = &first;
+  ImageSpec image;
+  image.width = w, image.height = h, image.spp = 1;
+  TileWork seen_first, seen_second;
+  trace_tile(*scene, tracer, first, image, TileRect{0, 0, w, h}, seen_first);
+  trace_tile(*scene, tracer, second, image, TileRect{0, 0, w, h}, seen_second);
+  LocalInputs none;
+  for (const char* kind : {"irradiance", "direct", "pathtrace"}) {
+    SCOPED_TRACE(kind);
+    const Value::Map params = std::string(kind) == "irradiance" ? Value::Map{{"own_rays", 4}}
+                                                                : Value::Map{{"light_sampling", "learned"}};
+    auto direct = make("direct");
+    ctx.camera = &first;
+    run_to_completion(direct->setup(ctx, none));
+    LocalInputs to_direct({{direct.get(), &none}});
+    auto op = make(kind, params), in_place = make(kind, params);
+    ASSERT_TRUE(op->carries_views());
+    run_to_completion(op->setup(ctx, to_direct));
+    run_to_completion(in_place->setup(ctx, to_direct));
+    std::vector<RGB> before(seen_first.points.size()), after(seen_first.points.size());
+    run_to_completion(op->shade(seen_first.points, before, to_direct));
+
+    auto fork = op->fork_view();
+    ASSERT_NE(fork, nullptr);
+    const std::string kept = op->carried_state();
+    ctx.camera = &second;
+    run_to_completion(fork->extend_to_view(ctx, to_direct));
+    run_to_completion(in_place->extend_to_view(ctx, to_direct));
+    EXPECT_NE(fork->carried_state(), kept) << "the second view added nothing: the test shows nothing";
+    EXPECT_EQ(op->carried_state(), kept) << "extending the fork changed the original";
+    ctx.camera = &first;
+    run_to_completion(op->shade(seen_first.points, after, to_direct));
+    EXPECT_TRUE(before == after) << "the original answers its view differently after the fork was extended";
+
+    std::vector<RGB> a(seen_second.points.size()), b(seen_second.points.size());
+    ctx.camera = &second;
+    run_to_completion(fork->shade(seen_second.points, a, to_direct));
+    run_to_completion(in_place->shade(seen_second.points, b, to_direct));
+    EXPECT_TRUE(a == b) << "the fork answers the next view differently from an op extended in place";
+    EXPECT_EQ(fork->carried_state(), in_place->carried_state());
+  }
+}
+
+}  // namespace lf

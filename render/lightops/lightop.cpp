@@ -61,6 +61,7 @@ void GatherState::complete_one(std::string failure) {
   if (!failure.empty() && error.empty()) error = std::move(failure);
   if (remaining > 0 && --remaining == 0 && waiter) {
     auto h = std::exchange(waiter, {});
+    if (before_resume) before_resume();
     h.resume();
   }
 }

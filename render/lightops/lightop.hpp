@@ -138,6 +138,9 @@ struct GatherState {
   size_t remaining = 0;
   std::string error;                 // first failure, if any
   std::coroutine_handle<> waiter;    // resumed when remaining reaches 0
+  // Called just before the waiter resumes: the runtime gives the coroutine back what it saw when it began waiting
+  // (the view of a job's frame it shades, while another frame's requests ran meanwhile).
+  std::function<void()> before_resume;
   void complete_one(std::string failure = {});
 };
 
@@ -252,6 +255,10 @@ class LightOp {
     (void)ctx, (void)inputs;
     co_return;
   }
+  // A copy of this op as it stands, for a job's frames in flight: the copy is extended to the next view while this
+  // one goes on answering the last view's requests, unchanged. nullptr: the op cannot be copied, and the job's frames
+  // then go one at a time.
+  virtual std::unique_ptr<LightOp> fork_view() const { return nullptr; }
   // A carried setup as bytes, kept in a job's record after each view, so that a run resuming the job restores it
   // (restore_carried) instead of replaying the views before its first frame. Empty: nothing to keep (the farm
   // then replays).

@@ -64,6 +64,12 @@ class PathTrace final : public LightOp {
     ctx_ = ctx;
     co_await selection_.extend(ctx, selection_options_, "pathtrace");
   }
+  std::unique_ptr<LightOp> fork_view() const override {
+    if (use_cache_) return nullptr;
+    auto copy = std::make_unique<PathTrace>(*this);
+    if (options_.light_selection) copy->options_.light_selection = &copy->selection_;  // its own, not this one's
+    return copy;
+  }
   std::string carried_state() const override { return selection_.state(); }
   void restore_carried(std::string_view state) override {
     selection_.restore(state, *ctx_.scene, "pathtrace");
@@ -152,7 +158,7 @@ class PathTrace final : public LightOp {
   LightSelection selection_;
   DirectionalCacheOptions cache_options_;
   int fill_spp_ = 4, fill_stride_ = 2;
-  std::unique_ptr<DirectionalCache> cache_;
+  std::shared_ptr<DirectionalCache> cache_;  // a copy (fork_view) has none: a cache is never carried
 };
 
 }  // namespace
