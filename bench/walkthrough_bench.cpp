@@ -9,6 +9,9 @@
 //   - the job's time per frame after the first against its first frame's (goal: <= 0.5), median and spread;
 //   - the share of the machine's CPU time the job left idle (actors' and director's CPU-seconds against wall time
 //     times the CPUs it may use), and the same for the separate runs;
+//   - the job with frames in flight (the default) against the same job one frame at a time (--set in_flight=0), in
+//     turn, --runs times: the wall time and idle share of each, the ratio of the two times, and whether every frame
+//     of the two is the same bit for bit;
 //   - the first frame's time is the setup stage and its render; a later frame's, PHASE frame to its image written;
 //   - whether each sampled frame of the job equals its separate run bit for bit (it does where no setup the job
 //     keeps asked an op that sees the camera: the network's path tracer does not learn from the view);
@@ -24,7 +27,7 @@
 //     one's error changed.
 //
 //   build/bench/walkthrough_bench [--frames N] [--separate K] [--lighting network|direct] [--width W --height H]
-//                                 [--spp S] [--reference-spp S] [--cache DIR] [--json FILE]
+//                                 [--spp S] [--reference-spp S] [--cache DIR] [--runs R] [--json FILE]
 #include <sched.h>
 
 #include <algorithm>
@@ -43,6 +46,7 @@ struct Args {
   std::string lighting = "network";
   int width = 320, height = 240, spp = 16;
   int reference_spp = 1024;
+  int runs = 1;
   std::string cache = (bench::fs::temp_directory_path() / "lightfarm-walkthrough-references").string();
   std::string json = "bench-walkthrough.json";
 };
@@ -60,6 +64,7 @@ Args parse(int argc, char** argv) {
     else if (k == "--json") a.json = v;
     else if (k == "--reference-spp") a.reference_spp = std::atoi(v.c_str());
     else if (k == "--cache") a.cache = v;
+    else if (k == "--runs") a.runs = std::max(1, std::atoi(v.c_str()));
   }
   a.separate = std::min(a.separate, a.frames);
   return a;
@@ -95,8 +100,33 @@ int main(int argc, char** argv) {
                                       "frames=" + std::to_string(args.frames)};
   const int cpus = cpu_count();
 
-  // The job, one farm.
+  // The job, one farm, with frames in flight; and, in turn, the same job one frame at a time.
   const auto job = bench::run_farm(script, look, (dir / "walk.####.exr").string());
+  std::vector<double> flying_seconds, one_seconds, flying_idle, one_idle, ratios;
+  int same_frames = 0;
+  for (int r = 0; r < args.runs; ++r) {
+    const std::string fly_dir = (dir / ("fly" + std::to_string(r))).string(), one_dir = (dir / ("one" + std::to_string(r))).string();
+    bench::fs::create_directories(fly_dir);
+    bench::fs::create_directories(one_dir);
+    std::vector<std::string> one_at_a_time = look;
+    one_at_a_time.push_back("in_flight=0");
+    const auto one = bench::run_farm(script, one_at_a_time, one_dir + "/walk.####.exr");
+    const auto fly = r == 0 ? job : bench::run_farm(script, look, fly_dir + "/walk.####.exr");
+    flying_seconds.push_back(fly.wall_seconds), one_seconds.push_back(one.wall_seconds);
+    flying_idle.push_back(1 - fly.cpu_seconds / (fly.wall_seconds * cpus));
+    one_idle.push_back(1 - one.cpu_seconds / (one.wall_seconds * cpus));
+    ratios.push_back(fly.wall_seconds / one.wall_seconds);
+    if (r > 0) continue;
+    for (int k = 1; k <= args.frames; ++k) same_frames += same_pixels(frame_file(dir.string(), k), frame_file(one_dir, k));
+  }
+  const auto ratio_spread = bench::spread(ratios);
+  std::printf("frames in flight against one at a time (%d run%s, in turn):\n", args.runs, args.runs == 1 ? "" : "s");
+  for (int r = 0; r < args.runs; ++r)
+    std::printf("  run %d: in flight %.1f s (%.1f%% idle), one at a time %.1f s (%.1f%% idle), ratio %.3f\n", r + 1,
+                flying_seconds[r], 100 * flying_idle[r], one_seconds[r], 100 * one_idle[r], ratios[r]);
+  std::printf("  time in flight / one at a time: median %.3f (%.3f-%.3f); %d of %d frames identical\n",
+              ratio_spread.median, ratio_spread.min, ratio_spread.max, same_frames, args.frames);
+  std::fflush(stdout);
   const auto frame_seconds = bench::json_numbers(job.stats, "seconds");  // the job's frames, in order
   std::vector<double> later(frame_seconds.begin() + (frame_seconds.empty() ? 0 : 1), frame_seconds.end());
   // The first frame's setup is the setup stage; a later frame's (what depends on the view) is in its own seconds.
@@ -224,7 +254,11 @@ int main(int argc, char** argv) {
   std::ofstream(args.json) << "{\n  \"frames\": " << args.frames << ", \"lighting\": \"" << args.lighting
                            << "\", \"width\": " << args.width << ", \"height\": " << args.height << ", \"spp\": " << args.spp
                            << ",\n  \"job_seconds\": " << job.wall_seconds << ", \"job_cpu_seconds\": " << job.cpu_seconds
-                           << ", \"job_idle_share\": " << job_idle << ",\n  \"first_frame_seconds\": " << first
+                           << ", \"job_idle_share\": " << job_idle << ",\n  \"in_flight_over_one_at_a_time\": {\"median\": "
+                           << ratio_spread.median << ", \"min\": " << ratio_spread.min << ", \"max\": " << ratio_spread.max
+                           << ", \"runs\": " << args.runs << ", \"one_at_a_time_idle_share\": " << bench::spread(one_idle).median
+                           << ", \"in_flight_idle_share\": " << bench::spread(flying_idle).median
+                           << ", \"identical_frames\": " << same_frames << "},\n  \"first_frame_seconds\": " << first
                            << ", \"later_frame_seconds\": {\"median\": " << later_spread.median << ", \"min\": "
                            << later_spread.min << ", \"max\": " << later_spread.max << "},\n  \"separate_mean_seconds\": "
                            << mean_separate << ", \"separate_sampled\": " << args.separate

@@ -41,7 +41,8 @@ material "Torch" { emission = {9, 9, 6}, kd = {0, 0, 0} }
 camera   { eye = {-5, 18, -30}, at = {5, 12, 5}, fov = 70 }
 -- --set frames=N: a walkthrough of N frames (outputs lost_empire.####.png): the eye walks in from the opening view and
 -- turns, along a smooth path a Lua function of the frame gives; --set frame=K renders frame K of it alone (a job
--- of that one frame, to lost_empire.png).
+-- of that one frame, to lost_empire.png). --set in_flight=0: one frame at a time (frames { in_flight }; the same
+-- images, without the next frame beginning while the last one's final tiles render).
 local walk, at_frame = param("frames", 0), param("frame", 0)
 local function walk_view(f)
   local t = walk > 1 and (f - 1) / (walk - 1) or 0
@@ -49,7 +50,8 @@ local function walk_view(f)
   return { eye = {-5 + 8 * s, 18 - s, -30 + 14 * s}, at = {5 + 7 * s, 12, 5 + 9 * s} }
 end
 if walk > 0 then
-  frames { first = at_frame > 0 and at_frame or 1, last = at_frame > 0 and at_frame or walk, camera = walk_view }
+  frames { first = at_frame > 0 and at_frame or 1, last = at_frame > 0 and at_frame or walk, camera = walk_view,
+           in_flight = param("in_flight", 1) == 1 }
 end
 -- shade_spp: of the spp camera samples per pixel, how many the lighting shades; the others only see the torches'
 -- flames, whose sub-pixel shapes need many camera samples but no light (docs/lua-api.md, image).
