@@ -412,7 +412,8 @@ renderers { count = 2, lighting = lightop "direct" {} }
 // --preview-every: while a frame renders its partial image (finished tiles, the rest black) is beside the output;
 // it goes once the frame is written.
 TEST_F(JobTest, APreviewShowsTheFrameWhileItRenders) {
-  Farm farm({"run", script, "--set", "out=" + path("p.####.exr"), "--set", "last=1", "--set", "spp=256", "--set", "tile=8",
+  // 25 tiles over several seconds: a preview a twentieth of a second apart catches some landed and some not.
+  Farm farm({"run", script, "--set", "out=" + path("p.####.exr"), "--set", "last=1", "--set", "spp=64", "--set", "tile=8",
              "--checkpoint-every", "0", "--preview-every", "0.05"});
   const std::string preview = path("p.0001.preview.exr");
   std::optional<Image> seen;
