@@ -19,6 +19,7 @@
 #include <deque>
 
 #include "actors/codecs/shade_codec.hpp"
+#include "actors/kinds/renderer_views.hpp"
 #include "actors/kinds/tile_plan.hpp"
 #include "actors/runtime/frame_scene.hpp"
 #include "actors/runtime/lean_points.hpp"
@@ -52,8 +53,7 @@ class RendererActor final : public Actor {
     tracer_ = std::move(loaded->tracer);
     image_ = config.image;
     sampler_ = sampler_of(image_);
-    const Camera camera(config.camera, image_.width, image_.height);
-    latest_ = std::make_shared<const View>(View{camera, emitter_edges(scene(), camera, image_), config.frame});
+    views_.take(scene(), config.camera, image_, config.frame, false);
     tracing_ = RemoteTracing::for_config(config, rt, frame_scene_.shipped());
     colocate_ = tracing_ && rt.input_holds_parts(0);
     return Ok{};
@@ -85,9 +85,7 @@ class RendererActor final : public Actor {
     auto changed = frame_scene_.take(view.materials, "frame " + std::to_string(view.frame));
     if (!changed) return rt.fail(changed.error().message);
     if (*changed && view.in_flight) return rt.fail("PHASE frame in flight where the materials change");
-    earlier_ = view.in_flight ? latest_ : nullptr;
-    const Camera camera(view.camera, image_.width, image_.height);
-    latest_ = std::make_shared<const View>(View{camera, emitter_edges(scene(), camera, image_), view.frame});
+    views_.take(scene(), view.camera, image_, view.frame, view.in_flight.has_value());
     no_more_tiles_ = false;
     rt.phase_done(wire::Phase::frame);
   }
@@ -97,15 +95,9 @@ class RendererActor final : public Actor {
   }
 
  private:
-  // A frame's view: its camera, its pixels on a light's outline, and its frame's number (none outside a job).
-  struct View {
-    Camera camera;
-    EmitterEdges edges;
-    std::optional<int> frame;
-  };
   struct TileJob {
     uint64_t id = 0;
-    std::shared_ptr<const View> view;  // the frame's the tile is of
+    std::shared_ptr<const RendererView> view;  // the frame's the tile is of
     TileWork work;
     std::vector<uint32_t> sample_part;  // partition { colocate = true }: the part each camera sample's hit is in
     TilePlan plan;                      // how the points went out, and where their replies go
@@ -162,8 +154,7 @@ class RendererActor final : public Actor {
     rect.first_sample = tile.first_sample;  // a time-limited frame's pass
     auto job = std::make_shared<TileJob>();
     job->id = tile.id;
-    // A tile names its frame while two are in flight; else it is the latest frame's.
-    job->view = earlier_ && tile.frame && earlier_->frame == tile.frame ? earlier_ : latest_;
+    job->view = views_.for_tile(tile.frame);
     jobs_.push_back(job);
     if (tracing_) {
       std::erase_if(tracing_tasks_, [](const Task& t) { return t.done(); });
@@ -334,8 +325,7 @@ class RendererActor final : public Actor {
   std::unique_ptr<RemoteTracing> tracing_;        // a partitioned scene's geometry actors, or none
   bool colocate_ = false;                         // the lighting pool's replicas hold parts: send points by part
   std::vector<Task> tracing_tasks_;               // tiles whose camera rays are out at the parts (finished ones kept until the next tile)
-  std::shared_ptr<const View> latest_;   // the latest PHASE frame's view (CONFIG's before any)
-  std::shared_ptr<const View> earlier_;  // in flight: the last frame's, for its tiles still to come
+  RendererViews views_;
   ImageSpec image_;
   SamplerKind sampler_ = SamplerKind::independent;
   RendererParams params_;

@@ -521,7 +521,7 @@ class Irradiance final : public LightOp {
   uint64_t seed_;
   float extent_ = 1;
   SceneContext ctx_;
-  std::shared_ptr<IrradianceCache> cache_;  // shared only between fork_view() and the copy's first insert
+  std::shared_ptr<IrradianceCache> cache_;  // copyable with the op; fork_view() gives the copy a cache of its own
 };
 
 }  // namespace
