@@ -208,6 +208,7 @@ void FrameLoop::run(const FrameStages& stages) {
   bool began = false;      // left_[i] began in flight, beside the frame before
   bool rendering = false;  // PHASE render is out, and the renderers have not all answered READY render
   const auto start = Clock::now();
+  auto tiles_began = start;  // when the frame under way began to hand out its tiles
   for (size_t i = 0; i < left_.size(); ++i) {
     const Left& f = left_[i];
     if (!began) {
@@ -229,19 +230,29 @@ void FrameLoop::run(const FrameStages& stages) {
       if (f.index != holds && !restored) switch_view(f.frame, false, stages.run_phase, change == f.index && change > 0);
       holds = f.index;
     }
-    if (!rendering) stages.run_phase(wire::Phase::render, {}), rendering = true;
+    if (!rendering) stages.run_phase(wire::Phase::render, {}), rendering = true, tiles_began = Clock::now();
     began = two_in_flight_ = flies(i);
     begun_in_flight_ += began;
     tiles_.expect_next_frame(began);
     if (began) {
-      // Once every tile of this frame is out, the next frame's view goes out, set up while this one's last tiles
-      // render; then its tiles. This frame is written when its last tile is in.
-      stages.render_until([this] { return tiles_.all_handed_out(); });
+      // The next frame's view goes out while this one's last tiles still keep the farm busy (NextViewTiming); then
+      // its tiles, after any of this frame's still to hand out. This frame is written when its last tile is in.
+      const size_t total = tiles_.tiles_total();
+      stages.render_until([&] {
+        const size_t left = tiles_.tiles_unassigned();
+        return next_view_.due(left, total - left, std::chrono::duration<double>(Clock::now() - tiles_began).count());
+      });
+      const size_t left_at_switch = tiles_.tiles_unassigned();
+      const auto switch_start = Clock::now();
       const Left& next = left_[i + 1];
       switch_view(next.frame, false, stages.run_phase, false, f.frame.number);
       stages.run_phase(wire::Phase::render, {});  // every actor has PHASE render for each frame, and answers it
+      next_view_.switched(std::chrono::duration<double>(Clock::now() - switch_start).count());
+      log_debug("frame " + std::to_string(next.frame.number) + " began with " + std::to_string(left_at_switch) +
+                " tiles of frame " + std::to_string(f.frame.number) + " to hand out");
       tiles_.begin_frame(next.frame.output, next.key, options_.checkpoint_every, options_.restart, 0, frame_number(next),
                          /*in_flight=*/true);
+      tiles_began = Clock::now();
       tiles_.serve(out_);
       holds = next.index;
       stages.render_until([this] { return tiles_.earlier_finished(); });

@@ -11,8 +11,8 @@
 // renders. Each frame is written as soon as it is complete and recorded in the job's record (JobRecord),
 // which a later run of the same job reads to skip the frames done; the frame in progress resumes from its film
 // checkpoint (FilmCheckpoint).
-// Frames in flight: once every tile of frame k is out, frame k+1's view goes out (PHASE frame with in_flight = k,
-// and setup) and its tiles follow, while k's last tiles still render; k is written when its last tile lands. The
+// Frames in flight: while frame k's last tiles are out (NextViewTiming), frame k+1's view goes out (PHASE frame
+// with in_flight = k, and setup) and its tiles follow k's, while k's last tiles still render; k is written when its last tile lands. The
 // actors answer k's requests as before meanwhile (each request names its frame), so the images are those of one
 // frame at a time. Where the farm cannot (see flies()), the frames go one at a time.
 #include <chrono>
@@ -25,6 +25,7 @@
 #include "actors/director/director.hpp"
 #include "actors/director/exchange_service.hpp"
 #include "actors/director/job_record.hpp"
+#include "actors/director/next_view_timing.hpp"
 #include "actors/director/report.hpp"
 #include "actors/director/tile_service.hpp"
 #include "farm/farm_spec.hpp"
@@ -90,6 +91,7 @@ class FrameLoop {
   // A frame's image is complete and written: its figures, its line, the job's record.
   void written(const Left& f, double seconds);
   bool flyable_ = false;
+  NextViewTiming next_view_;
   bool two_in_flight_ = false;  // the next frame began beside the one not yet written
   size_t begun_in_flight_ = 0;  // frames that began beside the one before
   // The number each tile and request names a job's frame by (none for a farm of one frame).

@@ -56,7 +56,7 @@ class TileService final : public Service {
   // A job's next frame will begin in flight: a tile request this frame cannot serve waits for it, even once every
   // tile is done (renderers are not told that no tile is left).
   void expect_next_frame(bool coming) { next_frame_coming_ = coming; }
-  // Every tile of the frame is out or done: the next frame may begin in flight.
+  // Every tile of the frame is out or done.
   bool all_handed_out() const { return master_.unassigned() == 0; }
   // The frame that went on beside the latest (begin_frame in_flight): whether every tile is in, and its image
   // written (then it is gone).
@@ -80,6 +80,7 @@ class TileService final : public Service {
   int passes() const { return passes_; }
   size_t tiles_done() const { return master_.done(); }
   size_t tiles_total() const { return master_.total(); }
+  size_t tiles_unassigned() const { return master_.unassigned(); }
   // Seconds from the render phase's start to the first finished tile, and to now.
   double first_tile_seconds() const { return first_tile_seconds_; }
   double render_seconds() const;

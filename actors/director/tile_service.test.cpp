@@ -9,6 +9,7 @@
 #include <thread>
 
 #include "actors/codecs/control_codec.hpp"
+#include "actors/director/next_view_timing.hpp"
 #include "actors/director/service_test_support.hpp"
 
 namespace lf {
@@ -382,6 +383,65 @@ TEST(TileService, TheNextFrameBeginsWhileTheLastTilesOfOneAreOut) {
   EXPECT_TRUE(s.finished());
   for (const RGB& p : s.film().pixels) EXPECT_EQ(p, (RGB{3, 3, 3}));
   EXPECT_EQ(ask("r0").find("tile"), nullptr) << "the job's last frame done: no tile left";
+}
+
+// The next frame may begin while some of this frame's tiles are not yet handed out (NextViewTiming sends its view
+// early): those still go out first, each to be rendered as a tile of its own frame, and then the new frame's.
+TEST(TileService, AFrameBegunEarlyHandsOutTheTilesLeftOfTheOneBeforeFirst) {
+  const std::string dir = ::testing::TempDir();
+  TileService s(image(64, 16, 16), {"r0"}, false, true);  // four tiles a frame
+  RecordingOutbox out;
+  s.begin_frame(dir + "/early.0001.exr", "k1", 0, false, 0, 1);
+  s.expect_next_frame(true);
+  ASSERT_TRUE(s.on_phase(wire::Phase::render, out).ok());
+  uint64_t req = 1;
+  auto ask = [&] {
+    EXPECT_TRUE(s.on_request("r0", Op::tile, req++, Value::Map{}, out).ok());
+    auto sent = out.take();
+    EXPECT_EQ(sent.size(), 1u);
+    return sent.empty() ? Value() : sent[0].body;
+  };
+  auto frame_of = [](const Value& tile) { return tile.find("tile")->find("frame")->as_int(); };
+  std::vector<Value> given{ask()};
+  EXPECT_EQ(s.tiles_unassigned(), 3u);
+  s.begin_frame(dir + "/early.0002.exr", "k2", 0, false, 0, 2, /*in_flight=*/true);
+  EXPECT_EQ(s.tiles_unassigned(), 4u) << "the new frame's";
+  for (int i = 0; i < 7; ++i) given.push_back(ask());
+  std::vector<int> frames;
+  std::set<int64_t> ids;
+  for (const Value& t : given) {
+    ASSERT_TRUE(t.find("tile"));
+    frames.push_back(static_cast<int>(frame_of(t)));
+    ids.insert(t.find("tile")->find("id")->as_int());
+  }
+  EXPECT_EQ(frames, (std::vector<int>{1, 1, 1, 1, 2, 2, 2, 2}));
+  EXPECT_EQ(ids.size(), 8u) << "each tile of the two frames once";
+  for (const Value& t : given)
+    ASSERT_TRUE(s.on_request("r0", Op::tile_done, req++,
+                             Value::Map{{"id", t.find("tile")->find("id")->as_int()}, {"pixels", pixels_for(t, static_cast<float>(frame_of(t)))}},
+                             out)
+                    .ok());
+  for (const auto& m : out.take()) EXPECT_FALSE(m.refused) << m.message;
+  EXPECT_TRUE(s.earlier_finished());
+  ASSERT_TRUE(s.write_earlier().ok());
+  auto one = read_image(dir + "/early.0001.exr");
+  ASSERT_TRUE(one.ok()) << one.error().message;
+  for (const RGB& p : one->pixels) EXPECT_EQ(p, (RGB{1, 1, 1}));
+  EXPECT_TRUE(s.finished());
+  for (const RGB& p : s.film().pixels) EXPECT_EQ(p, (RGB{2, 2, 2}));
+}
+
+// The next view goes out once the tiles left take the renderers as long as the last switch took, at this frame's
+// rate; never before a switch has been timed, always once every tile is out.
+TEST(NextViewTiming, TheViewGoesOutWhenTheTilesLeftLastAsLongAsTheLastSwitch) {
+  NextViewTiming t;
+  EXPECT_FALSE(t.due(10, 70, 3.5)) << "the job's first switch: nothing to go by";
+  EXPECT_TRUE(t.due(0, 80, 4.0));
+  t.switched(0.5);  // 20 tiles a second below: 10 tiles last 0.5 s
+  EXPECT_FALSE(t.due(11, 70, 3.5));
+  EXPECT_TRUE(t.due(10, 70, 3.5));
+  EXPECT_FALSE(t.due(10, 0, 0.0)) << "no rate yet";
+  EXPECT_TRUE(t.due(0, 0, 0.0));
 }
 
 }  // namespace
