@@ -145,6 +145,9 @@ struct FarmRun {
   // started and their descendants (actors, host agents, their stand-ins, ssh clients): what the farm's actors
   // hold on this machine, shared pages counted once.
   double peak_actors_pss_bytes = 0;
+  // With `sample_cpu`: (seconds since the start, CPU-seconds of the director and every live descendant) every
+  // 100 ms, to find the CPU the farm used within a stage.
+  std::vector<std::pair<double, double>> cpu_samples;
   double number(const std::string& key) const { return json_number(stats, key); }
   double phase(const std::string& stage) const { return phase_seconds(stats, stage); }
 };
@@ -233,7 +236,7 @@ inline std::string allowed_cpus() {
 // With `cpus` ("0" or "0,1"), the farm and every process it starts run only on those CPUs (the affinity is
 // inherited).
 inline FarmRun run_farm(const std::string& script, const std::vector<std::string>& sets, const std::string& output = {},
-                        bool sample_memory = false, const std::string& cpus = {}) {
+                        bool sample_memory = false, const std::string& cpus = {}, bool sample_cpu = false) {
   const fs::path tmp = fs::temp_directory_path() / ("lightfarm-bench-" + std::to_string(::getpid()));
   fs::create_directories(tmp);
   const std::string image = output.empty() ? (tmp / "bench.exr").string() : output;
@@ -263,10 +266,12 @@ inline FarmRun run_farm(const std::string& script, const std::vector<std::string
   }
   std::atomic<bool> running{true};
   double peak_pss = 0;
+  std::vector<std::pair<double, double>> cpu_samples;
   std::thread sampler([&] {
-    while (sample_memory && running) {
-      peak_pss = std::max(peak_pss, descendants_pss_bytes(pid));
-      std::this_thread::sleep_for(std::chrono::milliseconds(50));
+    while ((sample_memory || sample_cpu) && running) {
+      if (sample_memory) peak_pss = std::max(peak_pss, descendants_pss_bytes(pid));
+      if (sample_cpu) cpu_samples.emplace_back(std::chrono::duration<double>(Clock::now() - t0).count(), tree_cpu_seconds(pid));
+      std::this_thread::sleep_for(std::chrono::milliseconds(sample_cpu ? 100 : 50));
     }
   });
   int status = 0;
@@ -275,6 +280,7 @@ inline FarmRun run_farm(const std::string& script, const std::vector<std::string
   sampler.join();
   FarmRun r;
   r.peak_actors_pss_bytes = peak_pss;
+  r.cpu_samples = std::move(cpu_samples);
   r.wall_seconds = std::chrono::duration<double>(Clock::now() - t0).count();
   struct rusage after {};
   getrusage(RUSAGE_CHILDREN, &after);

@@ -10,8 +10,9 @@
 //   - the share of the machine's CPU time the job left idle (actors' and director's CPU-seconds against wall time
 //     times the CPUs it may use), and the same for the separate runs;
 //   - the job with frames in flight (the default) against the same job one frame at a time (--set in_flight=0), in
-//     turn, --runs times: the wall time and idle share of each, the ratio of the two times, and whether every frame
-//     of the two is the same bit for bit;
+//     turn, --runs times: the wall time and idle share of each, also within the render stage alone (the goal's
+//     "idle between frames": every frame and the switches between them, without the director reading the scene
+//     before launch), the ratio of the two times, and whether every frame of the two is the same bit for bit;
 //   - the first frame's time is the setup stage and its render; a later frame's, PHASE frame to its image written;
 //   - whether each sampled frame of the job equals its separate run bit for bit (it does where no setup the job
 //     keeps asked an op that sees the camera: the network's path tracer does not learn from the view);
@@ -87,6 +88,24 @@ std::string frame_file(const std::string& dir, int k) {
   return dir + name;
 }
 
+// The share of the machine's CPU the farm left idle in its render stage: every frame's render and the switches
+// between frames, without the stages before it (the director reading the scene alone, the launch, the first
+// frame's setup). From the farm's CPU sampled every 100 ms (run_farm's sample_cpu), between the first sample in
+// the stage and the last.
+double render_stage_idle(const bench::FarmRun& run, int cpus) {
+  double start = 0;
+  for (const char* stage : {"prepare", "launch", "hello", "configure", "setup"}) start += run.phase(stage);
+  const double end = start + run.phase("render");
+  const std::pair<double, double>* from = nullptr;
+  const std::pair<double, double>* to = nullptr;
+  for (const auto& sample : run.cpu_samples) {
+    if (!from && sample.first >= start) from = &sample;
+    if (sample.first <= end) to = &sample;
+  }
+  if (!from || !to || to->first <= from->first) return 0;
+  return 1 - (to->second - from->second) / ((to->first - from->first) * cpus);
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -101,8 +120,8 @@ int main(int argc, char** argv) {
   const int cpus = cpu_count();
 
   // The job, one farm, with frames in flight; and, in turn, the same job one frame at a time.
-  const auto job = bench::run_farm(script, look, (dir / "walk.####.exr").string());
-  std::vector<double> flying_seconds, one_seconds, flying_idle, one_idle, ratios;
+  const auto job = bench::run_farm(script, look, (dir / "walk.####.exr").string(), false, {}, true);
+  std::vector<double> flying_seconds, one_seconds, flying_idle, one_idle, flying_render_idle, one_render_idle, ratios;
   int same_frames = 0;
   for (int r = 0; r < args.runs; ++r) {
     const std::string fly_dir = (dir / ("fly" + std::to_string(r))).string(), one_dir = (dir / ("one" + std::to_string(r))).string();
@@ -110,11 +129,13 @@ int main(int argc, char** argv) {
     bench::fs::create_directories(one_dir);
     std::vector<std::string> one_at_a_time = look;
     one_at_a_time.push_back("in_flight=0");
-    const auto one = bench::run_farm(script, one_at_a_time, one_dir + "/walk.####.exr");
-    const auto fly = r == 0 ? job : bench::run_farm(script, look, fly_dir + "/walk.####.exr");
+    const auto one = bench::run_farm(script, one_at_a_time, one_dir + "/walk.####.exr", false, {}, true);
+    const auto fly = r == 0 ? job : bench::run_farm(script, look, fly_dir + "/walk.####.exr", false, {}, true);
     flying_seconds.push_back(fly.wall_seconds), one_seconds.push_back(one.wall_seconds);
     flying_idle.push_back(1 - fly.cpu_seconds / (fly.wall_seconds * cpus));
     one_idle.push_back(1 - one.cpu_seconds / (one.wall_seconds * cpus));
+    flying_render_idle.push_back(render_stage_idle(fly, cpus));
+    one_render_idle.push_back(render_stage_idle(one, cpus));
     ratios.push_back(fly.wall_seconds / one.wall_seconds);
     if (r > 0) continue;
     for (int k = 1; k <= args.frames; ++k) same_frames += same_pixels(frame_file(dir.string(), k), frame_file(one_dir, k));
@@ -122,8 +143,9 @@ int main(int argc, char** argv) {
   const auto ratio_spread = bench::spread(ratios);
   std::printf("frames in flight against one at a time (%d run%s, in turn):\n", args.runs, args.runs == 1 ? "" : "s");
   for (int r = 0; r < args.runs; ++r)
-    std::printf("  run %d: in flight %.1f s (%.1f%% idle), one at a time %.1f s (%.1f%% idle), ratio %.3f\n", r + 1,
-                flying_seconds[r], 100 * flying_idle[r], one_seconds[r], 100 * one_idle[r], ratios[r]);
+    std::printf("  run %d: in flight %.1f s (%.1f%% idle; render stage %.1f%%), one at a time %.1f s (%.1f%% idle; render "
+                "stage %.1f%%), ratio %.3f\n", r + 1, flying_seconds[r], 100 * flying_idle[r], 100 * flying_render_idle[r],
+                one_seconds[r], 100 * one_idle[r], 100 * one_render_idle[r], ratios[r]);
   std::printf("  time in flight / one at a time: median %.3f (%.3f-%.3f); %d of %d frames identical\n",
               ratio_spread.median, ratio_spread.min, ratio_spread.max, same_frames, args.frames);
   std::fflush(stdout);
@@ -258,6 +280,8 @@ int main(int argc, char** argv) {
                            << ratio_spread.median << ", \"min\": " << ratio_spread.min << ", \"max\": " << ratio_spread.max
                            << ", \"runs\": " << args.runs << ", \"one_at_a_time_idle_share\": " << bench::spread(one_idle).median
                            << ", \"in_flight_idle_share\": " << bench::spread(flying_idle).median
+                           << ", \"in_flight_render_stage_idle_share\": " << bench::spread(flying_render_idle).median
+                           << ", \"one_at_a_time_render_stage_idle_share\": " << bench::spread(one_render_idle).median
                            << ", \"identical_frames\": " << same_frames << "},\n  \"first_frame_seconds\": " << first
                            << ", \"later_frame_seconds\": {\"median\": " << later_spread.median << ", \"min\": "
                            << later_spread.min << ", \"max\": " << later_spread.max << "},\n  \"separate_mean_seconds\": "
