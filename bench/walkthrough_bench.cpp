@@ -90,7 +90,7 @@ std::string frame_file(const std::string& dir, int k) {
 
 // The share of the machine's CPU the farm left idle in its render stage: every frame's render and the switches
 // between frames, without the stages before it (the director reading the scene alone, the launch, the first
-// frame's setup). From the farm's CPU sampled every 100 ms (run_farm's sample_cpu), between the first sample in
+// frame's setup). From the farm's CPU sampled every 500 ms (run_farm's sample_cpu), between the first sample in
 // the stage and the last.
 double render_stage_idle(const bench::FarmRun& run, int cpus) {
   double start = 0;
