@@ -12,9 +12,9 @@
 // which a later run of the same job reads to skip the frames done; the frame in progress resumes from its film
 // checkpoint (FilmCheckpoint).
 // Frames in flight: while frame k's last tiles are out (NextViewTiming), frame k+1's view goes out (PHASE frame
-// with in_flight = k, and setup) and its tiles follow k's, while k's last tiles still render; k is written when its last tile lands. The
-// actors answer k's requests as before meanwhile (each request names its frame), so the images are those of one
-// frame at a time. Where the farm cannot (see flies()), the frames go one at a time.
+// with in_flight = k, and setup) and its tiles follow k's, while k's last tiles still render; k is written when its
+// last tile lands. The actors answer k's requests as before meanwhile (each request names its frame), so the images
+// are those of one frame at a time. Where the farm cannot (see flies()), the frames go one at a time.
 #include <chrono>
 #include <functional>
 #include <optional>

@@ -20,7 +20,6 @@ class NextViewTiming {
     return static_cast<double>(left) <= static_cast<double>(handed_out) / seconds * last_switch_seconds_;
   }
   void switched(double seconds) { last_switch_seconds_ = seconds; }
-  double last_switch_seconds() const { return last_switch_seconds_; }
 
  private:
   double last_switch_seconds_ = 0;

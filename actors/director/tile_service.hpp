@@ -56,8 +56,6 @@ class TileService final : public Service {
   // A job's next frame will begin in flight: a tile request this frame cannot serve waits for it, even once every
   // tile is done (renderers are not told that no tile is left).
   void expect_next_frame(bool coming) { next_frame_coming_ = coming; }
-  // Every tile of the frame is out or done.
-  bool all_handed_out() const { return master_.unassigned() == 0; }
   // The frame that went on beside the latest (begin_frame in_flight): whether every tile is in, and its image
   // written (then it is gone).
   bool earlier_finished() const { return !earlier_ || earlier_->master.finished(); }
