@@ -248,6 +248,10 @@ class Scene {
   void metal_rough_at(uint32_t triangle, Vec3 b, float footprint, float& metallic, float& roughness) const;
   // Whether the surface is there at barycentrics b (false where an alpha map cuts it out).
   bool opaque(uint32_t triangle, Vec3 b) const;
+  // Whether opaque() holds at every point of the triangle: no alpha map, or every texel its bilinear lookups can
+  // reach is well above the cut. Conservative (false when unsure, e.g. a footprint of more than 4096 texels), so
+  // the tracer can leave such triangles unfiltered without changing any hit.
+  bool opaque_everywhere(uint32_t triangle) const;
   // Whether any material is cut out by an alpha map (the tracer then filters its hits).
   bool has_cutouts() const;
   // The share of a triangle's area that is not cut out (1 without an alpha map), from a fixed grid of points.

@@ -243,6 +243,32 @@ bool Scene::opaque(uint32_t t, Vec3 b) const {
   return textures_[static_cast<size_t>(m.alpha_map)].sample(at, 0) >= 0.5f;
 }
 
+bool Scene::opaque_everywhere(uint32_t t) const {
+  const Material& m = materials_[material_view_[t]];
+  if (m.alpha_map < 0 || corner_uv_view_.empty()) return true;
+  const Texture& tex = textures_[static_cast<size_t>(m.alpha_map)];
+  if (tex.width == 0 || tex.height == 0) return true;  // sample() reads 1 then
+  // The texel coordinates bilinear() computes for every point of the triangle lie within the corners' box; its
+  // lookups reach the texel below each coordinate and the next, and one more on each side covers rounding.
+  const Vec2* c = &corner_uv_view_[3 * static_cast<size_t>(t)];
+  const float w = static_cast<float>(tex.width), h = static_cast<float>(tex.height);
+  float x_lo = INFINITY, x_hi = -INFINITY, y_lo = INFINITY, y_hi = -INFINITY;
+  for (int i = 0; i < 3; ++i) {
+    const float x = c[i].u * w - 0.5f, y = (1.0f - c[i].v) * h - 0.5f;
+    // Far-off coordinates are reduced by bilinear()'s fmod, which this box does not follow.
+    if (!(std::abs(x) < 1000.0f * w) || !(std::abs(y) < 1000.0f * h)) return false;
+    x_lo = std::min(x_lo, x), x_hi = std::max(x_hi, x), y_lo = std::min(y_lo, y), y_hi = std::max(y_hi, y);
+  }
+  const auto x0 = static_cast<int64_t>(std::floor(x_lo)) - 1, x1 = static_cast<int64_t>(std::floor(x_hi)) + 2;
+  const auto y0 = static_cast<int64_t>(std::floor(y_lo)) - 1, y1 = static_cast<int64_t>(std::floor(y_hi)) + 2;
+  if ((x1 - x0 + 1) * (y1 - y0 + 1) > 4096) return false;
+  // A bilinear blend of values at or above the cut plus a margin cannot round below the cut.
+  for (int64_t y = y0; y <= y1; ++y)
+    for (int64_t x = x0; x <= x1; ++x)
+      if (!(tex.texel(x, y, 0) >= 0.5f + 1e-3f)) return false;
+  return true;
+}
+
 bool Scene::has_cutouts() const {
   if (corner_uv_view_.empty()) return false;
   return std::any_of(materials_.begin(), materials_.end(), [](const Material& m) { return m.alpha_map >= 0; });

@@ -288,6 +288,44 @@ TEST_F(SurfaceFiles, AlphaCutGeometryIsNotThereForCameraOrShadowRays) {
   }
 }
 
+// Triangles whose every reachable texel is there are known opaque, and the tracer leaves them unfiltered: a quad
+// over the map's solid half (u in 0.6-0.9) is opaque everywhere, one over its cut half (u in 0.1-0.4) is not, and
+// neither is one whose bilinear lookups reach across the cut (u in 0.45-0.9). Rays find the same hits either way.
+TEST_F(SurfaceFiles, OnlyTrianglesWhoseEveryReachableTexelIsThereAreOpaqueEverywhere) {
+  write_half_alpha((dir / "alpha.png").string());
+  write("cut.mtl", "newmtl floor\nKd 0.5 0.5 0.5\nnewmtl leaf\nKd 0.5 0.5 0.5\nmap_d alpha.png\n");
+  auto s = Scene::load_obj_unlit(write(
+      "cut.obj",
+      "mtllib cut.mtl\nv -4 0 -4\nv 4 0 -4\nv 4 0 4\nv -4 0 4\nusemtl floor\nf 1 4 3 2\n"
+      "vt 0.6 0\nvt 0.9 0\nvt 0.9 1\nvt 0.6 1\nvt 0.1 0\nvt 0.4 0\nvt 0.4 1\nvt 0.1 1\n"
+      "vt 0.45 0\nvt 0.45 1\nusemtl leaf\n"
+      "v -3 1 -1\nv -2 1 -1\nv -2 1 1\nv -3 1 1\nf 5/1 8/4 7/3 6/2\n"      // solid half of the map
+      "v -1 1 -1\nv 0 1 -1\nv 0 1 1\nv -1 1 1\nf 9/5 12/8 11/7 10/6\n"     // cut half
+      "v 1 1 -1\nv 2 1 -1\nv 2 1 1\nv 1 1 1\nf 13/9 16/10 15/3 14/2\n"));  // reaching across the cut
+  ASSERT_TRUE(s.ok()) << s.error().message;
+  s->add_point_light({0, 10, 0}, {1, 1, 1});
+  ASSERT_TRUE(s->finalize("cut").ok());
+  ASSERT_EQ(s->triangles().size(), 8u);
+  const std::vector<bool> expected{true, true, true, true, false, false, false, false};
+  for (uint32_t t = 0; t < 8; ++t) EXPECT_EQ(s->opaque_everywhere(t), expected[t]) << "triangle " << t;
+  RayTracer tracer(*s);
+  // Straight down: the solid quad stops every ray at y = 1, the cut quad none, the mixed one where u >= 0.5.
+  std::vector<Ray> down;
+  for (float x : {-2.9f, -2.1f, -0.9f, -0.1f, 1.02f, 1.5f, 1.9f}) down.push_back(Ray{{x, 5, 0.3f}, {0, -1, 0}});
+  std::vector<Hit> hits(down.size());
+  tracer.intersect(down, hits);
+  const std::vector<float> t_expected{4, 4, 5, 5, 5, 4, 4};
+  for (size_t i = 0; i < down.size(); ++i) {
+    ASSERT_TRUE(hits[i].valid()) << i;
+    EXPECT_NEAR(hits[i].t, t_expected[i], 1e-4f) << "x " << down[i].origin.x;
+    EXPECT_EQ(hits[i].triangle < 2, t_expected[i] == 5) << "x " << down[i].origin.x << ": the floor's or a quad's";
+  }
+  std::vector<uint8_t> blocked(down.size());
+  for (Ray& r : down) r.tfar = 4.5f;
+  tracer.occluded(down, blocked);
+  for (size_t i = 0; i < down.size(); ++i) EXPECT_EQ(blocked[i], t_expected[i] == 4 ? 1 : 0) << "x " << down[i].origin.x;
+}
+
 // A floor at y = 0 and, at y = 1 facing down onto it, an emitting quad over x in [-1, 1] whose left half its alpha
 // map cuts out.
 Result<Scene> load_cut_out_emitter(const fs::path& dir) {

@@ -14,7 +14,7 @@ namespace lf {
 
 namespace {
 
-// What the alpha filter needs: the scene, and which scene triangle each of Embree's primitives is.
+// Which scene triangle each of a geometry's Embree primitives is, and the scene its alpha filter asks.
 struct Primitives {
   const Scene* scene = nullptr;
   std::vector<uint32_t> subset;  // Embree's primitive i is scene triangle subset[i]; empty: the whole scene
@@ -31,13 +31,53 @@ void skip_cut_out(const RTCFilterFunctionNArguments* args) {
   }
 }
 
+// A geometry of `triangles` (scene numbering; empty: the whole scene) over the vertices `vertices` names
+// (renumbered: Embree's vertex i is scene vertex vertices[i]; empty: the scene's); each corner in its scene order, so
+// a triangle's hit is the same arithmetic whichever geometry holds it.
+RTCGeometry triangle_geometry(RTCDevice device, const Scene& scene, const std::vector<uint32_t>& triangles,
+                              const std::vector<uint32_t>& vertices, const std::vector<uint32_t>& renumbered) {
+  RTCGeometry geom = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_TRIANGLE);
+  if (vertices.empty() && scene.shares_storage()) {
+    // The scene image is mapped by every actor of this host; Embree reads it in place (padded for its loads).
+    rtcSetSharedGeometryBuffer(geom, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, scene.vertices().data(), 0,
+                               sizeof(Vec3), scene.vertices().size());
+  } else {
+    const size_t count = vertices.empty() ? scene.vertices().size() : vertices.size();
+    auto* vb = static_cast<float*>(
+        rtcSetNewGeometryBuffer(geom, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, 3 * sizeof(float), count));
+    for (size_t i = 0; i < count; ++i) {
+      const Vec3 v = scene.vertices()[vertices.empty() ? i : vertices[i]];
+      vb[3 * i] = v.x;
+      vb[3 * i + 1] = v.y;
+      vb[3 * i + 2] = v.z;
+    }
+  }
+  if (triangles.empty() && scene.shares_storage()) {
+    rtcSetSharedGeometryBuffer(geom, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, scene.triangles().data(), 0,
+                               3 * sizeof(unsigned), scene.triangles().size());
+    return geom;
+  }
+  const size_t count = triangles.empty() ? scene.triangles().size() : triangles.size();
+  auto* ib = static_cast<unsigned*>(
+      rtcSetNewGeometryBuffer(geom, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, 3 * sizeof(unsigned), count));
+  for (size_t i = 0; i < count; ++i)
+    for (int c = 0; c < 3; ++c) {
+      const uint32_t v = scene.triangles()[triangles.empty() ? i : triangles[i]][c];
+      ib[3 * i + c] = vertices.empty() ? v : renumbered[v];
+    }
+  return geom;
+}
+
 }  // namespace
 
 struct RayTracer::Impl {
   RTCDevice device = nullptr;
   RTCScene scene = nullptr;
-  Primitives prims;
+  // Per Embree geometry (its geomID): the triangles that may be cut out by an alpha map are a geometry of their
+  // own with the alpha filter; the rest, most of a scene, need no call back into the filter for each candidate hit.
+  std::vector<Primitives> geometries;
   std::unique_ptr<TiedHits> ties;  // the whole scene's; a part's tracer leaves ties to its caller
+  uint32_t triangle_of(unsigned geom, unsigned prim) const { return geometries[geom].triangle_of(prim); }
   ~Impl() {
     if (scene) rtcReleaseScene(scene);
     if (device) rtcReleaseDevice(device);
@@ -48,66 +88,48 @@ RayTracer::RayTracer(const Scene& scene) : RayTracer(scene, std::vector<uint32_t
 
 RayTracer::RayTracer(const Scene& scene, std::vector<uint32_t> triangles)
     : impl_(std::make_unique<Impl>()), scene_(scene) {
-  impl_->prims.scene = &scene;
-  impl_->prims.subset = std::move(triangles);
-  const bool whole = impl_->prims.subset.empty();
+  const bool whole = triangles.empty();
   // One thread per actor: parallelism comes from processes (and Embree's own pool would fight them for cores).
   impl_->device = rtcNewDevice("threads=1");
   if (!impl_->device) throw std::runtime_error("Embree: cannot create a device");
   impl_->scene = rtcNewScene(impl_->device);
-  RTCGeometry geom = rtcNewGeometry(impl_->device, RTC_GEOMETRY_TYPE_TRIANGLE);
-  if (whole && scene.shares_storage()) {
-    // The scene image is mapped by every actor of this host; Embree reads it in place (padded for its loads).
-    rtcSetSharedGeometryBuffer(geom, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, scene.vertices().data(), 0,
-                               sizeof(Vec3), scene.vertices().size());
-    rtcSetSharedGeometryBuffer(geom, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, scene.triangles().data(), 0,
-                               3 * sizeof(unsigned), scene.triangles().size());
-  } else if (whole) {
-    auto* vb = static_cast<float*>(rtcSetNewGeometryBuffer(geom, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3,
-                                                           3 * sizeof(float), scene.vertices().size()));
-    for (size_t i = 0; i < scene.vertices().size(); ++i) {
-      vb[3 * i] = scene.vertices()[i].x;
-      vb[3 * i + 1] = scene.vertices()[i].y;
-      vb[3 * i + 2] = scene.vertices()[i].z;
-    }
-    auto* ib = static_cast<unsigned*>(rtcSetNewGeometryBuffer(geom, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3,
-                                                              3 * sizeof(unsigned), scene.triangles().size()));
-    for (size_t i = 0; i < scene.triangles().size(); ++i)
-      for (int c = 0; c < 3; ++c) ib[3 * i + c] = scene.triangles()[i][c];
-  } else {
-    // A part: its triangles' own vertices only, renumbered, each corner in its scene order (same float values, same
-    // corners in the same order: the same intersection arithmetic as in the whole scene).
-    const auto& subset = impl_->prims.subset;
-    std::vector<uint32_t> renumbered(scene.vertices().size(), UINT32_MAX);
-    std::vector<uint32_t> used;
-    for (uint32_t t : subset)
+  // A part keeps its triangles' own vertices only (renumbered); the whole scene keeps the scene's.
+  std::vector<uint32_t> vertices, renumbered;
+  if (!whole) {
+    renumbered.assign(scene.vertices().size(), UINT32_MAX);
+    for (uint32_t t : triangles)
       for (uint32_t v : scene.triangles()[t])
         if (renumbered[v] == UINT32_MAX) {
-          renumbered[v] = static_cast<uint32_t>(used.size());
-          used.push_back(v);
+          renumbered[v] = static_cast<uint32_t>(vertices.size());
+          vertices.push_back(v);
         }
-    auto* vb = static_cast<float*>(rtcSetNewGeometryBuffer(geom, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3,
-                                                           3 * sizeof(float), used.size()));
-    for (size_t i = 0; i < used.size(); ++i) {
-      const Vec3 v = scene.vertices()[used[i]];
-      vb[3 * i] = v.x;
-      vb[3 * i + 1] = v.y;
-      vb[3 * i + 2] = v.z;
+  }
+  // Scene triangles; both empty: the whole scene, none cut out, as one geometry.
+  std::vector<uint32_t> solid, cut;
+  const bool cutouts = scene.has_cutouts();
+  if (!whole || cutouts) {
+    const size_t count = whole ? scene.triangles().size() : triangles.size();
+    for (size_t i = 0; i < count; ++i) {
+      const uint32_t t = whole ? static_cast<uint32_t>(i) : triangles[i];
+      (cutouts && !scene.opaque_everywhere(t) ? cut : solid).push_back(t);
     }
-    auto* ib = static_cast<unsigned*>(rtcSetNewGeometryBuffer(geom, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3,
-                                                              3 * sizeof(unsigned), subset.size()));
-    for (size_t i = 0; i < subset.size(); ++i)
-      for (int c = 0; c < 3; ++c) ib[3 * i + c] = renumbered[scene.triangles()[subset[i]][c]];
+    if (whole && cut.empty()) solid.clear();
   }
-  if (scene.has_cutouts()) {
-    // Alpha cut-outs: a hit where the alpha map says the surface is not there is no hit, for every kind of ray.
-    rtcSetGeometryUserData(geom, &impl_->prims);
-    rtcSetGeometryIntersectFilterFunction(geom, &skip_cut_out);
-    rtcSetGeometryOccludedFilterFunction(geom, &skip_cut_out);
+  impl_->geometries.reserve(2);  // the filters hold pointers into it
+  for (std::vector<uint32_t>* part : {&solid, &cut}) {
+    if (part->empty() && (part == &cut || !cut.empty())) continue;
+    RTCGeometry geom = triangle_geometry(impl_->device, scene, *part, vertices, renumbered);
+    impl_->geometries.push_back({&scene, std::move(*part)});
+    if (part == &cut) {
+      // Alpha cut-outs: a hit where the alpha map says the surface is not there is no hit, for every kind of ray.
+      rtcSetGeometryUserData(geom, &impl_->geometries.back());
+      rtcSetGeometryIntersectFilterFunction(geom, &skip_cut_out);
+      rtcSetGeometryOccludedFilterFunction(geom, &skip_cut_out);
+    }
+    rtcCommitGeometry(geom);
+    rtcAttachGeometryByID(impl_->scene, geom, static_cast<unsigned>(impl_->geometries.size() - 1));
+    rtcReleaseGeometry(geom);
   }
-  rtcCommitGeometry(geom);
-  rtcAttachGeometry(impl_->scene, geom);
-  rtcReleaseGeometry(geom);
   rtcCommitScene(impl_->scene);
   if (rtcGetDeviceError(impl_->device) != RTC_ERROR_NONE) throw std::runtime_error("Embree: cannot build the scene");
   if (whole) impl_->ties = std::make_unique<TiedHits>(scene);
@@ -170,7 +192,7 @@ void RayTracer::intersect_unsettled(std::span<const Ray> rays, std::span<Hit> hi
     if (buffer[i].hit.geomID == RTC_INVALID_GEOMETRY_ID) {
       hits[i] = Hit{};
     } else {
-      hits[i] = Hit{impl_->prims.triangle_of(buffer[i].hit.primID), buffer[i].ray.tfar};
+      hits[i] = Hit{impl_->triangle_of(buffer[i].hit.geomID, buffer[i].hit.primID), buffer[i].ray.tfar};
     }
   }
 }
