@@ -93,6 +93,8 @@ struct Texture {
   // Channel c at texture coordinates uv, bilinear and repeating, at level of detail `lod` (0: the full image;
   // between levels, trilinear); colour channels decoded from sRGB to linear (unless `linear`).
   float sample(Vec2 uv, uint32_t c, float lod = 0) const;
+  // Channels 0, 1 and 2, each exactly as sample() gives it, for the cost of little more than one.
+  RGB sample_rgb(Vec2 uv, float lod = 0) const;
   // Channel c of the full image's texel (x, y), repeating, decoded as sample() decodes it; y = 0 is the top row.
   float texel(int64_t x, int64_t y, uint32_t c) const;
   static uint64_t pyramid_bytes(uint32_t width, uint32_t height, uint32_t channels);

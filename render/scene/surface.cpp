@@ -79,24 +79,37 @@ void Texture::build_pyramid() {
 
 namespace {
 
-// Channel c of one level (w x h texels at `texels`), bilinear and repeating.
-float bilinear(const uint8_t* texels, uint32_t w, uint32_t h, uint32_t channels, bool linear, Vec2 uv, uint32_t c) {
+// Channels c .. c + N - 1 of one level (w x h texels at `texels`), bilinear and repeating: the texel coordinates
+// once for all of them (a colour's three lookups cost little more than one), each channel the same arithmetic.
+template <int N>
+std::array<float, N> bilinear(const uint8_t* texels, uint32_t w, uint32_t h, uint32_t channels, bool linear, Vec2 uv,
+                              uint32_t c) {
+  std::array<float, N> out{};
   // Texel centres sit at half-integers; v = 0 is the bottom row, and files store the top row first.
   const float x = uv.u * static_cast<float>(w) - 0.5f;
   const float y = (1.0f - uv.v) * static_cast<float>(h) - 0.5f;
-  if (!std::isfinite(x) || !std::isfinite(y)) return 0.0f;
+  if (!std::isfinite(x) || !std::isfinite(y)) return out;
   const float fx = std::floor(x), fy = std::floor(y);
   const float ax = x - fx, ay = y - fy;
-  // Far-off coordinates are reduced first so that the integer conversion cannot overflow.
-  const auto ix = static_cast<int64_t>(std::fmod(fx, static_cast<float>(w) * 1024.0f));
-  const auto iy = static_cast<int64_t>(std::fmod(fy, static_cast<float>(h) * 1024.0f));
+  // Far-off coordinates are reduced first so that the integer conversion cannot overflow (inside the image fmod
+  // would return them unchanged, so it is skipped there).
+  const float wide = static_cast<float>(w) * 1024.0f, high = static_cast<float>(h) * 1024.0f;
+  const auto ix = static_cast<int64_t>(fx >= 0 && fx < static_cast<float>(w) ? fx : std::fmod(fx, wide));
+  const auto iy = static_cast<int64_t>(fy >= 0 && fy < static_cast<float>(h) ? fy : std::fmod(fy, high));
   const uint32_t x0 = wrap(ix, w), x1 = wrap(ix + 1, w), y0 = wrap(iy, h), y1 = wrap(iy + 1, h);
   const bool colour = channels == 3 && !linear;
-  auto texel = [&](uint32_t tx, uint32_t ty) {
-    const uint8_t v = texels[(static_cast<size_t>(ty) * w + tx) * channels + c];
-    return colour ? srgb_to_linear()[v] : static_cast<float>(v) / 255.0f;
-  };
-  return (texel(x0, y0) * (1 - ax) + texel(x1, y0) * ax) * (1 - ay) + (texel(x0, y1) * (1 - ax) + texel(x1, y1) * ax) * ay;
+  const uint8_t* row0 = texels + static_cast<size_t>(y0) * w * channels;
+  const uint8_t* row1 = texels + static_cast<size_t>(y1) * w * channels;
+  for (int k = 0; k < N; ++k) {
+    const uint32_t ch = c + static_cast<uint32_t>(k);
+    auto texel = [&](const uint8_t* row, uint32_t tx) {
+      const uint8_t v = row[static_cast<size_t>(tx) * channels + ch];
+      return colour ? srgb_to_linear()[v] : static_cast<float>(v) / 255.0f;
+    };
+    out[k] = (texel(row0, x0) * (1 - ax) + texel(row0, x1) * ax) * (1 - ay) +
+             (texel(row1, x0) * (1 - ax) + texel(row1, x1) * ax) * ay;
+  }
+  return out;
 }
 
 }  // namespace
@@ -110,24 +123,43 @@ float Texture::texel(int64_t x, int64_t y, uint32_t c) const {
   return channels == 3 && !linear ? srgb_to_linear()[v] : static_cast<float>(v) / 255.0f;
 }
 
-float Texture::sample(Vec2 uv, uint32_t c, float lod) const {
-  if (width == 0 || height == 0 || c >= channels) return 1.0f;
-  if (!(lod > 0)) return bilinear(texels.data(), width, height, channels, linear, uv, c);
+namespace {
+
+// Channels c .. c + N - 1 at uv and `lod` (Texture::sample's arithmetic for each).
+template <int N>
+std::array<float, N> sample_channels(const Texture& tex, Vec2 uv, uint32_t c, float lod) {
+  const uint8_t* texels = tex.texels.data();
+  if (!(lod > 0)) return bilinear<N>(texels, tex.width, tex.height, tex.channels, tex.linear, uv, c);
   // Walk down to the level below `lod`, then blend it with the next.
   const int below = static_cast<int>(std::min(lod, 30.0f));
   const float blend = std::min(lod, 30.0f) - static_cast<float>(below);
-  uint32_t w = width, h = height;
+  uint32_t w = tex.width, h = tex.height;
   size_t at = 0;
   for (int l = 0; l < below && (w > 1 || h > 1); ++l) {
-    at += size_t{w} * h * channels;
+    at += size_t{w} * h * tex.channels;
     w = std::max(1u, w / 2);
     h = std::max(1u, h / 2);
   }
-  const float fine = bilinear(texels.data() + at, w, h, channels, linear, uv, c);
+  std::array<float, N> fine = bilinear<N>(texels + at, w, h, tex.channels, tex.linear, uv, c);
   if (blend <= 0 || (w == 1 && h == 1)) return fine;
-  const size_t next = at + size_t{w} * h * channels;
-  const float coarse = bilinear(texels.data() + next, std::max(1u, w / 2), std::max(1u, h / 2), channels, linear, uv, c);
-  return fine * (1 - blend) + coarse * blend;
+  const size_t next = at + size_t{w} * h * tex.channels;
+  const std::array<float, N> coarse =
+      bilinear<N>(texels + next, std::max(1u, w / 2), std::max(1u, h / 2), tex.channels, tex.linear, uv, c);
+  for (int k = 0; k < N; ++k) fine[k] = fine[k] * (1 - blend) + coarse[k] * blend;
+  return fine;
+}
+
+}  // namespace
+
+float Texture::sample(Vec2 uv, uint32_t c, float lod) const {
+  if (width == 0 || height == 0 || c >= channels) return 1.0f;
+  return sample_channels<1>(*this, uv, c, lod)[0];
+}
+
+RGB Texture::sample_rgb(Vec2 uv, float lod) const {
+  if (width == 0 || height == 0 || channels < 3) return {sample(uv, 0, lod), sample(uv, 1, lod), sample(uv, 2, lod)};
+  const std::array<float, 3> v = sample_channels<3>(*this, uv, 0, lod);
+  return {v[0], v[1], v[2]};
 }
 
 Vec3 Scene::barycentrics(uint32_t t, Vec3 p) const {
@@ -204,8 +236,8 @@ Vec3 Scene::normal_mapped(uint32_t t, Vec3 b, Vec3 n) const {
     if (dot(bitangent, dpdv) < 0) bitangent = -bitangent;
   }
   const Texture& tex = textures_[static_cast<size_t>(m.normal_map)];
-  const float x = (2 * tex.sample(at, 0) - 1) * m.normal_scale, y = (2 * tex.sample(at, 1) - 1) * m.normal_scale;
-  const float z = 2 * tex.sample(at, 2) - 1;
+  const RGB texel = tex.sample_rgb(at);
+  const float x = (2 * texel.x - 1) * m.normal_scale, y = (2 * texel.y - 1) * m.normal_scale, z = 2 * texel.z - 1;
   const Vec3 turned = tangent * x + bitangent * y + n * z;
   const float len = length(turned);
   return len > 0 && std::isfinite(len) ? turned / len : n;
@@ -232,7 +264,7 @@ RGB Scene::albedo(uint32_t t, Vec3 b, float footprint) const {
   const Vec2 at = uv(t, b);
   if (!std::isfinite(at.u) || !std::isfinite(at.v)) return m.kd;  // a face without texture coordinates
   const float lod = texture_lod(*this, t, tex, footprint);
-  return {tex.sample(at, 0, lod), tex.sample(at, 1, lod), tex.sample(at, 2, lod)};
+  return tex.sample_rgb(at, lod);
 }
 
 bool Scene::opaque(uint32_t t, Vec3 b) const {
@@ -302,14 +334,14 @@ RGB Scene::mapped_emission(uint32_t t, Vec3 b) const {
   const Vec2 at = uv(t, b);
   if (!std::isfinite(at.u) || !std::isfinite(at.v)) return m.ke;
   const Texture& tex = textures_[static_cast<size_t>(m.emission_map)];
-  return m.ke * RGB{tex.sample(at, 0), tex.sample(at, 1), tex.sample(at, 2)};
+  return m.ke * tex.sample_rgb(at);
 }
 
 RGB Scene::mean_emission(const Material& m) const {
   if (m.emission_map < 0 || !has_uvs()) return m.ke;
   // The pyramid's last level is the image's mean (levels average in linear values).
   const Texture& tex = textures_[static_cast<size_t>(m.emission_map)];
-  return m.ke * RGB{tex.sample({0.5f, 0.5f}, 0, 64), tex.sample({0.5f, 0.5f}, 1, 64), tex.sample({0.5f, 0.5f}, 2, 64)};
+  return m.ke * tex.sample_rgb({0.5f, 0.5f}, 64);
 }
 
 }  // namespace lf
