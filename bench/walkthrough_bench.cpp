@@ -5,7 +5,9 @@
 // frame 1..N. The separate runs: the same script with --set frame=K, a job of that one frame alone, for an evenly
 // spread sample of the frames (--separate, default 6: frames 1, ..., N); their mean time stands for every frame's,
 // and N times it for the N separate runs. Printed and written as JSON:
-//   - the job's wall time against the N separate runs' (goal: <= 0.4);
+//   - the job's wall time against the N separate runs' (goal: <= 0.4), per run (each run's job with frames in
+//     flight against its own separate runs, right after it: the machine's speed drifts over minutes), and the
+//     median over the runs with its spread;
 //   - the job's time per frame after the first against its first frame's (goal: <= 0.5), median and spread;
 //   - the share of the machine's CPU time the job left idle (actors' and director's CPU-seconds against wall time
 //     times the CPUs it may use), and the same for the separate runs;
@@ -119,8 +121,39 @@ int main(int argc, char** argv) {
                                       "frames=" + std::to_string(args.frames)};
   const int cpus = cpu_count();
 
-  // The job, one farm, with frames in flight; and, in turn, the same job one frame at a time.
+  // Separate runs of single frames, evenly spread over the walk: their mean wall time, their CPU-seconds and which
+  // of them equal the job's frames (files single.K.exr for run 0, singleR.K.exr after).
+  struct SeparateSample {
+    std::vector<double> seconds;
+    std::vector<int> frames;
+    double cpu = 0, wall = 0;
+    int identical = 0;
+    double mean() const { return wall / static_cast<double>(seconds.size()); }
+  };
+  auto separate_sample = [&](int r) {
+    SeparateSample out;
+    for (int i = 0; i < args.separate; ++i) {
+      const int k = 1 + static_cast<int>(std::lround(static_cast<double>(i) * (args.frames - 1) / (args.separate - 1)));
+      std::vector<std::string> sets = look;
+      sets.push_back("frame=" + std::to_string(k));
+      const std::string out_file =
+          (dir / ("single" + (r == 0 ? std::string() : std::to_string(r)) + "." + std::to_string(k) + ".exr")).string();
+      const auto one = bench::run_farm(script, sets, out_file);
+      out.seconds.push_back(one.wall_seconds);
+      out.frames.push_back(k);
+      out.cpu += one.cpu_seconds;
+      out.wall += one.wall_seconds;
+      out.identical += same_pixels(out_file, frame_file(dir.string(), k));
+    }
+    return out;
+  };
+
+  // The job, one farm, with frames in flight; and, in turn, the same job one frame at a time, then the separate runs.
+  // The machine's speed drifts by 10-25 % over minutes, so each run compares its own job with its own separate runs
+  // and the job / separate figure is the median over the runs.
   const auto job = bench::run_farm(script, look, (dir / "walk.####.exr").string(), false, {}, true);
+  std::vector<SeparateSample> separates;
+  std::vector<double> job_over_separate;
   std::vector<double> flying_seconds, one_seconds, flying_idle, one_idle, flying_render_idle, one_render_idle, ratios;
   int same_frames = 0;
   for (int r = 0; r < args.runs; ++r) {
@@ -137,6 +170,8 @@ int main(int argc, char** argv) {
     flying_render_idle.push_back(render_stage_idle(fly, cpus));
     one_render_idle.push_back(render_stage_idle(one, cpus));
     ratios.push_back(fly.wall_seconds / one.wall_seconds);
+    separates.push_back(separate_sample(r));
+    job_over_separate.push_back(fly.wall_seconds / (separates.back().mean() * args.frames));
     if (r > 0) continue;
     for (int k = 1; k <= args.frames; ++k) same_frames += same_pixels(frame_file(dir.string(), k), frame_file(one_dir, k));
   }
@@ -144,8 +179,9 @@ int main(int argc, char** argv) {
   std::printf("frames in flight against one at a time (%d run%s, in turn):\n", args.runs, args.runs == 1 ? "" : "s");
   for (int r = 0; r < args.runs; ++r)
     std::printf("  run %d: in flight %.1f s (%.1f%% idle; render stage %.1f%%), one at a time %.1f s (%.1f%% idle; render "
-                "stage %.1f%%), ratio %.3f\n", r + 1, flying_seconds[r], 100 * flying_idle[r], 100 * flying_render_idle[r],
-                one_seconds[r], 100 * one_idle[r], 100 * one_render_idle[r], ratios[r]);
+                "stage %.1f%%), ratio %.3f; separate runs %.2f s a frame, job in flight / separate runs %.3f\n", r + 1,
+                flying_seconds[r], 100 * flying_idle[r], 100 * flying_render_idle[r], one_seconds[r], 100 * one_idle[r],
+                100 * one_render_idle[r], ratios[r], separates[r].mean(), job_over_separate[r]);
   std::printf("  time in flight / one at a time: median %.3f (%.3f-%.3f); %d of %d frames identical\n",
               ratio_spread.median, ratio_spread.min, ratio_spread.max, same_frames, args.frames);
   std::fflush(stdout);
@@ -162,34 +198,17 @@ int main(int argc, char** argv) {
               job.phase("setup"), job.phase("render"));
   std::fflush(stdout);
 
-  // Separate runs of single frames, evenly spread over the walk.
-  std::vector<double> separate_seconds;
-  std::vector<int> sampled;
-  double separate_cpu = 0;
-  int identical = 0;
-  std::printf("separate runs:");
-  for (int i = 0; i < args.separate; ++i) {
-    const int k = 1 + static_cast<int>(std::lround(static_cast<double>(i) * (args.frames - 1) / (args.separate - 1)));
-    std::vector<std::string> sets = look;
-    sets.push_back("frame=" + std::to_string(k));
-    const std::string out = (dir / ("single." + std::to_string(k) + ".exr")).string();
-    const auto one = bench::run_farm(script, sets, out);
-    separate_seconds.push_back(one.wall_seconds);
-    sampled.push_back(k);
-    separate_cpu += one.cpu_seconds;
-    const bool same = same_pixels(out, frame_file(dir.string(), k));
-    identical += same;
-    std::printf(" %d: %.2f s%s", k, one.wall_seconds, same ? "" : " (differs)");
-    std::fflush(stdout);
-  }
+  // The first run's separate runs, frame by frame.
+  const SeparateSample& separate = separates.front();
+  const std::vector<int>& sampled = separate.frames;
+  std::printf("separate runs (run 1):");
+  for (size_t i = 0; i < sampled.size(); ++i) std::printf(" %d: %.2f s", sampled[i], separate.seconds[i]);
   std::printf("\n");
-  double separate_wall = 0;
-  for (double s : separate_seconds) separate_wall += s;
-  const double mean_separate = separate_wall / static_cast<double>(separate_seconds.size());
-  const double separate_idle = 1 - separate_cpu / (separate_wall * cpus);
-  const double estimate = mean_separate * args.frames;
+  const double mean_separate = separate.mean();
+  const double separate_idle = 1 - separate.cpu / (separate.wall * cpus);
+  const int identical = separate.identical;
   std::printf("  mean %.2f s a frame: %d separate runs ~ %.1f s (%.0f%% of %d CPUs idle)\n", mean_separate, args.frames,
-              estimate, 100 * separate_idle, cpus);
+              mean_separate * args.frames, 100 * separate_idle, cpus);
   std::printf("  %d of %d sampled frames identical to the job's\n", identical, args.separate);
 
   // Resume with every frame done: the scene loaded for its key, the record verified, nothing launched.
@@ -268,10 +287,11 @@ int main(int argc, char** argv) {
     }
   }
 
-  const double ratio = job.wall_seconds / estimate;
+  const auto ratio = bench::spread(job_over_separate);
   const double per_frame = first > 0 ? later_spread.median / first : 0;
-  std::printf("\njob / separate runs: %.3f (goal <= 0.4)\nlater frame / first frame: %.3f (%.3f-%.3f; goal <= 0.5)\n",
-              ratio, per_frame, first > 0 ? later_spread.min / first : 0, first > 0 ? later_spread.max / first : 0);
+  std::printf("\njob / separate runs: median %.3f (%.3f-%.3f over %d run%s; goal <= 0.4)\nlater frame / first frame: "
+              "%.3f (%.3f-%.3f; goal <= 0.5)\n", ratio.median, ratio.min, ratio.max, args.runs, args.runs == 1 ? "" : "s",
+              per_frame, first > 0 ? later_spread.min / first : 0, first > 0 ? later_spread.max / first : 0);
 
   std::ofstream(args.json) << "{\n  \"frames\": " << args.frames << ", \"lighting\": \"" << args.lighting
                            << "\", \"width\": " << args.width << ", \"height\": " << args.height << ", \"spp\": " << args.spp
@@ -287,7 +307,8 @@ int main(int argc, char** argv) {
                            << later_spread.min << ", \"max\": " << later_spread.max << "},\n  \"separate_mean_seconds\": "
                            << mean_separate << ", \"separate_sampled\": " << args.separate
                            << ", \"separate_idle_share\": " << separate_idle << ", \"identical_frames\": " << identical
-                           << ",\n  \"job_over_separate\": " << ratio << ", \"later_over_first\": " << per_frame
+                           << ",\n  \"job_over_separate\": {\"median\": " << ratio.median << ", \"min\": " << ratio.min
+                           << ", \"max\": " << ratio.max << "}, \"later_over_first\": " << per_frame
                            << ", \"resume_all_done_seconds\": " << again.wall_seconds
                            << ", \"resume_half_seconds\": " << half.wall_seconds << ", \"replay_seconds\": " << replay << ", \"restore_seconds\": " << restore
                            << ", \"resumed_identical\": " << resumed_identical
