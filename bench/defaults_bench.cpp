@@ -19,7 +19,11 @@
 // Every render is deterministic (fixed seeds), so --runs repeats them for their times only: a point's time is the
 // median over the runs, its spread the min and max.
 //
+// --network-set k=v (repeatable) adds a script setting to the network's runs: what a setting would do against the
+// defaults, with the same references and path-tracer points.
+//
 //   build/bench/defaults_bench [--runs N] [--reference-spp N] [--scenes a,b] [--cache DIR] [--json FILE]
+//                              [--network-set k=v ...]
 #include <cmath>
 #include <cstdio>
 #include <fstream>
@@ -37,6 +41,7 @@ struct Args {
   std::string only;  // ",a,b," or empty for all
   std::string cache = (bench::fs::temp_directory_path() / "lightfarm-defaults-references").string();
   std::string json = "bench-defaults.json";
+  std::vector<std::string> network_sets;  // --network-set k=v: a setting tried against the defaults, on every scene
 };
 
 Args parse(int argc, char** argv) {
@@ -48,6 +53,7 @@ Args parse(int argc, char** argv) {
     else if (k == "--scenes") a.only = "," + std::string(argv[i + 1]) + ",";
     else if (k == "--cache") a.cache = argv[i + 1];
     else if (k == "--json") a.json = argv[i + 1];
+    else if (k == "--network-set") a.network_sets.push_back(argv[i + 1]);
   }
   return a;
 }
@@ -164,6 +170,7 @@ int main(int argc, char** argv) {
     for (int spp : {16, 64}) points.push_back({"network", spp});
     for (Point& p : points) {
       std::vector<std::string> sets = p.method == "network" ? c.network_sets : c.pathtrace_sets;
+      if (p.method == "network") sets.insert(sets.end(), args.network_sets.begin(), args.network_sets.end());
       sets.push_back("spp=" + std::to_string(p.spp));
       const std::string& script = p.method == "network" ? c.network_script : c.pathtrace_script;
       std::vector<double> times;
