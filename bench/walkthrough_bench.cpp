@@ -36,6 +36,7 @@
 #include <algorithm>
 #include <cstdio>
 #include <fstream>
+#include <numeric>
 #include <string>
 
 #include "bench/bench_util.hpp"
@@ -126,9 +127,10 @@ int main(int argc, char** argv) {
   struct SeparateSample {
     std::vector<double> seconds;
     std::vector<int> frames;
-    double cpu = 0, wall = 0;
+    double cpu = 0;
     int identical = 0;
-    double mean() const { return wall / static_cast<double>(seconds.size()); }
+    double wall() const { return std::accumulate(seconds.begin(), seconds.end(), 0.0); }
+    double mean() const { return wall() / static_cast<double>(seconds.size()); }
   };
   auto separate_sample = [&](int r) {
     SeparateSample out;
@@ -142,7 +144,6 @@ int main(int argc, char** argv) {
       out.seconds.push_back(one.wall_seconds);
       out.frames.push_back(k);
       out.cpu += one.cpu_seconds;
-      out.wall += one.wall_seconds;
       out.identical += same_pixels(out_file, frame_file(dir.string(), k));
     }
     return out;
@@ -205,7 +206,7 @@ int main(int argc, char** argv) {
   for (size_t i = 0; i < sampled.size(); ++i) std::printf(" %d: %.2f s", sampled[i], separate.seconds[i]);
   std::printf("\n");
   const double mean_separate = separate.mean();
-  const double separate_idle = 1 - separate.cpu / (separate.wall * cpus);
+  const double separate_idle = 1 - separate.cpu / (separate.wall() * cpus);
   const int identical = separate.identical;
   std::printf("  mean %.2f s a frame: %d separate runs ~ %.1f s (%.0f%% of %d CPUs idle)\n", mean_separate, args.frames,
               mean_separate * args.frames, 100 * separate_idle, cpus);

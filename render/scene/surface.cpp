@@ -23,6 +23,9 @@ const std::array<float, 256>& srgb_to_linear() {
   return table;
 }
 
+// Where an alpha map's coverage is below this, the surface is not there (map_d's cut).
+constexpr float kCoverageCut = 0.5f;
+
 // Wraps a texel index into [0, n) (textures repeat, as OBJ coordinates outside [0, 1] expect).
 uint32_t wrap(int64_t i, uint32_t n) {
   const int64_t m = i % static_cast<int64_t>(n);
@@ -272,7 +275,7 @@ bool Scene::opaque(uint32_t t, Vec3 b) const {
   if (m.alpha_map < 0 || corner_uv_view_.empty()) return true;
   const Vec2 at = uv(t, b);
   if (!std::isfinite(at.u) || !std::isfinite(at.v)) return true;
-  return textures_[static_cast<size_t>(m.alpha_map)].sample(at, 0) >= 0.5f;
+  return textures_[static_cast<size_t>(m.alpha_map)].sample(at, 0) >= kCoverageCut;
 }
 
 bool Scene::opaque_everywhere(uint32_t t) const {
@@ -297,7 +300,7 @@ bool Scene::opaque_everywhere(uint32_t t) const {
   // A bilinear blend of values at or above the cut plus a margin cannot round below the cut.
   for (int64_t y = y0; y <= y1; ++y)
     for (int64_t x = x0; x <= x1; ++x)
-      if (!(tex.texel(x, y, 0) >= 0.5f + 1e-3f)) return false;
+      if (!(tex.texel(x, y, 0) >= kCoverageCut + 1e-3f)) return false;
   return true;
 }
 

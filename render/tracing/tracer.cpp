@@ -104,23 +104,12 @@ RayTracer::RayTracer(const Scene& scene, std::vector<uint32_t> triangles)
           vertices.push_back(v);
         }
   }
-  // Scene triangles; both empty: the whole scene, none cut out, as one geometry.
-  std::vector<uint32_t> solid, cut;
-  const bool cutouts = scene.has_cutouts();
-  if (!whole || cutouts) {
-    const size_t count = whole ? scene.triangles().size() : triangles.size();
-    for (size_t i = 0; i < count; ++i) {
-      const uint32_t t = whole ? static_cast<uint32_t>(i) : triangles[i];
-      (cutouts && !scene.opaque_everywhere(t) ? cut : solid).push_back(t);
-    }
-    if (whole && cut.empty()) solid.clear();
-  }
   impl_->geometries.reserve(2);  // the filters hold pointers into it
-  for (std::vector<uint32_t>* part : {&solid, &cut}) {
-    if (part->empty() && (part == &cut || !cut.empty())) continue;
-    RTCGeometry geom = triangle_geometry(impl_->device, scene, *part, vertices, renumbered);
-    impl_->geometries.push_back({&scene, std::move(*part)});
-    if (part == &cut) {
+  // A geometry of `part` (empty: the whole scene), with the alpha filter where it may be cut out.
+  auto add = [&](std::vector<uint32_t> part, bool filtered) {
+    RTCGeometry geom = triangle_geometry(impl_->device, scene, part, vertices, renumbered);
+    impl_->geometries.push_back({&scene, std::move(part)});
+    if (filtered) {
       // Alpha cut-outs: a hit where the alpha map says the surface is not there is no hit, for every kind of ray.
       rtcSetGeometryUserData(geom, &impl_->geometries.back());
       rtcSetGeometryIntersectFilterFunction(geom, &skip_cut_out);
@@ -129,6 +118,20 @@ RayTracer::RayTracer(const Scene& scene, std::vector<uint32_t> triangles)
     rtcCommitGeometry(geom);
     rtcAttachGeometryByID(impl_->scene, geom, static_cast<unsigned>(impl_->geometries.size() - 1));
     rtcReleaseGeometry(geom);
+  };
+  std::vector<uint32_t> solid, cut;  // scene triangles
+  if (scene.has_cutouts() || !whole) {
+    const size_t count = whole ? scene.triangles().size() : triangles.size();
+    for (size_t i = 0; i < count; ++i) {
+      const uint32_t t = whole ? static_cast<uint32_t>(i) : triangles[i];
+      (scene.opaque_everywhere(t) ? solid : cut).push_back(t);
+    }
+  }
+  if (whole && cut.empty()) {
+    add({}, false);  // nothing cut out: the scene's own triangles, in place
+  } else {
+    if (!solid.empty()) add(std::move(solid), false);
+    if (!cut.empty()) add(std::move(cut), true);
   }
   rtcCommitScene(impl_->scene);
   if (rtcGetDeviceError(impl_->device) != RTC_ERROR_NONE) throw std::runtime_error("Embree: cannot build the scene");
