@@ -93,7 +93,7 @@ elseif lighting == "network" then
   local bounce_replicas = param("bounce_replicas", 2)
   if bounce_replicas > 1 then paths = multiplexer { paths, replicas = bounce_replicas } end
   local indirect = lightop "irradiance" { input = paths, a = param("a", 0), stride = param("stride", 8),
-                                          finest = param("finest", 2), own_rays = param("own_rays", 8),
+                                          finest = param("finest", 2), own_rays = param("own_rays", 2),
                                           relax = param("relax", 1), nearest = param("nearest", 1.5),
                                           theta = param("theta", 0), phi = param("phi", 0),
                                           name = "indirect", seed = seed }

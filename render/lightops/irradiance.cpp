@@ -48,7 +48,7 @@ class Irradiance final : public LightOp {
         min_spacing_(static_cast<float>(p.get_float("min_spacing", 0.002, 0, 1))),
         max_spacing_(static_cast<float>(p.get_float("max_spacing", 0.2, 0, 10))),
         min_reach_(static_cast<float>(p.get_float("min_reach", static_cast<double>(finest_), 0, 64))),
-        own_rays_(static_cast<int>(p.get_int("own_rays", 8, 0, 1 << 16))),
+        own_rays_(static_cast<int>(p.get_int("own_rays", 2, 0, 1 << 16))),
         nearest_(static_cast<float>(p.get_float("nearest", 1.5, 0, 1000))),
         bounds_(bounds_up_to(p.get_float("relax", 1, 1, 4))),
         reuse_(p.get_bool("reuse", true)),
