@@ -256,6 +256,18 @@ class Scene {
   bool opaque_everywhere(uint32_t triangle) const;
   // Whether any material is cut out by an alpha map (the tracer then filters its hits).
   bool has_cutouts() const;
+  // Reorders `triangles` so that those opaque everywhere come first, each group in its former order; returns how
+  // many are. The tracer builds each group as an Embree geometry of its own (only the rest need the alpha filter).
+  size_t put_opaque_first(std::vector<uint32_t>& triangles) const;
+  // Every triangle of a scene with cut-outs, put_opaque_first's order (`opaque` of them first), and their corners
+  // in that order: what the tracer's two geometries are made of. Only a mapped scene has it (in its image, so the
+  // actors of a host share it as they share the rest); else empty, and each tracer makes its own.
+  struct OpaqueFirst {
+    std::span<const uint32_t> triangles;
+    std::span<const std::array<uint32_t, 3>> corners;
+    size_t opaque = 0;
+  };
+  const OpaqueFirst& opaque_first() const { return opaque_first_; }
   // The share of a triangle's area that is not cut out (1 without an alpha map), from a fixed grid of points.
   float opaque_fraction(uint32_t triangle) const;
   // Emitted flux of emitter triangle t: pi * area * mean(Le) * opaque_fraction.
@@ -407,6 +419,7 @@ class Scene {
   void settle_normal_maps();
   RGB mapped_emission(uint32_t triangle, Vec3 b) const;
   std::shared_ptr<const void> storage_;  // the mapping the views point into, when mapped
+  OpaqueFirst opaque_first_;             // views into the mapping, when mapped
   std::vector<std::string> ambient_only_;  // OBJ materials with Ka but no Ke: named if the scene ends up unlit
   Bounds bounds_;
   float epsilon_ = 1e-4f;

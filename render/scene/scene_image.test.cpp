@@ -12,6 +12,7 @@
 #include <fstream>
 #include <random>
 
+#include "render/images/image.hpp"
 #include "render/scene/scene_file.hpp"
 #include "render/tracing/tracer.hpp"
 
@@ -159,6 +160,68 @@ TEST_F(ImageDir, EmbreeOverTheMappedArraysFindsTheSameHits) {
     hits += a[i].valid();
   }
   EXPECT_GT(hits, rays.size() / 4);  // the box is open at the front
+}
+
+// A scene with cut-outs carries the tracer's opaque-first order in its image, so the actors of a host share it: a
+// quad its alpha map cuts out entirely, the floor, a quad it leaves whole and one it cuts in half, in that order.
+TEST_F(ImageDir, TheOpaqueFirstOrderIsInTheImageAndTracesTheSameHits) {
+  Image alpha(16, 16);
+  for (int y = 0; y < 16; ++y)
+    for (int x = 0; x < 16; ++x) alpha.at(x, y) = x < 8 ? RGB{0, 0, 0} : RGB{1, 1, 1};
+  ASSERT_TRUE(write_image(alpha, (dir / "alpha.png").string()).ok());
+  std::ofstream(dir / "cut.mtl") << "newmtl floor\nKd 0.5 0.5 0.5\nnewmtl leaf\nKd 0.5 0.5 0.5\nmap_d alpha.png\n";
+  std::ofstream(dir / "cut.obj")
+      << "mtllib cut.mtl\nvt 0.6 0\nvt 0.9 0\nvt 0.9 1\nvt 0.6 1\nvt 0.1 0\nvt 0.4 0\nvt 0.4 1\nvt 0.1 1\nvt 0.45 0\nvt 0.45 1\n"
+         "usemtl leaf\nv -1 1 -1\nv 0 1 -1\nv 0 1 1\nv -1 1 1\nf 1/5 4/8 3/7 2/6\n"            // cut out
+         "usemtl floor\nv -4 0 -4\nv 4 0 -4\nv 4 0 4\nv -4 0 4\nf 5 8 7 6\n"
+         "usemtl leaf\nv -3 1 -1\nv -2 1 -1\nv -2 1 1\nv -3 1 1\nf 9/1 12/4 11/3 10/2\n"        // whole
+         "v 1 1 -1\nv 2 1 -1\nv 2 1 1\nv 1 1 1\nf 13/9 16/10 15/3 14/2\n";                     // cut in half
+  auto s = Scene::load_obj_unlit((dir / "cut.obj").string());
+  ASSERT_TRUE(s.ok()) << s.error().message;
+  s->add_point_light({0, 10, 0}, {1, 1, 1});
+  ASSERT_TRUE(s->finalize("cut").ok());
+  EXPECT_TRUE(s->opaque_first().triangles.empty()) << "a scene of its own arrays: each tracer makes its own order";
+  const auto path = dir / "cut.image";
+  const std::string good = SceneImage::encode(*s, "0123456789abcdef");
+  std::ofstream(path, std::ios::binary) << good;
+  auto m = SceneImage::map(path.string(), "0123456789abcdef", "x");
+  ASSERT_TRUE(m.ok()) << m.error().message;
+  const auto& order = m->opaque_first();
+  EXPECT_EQ(std::vector<uint32_t>(order.triangles.begin(), order.triangles.end()),
+            (std::vector<uint32_t>{2, 3, 4, 5, 0, 1, 6, 7}));
+  EXPECT_EQ(order.opaque, 4u);
+  for (size_t i = 0; i < order.triangles.size(); ++i) EXPECT_EQ(order.corners[i], m->triangles()[order.triangles[i]]);
+
+  // Straight down: the floor through the cut-out quad, the whole quad at y = 1, the halved one where u >= 0.5.
+  RayTracer own(*s), shared(*m);
+  std::vector<Ray> down;
+  for (float x : {-2.9f, -2.1f, -0.9f, -0.1f, 1.02f, 1.5f, 1.9f, 3.0f}) down.push_back(Ray{{x, 5, 0.3f}, {0, -1, 0}});
+  std::vector<Hit> a(down.size()), b(down.size());
+  own.intersect(down, a);
+  shared.intersect(down, b);
+  const std::vector<float> t_expected{4, 4, 5, 5, 5, 4, 4, 5};
+  for (size_t i = 0; i < down.size(); ++i) {
+    ASSERT_TRUE(b[i].valid()) << i;
+    EXPECT_NEAR(b[i].t, t_expected[i], 1e-4f) << "x " << down[i].origin.x;
+    EXPECT_EQ(a[i].triangle, b[i].triangle) << i;
+    EXPECT_TRUE(same_bits(a[i].t, b[i].t)) << i;
+  }
+  std::vector<uint8_t> blocked(down.size());
+  for (Ray& r : down) r.tfar = 4.5f;
+  shared.occluded(down, blocked);
+  for (size_t i = 0; i < down.size(); ++i) EXPECT_EQ(blocked[i], t_expected[i] == 4 ? 1 : 0) << "x " << down[i].origin.x;
+
+  // An order that lists a triangle twice is refused, not traced.
+  uint64_t order_at = 0;
+  // The offsets begin 120 bytes in (see DamagedImagesAreRefusedAndRemade); the order's is the tenth.
+  std::memcpy(&order_at, good.data() + 120 + 8 * 9, 8);
+  ASSERT_LT(order_at + 8, good.size());
+  std::string twice = good;
+  std::memcpy(twice.data() + order_at, good.data() + order_at + 4, 4);
+  std::ofstream(path, std::ios::binary | std::ios::trunc) << twice;
+  auto refused = SceneImage::map(path.string(), "0123456789abcdef", "x");
+  ASSERT_FALSE(refused.ok());
+  EXPECT_NE(refused.error().message.find("the opaque-first order"), std::string::npos) << refused.error().message;
 }
 
 TEST_F(ImageDir, ActorsStartingTogetherMakeTheImageOnceAndMapOneFile) {

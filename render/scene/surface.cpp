@@ -304,6 +304,11 @@ bool Scene::opaque_everywhere(uint32_t t) const {
   return true;
 }
 
+size_t Scene::put_opaque_first(std::vector<uint32_t>& triangles) const {
+  const auto cut = std::stable_partition(triangles.begin(), triangles.end(), [&](uint32_t t) { return opaque_everywhere(t); });
+  return static_cast<size_t>(cut - triangles.begin());
+}
+
 bool Scene::has_cutouts() const {
   if (corner_uv_view_.empty()) return false;
   return std::any_of(materials_.begin(), materials_.end(), [](const Material& m) { return m.alpha_map >= 0; });

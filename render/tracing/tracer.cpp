@@ -17,7 +17,8 @@ namespace {
 // Which scene triangle each of a geometry's Embree primitives is, and the scene its alpha filter asks.
 struct Primitives {
   const Scene* scene = nullptr;
-  std::vector<uint32_t> subset;  // Embree's primitive i is scene triangle subset[i]; empty: the whole scene
+  std::vector<uint32_t> owned;       // the subset, when this tracer made it
+  std::span<const uint32_t> subset;  // Embree's primitive i is scene triangle subset[i]; empty: the whole scene
   uint32_t triangle_of(unsigned prim) const { return subset.empty() ? prim : subset[prim]; }
 };
 
@@ -33,9 +34,11 @@ void skip_cut_out(const RTCFilterFunctionNArguments* args) {
 
 // A geometry of `triangles` (scene numbering; empty: the whole scene) over the vertices `vertices` names
 // (renumbered: Embree's vertex i is scene vertex vertices[i]; empty: the scene's); each corner in its scene order, so
-// a triangle's hit is the same arithmetic whichever geometry holds it.
-RTCGeometry triangle_geometry(RTCDevice device, const Scene& scene, const std::vector<uint32_t>& triangles,
-                              const std::vector<uint32_t>& vertices, const std::vector<uint32_t>& renumbered) {
+// a triangle's hit is the same arithmetic whichever geometry holds it. `corners`, when given, are the triangles'
+// corners already laid out (the scene image's), read in place.
+RTCGeometry triangle_geometry(RTCDevice device, const Scene& scene, std::span<const uint32_t> triangles,
+                              std::span<const std::array<uint32_t, 3>> corners, const std::vector<uint32_t>& vertices,
+                              const std::vector<uint32_t>& renumbered) {
   RTCGeometry geom = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_TRIANGLE);
   if (vertices.empty() && scene.shares_storage()) {
     // The scene image is mapped by every actor of this host; Embree reads it in place (padded for its loads).
@@ -52,9 +55,10 @@ RTCGeometry triangle_geometry(RTCDevice device, const Scene& scene, const std::v
       vb[3 * i + 2] = v.z;
     }
   }
-  if (triangles.empty() && scene.shares_storage()) {
-    rtcSetSharedGeometryBuffer(geom, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, scene.triangles().data(), 0,
-                               3 * sizeof(unsigned), scene.triangles().size());
+  if (triangles.empty() && scene.shares_storage()) corners = scene.triangles();
+  if (!corners.empty()) {
+    rtcSetSharedGeometryBuffer(geom, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, corners.data(), 0,
+                               3 * sizeof(unsigned), corners.size());
     return geom;
   }
   const size_t count = triangles.empty() ? scene.triangles().size() : triangles.size();
@@ -105,13 +109,16 @@ RayTracer::RayTracer(const Scene& scene, std::vector<uint32_t> triangles)
         }
   }
   impl_->geometries.reserve(2);  // the filters hold pointers into it
-  // A geometry of `part` (empty: the whole scene), with the alpha filter where it may be cut out.
-  auto add = [&](std::vector<uint32_t> part, bool filtered) {
-    RTCGeometry geom = triangle_geometry(impl_->device, scene, part, vertices, renumbered);
-    impl_->geometries.push_back({&scene, std::move(part)});
+  // A geometry of the triangles `part` lists (empty: the whole scene), or of `owned` when the tracer made the list;
+  // `corners`: theirs as the scene image lays them out, else none. With the alpha filter where they may be cut out.
+  auto add = [&](std::vector<uint32_t> owned, std::span<const uint32_t> part, std::span<const std::array<uint32_t, 3>> corners,
+                 bool filtered) {
+    Primitives& prims = impl_->geometries.emplace_back(Primitives{&scene, std::move(owned), part});
+    if (!prims.owned.empty()) prims.subset = prims.owned;
+    RTCGeometry geom = triangle_geometry(impl_->device, scene, prims.subset, corners, vertices, renumbered);
     if (filtered) {
       // Alpha cut-outs: a hit where the alpha map says the surface is not there is no hit, for every kind of ray.
-      rtcSetGeometryUserData(geom, &impl_->geometries.back());
+      rtcSetGeometryUserData(geom, &prims);
       rtcSetGeometryIntersectFilterFunction(geom, &skip_cut_out);
       rtcSetGeometryOccludedFilterFunction(geom, &skip_cut_out);
     }
@@ -119,19 +126,30 @@ RayTracer::RayTracer(const Scene& scene, std::vector<uint32_t> triangles)
     rtcAttachGeometryByID(impl_->scene, geom, static_cast<unsigned>(impl_->geometries.size() - 1));
     rtcReleaseGeometry(geom);
   };
-  std::vector<uint32_t> solid, cut;  // scene triangles
-  if (scene.has_cutouts() || !whole) {
-    const size_t count = whole ? scene.triangles().size() : triangles.size();
-    for (size_t i = 0; i < count; ++i) {
-      const uint32_t t = whole ? static_cast<uint32_t>(i) : triangles[i];
-      (scene.opaque_everywhere(t) ? solid : cut).push_back(t);
-    }
-  }
-  if (whole && cut.empty()) {
-    add({}, false);  // nothing cut out: the scene's own triangles, in place
+  // The triangles that are opaque everywhere, then those that may be cut out: each group a geometry.
+  const Scene::OpaqueFirst& shared = scene.opaque_first();
+  if (whole && !scene.has_cutouts()) {
+    add({}, {}, {}, false);  // nothing cut out: the scene's own triangles, in place
+  } else if (whole && !shared.triangles.empty()) {
+    // The order the scene image holds: every actor of this host reads the same copy.
+    if (shared.opaque > 0) add({}, shared.triangles.first(shared.opaque), shared.corners.first(shared.opaque), false);
+    if (shared.opaque < shared.triangles.size())
+      add({}, shared.triangles.subspan(shared.opaque), shared.corners.subspan(shared.opaque), true);
   } else {
-    if (!solid.empty()) add(std::move(solid), false);
-    if (!cut.empty()) add(std::move(cut), true);
+    std::vector<uint32_t> order = std::move(triangles);
+    if (whole) {
+      order.resize(scene.triangle_count());
+      for (uint32_t t = 0; t < order.size(); ++t) order[t] = t;
+    }
+    const size_t opaque = scene.put_opaque_first(order);
+    if (whole && opaque == order.size()) {
+      add({}, {}, {}, false);  // nothing cut out after all: the scene's own triangles, in place
+    } else {
+      std::vector<uint32_t> cut(order.begin() + static_cast<std::ptrdiff_t>(opaque), order.end());
+      order.resize(opaque);
+      if (!order.empty()) add(std::move(order), {}, {}, false);
+      if (!cut.empty()) add(std::move(cut), {}, {}, true);
+    }
   }
   rtcCommitScene(impl_->scene);
   if (rtcGetDeviceError(impl_->device) != RTC_ERROR_NONE) throw std::runtime_error("Embree: cannot build the scene");
