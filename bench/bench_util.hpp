@@ -14,6 +14,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <initializer_list>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -21,6 +22,30 @@
 #include "core/value.hpp"
 
 namespace bench {
+
+// A benchmark's command line, checked before it starts anything long (some run for an hour): every argument is one
+// of `flags`, each followed by its value, or of `switches`, alone. --help (or -h) prints `usage` and exits 0;
+// anything else, or a flag without its value, says what is wrong, prints `usage` and exits 2.
+inline void check_command_line(int argc, char** argv, const char* usage, std::initializer_list<const char*> flags,
+                               std::initializer_list<const char*> switches = {}) {
+  auto among = [](const std::string& a, std::initializer_list<const char*> names) {
+    return std::any_of(names.begin(), names.end(), [&](const char* n) { return a == n; });
+  };
+  for (int i = 1; i < argc; ++i) {
+    const std::string a = argv[i];
+    if (a == "--help" || a == "-h") {
+      std::printf("usage: %s\n", usage);
+      std::exit(0);
+    }
+    if (among(a, switches)) continue;
+    const char* wrong = !among(a, flags) ? "unknown argument" : i + 1 >= argc ? "needs a value" : nullptr;
+    if (wrong) {
+      std::fprintf(stderr, "%s: '%s' %s\nusage: %s\n", argv[0], a.c_str(), wrong, usage);
+      std::exit(2);
+    }
+    ++i;
+  }
+}
 
 namespace fs = std::filesystem;
 using Clock = std::chrono::steady_clock;

@@ -41,6 +41,9 @@ Args parse(int argc, char** argv) {
 }  // namespace
 
 int main(int argc, char** argv) {
+  bench::check_command_line(argc, argv,
+                            "build/bench/bias_bench [--size PIXELS] [--reference-spp N] [--scenes a,b] [--json FILE]",
+                            {"--size", "--reference-spp", "--scenes", "--json"});
   const Args args = parse(argc, argv);
   const std::string src = LIGHTFARM_SOURCE_DIR;
   const std::string mcguire = bench::shared_scene("cornell_box_mcguire/");

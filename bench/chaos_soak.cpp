@@ -47,6 +47,10 @@ std::set<std::string> lightfarm_files(const fs::path& out_dir) {
 }  // namespace
 
 int main(int argc, char** argv) {
+  bench::check_command_line(argc, argv,
+                            "build/bench/chaos_soak [--frames N per network] [--seed S] [--only NETWORK]"
+                            " [--json FILE]",
+                            {"--frames", "--seed", "--only", "--json"});
   int frames = 10;
   unsigned seed = 1;
   std::string json_path = "bench-chaos.json";

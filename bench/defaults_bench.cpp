@@ -142,6 +142,10 @@ struct Point {
 }  // namespace
 
 int main(int argc, char** argv) {
+  bench::check_command_line(argc, argv,
+                            "build/bench/defaults_bench [--runs N] [--reference-spp N] [--scenes a,b] [--cache DIR]"
+                            " [--json FILE] [--network-set k=v ...]",
+                            {"--runs", "--reference-spp", "--scenes", "--cache", "--json", "--network-set"});
   std::setvbuf(stdout, nullptr, _IOLBF, 0);  // a long run shows its lines as they come, also into a file
   const Args args = parse(argc, argv);
   const std::string src = LIGHTFARM_SOURCE_DIR;

@@ -21,6 +21,10 @@
 #include "render/scene/scene.hpp"
 
 int main(int argc, char** argv) {
+  bench::check_command_line(argc, argv,
+                            "build/bench/dircache_bench [--size WIDTH] [--reference-spp N] [--radius R] [--json FILE]"
+                            " [--glossy]",
+                            {"--size", "--reference-spp", "--radius", "--json"}, {"--glossy"});
   int width = 160, reference_spp = 1024;
   double radius = 0.5;
   std::string json_path = "bench-dircache.json";

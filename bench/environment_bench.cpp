@@ -37,6 +37,9 @@ struct Moments {
 }  // namespace
 
 int main(int argc, char** argv) {
+  bench::check_command_line(argc, argv,
+                            "build/bench/environment_bench [--samples 16] [--trials 40000] [--json FILE]",
+                            {"--samples", "--trials", "--json"});
   int samples = 16, trials = 40000;
   std::string json = "bench-environment.json";
   for (int i = 1; i + 1 < argc; i += 2) {

@@ -150,6 +150,10 @@ lf::Value spread_value(const std::vector<double>& v) { return bench::spread(v).t
 }  // namespace
 
 int main(int argc, char** argv) {
+  bench::check_command_line(argc, argv,
+                            "build/bench/farm_bench [--json FILE] [--runs N] [--size PIXELS] [--spp N]"
+                            " [--pathtrace-size PIXELS]",
+                            {"--json", "--runs", "--size", "--spp", "--pathtrace-size"});
   std::string json_path = "bench-farm.json";
   // Frames of ~6 s (direct) and ~9 s (pathtrace) on one core: a farm's fixed cost (the director's ~0.7 CPU-s, each
   // actor's start) is printed apart; in a frame of 1 s of light it was what the ratios measured (CPU efficiency 0.55

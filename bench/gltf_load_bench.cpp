@@ -97,6 +97,9 @@ bool write_glb(const lf::Scene& s, const std::string& path) {
 }  // namespace
 
 int main(int argc, char** argv) {
+  bench::check_command_line(argc, argv,
+                            "build/bench/gltf_load_bench [--runs N] [--json FILE]",
+                            {"--runs", "--json"});
   int runs = 5;
   std::string json = "bench-gltf-load.json";
   for (int i = 1; i + 1 < argc; i += 2) {

@@ -65,6 +65,9 @@ std::pair<double, double> step_launch(int processes) {
 }  // namespace
 
 int main(int argc, char** argv) {
+  bench::check_command_line(argc, argv,
+                            "build/bench/hosts_bench [--runs N] [--json FILE]",
+                            {"--runs", "--json"});
   int runs = 5;
   std::string json_path = "bench-hosts.json";
   for (int i = 1; i + 1 < argc; i += 2) {

@@ -25,6 +25,9 @@ struct Case {
 }  // namespace
 
 int main(int argc, char** argv) {
+  bench::check_command_line(argc, argv,
+                            "build/bench/kernel_bench [--runs N] [--size PIXELS] [--spp N] [--json FILE]",
+                            {"--runs", "--size", "--spp", "--json"});
   int size = 128, spp = 64, runs = 5;
   std::string json_path = "bench-kernel.json";
   for (int i = 1; i + 1 < argc; i += 2) {

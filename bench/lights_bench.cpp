@@ -52,6 +52,10 @@ Render render(const std::string& script, const std::vector<std::string>& sets) {
 }  // namespace
 
 int main(int argc, char** argv) {
+  bench::check_command_line(argc, argv,
+                            "build/bench/lights_bench [--json FILE] [--runs N] [--reference FILE.exr]"
+                            " [--reference-spp N] [--width W]",
+                            {"--json", "--runs", "--reference", "--reference-spp", "--width"});
   std::string json_path = "bench-lights.json", reference_file;
   int runs = 3, reference_spp = 1024, width = 320;
   for (int i = 1; i + 1 < argc; i += 2) {

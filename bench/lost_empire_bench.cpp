@@ -95,6 +95,10 @@ std::string joined(const std::vector<std::string>& sets) {
 }  // namespace
 
 int main(int argc, char** argv) {
+  bench::check_command_line(argc, argv,
+                            "build/bench/lost_empire_bench [--json FILE] [--runs N] [--reference FILE.exr]"
+                            " [--reference-spp N]",
+                            {"--json", "--runs", "--reference", "--reference-spp"});
   std::string json_path = "bench-lost-empire.json", reference_file;
   int runs = 1, reference_spp = 4096;
   for (int i = 1; i + 1 < argc; i += 2) {

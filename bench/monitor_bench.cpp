@@ -193,6 +193,10 @@ void print_paired(const char* label, const Paired& p) {
 }  // namespace
 
 int main(int argc, char** argv) {
+  bench::check_command_line(argc, argv,
+                            "build/bench/monitor_bench [--json FILE] [--runs N] [--spp N] [--long-runs N]"
+                            " [--long-spp N]",
+                            {"--json", "--runs", "--spp", "--long-runs", "--long-spp"});
   std::string json_path = "bench-monitor.json";
   int runs = 5, spp = 160, long_runs = 3, long_spp = 800;
   for (int i = 1; i + 1 < argc; i += 2) {

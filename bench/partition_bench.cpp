@@ -18,6 +18,9 @@
 
 
 int main(int argc, char** argv) {
+  bench::check_command_line(argc, argv,
+                            "build/bench/partition_bench [--runs N] [--size WIDTH] [--spp N] [--json FILE]",
+                            {"--runs", "--size", "--spp", "--json"});
   int runs = 3, width = 160, spp = 4;
   std::string json_path = "bench-partition.json";
   for (int i = 1; i + 1 < argc; i += 2) {

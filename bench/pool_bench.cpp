@@ -14,6 +14,9 @@
 using bench::median;
 
 int main(int argc, char** argv) {
+  bench::check_command_line(argc, argv,
+                            "build/bench/pool_bench [--json FILE] [--runs N]",
+                            {"--json", "--runs"});
   std::string json_path = "bench-pool.json";
   int runs = 3;
   for (int i = 1; i + 1 < argc; i += 2) {

@@ -36,6 +36,10 @@ lf::Image run(const std::string& script, const std::vector<std::string>& sets, d
 }  // namespace
 
 int main(int argc, char** argv) {
+  bench::check_command_line(argc, argv,
+                            "build/bench/quality_bench [--json FILE] [--size PIXELS] [--reference-spp N]"
+                            " [--reference FILE.exr]",
+                            {"--json", "--size", "--reference-spp", "--reference"});
   std::string json_path = "bench-quality.json";
   int size = 512, reference_spp = 2048;
   std::string reference_file;  // --reference: reuse this image if it exists, else render and keep it there

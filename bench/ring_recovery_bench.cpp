@@ -32,6 +32,9 @@ struct Solve {
 }  // namespace
 
 int main(int argc, char** argv) {
+  bench::check_command_line(argc, argv,
+                            "build/bench/ring_recovery_bench [--repeats 3] [--iterations 120] [--json FILE]",
+                            {"--repeats", "--iterations", "--json"});
   int repeats = 3, iterations = 120;
   std::string json_path = "bench-ring-recovery.json";
   for (int i = 1; i + 1 < argc; i += 2) {

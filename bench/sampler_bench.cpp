@@ -31,6 +31,9 @@ double bare_frame(const lf::Scene& scene, const lf::RayTracer& tracer, const cha
 }  // namespace
 
 int main(int argc, char** argv) {
+  bench::check_command_line(argc, argv,
+                            "build/bench/sampler_bench [--size PIXELS] [--reference-spp N] [--runs N] [--json FILE]",
+                            {"--size", "--reference-spp", "--runs", "--json"});
   int size = 128, reference_spp = 4096, runs = 5;
   std::string json_path = "bench-sampler.json";
   for (int i = 1; i + 1 < argc; i += 2) {

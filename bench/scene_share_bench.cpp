@@ -44,6 +44,9 @@ std::vector<ActorFigures> actors_of(const std::string& stats) {
 }  // namespace
 
 int main(int argc, char** argv) {
+  bench::check_command_line(argc, argv,
+                            "build/bench/scene_share_bench [--runs N] [--json FILE]",
+                            {"--runs", "--json"});
   int runs = 5;
   std::string json_path = "bench-scene-share.json";
   for (int i = 1; i + 1 < argc; i += 2) {

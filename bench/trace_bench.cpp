@@ -27,6 +27,9 @@ namespace {
 }  // namespace
 
 int main(int argc, char** argv) {
+  bench::check_command_line(argc, argv,
+                            "build/bench/trace_bench [--runs N] [--json FILE]",
+                            {"--runs", "--json"});
   int runs = 5;
   std::string json_path = "bench-trace.json";
   for (int i = 1; i + 1 < argc; i += 2) {

@@ -112,6 +112,11 @@ double render_stage_idle(const bench::FarmRun& run, int cpus) {
 }  // namespace
 
 int main(int argc, char** argv) {
+  bench::check_command_line(argc, argv,
+                            "build/bench/walkthrough_bench [--frames N] [--separate K] [--lighting network|direct]"
+                            " [--width W --height H] [--spp S] [--reference-spp S] [--cache DIR] [--runs R]"
+                            " [--json FILE]",
+                            {"--frames", "--separate", "--lighting", "--width", "--height", "--spp", "--json", "--reference-spp", "--cache", "--runs"});
   const Args args = parse(argc, argv);
   if (bench::shared_scene("lost_empire/lost_empire.obj").empty()) return 0;
   const std::string script = std::string(LIGHTFARM_SOURCE_DIR) + "/examples/lost_empire.lua";
