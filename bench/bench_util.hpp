@@ -50,9 +50,13 @@ inline void check_command_line(int argc, char** argv, const char* usage, std::in
 namespace fs = std::filesystem;
 using Clock = std::chrono::steady_clock;
 
+// The middle value; of an even count, the mean of the two middle ones (not the upper, which made a median of two
+// runs their maximum).
 inline double median(std::vector<double> v) {
+  if (v.empty()) return 0;
   std::sort(v.begin(), v.end());
-  return v.empty() ? 0 : v[v.size() / 2];
+  const size_t half = v.size() / 2;
+  return v.size() % 2 ? v[half] : 0.5 * (v[half - 1] + v[half]);
 }
 
 // Wall seconds `fn` takes.
