@@ -116,7 +116,8 @@ int main(int argc, char** argv) {
                             "build/bench/walkthrough_bench [--frames N] [--separate K] [--lighting network|direct]"
                             " [--width W --height H] [--spp S] [--reference-spp S] [--cache DIR] [--runs R]"
                             " [--json FILE]",
-                            {"--frames", "--separate", "--lighting", "--width", "--height", "--spp", "--json", "--reference-spp", "--cache", "--runs"});
+                            {"--frames", "--separate", "--lighting", "--width", "--height", "--spp", "--json", "--reference-spp",
+                             "--cache", "--runs"});
   const Args args = parse(argc, argv);
   if (bench::shared_scene("lost_empire/lost_empire.obj").empty()) return 0;
   const std::string script = std::string(LIGHTFARM_SOURCE_DIR) + "/examples/lost_empire.lua";

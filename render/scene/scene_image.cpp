@@ -8,6 +8,7 @@
 
 #include <cerrno>
 #include <cstring>
+#include <numeric>
 
 #include "core/log.hpp"
 #include "render/byte_io.hpp"
@@ -131,7 +132,7 @@ std::string SceneImage::encode(const Scene& scene, const std::string& hash) {
   std::vector<std::array<uint32_t, 3>> corners;
   if (scene.has_cutouts()) {
     order.resize(scene.triangle_count());
-    for (uint32_t t = 0; t < order.size(); ++t) order[t] = t;
+    std::iota(order.begin(), order.end(), 0u);
     h.opaque_first = 1;
     h.opaque_count = scene.put_opaque_first(order);
     corners.reserve(order.size());

@@ -6,6 +6,7 @@
 #include <embree3/rtcore.h>
 #include <malloc.h>
 
+#include <numeric>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -17,7 +18,6 @@ namespace {
 // Which scene triangle each of a geometry's Embree primitives is, and the scene its alpha filter asks.
 struct Primitives {
   const Scene* scene = nullptr;
-  std::vector<uint32_t> owned;       // the subset, when this tracer made it
   std::span<const uint32_t> subset;  // Embree's primitive i is scene triangle subset[i]; empty: the whole scene
   uint32_t triangle_of(unsigned prim) const { return subset.empty() ? prim : subset[prim]; }
 };
@@ -80,6 +80,7 @@ struct RayTracer::Impl {
   // Per Embree geometry (its geomID): the triangles that may be cut out by an alpha map are a geometry of their
   // own with the alpha filter; the rest, most of a scene, need no call back into the filter for each candidate hit.
   std::vector<Primitives> geometries;
+  std::vector<uint32_t> order;  // the geometries' triangles, opaque first, when the scene image holds no such order
   std::unique_ptr<TiedHits> ties;  // the whole scene's; a part's tracer leaves ties to its caller
   uint32_t triangle_of(unsigned geom, unsigned prim) const { return geometries[geom].triangle_of(prim); }
   ~Impl() {
@@ -109,13 +110,11 @@ RayTracer::RayTracer(const Scene& scene, std::vector<uint32_t> triangles)
         }
   }
   impl_->geometries.reserve(2);  // the filters hold pointers into it
-  // A geometry of the triangles `part` lists (empty: the whole scene), or of `owned` when the tracer made the list;
-  // `corners`: theirs as the scene image lays them out, else none. With the alpha filter where they may be cut out.
-  auto add = [&](std::vector<uint32_t> owned, std::span<const uint32_t> part, std::span<const std::array<uint32_t, 3>> corners,
-                 bool filtered) {
-    Primitives& prims = impl_->geometries.emplace_back(Primitives{&scene, std::move(owned), part});
-    if (!prims.owned.empty()) prims.subset = prims.owned;
-    RTCGeometry geom = triangle_geometry(impl_->device, scene, prims.subset, corners, vertices, renumbered);
+  // A geometry of the triangles `part` lists (empty: the whole scene); `corners`: theirs as the scene image lays them
+  // out, else none. With the alpha filter where they may be cut out.
+  auto add = [&](std::span<const uint32_t> part, std::span<const std::array<uint32_t, 3>> corners, bool filtered) {
+    Primitives& prims = impl_->geometries.emplace_back(Primitives{&scene, part});
+    RTCGeometry geom = triangle_geometry(impl_->device, scene, part, corners, vertices, renumbered);
     if (filtered) {
       // Alpha cut-outs: a hit where the alpha map says the surface is not there is no hit, for every kind of ray.
       rtcSetGeometryUserData(geom, &prims);
@@ -126,30 +125,30 @@ RayTracer::RayTracer(const Scene& scene, std::vector<uint32_t> triangles)
     rtcAttachGeometryByID(impl_->scene, geom, static_cast<unsigned>(impl_->geometries.size() - 1));
     rtcReleaseGeometry(geom);
   };
-  // The triangles that are opaque everywhere, then those that may be cut out: each group a geometry.
-  const Scene::OpaqueFirst& shared = scene.opaque_first();
-  if (whole && !scene.has_cutouts()) {
-    add({}, {}, {}, false);  // nothing cut out: the scene's own triangles, in place
-  } else if (whole && !shared.triangles.empty()) {
-    // The order the scene image holds: every actor of this host reads the same copy.
-    if (shared.opaque > 0) add({}, shared.triangles.first(shared.opaque), shared.corners.first(shared.opaque), false);
-    if (shared.opaque < shared.triangles.size())
-      add({}, shared.triangles.subspan(shared.opaque), shared.corners.subspan(shared.opaque), true);
-  } else {
-    std::vector<uint32_t> order = std::move(triangles);
+  // The triangles that are opaque everywhere, then those that may be cut out: each group a geometry. A mapped
+  // scene's image holds that order for the whole scene (every actor of this host reads the same copy); else this
+  // tracer makes it.
+  const bool cutouts = scene.has_cutouts();
+  std::span<const uint32_t> order = scene.opaque_first().triangles;
+  std::span<const std::array<uint32_t, 3>> corners = scene.opaque_first().corners;
+  size_t opaque = scene.opaque_first().opaque;
+  if (!whole || (cutouts && order.empty())) {
+    impl_->order = std::move(triangles);
     if (whole) {
-      order.resize(scene.triangle_count());
-      for (uint32_t t = 0; t < order.size(); ++t) order[t] = t;
+      impl_->order.resize(scene.triangle_count());
+      std::iota(impl_->order.begin(), impl_->order.end(), 0u);
     }
-    const size_t opaque = scene.put_opaque_first(order);
-    if (whole && opaque == order.size()) {
-      add({}, {}, {}, false);  // nothing cut out after all: the scene's own triangles, in place
-    } else {
-      std::vector<uint32_t> cut(order.begin() + static_cast<std::ptrdiff_t>(opaque), order.end());
-      order.resize(opaque);
-      if (!order.empty()) add(std::move(order), {}, {}, false);
-      if (!cut.empty()) add(std::move(cut), {}, {}, true);
-    }
+    opaque = scene.put_opaque_first(impl_->order);
+    order = impl_->order;
+    corners = {};
+  }
+  if (whole && (!cutouts || opaque == order.size())) {
+    impl_->order = {};
+    add({}, {}, false);  // nothing cut out: the scene's own triangles, in place
+  } else {
+    const auto corners_of = [&](size_t at, size_t n) { return corners.empty() ? corners : corners.subspan(at, n); };
+    if (opaque > 0) add(order.first(opaque), corners_of(0, opaque), false);
+    if (opaque < order.size()) add(order.subspan(opaque), corners_of(opaque, order.size() - opaque), true);
   }
   rtcCommitScene(impl_->scene);
   if (rtcGetDeviceError(impl_->device) != RTC_ERROR_NONE) throw std::runtime_error("Embree: cannot build the scene");
