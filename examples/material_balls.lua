@@ -10,9 +10,12 @@
 --   lightfarm run examples/material_balls.lua --set hdri=sunset        (forest, interior, sunset, courtyard)
 --   lightfarm run examples/material_balls.lua --set glass=1            (the blue balls as rough glass)
 --
--- Every glTF material is one glossy lobe for the light-path check: `direct` gives it its direct light (the sky's
--- and the sun's included) and `glossy` the rest, asking the bounce paths where each lobe sample lands; the
--- irradiance cache has nothing to cache here.
+-- Every glTF material is a glossy lobe (its specular coat) and a diffuse one (the base under it, a metal's multiply
+-- scattered light) for the light-path check: `direct` gives both their direct light (the sky's and the sun's
+-- included), `glossy` the glossy lobe's indirect light, asking the bounce paths where each lobe sample lands, and
+-- the diffuse lobe's indirect light comes from the irradiance cache (`--set diffuse=cache`) or, as here by default,
+-- from `glossy` following that lobe too (`lobes = "all"`): under an open sky little light bounces off the
+-- surfaces, and the cache's pre-pass costs more than it saves (bench/RESULTS.md, "glTF materials").
 
 scene  { file = "../../shared/scenes/gltf/balls.glb" }
 environment { map = "../../shared/scenes/gltf/hdri/" .. param("hdri", "courtyard") .. ".exr" }
@@ -32,9 +35,14 @@ local lighting = param("lighting", "network")
 local seed = param("seed", 0)  -- the light's random numbers (bench/peer/compare_balls.sh renders pairs)
 if lighting == "network" then
   local paths = lightop "pathtrace" { name = "bounces", seed = seed }
-  renderers { count = param("renderers", 2),
-              lighting = lightop "combine" { inputs = { lightop "direct" { seed = seed },
-                                                        lightop "glossy" { input = paths, seed = seed } } } }
+  local lit = { lightop "direct" { seed = seed } }
+  if param("diffuse", "paths") == "cache" then
+    table.insert(lit, lightop "irradiance" { input = paths, seed = seed })
+    table.insert(lit, lightop "glossy" { input = paths, seed = seed })
+  else
+    table.insert(lit, lightop "glossy" { input = paths, lobes = "all", seed = seed })
+  end
+  renderers { count = param("renderers", 2), lighting = lightop "combine" { inputs = lit } }
 elseif lighting == "pathtrace" then
   renderers { count = param("renderers", 2), lighting = multiplexer { lightop "pathtrace" { seed = seed }, replicas = 2 } }
 else

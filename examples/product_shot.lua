@@ -54,6 +54,8 @@ elseif variants > 0 then
   end }
 end
 
+-- Direct light, and what the bounce paths bring along every lobe but mirrors (`lobes = "all"`: the glossy coats and
+-- the diffuse bases alike; under an open sky a cache's pre-pass would cost more than it saves).
 local paths = lightop "pathtrace" { name = "bounces" }
 renderers { count = param("renderers", 2),
-            lighting = lightop "combine" { inputs = { lightop "direct" {}, lightop "glossy" { input = paths } } } }
+            lighting = lightop "combine" { inputs = { lightop "direct" {}, lightop "glossy" { input = paths, lobes = "all" } } } }

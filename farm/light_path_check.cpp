@@ -141,15 +141,21 @@ static void warn_about_empty_caches(const FarmSpec& spec, const SceneLobes& scen
       auto it = a.params.find(key);
       return it != a.params.end() && it->second.is_bool() && it->second.as_bool();
     };
-    if (a.kind == "pathtrace" && param("directional_cache") && scene.materials[static_cast<int>(Lobe::diffuse)].empty())
+    const auto& diffuse = scene.materials[static_cast<int>(Lobe::diffuse)];
+    if (a.kind == "pathtrace" && param("directional_cache") && diffuse.size() == scene.elevation_weighted.size())
       report.warnings.push_back(a.loc.str() + ": '" + a.name +
-                                "' has directional_cache = true, but no material of the scene reflects diffusely (the "
-                                "cache answers only rays a diffuse lobe sends): it will answer nothing and only cost "
-                                "its filling pass");
+                                "' has directional_cache = true, but no material of the scene has a Lambert lobe (the "
+                                "cache answers only rays a Lambert lobe sends; metal_rough materials' are traced): it "
+                                "will answer nothing and only cost its filling pass");
     if (a.kind == "irradiance" && scene.materials[static_cast<int>(Lobe::diffuse)].empty())
       report.warnings.push_back(a.loc.str() + ": '" + a.name +
                                 "' caches diffuse light, but no material of the scene reflects diffusely: it has "
                                 "nothing to cache");
+    if (a.kind == "radiosity" && !scene.elevation_weighted.empty())
+      report.warnings.push_back(a.loc.str() + ": '" + a.name + "' takes metal_rough materials for black (" +
+                                quoted_list(scene.elevation_weighted, 3) +
+                                "): the light their bases reflect diffusely is not in its solution (an `irradiance` "
+                                "op over a path tracer lights them)");
   }
 }
 

@@ -165,8 +165,13 @@ TEST(LightPathCheck, ACacheWithNothingToCacheIsAWarning) {
   auto report = check_light_paths(s, lobes({Lobe::specular}));
   ASSERT_EQ(report.warnings.size(), 1u) << joined(report.warnings);
   EXPECT_TRUE(mentions(report.warnings, "farm.lua:1: 'paths' has directional_cache = true, but no material of the "
-                                        "scene reflects diffusely"));
+                                        "scene has a Lambert lobe"));
   EXPECT_TRUE(check_light_paths(s, lobes({Lobe::diffuse, Lobe::glossy})).warnings.empty());
+  // Diffuse lobes that are all metal_rough materials' (glTF): the directional cache answers none of their rays.
+  SceneLobes gltf = lobes({Lobe::diffuse, Lobe::glossy});
+  gltf.elevation_weighted = gltf.materials[static_cast<int>(Lobe::diffuse)];
+  EXPECT_TRUE(mentions(check_light_paths(s, gltf).warnings, "has directional_cache = true, but no material of the "
+                                                             "scene has a Lambert lobe"));
 
   FarmSpec cache;
   cache.light_paths = "partial";
@@ -175,6 +180,15 @@ TEST(LightPathCheck, ACacheWithNothingToCacheIsAWarning) {
   EXPECT_TRUE(mentions(report.warnings, "farm.lua:2: 'indirect' caches diffuse light, but no material of the scene "
                                         "reflects diffusely")) << joined(report.warnings);
   EXPECT_TRUE(check_light_paths(cache, lobes({Lobe::diffuse})).warnings.empty());
+  // An irradiance cache serves metal_rough materials' diffuse lobes; a radiosity solution takes them for black.
+  EXPECT_TRUE(check_light_paths(cache, gltf).warnings.empty()) << joined(check_light_paths(cache, gltf).warnings);
+  FarmSpec ring;
+  ring.light_paths = "partial";
+  ring.lighting = add(ring, "solution", "radiosity");
+  report = check_light_paths(ring, gltf);
+  ASSERT_EQ(report.warnings.size(), 1u) << joined(report.warnings);
+  EXPECT_TRUE(mentions(report.warnings, "farm.lua:1: 'solution' takes metal_rough materials for black ('mD')"));
+  EXPECT_TRUE(check_light_paths(ring, lobes({Lobe::diffuse})).warnings.empty());
 }
 
 TEST(LightPathCheck, GraphArrowsSayWhatTheyCarry) {

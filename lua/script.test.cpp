@@ -462,17 +462,19 @@ TEST_F(ScriptTest, TheSuggestedNetworksAreComplete) {
   const Lobes sets[] = {Lobes::of({Lobe::diffuse}), Lobes::of({Lobe::diffuse, Lobe::glossy}),
                         Lobes::of({Lobe::diffuse, Lobe::specular}), Lobes::all(), Lobes::of({Lobe::glossy}),
                         Lobes::of({Lobe::glossy, Lobe::specular})};
-  for (const Lobes& lobes : sets) {
-    auto r = evaluate_script(write("farm.lua", "scene { builtin = \"cornell\" }\n" + complete_network_for(lobes)));
-    ASSERT_TRUE(r.ok()) << r.error().message;
-    SceneLobes scene;
-    scene.lobes = lobes;
-    scene.emits = true;
-    for (int l = 0; l < kLobeCount; ++l)
-      if (lobes.has[l]) scene.materials[l] = {"m"};
-    const LightPathReport report = check_light_paths(*r, scene);
-    EXPECT_TRUE(report.errors.empty() && report.warnings.empty()) << complete_network_for(lobes);
-  }
+  for (const Lobes& lobes : sets)
+    for (bool worth_caching : {true, false}) {
+      const std::string network = complete_network_for(lobes, worth_caching);
+      auto r = evaluate_script(write("farm.lua", "scene { builtin = \"cornell\" }\n" + network));
+      ASSERT_TRUE(r.ok()) << r.error().message;
+      SceneLobes scene;
+      scene.lobes = lobes;
+      scene.emits = true;
+      for (int l = 0; l < kLobeCount; ++l)
+        if (lobes.has[l]) scene.materials[l] = {"m"};
+      const LightPathReport report = check_light_paths(*r, scene);
+      EXPECT_TRUE(report.errors.empty() && report.warnings.empty()) << network;
+    }
 }
 
 // A job: frames { } with a camera function or camera { keys }, output patterns, --frames, and their mistakes.

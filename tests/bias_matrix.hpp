@@ -20,7 +20,7 @@ struct Scene {
 
 // Diffuse (the Cornell box), mirror and glass (cornell_glass), glossy (McGuire's CornellBox-Glossy: a glossy sphere
 // and box), glossy everywhere (its walls, floor and ceiling given a Phong lobe from the script), a floor both
-// diffuse and a mirror, glTF's metal-roughness model on the sphere, the box and the floor, and rough glass.
+// diffuse and a mirror, glTF's metal-roughness model on every surface, and rough glass.
 // `mcguire`: the folder holding CornellBox-Glossy.obj.
 inline std::vector<Scene> scenes(const std::string& mcguire) {
   const std::string cornell_camera = "camera { eye = {278, 273, -800}, at = {278, 273, 0}, fov = 39.3 }\n";
@@ -34,11 +34,15 @@ inline std::vector<Scene> scenes(const std::string& mcguire) {
   // A floor that is diffuse and a mirror at once (MTL illum 3 with Kd): direct light and the caches take its Kd, the
   // specular op its mirror term, a photon map follows that term too.
   const std::string mirror_floor = glossy + "material \"floor\" { kd = {0.4, 0.4, 0.4}, mirror = {0.4, 0.4, 0.4} }\n";
-  // glTF's microfacet model: a rough gold sphere, a blue dielectric box and a shiny grey floor.
-  const std::string microfacet = glossy +
-                                 "material \"sphere\" { metallic = 1, roughness = 0.3, base_color = {0.95, 0.8, 0.5} }\n"
-                                 "material \"shortBox\" { metallic = 0, roughness = 0.5, base_color = {0.2, 0.4, 0.8} }\n"
-                                 "material \"floor\" { metallic = 0, roughness = 0.2, base_color = {0.7, 0.7, 0.7} }\n";
+  // glTF's microfacet model everywhere, as a glTF exporter writes a room: a rough gold sphere (much of its light
+  // scattered more than once between microfacets), a blue dielectric box, a shiny grey floor and walls and ceiling
+  // of their own colours under a rough coat. The caches light the bases and the gold's multiply scattered light.
+  std::string microfacet = glossy +
+                           "material \"sphere\" { metallic = 1, roughness = 0.8, base_color = {0.95, 0.8, 0.5} }\n"
+                           "material \"shortBox\" { metallic = 0, roughness = 0.5, base_color = {0.2, 0.4, 0.8} }\n"
+                           "material \"floor\" { metallic = 0, roughness = 0.2, base_color = {0.7, 0.7, 0.7} }\n";
+  for (const char* wall : {"leftWall", "rightWall", "ceiling", "backWall"})
+    microfacet += std::string("material \"") + wall + "\" { metallic = 0, roughness = 0.6 }\n";
   // Rough glass (glTF's transmission): a clear sphere and a tinted, rougher box, light reaching the floor through
   // both (L G+ D) and the walls seen through them.
   const std::string rough_glass =

@@ -185,12 +185,13 @@ void IrradianceCache::for_candidates(Vec3 x, Visit&& visit) const {
 }
 
 int IrradianceCache::lookup_first(Vec3 x, Vec3 n, std::span<const float> relax, RGB& irradiance,
-                                  uint32_t* records) const {
+                                  uint32_t* records, ElevationBands* bands) const {
   constexpr size_t kMaxBounds = 4;
   const size_t bounds = std::min(relax.size(), kMaxBounds);
   double weight_sum[kMaxBounds] = {};
   uint32_t count[kMaxBounds] = {};
   RGB sum[kMaxBounds] = {};
+  ElevationBands band_sum[kMaxBounds] = {};
   if (relax[bounds - 1] > max_relax_ * 1.0001f)
     throw std::invalid_argument("irradiance cache: a lookup wider than the cache was built for");
   const float widest = a_ * relax[bounds - 1];
@@ -215,17 +216,31 @@ int IrradianceCache::lookup_first(Vec3 x, Vec3 n, std::span<const float> relax, 
       const float value = base + dot(nxn, r.rotational[ch]) + dot(d, r.translational[ch]);
       (ch == 0 ? e.x : ch == 1 ? e.y : e.z) = std::max(0.0f, value);
     }
+    // The record's bands scaled per channel to its extrapolated irradiance (spread evenly where the record had
+    // none in that channel and the gradients give some).
+    ElevationBands scaled{};
+    if (bands) {
+      auto scale = [](float band, float base, float to) { return base > 0 ? band * (to / base) : to / kElevationBands; };
+      for (size_t j = 0; j < scaled.size(); ++j)
+        scaled[j] = RGB{scale(r.bands[j].x, r.irradiance.x, e.x), scale(r.bands[j].y, r.irradiance.y, e.y),
+                        scale(r.bands[j].z, r.irradiance.z, e.z)};
+    }
     for (size_t b = 0; b < bounds; ++b) {
       if (error >= a_ * relax[b]) continue;
       sum[b] += e * w;
       weight_sum[b] += w;
       ++count[b];
+      if (bands)
+        for (size_t j = 0; j < band_sum[b].size(); ++j) band_sum[b][j] += scaled[j] * w;
     }
   });
   for (size_t b = 0; b < bounds; ++b)
     if (weight_sum[b] > 0) {
-      irradiance = sum[b] * static_cast<float>(1.0 / weight_sum[b]);
+      const float inverse = static_cast<float>(1.0 / weight_sum[b]);
+      irradiance = sum[b] * inverse;
       if (records) *records = count[b];
+      if (bands)
+        for (size_t j = 0; j < bands->size(); ++j) (*bands)[j] = band_sum[b][j] * inverse;
       return static_cast<int>(b);
     }
   return -1;

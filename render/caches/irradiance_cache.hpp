@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "render/math.hpp"
+#include "render/shading/elevation_bands.hpp"
 
 namespace lf {
 
@@ -19,6 +20,9 @@ struct IrradianceRecord {
   float harmonic_distance;     // R_i: harmonic mean distance to what the hemisphere sees
   Vec3 rotational[3];          // d E / d(normal rotation), per channel
   Vec3 translational[3];       // d E / d position, per channel
+  // E split by the elevation its light arrives from (they sum to E): what lobes that weigh light by its elevation
+  // reflect (render/shading/elevation_bands.hpp). Filled by the op that traced the hemisphere.
+  ElevationBands bands{};
 };
 
 // Hemisphere samples of one record, stratified for cosine weighting: cell (j, k) has sin^2(theta) in
@@ -51,8 +55,10 @@ class IrradianceCache {
   // The lookups under bounds relax[0] * a, relax[1] * a, ... (ascending, at most 4 of them, each at most
   // max_relax) in one pass over the records: the index of the first that found records, its irradiance in
   // `irradiance`, or -1. Gives exactly what the separate lookups would. `records`, if given: how many records that
-  // answer averaged.
-  int lookup_first(Vec3 x, Vec3 n, std::span<const float> relax, RGB& irradiance, uint32_t* records = nullptr) const;
+  // answer averaged. `bands`, if given: that irradiance by elevation, each record's bands scaled to its
+  // extrapolated irradiance (so they sum to `irradiance`) and averaged with the same weights.
+  int lookup_first(Vec3 x, Vec3 n, std::span<const float> relax, RGB& irradiance, uint32_t* records = nullptr,
+                   ElevationBands* bands = nullptr) const;
   static constexpr float kMaxRelax = 4.0f;
   // How far behind a record's tangent plane, as a share of its R, a point may lie beyond what the surface's
   // curvature explains (rounding, meshes' facets).

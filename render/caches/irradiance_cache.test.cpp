@@ -109,6 +109,53 @@ TEST(IrradianceCache, ACacheBuiltForItsOwnBoundAnswersAsTheWidestOne) {
   }
 }
 
+// Asked for elevation bands, a lookup gives the same irradiance, and bands that sum to it: each record's bands
+// scaled to its gradient-extrapolated irradiance, weighed as the irradiance is. Records whose light came from one band
+// give that band alone; and the bands cost a Lambert lookup (which asks for none) nothing.
+TEST(IrradianceCache, BandsSumToTheIrradianceTheLookupGives) {
+  auto recs = records(3000, 6);
+  for (size_t i = 0; i < recs.size(); ++i) {
+    const size_t band = i % 3 == 0 ? 2 : i % kElevationBands;  // a third from band 2 alone, the rest spread
+    if (i % 3 == 0) {
+      recs[i].bands[band] = recs[i].irradiance;
+    } else {
+      for (size_t j = 0; j < kElevationBands; ++j) recs[i].bands[j] = recs[i].irradiance * (1.0f / kElevationBands);
+    }
+  }
+  IrradianceCache cache(0.2f, 17.3f), only_band_two(0.2f, 17.3f);
+  for (size_t i = 0; i < recs.size(); ++i) {
+    cache.insert(recs[i]);
+    if (i % 3 == 0) only_band_two.insert(recs[i]);
+  }
+  cache.freeze();
+  only_band_two.freeze();
+  const float bounds[3] = {1, 2, 4};
+  size_t answered = 0, answered_two = 0;
+  for (const Query& q : queries(4000, 7)) {
+    RGB plain, e;
+    ElevationBands bands;
+    const int at = cache.lookup_first(q.x, q.n, bounds, e, nullptr, &bands);
+    ASSERT_EQ(at, cache.lookup_first(q.x, q.n, bounds, plain));
+    if (at < 0) continue;
+    ++answered;
+    EXPECT_EQ(e.x, plain.x);
+    EXPECT_EQ(e.z, plain.z);
+    RGB sum{};
+    for (const RGB& b : bands) sum += b;
+    EXPECT_NEAR(sum.x, e.x, 1e-4f * (1 + e.x));
+    EXPECT_NEAR(sum.y, e.y, 1e-4f * (1 + e.y));
+    EXPECT_NEAR(sum.z, e.z, 1e-4f * (1 + e.z));
+    if (only_band_two.lookup_first(q.x, q.n, bounds, e, nullptr, &bands) >= 0) {
+      ++answered_two;
+      for (size_t j = 0; j < kElevationBands; ++j)
+        if (j != 2) EXPECT_EQ(bands[j], RGB{}) << j;
+      EXPECT_NEAR(bands[2].y, e.y, 1e-5f * (1 + e.y));
+    }
+  }
+  EXPECT_GT(answered, 1000u);
+  EXPECT_GT(answered_two, 300u);
+}
+
 // A record does not serve a parallel surface just behind its own (the ceiling above a light panel hung 1 cm under
 // it, where the panel's records, which see the open room, made a bright rim), but does serve points of a curved
 // surface that lie behind its tangent plane as far as the curvature between their normals explains.

@@ -1,5 +1,6 @@
 // glossy: indirect light reflected by a glossy lobe. At a point whose material has one (a Phong lobe, Ks > 0, or a
-// metal_rough material's whole microfacet BSDF, rough glass's refraction included),
+// metal_rough material's specular lobe and rough glass, refraction included: its base and its conductor's multiply
+// scattered light are diffuse lobes, the caches'),
 // `samples` directions drawn in proportion to that lobe; where each lands, the input is asked (in one batch) for
 // the light leaving that surface back towards the point. The answer is the lobe's share of the reflected light:
 // ks (ns + 2) / (ns + 1) cos(wi) times what arrives, averaged. One input.
@@ -8,7 +9,10 @@
 // (with multiple importance sampling between its light samples and its own lobe samples), so this op counts only
 // what its input says leaves the landing, i.e. light that has scattered at least once more. The two split the
 // lobe's light by path (L G for direct, L ... X G for this op), not by estimator, so neither needs the other's
-// densities. The diffuse part of the same material is the caches' or the path tracer's (irradiance: L ... D).
+// densities. The diffuse part of the same material is the caches' or the path tracer's (irradiance: L ... D), unless
+// `lobes = "all"`: then this op follows every lobe but mirrors and glass, the diffuse ones too (L ... X (D|G)),
+// for scenes where the light that bounces off diffuse surfaces is too little to be worth a cache's pre-pass (an
+// object under an open sky).
 #include "render/shading/bsdf.hpp"
 #include "render/lightops/lightop_registry.hpp"
 #include "render/shading/sampler.hpp"
@@ -21,7 +25,8 @@ class Glossy final : public LightOp {
  public:
   explicit Glossy(const ParamTable& p)
       : samples_(static_cast<int>(p.get_int("samples", 1, 1, 1 << 16))),
-        seed_(static_cast<uint64_t>(p.get_int("seed", 0, 0, INT32_MAX))) {}
+        seed_(static_cast<uint64_t>(p.get_int("seed", 0, 0, INT32_MAX))),
+        all_lobes_(p.get_string("lobes", "glossy", {"glossy", "all"}) == "all") {}
 
   Task setup(SceneContext ctx, Inputs& inputs) override {
     if (inputs.count() != 1) throw LightOpError("glossy needs one input");
@@ -32,7 +37,8 @@ class Glossy final : public LightOp {
   bool setup_sees_camera() const override { return false; }
 
   std::optional<LightPaths> paths(std::span<const LightPaths> inputs) const override {
-    return inputs.empty() ? LightPaths() : inputs[0].then(Lobe::glossy);
+    if (inputs.empty()) return LightPaths();
+    return all_lobes_ ? inputs[0].then(Lobe::glossy) + inputs[0].then(Lobe::diffuse) : inputs[0].then(Lobe::glossy);
   }
 
   Value stats() const override {
@@ -50,13 +56,14 @@ class Glossy final : public LightOp {
       radiance[i] = RGB{};
       const Material& m = scene.material(points.material[i]);
       const bool microfacet = m.type == Material::Type::metal_rough;
-      // A microfacet material's base colour may be a texture's; a Phong lobe needs no albedo.
+      // A microfacet material's base colour, and a diffuse lobe's, may be a texture's; a Phong lobe needs none.
       const float footprint = ctx_.pixel_footprint(points.position[i]);
       float metallic = 0, roughness = 0;
       if (microfacet) points.metal_rough(i, scene, footprint, metallic, roughness);
-      const Bsdf bsdf = microfacet ? Bsdf(m, points.albedo(i, scene, footprint), metallic, roughness, points.outside(i, scene))
-                                   : Bsdf(m);
-      if (!bsdf.has_glossy_lobe()) continue;
+      const Bsdf bsdf = microfacet || all_lobes_
+                            ? Bsdf(m, points.albedo(i, scene, footprint), metallic, roughness, points.outside(i, scene))
+                            : Bsdf(m);
+      if (!bsdf.has_glossy_lobe() && !(all_lobes_ && bsdf.has_diffuse_lobe())) continue;
       ++points_;
       const Vec3 ng = points.face_normal(i, scene);
       const Vec3 origin = scene.ray_origin(points.triangle_of(i), points.position[i], ng);
@@ -66,8 +73,12 @@ class Glossy final : public LightOp {
         const Uniform2 u = sampler.uniform2();
         // The microfacet model's choice between its parts takes one more number (after the pair, so a Phong
         // lobe's directions stay what they were).
-        const float part = microfacet ? sampler.uniform() : 0.5f;
-        auto sample = bsdf.sample_glossy(points.normal[i], points.wo[i], u.u, u.v, part);
+        const float part = microfacet || all_lobes_ ? sampler.uniform() : 0.5f;
+        // Every lobe: the whole BSDF's sample, its mirror term's left to `specular` (a sample that takes it is
+        // dropped, which leaves the other lobes' estimate as it is: sample() weighs them by their chance).
+        auto sample = all_lobes_ ? bsdf.sample(points.normal[i], points.wo[i], true, part, u.u, u.v)
+                                 : bsdf.sample_glossy(points.normal[i], points.wo[i], u.u, u.v, part);
+        if (sample && sample->delta) continue;
         // A reflection the shading normal allows below the face would leave through the surface: no light. Rough
         // glass sends its refractions through, below both normals, from beneath the face.
         if (!sample) continue;
@@ -106,6 +117,7 @@ class Glossy final : public LightOp {
  private:
   int samples_;
   uint64_t seed_;
+  bool all_lobes_;
   SceneContext ctx_;
   uint64_t points_ = 0, rays_ = 0, landed_ = 0;
 };

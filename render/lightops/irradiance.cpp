@@ -13,7 +13,9 @@
 // merged in order (all-gather), so every replica inserts the same records in the same order as a single op would. While
 // rendering, a point the cache cannot serve (with `relax`, not even under 2a, then 4a) computes its own value from
 // its own hemisphere samples and adds no record, so no point's value depends on which points came first.
-// Output: Kd / pi * E (the diffuse part); nothing on mirrors and glass.
+// Output: Kd / pi * E on a Lambert lobe; on a metal_rough material, what its base and its conductor's multiply
+// scattered light reflect of E, which they weigh by the elevation the light arrives from (the records keep E in
+// elevation bands, render/shading/elevation_bands.hpp); nothing on mirrors and glass, nor for glossy lobes.
 #include <algorithm>
 #include <array>
 #include <limits>
@@ -30,7 +32,7 @@
 namespace lf {
 namespace {
 
-constexpr std::string_view kCarriedTag = "LFIRRCACHE1";
+constexpr std::string_view kCarriedTag = "LFIRRCACHE2";  // 2: records with elevation bands
 
 bool finite(Vec3 v) { return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z); }
 
@@ -141,18 +143,23 @@ class Irradiance final : public LightOp {
     for (size_t i = 0; i < points.size(); ++i) {
       radiance[i] = RGB{};
       const Material& m = scene.material(points.material[i]);
-      if (!m.has_lambert_lobe()) continue;
+      if (!m.has_diffuse_lobe()) continue;
       // The records valid under a, else (with `relax`) under 2a and 4a: a point the cache barely misses then uses its
       // nearest records (deterministically: the cache does not change while rendering) instead of paying for its
       // own value. Such points lie mostly near what occludes them, where the records farther off are brighter.
       RGB e;
       uint32_t records = 0;
-      const int bound = cache_->lookup_first(points.position[i], points.normal[i], bounds_, e, &records);
+      // A Lambert lobe needs the irradiance alone; the others weigh it by elevation (Bsdf::reflect_bands).
+      const bool lambert = m.has_lambert_lobe();
+      ElevationBands bands;
+      const int bound = cache_->lookup_first(points.position[i], points.normal[i], bounds_, e, &records,
+                                             lambert ? nullptr : &bands);
       ++lookups_;
       if (bound >= 0) {
         ++served_[bound];
         records_used_ += records;
-        radiance[i] = points.albedo(i, scene, ctx_.pixel_footprint(points.position[i])) * e * (1.0f / kPi);
+        radiance[i] = lambert ? points.albedo(i, scene, ctx_.pixel_footprint(points.position[i])) * e * (1.0f / kPi)
+                              : reflected_by_bands(points, i, bands);
       } else {
         ++own_values_;
         misses.push_back(Candidate{points.position[i], points.normal[i], points.face_normal(i, scene),
@@ -167,8 +174,22 @@ class Irradiance final : public LightOp {
     else co_await compute(misses, inputs, own, m_, n_);
     for (size_t j = 0; j < misses.size(); ++j) {
       const size_t i = miss_owner[j];
-      radiance[i] = points.albedo(i, scene, ctx_.pixel_footprint(points.position[i])) * own[j].irradiance * (1.0f / kPi);
+      radiance[i] = scene.material(points.material[i]).has_lambert_lobe()
+                        ? points.albedo(i, scene, ctx_.pixel_footprint(points.position[i])) * own[j].irradiance * (1.0f / kPi)
+                        : reflected_by_bands(points, i, own[j].bands);
     }
+  }
+
+  // What point i's diffuse lobes (a metal_rough material's base and its conductor's multiply scattered light)
+  // reflect towards the camera of the irradiance `bands` bring.
+  RGB reflected_by_bands(const ShadingPoints& points, size_t i, const ElevationBands& bands) const {
+    const Scene& scene = *ctx_.scene;
+    const Material& m = scene.material(points.material[i]);
+    const float footprint = ctx_.pixel_footprint(points.position[i]);
+    float metallic = 0, roughness = 0;
+    points.metal_rough(i, scene, footprint, metallic, roughness);
+    const Bsdf bsdf(m, points.albedo(i, scene, footprint), metallic, roughness, points.outside(i, scene));
+    return bsdf.reflect_bands(points.normal[i], points.wo[i], bands);
   }
 
  private:
@@ -245,7 +266,7 @@ class Irradiance final : public LightOp {
     double total = 0;
     for (uint32_t t = 0; t < scene.triangle_count(); ++t) {
       const Material& m = scene.material(scene.material_of(t));
-      if (!m.has_lambert_lobe()) continue;
+      if (!m.has_diffuse_lobe()) continue;
       total += scene.area(t);
       tris.push_back(t);
       cdf.push_back(total);
@@ -305,7 +326,7 @@ class Irradiance final : public LightOp {
         const Vec3 n = sp.ng;
         const Material& m = scene.material(scene.material_of(t));
         if (!m.specular()) {
-          if (m.has_lambert_lobe()) found.emplace_back(ids[i], Candidate{p, sp.ns, sp.ng, splitmix64(ids[i] ^ 0xca3e5a), t});
+          if (m.has_diffuse_lobe()) found.emplace_back(ids[i], Candidate{p, sp.ns, sp.ng, splitmix64(ids[i] ^ 0xca3e5a), t});
           continue;
         }
         Vec3 dir = reflect(wo, n);
@@ -363,7 +384,7 @@ class Irradiance final : public LightOp {
       if (!hits[r].valid()) continue;
       const uint32_t t = hits[r].triangle;
       const Material& m = scene.material(scene.material_of(t));
-      if (!m.has_lambert_lobe()) continue;
+      if (!m.has_diffuse_lobe()) continue;
       const Vec3 x = rays[r].origin + rays[r].direction * hits[r].t;
       const SurfacePoint sp = surface_at(scene, t, x, -rays[r].direction);
       out.push_back(Candidate{x, sp.ns, sp.ng, splitmix64(seen[r / static_cast<size_t>(per)].key ^ (0x0e70000ull + r)), t});
@@ -420,6 +441,10 @@ class Irradiance final : public LightOp {
         s.distance[q] = hits[r].valid() ? hits[r].t : max_r;
       }
       IrradianceRecord rec = make_record(candidates[c].x, frames[c][0], frames[c][1], frames[c][2], s);
+      // E by the elevation of each ray's direction (cosine-weighted rays: pi / count each, as E sums them).
+      for (size_t q = 0; q < per; ++q)
+        rec.bands[static_cast<size_t>(elevation_band(dot(rays[c * per + q].direction, frames[c][2])))] +=
+            s.radiance[q] * (kPi / static_cast<float>(per));
       // The near field: the harmonic mean weighs a near occluder by the solid angle it covers, not by the light it
       // takes away, so a record a little way from a panel hung under a ceiling reached under the panel's shadow
       // (+50 % there). R is at most `nearest` times the distance to the nearest thing the hemisphere hits (the

@@ -62,10 +62,17 @@ struct Material {
   // Light passes through the surface along lobes that are not single directions (rough glass): such a point
   // gathers light from both sides.
   bool transmits() const { return type == Type::metal_rough && transmission > 0 && metallic < 1; }
-  // A Lambert lobe of its own (diffuse and glossy materials with kd): what the diffuse caches serve. A metal_rough
-  // material's base is not one: its share under the coating depends on both directions, so its whole BSDF is a
-  // glossy lobe, the `glossy` op's (docs/decisions.md, "Microfacet materials").
+  // A Lambert lobe of its own (diffuse and glossy materials with kd).
   bool has_lambert_lobe() const { return (type == Type::diffuse || type == Type::glossy) && !is_black(kd); }
+  // A lobe the diffuse caches serve (the light-path check's D): a Lambert lobe, or a metal_rough material's base
+  // under its coating or its conductor's multiply scattered light. Those two weigh light by its elevation alone,
+  // which a cache's records keep in bands (render/shading/elevation_bands.hpp); the rest of a metal_rough
+  // material (its specular lobe and rough glass) is a glossy lobe, the `glossy` op's (docs/decisions.md,
+  // "Microfacet materials").
+  bool has_diffuse_lobe() const {
+    if (type != Type::metal_rough) return has_lambert_lobe();
+    return metallic > 0 || (metallic < 1 && transmission < 1 && (!is_black(kd) || kd_map >= 0));
+  }
 };
 
 // The MTL illum model and coefficients as a Material (docs/lua-api.md, "Materials"): illum 5, and 3 without Kd, are

@@ -84,13 +84,13 @@ Vec3 suggested_eye(const Scene& s, Vec3 centre, float distance) {
 
 }  // namespace
 
-std::string complete_network_for(const Lobes& lobes) {
+std::string complete_network_for(const Lobes& lobes, bool worth_caching) {
   const bool glossy = lobes.contains(Lobe::glossy), mirrors = lobes.contains(Lobe::specular);
   // Without a diffuse lobe no cache has anything to hold, and the ops left would be a path tracer cut into
   // processes: on glTF's material balls (glossy only) it reached Cycles' noise in 1.35x Cycles' time, the path
   // tracer alone in 0.83x (bench/peer/README.md).
-  if (!lobes.contains(Lobe::diffuse))
-    return "renderers { lighting = lightop \"pathtrace\" {} }              -- no diffuse lobe: nothing to cache\n";
+  if (!lobes.contains(Lobe::diffuse) || !worth_caching)
+    return "renderers { lighting = lightop \"pathtrace\" {} }              -- no diffuse lobe worth caching\n";
   std::string s = "local paths    = lightop \"pathtrace\" {}                       -- what leaves the surfaces the ops below see\n"
                   "local direct   = lightop \"direct\" {}                          -- L(D|G)\n"
                   "local indirect = lightop \"irradiance\" { input = paths }       -- L(D|G|S)+D\n";
@@ -208,7 +208,14 @@ Result<std::string> describe_scene(const std::string& obj_path) {
                  std::to_string(lobes.materials[l].size()) + " material" + (lobes.materials[l].size() == 1 ? "" : "s");
   out += "  lobes      " + (present.empty() ? std::string("none") : present) + "\n";
   out += "  network    every light path on these lobes once:\n";
-  const std::string network = complete_network_for(lobes.lobes);
+  // A cache is worth its pre-pass where some surface reflects diffusely: a Lambert lobe, or a dielectric base under
+  // a metal_rough coating (not a metal's multiply scattered light alone).
+  bool worth_caching = false;
+  for (uint32_t t = 0; t < scene->triangle_count() && !worth_caching; ++t) {
+    const Material& m = scene->material(scene->material_of(t));
+    worth_caching = m.has_lambert_lobe() || (m.type == Material::Type::metal_rough && m.has_diffuse_lobe() && m.metallic < 1);
+  }
+  const std::string network = complete_network_for(lobes.lobes, worth_caching);
   for (size_t at = 0; at < network.size();) {
     const size_t end = network.find('\n', at);
     out += "    " + network.substr(at, end - at) + "\n";

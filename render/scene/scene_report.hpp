@@ -12,7 +12,8 @@ namespace lf {
 Result<std::string> describe_scene(const std::string& obj_path);
 
 // Lua for a network that counts every light path on these lobes once (docs/lua-api.md, "Light paths"): direct light,
-// caches and the ops the lobes need, or the path tracer alone where no lobe is diffuse.
-std::string complete_network_for(const Lobes& lobes);
+// caches and the ops the lobes need, or the path tracer alone where no lobe is diffuse or `worth_caching` is false
+// (the only diffuse lobe is metals' multiply scattered light, a small share of what they reflect).
+std::string complete_network_for(const Lobes& lobes, bool worth_caching = true);
 
 }  // namespace lf

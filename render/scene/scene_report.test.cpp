@@ -68,8 +68,8 @@ TEST(SceneReport, DescribesARoomAndFramesIt) {
 // A material-test setup: a small knob in front of a large backdrop, lit by a lamp on the same side (-z). The camera
 // looks from that side, where the backdrop's lit face and the knob are, not at the backdrop's unlit back (+z, the
 // view every scene got before: an image of zeros).
-// Glossy surfaces only (glTF's metal-roughness model everywhere, a black lamp): no cache would hold anything, so the
-// suggestion is the path tracer, which the light-path check finds complete.
+// Metal surfaces only (glTF's metal-roughness model everywhere, a black lamp): a cache would hold only the metals'
+// multiply scattered light, so the suggestion is the path tracer, which the light-path check finds complete.
 TEST(SceneReport, AllGlossyScenesGetThePathTracer) {
   const auto dir = std::filesystem::temp_directory_path() / ("lightfarm-report-glossy-" + std::to_string(::getpid()));
   std::filesystem::create_directories(dir);
@@ -80,7 +80,7 @@ TEST(SceneReport, AllGlossyScenesGetThePathTracer) {
   auto text = describe_scene(obj);
   std::filesystem::remove_all(dir);
   ASSERT_TRUE(text.ok()) << text.error().message;
-  EXPECT_NE(text->find("  lobes      G (glossy) on 1 material\n"), std::string::npos) << *text;
+  EXPECT_NE(text->find("  lobes      D (diffuse) on 1 material, G (glossy) on 1 material\n"), std::string::npos) << *text;
   EXPECT_NE(text->find("renderers { lighting = lightop \"pathtrace\" {} }"), std::string::npos) << *text;
   EXPECT_EQ(text->find("irradiance"), std::string::npos) << *text;
 }

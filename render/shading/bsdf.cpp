@@ -78,7 +78,13 @@ std::optional<Bsdf::Sample> Bsdf::sample_microfacet(Vec3 n, Vec3 wo, float u0, f
 }
 
 std::optional<Bsdf::Sample> Bsdf::sample_glossy(Vec3 n, Vec3 wo, float u1, float u2, float u0) const {
-  if (microfacet_) return sample_microfacet(n, wo, u0, u1, u2);
+  if (microfacet_) {
+    if (dot(n, wo) <= 0) return std::nullopt;
+    const Frame f(n);
+    const auto s = microfacet_->sample_glossy(f.local(wo), u0, u1, u2);
+    if (!s || !(s->pdf > 0)) return std::nullopt;
+    return Sample{normalize(f.world(s->wi)), s->weight, s->pdf, false};
+  }
   if (!has_glossy_lobe() || dot(n, wo) <= 0) return std::nullopt;
   const Vec3 wi = phong_direction(reflect(wo, n), m_.ns, u1, u2);
   const float cos_i = dot(n, wi);
@@ -87,6 +93,13 @@ std::optional<Bsdf::Sample> Bsdf::sample_glossy(Vec3 n, Vec3 wo, float u1, float
   const float ca = std::max(0.0f, dot(reflect(wo, n), wi));
   const float pdf = (m_.ns + 1.0f) / (2.0f * kPi) * std::pow(ca, m_.ns);
   return Sample{wi, m_.ks * ((m_.ns + 2.0f) / (m_.ns + 1.0f) * cos_i), pdf, false};
+}
+
+RGB Bsdf::reflect_bands(Vec3 n, Vec3 wo, const ElevationBands& irradiance) const {
+  if (microfacet_) return dot(n, wo) > 0 ? microfacet_->reflect_bands(Frame(n).local(wo), irradiance) : RGB{};
+  RGB e{};
+  for (const RGB& band : irradiance) e += band;
+  return has_diffuse_lobe() ? kd_ * e * (1.0f / kPi) : RGB{};
 }
 
 std::optional<Bsdf::Sample> Bsdf::sample_mirror_term(Vec3 n, Vec3 wo) const {

@@ -46,9 +46,18 @@ class Bsdf {
 
   // A glossy material's Phong lobe alone: whether it has one, and a direction drawn in proportion to it, weighted
   // by that lobe's f * cos / pdf (the diffuse part left out: the `glossy` LightOp's share of the BSDF).
-  // A metal_rough material's whole BSDF is its glossy lobe; u0 chooses between its parts (a Phong lobe needs none).
+  // A metal_rough material's glossy lobes are its specular lobe and its rough glass; u0 chooses between them (a
+  // Phong lobe needs none).
   bool has_glossy_lobe() const { return microfacet_ || (m_.type == Material::Type::glossy && !is_black(m_.ks)); }
   std::optional<Sample> sample_glossy(Vec3 n, Vec3 wo, float u1, float u2, float u0 = 0.5f) const;
+  // The lobes a diffuse cache lights: a Lambert lobe (diffuse and glossy materials' kd), or a metal_rough
+  // material's base under its coating and its conductor's multiply scattered light (their share of each direction
+  // of arrival depends on the elevation alone). What they reflect towards wo of light whose irradiance arrives in
+  // elevation bands around n: kd / pi times the irradiance, or MetalRoughness::reflect_bands.
+  bool has_diffuse_lobe() const {
+    return microfacet_ ? microfacet_->has_diffuse() : !is_delta() && !is_black(kd_);
+  }
+  RGB reflect_bands(Vec3 n, Vec3 wo, const ElevationBands& irradiance) const;
   // A glossy surface's lobes one at a time (the directional cache answers its diffuse lobe's rays): the mirror term,
   // the Lambert lobe or the Phong lobe, chosen as sample() chooses; the weight is that lobe's f * cos over the
   // chance of choosing it times its density, `pdf` that product (for MIS with light samples of the same lobe).

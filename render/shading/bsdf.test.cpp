@@ -104,8 +104,14 @@ TEST(Bsdf, MetalRoughIsTheMicrofacetModelAroundTheNormal) {
         ASSERT_NEAR(smp->weight.x, expect.x, 1e-3f * std::max(1.0f, expect.x));
         albedo += smp->weight.y;
       }
-      if (auto g = b.sample_glossy(n, wo, rng.uniform(), rng.uniform(), rng.uniform())) {
-        EXPECT_NEAR(g->pdf, b.pdf_glossy(n, wo, g->wi), 1e-3f * g->pdf);
+      // The glossy lobes alone: the model's, turned around the normal.
+      const float u0 = rng.uniform(), u1 = rng.uniform(), u2 = rng.uniform();
+      const auto g = b.sample_glossy(n, wo, u1, u2, u0);
+      const auto expected_g = model.sample_glossy(local_wo, u0, u1, u2);
+      ASSERT_EQ(g.has_value(), expected_g.has_value());
+      if (g) {
+        EXPECT_NEAR(g->pdf, expected_g->pdf, 1e-3f * g->pdf);
+        EXPECT_NEAR(g->weight.y, expected_g->weight.y, 1e-3f * std::max(1.0f, g->weight.y));
       }
     }
     EXPECT_LE(albedo / count, 1.0) << theta;

@@ -18,7 +18,9 @@ SceneLobes scene_lobes(const Scene& scene, const std::vector<Material>* material
     const Material& m = materials ? (*materials)[id] : scene.material(static_cast<uint32_t>(id));
     out.emits = out.emits || m.emissive();
     const bool has[kLobeCount] = {
-        (m.type == Material::Type::diffuse || m.type == Material::Type::glossy) && (!is_black(m.kd) || m.kd_map >= 0),
+        m.type == Material::Type::metal_rough ? m.has_diffuse_lobe()
+                                              : (m.type == Material::Type::diffuse || m.type == Material::Type::glossy) &&
+                                                    (!is_black(m.kd) || m.kd_map >= 0),
         (m.type == Material::Type::glossy && !is_black(m.ks)) || m.type == Material::Type::metal_rough,
         m.type == Material::Type::glass || (m.type == Material::Type::mirror && !is_black(m.ks)) || m.has_mirror_term(),
     };
@@ -27,6 +29,7 @@ SceneLobes scene_lobes(const Scene& scene, const std::vector<Material>* material
         out.lobes.has[l] = true;
         out.materials[l].push_back(m.name);
       }
+    if (has[static_cast<int>(Lobe::diffuse)] && m.type == Material::Type::metal_rough) out.elevation_weighted.push_back(m.name);
 
   }
   return out;

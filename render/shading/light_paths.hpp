@@ -41,6 +41,10 @@ struct SceneLobes {
   Lobes lobes;
   bool emits = false;
   std::vector<std::string> materials[kLobeCount];  // names of the materials with each lobe, in material order
+  // Of the materials with a D lobe, those whose D is a metal_rough material's (its base and its conductor's
+  // multiply scattered light, which weigh light by its elevation): `irradiance` and path tracing light it; the
+  // radiosity solution and the directional cache, which hold Lambert light only, do not.
+  std::vector<std::string> elevation_weighted;
 };
 // `materials`: the scene's materials as a job's frame changes them (the same list, in the same order).
 SceneLobes scene_lobes(const Scene& scene, const std::vector<Material>* materials = nullptr);

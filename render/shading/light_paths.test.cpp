@@ -46,20 +46,27 @@ TEST(LightPaths, ChainsKeepWhatEndsOnTheirLandingLobes) {
             (std::vector<std::string>{"LS", "LDS", "LGS", "LSS"}));
 }
 
-// A scene's lobes by material: a metal_rough material's whole BSDF is a glossy lobe (its base under the coating is
-// no Lambert lobe the caches could serve), so only ops that follow glossy lobes reach it.
-TEST(LightPaths, AMetalRoughMaterialIsOneGlossyLobe) {
+// A scene's lobes by material: a metal_rough material is a glossy lobe (its specular lobe, its rough glass) and a
+// diffuse one (its base under the coating, a conductor's multiply scattered light), which the caches serve by
+// elevation bands; rough glass alone, or a perfectly smooth metal, is glossy only.
+TEST(LightPaths, AMetalRoughMaterialIsAGlossyAndADiffuseLobe) {
   Scene s;
   Material ball{"ball", {0.8f, 0.8f, 0.8f}, {}};
   ball.type = Material::Type::metal_rough;
+  Material glass = ball;
+  glass.name = "glass";
+  glass.transmission = 1;
   s.add_quad({0, 0, 0}, {1, 0, 0}, {1, 0, 1}, {0, 0, 1}, s.add_material(ball));
+  s.add_quad({0, 0, 2}, {1, 0, 2}, {1, 0, 3}, {0, 0, 3}, s.add_material(glass));
   s.add_quad({0, 1, 0}, {0, 1, 1}, {1, 1, 1}, {1, 1, 0}, s.add_material({"lamp", {}, {1, 1, 1}}));
   ASSERT_TRUE(s.finalize("lobes").ok());
   const SceneLobes found = scene_lobes(s);
-  EXPECT_EQ(found.materials[static_cast<int>(Lobe::glossy)], (std::vector<std::string>{"ball"}));
-  EXPECT_TRUE(found.materials[static_cast<int>(Lobe::diffuse)].empty());
+  EXPECT_EQ(found.materials[static_cast<int>(Lobe::glossy)], (std::vector<std::string>{"ball", "glass"}));
+  EXPECT_EQ(found.materials[static_cast<int>(Lobe::diffuse)], (std::vector<std::string>{"ball"}));
   EXPECT_TRUE(found.materials[static_cast<int>(Lobe::specular)].empty());
   EXPECT_FALSE(ball.has_lambert_lobe());
+  EXPECT_TRUE(ball.has_diffuse_lobe());
+  EXPECT_FALSE(glass.has_diffuse_lobe());
 }
 
 TEST(LightPaths, SummariesNameTheShapes) {

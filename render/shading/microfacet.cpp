@@ -123,6 +123,18 @@ const MicrofacetAlbedo& MicrofacetAlbedo::table() {
           average += 2.0 * t.e[kind][r][i] * mu_at(i) / kN;  // 2 times the integral of E(mu) mu over [0, 1]
         }
         t.average[kind][r] = static_cast<float>(average);
+        // The band means of the interpolated table eval() reads, weighted by the cosine (midpoint rule in it).
+        constexpr int kSteps = 32;
+        const float (&rows)[kN][kN] = t.e[kind];
+        for (int j = 0; j < kElevationBands; ++j) {
+          double sum = 0, weight = 0;
+          for (int q = 0; q < kSteps; ++q) {
+            const float mu = 1 - (static_cast<float>(j) + (q + 0.5f) / kSteps) / kElevationBands;
+            sum += mu * table_lookup(rows, mu, roughness_at(r));
+            weight += mu;
+          }
+          t.band[kind][r][j] = static_cast<float>(sum / weight);
+        }
       }
     return t;
   }();
@@ -136,6 +148,19 @@ float MicrofacetAlbedo::conductor_average(float roughness) const {
 }
 float MicrofacetAlbedo::dielectric_average(float roughness) const {
   return lerp_at(average[1], std::clamp(roughness, 0.0f, 1.0f) * (kN - 1));
+}
+
+float MicrofacetAlbedo::conductor_band(int j, float roughness) const {
+  const float r = std::clamp(roughness, 0.0f, 1.0f) * (kN - 1);
+  const int k = std::min(static_cast<int>(r), kN - 2);
+  const float t = r - static_cast<float>(k);
+  return band[0][k][j] * (1 - t) + band[0][k + 1][j] * t;
+}
+float MicrofacetAlbedo::dielectric_band(int j, float roughness) const {
+  const float r = std::clamp(roughness, 0.0f, 1.0f) * (kN - 1);
+  const int k = std::min(static_cast<int>(r), kN - 2);
+  const float t = r - static_cast<float>(k);
+  return band[1][k][j] * (1 - t) + band[1][k + 1][j] * t;
 }
 
 std::optional<Vec3> RoughDielectric::half_vector(Vec3 wo, Vec3 wi) const {
@@ -241,6 +266,47 @@ RGB MetalRoughness::eval_diffuse(Vec3 wo, Vec3 wi) const {
     f += base_ * (dielectric_weight_ * passed / (kPi * (1 - dielectric_average_)));
   }
   return f;
+}
+
+RGB MetalRoughness::reflect_bands(Vec3 wo, const ElevationBands& irradiance) const {
+  if (wo.z <= 0) return {};
+  const MicrofacetAlbedo& table = MicrofacetAlbedo::table();
+  RGB out{};
+  if (conductor_weight_ > 0 && conductor_average_ < 1) {
+    RGB passed{};
+    for (int j = 0; j < kElevationBands; ++j)
+      passed += irradiance[static_cast<size_t>(j)] * (1 - table.conductor_band(j, roughness_));
+    out += multiple_scattering_fresnel_ * passed *
+           (conductor_weight_ * (1 - table.conductor(wo.z, roughness_)) / (kPi * (1 - conductor_average_)));
+  }
+  if (dielectric_weight_ > 0) {
+    RGB passed{};
+    for (int j = 0; j < kElevationBands; ++j)
+      passed += irradiance[static_cast<size_t>(j)] * (1 - table.dielectric_band(j, roughness_));
+    out += base_ * passed *
+           (dielectric_weight_ * (1 - table.dielectric(wo.z, roughness_)) / (kPi * (1 - dielectric_average_)));
+  }
+  return out;
+}
+
+std::optional<MetalRoughness::Sample> MetalRoughness::sample_glossy(Vec3 wo, float u0, float u1, float u2) const {
+  if (wo.z <= 0) return std::nullopt;
+  // The rough dielectric with its share against the reflecting parts (as sample() takes it), else the specular
+  // lobe's visible normals.
+  const float pg = glass_probability(wo);
+  std::optional<Vec3> wi;
+  if (u0 < pg) {
+    wi = glass_.sample(wo, std::min(u0 / pg, 0x1.fffffep-1f), u1, u2);
+  } else {
+    wi = reflect_about(wo, ggx_.sample_visible_normal(wo, u1, u2));
+    if (wi->z <= 0) return std::nullopt;
+  }
+  if (!wi) return std::nullopt;
+  float p = pg > 0 ? pg * glass_.pdf(wo, *wi) : 0.0f;
+  if (pg < 1 && wi->z > 0) p += (1 - pg) * ggx_.pdf(wo, *wi);
+  if (!(p > 0)) return std::nullopt;
+  const RGB f = eval_specular(wo, *wi) + eval_transmitting(wo, *wi);
+  return Sample{*wi, f * (std::fabs(wi->z) / p), p};
 }
 
 // The specular lobe's share of what wo reflects, from each lobe's albedo at wo. A lobe that reflects anything

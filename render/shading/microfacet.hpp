@@ -12,6 +12,7 @@
 #include <optional>
 
 #include "render/math.hpp"
+#include "render/shading/elevation_bands.hpp"
 
 namespace lf {
 
@@ -51,11 +52,16 @@ struct MicrofacetAlbedo {
   float conductor_average(float roughness) const;
   float dielectric(float mu, float roughness) const;
   float dielectric_average(float roughness) const;
+  // E averaged over elevation band j (render/shading/elevation_bands.hpp), weighted by the cosine: what a band's
+  // irradiance loses to the layer above the lobe it reaches.
+  float conductor_band(int j, float roughness) const;
+  float dielectric_band(int j, float roughness) const;
   static const MicrofacetAlbedo& table();
 
   static constexpr int kSize = 32;
   float e[2][kSize][kSize];  // [conductor, dielectric][roughness][mu]
   float average[2][kSize];
+  float band[2][kSize][kElevationBands];  // [conductor, dielectric][roughness][band]
 };
 
 // A rough dielectric interface (Walter, Marschner, Li and Torrance 2007, "Microfacet Models for Refraction through
@@ -123,6 +129,15 @@ class MetalRoughness {
   RGB eval_specular(Vec3 wo, Vec3 wi) const;
   RGB eval_diffuse(Vec3 wo, Vec3 wi) const;  // the conductor's multiple scattering and the base
   RGB eval_transmitting(Vec3 wo, Vec3 wi) const;  // the rough dielectric's reflection and transmission
+  // Whether eval_diffuse() is ever more than 0 (a perfectly smooth conductor's, or rough glass's, is not).
+  bool has_diffuse() const { return dielectric_weight_ > 0 || (conductor_weight_ > 0 && conductor_average_ < 1); }
+  // What eval_diffuse() reflects towards wo of light whose irradiance arrives split into elevation bands: its
+  // factor of wi, 1 - E(cos theta_i), averaged over each band (the lobe is the same in every azimuth). This is
+  // how a diffuse cache's records light these lobes.
+  RGB reflect_bands(Vec3 wo, const ElevationBands& irradiance) const;
+  // The glossy lobes alone: the specular lobe and the rough dielectric (what `glossy` follows; the others are the
+  // diffuse caches'). A direction drawn in proportion to them, weighted by their f cos / pdf.
+  std::optional<Sample> sample_glossy(Vec3 wo, float u0, float u1, float u2) const;
   // Whether wi below the surface gets anything (the rough dielectric's share is not 0).
   bool transmits() const { return glass_weight_ > 0; }
 
