@@ -3,7 +3,9 @@
 // the path tracer's time. Goal: at most 1/3, with no setting but the image's samples (the quality knob) changed.
 //
 // Scenes: Lost Empire as examples/lost_empire.lua sets it up; Lost Empire with its main blocks given a glossy lobe
-// from the script; McGuire's CornellBox-Glossy with the light quad of tests/bias_matrix.hpp, and with its walls
+// from the script, and given glTF's metal-roughness model as exporters write it (a dielectric under a rough coat);
+// Blender's glTF material-ball grid under an HDRI (without its sun) by examples/material_balls.lua's network and
+// path tracer; McGuire's CornellBox-Glossy with the light quad of tests/bias_matrix.hpp, and with its walls
 // glossy too; McGuire's other boxes as their files give them (original, glossy floor, mirror, sphere, water and
 // the four empty ones); the built-in Cornell box. The network is examples/lost_empire.lua's (`lighting = "network"`), with
 // each scene's lines swapped in as bias_matrix.hpp swaps them; the path tracer is examples/pathtrace.lua's (Lost
@@ -95,6 +97,27 @@ std::vector<Case> cases(const std::string& src, const std::string& pid) {
     glossy.insert(glossy.find(after), lobes);
     const std::string shiny = bench::temp_script(pid + "lost_empire_glossy.lua", glossy);
     out.push_back({"lost_empire_glossy", shiny, shiny, network, pathtrace});
+    // The same blocks as a glTF exporter writes every material: metal-roughness, a dielectric under a rough coat.
+    std::string coated = text;
+    std::string bases;
+    for (const char* m : {"Stone", "Grass", "Dirt", "Cobblestone", "Wooden_Plank", "Gravel", "Log", "Sand"})
+      bases += std::string("material \"") + m + "\" { metallic = 0, roughness = 0.6 }\n";
+    coated.insert(coated.find(after), bases);
+    const std::string metal_rough = bench::temp_script(pid + "lost_empire_metal_rough.lua", coated);
+    out.push_back({"lost_empire_metal_rough", metal_rough, metal_rough, network, pathtrace});
+  }
+  // Blender's glTF material-ball grid under an HDRI, by examples/material_balls.lua's own network and path tracer;
+  // without the file's sun, whose sub-degree glints on the smooth balls and their caustics on the floor are rare
+  // samples of thousands of times a pixel's value (one such pixel made a single render's error 0.06 or 0.79).
+  if (const std::string balls = bench::shared_scene("gltf/balls.glb"); !balls.empty()) {
+    // The example's paths (the file and the HDRI folder) made absolute.
+    std::string text = read_file(src + "/examples/material_balls.lua");
+    const std::string relative = "../../shared/scenes/gltf/", absolute = balls.substr(0, balls.size() - 9);
+    for (size_t at = text.find(relative); at != std::string::npos; at = text.find(relative, at + absolute.size()))
+      text.replace(at, relative.size(), absolute);
+    const std::string script = bench::temp_script(pid + "material_balls.lua", text);
+    out.push_back({"material_balls", script, script, {"lighting=network", "sun=0", "width=320", "height=180"},
+                   {"lighting=pathtrace", "sun=0", "width=320", "height=180"}});
   }
   if (!mcguire.empty()) {
     std::vector<lf::bias::Scene> boxes;
