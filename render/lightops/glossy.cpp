@@ -9,7 +9,10 @@
 // (with multiple importance sampling between its light samples and its own lobe samples), so this op counts only
 // what its input says leaves the landing, i.e. light that has scattered at least once more. The two split the
 // lobe's light by path (L G for direct, L ... X G for this op), not by estimator, so neither needs the other's
-// densities. The diffuse part of the same material is the caches' or the path tracer's (irradiance: L ... D), unless
+// densities. A lobe that reflects a small share of a point's light (a dielectric's coat: 5-15 %) gets few samples:
+// each is kept with chance q = twice the lobe's share of what the point reflects (at most 1) and weighted by 1 / q
+// (Russian roulette, unbiased): its noise is a small part of the pixel's, and a path per lit sample was most of a
+// coated scene's rendering (`roulette = false`: every sample). The diffuse part of the same material is the caches' or the path tracer's (irradiance: L ... D), unless
 // `lobes = "all"`: then this op follows every lobe but mirrors and glass, the diffuse ones too (L ... X (D|G)),
 // for scenes where the light that bounces off diffuse surfaces is too little to be worth a cache's pre-pass (an
 // object under an open sky).
@@ -26,7 +29,8 @@ class Glossy final : public LightOp {
   explicit Glossy(const ParamTable& p)
       : samples_(static_cast<int>(p.get_int("samples", 1, 1, 1 << 16))),
         seed_(static_cast<uint64_t>(p.get_int("seed", 0, 0, INT32_MAX))),
-        all_lobes_(p.get_string("lobes", "glossy", {"glossy", "all"}) == "all") {}
+        all_lobes_(p.get_string("lobes", "glossy", {"glossy", "all"}) == "all"),
+        roulette_(p.get_bool("roulette", true)) {}
 
   Task setup(SceneContext ctx, Inputs& inputs) override {
     if (inputs.count() != 1) throw LightOpError("glossy needs one input");
@@ -65,6 +69,9 @@ class Glossy final : public LightOp {
                             : Bsdf(m);
       if (!bsdf.has_glossy_lobe() && !(all_lobes_ && bsdf.has_diffuse_lobe())) continue;
       ++points_;
+      // The chance each of its samples is followed (every lobe, with lobes = "all").
+      const float keep = roulette_ && !all_lobes_ ? std::min(1.0f, 2 * bsdf.glossy_share(points.normal[i], points.wo[i])) : 1.0f;
+      if (!(keep > 0)) continue;
       const Vec3 ng = points.face_normal(i, scene);
       const Vec3 origin = scene.ray_origin(points.triangle_of(i), points.position[i], ng);
       for (int s = 0; s < samples_; ++s) {
@@ -79,13 +86,14 @@ class Glossy final : public LightOp {
         auto sample = all_lobes_ ? bsdf.sample(points.normal[i], points.wo[i], true, part, u.u, u.v)
                                  : bsdf.sample_glossy(points.normal[i], points.wo[i], u.u, u.v, part);
         if (sample && sample->delta) continue;
+        if (keep < 1 && sampler.uniform() >= keep) continue;
         // A reflection the shading normal allows below the face would leave through the surface: no light. Rough
         // glass sends its refractions through, below both normals, from beneath the face.
         if (!sample) continue;
         const bool through = bsdf.transmits() && above_both(-sample->wi, points.normal[i], ng);
         if (!through && dot(sample->wi, ng) <= 0) continue;
         rays.push_back(Ray{through ? scene.ray_origin(points.triangle_of(i), points.position[i], -ng) : origin, sample->wi});
-        weights.push_back(sample->weight);
+        weights.push_back(keep < 1 ? sample->weight * (1.0f / keep) : sample->weight);
         owners.push_back(i);
         sample_of.push_back(static_cast<uint32_t>(s));
       }
@@ -117,7 +125,7 @@ class Glossy final : public LightOp {
  private:
   int samples_;
   uint64_t seed_;
-  bool all_lobes_;
+  bool all_lobes_, roulette_;
   SceneContext ctx_;
   uint64_t points_ = 0, rays_ = 0, landed_ = 0;
 };

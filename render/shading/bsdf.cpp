@@ -95,6 +95,11 @@ std::optional<Bsdf::Sample> Bsdf::sample_glossy(Vec3 n, Vec3 wo, float u1, float
   return Sample{wi, m_.ks * ((m_.ns + 2.0f) / (m_.ns + 1.0f) * cos_i), pdf, false};
 }
 
+float Bsdf::glossy_share(Vec3 n, Vec3 wo) const {
+  if (microfacet_) return dot(n, wo) > 0 ? microfacet_->glossy_share(Frame(n).local(wo)) : 0.0f;
+  return has_glossy_lobe() ? 1.0f - diffuse_probability() : 0.0f;
+}
+
 RGB Bsdf::reflect_bands(Vec3 n, Vec3 wo, const ElevationBands& irradiance) const {
   if (microfacet_) return dot(n, wo) > 0 ? microfacet_->reflect_bands(Frame(n).local(wo), irradiance) : RGB{};
   RGB e{};

@@ -50,6 +50,9 @@ class Bsdf {
   // Phong lobe needs none).
   bool has_glossy_lobe() const { return microfacet_ || (m_.type == Material::Type::glossy && !is_black(m_.ks)); }
   std::optional<Sample> sample_glossy(Vec3 n, Vec3 wo, float u1, float u2, float u0 = 0.5f) const;
+  // The glossy lobes' share of what the surface reflects towards wo (its mirror term aside): ks against kd for a
+  // Phong lobe, MetalRoughness::glossy_share for a metal_rough material.
+  float glossy_share(Vec3 n, Vec3 wo) const;
   // The lobes a diffuse cache lights: a Lambert lobe (diffuse and glossy materials' kd), or a metal_rough
   // material's base under its coating and its conductor's multiply scattered light (their share of each direction
   // of arrival depends on the elevation alone). What they reflect towards wo of light whose irradiance arrives in

@@ -138,6 +138,12 @@ class MetalRoughness {
   // The glossy lobes alone: the specular lobe and the rough dielectric (what `glossy` follows; the others are the
   // diffuse caches'). A direction drawn in proportion to them, weighted by their f cos / pdf.
   std::optional<Sample> sample_glossy(Vec3 wo, float u0, float u1, float u2) const;
+  // The glossy lobes' share of what wo reflects and transmits, by the lobes' albedos (as sample() chooses them).
+  float glossy_share(Vec3 wo) const {
+    if (wo.z <= 0) return 0;
+    const float pg = glass_probability(wo);
+    return pg + (1 - pg) * specular_probability(wo);
+  }
   // Whether wi below the surface gets anything (the rough dielectric's share is not 0).
   bool transmits() const { return glass_weight_ > 0; }
 
