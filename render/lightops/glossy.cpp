@@ -9,10 +9,14 @@
 // (with multiple importance sampling between its light samples and its own lobe samples), so this op counts only
 // what its input says leaves the landing, i.e. light that has scattered at least once more. The two split the
 // lobe's light by path (L G for direct, L ... X G for this op), not by estimator, so neither needs the other's
-// densities. A lobe that reflects a small share of a point's light (a dielectric's coat: 5-15 %) gets few samples:
-// each is kept with chance q = twice the lobe's share of what the point reflects (at most 1) and weighted by 1 / q
-// (Russian roulette, unbiased): its noise is a small part of the pixel's, and a path per lit sample was most of a
-// coated scene's rendering (`roulette = false`: every sample). The diffuse part of the same material is the caches' or the path tracer's (irradiance: L ... D), unless
+// densities.
+//
+// A lobe that reflects a small share of a point's light (a dielectric's coat: 5-15 %) gets few samples: each is
+// kept with chance q = twice the lobe's share of what the point reflects (at most 1) and weighted by 1 / q (Russian
+// roulette, unbiased). Its noise is a small part of the pixel's, and a path per lit sample was most of a coated
+// scene's rendering (`roulette = false`: every sample).
+//
+// The diffuse part of the same material is the caches' or the path tracer's (irradiance: L ... D), unless
 // `lobes = "all"`: then this op follows every lobe but mirrors and glass, the diffuse ones too (L ... X (D|G)),
 // for scenes where the light that bounces off diffuse surfaces is too little to be worth a cache's pre-pass (an
 // object under an open sky).
