@@ -150,18 +150,18 @@ float MicrofacetAlbedo::dielectric_average(float roughness) const {
   return lerp_at(average[1], std::clamp(roughness, 0.0f, 1.0f) * (kN - 1));
 }
 
-float MicrofacetAlbedo::conductor_band(int j, float roughness) const {
+namespace {
+// A band's mean at the roughness, linear between the table's roughnesses (as table_lookup is).
+float band_lookup(const float (&bands)[kN][kElevationBands], int j, float roughness) {
   const float r = std::clamp(roughness, 0.0f, 1.0f) * (kN - 1);
   const int k = std::min(static_cast<int>(r), kN - 2);
   const float t = r - static_cast<float>(k);
-  return band[0][k][j] * (1 - t) + band[0][k + 1][j] * t;
+  return bands[k][j] * (1 - t) + bands[k + 1][j] * t;
 }
-float MicrofacetAlbedo::dielectric_band(int j, float roughness) const {
-  const float r = std::clamp(roughness, 0.0f, 1.0f) * (kN - 1);
-  const int k = std::min(static_cast<int>(r), kN - 2);
-  const float t = r - static_cast<float>(k);
-  return band[1][k][j] * (1 - t) + band[1][k + 1][j] * t;
-}
+}  // namespace
+
+float MicrofacetAlbedo::conductor_band(int j, float roughness) const { return band_lookup(band[0], j, roughness); }
+float MicrofacetAlbedo::dielectric_band(int j, float roughness) const { return band_lookup(band[1], j, roughness); }
 
 std::optional<Vec3> RoughDielectric::half_vector(Vec3 wo, Vec3 wi) const {
   if (wo.z <= 0 || wi.z == 0) return std::nullopt;
@@ -271,21 +271,20 @@ RGB MetalRoughness::eval_diffuse(Vec3 wo, Vec3 wi) const {
 RGB MetalRoughness::reflect_bands(Vec3 wo, const ElevationBands& irradiance) const {
   if (wo.z <= 0) return {};
   const MicrofacetAlbedo& table = MicrofacetAlbedo::table();
+  // The irradiance the layer above a lobe lets through to it, band by band.
+  auto passed = [&](float (MicrofacetAlbedo::*band)(int, float) const) {
+    RGB sum{};
+    for (int j = 0; j < kElevationBands; ++j)
+      sum += irradiance[static_cast<size_t>(j)] * (1 - (table.*band)(j, roughness_));
+    return sum;
+  };
   RGB out{};
-  if (conductor_weight_ > 0 && conductor_average_ < 1) {
-    RGB passed{};
-    for (int j = 0; j < kElevationBands; ++j)
-      passed += irradiance[static_cast<size_t>(j)] * (1 - table.conductor_band(j, roughness_));
-    out += multiple_scattering_fresnel_ * passed *
+  if (conductor_weight_ > 0 && conductor_average_ < 1)
+    out += multiple_scattering_fresnel_ * passed(&MicrofacetAlbedo::conductor_band) *
            (conductor_weight_ * (1 - table.conductor(wo.z, roughness_)) / (kPi * (1 - conductor_average_)));
-  }
-  if (dielectric_weight_ > 0) {
-    RGB passed{};
-    for (int j = 0; j < kElevationBands; ++j)
-      passed += irradiance[static_cast<size_t>(j)] * (1 - table.dielectric_band(j, roughness_));
-    out += base_ * passed *
+  if (dielectric_weight_ > 0)
+    out += base_ * passed(&MicrofacetAlbedo::dielectric_band) *
            (dielectric_weight_ * (1 - table.dielectric(wo.z, roughness_)) / (kPi * (1 - dielectric_average_)));
-  }
   return out;
 }
 
