@@ -240,4 +240,12 @@ std::vector<std::string> light_path_summaries(const FarmSpec& spec) {
   return out;
 }
 
+std::vector<std::optional<AnswerEnds>> answer_ends(const FarmSpec& spec) {
+  const Composition c = compose_all(spec);
+  std::vector<std::optional<AnswerEnds>> out(spec.actors.size());
+  for (size_t i = 0; i < spec.actors.size(); ++i)
+    if (c.paths[i]) out[i] = c.paths[i]->ends();
+  return out;
+}
+
 }  // namespace lf

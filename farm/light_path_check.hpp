@@ -11,6 +11,7 @@
 //                  (a network meant to compute part of the light, e.g. direct light alone)
 //
 // Exec actors (plug-ins) do not say what they compute: a network with one is not checked, which a warning says.
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -30,5 +31,10 @@ LightPathReport check_light_paths(const FarmSpec& spec, const SceneLobes& scene)
 // What each actor's answer counts, over every lobe (no scene needed): a short summary per actor index, empty for
 // actors that are not LightOps or do not say. For the arrows of `lightfarm graph`.
 std::vector<std::string> light_path_summaries(const FarmSpec& spec);
+
+// Where each actor's answer can be other than zero (LightPaths::ends), by actor index: a pool's as its replicas';
+// nullopt for actors that are not LightOps or do not say (plug-ins, and whatever asks one of them). What the
+// director tells each asker of an input (CONFIG inputs[i].answers_at), so that it asks only about those points.
+std::vector<std::optional<AnswerEnds>> answer_ends(const FarmSpec& spec);
 
 }  // namespace lf

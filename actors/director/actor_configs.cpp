@@ -5,13 +5,15 @@
 #include "actors/codecs/control_codec.hpp"
 #include "farm/builders.hpp"
 #include "farm/kind_params.hpp"
+#include "farm/light_path_check.hpp"
 #include "farm/pool_subset.hpp"
 #include "render/lightops/lightop_registry.hpp"
 
 namespace lf {
 
 ActorConfig config_for(const FarmSpec& spec, int actor, const std::function<std::string(int)>& endpoint_of,
-                       const std::function<std::string(int)>& key_of, std::optional<int> pool_index) {
+                       const std::function<std::string(int)>& key_of, std::optional<int> pool_index,
+                       const std::vector<std::optional<AnswerEnds>>* answers) {
   const ActorSpec& a = spec.actors[static_cast<size_t>(actor)];
   ActorConfig config;
   config.params = a.params;
@@ -32,6 +34,7 @@ ActorConfig config_for(const FarmSpec& spec, int actor, const std::function<std:
     if (!input.dispatched_by_clients) {
       config.inputs.push_back({input.name, endpoint_of(in), window, key_of ? key_of(in) : std::string()});
       config.inputs.back().lean = lean(in);
+      if (answers) config.inputs.back().answers = (*answers)[static_cast<size_t>(in)];
       continue;
     }
     // A pool this actor dispatches to itself: its replicas, each with the pool's window.
@@ -60,6 +63,7 @@ ActorConfig config_for(const FarmSpec& spec, int actor, const std::function<std:
                                   key_of ? key_of(r) : std::string()});
       spec_in.replicas.back().lean = lean(r);
     }
+    if (answers) spec_in.answers = (*answers)[static_cast<size_t>(in)];
     config.inputs.push_back(std::move(spec_in));
   }
   config.runtime = a.runtime;
@@ -95,7 +99,7 @@ ActorConfig ConfigBuilder::build(const ActorRecord& a, const ActorTable& actors)
   auto endpoint_of = [&](int i) { return actors.at(name_of(i)).endpoint; };
   std::function<std::string(int)> key_of;
   if (d_.curve()) key_of = [&](int i) { return d_.public_key_of(name_of(i)); };
-  ActorConfig config = config_for(spec_, a.index, endpoint_of, key_of, pools_.at(static_cast<size_t>(a.index)));
+  ActorConfig config = config_for(spec_, a.index, endpoint_of, key_of, pools_.at(static_cast<size_t>(a.index)), &answers_);
   std::vector<InputSpec> inputs;
   for (auto& in : config.inputs) {
     if (actors.at(in.name).lost) continue;

@@ -13,13 +13,16 @@
 #include "actors/director/supervisor.hpp"
 #include "actors/runtime/actor_config.hpp"
 #include "farm/farm_spec.hpp"
+#include "farm/light_path_check.hpp"
 
 namespace lf {
 
 // `endpoint_of(i)`: the data endpoint actor i said in its HELLO; `key_of(i)` (for a CURVE farm): its public key;
-// `pool`: the actor's pool (FarmSpec::pools), if known: a farm's every CONFIG looking it up was quadratic.
+// `pool`: the actor's pool (FarmSpec::pools), if known: a farm's every CONFIG looking it up was quadratic;
+// `answers`: where each actor's answer can be other than zero (answer_ends), told to its askers; null: not told.
 ActorConfig config_for(const FarmSpec& spec, int actor, const std::function<std::string(int)>& endpoint_of,
-                       const std::function<std::string(int)>& key_of = {}, std::optional<int> pool = std::nullopt);
+                       const std::function<std::string(int)>& key_of = {}, std::optional<int> pool = std::nullopt,
+                       const std::vector<std::optional<AnswerEnds>>* answers = nullptr);
 
 // CONFIG as the director sends it: config_for() over the actor table (where each actor said it listens, who is
 // lost) and the deployment (scene caches, a partitioned scene's parts, CURVE keys).
@@ -27,7 +30,7 @@ class ConfigBuilder {
  public:
   using ActorTable = std::map<std::string, ActorRecord>;
   ConfigBuilder(const FarmSpec& spec, const Deployment& deployment)
-      : spec_(spec), d_(deployment), pools_(spec.pools()) {}
+      : spec_(spec), d_(deployment), pools_(spec.pools()), answers_(answer_ends(spec)) {}
   // What actor `a` is told; inputs lost before it was configured are left out (they may never have said where
   // they listen).
   ActorConfig build(const ActorRecord& a, const ActorTable& actors) const;
@@ -46,6 +49,7 @@ class ConfigBuilder {
   const FarmSpec& spec_;
   const Deployment& d_;
   std::vector<int> pools_;  // each actor's pool (FarmSpec::pools)
+  std::vector<std::optional<AnswerEnds>> answers_;  // each actor's (answer_ends)
 };
 
 }  // namespace lf

@@ -80,6 +80,59 @@ TEST(ActorConfigs, OnlyBuiltInLightOpsAreAskedWithLeanRequests) {
   EXPECT_FALSE(decoded->inputs[1].lean);
 }
 
+// Each asker is told where each input's answer can be other than zero (CONFIG inputs[i].answers_at), from the
+// light paths the network composes: a glossy op's points are glossy ones, a pool's as its replicas', and a
+// plug-in's, which says nothing, everywhere. It survives CONFIG's encoding.
+TEST(ActorConfigs, AskersAreToldWhereEachInputsAnswerReaches) {
+  FarmSpec spec;
+  const int paths = add_actor(spec, ActorSpec{.name = "paths", .kind = "pathtrace"});
+  const int direct = add_actor(spec, ActorSpec{.name = "direct", .kind = "direct"});
+  const int shiny = add_actor(spec, ActorSpec{.name = "shiny", .kind = "glossy", .inputs = {paths}});
+  const int mirror = add_actor(spec, ActorSpec{.name = "mirror", .kind = "specular", .inputs = {direct}});
+  const int lamps = add_actor(spec, ActorSpec{.name = "lamps", .kind = "emission"});
+  const int plugin = add_actor(spec, ActorSpec{.name = "mine", .kind = "exec", .runtime = {{"cmd", "./mine"}}});
+  PoolSpec pool;
+  pool.op = add_actor(spec, ActorSpec{.name = "cache", .kind = "irradiance", .inputs = {paths}});
+  pool.replicas = 2;
+  auto cache = replicate(spec, pool);
+  ASSERT_TRUE(cache.ok());
+  const int sum = add_actor(spec, ActorSpec{.name = "sum", .kind = "combine",
+                                            .inputs = {direct, shiny, mirror, lamps, *cache, plugin}});
+  add_renderers(spec, 1, sum, RendererParams{}, {}, {});
+  settle_pool_dispatch(spec);
+  auto endpoint = [](int i) { return "tcp://host:" + std::to_string(6000 + i); };
+  const auto answers = answer_ends(spec);
+
+  const ActorConfig told = config_for(spec, sum, endpoint, {}, std::nullopt, &answers);
+  auto decoded = ActorConfig::from_value(told.to_value());
+  ASSERT_TRUE(decoded.ok()) << decoded.error().message;
+  const char* expected[] = {"DG", "G", "S", "L", "D", nullptr};
+  for (const ActorConfig* c : std::initializer_list<const ActorConfig*>{&told, &*decoded}) {
+    ASSERT_EQ(c->inputs.size(), 6u);
+    for (size_t i = 0; i < 6; ++i) {
+      SCOPED_TRACE(c->inputs[i].name);
+      if (!expected[i]) {
+        EXPECT_FALSE(c->inputs[i].answers);
+        continue;
+      }
+      ASSERT_TRUE(c->inputs[i].answers);
+      EXPECT_EQ(c->inputs[i].answers->letters(), expected[i]);
+    }
+  }
+  EXPECT_TRUE(told.inputs[4].is_pool());
+  // The renderer asks a combine with a plug-in among its inputs: what that answers is not known.
+  EXPECT_FALSE(config_for(spec, spec.find("renderer-0"), endpoint, {}, std::nullopt, &answers).inputs[0].answers);
+  // Not told (a caller without the composition): nothing is left out.
+  EXPECT_FALSE(config_for(spec, sum, endpoint).inputs[0].answers);
+
+  Value bad = told.to_value();
+  bad.as_map()["inputs"].as_array()[0].as_map()["answers_at"] = "DQ";
+  auto refused = ActorConfig::from_value(bad);
+  ASSERT_FALSE(refused.ok());
+  EXPECT_NE(refused.error().message.find("answers_at must be letters of L, D, G and S"), std::string::npos)
+      << refused.error().message;
+}
+
 // Each client of a large pool connects to a subset of its replicas (farm/pool_subset.hpp): CONFIG lists every
 // replica, the client's subset first, and says how many that is; the clients' subsets cover every replica evenly.
 // A client also connects to the replicas on its own host (IPC, no CURVE), up to as many again. The subset

@@ -18,12 +18,25 @@ Value::Array inputs_value(const std::vector<InputSpec>& inputs) {
     if (!in.key.empty()) entry["key"] = in.key;
     if (in.lean) entry["lean"] = true;
     if (in.part >= 0) entry["part"] = in.part;
+    if (in.answers) entry["answers_at"] = in.answers->letters();
     ins.push_back(std::move(entry));
   }
   return ins;
 }
 
 Status read_inputs(const Value& body, const char* field, std::vector<InputSpec>& out, bool pools_allowed = false);
+
+// An input's `answers_at`: letters of L, D, G, S; absent: unknown.
+Status read_answers_at(const Value& entry, InputSpec& in) {
+  const Value* at = entry.find("answers_at");
+  if (!at || at->is_nil()) return Ok{};
+  std::optional<AnswerEnds> ends;
+  if (at->is_string() && at->as_string().size() <= 8) ends = AnswerEnds::parse(at->as_string());
+  if (!ends)
+    return make_error("CONFIG input '" + in.name + "': answers_at must be letters of L, D, G and S", ErrorCode::bad_request);
+  in.answers = ends;
+  return Ok{};
+}
 
 // An input's `pool` {strategy, split, seed, replicas: [...]} (a pool this actor dispatches to itself).
 Status read_pool(const std::string& name, const Value& pool, InputSpec& in) {
@@ -67,6 +80,7 @@ Status read_inputs(const Value& body, const char* field, std::vector<InputSpec>&
                           ErrorCode::bad_request);
       if (window) spec.window = window->as_int();
       if (auto st = read_pool(spec.name, *pool, spec); !st) return st;
+      if (auto st = read_answers_at(in, spec); !st) return st;
       out.push_back(std::move(spec));
       continue;
     }
@@ -97,6 +111,8 @@ Status read_inputs(const Value& body, const char* field, std::vector<InputSpec>&
                           ErrorCode::bad_request);
       out.back().part = part->as_int();
     }
+    if (pools_allowed)
+      if (auto st = read_answers_at(in, out.back()); !st) return st;
   }
   return Ok{};
 }

@@ -10,6 +10,7 @@
 #include "core/result.hpp"
 #include "core/specs.hpp"
 #include "core/value.hpp"
+#include "render/shading/light_paths.hpp"
 
 namespace lf {
 
@@ -31,6 +32,10 @@ struct InputSpec {
   // The input takes a shade request's `nrm` and `m` from the scene when it carries `tri` (a built-in LightOp): the
   // asker may leave them out (CONFIG inputs[i].lean). A pool is lean when all its replicas are.
   bool lean = false;
+  // Where the input's answer can be other than zero (CONFIG inputs[i].answers_at: the lobes, and L for emission,
+  // that end the paths it counts): the runtime asks it only about points whose materials those reach. nullopt: the
+  // farm does not know (a plug-in), and every point is asked about.
+  std::optional<AnswerEnds> answers;
   // A pool's replica that holds a part of a partitioned scene itself (CONFIG replicas[j].part; partition
   // { colocate = true }): the points that lie in that part go to it. -1: none.
   int64_t part = -1;

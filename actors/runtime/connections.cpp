@@ -31,6 +31,7 @@ Status Connections::connect_config(const ActorConfig& config, const std::string&
   for (const auto& in : config.inputs) {
     LightingInput input;
     input.name = in.name;
+    input.answers = in.answers;
     if (!in.is_pool()) {
       auto row = add(Group::lighting, in);
       if (!row) return row.error();

@@ -33,6 +33,7 @@ class Connections {
     std::unique_ptr<PoolClient> pool;  // or a pool dispatched here
     bool lean = false;                 // it takes normals and materials from the scene
     bool holds_parts = false;          // some replica holds a scene part itself
+    std::optional<AnswerEnds> answers;  // where its answer can be other than zero (CONFIG inputs[i].answers_at)
     // A pool's replicas beyond its subset (CONFIG pool.subset), in CONFIG's order: one is connected in place of
     // each replica of the subset that is lost.
     std::deque<InputSpec> spares;

@@ -28,6 +28,7 @@
 #include <optional>
 
 #include "actors/codecs/shade_codec.hpp"
+#include "actors/runtime/answered_points.hpp"
 #include "actors/runtime/frame_scene.hpp"
 #include "actors/runtime/lean_points.hpp"
 #include "actors/runtime/remote_tracing.hpp"
@@ -43,8 +44,8 @@ namespace {
 // Predecessors reached over the wire: each query becomes one or more batched, asynchronous requests.
 class RemoteInputs final : public Inputs {
  public:
-  RemoteInputs(Runtime& rt, size_t batch, const Scene& scene, ViewsInFlight& views)
-      : rt_(rt), batch_(batch), scene_(scene), views_(views) {}
+  RemoteInputs(Runtime& rt, size_t batch, const FrameScene& frame_scene, ViewsInFlight& views)
+      : rt_(rt), batch_(batch), scene_(frame_scene.shipped()), frame_scene_(frame_scene), views_(views) {}
   size_t count() const override { return rt_.input_count(); }
 
   Gather gather(std::vector<InputQuery> queries) override {
@@ -57,21 +58,35 @@ class RemoteInputs final : public Inputs {
         continue;
       }
       q.radiance->assign(q.points->size(), RGB{});
-      for (size_t begin = 0; begin < q.points->size(); begin += batch_) {
-        const size_t end = std::min(begin + batch_, q.points->size());
+      // Only the points the input's answer can reach; the rest stay zero (answered_points.hpp).
+      const ShadingPoints* asked = q.points;
+      AnsweredPoints answered;
+      std::shared_ptr<const std::vector<uint32_t>> places;  // null: the asked points are the points
+      if (const auto& ends = rt_.input_answers(q.input)) {
+        answered = answered_points(*q.points, frame_scene_.scene()->materials(), *ends);
+        if (!answered.all) {
+          asked = &answered.points;
+          places = std::make_shared<const std::vector<uint32_t>>(std::move(answered.index));
+        }
+      }
+      for (size_t begin = 0; begin < asked->size(); begin += batch_) {
+        const size_t end = std::min(begin + batch_, asked->size());
         ++state->remaining;
         auto* out = q.radiance;
         const std::string input_name = rt_.input_name(q.input);
         Value body = encode_shade_request(
-            *q.points, begin, end, rt_.input_is_lean(q.input) ? fields_to_send(*q.points, begin, end, scene_) : PointFields{});
+            *asked, begin, end, rt_.input_is_lean(q.input) ? fields_to_send(*asked, begin, end, scene_) : PointFields{});
         if (view) set_shade_view(body, *view);
         rt_.ask_input(
             q.input, wire::Op::shade, std::move(body),
-            [state, out, begin, end, input_name](Result<wire::Message> r) {
+            [state, out, begin, end, input_name, places](Result<wire::Message> r) {
               if (!r) return state->complete_one(r.error().message);
               auto radiance = decode_radiance(r->body, end - begin);
               if (!radiance) return state->complete_one(input_name + ": " + radiance.error().message);
-              std::copy(radiance->begin(), radiance->end(), out->begin() + static_cast<ptrdiff_t>(begin));
+              if (!places)
+                std::copy(radiance->begin(), radiance->end(), out->begin() + static_cast<ptrdiff_t>(begin));
+              else
+                for (size_t k = 0; k < radiance->size(); ++k) (*out)[(*places)[begin + k]] = (*radiance)[k];
               state->complete_one();
             });
       }
@@ -83,6 +98,7 @@ class RemoteInputs final : public Inputs {
   Runtime& rt_;
   size_t batch_;
   const Scene& scene_;
+  const FrameScene& frame_scene_;  // the frame's materials, which say what an input's answer reaches
   ViewsInFlight& views_;
 };
 
@@ -256,7 +272,7 @@ class LightOpActor final : public Actor {
     height_ = config.image.height;
     sampler_ = sampler_of(config.image);
     lit_samples_ = config.image.shaded_per_pixel();
-    inputs_ = std::make_unique<RemoteInputs>(rt, 4096, frame_scene_.shipped(), *views_);
+    inputs_ = std::make_unique<RemoteInputs>(rt, 4096, frame_scene_, *views_);
     if (config.pool) {
       replica_index_ = static_cast<int>(config.pool->index);
       replica_count_ = static_cast<int>(config.pool->count);

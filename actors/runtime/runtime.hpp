@@ -155,6 +155,8 @@ class Runtime {
   bool input_is_pool(size_t i) const { return connections_.lighting()[i].pool != nullptr; }
   // Input i takes normals and materials from the scene (CONFIG inputs[i].lean; a pool: every replica does).
   bool input_is_lean(size_t i) const { return connections_.lighting()[i].lean; }
+  // Where input i's answer can be other than zero (CONFIG inputs[i].answers_at); nullopt: anywhere.
+  const std::optional<AnswerEnds>& input_answers(size_t i) const { return connections_.lighting()[i].answers; }
   // Throws for a pool.
   wire::RequestClient& input(size_t i) { return *connections_.rows().at(connections_.lighting()[i].row).client; }
   const std::string& input_name(size_t i) const { return connections_.lighting()[i].name; }

@@ -8,6 +8,31 @@
 
 namespace lf {
 
+Lobes material_lobes(const Material& m) {
+  return Lobes{{
+      m.type == Material::Type::metal_rough ? m.has_diffuse_lobe()
+                                            : (m.type == Material::Type::diffuse || m.type == Material::Type::glossy) &&
+                                                  (!is_black(m.kd) || m.kd_map >= 0),
+      (m.type == Material::Type::glossy && !is_black(m.ks)) || m.type == Material::Type::metal_rough,
+      m.type == Material::Type::glass || (m.type == Material::Type::mirror && !is_black(m.ks)) || m.has_mirror_term(),
+  }};
+}
+
+bool AnswerEnds::reaches(const Material& m) const {
+  if (emission && m.emissive()) return true;
+  const Lobes has = material_lobes(m);
+  for (int l = 0; l < kLobeCount; ++l)
+    if (lobes.has[l] && has.has[l]) return true;
+  return false;
+}
+
+std::string AnswerEnds::letters() const {
+  std::string s = emission ? "L" : "";
+  for (int l = 0; l < kLobeCount; ++l)
+    if (lobes.has[l]) s += kLobeLetters[l];
+  return s;
+}
+
 SceneLobes scene_lobes(const Scene& scene, const std::vector<Material>* materials) {
   std::vector<bool> used(scene.materials().size(), false);
   for (uint32_t t = 0; t < scene.triangle_count(); ++t) used[scene.material_of(t)] = true;
@@ -17,19 +42,13 @@ SceneLobes scene_lobes(const Scene& scene, const std::vector<Material>* material
     if (!used[id]) continue;
     const Material& m = materials ? (*materials)[id] : scene.material(static_cast<uint32_t>(id));
     out.emits = out.emits || m.emissive();
-    const bool has[kLobeCount] = {
-        m.type == Material::Type::metal_rough ? m.has_diffuse_lobe()
-                                              : (m.type == Material::Type::diffuse || m.type == Material::Type::glossy) &&
-                                                    (!is_black(m.kd) || m.kd_map >= 0),
-        (m.type == Material::Type::glossy && !is_black(m.ks)) || m.type == Material::Type::metal_rough,
-        m.type == Material::Type::glass || (m.type == Material::Type::mirror && !is_black(m.ks)) || m.has_mirror_term(),
-    };
+    const Lobes has = material_lobes(m);
     for (int l = 0; l < kLobeCount; ++l)
-      if (has[l]) {
+      if (has.has[l]) {
         out.lobes.has[l] = true;
         out.materials[l].push_back(m.name);
       }
-    if (has[static_cast<int>(Lobe::diffuse)] && m.type == Material::Type::metal_rough) out.elevation_weighted.push_back(m.name);
+    if (has.contains(Lobe::diffuse) && m.type == Material::Type::metal_rough) out.elevation_weighted.push_back(m.name);
 
   }
   return out;
@@ -61,6 +80,29 @@ std::optional<size_t> appended(size_t index, int x) {
 int last_lobe(size_t index) { return static_cast<int>((index - 1) % 3); }
 
 }  // namespace
+
+std::optional<AnswerEnds> AnswerEnds::parse(std::string_view letters) {
+  AnswerEnds e;
+  for (char c : letters) {
+    if (c == 'L') {
+      e.emission = true;
+      continue;
+    }
+    const int l = lobe_of(c);
+    if (l < 0) return std::nullopt;
+    e.lobes.has[l] = true;
+  }
+  return e;
+}
+
+AnswerEnds LightPaths::ends() const {
+  AnswerEnds e;
+  e.emission = counts_[0] != 0;
+  for (size_t i = 1; i < kPathCount; ++i)
+    if (counts_[i] != 0) e.lobes.has[last_lobe(i)] = true;
+  return e;
+}
+
 
 std::string LightPaths::path_of(size_t index) {
   std::string events;

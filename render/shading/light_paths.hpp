@@ -11,6 +11,7 @@
 // kMaxEvents are not tracked: their light is a product of that many reflectances.
 #include <array>
 #include <cstdint>
+#include <optional>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -35,6 +36,23 @@ struct Lobes {
 
 class Scene;
 struct Material;
+
+// The lobes a material has: D (a Lambert lobe, or a metal_rough material's base and multiply scattered light),
+// G (a Phong lobe, a metal_rough material's specular lobe and rough glass), S (mirror, glass, a mirror term).
+Lobes material_lobes(const Material& m);
+
+// Where an op's answer can be other than zero: at a point whose material has one of `lobes` (the last events of the
+// paths it counts), and, with `emission`, at a point that emits (the lone L). The runtime asks an input only about
+// the points its answer reaches (CONFIG inputs[i].answers_at, docs/PROTOCOL.md).
+struct AnswerEnds {
+  Lobes lobes;
+  bool emission = false;
+  bool reaches(const Material& m) const;
+  // "L" for emission, then the lobes' letters in DGS order: "LD", "G", "" (nowhere).
+  std::string letters() const;
+  // nullopt for a letter that is not one of L, D, G, S.
+  static std::optional<AnswerEnds> parse(std::string_view letters);
+};
 
 // The lobes the scene's materials have where at least one triangle uses them, and whether anything emits.
 struct SceneLobes {
@@ -67,6 +85,8 @@ class LightPaths {
   LightPaths then(Lobe x) const;
   // Each path w becomes w X^k for k in min..max.
   LightPaths then_repeated(Lobe x, int min, int max) const;
+  // Where an answer that counts these paths can be other than zero.
+  AnswerEnds ends() const;
   // Only the paths whose last event is in `lobes` (and the lone L where `with_emission`): what an answer holds at a
   // point that has those lobes.
   LightPaths ending_in(Lobes lobes, bool with_emission) const;
