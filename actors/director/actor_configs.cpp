@@ -99,7 +99,8 @@ ActorConfig ConfigBuilder::build(const ActorRecord& a, const ActorTable& actors)
   auto endpoint_of = [&](int i) { return actors.at(name_of(i)).endpoint; };
   std::function<std::string(int)> key_of;
   if (d_.curve()) key_of = [&](int i) { return d_.public_key_of(name_of(i)); };
-  ActorConfig config = config_for(spec_, a.index, endpoint_of, key_of, pools_.at(static_cast<size_t>(a.index)), &answers_);
+  ActorConfig config = config_for(spec_, a.index, endpoint_of, key_of, pools_.at(static_cast<size_t>(a.index)),
+                                  d_.answers.empty() ? nullptr : &d_.answers);
   std::vector<InputSpec> inputs;
   for (auto& in : config.inputs) {
     if (actors.at(in.name).lost) continue;

@@ -13,7 +13,6 @@
 #include "actors/director/supervisor.hpp"
 #include "actors/runtime/actor_config.hpp"
 #include "farm/farm_spec.hpp"
-#include "farm/light_path_check.hpp"
 
 namespace lf {
 
@@ -30,7 +29,7 @@ class ConfigBuilder {
  public:
   using ActorTable = std::map<std::string, ActorRecord>;
   ConfigBuilder(const FarmSpec& spec, const Deployment& deployment)
-      : spec_(spec), d_(deployment), pools_(spec.pools()), answers_(answer_ends(spec)) {}
+      : spec_(spec), d_(deployment), pools_(spec.pools()) {}
   // What actor `a` is told; inputs lost before it was configured are left out (they may never have said where
   // they listen).
   ActorConfig build(const ActorRecord& a, const ActorTable& actors) const;
@@ -49,7 +48,6 @@ class ConfigBuilder {
   const FarmSpec& spec_;
   const Deployment& d_;
   std::vector<int> pools_;  // each actor's pool (FarmSpec::pools)
-  std::vector<std::optional<AnswerEnds>> answers_;  // each actor's (answer_ends)
 };
 
 }  // namespace lf

@@ -7,6 +7,7 @@
 #include <set>
 
 #include "farm/builders.hpp"
+#include "farm/light_path_check.hpp"
 
 namespace lf {
 namespace {

@@ -223,6 +223,7 @@ Deployment Deployer::finish(const Scene& scene) {
     d_.local_address = *address;
   }
   if (spec_.security == "curve") make_keys();
+  d_.answers = answer_ends(spec_);
   return std::move(d_);
 }
 

@@ -6,6 +6,7 @@
 #include <future>
 #include <map>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -13,6 +14,7 @@
 #include "farm/farm_spec.hpp"
 #include "render/tracing/partition.hpp"
 #include "render/scene/scene.hpp"
+#include "render/shading/light_paths.hpp"
 #include "transport/security.hpp"
 
 namespace lf {
@@ -24,6 +26,9 @@ struct Deployment {
   std::map<std::string, std::string> agent_sockets;  // host -> its host agent's socket, where one runs
   std::vector<ScenePart> parts;                     // partition { parts = N }: what each geometry actor holds
   std::string local_address;  // set when the farm spans hosts: where this machine's actors and the director listen
+  // Where each actor's answer can be other than zero (answer_ends, by actor index), told to its askers in CONFIG:
+  // composed once here, not for every actor configured.
+  std::vector<std::optional<AnswerEnds>> answers;
   // CURVE (farm { security = "curve" }): a keypair for the director and one per actor process; the authenticator
   // lets in only the actors' keys.
   wire::CurveKeys director_keys;
