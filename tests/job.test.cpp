@@ -32,9 +32,14 @@ end
 local single = param("frame", 0)
 -- --set lit_from=K: from frame K on the light is brighter and whiter (frames { materials }; with --set frame=N,
 -- material "light" { } says the same for a farm of frame N alone); --set dark_from=K turns it off from frame K.
+-- --set glossy_from=K: from frame K on the white walls have a glossy lobe as well.
 local lit_from, dark_from, warm_from = param("lit_from", 0), param("dark_from", 0), param("warm_from", 0)  -- warm: redder
+local glossy_from = param("glossy_from", 0)
 local function lamp(f)
   if dark_from > 0 and f >= dark_from then return { light = { emission = {0, 0, 0} } } elseif warm_from > 0 and f >= warm_from then return { light = { emission = {40, 20, 10} } } end
+  if glossy_from > 0 and f >= glossy_from then
+    return { white = { type = "glossy", kd = {0.55, 0.54, 0.52}, ks = {0.3, 0.3, 0.3}, ns = 20 } }
+  end
   return lit_from > 0 and f >= lit_from and { light = { emission = {30, 27, 20} } } or {}
 end
 if single > 0 then
@@ -314,6 +319,24 @@ TEST_F(JobTest, MaterialsChangedByAFrameSetEverythingUpAnewFromThatFrame) {
   }
 }
 
+// Each op is asked only about the points its answer reaches, by the lobes of the frame's materials: where a frame
+// gives the walls a glossy lobe, the glossy ops, asked about no point before, are asked about the walls' from that
+// frame on, and the frame equals its farm alone (whose shipped walls are glossy). Asked by the shipped scene's
+// materials, the job's frame would lose its walls' glossy light.
+TEST_F(JobTest, AFrameThatGivesAMaterialALobeAsksTheOpsOfThatLobe) {
+  const auto job = run("g.####.exr", {"--set", "last=3", "--set", "glossy_from=3"});
+  ASSERT_EQ(job.status, 0) << job.err;
+  expect_no_leftovers(job);
+  EXPECT_GT(figure(job.err, "glossy", "glossy_points"), 0) << job.err;
+  const auto before = run("b.####.exr", {"--set", "last=2", "--set", "glossy_from=3"});
+  ASSERT_EQ(before.status, 0) << before.err;
+  EXPECT_EQ(figure(before.err, "glossy", "glossy_points"), 0) << "no glossy material in frames 1 and 2\n" << before.err;
+  const auto alone = run("alone.exr", {"--set", "frame=3", "--set", "glossy_from=3"});
+  ASSERT_EQ(alone.status, 0) << alone.err;
+  EXPECT_TRUE(same_pixels(frame("g", 3), path("alone.exr"))) << "frame 3 is not the farm of frame 3 alone";
+  EXPECT_TRUE(same_pixels(frame("g", 2), frame("b", 2))) << "frame 2 changed with frame 3's materials";
+}
+
 // frames { sun }: the sun moves from frame to frame (here across the sky over a block on the ground), and each
 // frame equals the farm of that frame alone whose script declares the sun where the job's frame puts it. A job
 // that moves a sun the script never declared is refused before launch, at the frames line.
@@ -450,7 +473,7 @@ TEST_F(JobTest, BadJobsAreRefusedBeforeAnythingStarts) {
   expect_no_leftovers(r);
   r = run("dark.####.exr", {"--set", "last=3", "--set", "dark_from=2"});
   EXPECT_EQ(r.status, 2);
-  EXPECT_NE(r.err.find("turn.lua:20: frames: frame 2's materials leave the scene without light"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("turn.lua:25: frames: frame 2's materials leave the scene without light"), std::string::npos) << r.err;
   EXPECT_FALSE(fs::exists(frame("dark", 1))) << "refused before anything rendered";
   expect_no_leftovers(r);
   // A radiosity ring's solution is made once: it cannot follow a job's change of materials.
