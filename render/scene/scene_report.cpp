@@ -38,7 +38,7 @@ const char* kind_name(Material::Type t) {
 // bounding sphere (a little above it, +z first), a coarse 32 x 24 view counts the camera rays whose first hit is on
 // the side of its surface that faces the emitters' centre (with no emitters: every hit); the first best wins. A
 // fixed +z view looked at the back of a backdrop whose lamp and test object were on its -z side: an image of zeros.
-Vec3 suggested_eye(const Scene& s, Vec3 centre, float distance) {
+Vec3 suggested_eye(const Scene& s, const RayTracer& tracer, Vec3 centre, float distance) {
   const auto eye_at = [&](int k) {
     const float az = static_cast<float>(k) * kPi / 4;
     return centre + normalize(Vec3{std::sin(az), 0.35f, std::cos(az)}) * distance;
@@ -56,7 +56,6 @@ Vec3 suggested_eye(const Scene& s, Vec3 centre, float distance) {
   }
   const bool lit = weight > 0;
   if (lit) light = light * static_cast<float>(1.0 / weight);
-  const RayTracer tracer(s);
   int best = 0;
   size_t best_score = 0;
   constexpr int kWidth = 32, kHeight = 24;
@@ -231,7 +230,8 @@ Result<std::string> describe_scene(const std::string& obj_path) {
   const Vec3 centre = (lo + hi) * 0.5f;
   const float radius = 0.5f * bounds.diagonal();
   const float distance = radius / std::sin(0.5f * 45.0f * kPi / 180.0f);  // the sphere fits the view cone
-  const Vec3 eye = suggested_eye(s, centre, distance);
+  const RayTracer tracer(s);  // one BVH for the camera's probes and the open share
+  const Vec3 eye = suggested_eye(s, tracer, centre, distance);
   out += "  camera     camera { eye = " + vec(eye) + ", at = " + vec(centre) + ", fov = 45 }\n";
   // A glTF file's own cameras, by the names camera { gltf = ... } takes; an animated one moves over a job's frames.
   for (const auto& c : catalogue->cameras)
@@ -258,10 +258,9 @@ Result<std::string> describe_scene(const std::string& obj_path) {
   }
   // Nor where most of what those surfaces gather comes from outside the scene (an object under an open sky): the
   // light that bounces between them, all a cache holds, is then the smaller part, and the paths a path tracer follows
-  // end at the first or second bounce. On glTF's material balls under an HDRI (88 % open) the network with a cache
-  // needed 2x the path tracer's time for equal error, and without one too (bench/RESULTS.md); Lost Empire (35 %) and
-  // the Cornell boxes (15-19 %) are where the cache wins.
-  const RayTracer tracer(s);
+  // end at the first or second bounce. On glTF's material balls under an HDRI (88 % open) the network's 1/(RMSE^2 s)
+  // was 18.6 with a cache and 17.9 without, the path tracer's 48 (bench/RESULTS.md); Lost Empire (35 %) and the
+  // Cornell boxes (15-19 %) are where the cache wins.
   const double open = open_share(s, tracer);
   out += format("  open       %.0f%% of the diffuse surfaces' gathering rays leave the scene\n", 100 * open);
   worth_caching = worth_caching && open <= 0.5;

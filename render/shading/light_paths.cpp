@@ -103,7 +103,6 @@ AnswerEnds LightPaths::ends() const {
   return e;
 }
 
-
 std::string LightPaths::path_of(size_t index) {
   std::string events;
   for (; index > 0; index = (index - 1) / 3) events.insert(events.begin(), kLobeLetters[last_lobe(index)]);
