@@ -212,7 +212,7 @@ TEST_F(ScriptTest, ShapesAddGeometryWithTheirOwnMaterialAndNameTheirLineWhenWron
 TEST_F(ScriptTest, BadParametersNameLineAndParameter) {
   EXPECT_EQ(error_of("local d = lightop \"direct\" { light_sample = 4 }\n"),
             "farm.lua:1: lightop 'direct': unknown parameter 'light_sample' (known: learned_cell, learned_samples, "
-            "learned_share, learned_stride, light_point, light_samples, light_sampling, mis, reuse, seed)");
+            "learned_share, learned_stride, light_point, light_samples, light_sampling, mis, mis_reach, reuse, seed)");
   EXPECT_EQ(error_of("local d = lightop \"direct\" { light_samples = -1 }\n"),
             "farm.lua:1: lightop 'direct': parameter 'light_samples' must be in [1, 1048576], got -1");
   EXPECT_EQ(error_of("image { width = 0 }\n"), "farm.lua:1: image: parameter 'width' must be in [1, 16384], got 0");

@@ -5,14 +5,18 @@
 // alone, or with `light_sampling = "learned"` partly from the lights found before rendering to light the point's
 // cell where the camera looks (render/lights/light_selection.hpp); then a uniform point on it, and a shadow ray. On glossy
 // surfaces it also samples the BSDF, and the two are combined by multiple importance sampling
-// (render/shading/path_kernel.cpp with one vertex). On diffuse surfaces light sampling alone is used unless `mis = true`:
-// then they get the BSDF sample too, which tames points close to a light (a uniform point on a light seen under a
-// wide angle has a 1/d^2 weight; a cosine direction does not). Left unset, `mis` is true in a scene with an
-// environment (render/lights/environment.hpp), false otherwise. In a job the learned lights are carried over the
+// (render/shading/path_kernel.cpp with one vertex). Diffuse surfaces get the BSDF sample too where `mis` says: it
+// tames points close to a light (a uniform point on a light seen under a wide angle has a 1/d^2 weight; a cosine
+// direction does not). `true`: everywhere; `false`: nowhere; unset: everywhere in a scene with an environment
+// (render/lights/environment.hpp), otherwise only within `mis_reach` radii of a light (render/lights/near_lights.hpp),
+// the only places it pays for its ray. In a job the learned lights are carried over the
 // frames (`reuse`, default true): a frame learns only the cells its view finds new or sees much better
 // (LightSelection::extend). Emitters emit on the side their winding faces.
 // Mirrors and glass get nothing here: that is `specular`'s job.
+#include <memory>
+
 #include "render/lightops/lightop_registry.hpp"
+#include "render/lights/near_lights.hpp"
 #include "render/shading/path_kernel.hpp"
 #include "render/shading/sampler.hpp"
 
@@ -28,6 +32,7 @@ class DirectLight final : public LightOp {
                                                                                                 : LightPoint::area),
         mis_set_(p.has("mis")),
         mis_(p.get_bool("mis", false)),
+        mis_reach_(static_cast<float>(p.get_float("mis_reach", 4, 0, 1e6))),
         seed_(static_cast<uint64_t>(p.get_int("seed", 0, 0, INT32_MAX))),
         selection_options_(light_selection_options(p, seed_)),
         reuse_(p.get_bool("reuse", true)) {}
@@ -38,6 +43,9 @@ class DirectLight final : public LightOp {
     // brightness go to a sun below a surface's horizon as often as to one above it, and the cosine sample is what
     // lights the surface then (bench/environment_bench: MIS is never far from the better of the two).
     if (!mis_set_) mis_ = ctx.scene->environment() && ctx.scene->environment()->emits();
+    // Unset, and without an environment, diffuse points near a light get the BSDF sample and the rest do not.
+    near_.reset();
+    if (!mis_set_ && !mis_ && mis_reach_ > 0) near_ = std::make_shared<const NearLights>(*ctx.scene, mis_reach_);
     if (light_sampling_ == LightSampling::learned) co_await LightSelection::build(ctx, selection_options_, selection_, "direct");
   }
 
@@ -74,6 +82,7 @@ class DirectLight final : public LightOp {
     o.samples = light_samples_;
     o.stream = streams::direct ^ (seed_ << 8);
     o.light_only_on_diffuse = !mis_;
+    o.mis_near = near_.get();
     o.dark_on_specular = true;
     o.light_tree = light_sampling_ != LightSampling::power;
     o.light_selection = light_sampling_ == LightSampling::learned ? &selection_ : nullptr;
@@ -86,6 +95,8 @@ class DirectLight final : public LightOp {
   LightSampling light_sampling_;
   LightPoint light_point_;
   bool mis_set_, mis_;
+  float mis_reach_;
+  std::shared_ptr<const NearLights> near_;  // shared by the views a job forks
   uint64_t seed_;
   LightSelectionOptions selection_options_;
   LightSelection selection_;

@@ -157,7 +157,7 @@ TEST(Direct, SolidAngleLightPointsMatchLambertsFormulaWithLessNoiseUnderAWideLig
     for (const RGB& l : rig.shade(pts)) sum += (l.y / (3 * f) - 1) * (l.y / (3 * f) - 1);
     return std::sqrt(sum / 256);
   };
-  const double by_area = rmse({}), by_solid_angle = rmse(solid);
+  const double by_area = rmse({{"mis", false}}), by_solid_angle = rmse(solid);
   EXPECT_LT(by_solid_angle, 0.5 * by_area) << by_area << " -> " << by_solid_angle;
   std::printf("direct under a wide light, relative RMSE at 16 light samples: area %.4f, solid angle %.4f\n", by_area,
               by_solid_angle);
@@ -249,10 +249,57 @@ TEST(Direct, PointLightGivesICosOverPiDSquared) {
   }
 }
 
+// With `mis` unset (and no environment) a diffuse point takes a BSDF sample beside its light samples only where a
+// light is near: within mis_reach (4) of its triangles' radii. There it is exactly mis = true's estimate, elsewhere
+// exactly mis = false's; and right beside a small lamp it matches Lambert's formula with less noise than light
+// samples alone.
+TEST(Direct, UnsetMisTakesBsdfSamplesOnlyNearTheLights) {
+  // A 0.2-wide lamp 0.03 above the floor: each of its triangles has a sphere of radius 0.14 around it, so points
+  // within 0.57 of its centre are near.
+  const std::vector<Vec3> lamp{{-0.1f, 0.03f, -0.1f}, {0.1f, 0.03f, -0.1f}, {0.1f, 0.03f, 0.1f}, {-0.1f, 0.03f, 0.1f}};
+  const std::vector<Vec3> where{{0.05f, 0, 0}, {0.2f, 0, 0.1f}, {0.7f, 0, 0.3f}, {1.2f, 0, 0}};
+  const bool near[] = {true, true, false, false};
+  Rig unset(lamp, 4), with(lamp, 4, false, SamplerKind::independent, Value::Map{{"mis", true}}),
+      without(lamp, 4, false, SamplerKind::independent, Value::Map{{"mis", false}});
+  const auto u = unset.shade(points_on_floor(unset, where)), w = with.shade(points_on_floor(with, where)),
+             o = without.shade(points_on_floor(without, where));
+  for (size_t i = 0; i < where.size(); ++i) {
+    EXPECT_GT(u[i].y, 0) << i;
+    EXPECT_EQ(u[i].y, near[i] ? w[i].y : o[i].y) << i;
+  }
+  EXPECT_NE(u[0].y, o[0].y);  // MIS changes these estimates, so the equalities above say which rule was applied
+  EXPECT_NE(u[1].y, o[1].y);
+  // mis_reach = 0: no point is near; light samples alone everywhere.
+  Rig none(lamp, 4, false, SamplerKind::independent, Value::Map{{"mis_reach", 0}});
+  const auto z = none.shade(points_on_floor(none, where));
+  for (size_t i = 0; i < where.size(); ++i) EXPECT_EQ(z[i].y, o[i].y) << i;
+
+  // Beside the lamp: unbiased, and less noisy than light samples alone.
+  auto relative_rmse = [&](Value::Map params) {
+    Rig rig(lamp, 4, false, SamplerKind::independent, std::move(params));
+    std::vector<Vec3> at(4096, Vec3{0.12f, 0, 0.02f});
+    const ShadingPoints pts = points_on_floor(rig, at);
+    const double f = form_factor(at[0], {0, 1, 0}, lamp);
+    double sum = 0, mean = 0;
+    for (const RGB& l : rig.shade(pts)) {
+      sum += (l.y / (3 * f) - 1) * (l.y / (3 * f) - 1);
+      mean += l.y / (3 * f) / static_cast<double>(at.size());
+    }
+    const double rmse = std::sqrt(sum / static_cast<double>(at.size()));
+    EXPECT_NEAR(mean, 1.0, 4 * rmse / std::sqrt(static_cast<double>(at.size())));  // four standard errors
+    return rmse;
+  };
+  const double light_only = relative_rmse({{"mis", false}}), near_lights = relative_rmse({});
+  EXPECT_LT(near_lights, 0.6 * light_only) << light_only << " -> " << near_lights;
+  std::printf("beside a small lamp, relative RMSE at 4 light samples: light samples alone %.4f, with MIS near lights %.4f\n",
+              light_only, near_lights);
+}
+
 TEST(Direct, BadParametersAreReported) {
   const auto& kind = *find_lightop_kind("direct");
   EXPECT_THROW(create_lightop(kind, ParamTable(Value::Map{{"light_samples", 0}}, "d")), ParamError);
   EXPECT_THROW(create_lightop(kind, ParamTable(Value::Map{{"samples", 4}}, "d")), ParamError);
+  EXPECT_THROW(create_lightop(kind, ParamTable(Value::Map{{"mis_reach", -1}}, "d")), ParamError);
 }
 
 }  // namespace lf

@@ -10,6 +10,7 @@
 
 #include "render/caches/directional_cache.hpp"
 #include "render/lights/light_sampling.hpp"
+#include "render/lights/near_lights.hpp"
 #include "render/lightops/lightop.hpp"
 #include "render/shading/sampler.hpp"
 
@@ -26,8 +27,10 @@ struct PathOptions {
   float rr_threshold = 0.25f;
   int samples = 1;            // paths per point, averaged
   uint64_t stream = 0;        // random stream of the calling op (sampler.hpp); the sampler is the farm's (ctx)
-  // With max_depth 1: on diffuse surfaces use light sampling alone (a BSDF ray adds cost, not quality there).
+  // With max_depth 1: on diffuse surfaces use light sampling alone (a BSDF ray adds cost, not quality there)...
   bool light_only_on_diffuse = false;
+  // ... except at points these say are near a light (render/lights/near_lights.hpp), which get the BSDF sample too.
+  const NearLights* mis_near = nullptr;
   // Points on mirrors and glass get nothing: in a network the `specular` op follows their chains, emitters met
   // included, so a BSDF ray from here would count those emitters twice.
   bool dark_on_specular = false;
