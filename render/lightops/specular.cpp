@@ -8,10 +8,14 @@
 // `emission_samples` chains per point look only for emitters: a flame seen in a window or in water is as small as
 // one seen directly, and needs as many chains as the camera gives it samples, while what the chain lands on
 // (asking the input: the expensive part) is smooth enough for `samples`. The emission is the mean over all
-// chains, the landing light the mean over the first `samples`: both unbiased.
+// chains, the landing light the mean over the first `samples`: both unbiased. Unset, 4 x `samples`: on Lost
+// Empire's network (16 spp) error 0.226 -> 0.190 at the same time, on cornell_glass the seed-pair noise 0.0109 ->
+// 0.0061 (docs/decisions.md).
 //
 // `emitters = false`: chains add nothing for the emitters they meet (L S+), for a network in which another op counts
 // that light, e.g. a cache whose hemisphere sees mirrors beside a caustic photon map that holds L S+ D.
+#include <algorithm>
+
 #include "render/shading/bsdf.hpp"
 #include "render/scene/surface.hpp"
 #include "render/lightops/lightop_registry.hpp"
@@ -20,11 +24,14 @@
 namespace lf {
 namespace {
 
+// Emitter-only chains a point traces for each chain whose landing is shaded, when `emission_samples` is unset.
+constexpr int kEmissionChainsPerChain = 4;
+
 class Specular final : public LightOp {
  public:
   explicit Specular(const ParamTable& p)
       : samples_(static_cast<int>(p.get_int("samples", 1, 1, 1 << 16))),
-        emission_samples_(static_cast<int>(p.get_int("emission_samples", samples_, samples_, 1 << 16))),
+        emission_samples_(static_cast<int>(p.get_int("emission_samples", std::min(kEmissionChainsPerChain * samples_, 1 << 16), samples_, 1 << 16))),
         max_depth_(static_cast<int>(p.get_int("max_depth", 8, 1, 256))),
         seed_(static_cast<uint64_t>(p.get_int("seed", 0, 0, INT32_MAX))),
         emitters_(p.get_bool("emitters", true)) {}
