@@ -463,8 +463,9 @@ TEST_F(ScriptTest, TheSuggestedNetworksAreComplete) {
                         Lobes::of({Lobe::diffuse, Lobe::specular}), Lobes::all(), Lobes::of({Lobe::glossy}),
                         Lobes::of({Lobe::glossy, Lobe::specular})};
   for (const Lobes& lobes : sets)
-    for (bool worth_caching : {true, false}) {
-      const std::string network = complete_network_for(lobes, worth_caching);
+    for (const auto& [worth_caching, cores] : {std::pair{true, 1}, {false, 1}, {true, 2}, {false, 3}}) {
+      const std::string network = complete_network_for(lobes, worth_caching, cores);
+      EXPECT_EQ(network.find("multiplexer") != std::string::npos, cores > 1) << network;
       auto r = evaluate_script(write("farm.lua", "scene { builtin = \"cornell\" }\n" + network));
       ASSERT_TRUE(r.ok()) << r.error().message;
       SceneLobes scene;

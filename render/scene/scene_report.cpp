@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstdio>
 #include <map>
+#include <thread>
 
 #include "render/shading/bsdf.hpp"
 #include "render/shading/sampler.hpp"
@@ -124,24 +125,34 @@ double open_share(const Scene& s, const RayTracer& tracer) {
 
 }  // namespace
 
-std::string complete_network_for(const Lobes& lobes, bool worth_caching) {
+std::string complete_network_for(const Lobes& lobes, bool worth_caching, int cores) {
   const bool glossy = lobes.contains(Lobe::glossy), mirrors = lobes.contains(Lobe::specular);
+  // An op that does most of the work is a pool of one replica a core: one process would leave the other cores
+  // idle while it works (the cache's pre-pass is all bounce paths). On Lost Empire, 16 spp, two cores: 17.9 s
+  // with one process each, 15.3 s with pools of two, the same image error.
+  auto pooled = [&](const std::string& op) {
+    return cores > 1 ? "multiplexer { " + op + ", replicas = " + std::to_string(cores) + " }" : op;
+  };
   // Without a diffuse lobe no cache has anything to hold, and the ops left would be a path tracer cut into
   // processes: on glTF's material balls (glossy only) it reached Cycles' noise in 1.35x Cycles' time, the path
   // tracer alone in 0.83x (bench/peer/README.md).
+  // Each line's comment (the light paths it counts) in one column.
+  auto line = [](const std::string& code, const std::string& comment) {
+    return code + std::string(code.size() < 66 ? 66 - code.size() : 1, ' ') + "-- " + comment + "\n";
+  };
   if (!lobes.contains(Lobe::diffuse) || !worth_caching)
-    return "renderers { lighting = lightop \"pathtrace\" {} }              -- no diffuse light worth a cache\n";
-  std::string s = "local paths    = lightop \"pathtrace\" {}                       -- what leaves the surfaces the ops below see\n"
-                  "local direct   = lightop \"direct\" {}                          -- L(D|G)\n"
-                  "local indirect = lightop \"irradiance\" { input = paths }       -- L(D|G|S)+D\n";
+    return line("renderers { lighting = " + pooled("lightop \"pathtrace\" {}") + " }", "no diffuse light worth a cache");
+  std::string s = line("local paths    = " + pooled("lightop \"pathtrace\" {}"), "what leaves the surfaces the ops below see") +
+                  line("local direct   = " + pooled("lightop \"direct\" {}"), "L(D|G)") +
+                  line("local indirect = lightop \"irradiance\" { input = paths }", "L(D|G|S)+D");
   std::string parts = "direct, indirect";
   if (glossy) {
-    s += "local shiny    = lightop \"glossy\" { input = paths }           -- L(D|G|S)+G\n";
+    s += line("local shiny    = lightop \"glossy\" { input = paths }", "L(D|G|S)+G");
     parts += ", shiny";
   }
   if (mirrors) {
-    s += "local chains   = lightop \"specular\" { input = lightop \"combine\" { inputs = { " + parts +
-         " } } }  -- L(D|G|S)*S\n";
+    s += line("local chains   = lightop \"specular\" { input = lightop \"combine\" { inputs = { " + parts + " } } }",
+              "L(D|G|S)*S");
     parts += ", chains";
   }
   return s + "renderers { lighting = lightop \"combine\" { inputs = { " + parts + " } } }\n";
@@ -264,7 +275,8 @@ Result<std::string> describe_scene(const std::string& obj_path) {
   const double open = open_share(s, tracer);
   out += format("  open       %.0f%% of the diffuse surfaces' gathering rays leave the scene\n", 100 * open);
   worth_caching = worth_caching && open <= 0.5;
-  const std::string network = complete_network_for(lobes.lobes, worth_caching);
+  const int cores = static_cast<int>(std::clamp(std::thread::hardware_concurrency(), 1u, 64u));
+  const std::string network = complete_network_for(lobes.lobes, worth_caching, cores);
   for (size_t at = 0; at < network.size();) {
     const size_t end = network.find('\n', at);
     out += "    " + network.substr(at, end - at) + "\n";

@@ -13,7 +13,9 @@ Result<std::string> describe_scene(const std::string& obj_path);
 
 // Lua for a network that counts every light path on these lobes once (docs/lua-api.md, "Light paths"): direct light,
 // caches and the ops the lobes need, or the path tracer alone where no lobe is diffuse or `worth_caching` is false
-// (the only diffuse lobe is metals' multiply scattered light, a small share of what they reflect).
-std::string complete_network_for(const Lobes& lobes, bool worth_caching = true);
+// (the only diffuse lobe is metals' multiply scattered light, a small share of what they reflect). With `cores` > 1
+// the ops that do most of the work (the paths and the direct light, or the path tracer) are pools of that many
+// replicas, one a core, as examples/lost_empire.lua has them.
+std::string complete_network_for(const Lobes& lobes, bool worth_caching = true, int cores = 1);
 
 }  // namespace lf
