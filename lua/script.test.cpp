@@ -463,9 +463,12 @@ TEST_F(ScriptTest, TheSuggestedNetworksAreComplete) {
                         Lobes::of({Lobe::diffuse, Lobe::specular}), Lobes::all(), Lobes::of({Lobe::glossy}),
                         Lobes::of({Lobe::glossy, Lobe::specular})};
   for (const Lobes& lobes : sets)
-    for (const auto& [worth_caching, cores] : {std::pair{true, 1}, {false, 1}, {true, 2}, {false, 3}}) {
-      const std::string network = complete_network_for(lobes, worth_caching, cores);
-      EXPECT_EQ(network.find("multiplexer") != std::string::npos, cores > 1) << network;
+    for (const NetworkChoices& choices : {NetworkChoices{true, 1, false}, NetworkChoices{false, 1, false},
+                                          NetworkChoices{true, 2, true}, NetworkChoices{false, 3, true}}) {
+      const std::string network = complete_network_for(lobes, choices);
+      EXPECT_EQ(network.find("multiplexer") != std::string::npos, choices.cores > 1) << network;
+      EXPECT_EQ(network.find("learned") != std::string::npos,
+                choices.many_lights && choices.worth_caching && lobes.contains(Lobe::diffuse)) << network;
       auto r = evaluate_script(write("farm.lua", "scene { builtin = \"cornell\" }\n" + network));
       ASSERT_TRUE(r.ok()) << r.error().message;
       SceneLobes scene;

@@ -125,7 +125,8 @@ double open_share(const Scene& s, const RayTracer& tracer) {
 
 }  // namespace
 
-std::string complete_network_for(const Lobes& lobes, bool worth_caching, int cores) {
+std::string complete_network_for(const Lobes& lobes, const NetworkChoices& choices) {
+  const int cores = choices.cores;
   const bool glossy = lobes.contains(Lobe::glossy), mirrors = lobes.contains(Lobe::specular);
   // An op that does most of the work is a pool of one replica a core: one process would leave the other cores
   // idle while it works (the cache's pre-pass is all bounce paths). On Lost Empire, 16 spp, two cores: 17.9 s
@@ -140,10 +141,13 @@ std::string complete_network_for(const Lobes& lobes, bool worth_caching, int cor
   auto line = [](const std::string& code, const std::string& comment) {
     return code + std::string(code.size() < 66 ? 66 - code.size() : 1, ' ') + "-- " + comment + "\n";
   };
-  if (!lobes.contains(Lobe::diffuse) || !worth_caching)
+  if (!lobes.contains(Lobe::diffuse) || !choices.worth_caching)
     return line("renderers { lighting = " + pooled("lightop \"pathtrace\" {}") + " }", "no diffuse light worth a cache");
   std::string s = line("local paths    = " + pooled("lightop \"pathtrace\" {}"), "what leaves the surfaces the ops below see") +
-                  line("local direct   = " + pooled("lightop \"direct\" {}"), "L(D|G)") +
+                  line("local direct   = " +
+                           pooled(choices.many_lights ? "lightop \"direct\" { light_samples = 2, light_sampling = \"learned\" }"
+                                                      : "lightop \"direct\" {}"),
+                       "L(D|G)") +
                   line("local indirect = lightop \"irradiance\" { input = paths }", "L(D|G|S)+D");
   std::string parts = "direct, indirect";
   if (glossy) {
@@ -276,7 +280,11 @@ Result<std::string> describe_scene(const std::string& obj_path) {
   out += format("  open       %.0f%% of the diffuse surfaces' gathering rays leave the scene\n", 100 * open);
   worth_caching = worth_caching && open <= 0.5;
   const int cores = static_cast<int>(std::clamp(std::thread::hardware_concurrency(), 1u, 64u));
-  const std::string network = complete_network_for(lobes.lobes, worth_caching, cores);
+  NetworkChoices choices;
+  choices.worth_caching = worth_caching;
+  choices.cores = cores;
+  choices.many_lights = s.emitters().size() + s.point_lights().size() > 2;
+  const std::string network = complete_network_for(lobes.lobes, choices);
   for (size_t at = 0; at < network.size();) {
     const size_t end = network.find('\n', at);
     out += "    " + network.substr(at, end - at) + "\n";

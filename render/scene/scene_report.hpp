@@ -11,11 +11,21 @@ namespace lf {
 
 Result<std::string> describe_scene(const std::string& obj_path);
 
+// What the suggested network depends on besides the lobes.
+struct NetworkChoices {
+  // False where no lobe is diffuse enough for a cache (the only diffuse lobe is metals' multiply scattered light,
+  // a small share of what they reflect) or most of what the surfaces gather comes from outside the scene.
+  bool worth_caching = true;
+  // Above 1, the ops that do most of the work (the paths and the direct light, or the path tracer) are pools of
+  // that many replicas, one a core, as examples/lost_empire.lua has them.
+  int cores = 1;
+  // More lights than one quad: `direct` learns which of them light what the camera sees, and takes 2 samples a
+  // point, as examples/lost_empire.lua's does (docs/decisions.md, "The suggested network").
+  bool many_lights = false;
+};
+
 // Lua for a network that counts every light path on these lobes once (docs/lua-api.md, "Light paths"): direct light,
-// caches and the ops the lobes need, or the path tracer alone where no lobe is diffuse or `worth_caching` is false
-// (the only diffuse lobe is metals' multiply scattered light, a small share of what they reflect). With `cores` > 1
-// the ops that do most of the work (the paths and the direct light, or the path tracer) are pools of that many
-// replicas, one a core, as examples/lost_empire.lua has them.
-std::string complete_network_for(const Lobes& lobes, bool worth_caching = true, int cores = 1);
+// caches and the ops the lobes need, or the path tracer alone where no lobe is diffuse or caching is not worth it.
+std::string complete_network_for(const Lobes& lobes, const NetworkChoices& choices = {});
 
 }  // namespace lf
