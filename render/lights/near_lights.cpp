@@ -9,11 +9,10 @@ namespace lf {
 
 NearLights::NearLights(const Scene& scene, float reach) {
   for (const uint32_t t : scene.emitters()) {
-    const Vec3 a = scene.vertex(t, 0), b = scene.vertex(t, 1), c = scene.vertex(t, 2);
-    const Vec3 lo{std::min({a.x, b.x, c.x}), std::min({a.y, b.y, c.y}), std::min({a.z, b.z, c.z})};
-    const Vec3 hi{std::max({a.x, b.x, c.x}), std::max({a.y, b.y, c.y}), std::max({a.z, b.z, c.z})};
-    const float radius = reach * 0.5f * length(hi - lo);
-    if (radius > 0) zones_.push_back({(lo + hi) * 0.5f, radius * radius});
+    const Vec3 corners[3] = {scene.vertex(t, 0), scene.vertex(t, 1), scene.vertex(t, 2)};
+    const Bounds box = bounds_of(corners);
+    const float radius = reach * 0.5f * box.diagonal();
+    if (radius > 0) zones_.push_back({(box.lo + box.hi) * 0.5f, radius * radius});
   }
   if (zones_.empty()) return;
   std::vector<float> radii;
